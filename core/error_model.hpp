@@ -1,0 +1,85 @@
+#pragma once
+// Location errors of the rotary axes and the exact table kinematics that carries them.
+//  A/C tilting table, 000 Eq. (1):
+//    T_m_w = Dx(dx_AY) Dy(dy_AY) Dz(dz_AY) Da(a_AY) Db(b_AY) Dc(c_AY) Da(-A)
+//            Dy(dy_CA) Db(b_CA) Dc(-C)                        (a_CA, c_CA are redundant, omitted)
+//  B/C tilting table, 002 Eq. (2)-(3) with constant errors:
+//    T_m_w = Da(a_BY) Db(b_BY) Dc(c_BY) Dx(dx_BY) Dy(dy_CB) Dz(dz_BY) Db(-B)
+//            Da(a_CB) Dx(dx_CB) Dc(-C)
+// T_m_w maps a point fixed on the table (workpiece frame) to the machine frame, whose origin is
+// the nominal intersection of the rotary axes. Angles A, B, C are the commanded angles in the
+// papers' sign convention (a controller may count the other way: see MachineModel).
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/transforms.hpp"
+
+namespace rotacal {
+
+enum class Kinematics { TableAC, TableBC };
+
+std::string_view kinematicsName(Kinematics kinematics);       // "table_ac", "table_bc"
+Kinematics kinematicsFromName(std::string_view name);         // throws std::invalid_argument
+
+enum class ParamKind { Length, Angle };
+
+/// What one error parameter is: the papers' symbol in ASCII, its ISO 230-7 name, its kind.
+struct ParameterInfo {
+  std::string_view name;
+  std::string_view iso;
+  ParamKind kind;
+  std::string_view description;
+};
+
+constexpr int kNumLocationErrors = 8;
+using ErrorVector = Eigen::Matrix<double, kNumLocationErrors, 1>;
+
+/// The eight location errors of a kinematics, in order, 000 Table 1 / 002 Table 2.
+const std::vector<ParameterInfo>& locationParameters(Kinematics kinematics);
+int parameterIndex(Kinematics kinematics, std::string_view name);  // -1 when unknown
+
+/// A commanded rotary pose in degrees, papers' convention. Unused axes stay 0.
+struct Pose {
+  double A = 0.0;
+  double B = 0.0;
+  double C = 0.0;
+};
+
+/// Location errors of one machine: lengths in mm, angles in rad, order of locationParameters().
+struct LocationErrors {
+  Kinematics kinematics = Kinematics::TableAC;
+  ErrorVector values = ErrorVector::Zero();
+
+  double get(std::string_view name) const;
+  void set(std::string_view name, double value_mm_or_rad);
+  /// Value in report units: um for lengths, mdeg for angles.
+  double reportValue(int index) const;
+  void setReportValue(int index, double um_or_mdeg);
+};
+
+/// Factor of the kinematic chain: a motion whose value is an error parameter or a commanded angle.
+struct ChainFactor {
+  Motion motion;
+  enum class Source { Parameter, NegativeAxis } source;
+  int index;  // parameter index, or axis (0 = A, 1 = B, 2 = C)
+};
+const std::vector<ChainFactor>& kinematicChain(Kinematics kinematics);
+
+/// T_m_w: workpiece (table) frame in the machine frame, exact HTM product.
+Eigen::Isometry3d T_m_w(const LocationErrors& errors, const Pose& pose);
+
+/// Nominal T_m_w (all errors zero): a pure rotation.
+Eigen::Isometry3d T_m_w_nominal(Kinematics kinematics, const Pose& pose);
+
+/// J_pm_e: derivative of p_m = T_m_w p_w with respect to the eight location errors
+/// (mm/mm and mm/rad), evaluated exactly at the given errors.
+Eigen::Matrix<double, 3, kNumLocationErrors> J_pm_e(const LocationErrors& errors, const Pose& pose,
+                                                    const Eigen::Vector3d& p_w);
+
+/// Unit used in reports for a parameter kind: "um" or "mdeg".
+std::string_view reportUnit(ParamKind kind);
+
+}  // namespace rotacal

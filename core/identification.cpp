@@ -1,0 +1,368 @@
+#include "core/identification.hpp"
+
+#include <Eigen/Dense>
+#include <Eigen/SVD>
+#include <cmath>
+#include <map>
+#include <set>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "core/closed_form.hpp"
+#include "core/simulation.hpp"
+#include "core/units.hpp"
+
+namespace rotacal {
+
+std::string_view methodName(Method m) {
+  switch (m) {
+    case Method::ClosedForm: return "closed_form";
+    case Method::LeastSquaresRigidSetup: return "lsq_rigid_setup";
+    case Method::LeastSquaresPerPoint: return "lsq_per_point";
+  }
+  return "?";
+}
+
+Method methodFromName(std::string_view name) {
+  if (name == "closed_form") return Method::ClosedForm;
+  if (name == "lsq_rigid_setup") return Method::LeastSquaresRigidSetup;
+  if (name == "lsq_per_point" || name == "lsq") return Method::LeastSquaresPerPoint;
+  throw std::invalid_argument("unknown method '" + std::string(name) +
+                              "' (expected closed_form, lsq_rigid_setup, lsq_per_point)");
+}
+
+std::string_view terminationName(Termination t) {
+  switch (t) {
+    case Termination::Converged: return "converged";
+    case Termination::MaxIterations: return "max_iterations";
+    case Termination::RankDeficient: return "rank_deficient";
+    case Termination::InvalidInput: return "invalid_input";
+  }
+  return "?";
+}
+
+bool IdentificationOptions::validate(std::string* why) const {
+  auto fail = [&](const std::string& w) {
+    if (why) *why = w;
+    return false;
+  };
+  if (max_iterations < 1) return fail("max_iterations must be >= 1");
+  if (!(step_tolerance > 0)) return fail("step_tolerance must be > 0");
+  if (!(rank_tolerance > 0 && rank_tolerance < 1)) return fail("rank_tolerance must be in (0, 1)");
+  if (!(prior_sigma_um >= 0)) return fail("prior_sigma_um must be >= 0");
+  return true;
+}
+
+double alongApproach(const ProbePoint& point, const TriggerPoint& trigger) {
+  return point.approach_m.dot(trigger.position_m_mm - point.trigger_m_mm);
+}
+
+namespace {
+
+struct Observation {
+  int run;
+  const ProbePoint* point;
+  double s_mm;  // measured, along the approach from the nominal trigger
+  Eigen::Vector3d measured_m;
+};
+
+std::vector<Observation> collect(const ProbePlan& plan, const std::vector<MeasurementRun>& runs, std::string* why) {
+  std::vector<Observation> obs;
+  for (size_t r = 0; r < runs.size(); ++r) {
+    for (const auto& t : runs[r].points) {
+      const ProbePoint* p = plan.findPoint(t.point_id);
+      if (!p) {
+        *why = fmt::format("{}: point {} is not in the plan", runs[r].source, t.point_id);
+        return {};
+      }
+      obs.push_back({static_cast<int>(r), p, alongApproach(*p, t), t.position_m_mm});
+    }
+  }
+  return obs;
+}
+
+/// Parameter layout and model of the least-squares problem.
+class LsqModel {
+ public:
+  LsqModel(const ProbePlan& plan, const std::vector<Observation>& obs, Method method)
+      : plan_(plan), obs_(obs), method_(method), r_(plan.machine.probe.ball_radius_mm()) {
+    if (method == Method::LeastSquaresRigidSetup) {
+      nuisance_ = 6;
+    } else {
+      for (const auto& o : obs) {
+        if (!target_index_.count(o.point->target)) {
+          const int idx = static_cast<int>(target_index_.size());
+          target_index_[o.point->target] = idx;
+        }
+      }
+      nuisance_ = static_cast<int>(target_index_.size());
+      for (Face f : kAllFaces) normal_[static_cast<size_t>(f)] = faceNormal_w(f);
+      reference_pose_ = plan.points.front().pose_name;
+    }
+  }
+
+  int size() const { return kNumLocationErrors + nuisance_; }
+
+  LocationErrors errors(const Eigen::VectorXd& theta) const {
+    LocationErrors e;
+    e.kinematics = plan_.machine.kinematics;
+    e.values = theta.head<kNumLocationErrors>();
+    return e;
+  }
+
+  /// Face orientation from the reference pose (second-order effect only; see header).
+  void updateNormals(const Eigen::VectorXd& theta) {
+    if (method_ != Method::LeastSquaresPerPoint) return;
+    const LocationErrors e = errors(theta);
+    for (Face f : kAllFaces) {
+      std::vector<Eigen::Vector3d> pts;
+      for (const auto& o : obs_) {
+        if (o.point->face != f || o.point->pose_name != reference_pose_) continue;
+        pts.push_back(T_m_w(e, o.point->pose).inverse() * o.measured_m);
+      }
+      const Eigen::Vector3d n0 = faceNormal_w(f);
+      const auto axes = faceAxes_w(f);
+      std::vector<Eigen::Vector3d> used_axes;
+      for (const auto& ax : axes) {
+        double lo = 1e300, hi = -1e300;
+        for (const auto& p : pts) { lo = std::min(lo, ax.dot(p)); hi = std::max(hi, ax.dot(p)); }
+        if (!pts.empty() && hi - lo > 1.0) used_axes.push_back(ax);
+      }
+      if (pts.size() < used_axes.size() + 2 || used_axes.empty()) { normal_[static_cast<size_t>(f)] = n0; continue; }
+      Eigen::MatrixXd M(pts.size(), used_axes.size() + 1);
+      Eigen::VectorXd h(pts.size());
+      for (size_t i = 0; i < pts.size(); ++i) {
+        M(static_cast<long>(i), 0) = 1.0;
+        for (size_t a = 0; a < used_axes.size(); ++a) M(static_cast<long>(i), static_cast<long>(a + 1)) = used_axes[a].dot(pts[i]);
+        h[static_cast<long>(i)] = n0.dot(pts[i]);
+      }
+      const Eigen::VectorXd c = M.colPivHouseholderQr().solve(h);
+      Eigen::Vector3d n = n0;
+      for (size_t a = 0; a < used_axes.size(); ++a) n -= c[static_cast<long>(a + 1)] * used_axes[a];
+      normal_[static_cast<size_t>(f)] = n.normalized();
+    }
+  }
+
+  Plane plane_w(const Eigen::VectorXd& theta, const ProbePoint& p) const {
+    if (method_ == Method::LeastSquaresRigidSetup) {
+      ArtefactTruth a;
+      a.setup.translation_mm = theta.segment<3>(kNumLocationErrors);
+      a.setup.rotation_rad = theta.segment<3>(kNumLocationErrors + 3);
+      return a.face(*plan_.machine.artefact, p.face);
+    }
+    const Eigen::Vector3d& n = normal_[static_cast<size_t>(p.face)];
+    const double s = theta[kNumLocationErrors + target_index_.at(p.target)];
+    return Plane{p.contact_w_mm + s * n, n};
+  }
+
+  double predict(const Eigen::VectorXd& theta, const ProbePoint& p) const {
+    const Plane w = plane_w(theta, p);
+    const Eigen::Isometry3d T = T_m_w(errors(theta), p.pose);
+    return ballPlaneContact(p.trigger_m_mm, p.approach_m, r_, Plane{T * w.point, T.linear() * w.normal});
+  }
+
+  /// Residuals (measured - model) and the Jacobian of the model, J_s_theta.
+  void evaluate(const Eigen::VectorXd& theta, Eigen::VectorXd* res, Eigen::MatrixXd* J) const {
+    const long m = static_cast<long>(obs_.size());
+    res->resize(m);
+    J->setZero(m, size());
+    const LocationErrors e = errors(theta);
+    for (long i = 0; i < m; ++i) {
+      const ProbePoint& p = *obs_[static_cast<size_t>(i)].point;
+      const Plane w = plane_w(theta, p);
+      const Eigen::Isometry3d T = T_m_w(e, p.pose);
+      const Plane pm{T * w.point, T.linear() * w.normal};
+      const double s = ballPlaneContact(p.trigger_m_mm, p.approach_m, r_, pm);
+      (*res)[i] = obs_[static_cast<size_t>(i)].s_mm - s;
+      const double nu = pm.normal.dot(p.approach_m);
+      // J_s_e: the plane moves with the table: dx = J(x) de, dn = (J(x + n) - J(x)) de.
+      const auto Jx = J_pm_e(e, p.pose, w.point);
+      const auto Jxn = J_pm_e(e, p.pose, w.point + w.normal);
+      for (int j = 0; j < kNumLocationErrors; ++j) {
+        const Eigen::Vector3d dx = Jx.col(j);
+        const Eigen::Vector3d dn = Jxn.col(j) - dx;
+        (*J)(i, j) = (-dn.dot(p.trigger_m_mm - pm.point) + pm.normal.dot(dx)) / nu - s * dn.dot(p.approach_m) / nu;
+      }
+      if (method_ == Method::LeastSquaresPerPoint) {
+        (*J)(i, kNumLocationErrors + target_index_.at(p.target)) = 1.0 / nu;
+      } else {
+        for (int j = 0; j < 6; ++j) {
+          const double h = j < 3 ? 1e-6 : 1e-8;
+          Eigen::VectorXd tp = theta, tm = theta;
+          tp[kNumLocationErrors + j] += h;
+          tm[kNumLocationErrors + j] -= h;
+          (*J)(i, kNumLocationErrors + j) = (predict(tp, p) - predict(tm, p)) / (2 * h);
+        }
+      }
+    }
+  }
+
+ private:
+  const ProbePlan& plan_;
+  const std::vector<Observation>& obs_;
+  Method method_;
+  double r_;
+  int nuisance_ = 0;
+  std::map<int, int> target_index_;
+  std::array<Eigen::Vector3d, 5> normal_;
+  std::string reference_pose_;
+};
+
+IdentificationResult leastSquares(const ProbePlan& plan, const std::vector<Observation>& obs,
+                                  const IdentificationOptions& options) {
+  IdentificationResult out;
+  out.method = options.method;
+  out.estimate.kinematics = plan.machine.kinematics;
+  LsqModel model(plan, obs, options.method);
+  const int n = model.size();
+  const long m = static_cast<long>(obs.size());
+  out.summary.observations = static_cast<int>(m);
+  out.summary.parameters = n;
+  Eigen::VectorXd theta = Eigen::VectorXd::Zero(n);
+  Eigen::VectorXd res;
+  Eigen::MatrixXd J;
+  Eigen::VectorXd scale;
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd;
+  out.summary.termination = Termination::MaxIterations;
+  for (int it = 0; it < options.max_iterations; ++it) {
+    model.updateNormals(theta);
+    model.evaluate(theta, &res, &J);
+    scale = J.colwise().norm().transpose();
+    for (int j = 0; j < n; ++j) scale[j] = scale[j] > 0 ? 1.0 / scale[j] : 1.0;
+    const Eigen::MatrixXd Js = J * scale.asDiagonal();
+    svd.compute(Js, Eigen::ComputeThinU | Eigen::ComputeThinV);
+    const auto& sv = svd.singularValues();
+    const double tol = options.rank_tolerance * sv[0];
+    int rank = 0;
+    for (long i = 0; i < sv.size(); ++i)
+      if (sv[i] > tol) ++rank;
+    out.summary.rank = rank;
+    out.summary.condition = rank > 0 ? sv[0] / sv[rank - 1] : INFINITY;
+    if (rank < n || m < n) {
+      // Name the location errors that take part in the null space.
+      std::set<std::string> names;
+      const auto& V = svd.matrixV();
+      const auto& params = locationParameters(plan.machine.kinematics);
+      for (long c = rank; c < V.cols(); ++c)
+        for (int j = 0; j < kNumLocationErrors; ++j)
+          if (std::abs(V(j, c)) > 0.05) names.insert(std::string(params[j].name));
+      out.unidentifiable.assign(names.begin(), names.end());
+      out.summary.termination = Termination::RankDeficient;
+      std::string list;
+      for (const auto& s : out.unidentifiable) list += (list.empty() ? "" : ", ") + s;
+      out.summary.message = names.empty()
+                                ? fmt::format("the plan leaves {} nuisance combination(s) unidentifiable", n - rank)
+                                : "the plan cannot identify " + list + " (they move no trigger independently)";
+      return out;
+    }
+    svd.setThreshold(options.rank_tolerance);
+    const Eigen::VectorXd step_scaled = svd.solve(res);
+    const Eigen::VectorXd step = scale.asDiagonal() * step_scaled;
+    theta += step;
+    out.summary.iterations = it + 1;
+    const double effect = (J * step).cwiseAbs().maxCoeff();
+    if (effect < options.step_tolerance) {
+      out.summary.termination = Termination::Converged;
+      break;
+    }
+  }
+  model.updateNormals(theta);
+  model.evaluate(theta, &res, &J);
+  scale = J.colwise().norm().transpose();
+  for (int j = 0; j < n; ++j) scale[j] = scale[j] > 0 ? 1.0 / scale[j] : 1.0;
+  svd.compute(J * scale.asDiagonal(), Eigen::ComputeThinU | Eigen::ComputeThinV);
+  const double rss = res.squaredNorm();
+  out.summary.cost = 0.5 * rss;
+  out.summary.dof = static_cast<int>(m) - n;
+  out.summary.residual_rms_um = mmToUm(std::sqrt(rss / static_cast<double>(m)));
+  out.summary.sigma_um = out.summary.dof > 0 ? mmToUm(std::sqrt(rss / out.summary.dof)) : options.prior_sigma_um;
+  const double sigma_mm = umToMm(out.summary.sigma_um);
+  const Eigen::VectorXd inv_sv = svd.singularValues().cwiseInverse();
+  const Eigen::MatrixXd Vs = scale.asDiagonal() * svd.matrixV();
+  const Eigen::MatrixXd cov = sigma_mm * sigma_mm * Vs * inv_sv.cwiseAbs2().asDiagonal() * Vs.transpose();
+  out.covariance = cov.topLeftCorner<kNumLocationErrors, kNumLocationErrors>();
+  out.u = out.covariance.diagonal().cwiseSqrt();
+  out.estimate = model.errors(theta);
+  for (long i = 0; i < m; ++i)
+    out.residuals.push_back({obs[static_cast<size_t>(i)].run, obs[static_cast<size_t>(i)].point->id, mmToUm(res[i])});
+  if (out.summary.termination == Termination::Converged)
+    out.summary.message = fmt::format("converged in {} iterations", out.summary.iterations);
+  else
+    out.summary.message = fmt::format("stopped after {} iterations without meeting the step tolerance", out.summary.iterations);
+  return out;
+}
+
+IdentificationResult closedForm(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
+                                const IdentificationOptions& options) {
+  IdentificationResult out;
+  out.method = Method::ClosedForm;
+  out.estimate.kinematics = plan.machine.kinematics;
+  try {
+    ErrorVector sum = ErrorVector::Zero();
+    ErrorVector var = ErrorVector::Zero();
+    for (const auto& run : runs) {
+      const auto eqs = touch154Patterns(plan, run);
+      const LocationErrors e = solvePatterns(eqs);
+      sum += e.values;
+      // The closed form is linear in the measured coordinates: propagate the probe's
+      // repeatability through it by unit perturbations of each trigger along its approach.
+      const double h = 1e-3;
+      MeasurementRun pert = run;
+      for (size_t i = 0; i < run.points.size(); ++i) {
+        const ProbePoint* p = plan.findPoint(run.points[i].point_id);
+        if (!p) continue;
+        pert.points[i].position_m_mm += h * p->approach_m;
+        const ErrorVector d = (solvePatterns(touch154Patterns(plan, pert)).values - e.values) / h;
+        var += d.cwiseAbs2();
+        pert.points[i].position_m_mm = run.points[i].position_m_mm;
+      }
+      out.summary.observations += static_cast<int>(run.points.size());
+    }
+    const double nr = static_cast<double>(runs.size());
+    out.estimate.values = sum / nr;
+    const double sigma = umToMm(options.prior_sigma_um);
+    out.u = (var / (nr * nr)).cwiseSqrt() * sigma;
+    out.covariance = out.u.cwiseAbs2().asDiagonal();
+    out.summary.termination = Termination::Converged;
+    out.summary.parameters = kNumLocationErrors;
+    out.summary.rank = kNumLocationErrors;
+    out.summary.sigma_um = options.prior_sigma_um;
+    out.summary.message = "closed form (000 Eqs. (14)-(19), corrected); u from the probe repeatability";
+  } catch (const std::invalid_argument& e) {
+    out.summary.termination = Termination::InvalidInput;
+    out.summary.message = e.what();
+  }
+  return out;
+}
+
+}  // namespace
+
+IdentificationResult identify(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
+                              const IdentificationOptions& options) {
+  IdentificationResult bad;
+  bad.method = options.method;
+  bad.estimate.kinematics = plan.machine.kinematics;
+  std::string why;
+  if (!options.validate(&why)) {
+    bad.summary.message = "invalid options: " + why;
+    return bad;
+  }
+  if (runs.empty()) {
+    bad.summary.message = "no results to identify from";
+    return bad;
+  }
+  if (!plan.machine.artefact) {
+    bad.summary.message = "the plan has no artefact";
+    return bad;
+  }
+  if (options.method == Method::ClosedForm) return closedForm(plan, runs, options);
+  const auto obs = collect(plan, runs, &why);
+  if (obs.empty()) {
+    bad.summary.message = why.empty() ? "no observations" : why;
+    return bad;
+  }
+  return leastSquares(plan, obs, options);
+}
+
+}  // namespace rotacal

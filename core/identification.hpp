@@ -1,0 +1,83 @@
+#pragma once
+// Identification of the eight location errors from touch-probe triggers.
+//  - ClosedForm: 000 Eq. (3)-(19) on the relative displacements of Eq. (21), with the
+//    corrections documented in closed_form.hpp.
+//  - LeastSquaresRigidSetup: Gauss-Newton over all points with the exact simulator as the model;
+//    nuisance = the test piece's rigid setup (3 translations, 3 rotations).
+//  - LeastSquaresPerPoint: the form-immune variant: nuisance = one surface offset per target
+//    point (the piece's setup and form together), so only the displacement of each point
+//    between poses informs the location errors (the idea of 000 Eq. (21), over all points).
+//    Face orientations (which enter at second order only) are re-estimated at every iteration
+//    from the reference pose's points.
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "core/error_model.hpp"
+#include "core/measurement.hpp"
+#include "core/probe_plan.hpp"
+
+namespace rotacal {
+
+enum class Method { ClosedForm, LeastSquaresRigidSetup, LeastSquaresPerPoint };
+std::string_view methodName(Method method);   // "closed_form", "lsq_rigid_setup", "lsq_per_point"
+Method methodFromName(std::string_view name);  // throws std::invalid_argument
+
+struct IdentificationOptions {
+  Method method = Method::LeastSquaresPerPoint;
+  int max_iterations = 30;
+  /// Stop when the largest scaled step is below this (relative to the scaled parameter size).
+  double step_tolerance = 1e-12;  // mm of trigger effect
+  /// Singular values of the column-scaled Jacobian below this fraction of the largest one count
+  /// as zero: the parameters in their null space are reported as not identifiable.
+  double rank_tolerance = 1e-8;
+  /// Probe repeatability (um, k = 1) used for the closed form's uncertainty, and reported beside
+  /// the fit's own noise estimate.
+  double prior_sigma_um = 0.7;
+
+  bool validate(std::string* why) const;
+};
+
+enum class Termination { Converged, MaxIterations, RankDeficient, InvalidInput };
+std::string_view terminationName(Termination t);
+
+struct IdentificationSummary {
+  Termination termination = Termination::InvalidInput;
+  std::string message;
+  int iterations = 0;
+  int observations = 0;
+  int parameters = 0;       // location errors + nuisance
+  int rank = 0;
+  double condition = 0.0;   // of the column-scaled Jacobian
+  double cost = 0.0;        // 0.5 * sum of squared residuals, mm^2
+  double residual_rms_um = 0.0;
+  double sigma_um = 0.0;    // a-posteriori noise: sqrt(RSS / dof)
+  int dof = 0;
+};
+
+struct PointResidual {
+  int run = 0;
+  int point_id = 0;
+  double residual_um = 0.0;  // measured - model, along the approach
+};
+
+struct IdentificationResult {
+  LocationErrors estimate;
+  ErrorVector u = ErrorVector::Zero();  // standard uncertainty (k = 1), mm / rad
+  Eigen::Matrix<double, kNumLocationErrors, kNumLocationErrors> covariance =
+      Eigen::Matrix<double, kNumLocationErrors, kNumLocationErrors>::Zero();
+  std::vector<PointResidual> residuals;
+  std::vector<std::string> unidentifiable;  // parameter names, when RankDeficient
+  IdentificationSummary summary;
+  Method method = Method::LeastSquaresPerPoint;
+};
+
+/// Identifies the location errors from one or more runs of the same plan (repeats share the
+/// test piece, hence its nuisance parameters). Never throws on bad data: the summary says why.
+IdentificationResult identify(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
+                              const IdentificationOptions& options);
+
+/// Measured scalar of a trigger: its displacement along the approach from the nominal trigger (mm).
+double alongApproach(const ProbePoint& point, const TriggerPoint& trigger);
+
+}  // namespace rotacal

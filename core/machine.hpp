@@ -1,0 +1,74 @@
+#pragma once
+// The immutable description of a machine: kinematic type, strokes, probe, feeds, clearances and
+// the artefact on its table (MACHINE.json). Free functions take it by const reference.
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/artefact.hpp"
+#include "core/error_model.hpp"
+#include "core/json_io.hpp"
+
+namespace rotacal {
+
+enum class LengthUnit { Millimetre, Inch };
+
+struct AxisRange {
+  double min = 0.0;
+  double max = 0.0;
+  bool contains(double v, double tol = 1e-9) const { return v >= min - tol && v <= max + tol; }
+};
+
+/// A rotary axis. Strokes in the papers' convention (deg). controller_sign says how the
+/// controller counts: commanded controller angle = controller_sign * paper angle. A dialect may
+/// override it (e.g. LinuxCNC's xyzac-trt-kins turns the table the other way: -1).
+struct RotaryAxis {
+  char name = 'C';
+  AxisRange stroke_deg{-1e9, 1e9};
+  bool continuous = false;
+  int controller_sign = 1;
+  std::map<std::string, int> dialect_sign;
+};
+
+struct ProbeSpec {
+  double ball_diameter_mm = 6.0;
+  double stylus_length_mm = 50.0;     // ball centre to probe body
+  double body_clearance_mm = 5.0;     // body must stay this far above the piece's top in the pose
+  int tool_number = 0;                // 0: the controlled point is the ball centre, no G43
+  double repeatability_um = 0.7;      // standard uncertainty, one direction (000 Table 5)
+  double ball_radius_mm() const { return ball_diameter_mm / 2.0; }
+};
+
+struct Feeds {
+  double rapid_mm_min = 20000.0;
+  double positioning_mm_min = 2000.0;  // G1 moves near the piece
+  double probing_mm_min = 100.0;       // guarded move
+  double rotary_deg_min = 3600.0;
+};
+
+struct MachineModel {
+  std::string name;
+  std::string description;
+  Kinematics kinematics = Kinematics::TableAC;
+  LengthUnit units = LengthUnit::Millimetre;
+  AxisRange x, y, z;                     // machine frame, origin at the rotary-axis intersection, mm
+  std::vector<RotaryAxis> rotary;        // e.g. A then C
+  double table_diameter_mm = 500.0;
+  ProbeSpec probe;
+  Feeds feeds;
+  double clearance_mm = 10.0;            // above the artefact for moves between points
+  double approach_mm = 5.0;              // start of a probing move, before the nominal trigger
+  double overtravel_mm = 2.0;            // end of a probing move, past the nominal trigger
+  std::optional<SquareColumn> artefact;
+
+  const RotaryAxis& rotaryAxis(char name) const;  // throws std::invalid_argument
+  bool hasRotary(char name) const;
+  int controllerSign(char axis, const std::string& dialect) const;
+};
+
+MachineModel machineFromJson(const JsonDoc& doc, const Json& value);
+MachineModel loadMachine(const std::string& path);
+Json machineToJson(const MachineModel& machine);
+
+}  // namespace rotacal

@@ -1,0 +1,84 @@
+#pragma once
+// A probing plan: the ordered touches of a cycle with everything the program writer, the
+// simulator and the identification need (contract.md, PLAN.json). Poses are in the papers'
+// convention; positions are ball-centre machine coordinates (origin at the rotary-axis
+// intersection), mm.
+#include <Eigen/Core>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "core/artefact.hpp"
+#include "core/error_model.hpp"
+#include "core/json_io.hpp"
+#include "core/machine.hpp"
+
+namespace rotacal {
+
+struct ProbePoint {
+  int id = 0;                   // 1-based, order of probing
+  std::string pose_name;        // e.g. "I" .. "VII" (000 Fig. 5)
+  Pose pose;                    // commanded angles, deg, papers' convention
+  int target = 0;               // the point on the artefact (000 Fig. 6 index k), same at every pose
+  Face face = Face::Top;
+  Eigen::Vector3d contact_w_mm = Eigen::Vector3d::Zero();  // nominal contact, workpiece frame
+  Eigen::Vector3d normal_w = Eigen::Vector3d::UnitZ();     // outward normal, workpiece frame
+  Eigen::Vector3d trigger_m_mm = Eigen::Vector3d::Zero();  // ball centre at trigger, perfect machine
+  Eigen::Vector3d approach_m = -Eigen::Vector3d::UnitZ();  // unit direction of the probing move
+  double t_s = 0.0;                                        // planned seconds from cycle start
+
+  Eigen::Vector3d start_m(double approach_mm) const { return trigger_m_mm - approach_mm * approach_m; }
+  Eigen::Vector3d end_m(double overtravel_mm) const { return trigger_m_mm + overtravel_mm * approach_m; }
+};
+
+/// A named pose and the heights used around it.
+struct PlanPose {
+  std::string name;
+  Pose pose;
+  double safe_z_mm = 0.0;  // ball-centre Z for moves between points at this pose
+};
+
+struct ProbePlan {
+  std::string cycle;
+  MachineModel machine;
+  std::map<std::string, std::string> options;  // the cycle options used (after defaults)
+  std::vector<PlanPose> poses;
+  double index_z_mm = 0.0;  // ball-centre Z at which the rotary axes may index
+  std::vector<ProbePoint> points;
+
+  const ProbePoint* findPoint(int id) const;
+  const PlanPose& poseByName(const std::string& name) const;  // throws std::invalid_argument
+};
+
+/// Cycle options from `--set KEY=VALUE`.
+using CycleOptions = std::map<std::string, std::string>;
+
+/// Builds the plan of a cycle. Throws std::invalid_argument on an unknown cycle or option, or a
+/// plan that does not fit the machine (stroke, reach), naming what is wrong.
+ProbePlan makePlan(const std::string& cycle, const MachineModel& machine, const CycleOptions& options);
+
+Json planToJson(const ProbePlan& plan);
+ProbePlan planFromJson(const JsonDoc& doc);
+ProbePlan loadPlan(const std::string& path);
+
+/// Positions the probe passes through, in order, for the whole plan (shared by the time
+/// estimate, the program writer and the stroke check).
+struct Waypoint {
+  enum class Kind { Rapid, Position, Index, Probe, Retract } kind;
+  Eigen::Vector3d position_m;  // ball centre, machine frame, mm
+  Pose pose;                   // rotary pose in force (deg, papers' convention)
+  int point_id = 0;            // for Probe/Retract
+};
+std::vector<Waypoint> plannedPath(const ProbePlan& plan);
+
+/// Checks every waypoint and pose against the machine's strokes; returns the violations.
+std::vector<std::string> strokeViolations(const ProbePlan& plan);
+
+/// Fills t_s of every point from the path, the feeds and the rotary speed.
+void estimateTimes(ProbePlan& plan);
+
+/// Splits "a,b,c" into doubles; throws std::invalid_argument naming the option.
+std::vector<double> parseNumberList(const std::string& key, const std::string& text);
+double parseNumber(const std::string& key, const std::string& text);
+
+}  // namespace rotacal

@@ -1,0 +1,26 @@
+#pragma once
+// REPORT.json (contract) and the readable summary of an analysis.
+#include <string>
+#include <vector>
+
+#include "core/closed_form.hpp"
+#include "core/identification.hpp"
+#include "core/json_io.hpp"
+#include "core/probe_plan.hpp"
+
+namespace rotacal {
+
+struct Analysis {
+  const ProbePlan* plan = nullptr;
+  std::vector<std::string> result_files;
+  IdentificationResult main;                  // all runs together
+  std::vector<IdentificationResult> per_run;  // each repeat alone (000 Table 4 columns)
+  std::vector<IdentificationResult> other_methods;  // the same data by the other estimators
+  std::vector<PatternEquation> patterns;      // closed form, first run (touch154)
+};
+
+Json locationErrorsJson(const LocationErrors& estimate, const ErrorVector& u);
+Json analysisToJson(const Analysis& analysis);
+std::string analysisText(const Analysis& analysis);
+
+}  // namespace rotacal

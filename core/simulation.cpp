@@ -1,0 +1,146 @@
+#include "core/simulation.hpp"
+
+#include <cmath>
+#include <random>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "core/units.hpp"
+
+namespace rotacal {
+
+double ballPlaneContact(const Eigen::Vector3d& c0, const Eigen::Vector3d& u, double r, const Plane& plane) {
+  const double nu = plane.normal.dot(u);
+  if (nu > -1e-9) throw std::invalid_argument("approach does not move toward the surface");
+  return (r - plane.normal.dot(c0 - plane.point)) / nu;
+}
+
+Plane truePlane_m(const ProbePlan& plan, const ProbePoint& point, const Truth& truth) {
+  const Plane w = truth.artefact.face(*plan.machine.artefact, point.face);
+  const Eigen::Isometry3d T = T_m_w(truth.errors, point.pose);
+  return Plane{T * w.point, T.linear() * w.normal};
+}
+
+MeasurementRun simulate(const ProbePlan& plan, const Truth& truth, const SimulationOptions& options) {
+  if (!plan.machine.artefact) throw std::invalid_argument("plan has no artefact to simulate");
+  std::mt19937_64 rng(options.seed);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  const double r = plan.machine.probe.ball_radius_mm();
+  MeasurementRun run;
+  run.source = "simulation";
+  for (const auto& p : plan.points) {
+    const Plane plane = truePlane_m(plan, p, truth);
+    double s = ballPlaneContact(p.trigger_m_mm, p.approach_m, r, plane);
+    if (s < -plan.machine.approach_mm || s > plan.machine.overtravel_mm)
+      throw std::runtime_error(fmt::format(
+          "point {} (pose {}, face {}): the probe would not trigger: the surface is {:.3f} mm from the nominal "
+          "trigger, outside the search range [-{:.3f}, +{:.3f}] mm",
+          p.id, p.pose_name, faceName(p.face), s, plan.machine.approach_mm, plan.machine.overtravel_mm));
+    s += umToMm(truth.pretravel_um);
+    if (truth.noise_um > 0) s += umToMm(truth.noise_um) * noise(rng);
+    TriggerPoint t;
+    t.point_id = p.id;
+    t.position_m_mm = p.trigger_m_mm + s * p.approach_m;
+    t.t_s = truth.start_time_s + p.t_s;
+    run.points.push_back(t);
+  }
+  return run;
+}
+
+namespace {
+
+Eigen::Vector3d vec3Or(const JsonDoc& doc, const Json& obj, const char* key) {
+  if (!obj.contains(key)) return Eigen::Vector3d::Zero();
+  if (!obj[key].is_array() || obj[key].size() != 3) doc.fail(key, std::string("'") + key + "' must be [x, y, z]");
+  Eigen::Vector3d v;
+  for (int i = 0; i < 3; ++i) {
+    if (!obj[key][i].is_number()) doc.fail(key, std::string("'") + key + "' must hold numbers");
+    v[i] = obj[key][i].get<double>();
+  }
+  return v;
+}
+
+}  // namespace
+
+Truth truthFromJson(const JsonDoc& doc, Kinematics kinematics) {
+  const Json& j = doc.value;
+  if (!j.is_object() || j.value("format", "") != "rotacal-truth/1")
+    doc.fail("format", "not a truth file (expected \"format\": \"rotacal-truth/1\")");
+  Truth t;
+  t.errors.kinematics = kinematics;
+  if (j.contains("location_errors")) {
+    for (const auto& [name, entry] : j["location_errors"].items()) {
+      const int i = parameterIndex(kinematics, name);
+      if (i < 0) doc.fail(name, "unknown location error '" + name + "' for this machine");
+      if (!entry.is_object() || !entry.contains("value") || !entry["value"].is_number())
+        doc.fail(name, "location error '" + name + "' needs {\"value\": number, \"unit\": ...}");
+      const std::string unit = entry.value("unit", "");
+      const double v = entry["value"].get<double>();
+      const ParamKind kind = locationParameters(kinematics)[i].kind;
+      if (kind == ParamKind::Length) {
+        if (unit == "um") t.errors.values[i] = umToMm(v);
+        else if (unit == "mm") t.errors.values[i] = v;
+        else doc.fail(name, "unit of '" + name + "' must be um or mm");
+      } else {
+        if (unit == "mdeg") t.errors.values[i] = mdegToRad(v);
+        else if (unit == "urad") t.errors.values[i] = v * 1e-6;
+        else if (unit == "deg") t.errors.values[i] = degToRad(v);
+        else doc.fail(name, "unit of '" + name + "' must be mdeg, urad or deg");
+      }
+    }
+  }
+  if (j.contains("setup_error")) {
+    const Json& s = j["setup_error"];
+    t.artefact.setup.translation_mm = vec3Or(doc, s, "translation_mm");
+    t.artefact.setup.rotation_rad = vec3Or(doc, s, "rotation_mrad") * 1e-3;
+  }
+  if (j.contains("form_error")) {
+    for (const auto& [face, f] : j["form_error"].items()) {
+      Face fc;
+      try {
+        fc = faceFromName(face);
+      } catch (const std::invalid_argument& e) {
+        doc.fail(face, e.what());
+      }
+      FaceForm& ff = t.artefact.form[static_cast<size_t>(fc)];
+      ff.offset_mm = umToMm(numberOr(doc, f, "offset_um", 0.0));
+      ff.tilt_u_rad = numberOr(doc, f, "tilt_u_mrad", 0.0) * 1e-3;
+      ff.tilt_v_rad = numberOr(doc, f, "tilt_v_mrad", 0.0) * 1e-3;
+    }
+  }
+  t.noise_um = numberOr(doc, j, "probe_noise_um", 0.0);
+  t.pretravel_um = numberOr(doc, j, "probe_pretravel_um", 0.0);
+  t.start_time_s = numberOr(doc, j, "start_time_s", 0.0);
+  return t;
+}
+
+Truth loadTruth(const std::string& path, Kinematics kinematics) { return truthFromJson(readJsonFile(path), kinematics); }
+
+Json truthToJson(const Truth& t) {
+  Json j;
+  j["format"] = "rotacal-truth/1";
+  Json le = Json::object();
+  const auto& params = locationParameters(t.errors.kinematics);
+  for (size_t i = 0; i < params.size(); ++i)
+    le[std::string(params[i].name)] = {{"value", t.errors.reportValue(static_cast<int>(i))},
+                                       {"unit", std::string(reportUnit(params[i].kind))}};
+  j["location_errors"] = le;
+  const auto& s = t.artefact.setup;
+  j["setup_error"] = {{"translation_mm", {s.translation_mm.x(), s.translation_mm.y(), s.translation_mm.z()}},
+                      {"rotation_mrad", {s.rotation_rad.x() * 1e3, s.rotation_rad.y() * 1e3, s.rotation_rad.z() * 1e3}}};
+  Json form = Json::object();
+  for (Face f : kAllFaces) {
+    const FaceForm& ff = t.artefact.form[static_cast<size_t>(f)];
+    if (ff.offset_mm == 0 && ff.tilt_u_rad == 0 && ff.tilt_v_rad == 0) continue;
+    form[std::string(faceName(f))] = {{"offset_um", mmToUm(ff.offset_mm)},
+                                      {"tilt_u_mrad", ff.tilt_u_rad * 1e3},
+                                      {"tilt_v_mrad", ff.tilt_v_rad * 1e3}};
+  }
+  if (!form.empty()) j["form_error"] = form;
+  if (t.noise_um > 0) j["probe_noise_um"] = t.noise_um;
+  if (t.pretravel_um != 0) j["probe_pretravel_um"] = t.pretravel_um;
+  return j;
+}
+
+}  // namespace rotacal

@@ -1,0 +1,44 @@
+#pragma once
+// The exact simulator: what the controller records when the true machine (location errors,
+// full HTMs) probes the true test piece (setup + form, planes) with a ball of the probe's
+// radius moving along the plan's approach line. No small-angle approximation anywhere.
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "core/artefact.hpp"
+#include "core/error_model.hpp"
+#include "core/json_io.hpp"
+#include "core/measurement.hpp"
+#include "core/probe_plan.hpp"
+
+namespace rotacal {
+
+struct Truth {
+  LocationErrors errors;
+  ArtefactTruth artefact;
+  double noise_um = 0.0;          // probe repeatability, standard deviation along the approach
+  double pretravel_um = 0.0;      // constant trigger lag along the approach (probe_pretravel)
+  double start_time_s = 0.0;      // clock at the cycle start (repeats in time order)
+};
+
+/// Distance s (mm) along the approach from the nominal trigger at which the ball of radius r
+/// first touches the plane, both in the machine frame: n.(c0 + s u - x) = r.
+double ballPlaneContact(const Eigen::Vector3d& c0_m, const Eigen::Vector3d& u_m, double r_mm, const Plane& plane_m);
+
+/// The true face plane of a point in the machine frame at its pose.
+Plane truePlane_m(const ProbePlan& plan, const ProbePoint& point, const Truth& truth);
+
+struct SimulationOptions {
+  std::uint64_t seed = 1;
+};
+
+/// Simulated triggers for every plan point. Throws std::runtime_error naming the point when the
+/// probe would not trigger within [-approach_mm, +overtravel_mm] (the program would alarm).
+MeasurementRun simulate(const ProbePlan& plan, const Truth& truth, const SimulationOptions& options);
+
+Truth truthFromJson(const JsonDoc& doc, Kinematics kinematics);
+Truth loadTruth(const std::string& path, Kinematics kinematics);
+Json truthToJson(const Truth& truth);
+
+}  // namespace rotacal

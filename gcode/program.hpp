@@ -1,0 +1,46 @@
+#pragma once
+// The dialect-neutral NC program: what a probing program does, in the controller's own
+// coordinates (machine XYZ with the work offset at the rotary-axis intersection, in the
+// program's length unit; rotary angles in the controller's own sign), before any dialect
+// decides how to spell it. controllers/ turns it into text; postproc/ builds it from a plan.
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace rotacal::nc {
+
+enum class Unit { Millimetre, Inch };
+
+/// One step of a probing program.
+struct Op {
+  enum class Kind {
+    Comment,   // text
+    Rapid,     // G0 to xyz
+    Linear,    // G1 to xyz at feed
+    Index,     // rotary axes to `rotary` (clear of the piece: the writer needs nothing else)
+    Probe,     // guarded move from the current position toward xyz at feed; must trigger
+  } kind = Kind::Comment;
+  Eigen::Vector3d xyz = Eigen::Vector3d::Zero();
+  std::vector<std::pair<char, double>> rotary;  // for Index: axis letter, controller angle (deg)
+  double feed = 0.0;                            // per minute, program units
+  std::string text;                             // Comment
+  int point_id = 0;                             // Probe: plan point id (1-based)
+  Eigen::Vector3d nominal_trigger = Eigen::Vector3d::Zero();  // Probe: expected ball centre
+  std::string pose_name;                                      // Probe: e.g. "III"
+};
+
+struct Program {
+  std::string name;                  // e.g. "ROTACAL_TOUCH154"
+  int number = 7154;                 // O-number for the controls that need one
+  std::string cycle;
+  Unit unit = Unit::Millimetre;
+  std::vector<std::string> header;   // comment lines for the operator
+  std::vector<char> rotary_axes;     // letters used, e.g. {'A', 'C'}
+  int probe_tool = 0;                // 0: no tool change / length compensation
+  std::string results_file;          // base name of the file the program writes
+  int point_count = 0;
+  std::vector<Op> ops;
+};
+
+}  // namespace rotacal::nc

@@ -1,0 +1,80 @@
+#include "postproc/probe_program.hpp"
+
+#include <fmt/format.h>
+
+#include "core/units.hpp"
+
+namespace rotacal {
+
+double controllerAngle(const MachineModel& machine, char axis, const std::string& dialect, double paper_deg) {
+  const double a = machine.controllerSign(axis, dialect) * paper_deg;
+  return a == 0.0 ? 0.0 : a;  // no "-0.000"
+}
+
+nc::Program probeProgram(const ProbePlan& plan, const std::string& dialect) {
+  const MachineModel& m = plan.machine;
+  nc::Program prog;
+  prog.cycle = plan.cycle;
+  prog.name = "ROTACAL_" + plan.cycle;
+  for (auto& ch : prog.name) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+  prog.unit = m.units == LengthUnit::Inch ? nc::Unit::Inch : nc::Unit::Millimetre;
+  const double k = m.units == LengthUnit::Inch ? 1.0 / kMmPerInch : 1.0;
+  prog.probe_tool = m.probe.tool_number;
+  prog.results_file = "rotacal_" + plan.cycle;
+  prog.point_count = static_cast<int>(plan.points.size());
+  for (const auto& r : m.rotary) prog.rotary_axes.push_back(r.name);
+  prog.header = {
+      fmt::format("rotacal {} probing cycle, {} points, {} poses", plan.cycle, plan.points.size(), plan.poses.size()),
+      fmt::format("machine: {}", m.name),
+      "work offset: origin at the intersection of the rotary axes, no rotation",
+      m.probe.tool_number ? fmt::format("probe: tool {} with its length to the ball centre", m.probe.tool_number)
+                          : "probe: controlled point = probe ball centre (no length compensation)",
+      fmt::format("ball diameter {:.3f} mm, probing feed {:.1f} mm/min", m.probe.ball_diameter_mm, m.feeds.probing_mm_min),
+  };
+  for (const auto& r : m.rotary) {
+    const int s = m.controllerSign(r.name, dialect);
+    prog.header.push_back(fmt::format("{} angles: controller = {} x paper convention (000 Eq. (1))", r.name, s > 0 ? "+1" : "-1"));
+  }
+  const auto path = plannedPath(plan);
+  for (const auto& w : path) {
+    nc::Op op;
+    op.xyz = w.position_m * k;
+    switch (w.kind) {
+      case Waypoint::Kind::Rapid: op.kind = nc::Op::Kind::Rapid; break;
+      case Waypoint::Kind::Position:
+      case Waypoint::Kind::Retract:
+        op.kind = nc::Op::Kind::Linear;
+        op.feed = m.feeds.positioning_mm_min * k;
+        break;
+      case Waypoint::Kind::Index: {
+        op.kind = nc::Op::Kind::Index;
+        for (const auto& r : m.rotary) {
+          const double paper = r.name == 'A' ? w.pose.A : (r.name == 'B' ? w.pose.B : w.pose.C);
+          op.rotary.emplace_back(r.name, controllerAngle(m, r.name, dialect, paper));
+        }
+        std::string pose_name;
+        for (const auto& p : plan.poses)
+          if (p.pose.A == w.pose.A && p.pose.B == w.pose.B && p.pose.C == w.pose.C) pose_name = p.name;
+        nc::Op c;
+        c.kind = nc::Op::Kind::Comment;
+        c.text = fmt::format("pose {}", pose_name);
+        prog.ops.push_back(c);
+        break;
+      }
+      case Waypoint::Kind::Probe: {
+        op.kind = nc::Op::Kind::Probe;
+        op.feed = m.feeds.probing_mm_min * k;
+        op.point_id = w.point_id;
+        const ProbePoint* p = plan.findPoint(w.point_id);
+        op.nominal_trigger = p->trigger_m_mm * k;
+        op.pose_name = p->pose_name;
+        op.text = fmt::format("P{} pose {} target {} face {}", p->id, p->pose_name, p->target, faceName(p->face));
+        break;
+      }
+    }
+    prog.ops.push_back(op);
+  }
+  return prog;
+}
+
+}  // namespace rotacal

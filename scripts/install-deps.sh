@@ -1,0 +1,12 @@
+#!/usr/bin/env bash
+# Installs what rotacal needs to build and test, from Debian 12's packages only.
+set -euo pipefail
+SUDO=""
+if [ "$(id -u)" != 0 ]; then SUDO="sudo"; fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update
+# linuxcnc-uspace: LinuxCNC's own interpreter (rs274), which reads our LinuxCNC programs in the
+# tests. --no-install-recommends keeps its recommended RT kernel and Qt stack off the machine.
+$SUDO apt-get install -y --no-install-recommends \
+  build-essential cmake libeigen3-dev libfmt-dev nlohmann-json3-dev libcli11-dev \
+  libgtest-dev libgmock-dev linuxcnc-uspace

@@ -1,0 +1,87 @@
+// The exact simulator against an independent computation: the ball centre is moved along the
+// approach line and mapped back into the workpiece frame through the inverse HTM, and the
+// contact is found by bisection on its distance to the true face plane.
+#include <gtest/gtest.h>
+
+#include "core/identification.hpp"
+#include "core/simulation.hpp"
+#include "test_util.hpp"
+
+namespace rotacal {
+namespace {
+
+// Bisection to 1e-13 mm of the distance function; the closed-form contact is exact to rounding.
+constexpr double kContactTolMm = 1e-10;
+
+double contactByBisection(const ProbePlan& plan, const ProbePoint& p, const Truth& truth) {
+  const Plane w = truth.artefact.face(*plan.machine.artefact, p.face);
+  const Eigen::Isometry3d Tinv = T_m_w(truth.errors, p.pose).inverse();
+  const double r = plan.machine.probe.ball_radius_mm();
+  auto gap = [&](double s) { return w.normal.dot(Tinv * (p.trigger_m_mm + s * p.approach_m) - w.point) - r; };
+  double lo = -plan.machine.approach_mm, hi = plan.machine.overtravel_mm;
+  EXPECT_GT(gap(lo), 0.0);
+  EXPECT_LT(gap(hi), 0.0);
+  for (int i = 0; i < 200; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (gap(mid) > 0 ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+Truth roughTruth() {
+  Truth t = test::truthWith(test::table4Mean());
+  t.artefact.setup.translation_mm = Eigen::Vector3d(0.5, -0.3, 0.1);
+  t.artefact.setup.rotation_rad = Eigen::Vector3d(0.001, -0.0015, 0.002);
+  t.artefact.form[static_cast<size_t>(Face::Top)].tilt_v_rad = 0.002;
+  t.artefact.form[static_cast<size_t>(Face::PosX)].tilt_u_rad = 0.0002;
+  t.artefact.form[static_cast<size_t>(Face::NegY)].offset_mm = 0.02;
+  return t;
+}
+
+TEST(Simulation, TriggersMatchBisectionOnTheExactGeometry) {
+  const ProbePlan plan = test::touch154Plan();
+  const Truth truth = roughTruth();
+  const MeasurementRun run = simulate(plan, truth, {});
+  ASSERT_EQ(run.points.size(), plan.points.size());
+  for (size_t i = 0; i < plan.points.size(); ++i) {
+    const ProbePoint& p = plan.points[i];
+    const double s = contactByBisection(plan, p, truth);
+    EXPECT_NEAR(p.approach_m.dot(run.points[i].position_m_mm - p.trigger_m_mm), s, kContactTolMm) << "point " << p.id;
+    // The ball moves along the approach line only.
+    const Eigen::Vector3d d = run.points[i].position_m_mm - p.trigger_m_mm;
+    EXPECT_LT((d - d.dot(p.approach_m) * p.approach_m).norm(), 1e-12);
+  }
+}
+
+TEST(Simulation, PerfectMachineTriggersAtNominal) {
+  const ProbePlan plan = test::touch154Plan();
+  const MeasurementRun run = simulate(plan, Truth{}, {});
+  for (size_t i = 0; i < plan.points.size(); ++i)
+    EXPECT_LT((run.points[i].position_m_mm - plan.points[i].trigger_m_mm).norm(), 1e-12);
+}
+
+TEST(Simulation, NoiseHasTheRequestedSpreadAndIsSeeded) {
+  const ProbePlan plan = test::touch154Plan();
+  Truth t;
+  t.noise_um = 0.7;
+  const MeasurementRun a = simulate(plan, t, {42});
+  const MeasurementRun b = simulate(plan, t, {42});
+  double ss = 0;
+  for (size_t i = 0; i < plan.points.size(); ++i) {
+    EXPECT_EQ(a.points[i].position_m_mm, b.points[i].position_m_mm);
+    ss += std::pow(mmToUm(alongApproach(plan.points[i], a.points[i])), 2);
+  }
+  const double sd = std::sqrt(ss / static_cast<double>(plan.points.size()));
+  // 154 samples: the sample sd of a normal has a relative sd of 1/sqrt(2*154) = 5.7 %; 4 sd.
+  EXPECT_NEAR(sd, 0.7, 0.7 * 0.23);
+}
+
+TEST(Simulation, OutOfRangeSurfaceIsANoTrigger) {
+  const ProbePlan plan = test::touch154Plan();
+  Truth t;
+  t.artefact.setup.translation_mm = Eigen::Vector3d(0, 0, -3.0);  // top 3 mm low: past the 2 mm overtravel
+  EXPECT_THROW(simulate(plan, t, {}), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace rotacal

@@ -1,0 +1,35 @@
+#pragma once
+// Shared helpers for rotacal's tests: the bundled machine, the Table 4 truth, and one matrix
+// comparison that prints the difference.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "core/machine.hpp"
+#include "core/probe_plan.hpp"
+#include "core/simulation.hpp"
+#include "core/units.hpp"
+
+namespace rotacal::test {
+
+inline std::string sourcePath(const std::string& rel) { return std::string(ROTACAL_SOURCE_DIR) + "/" + rel; }
+
+inline MachineModel acMachine() { return loadMachine(sourcePath("examples/machines/ac_trunnion.json")); }
+inline ProbePlan touch154Plan() { return makePlan("touch154", acMachine(), {}); }
+
+/// 000 Table 4, mean column: um and mdeg.
+inline LocationErrors table4Mean() {
+  LocationErrors e;
+  e.kinematics = Kinematics::TableAC;
+  const double v[8] = {14.6, 23.2, 27.7, 3.9, -0.5, -0.1, -0.5, 0.2};
+  for (int i = 0; i < 8; ++i) e.setReportValue(i, v[i]);
+  return e;
+}
+
+inline Truth truthWith(const LocationErrors& e) {
+  Truth t;
+  t.errors = e;
+  return t;
+}
+
+}  // namespace rotacal::test
