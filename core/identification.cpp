@@ -3,6 +3,8 @@
 #include <Eigen/Dense>
 #include <Eigen/SVD>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <map>
 #include <set>
 #include <stdexcept>

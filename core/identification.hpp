@@ -27,7 +27,8 @@ struct IdentificationOptions {
   Method method = Method::LeastSquaresPerPoint;
   int max_iterations = 30;
   /// Stop when the largest scaled step is below this (relative to the scaled parameter size).
-  double step_tolerance = 1e-12;  // mm of trigger effect
+  // mm of trigger effect: 1e-7 um, two decades above the rounding floor of 200 mm coordinates.
+  double step_tolerance = 1e-10;
   /// Singular values of the column-scaled Jacobian below this fraction of the largest one count
   /// as zero: the parameters in their null space are reported as not identifiable.
   double rank_tolerance = 1e-8;

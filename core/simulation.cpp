@@ -32,6 +32,17 @@ MeasurementRun simulate(const ProbePlan& plan, const Truth& truth, const Simulat
   for (const auto& p : plan.points) {
     const Plane plane = truePlane_m(plan, p, truth);
     double s = ballPlaneContact(p.trigger_m_mm, p.approach_m, r, plane);
+    if (truth.linear_axis_error) {
+      // The controller reads c(s) = c0 + s u while the ball is at c(s) + E(c(s)): solve
+      // n.(c(s) + E(c(s)) - x) = r by fixed-point iteration (E varies by um per mm: contraction ~1e-3).
+      for (int it = 0; it < 50; ++it) {
+        const Eigen::Vector3d c = p.trigger_m_mm + s * p.approach_m;
+        const double next = ballPlaneContact(p.trigger_m_mm + truth.linear_axis_error(c), p.approach_m, r, plane);
+        const bool done = std::abs(next - s) < 1e-13;
+        s = next;
+        if (done) break;
+      }
+    }
     if (s < -plan.machine.approach_mm || s > plan.machine.overtravel_mm)
       throw std::runtime_error(fmt::format(
           "point {} (pose {}, face {}): the probe would not trigger: the surface is {:.3f} mm from the nominal "

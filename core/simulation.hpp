@@ -3,6 +3,7 @@
 // full HTMs) probes the true test piece (setup + form, planes) with a ball of the probe's
 // radius moving along the plan's approach line. No small-angle approximation anywhere.
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 
@@ -20,6 +21,10 @@ struct Truth {
   double noise_um = 0.0;          // probe repeatability, standard deviation along the approach
   double pretravel_um = 0.0;      // constant trigger lag along the approach (probe_pretravel)
   double start_time_s = 0.0;      // clock at the cycle start (repeats in time order)
+  /// Positioning error of the linear axes: actual ball centre minus the position the controller
+  /// reads, as a function of that position (machine frame, mm). Empty: perfect linear axes
+  /// (000 Sec. 2.2's assumption). Used by the uncertainty analysis (000 Sec. 5, Eq. (22)-(23)).
+  std::function<Eigen::Vector3d(const Eigen::Vector3d&)> linear_axis_error;
 };
 
 /// Distance s (mm) along the approach from the nominal trigger at which the ball of radius r

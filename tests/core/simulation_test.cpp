@@ -76,6 +76,24 @@ TEST(Simulation, NoiseHasTheRequestedSpreadAndIsSeeded) {
   EXPECT_NEAR(sd, 0.7, 0.7 * 0.23);
 }
 
+TEST(Simulation, LinearAxisErrorMovesTheTriggerByItsNormalComponent) {
+  // The controller reads c while the ball sits at c + E(c): the recorded trigger moves by
+  // -n.E along the normal. E here is a scale error of X (10 um/m) plus a 2 um Y offset.
+  const ProbePlan plan = test::touch154Plan();
+  Truth t;
+  t.linear_axis_error = [](const Eigen::Vector3d& c) { return Eigen::Vector3d(1e-5 * c.x(), 0.002, 0.0); };
+  const MeasurementRun run = simulate(plan, t, {});
+  for (size_t i = 0; i < plan.points.size(); ++i) {
+    const ProbePoint& p = plan.points[i];
+    const Eigen::Vector3d n = -p.approach_m;
+    // Exact for this E: the fixed point of s = n.E(c0 + s u) (linear in s), solved by hand.
+    const Eigen::Vector3d E0 = t.linear_axis_error(p.trigger_m_mm);
+    const double dEx_ds = 1e-5 * p.approach_m.x();
+    const double s = n.dot(E0) / (1.0 - n.x() * dEx_ds);  // u = -n, n.u = -1
+    EXPECT_NEAR(alongApproach(p, run.points[i]), s, 1e-12) << "point " << p.id;
+  }
+}
+
 TEST(Simulation, OutOfRangeSurfaceIsANoTrigger) {
   const ProbePlan plan = test::touch154Plan();
   Truth t;

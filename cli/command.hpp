@@ -1,0 +1,42 @@
+#pragma once
+// How a command joins the `rotacal` command line: each cmd_*.cpp adds its subcommands to the
+// app and returns what to run when one of them was given. Shared helpers for all commands.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <functional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "controllers/dialect.hpp"
+#include "core/errors.hpp"
+
+namespace rotacal {
+
+struct Common {
+  bool quiet = false;
+};
+
+struct Command {
+  CLI::App* sub;
+  std::function<int()> run;
+};
+
+std::vector<Command> touchCommands(CLI::App& app, const Common& common);
+
+/// A failure tied to a file given on the command line, when the core cannot name a line.
+[[noreturn]] inline void failFile(const std::string& file, const std::string& what) { throw InputError(file, 0, what); }
+
+inline void say(const Common& c, const std::string& text) {
+  if (!c.quiet) std::fputs(text.c_str(), stdout);
+}
+
+inline const Dialect& dialectOrFail(const std::string& name) {
+  try {
+    return dialectByName(name);
+  } catch (const std::invalid_argument& e) {
+    throw CLI::ValidationError("--dialect", e.what());
+  }
+}
+
+}  // namespace rotacal
