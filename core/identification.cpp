@@ -56,6 +56,12 @@ bool IdentificationOptions::validate(std::string* why) const {
   return true;
 }
 
+double observationTime_s(const ProbePlan& plan, int run, const ProbePoint& point, const TriggerPoint& trigger) {
+  if (std::isfinite(trigger.t_s)) return trigger.t_s;
+  const double cycle = plan.points.empty() ? 0.0 : plan.points.back().t_s + 60.0;
+  return point.t_s + run * cycle;
+}
+
 double alongApproach(const ProbePoint& point, const TriggerPoint& trigger) {
   return point.approach_m.dot(trigger.position_m_mm - point.trigger_m_mm);
 }
@@ -67,10 +73,17 @@ struct Observation {
   const ProbePoint* point;
   double s_mm;  // measured, along the approach from the nominal trigger
   Eigen::Vector3d measured_m;
+  double t_h = 0.0;
+  bool held_out = false;
+
+  ObservationContext context() const { return ObservationContext{point, run, t_h}; }
 };
 
-std::vector<Observation> collect(const ProbePlan& plan, const std::vector<MeasurementRun>& runs, std::string* why) {
+std::vector<Observation> collect(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
+                                 const IdentificationOptions& options, std::string* why) {
   std::vector<Observation> obs;
+  double t_sum = 0.0;
+  int t_n = 0;
   for (size_t r = 0; r < runs.size(); ++r) {
     for (const auto& t : runs[r].points) {
       const ProbePoint* p = plan.findPoint(t.point_id);
@@ -78,17 +91,33 @@ std::vector<Observation> collect(const ProbePlan& plan, const std::vector<Measur
         *why = fmt::format("{}: point {} is not in the plan", runs[r].source, t.point_id);
         return {};
       }
-      obs.push_back({static_cast<int>(r), p, alongApproach(*p, t), t.position_m_mm});
+      Observation o{static_cast<int>(r), p, alongApproach(*p, t), t.position_m_mm};
+      o.t_h = observationTime_s(plan, static_cast<int>(r), *p, t) / 3600.0;
+      o.held_out = options.hold_out && options.hold_out(static_cast<int>(r), *p);
+      if (!o.held_out) {
+        t_sum += o.t_h;
+        ++t_n;
+      }
+      obs.push_back(o);
     }
   }
+  const double t_mean = t_n ? t_sum / t_n : 0.0;
+  for (auto& o : obs) o.t_h -= t_mean;
   return obs;
 }
 
 /// Parameter layout and model of the least-squares problem.
 class LsqModel {
  public:
-  LsqModel(const ProbePlan& plan, const std::vector<Observation>& obs, Method method)
-      : plan_(plan), obs_(obs), method_(method), r_(plan.machine.probe.ball_radius_mm()) {
+  LsqModel(const ProbePlan& plan, const std::vector<Observation>& obs, Method method,
+           const std::vector<ExtensionPtr>& extensions)
+      : plan_(plan), obs_(obs), method_(method), r_(plan.machine.probe.ball_radius_mm()), ext_(extensions) {
+    for (const auto& x : ext_) {
+      ext_offset_.push_back(n_ext_);
+      for (const auto& prm : x->parameters()) ext_params_.push_back(prm);
+      n_ext_ += static_cast<int>(x->parameters().size());
+    }
+    nuis0_ = kNumLocationErrors + n_ext_;
     if (method == Method::LeastSquaresRigidSetup) {
       nuisance_ = 6;
     } else {
@@ -104,7 +133,14 @@ class LsqModel {
     }
   }
 
-  int size() const { return kNumLocationErrors + nuisance_; }
+  int size() const { return nuis0_ + nuisance_; }
+  int extensionCount() const { return n_ext_; }
+  const std::vector<ExtensionParameter>& extensionParameters() const { return ext_params_; }
+  bool knowsTarget(int target) const { return method_ == Method::LeastSquaresRigidSetup || target_index_.count(target) > 0; }
+
+  Eigen::VectorXd extensionBlock(const Eigen::VectorXd& theta, size_t i) const {
+    return theta.segment(kNumLocationErrors + ext_offset_[i], static_cast<long>(ext_[i]->parameters().size()));
+  }
 
   LocationErrors errors(const Eigen::VectorXd& theta) const {
     LocationErrors e;
@@ -149,19 +185,45 @@ class LsqModel {
   Plane plane_w(const Eigen::VectorXd& theta, const ProbePoint& p) const {
     if (method_ == Method::LeastSquaresRigidSetup) {
       ArtefactTruth a;
-      a.setup.translation_mm = theta.segment<3>(kNumLocationErrors);
-      a.setup.rotation_rad = theta.segment<3>(kNumLocationErrors + 3);
+      a.setup.translation_mm = theta.segment<3>(nuis0_);
+      a.setup.rotation_rad = theta.segment<3>(nuis0_ + 3);
       return a.face(*plan_.machine.artefact, p.face);
     }
     const Eigen::Vector3d& n = normal_[static_cast<size_t>(p.face)];
-    const double s = theta[kNumLocationErrors + target_index_.at(p.target)];
+    const double s = theta[nuis0_ + target_index_.at(p.target)];
     return Plane{p.contact_w_mm + s * n, n};
   }
 
-  double predict(const Eigen::VectorXd& theta, const ProbePoint& p) const {
+  /// Location errors in force at an observation (extensions such as drift change them).
+  LocationErrors errorsAt(const Eigen::VectorXd& theta, const Observation& o) const {
+    LocationErrors e = errors(theta);
+    for (size_t i = 0; i < ext_.size(); ++i) e = ext_[i]->errorsAt(extensionBlock(theta, i), o.context(), e);
+    return e;
+  }
+
+  /// The exact model of one trigger (mm along the approach from the nominal trigger).
+  double predict(const Eigen::VectorXd& theta, const Observation& o) const {
+    const ProbePoint& p = *o.point;
     const Plane w = plane_w(theta, p);
-    const Eigen::Isometry3d T = T_m_w(errors(theta), p.pose);
-    return ballPlaneContact(p.trigger_m_mm, p.approach_m, r_, Plane{T * w.point, T.linear() * w.normal});
+    const Eigen::Isometry3d T = T_m_w(errorsAt(theta, o), p.pose);
+    const Plane pm{T * w.point, T.linear() * w.normal};
+    double s = ballPlaneContact(p.trigger_m_mm, p.approach_m, r_, pm);
+    bool positional = false;
+    for (const auto& x : ext_) positional = positional || x->hasPositionError();
+    if (positional) {
+      for (int it = 0; it < 50; ++it) {
+        const Eigen::Vector3d c = p.trigger_m_mm + s * p.approach_m;
+        Eigen::Vector3d E = Eigen::Vector3d::Zero();
+        for (size_t i = 0; i < ext_.size(); ++i)
+          if (ext_[i]->hasPositionError()) E += ext_[i]->positionError(extensionBlock(theta, i), c);
+        const double next = ballPlaneContact(p.trigger_m_mm + E, p.approach_m, r_, pm);
+        const bool done = std::abs(next - s) < 1e-13;
+        s = next;
+        if (done) break;
+      }
+    }
+    for (size_t i = 0; i < ext_.size(); ++i) s += ext_[i]->triggerOffset(extensionBlock(theta, i), o.context());
+    return s;
   }
 
   /// Residuals (measured - model) and the Jacobian of the model, J_s_theta.
@@ -169,14 +231,15 @@ class LsqModel {
     const long m = static_cast<long>(obs_.size());
     res->resize(m);
     J->setZero(m, size());
-    const LocationErrors e = errors(theta);
     for (long i = 0; i < m; ++i) {
-      const ProbePoint& p = *obs_[static_cast<size_t>(i)].point;
+      const Observation& o = obs_[static_cast<size_t>(i)];
+      const ProbePoint& p = *o.point;
+      const LocationErrors e = errorsAt(theta, o);
       const Plane w = plane_w(theta, p);
       const Eigen::Isometry3d T = T_m_w(e, p.pose);
       const Plane pm{T * w.point, T.linear() * w.normal};
-      const double s = ballPlaneContact(p.trigger_m_mm, p.approach_m, r_, pm);
-      (*res)[i] = obs_[static_cast<size_t>(i)].s_mm - s;
+      const double s = n_ext_ > 0 ? predict(theta, o) : ballPlaneContact(p.trigger_m_mm, p.approach_m, r_, pm);
+      (*res)[i] = o.s_mm - s;
       const double nu = pm.normal.dot(p.approach_m);
       // J_s_e: the plane moves with the table: dx = J(x) de, dn = (J(x + n) - J(x)) de.
       const auto Jx = J_pm_e(e, p.pose, w.point);
@@ -186,15 +249,23 @@ class LsqModel {
         const Eigen::Vector3d dn = Jxn.col(j) - dx;
         (*J)(i, j) = (-dn.dot(p.trigger_m_mm - pm.point) + pm.normal.dot(dx)) / nu - s * dn.dot(p.approach_m) / nu;
       }
+      // Extensions: central differences of the exact model (few parameters).
+      for (int j = 0; j < n_ext_; ++j) {
+        const double h = ext_params_[static_cast<size_t>(j)].fd_step;
+        Eigen::VectorXd tp = theta, tm = theta;
+        tp[kNumLocationErrors + j] += h;
+        tm[kNumLocationErrors + j] -= h;
+        (*J)(i, kNumLocationErrors + j) = (predict(tp, o) - predict(tm, o)) / (2 * h);
+      }
       if (method_ == Method::LeastSquaresPerPoint) {
-        (*J)(i, kNumLocationErrors + target_index_.at(p.target)) = 1.0 / nu;
+        (*J)(i, nuis0_ + target_index_.at(p.target)) = 1.0 / nu;
       } else {
         for (int j = 0; j < 6; ++j) {
           const double h = j < 3 ? 1e-6 : 1e-8;
           Eigen::VectorXd tp = theta, tm = theta;
-          tp[kNumLocationErrors + j] += h;
-          tm[kNumLocationErrors + j] -= h;
-          (*J)(i, kNumLocationErrors + j) = (predict(tp, p) - predict(tm, p)) / (2 * h);
+          tp[nuis0_ + j] += h;
+          tm[nuis0_ + j] -= h;
+          (*J)(i, nuis0_ + j) = (predict(tp, o) - predict(tm, o)) / (2 * h);
         }
       }
     }
@@ -209,14 +280,25 @@ class LsqModel {
   std::map<int, int> target_index_;
   std::array<Eigen::Vector3d, 5> normal_;
   std::string reference_pose_;
+  std::vector<ExtensionPtr> ext_;
+  std::vector<int> ext_offset_;
+  std::vector<ExtensionParameter> ext_params_;
+  int n_ext_ = 0;
+  int nuis0_ = kNumLocationErrors;
 };
 
-IdentificationResult leastSquares(const ProbePlan& plan, const std::vector<Observation>& obs,
+IdentificationResult leastSquares(const ProbePlan& plan, const std::vector<Observation>& all_obs,
                                   const IdentificationOptions& options) {
   IdentificationResult out;
   out.method = options.method;
   out.estimate.kinematics = plan.machine.kinematics;
-  LsqModel model(plan, obs, options.method);
+  std::vector<Observation> obs, held;
+  for (const auto& o : all_obs) (o.held_out ? held : obs).push_back(o);
+  if (obs.empty()) {
+    out.summary.message = "every observation is held out";
+    return out;
+  }
+  LsqModel model(plan, obs, options.method, options.extensions);
   const int n = model.size();
   const long m = static_cast<long>(obs.size());
   out.summary.observations = static_cast<int>(m);
@@ -246,9 +328,12 @@ IdentificationResult leastSquares(const ProbePlan& plan, const std::vector<Obser
       std::set<std::string> names;
       const auto& V = svd.matrixV();
       const auto& params = locationParameters(plan.machine.kinematics);
-      for (long c = rank; c < V.cols(); ++c)
+      for (long c = rank; c < V.cols(); ++c) {
         for (int j = 0; j < kNumLocationErrors; ++j)
           if (std::abs(V(j, c)) > 0.05) names.insert(std::string(params[j].name));
+        for (int j = 0; j < model.extensionCount(); ++j)
+          if (std::abs(V(kNumLocationErrors + j, c)) > 0.05) names.insert(model.extensionParameters()[static_cast<size_t>(j)].name);
+      }
       out.unidentifiable.assign(names.begin(), names.end());
       out.summary.termination = Termination::RankDeficient;
       std::string list;
@@ -286,8 +371,27 @@ IdentificationResult leastSquares(const ProbePlan& plan, const std::vector<Obser
   out.covariance = cov.topLeftCorner<kNumLocationErrors, kNumLocationErrors>();
   out.u = out.covariance.diagonal().cwiseSqrt();
   out.estimate = model.errors(theta);
+  if (model.extensionCount() > 0) {
+    out.extension_values = theta.segment(kNumLocationErrors, model.extensionCount());
+    out.extension_u = cov.diagonal().segment(kNumLocationErrors, model.extensionCount()).cwiseSqrt();
+    out.extension_correlation.resize(model.extensionCount(), kNumLocationErrors);
+    for (int a = 0; a < model.extensionCount(); ++a)
+      for (int b = 0; b < kNumLocationErrors; ++b)
+        out.extension_correlation(a, b) =
+            cov(kNumLocationErrors + a, b) / std::sqrt(cov(kNumLocationErrors + a, kNumLocationErrors + a) * cov(b, b));
+  }
   for (long i = 0; i < m; ++i)
-    out.residuals.push_back({obs[static_cast<size_t>(i)].run, obs[static_cast<size_t>(i)].point->id, mmToUm(res[i])});
+    out.residuals.push_back({obs[static_cast<size_t>(i)].run, obs[static_cast<size_t>(i)].point->id, mmToUm(res[i]),
+                             obs[static_cast<size_t>(i)].t_h, false});
+  double held_ss = 0.0;
+  for (const auto& o : held) {
+    if (!model.knowsTarget(o.point->target)) continue;  // no offset for a point never fitted
+    const double r_um = mmToUm(o.s_mm - model.predict(theta, o));
+    out.residuals.push_back({o.run, o.point->id, r_um, o.t_h, true});
+    held_ss += r_um * r_um;
+    ++out.holdout_points;
+  }
+  out.holdout_rms_um = out.holdout_points ? std::sqrt(held_ss / out.holdout_points) : 0.0;
   if (out.summary.termination == Termination::Converged)
     out.summary.message = fmt::format("converged in {} iterations", out.summary.iterations);
   else
@@ -359,7 +463,7 @@ IdentificationResult identify(const ProbePlan& plan, const std::vector<Measureme
     return bad;
   }
   if (options.method == Method::ClosedForm) return closedForm(plan, runs, options);
-  const auto obs = collect(plan, runs, &why);
+  const auto obs = collect(plan, runs, options, &why);
   if (obs.empty()) {
     bad.summary.message = why.empty() ? "no observations" : why;
     return bad;

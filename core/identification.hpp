@@ -10,11 +10,13 @@
 //    Face orientations (which enter at second order only) are re-estimated at every iteration
 //    from the reference pose's points.
 #include <Eigen/Core>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "core/error_model.hpp"
 #include "core/measurement.hpp"
+#include "core/model_extension.hpp"
 #include "core/probe_plan.hpp"
 
 namespace rotacal {
@@ -30,11 +32,17 @@ struct IdentificationOptions {
   // mm of trigger effect: 1e-7 um, two decades above the rounding floor of 200 mm coordinates.
   double step_tolerance = 1e-10;
   /// Singular values of the column-scaled Jacobian below this fraction of the largest one count
-  /// as zero: the parameters in their null space are reported as not identifiable.
-  double rank_tolerance = 1e-8;
+  /// as zero: the parameters in their null space are reported as not identifiable. 1e-6 sits
+  /// far above the finite-difference noise of extension columns (~1e-9) and far below any
+  /// usable conditioning (touch154: condition ~1e3).
+  double rank_tolerance = 1e-6;
   /// Probe repeatability (um, k = 1) used for the closed form's uncertainty, and reported beside
   /// the fit's own noise estimate.
   double prior_sigma_um = 0.7;
+  /// Model extensions fitted together with the location errors (least squares only).
+  std::vector<ExtensionPtr> extensions;
+  /// Observations left out of the fit (held out); their residuals are still predicted.
+  std::function<bool(int run, const ProbePoint& point)> hold_out;
 
   bool validate(std::string* why) const;
 };
@@ -60,6 +68,8 @@ struct PointResidual {
   int run = 0;
   int point_id = 0;
   double residual_um = 0.0;  // measured - model, along the approach
+  double t_h = 0.0;          // observation time, hours relative to the data's mean time
+  bool held_out = false;     // predicted, not fitted
 };
 
 struct IdentificationResult {
@@ -69,6 +79,12 @@ struct IdentificationResult {
       Eigen::Matrix<double, kNumLocationErrors, kNumLocationErrors>::Zero();
   std::vector<PointResidual> residuals;
   std::vector<std::string> unidentifiable;  // parameter names, when RankDeficient
+  Eigen::VectorXd extension_values;         // internal units, in the order of the extensions' parameters
+  Eigen::VectorXd extension_u;
+  /// Correlation of each extension parameter with each location error (rows: extension params).
+  Eigen::MatrixXd extension_correlation;
+  double holdout_rms_um = 0.0;              // rms of the held-out residuals (0 when none)
+  int holdout_points = 0;
   IdentificationSummary summary;
   Method method = Method::LeastSquaresPerPoint;
 };
@@ -77,6 +93,10 @@ struct IdentificationResult {
 /// test piece, hence its nuisance parameters). Never throws on bad data: the summary says why.
 IdentificationResult identify(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
                               const IdentificationOptions& options);
+
+/// Observation time (s) of a trigger: its own clock when the controller has one, else the
+/// plan's t_s plus one cycle duration (plus one minute) per earlier repeat.
+double observationTime_s(const ProbePlan& plan, int run, const ProbePoint& point, const TriggerPoint& trigger);
 
 /// Measured scalar of a trigger: its displacement along the approach from the nominal trigger (mm).
 double alongApproach(const ProbePoint& point, const TriggerPoint& trigger);

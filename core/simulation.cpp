@@ -18,7 +18,9 @@ double ballPlaneContact(const Eigen::Vector3d& c0, const Eigen::Vector3d& u, dou
 
 Plane truePlane_m(const ProbePlan& plan, const ProbePoint& point, const Truth& truth) {
   const Plane w = truth.artefact.face(*plan.machine.artefact, point.face);
-  const Eigen::Isometry3d T = T_m_w(truth.errors, point.pose);
+  LocationErrors e = truth.errors;
+  if (truth.drift) e.values += truth.drift(truth.start_time_s + point.t_s);
+  const Eigen::Isometry3d T = T_m_w(e, point.pose);
   return Plane{T * w.point, T.linear() * w.normal};
 }
 
@@ -49,6 +51,7 @@ MeasurementRun simulate(const ProbePlan& plan, const Truth& truth, const Simulat
           "trigger, outside the search range [-{:.3f}, +{:.3f}] mm",
           p.id, p.pose_name, faceName(p.face), s, plan.machine.approach_mm, plan.machine.overtravel_mm));
     s += umToMm(truth.pretravel_um);
+    if (truth.pretravel_by_direction_um) s += umToMm(truth.pretravel_by_direction_um(p.approach_m));
     if (truth.noise_um > 0) s += umToMm(truth.noise_um) * noise(rng);
     TriggerPoint t;
     t.point_id = p.id;

@@ -25,6 +25,11 @@ struct Truth {
   /// reads, as a function of that position (machine frame, mm). Empty: perfect linear axes
   /// (000 Sec. 2.2's assumption). Used by the uncertainty analysis (000 Sec. 5, Eq. (22)-(23)).
   std::function<Eigen::Vector3d(const Eigen::Vector3d&)> linear_axis_error;
+  /// Thermal drift: change of the location errors (mm / rad) at a time on the common clock (s).
+  std::function<ErrorVector(double t_s)> drift;
+  /// Direction-dependent pretravel (um) as a function of the approach direction (machine frame),
+  /// added to pretravel_um.
+  std::function<double(const Eigen::Vector3d& approach_m)> pretravel_by_direction_um;
 };
 
 /// Distance s (mm) along the approach from the nominal trigger at which the ball of radius r

@@ -97,15 +97,16 @@ TEST_F(Cli, CsvClosedFormRecoversTable4) {
 }
 
 TEST_F(Cli, LinuxcncLogRecoversTable4WithinItsSixDecimals) {
-  // LOG prints %.6f mm: rounding is uniform within +-0.5 nm (sd 0.29 nm). Through the fit that
-  // is ~1/2400 of the 0.7 um noise case (u <= 0.6 um, 0.006 mdeg): bound 0.001 um / 0.0001 mdeg.
-  expectTable4(analyzeThrough("linuxcnc", "lsq_per_point", ".txt"), 1e-3, 1e-4);
+  // LOG prints %.6f mm: rounding is uniform within +-0.5 nm (sd 0.29 nm), 1/2400 of the 0.7 um
+  // noise case, whose fit u is <= 0.19 um and <= 0.055 mdeg: 4 sd is 3e-4 um and 1e-4 mdeg.
+  // Bound: 0.001 um / 0.0002 mdeg.
+  expectTable4(analyzeThrough("linuxcnc", "lsq_per_point", ".txt"), 1e-3, 2e-4);
 }
 
 TEST_F(Cli, FanucDprntRecoversTable4WithinItsFourDecimals) {
-  // DPRNT [44] prints 0.1 um steps: rounding sd 0.029 um, 1/24 of the 0.7 um noise case:
-  // bound 0.1 um / 0.001 mdeg (about 4 sd).
-  expectTable4(analyzeThrough("fanuc", "lsq_per_point", ".txt"), 0.1, 1e-3);
+  // DPRNT [44] prints 0.1 um steps: rounding sd 0.029 um, 1/24 of the 0.7 um noise case
+  // (fit u <= 0.19 um, <= 0.055 mdeg): 4 sd is 0.03 um and 0.009 mdeg. Bound: 0.05 um / 0.01 mdeg.
+  expectTable4(analyzeThrough("fanuc", "lsq_per_point", ".txt"), 0.05, 0.01);
 }
 
 TEST_F(Cli, GeneratesBothProgramsFromTheBundledPlan) {
@@ -117,7 +118,8 @@ TEST_F(Cli, GeneratesBothProgramsFromTheBundledPlan) {
   }
   const std::string ngc = slurp(p("prog.ngc"));
   size_t probes = 0;
-  for (size_t pos = 0; (pos = ngc.find("G38.2", pos)) != std::string::npos; ++pos) ++probes;
+  std::istringstream lines(ngc);
+  for (std::string l; std::getline(lines, l);) probes += l.rfind("G38.2", 0) == 0;
   EXPECT_EQ(probes, 154u);
 }
 

@@ -1,0 +1,48 @@
+// rotacal diagnose: where the model disagrees with the data, the physical cause, the gain.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "cli/command.hpp"
+#include "core/diagnosis.hpp"
+#include "core/json_io.hpp"
+#include "core/probe_plan.hpp"
+
+namespace rotacal {
+
+std::vector<Command> diagnoseCommands(CLI::App& app, const Common& common) {
+  struct Args {
+    std::string plan_file, dialect, json_out, text_out;
+    std::vector<std::string> results;
+    double alpha = 1e-3;
+  };
+  auto a = std::make_shared<Args>();
+  auto* cmd = app.add_subcommand("diagnose", "find what the model misses, name the cause, extend the model, measure the gain");
+  cmd->add_option("--plan", a->plan_file, "PLAN.json")->required();
+  cmd->add_option("--results", a->results, "RESULTS... (repeats of the plan, in time order)")->required();
+  cmd->add_option("--dialect", a->dialect, "csv | linuxcnc | fanuc")->required();
+  cmd->add_option("--json", a->json_out, "DIAGNOSIS.json")->required();
+  cmd->add_option("--text", a->text_out, "the readable summary, also printed on stdout");
+  cmd->add_option("--alpha", a->alpha, "false-alarm rate of the tests (default 0.001)");
+  return {{cmd, [a, &common] {
+             const ProbePlan plan = loadPlan(a->plan_file);
+             const Dialect& d = dialectOrFail(a->dialect);
+             std::vector<MeasurementRun> runs;
+             for (const auto& f : a->results) runs.push_back(d.parseResults(readTextFile(f), f, plan));
+             DiagnosisOptions o;
+             o.alpha = a->alpha;
+             o.prior_sigma_um = plan.machine.probe.repeatability_um;
+             std::string why;
+             if (!o.validate(&why)) throw CLI::ValidationError("--alpha", why);
+             const Diagnosis dg = diagnose(plan, runs, o);
+             if (dg.baseline.summary.termination != Termination::Converged)
+               failFile(a->results.front(), "baseline fit failed: " + dg.baseline.summary.message);
+             const std::string text = diagnosisText(dg);
+             writeFileAtomic(a->json_out, diagnosisToJson(dg).dump(1) + "\n");
+             if (!a->text_out.empty()) writeFileAtomic(a->text_out, text);
+             say(common, text);
+             return 0;
+           }}};
+}
+
+}  // namespace rotacal

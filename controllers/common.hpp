@@ -1,0 +1,101 @@
+#pragma once
+// Helpers shared by the dialects: locale-independent fixed-point text, strict number parsing,
+// line splitting, the collection of parsed points with precise errors, the plausibility limit
+// of written corrections and the stroke check of a parsed program.
+#include <Eigen/Core>
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "controllers/dialect.hpp"
+#include "core/measurement.hpp"
+#include "core/probe_plan.hpp"
+#include "gcode/reader.hpp"
+
+namespace rotacal::ctl {
+
+/// Plausibility limits of a written correction (request.force overrides them).
+constexpr double kMaxLengthCorrectionMm = 0.5;     // a larger pivot error is a setup blunder, not drift
+constexpr double kMaxAngleCorrectionMdeg = 100.0;  // 0.1 deg: likewise
+
+/// Tolerance of the stroke check on printed coordinates: covers the rounding of 4-5 printed
+/// decimals (<= 0.5e-4 mm, inch 0.5e-5 in) with margin.
+constexpr double kStrokeTolMm = 1e-3;
+
+/// `v` with `decimals` digits after the point, through fmt (locale-independent). Never "-0.000".
+/// Throws std::invalid_argument for NaN or infinity (no NC text may contain them).
+std::string fixed(double v, int decimals);
+
+struct TextLine {
+  int number = 0;  // 1-based
+  std::string text;
+};
+/// Lines of a text file; LF, CR LF and lone CR all end a line. A final line without an
+/// end-of-line is kept.
+std::vector<TextLine> splitLines(std::string_view text);
+
+/// Whitespace-separated tokens (spaces and tabs; repeated separators collapse).
+std::vector<std::string> tokens(std::string_view line);
+
+std::string trim(std::string_view s);
+std::string upper(std::string_view s);
+std::string lower(std::string_view s);
+
+/// A decimal number that is exactly the token: optional sign, digits, at most one '.', optional
+/// exponent; finite. nullopt otherwise ("1.2.3", "12a", "nan", "").
+std::optional<double> parseNumber(std::string_view token);
+/// A non-negative integer made of digits only.
+std::optional<long> parseDigits(std::string_view token);
+
+/// Collects the points of one results file and enforces: ids in the plan, each once, all
+/// present. Errors are rotacal::InputError(file, line, message).
+class PointCollector {
+ public:
+  PointCollector(const ProbePlan& plan, std::string file);
+  /// Records point `id` read at `line`. Throws on an id not in the plan or a repeated id.
+  void add(int line, int id, const Eigen::Vector3d& position_m_mm, double t_s);
+  /// Throws naming the first plan point not seen (at `last_line`), else returns the run in
+  /// file order.
+  MeasurementRun finish(int last_line) const;
+  /// First plan point not seen yet, or 0.
+  int firstMissing() const;
+  size_t size() const { return run_.points.size(); }
+
+ private:
+  const ProbePlan& plan_;
+  std::string file_;
+  MeasurementRun run_;
+  std::map<int, int> seen_line_;  // id -> line
+};
+
+/// Throws rotacal::InputError(file, line, what).
+[[noreturn]] void fail(const std::string& file, int line, const std::string& what);
+
+/// Throws std::invalid_argument naming the parameter, its value and the limit when any
+/// identified location error exceeds the plausibility limits and !request.force. Also throws
+/// when request.plan is null or a value is not finite.
+void requirePlausible(const OffsetRequest& request);
+
+/// "value +- u unit" lines of the identified errors, e.g. "dx_AY (X0A)  14.600 um +- 0.900 um".
+std::vector<std::string> identifiedLines(const OffsetRequest& request);
+
+/// Paper-convention angle of `axis` in a pose.
+double poseAngle(const Pose& pose, char axis);
+
+/// Machine-stroke problems of the motion blocks of a parsed program ("LINE: ..."): X/Y/Z
+/// endpoints (absolute mode, converted to mm under G20) against the machine's strokes, A/B/C
+/// against the rotary strokes in the papers' convention (controller angle / controller sign of
+/// `dialect`). Blocks with G10, G53 or G92 are not motion endpoints and are skipped; so are
+/// words whose value is an expression.
+std::vector<std::string> strokeProblems(const std::vector<nc::Block>& blocks, const ProbePlan& plan,
+                                        const std::string& dialect);
+
+/// Syntax issues recorded by the reader, as "LINE: issue".
+std::vector<std::string> readerIssues(const std::vector<nc::Block>& blocks);
+
+/// Index of the next non-blank block after `i` (blocks.size() when none).
+size_t nextNonBlank(const std::vector<nc::Block>& blocks, size_t i);
+
+}  // namespace rotacal::ctl

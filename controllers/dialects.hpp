@@ -1,0 +1,41 @@
+#pragma once
+// The dialect objects behind dialectByName(), and the few free functions of the dialects that
+// tests and tools need directly (controllers/dialect.hpp stays the fixed interface).
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "controllers/dialect.hpp"
+
+namespace rotacal {
+
+const Dialect& csvDialect();
+const Dialect& linuxcncDialect();
+const Dialect& fanucDialect();
+
+/// LinuxCNC kinematics component of a table machine: "xyzac-trt-kins" or "xyzbc-trt-kins".
+std::string linuxcncKinsComponent(Kinematics kinematics);
+
+/// Changes (mm) of the trt-kins HAL pins that apply the identified location errors (added to
+/// the pins' previous values), in the order they are written:
+///  A/C: x-rot-point += dx_AY, y-rot-point += dy_AY + dy_CA, z-rot-point += dz_AY,
+///       y-offset += -dy_CA, z-offset += 0
+///       (A pivot = rot-point + offset = (dx_AY, dy_AY, dz_AY); the C axis passes through rot-point)
+///  B/C: x-rot-point += dx_BY + dx_CB, y-rot-point += dy_CB, z-rot-point += dz_BY,
+///       x-offset += -dx_CB, z-offset += 0
+///       (B pivot = rot-point + offset = (dx_BY, dy_CB, dz_BY); the C axis passes through rot-point)
+std::vector<std::pair<std::string, double>> linuxcncKinsChanges(const LocationErrors& identified);
+
+/// The `setp <component>.<pin> <value>` lines of a HAL file: pin -> value. '#' starts a comment.
+/// Throws std::invalid_argument("line N: ...") when such a line's value is not a number.
+std::map<std::string, double> parseHalSetp(const std::string& text, const std::string& component);
+
+/// A number as Fanuc DPRNT prints #v[ab] (a integer digits, b decimals), in rotacal's chosen
+/// form: the sign (only when negative) directly before the digits, the whole right-aligned in
+/// a + (b > 0 ? b + 1 : 0) characters (leading spaces; wider when it does not fit), no decimal
+/// point when b == 0. E.g. [44]: 123.456 -> " 123.4560", -200 -> "-200.0000"; [90]: 12345 ->
+/// "    12345". UNVERIFIED against a real control (parameter 6001 changes padding and sign).
+std::string fanucDprntNumber(double value, int integer_digits, int decimals);
+
+}  // namespace rotacal

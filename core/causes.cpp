@@ -1,0 +1,150 @@
+#include "core/causes.hpp"
+
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "core/units.hpp"
+
+namespace rotacal {
+
+namespace {
+
+constexpr int kTranslations[3] = {0, 1, 2};  // dx_AY, dy_AY, dz_AY (A/C) or dx_BY, dy_CB, dz_BY (B/C)
+
+class DriftLinear : public ModelExtension {
+ public:
+  std::string cause() const override { return "thermal_drift"; }
+  std::string variant() const override { return "linear"; }
+  std::string describe() const override {
+    return "the table's position against the spindle (dx, dy, dz of the first rotary axis) changes at a constant rate";
+  }
+  std::vector<ExtensionParameter> parameters() const override {
+    return {{"dx_AY/h", "um/h", kUmPerMm, 1e-6}, {"dy_AY/h", "um/h", kUmPerMm, 1e-6}, {"dz_AY/h", "um/h", kUmPerMm, 1e-6}};
+  }
+  LocationErrors errorsAt(const Eigen::VectorXd& p, const ObservationContext& o, const LocationErrors& e) const override {
+    LocationErrors out = e;
+    for (int i = 0; i < 3; ++i) out.values[kTranslations[i]] += p[i] * o.t_h;
+    return out;
+  }
+};
+
+class DriftPerRepeat : public ModelExtension {
+ public:
+  explicit DriftPerRepeat(int runs) : runs_(runs) {}
+  std::string cause() const override { return "thermal_drift"; }
+  std::string variant() const override { return "per_repeat"; }
+  std::string describe() const override {
+    return "the table's position against the spindle takes its own value in each repeat (any heating or cooling curve)";
+  }
+  std::vector<ExtensionParameter> parameters() const override {
+    std::vector<ExtensionParameter> p;
+    for (int r = 1; r < runs_; ++r)
+      for (const char* n : {"dx_AY", "dy_AY", "dz_AY"})
+        p.push_back({fmt::format("{}@repeat{}", n, r + 1), "um", kUmPerMm, 1e-6});
+    return p;
+  }
+  LocationErrors errorsAt(const Eigen::VectorXd& p, const ObservationContext& o, const LocationErrors& e) const override {
+    LocationErrors out = e;
+    if (o.run >= 1 && o.run < runs_)
+      for (int i = 0; i < 3; ++i) out.values[kTranslations[i]] += p[3 * (o.run - 1) + i];
+    return out;
+  }
+
+ private:
+  int runs_;
+};
+
+/// Direction classes of an approach: +X -X +Y -Y (horizontal) and -Z (reference).
+int directionClass(const Eigen::Vector3d& u) {
+  int axis = 0;
+  u.cwiseAbs().maxCoeff(&axis);
+  if (axis == 2) return -1;
+  return axis * 2 + (u[axis] > 0 ? 0 : 1);
+}
+
+class Pretravel : public ModelExtension {
+ public:
+  std::string cause() const override { return "probe_pretravel"; }
+  std::string variant() const override { return "by_direction"; }
+  std::string describe() const override {
+    return "the probe triggers after a travel that depends on the approach direction (lobing), relative to -Z";
+  }
+  std::vector<ExtensionParameter> parameters() const override {
+    return {{"pretravel_+X", "um", kUmPerMm, 1e-6},
+            {"pretravel_-X", "um", kUmPerMm, 1e-6},
+            {"pretravel_+Y", "um", kUmPerMm, 1e-6},
+            {"pretravel_-Y", "um", kUmPerMm, 1e-6}};
+  }
+  double triggerOffset(const Eigen::VectorXd& p, const ObservationContext& o) const override {
+    const int c = directionClass(o.point->approach_m);
+    return c < 0 ? 0.0 : p[c];
+  }
+};
+
+class Squareness : public ModelExtension {
+ public:
+  std::string cause() const override { return "linear_axis_squareness"; }
+  std::string variant() const override { return "S_xy_S_xz_S_yz"; }
+  std::string describe() const override {
+    return "the linear axes are not square (000 Eq. (23)): E_xy = S_xy y, E_xz = S_xz z, E_yz = S_yz z";
+  }
+  std::vector<ExtensionParameter> parameters() const override {
+    // um/m: internal value is rad (mm/mm); 1 um/m = 1e-6.
+    return {{"S_xy", "um/m", 1e6, 1e-7}, {"S_xz", "um/m", 1e6, 1e-7}, {"S_yz", "um/m", 1e6, 1e-7}};
+  }
+  bool hasPositionError() const override { return true; }
+  Eigen::Vector3d positionError(const Eigen::VectorXd& p, const Eigen::Vector3d& c) const override {
+    return Eigen::Vector3d(p[0] * c.y() + p[1] * c.z(), p[2] * c.z(), 0.0);
+  }
+};
+
+class ProbeLength : public ModelExtension {
+ public:
+  std::string cause() const override { return "probe_length"; }
+  std::string variant() const override { return "constant"; }
+  std::string describe() const override { return "the probe ball centre sits dL lower than the controller assumes"; }
+  std::vector<ExtensionParameter> parameters() const override { return {{"dL", "um", kUmPerMm, 1e-6}}; }
+  bool hasPositionError() const override { return true; }
+  Eigen::Vector3d positionError(const Eigen::VectorXd& p, const Eigen::Vector3d&) const override {
+    return Eigen::Vector3d(0.0, 0.0, -p[0]);
+  }
+};
+
+}  // namespace
+
+ExtensionPtr thermalDriftLinear() { return std::make_shared<DriftLinear>(); }
+ExtensionPtr thermalDriftPerRepeat(int runs) { return std::make_shared<DriftPerRepeat>(runs); }
+ExtensionPtr probePretravel() { return std::make_shared<Pretravel>(); }
+ExtensionPtr linearAxisSquareness() { return std::make_shared<Squareness>(); }
+ExtensionPtr probeLength() { return std::make_shared<ProbeLength>(); }
+
+std::vector<ExtensionPtr> catalogFor(const ProbePlan& plan, int runs) {
+  (void)plan;
+  std::vector<ExtensionPtr> c = {thermalDriftLinear()};
+  if (runs >= 3) c.push_back(thermalDriftPerRepeat(runs));
+  c.push_back(probePretravel());
+  c.push_back(linearAxisSquareness());
+  c.push_back(probeLength());
+  return c;
+}
+
+std::string separationHint(const std::string& cause, const std::vector<std::string>& with) {
+  std::string list;
+  for (const auto& w : with) list += (list.empty() ? "" : ", ") + w;
+  if (cause == "probe_length")
+    return "a probe-length error moves every trigger of a table-probing plan like " + list +
+           ": no pose separates them; measure the probe length on a tool setter or probe a reference fixed to the "
+           "machine bed";
+  if (cause == "linear_axis_squareness")
+    return "squareness of the linear axes acts like " + list +
+           " on a piece that stays near one place: probe the piece at a second location (another X/Y/Z position) or "
+           "calibrate the linear axes separately (000 Sec. 2.2)";
+  if (cause == "probe_pretravel")
+    return "direction-dependent pretravel of a touch154 plan shifts the same points as " + list +
+           ": calibrate the probe on a reference sphere or ring gauge first (ISO 230-10), or probe each target from "
+           "two opposite directions at one pose";
+  return "add poses or points where the columns of the Jacobian of " + cause + " and " + list + " differ";
+}
+
+}  // namespace rotacal

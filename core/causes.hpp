@@ -1,0 +1,31 @@
+#pragma once
+// The catalog of physical causes rotacal can add to its model (issue 6), for the touch cycles.
+// Each is a ModelExtension; `catalogFor` lists the ones that apply to a plan and its data.
+//  thermal_drift/linear      the table moves against the spindle at a constant rate:
+//                            dx_AY, dy_AY, dz_AY change linearly with time (um/h)
+//  thermal_drift/per_repeat  the same translation, free per repeat (heating / cooling phases)
+//  probe_pretravel           trigger travel that depends on the approach direction (um),
+//                            relative to the -Z approach (a uniform pretravel is absorbed by the
+//                            per-point offsets and is harmless)
+//  linear_axis_squareness    S_xy, S_xz, S_yz of 000 Eq. (23) (um/m)
+//  probe_length              the ball centre sits dL below where the controller thinks (um)
+#include <string>
+#include <vector>
+
+#include "core/model_extension.hpp"
+
+namespace rotacal {
+
+ExtensionPtr thermalDriftLinear();
+ExtensionPtr thermalDriftPerRepeat(int runs);
+ExtensionPtr probePretravel();
+ExtensionPtr linearAxisSquareness();
+ExtensionPtr probeLength();
+
+/// The candidate extensions for a plan with `runs` repeats.
+std::vector<ExtensionPtr> catalogFor(const ProbePlan& plan, int runs);
+
+/// How two causes could be told apart when a plan cannot (a sentence for DIAGNOSIS.json).
+std::string separationHint(const std::string& cause, const std::vector<std::string>& confounded_with);
+
+}  // namespace rotacal

@@ -1,0 +1,101 @@
+#pragma once
+// The contributors to the uncertainty of the identified location errors (000 Sec. 5, Table 5),
+// each with its standard uncertainty (k = 1, normal distribution), and the file that lists them
+// (CONTRIB.json, "rotacal-contributors/1").
+//
+// Ids follow 000 Table 5 (contract.md): probe_repeatability, probe_pretravel, E_xx_lin,
+// E_xx_rand, E_yx_rand, E_zx_rand, E_yy_lin, E_yy_rand, E_xy_rand, E_zy_rand, S_xy, E_zz_lin,
+// E_zz_rand, E_xz_rand, E_yz_rand, S_xz, S_yz, setup_position, setup_orientation,
+// surface_roughness; and form_error (the test piece's own form, which 000 leaves out).
+// E_ba_* is the error in direction b of the motion of axis a (ISO 230-1 naming); the linear-axis
+// model is core/linear_axes.hpp.
+//
+// How each enters a run (per run, drawn anew; "per touch" = independently at every trigger):
+//   probe_repeatability  per touch, along the approach
+//   probe_pretravel      per probing direction (+X -X +Y -Y +Z -Z of the machine), along the approach
+//   E_aa_lin, E_ba_rand, S_..   the linear-axis model (000 Eq. (22)-(23))
+//   setup_position       translation of the piece [x, y, z]
+//   setup_orientation    rotation of the piece about X, Y, Z (about its top centre)
+//   surface_roughness    per touch, height of the surface under the ball along its normal
+//   form_error           per face: offset along the normal, and tilts about its two in-plane axes
+#include <Eigen/Core>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/error_model.hpp"
+#include "core/json_io.hpp"
+#include "core/linear_axes.hpp"
+
+namespace rotacal {
+
+enum class ContributorKind {
+  ProbeRepeatability,
+  ProbePretravel,
+  LinearScale,      // E_aa_lin
+  LinearRandom,     // E_ba_rand
+  Squareness,       // S_xy S_xz S_yz
+  SetupPosition,
+  SetupOrientation,
+  SurfaceRoughness,
+  FormError,
+};
+
+/// What a contributor id means: its kind and, for the linear axes, the moving axis and the
+/// direction of the error (0 = X, 1 = Y, 2 = Z).
+struct ContributorInfo {
+  std::string_view id;
+  ContributorKind kind;
+  int axis = -1;
+  int direction = -1;
+  std::string_view description;
+};
+
+/// Every known contributor, in the order of 000 Table 5 (then form_error).
+const std::vector<ContributorInfo>& contributorCatalog();
+const ContributorInfo* findContributor(std::string_view id);  // nullptr when unknown
+
+struct Contributor {
+  const ContributorInfo* info = nullptr;
+  /// Standard uncertainty, internal units: mm (lengths), mm/mm (slopes), rad (angles). Scalar
+  /// contributors use u[0]; setup_* use [x, y, z]; form_error uses [offset mm, tilt rad, -].
+  Eigen::Vector3d u = Eigen::Vector3d::Zero();
+  std::string unit;  // as written in the file, for the echo in reports
+  std::string note;
+};
+
+/// Reference figures to compare with (e.g. 000 Table 6 and Table 5's right-hand columns), in
+/// report units (um, mdeg). Optional; never used in a computation other than a comparison or
+/// the weights of a plan design.
+struct ReferenceUncertainty {
+  std::string source;
+  std::map<std::string, double> combined;                               // parameter -> u
+  std::map<std::string, std::map<std::string, double>> contributors;    // contributor -> parameter -> u
+};
+
+struct ContributorSet {
+  std::string file;  // where it came from, for messages
+  std::string description;
+  std::vector<Contributor> items;  // in catalog order
+  double node_spacing_min_mm = 20.0, node_spacing_max_mm = 50.0;  // 000 Eq. (22): p_rand
+  std::optional<ReferenceUncertainty> reference;
+
+  const Contributor* find(std::string_view id) const;
+  /// The linear-axis part, for core/linear_axes.hpp.
+  LinearAxisModel linearAxisModel() const;
+  bool validate(std::string* why) const;
+};
+
+/// Units accepted, converted to internal units by factor:
+///   lengths  um, mm
+///   slopes   um/m (= ppm), ppm, um/100mm, um/mm, mm/m, urad, mrad   (for *_lin, S_*, setup_orientation)
+///   angles   urad, mrad, mdeg, um/100mm                             (form_error tilt)
+/// Returns false when the unit does not fit the kind.
+bool unitFactor(ContributorKind kind, std::string_view unit, double* factor);
+
+ContributorSet contributorsFromJson(const JsonDoc& doc);
+ContributorSet loadContributors(const std::string& path);
+Json contributorsToJson(const ContributorSet& set);
+
+}  // namespace rotacal

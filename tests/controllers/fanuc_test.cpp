@@ -1,0 +1,294 @@
+// The Fanuc Macro B dialect: DPRNT results round-trip within [44]'s digits and the ms timer,
+// the parser accepts the forms DPRNT may print and names the line of every fault, the checker
+// passes the generated program and catches planted faults, and the G54 correction is written.
+#include <gtest/gtest.h>
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <map>
+#include <regex>
+
+#include "controllers/dialects.hpp"
+#include "core/errors.hpp"
+#include "core/units.hpp"
+#include "ctl_test_util.hpp"
+#include "postproc/probe_program.hpp"
+
+namespace rotacal {
+namespace {
+
+using test::lines;
+using test::messageOf;
+
+// DPRNT [44] prints 4 decimals: half a unit of the 4th decimal (mm).
+constexpr double kDprntRoundingMm = 0.5e-4 + 1e-12;
+// #3001 is printed in whole ms.
+constexpr double kTimerRoundingS = 0.5e-3 + 1e-12;
+
+const Dialect& fc() { return dialectByName("fanuc"); }
+
+TEST(FanucResults, DprntNumberIsRightAlignedWithTheSignBeforeTheDigits) {
+  EXPECT_EQ(fanucDprntNumber(123.456, 4, 4), " 123.4560");
+  EXPECT_EQ(fanucDprntNumber(-200.0, 4, 4), "-200.0000");
+  EXPECT_EQ(fanucDprntNumber(-12.34561, 4, 4), " -12.3456");
+  EXPECT_EQ(fanucDprntNumber(-0.00001, 4, 4), "   0.0000") << "never -0.0000";
+  EXPECT_EQ(fanucDprntNumber(12345.0, 9, 0), "    12345");
+  EXPECT_EQ(fanucDprntNumber(-1234.5, 4, 4), "-1234.5000") << "widened when it does not fit";
+}
+
+TEST(FanucResults, RoundTripWithinThePrintedDigits) {
+  const ProbePlan plan = test::acPlan();
+  const MeasurementRun run = test::displacedRun(plan);
+  const std::string text = fc().writeResults(plan, run);
+  const auto ls = lines(text);
+  EXPECT_EQ(ls[0], "ROTACAL-RESULTS DIALECT FANUC CYCLE TOUCH154 POINTS 154 UNIT MM");
+  EXPECT_EQ(ls.back(), "END");
+  EXPECT_NE(text.find("\r\n"), std::string::npos) << "CR LF like a Fanuc punch";
+  EXPECT_TRUE(std::regex_match(ls[1], std::regex(R"(P1 X[ -]*\d+\.\d{4} Y[ -]*\d+\.\d{4} Z[ -]*\d+\.\d{4} T *\d+)")))
+      << ls[1];
+  const MeasurementRun back = fc().parseResults(text, "res.txt", plan);
+  ASSERT_EQ(back.points.size(), plan.points.size());
+  for (size_t i = 0; i < back.points.size(); ++i) {
+    EXPECT_EQ(back.points[i].point_id, run.points[i].point_id);
+    EXPECT_LE((back.points[i].position_m_mm - run.points[i].position_m_mm).cwiseAbs().maxCoeff(), kDprntRoundingMm);
+    EXPECT_NEAR(back.points[i].t_s, run.points[i].t_s, kTimerRoundingS);
+  }
+}
+
+TEST(FanucResults, ParserAcceptsTheFormsDprntMayPrint) {
+  const ProbePlan plan = test::acPlan();
+  auto ls = lines(fc().writeResults(plan, test::displacedRun(plan)));
+  ls[1] = "P1 X0051.0010 Y-0235.0000 Z  150.0000 T 12345.";
+  ls[2] = "P2 X51.0010 Y  -215.0000 Z150.0000 T0000012346";
+  ls[3] = "  P3   X 51.0010   Y-185.0000   Z 150.0000   T    12347  ";
+  std::string text = "\x12%\r\n";  // DC2 of POPEN and a tape mark
+  for (size_t i = 0; i < ls.size(); ++i) text += ls[i] + (i % 2 ? "\r" : "\r\n");
+  text += "%\x14";
+  const MeasurementRun back = fc().parseResults(text, "res.txt", plan);
+  ASSERT_EQ(back.points.size(), plan.points.size());
+  EXPECT_EQ(back.points[0].position_m_mm, Eigen::Vector3d(51.001, -235.0, 150.0));
+  EXPECT_DOUBLE_EQ(back.points[0].t_s, 12.345);
+  EXPECT_EQ(back.points[1].position_m_mm.y(), -215.0);
+  EXPECT_DOUBLE_EQ(back.points[1].t_s, 12.346);
+  EXPECT_DOUBLE_EQ(back.points[2].t_s, 12.347);
+}
+
+TEST(FanucResults, InchMachinePrintsInchesAndParsesBackToMm) {
+  const ProbePlan plan = test::acPlan(LengthUnit::Inch);
+  const MeasurementRun run = test::displacedRun(plan);
+  const std::string text = fc().writeResults(plan, run);
+  EXPECT_NE(lines(text)[0].find("UNIT INCH"), std::string::npos);
+  const MeasurementRun back = fc().parseResults(text, "res.txt", plan);
+  // [44] in inch: half a unit of the 4th decimal of an inch, in mm.
+  constexpr double kDprntRoundingInchInMm = 0.5e-4 * 25.4 + 1e-12;
+  for (size_t i = 0; i < back.points.size(); ++i)
+    EXPECT_LE((back.points[i].position_m_mm - run.points[i].position_m_mm).cwiseAbs().maxCoeff(),
+              kDprntRoundingInchInMm);
+}
+
+class FanucRejects : public ::testing::Test {
+ protected:
+  ProbePlan plan = test::acPlan();
+  std::vector<std::string> ls = lines(fc().writeResults(plan, test::displacedRun(plan)));
+  void expectAt(const std::vector<std::string>& v, size_t line, const std::string& what) {
+    const std::string e = messageOf<InputError>([&] { fc().parseResults(test::join(v, "\r\n"), "res.txt", plan); });
+    EXPECT_NE(e.find(fmt::format("res.txt:{}: {}", line, what)), std::string::npos) << e;
+  }
+};
+
+TEST_F(FanucRejects, MissingPointAtTheLastLine) {
+  auto v = ls;
+  v.erase(v.begin() + 44);
+  expectAt(v, v.size(), "point 44 is missing");
+}
+
+TEST_F(FanucRejects, ProgramThatStoppedEarlyHasNoEnd) {
+  auto v = ls;
+  v.resize(45);  // header + 44 points: the alarm stopped the program
+  expectAt(v, 45, "point 45 is missing and there is no END line");
+  v = ls;
+  v.pop_back();
+  expectAt(v, v.size(), "no END line");
+}
+
+TEST_F(FanucRejects, DuplicatedPointAtItsSecondLine) {
+  auto v = ls;
+  v.insert(v.begin() + 9, ls[8]);
+  expectAt(v, 10, "point 8 appears twice (first at line 9)");
+}
+
+TEST_F(FanucRejects, PointIdNotInThePlan) {
+  auto v = ls;
+  v.insert(v.end() - 1, "P200 X 1.0000 Y 2.0000 Z 3.0000 T 5");
+  expectAt(v, v.size() - 1, "point 200 is not in the plan");
+}
+
+TEST_F(FanucRejects, CoordinateThatIsNotANumber) {
+  auto v = ls;
+  v[6] = "P6 X 12.3456 Y****.**** Z 1.0000 T 5";
+  expectAt(v, 7, "Y '****.****' of point 6 is not a number");
+  v[6] = "P6 X 1.2.3 Y 1.0000 Z 1.0000 T 5";
+  expectAt(v, 7, "X '1.2.3' of point 6 is not a number");
+}
+
+TEST_F(FanucRejects, HeaderWithTheWrongPointCount) {
+  auto v = ls;
+  v[0] = "ROTACAL-RESULTS DIALECT FANUC CYCLE TOUCH154 POINTS 150 UNIT MM";
+  expectAt(v, 1, "header says POINTS 150 but the plan has 154 points");
+}
+
+TEST_F(FanucRejects, TextAfterEnd) {
+  auto v = ls;
+  v.push_back("P1 X 1.0000 Y 2.0000 Z 3.0000 T 5");
+  expectAt(v, v.size(), "text after END");
+}
+
+TEST(FanucProgram, GeneratedProgramPassesTheChecker) {
+  const ProbePlan plan = test::acPlan();
+  const std::string text = fc().writeProgram(probeProgram(plan, "fanuc"));
+  EXPECT_EQ(fc().check(text, plan), std::vector<std::string>{});
+  const auto ls = lines(text);
+  EXPECT_EQ(ls[0], "%");
+  EXPECT_EQ(ls[1], "O7154(ROTACAL TOUCH154)");
+  EXPECT_EQ(ls[ls.size() - 2], "M30");
+  EXPECT_EQ(text.find("-0.0000"), std::string::npos);
+  for (const auto& l : ls) {
+    EXPECT_LE(l.size(), 80u) << l;
+    EXPECT_EQ(l.find_first_of("abcdefghijklmnopqrstuvwxyz"), std::string::npos) << l;
+  }
+  const size_t g = test::lineStarting(ls, "G31");
+  EXPECT_EQ(ls[g], "G31 X51.0000 Y-235.0000 Z150.0000 F100.0");
+  EXPECT_EQ(ls[g + 1], "#1=#5061-51.0000");
+  EXPECT_EQ(ls[g + 2], "#2=#5062+235.0000");
+  EXPECT_EQ(ls[g + 4], "IF[[#1*#1+#2*#2+#3*#3]GT0.0001]GOTO1001");
+  EXPECT_EQ(ls[g + 5], "#3000=1(POINT 1 NOT TRIGGERED)");
+  EXPECT_EQ(ls[g + 6], "N1001");
+  EXPECT_EQ(ls[g + 7], "#700=#5061");
+  EXPECT_EQ(ls[g + 10], "#703=#3001");
+  EXPECT_NE(text.find("\nDPRNT[P1*X#700[44]*Y#701[44]*Z#702[44]*T#703[90]]\n"), std::string::npos);
+  EXPECT_NE(text.find("\nDPRNT[END]\nPCLOS\nM30\n%\n"), std::string::npos);
+}
+
+TEST(FanucProgram, InchProgramUsesG20AndPassesTheChecker) {
+  const ProbePlan plan = test::acPlan(LengthUnit::Inch);
+  const std::string text = fc().writeProgram(probeProgram(plan, "fanuc"));
+  EXPECT_NE(text.find("\nG20\n"), std::string::npos);
+  EXPECT_NE(text.find("]GT0.000001]GOTO1001\n"), std::string::npos) << "(0.001 in)^2 no-trigger threshold";
+  EXPECT_EQ(fc().check(text, plan), std::vector<std::string>{});
+}
+
+TEST(FanucProgram, StoredVariablesRestartAtEachPose) {
+  const ProbePlan plan = test::acPlan();
+  const std::string text = fc().writeProgram(probeProgram(plan, "fanuc"));
+  // The first point of every pose is stored at #700 and printed before the next index move.
+  int first_of_pose = 0;
+  for (size_t i = 0; i < plan.points.size(); ++i)
+    first_of_pose += i == 0 || plan.points[i].pose_name != plan.points[i - 1].pose_name;
+  const std::regex store(R"(\n#700=#5061\n)");
+  EXPECT_EQ(std::distance(std::sregex_iterator(text.begin(), text.end(), store), std::sregex_iterator()), first_of_pose);
+  // The largest pose uses #700 .. #700 + 4 n - 1 and nothing beyond.
+  std::map<std::string, int> per_pose;
+  for (const auto& p : plan.points) ++per_pose[p.pose_name];
+  int most = 0;
+  for (const auto& [name, n] : per_pose) most = std::max(most, n);
+  const int top = 700 + 4 * most - 1;
+  EXPECT_NE(text.find(fmt::format("\n#{}=#3001\n", top)), std::string::npos);
+  EXPECT_EQ(text.find(fmt::format("\n#{}=", top + 1)), std::string::npos);
+  EXPECT_LE(most, 28) << "touch154: at most 28 points per pose, #700-#811";
+}
+
+TEST(FanucProgram, PoseWithMoreThanSeventyPointsIsRefused) {
+  nc::Program p;
+  p.cycle = "big";
+  for (int id = 1; id <= 71; ++id) {
+    nc::Op op;
+    op.kind = nc::Op::Kind::Probe;
+    op.point_id = id;
+    op.feed = 100;
+    p.ops.push_back(op);
+  }
+  EXPECT_THROW(fc().writeProgram(p), std::invalid_argument);
+  p.ops.pop_back();
+  EXPECT_NO_THROW(fc().writeProgram(p));
+}
+
+class FanucCheck : public ::testing::Test {
+ protected:
+  ProbePlan plan = test::acPlan();
+  std::vector<std::string> ls = lines(fc().writeProgram(probeProgram(plan, "fanuc")));
+  size_t g = test::lineStarting(ls, "G31");
+  std::vector<std::string> problemsWith(const std::function<void(std::vector<std::string>&)>& edit) {
+    auto v = ls;
+    edit(v);
+    return fc().check(test::join(v), plan);
+  }
+  static bool has(const std::vector<std::string>& ps, const std::string& what) {
+    for (const auto& p : ps)
+      if (p.find(what) != std::string::npos) return true;
+    return false;
+  }
+};
+
+TEST_F(FanucCheck, CatchesAMissingDecimalPoint) {
+  const auto ps = problemsWith([&](auto& v) { v[g] = "G31 X51 Y-235.0000 Z150.0000 F100.0"; });
+  ASSERT_EQ(ps.size(), 1u);
+  EXPECT_EQ(ps[0], fmt::format("{}: X51 has no decimal point (read in least input increments)", g + 1));
+  EXPECT_TRUE(has(problemsWith([&](auto& v) { v[g] = "G31 X51.0000 Y-235.0000 Z150.0000 F100"; }), "F100 has no"));
+}
+
+TEST_F(FanucCheck, CatchesARemovedNoTriggerAlarm) {
+  const auto ps = problemsWith([&](auto& v) { v.erase(v.begin() + static_cast<long>(g) + 5); });
+  ASSERT_EQ(ps.size(), 1u);
+  EXPECT_EQ(ps[0].rfind(fmt::format("{}: G31 is not followed by the no-trigger check", g + 1), 0), 0u) << ps[0];
+}
+
+TEST_F(FanucCheck, CatchesAPointOutsideTheStrokes) {
+  const auto ps = problemsWith([&](auto& v) { v[g] = "G31 X51.0000 Y-335.0000 Z150.0000 F100.0"; });
+  ASSERT_EQ(ps.size(), 1u);
+  EXPECT_NE(ps[0].find("Y = -335.0000 mm is outside the stroke"), std::string::npos) << ps[0];
+}
+
+TEST_F(FanucCheck, CatchesConstructsThatAreNotMacroB) {
+  EXPECT_TRUE(has(problemsWith([&](auto& v) { v[g + 1] = "o1001 if [#5070 NE 1]"; }), "o-word"));
+  EXPECT_TRUE(has(problemsWith([&](auto& v) { v[g + 1] = "#<dx>=#5061-51.0000"; }), "named parameters"));
+  EXPECT_TRUE(has(problemsWith([&](auto& v) { v[g] = "g31 X51.0000 Y-235.0000 Z150.0000 F100.0"; }), "lower-case"));
+  EXPECT_TRUE(has(problemsWith([&](auto& v) { v[3] = "(probe)"; }), "lower-case letters in a comment"));
+  EXPECT_TRUE(has(problemsWith([&](auto& v) { v[3] = "(" + std::string(90, 'X') + ")"; }), "more than 80"));
+  EXPECT_TRUE(has(problemsWith([&](auto& v) { v[test::lineStarting(v, "DPRNT[ROTACAL")] = "DPRNT[A=B]"; }),
+                  "DPRNT text has '='"));
+  EXPECT_TRUE(has(problemsWith([&](auto& v) { v[g + 4] = "IF[[#1*#1+#2*#2+#3*#3]GT0.0001]GOTO1001]"; }),
+                  "unbalanced brackets"));
+}
+
+TEST_F(FanucCheck, CatchesAMissingEnd) {
+  EXPECT_TRUE(has(problemsWith([&](auto& v) { v.erase(v.end() - 2); }), "does not end with M30"));
+  EXPECT_TRUE(has(problemsWith([&](auto& v) { v.pop_back(); }), "does not end with '%'"));
+}
+
+TEST(FanucOffsets, IncrementalG54ShiftWithTheFanucSign) {
+  const ProbePlan plan = test::acPlan();
+  OffsetRequest r;
+  r.plan = &plan;
+  r.identified.kinematics = Kinematics::TableAC;
+  const double v[8] = {14.6, 23.2, 27.7, 3.9, -0.5, -0.1, -0.5, 0.2};  // 000 Table 4 mean, um / mdeg
+  for (int i = 0; i < 8; ++i) r.identified.setReportValue(i, v[i]);
+  r.report_file = "out/report_1.json";
+  const std::string text = fc().writeOffsets(r);
+  const auto ls = lines(text);
+  EXPECT_NE(text.find("\nG91 G10 L2 P1 X0.0146 Y0.0232 Z0.0277 A-0.0005\nG90\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("OUT/REPORT-1.JSON"), std::string::npos) << text;
+  EXPECT_NE(text.find("UNVERIFIED"), std::string::npos);
+  EXPECT_NE(text.find("19700"), std::string::npos);
+  for (const auto& l : ls) {
+    EXPECT_LE(l.size(), 80u) << l;
+    EXPECT_EQ(l.find_first_of("abcdefghijklmnopqrstuvwxyz"), std::string::npos) << l;
+  }
+  r.identified.set("dx_AY", -0.7);
+  EXPECT_THROW(fc().writeOffsets(r), std::invalid_argument);
+  r.force = true;
+  EXPECT_NE(fc().writeOffsets(r).find("X-0.7000"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace rotacal

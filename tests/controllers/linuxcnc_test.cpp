@@ -1,0 +1,344 @@
+// The LinuxCNC dialect: the program's LOG results round-trip within the printed digits, the
+// parser names the line of every fault, the checker passes the generated program and catches
+// planted faults, and the HAL offsets follow the documented pin mapping.
+#include <gtest/gtest.h>
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <regex>
+
+#include "controllers/dialects.hpp"
+#include "core/errors.hpp"
+#include "core/units.hpp"
+#include "ctl_test_util.hpp"
+#include "postproc/probe_program.hpp"
+
+namespace rotacal {
+namespace {
+
+using test::lines;
+using test::messageOf;
+
+// LOG prints %.6f: a value read back differs by at most half a unit of the 6th decimal.
+constexpr double kLogRoundingMm = 0.5e-6 + 1e-12;
+// Inch: the same 6 decimals of an inch, expressed in mm.
+constexpr double kLogRoundingInchInMm = 0.5e-6 * 25.4 + 1e-12;
+
+const Dialect& lc() { return dialectByName("linuxcnc"); }
+
+TEST(LinuxCncResults, RoundTripWithinThePrintedDigits) {
+  const ProbePlan plan = test::acPlan();
+  const MeasurementRun run = test::displacedRun(plan);
+  const std::string text = lc().writeResults(plan, run);
+  const auto ls = lines(text);
+  EXPECT_EQ(ls[0], "rotacal-results/1 dialect=linuxcnc cycle=touch154 points=154 unit=mm");
+  EXPECT_TRUE(std::regex_match(ls[1], std::regex(R"(P1 -?\d+\.\d{6} -?\d+\.\d{6} -?\d+\.\d{6} -?\d+\.\d{4} -?\d+\.\d{4} 1)")))
+      << ls[1];
+  const MeasurementRun back = lc().parseResults(text, "res.txt", plan);
+  ASSERT_EQ(back.points.size(), plan.points.size());
+  for (size_t i = 0; i < back.points.size(); ++i) {
+    EXPECT_EQ(back.points[i].point_id, run.points[i].point_id);
+    EXPECT_LE((back.points[i].position_m_mm - run.points[i].position_m_mm).cwiseAbs().maxCoeff(), kLogRoundingMm);
+    EXPECT_TRUE(std::isnan(back.points[i].t_s)) << "LinuxCNC records no time";
+  }
+}
+
+TEST(LinuxCncResults, AnglesAreTheControllersWithTheLinuxCncSign) {
+  const ProbePlan plan = test::acPlan();
+  const auto ls = lines(lc().writeResults(plan, test::displacedRun(plan)));
+  for (const auto& p : plan.points) {
+    if (!(p.pose.A == -90.0 && p.pose.C == 90.0)) continue;  // pose V of 000
+    const auto& l = ls[static_cast<size_t>(p.id)];
+    EXPECT_NE(l.find(" 90.0000 -90.0000 1"), std::string::npos) << "A = -A*, C = -C* on xyzac-trt-kins: " << l;
+    return;
+  }
+  FAIL() << "no point at A* = -90, C* = 90";
+}
+
+TEST(LinuxCncResults, InchMachineLogsInchesAndParsesBackToMm) {
+  const ProbePlan plan = test::acPlan(LengthUnit::Inch);
+  const MeasurementRun run = test::displacedRun(plan);
+  const std::string text = lc().writeResults(plan, run);
+  EXPECT_NE(lines(text)[0].find("unit=inch"), std::string::npos);
+  const MeasurementRun back = lc().parseResults(text, "res.txt", plan);
+  for (size_t i = 0; i < back.points.size(); ++i)
+    EXPECT_LE((back.points[i].position_m_mm - run.points[i].position_m_mm).cwiseAbs().maxCoeff(), kLogRoundingInchInMm);
+}
+
+TEST(LinuxCncResults, ParserAcceptsCrLfCrAndRepeatedSpaces) {
+  const ProbePlan plan = test::acPlan();
+  auto ls = lines(lc().writeResults(plan, test::displacedRun(plan)));
+  std::string text;
+  for (size_t i = 0; i < ls.size(); ++i) {
+    std::string l = ls[i];
+    if (i % 3 == 1) l = "  " + std::regex_replace(l, std::regex(" "), "   ");
+    text += l + (i % 3 == 0 ? "\r\n" : i % 3 == 1 ? "\r" : "\n");
+  }
+  text += "\n\n";
+  EXPECT_EQ(lc().parseResults(text, "res.txt", plan).points.size(), plan.points.size());
+}
+
+class LinuxCncRejects : public ::testing::Test {
+ protected:
+  ProbePlan plan = test::acPlan();
+  std::vector<std::string> ls = lines(lc().writeResults(plan, test::displacedRun(plan)));
+  std::string err(const std::vector<std::string>& v) {
+    return messageOf<InputError>([&] { lc().parseResults(test::join(v), "res.txt", plan); });
+  }
+  void expectAt(const std::vector<std::string>& v, size_t line, const std::string& what) {
+    const std::string e = err(v);
+    EXPECT_NE(e.find(fmt::format("res.txt:{}: {}", line, what)), std::string::npos) << e;
+  }
+};
+
+TEST_F(LinuxCncRejects, MissingPointAtTheLastLine) {
+  auto v = ls;
+  v.erase(v.begin() + 17);  // P17
+  expectAt(v, v.size(), "point 17 is missing");
+}
+
+TEST_F(LinuxCncRejects, DuplicatedPointAtItsSecondLine) {
+  auto v = ls;
+  v.insert(v.begin() + 31, ls[5]);  // P5 again as line 32
+  expectAt(v, 32, "point 5 appears twice (first at line 6)");
+}
+
+TEST_F(LinuxCncRejects, PointIdNotInThePlan) {
+  auto v = ls;
+  v[40] = "P155 1.0 2.0 3.0 0.0 0.0 1";
+  expectAt(v, 41, "point 155 is not in the plan");
+}
+
+TEST_F(LinuxCncRejects, NonNumberNamingTheToken) {
+  auto v = ls;
+  v[12] = "P12 1.000000 2.0x0000 3.000000 0.0000 0.0000 1";
+  expectAt(v, 13, "'2.0x0000' (field 3 of point 12) is not a number");
+}
+
+TEST_F(LinuxCncRejects, UntriggeredPoint) {
+  auto v = ls;
+  v[9].back() = '0';
+  expectAt(v, 10, "point 9 was not triggered");
+}
+
+TEST_F(LinuxCncRejects, HeaderWithTheWrongPointCount) {
+  auto v = ls;
+  v[0] = "rotacal-results/1 dialect=linuxcnc cycle=touch154 points=153 unit=mm";
+  expectAt(v, 1, "header says points=153 but the plan has 154 points");
+}
+
+TEST_F(LinuxCncRejects, HeaderOfAnotherCycleOrMissing) {
+  auto v = ls;
+  v[0] = "rotacal-results/1 dialect=linuxcnc cycle=rtest points=154 unit=mm";
+  expectAt(v, 1, "results of cycle 'rtest'");
+  v.erase(v.begin());
+  expectAt(v, 1, "expected the header");
+}
+
+TEST_F(LinuxCncRejects, WrongFieldCount) {
+  auto v = ls;
+  v[3] = "P3 1.0 2.0 3.0 0.0 1";
+  expectAt(v, 4, "expected 7 fields");
+}
+
+TEST(LinuxCncProgram, GeneratedProgramPassesTheChecker) {
+  const ProbePlan plan = test::acPlan();
+  const std::string text = lc().writeProgram(probeProgram(plan, "linuxcnc"));
+  EXPECT_EQ(lc().check(text, plan), std::vector<std::string>{});
+  EXPECT_EQ(text.find("-0.0000"), std::string::npos);
+  const auto ls = lines(text);
+  EXPECT_EQ(ls.front(), "%");
+  EXPECT_EQ(ls[ls.size() - 2], "M2");
+  const size_t open = test::lineStarting(ls, "(LOGOPEN");
+  EXPECT_EQ(ls[open], "(LOGOPEN,rotacal_touch154.txt)");
+  EXPECT_EQ(ls[open + 1], "(LOG,rotacal-results/1 dialect=linuxcnc cycle=touch154 points=154 unit=mm)");
+  const size_t probe = test::lineStarting(ls, "G38.2");
+  EXPECT_EQ(ls[probe + 1], "o1001 if [#5070 NE 1]");
+  EXPECT_EQ(ls[probe + 2], "(ABORT, rotacal: point 1 did not trigger)");
+  EXPECT_EQ(ls[probe + 3], "o1001 endif");
+  EXPECT_EQ(ls[probe + 4], "(LOG,P1 %.6f#5061 %.6f#5062 %.6f#5063 %.4f#5064 %.4f#5066 %d#5070)");
+  for (const auto& l : ls) EXPECT_LE(l.size(), 252u) << l;
+}
+
+TEST(LinuxCncProgram, InchProgramUsesG20AndFiveDecimals) {
+  const ProbePlan plan = test::acPlan(LengthUnit::Inch);
+  const std::string text = lc().writeProgram(probeProgram(plan, "linuxcnc"));
+  EXPECT_NE(text.find("\nG20\n"), std::string::npos);
+  EXPECT_TRUE(std::regex_search(text, std::regex(R"(\nG38\.2 X-?\d+\.\d{5} Y-?\d+\.\d{5} Z-?\d+\.\d{5} F)")));
+  EXPECT_EQ(lc().check(text, plan), std::vector<std::string>{});
+}
+
+TEST(LinuxCncProgram, BcMachineLogsTheBAxisParameter) {
+  nc::Program p;
+  p.cycle = "rtest";
+  p.rotary_axes = {'B', 'C'};
+  nc::Op probe;
+  probe.kind = nc::Op::Kind::Probe;
+  probe.point_id = 1;
+  probe.feed = 100;
+  p.ops.push_back(probe);
+  const std::string text = lc().writeProgram(p);
+  EXPECT_NE(text.find("%.4f#5065 %.4f#5066 %d#5070)"), std::string::npos) << text;
+}
+
+TEST(LinuxCncCheck, CatchesARemovedAbort) {
+  const ProbePlan plan = test::acPlan();
+  auto ls = lines(lc().writeProgram(probeProgram(plan, "linuxcnc")));
+  const size_t g = test::lineStarting(ls, "G38.2");
+  ls.erase(ls.begin() + static_cast<long>(g) + 2);  // the (ABORT, ...) of point 1
+  const auto problems = lc().check(test::join(ls), plan);
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_EQ(problems[0].rfind(fmt::format("{}: G38.2 is not followed", g + 1), 0), 0u) << problems[0];
+}
+
+TEST(LinuxCncCheck, CatchesAPointOutsideTheStrokes) {
+  const ProbePlan plan = test::acPlan();
+  auto ls = lines(lc().writeProgram(probeProgram(plan, "linuxcnc")));
+  const size_t g = test::lineStarting(ls, "G38.2");
+  ls[g] = "G38.2 X700.0000 Y-235.0000 Z150.0000 F100.0";
+  const auto problems = lc().check(test::join(ls), plan);
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_NE(problems[0].find(fmt::format("{}: X = 700.0000 mm is outside the stroke", g + 1)), std::string::npos)
+      << problems[0];
+}
+
+TEST(LinuxCncCheck, CatchesARotaryAngleOutsideItsStrokeInThePapersConvention) {
+  const ProbePlan plan = test::acPlan();
+  auto ls = lines(lc().writeProgram(probeProgram(plan, "linuxcnc")));
+  const size_t g = test::lineStarting(ls, "G0 A");
+  ls[g] = "G0 A-30.0000 C0.0000";  // LinuxCNC A-30 = paper A* +30 > +20
+  const auto problems = lc().check(test::join(ls), plan);
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_NE(problems[0].find("papers' convention 30.0000"), std::string::npos) << problems[0];
+}
+
+TEST(LinuxCncCheck, CatchesLineSyntaxAndStructureFaults) {
+  const ProbePlan plan = test::acPlan();
+  const auto ls = lines(lc().writeProgram(probeProgram(plan, "linuxcnc")));
+  auto problemsWith = [&](const std::function<void(std::vector<std::string>&)>& edit) {
+    auto v = ls;
+    edit(v);
+    return lc().check(test::join(v), plan);
+  };
+  auto has = [](const std::vector<std::string>& ps, const std::string& what) {
+    for (const auto& p : ps)
+      if (p.find(what) != std::string::npos) return true;
+    return false;
+  };
+  EXPECT_TRUE(has(problemsWith([](auto& v) { v[1] = "(" + std::string(260, 'x') + ")"; }), "Command too long"));
+  EXPECT_TRUE(has(problemsWith([](auto& v) { v[1] = "(open"; }), "comment not closed"));
+  EXPECT_TRUE(has(problemsWith([](auto& v) { v[test::lineStarting(v, "(LOGOPEN")] = "(LOGOPEN x.txt)"; }),
+                  "LOGOPEN needs a comma"));
+  EXPECT_TRUE(has(problemsWith([](auto& v) {
+                    const size_t i = test::lineStarting(v, "(LOG,P1 ");
+                    v[i] = "(note)" + v[i];
+                  }),
+                  "shares its line"));
+  EXPECT_TRUE(has(problemsWith([](auto& v) { v.erase(v.end() - 2); }), "does not end with M2 or M30"));
+  EXPECT_TRUE(has(problemsWith([](auto& v) {
+                    const size_t g = test::lineStarting(v, "G38.2");
+                    v.erase(v.begin() + static_cast<long>(g), v.begin() + static_cast<long>(g) + 5);
+                  }),
+                  "153 G38.2 moves, the plan has 154 points"));
+}
+
+// ---- offsets ----
+
+OffsetRequest request(const ProbePlan& plan) {
+  OffsetRequest r;
+  r.plan = &plan;
+  r.identified.kinematics = plan.machine.kinematics;
+  r.report_file = "report.json";
+  return r;
+}
+
+LocationErrors table4() {
+  LocationErrors e;
+  e.kinematics = Kinematics::TableAC;
+  const double v[8] = {14.6, 23.2, 27.7, 3.9, -0.5, -0.1, -0.5, 0.2};  // 000 Table 4 mean, um / mdeg
+  for (int i = 0; i < 8; ++i) e.setReportValue(i, v[i]);
+  return e;
+}
+
+// Values are printed with 6 decimals (mm): half a unit of the last digit.
+constexpr double kPinRoundingMm = 0.5e-6 + 1e-12;
+
+TEST(LinuxCncOffsets, PinsFollowTheDocumentedMapping) {
+  const ProbePlan plan = test::acPlan();
+  OffsetRequest r = request(plan);
+  r.identified = table4();
+  const std::string hal = lc().writeOffsets(r);
+  const auto pins = parseHalSetp(hal, "xyzac-trt-kins");
+  ASSERT_EQ(pins.size(), 5u) << hal;
+  EXPECT_NEAR(pins.at("x-rot-point"), 0.0146, kPinRoundingMm);
+  EXPECT_NEAR(pins.at("y-rot-point"), 0.0232 + 0.0039, kPinRoundingMm);
+  EXPECT_NEAR(pins.at("z-rot-point"), 0.0277, kPinRoundingMm);
+  EXPECT_NEAR(pins.at("y-offset"), -0.0039, kPinRoundingMm);
+  EXPECT_NEAR(pins.at("z-offset"), 0.0, kPinRoundingMm);
+  // a_AY = -0.5 mdeg; LinuxCNC counts A the other way: G54 A offset = -1 * -0.0005 deg.
+  EXPECT_NE(hal.find("#   G10 L2 P1 A0.000500\n"), std::string::npos) << hal;
+  EXPECT_NE(hal.find("report.json"), std::string::npos);
+  EXPECT_NE(hal.find("b_AY"), std::string::npos);
+}
+
+TEST(LinuxCncOffsets, PreviousValuesAreAddedAndOtherLinesKept) {
+  const ProbePlan plan = test::acPlan();
+  OffsetRequest r = request(plan);
+  r.identified = table4();
+  r.previous_text =
+      "# old file\r\nsetp xyzac-trt-kins.x-rot-point 1.5\r\nsetp   xyzac-trt-kins.y-offset   -20.0  # A pivot\r\n"
+      "setp xyzac-trt-kins.tool-offset 0\r\n";
+  const std::string hal = lc().writeOffsets(r);
+  const auto pins = parseHalSetp(hal, "xyzac-trt-kins");
+  EXPECT_NEAR(pins.at("x-rot-point"), 1.5 + 0.0146, kPinRoundingMm);
+  EXPECT_NEAR(pins.at("y-offset"), -20.0 - 0.0039, kPinRoundingMm);
+  EXPECT_NEAR(pins.at("z-rot-point"), 0.0277, kPinRoundingMm) << "missing previous value counts as 0";
+  EXPECT_EQ(pins.at("tool-offset"), 0.0) << "unrelated pins are carried over";
+  EXPECT_NE(hal.find("1.500000"), std::string::npos) << "old value listed";
+}
+
+TEST(LinuxCncOffsets, ImplausibleCorrectionThrowsUnlessForced) {
+  const ProbePlan plan = test::acPlan();
+  OffsetRequest r = request(plan);
+  r.identified = table4();
+  r.identified.set("dz_AY", 0.62);
+  const std::string msg = messageOf<std::invalid_argument>([&] { lc().writeOffsets(r); });
+  EXPECT_NE(msg.find("dz_AY = 0.6200 mm exceeds the plausibility limit of 0.5 mm"), std::string::npos) << msg;
+  r.identified = table4();
+  r.identified.set("b_CA", mdegToRad(-150.0));
+  EXPECT_NE(messageOf<std::invalid_argument>([&] { lc().writeOffsets(r); }).find("b_CA = -150.0 mdeg"),
+            std::string::npos);
+  r.force = true;
+  EXPECT_NO_THROW(lc().writeOffsets(r));
+}
+
+TEST(LinuxCncOffsets, BcMachineWritesTheXyzbcPins) {
+  ProbePlan plan;
+  plan.cycle = "rtest";
+  plan.machine = test::machineFrom(test::kBcMachineJson);
+  OffsetRequest r = request(plan);
+  r.identified.set("dx_BY", 0.010);
+  r.identified.set("dy_CB", 0.002);
+  r.identified.set("dz_BY", -0.020);
+  r.identified.set("dx_CB", 0.005);
+  r.identified.set("b_BY", mdegToRad(1.0));
+  const std::string hal = lc().writeOffsets(r);
+  const auto pins = parseHalSetp(hal, "xyzbc-trt-kins");
+  EXPECT_NEAR(pins.at("x-rot-point"), 0.015, kPinRoundingMm);
+  EXPECT_NEAR(pins.at("y-rot-point"), 0.002, kPinRoundingMm);
+  EXPECT_NEAR(pins.at("z-rot-point"), -0.020, kPinRoundingMm);
+  EXPECT_NEAR(pins.at("x-offset"), -0.005, kPinRoundingMm);
+  EXPECT_NEAR(pins.at("z-offset"), 0.0, kPinRoundingMm);
+  EXPECT_NE(hal.find("G10 L2 P1 B-0.001000"), std::string::npos) << hal;
+}
+
+TEST(LinuxCncOffsets, PreviousFileWithANonNumberIsRefused) {
+  const ProbePlan plan = test::acPlan();
+  OffsetRequest r = request(plan);
+  r.previous_text = "setp xyzac-trt-kins.x-rot-point [KINS]X\n";
+  EXPECT_THROW(lc().writeOffsets(r), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace rotacal
