@@ -22,7 +22,9 @@ TEST(ProbeProgram, OneGuardedMovePerPointFromItsApproachStart) {
       EXPECT_LT((op.xyz - p.end_m(plan.machine.overtravel_mm)).norm(), 1e-9);
       EXPECT_DOUBLE_EQ(op.feed, plan.machine.feeds.probing_mm_min);
     }
-    if (op.kind == nc::Op::Kind::Index) EXPECT_NEAR(cur.z(), plan.index_z_mm, 1e-9) << "index only when clear";
+    if (op.kind == nc::Op::Kind::Index) {
+      EXPECT_NEAR(cur.z(), plan.index_z_mm, 1e-9) << "index only when clear";
+    }
     if (op.kind != nc::Op::Kind::Comment && op.kind != nc::Op::Kind::Index) cur = op.xyz;
   }
   EXPECT_EQ(probes, 154);
@@ -47,11 +49,12 @@ TEST(ProbeProgram, InchMachineGetsInchCoordinates) {
   const ProbePlan plan = makePlan("touch154", m, {});
   const nc::Program prog = probeProgram(plan, "fanuc");
   EXPECT_EQ(prog.unit, nc::Unit::Inch);
-  for (const auto& op : prog.ops)
+  for (const auto& op : prog.ops) {
     if (op.kind == nc::Op::Kind::Probe) {
       EXPECT_LT((op.nominal_trigger * kMmPerInch - plan.findPoint(op.point_id)->trigger_m_mm).norm(), 1e-9);
       EXPECT_NEAR(op.feed * kMmPerInch, m.feeds.probing_mm_min, 1e-9);
     }
+  }
 }
 
 }  // namespace
