@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   CLI::App app{"rotacal: calibrate the rotary axes of five-axis machine tools with the machine's touch probe"};
   app.set_version_flag("--version", std::string("rotacal ") + ROTACAL_VERSION);
   app.require_subcommand(1);
+  app.fallthrough();  // global flags (--quiet) also after the subcommand
   Common common;
   app.add_flag("-q,--quiet", common.quiet, "print nothing on success");
   std::vector<Command> commands = touchCommands(app, common);

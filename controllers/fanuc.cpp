@@ -152,7 +152,9 @@ class FanucDialect final : public Dialect {
       const Eigen::Vector3d& x = op.xyz;
       switch (op.kind) {
         case nc::Op::Kind::Comment: commentLines(op.text); break;
-        case nc::Op::Kind::Rapid: line(fmt::format("G00 X{} Y{} Z{}", L(x.x()), L(x.y()), L(x.z()))); break;
+        case nc::Op::Kind::Rapid:
+          line(op.z_only ? fmt::format("G00 Z{}", L(x.z())) : fmt::format("G00 X{} Y{} Z{}", L(x.x()), L(x.y()), L(x.z())));
+          break;
         case nc::Op::Kind::Linear:
           line(fmt::format("G01 X{} Y{} Z{} F{}", L(x.x()), L(x.y()), L(x.z()), F(op.feed)));
           break;

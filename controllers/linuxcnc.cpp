@@ -110,7 +110,9 @@ class LinuxCncDialect final : public Dialect {
       const Eigen::Vector3d& x = op.xyz;
       switch (op.kind) {
         case nc::Op::Kind::Comment: line(comment(op.text)); break;
-        case nc::Op::Kind::Rapid: line(fmt::format("G0 X{} Y{} Z{}", L(x.x()), L(x.y()), L(x.z()))); break;
+        case nc::Op::Kind::Rapid:
+          line(op.z_only ? fmt::format("G0 Z{}", L(x.z())) : fmt::format("G0 X{} Y{} Z{}", L(x.x()), L(x.y()), L(x.z())));
+          break;
         case nc::Op::Kind::Linear:
           line(fmt::format("G1 X{} Y{} Z{} F{}", L(x.x()), L(x.y()), L(x.z()), F(op.feed)));
           break;

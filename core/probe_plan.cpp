@@ -185,7 +185,8 @@ std::vector<Waypoint> plannedPath(const ProbePlan& plan) {
       if (pp.name == pt.pose_name) safe_z = pp.safe_z_mm;
     safe_z = std::max(safe_z, start.z());
     if (first || pt.pose_name != pose_name) {
-      if (first) push(Waypoint::Kind::Rapid, Eigen::Vector3d(start.x(), start.y(), plan.index_z_mm));
+      // Where the machine stands at the start is unknown: climb in Z alone first.
+      if (first) push(Waypoint::Kind::ClimbZ, Eigen::Vector3d(start.x(), start.y(), plan.index_z_mm));
       else if (cur.z() < plan.index_z_mm) push(Waypoint::Kind::Rapid, Eigen::Vector3d(cur.x(), cur.y(), plan.index_z_mm));
       pose = pt.pose;
       push(Waypoint::Kind::Index, cur);
@@ -243,6 +244,7 @@ void estimateTimes(ProbePlan& plan) {
   for (const auto& w : path) {
     const double d = (w.position_m - cur).norm();
     switch (w.kind) {
+      case Waypoint::Kind::ClimbZ:
       case Waypoint::Kind::Rapid: t += 60.0 * d / f.rapid_mm_min; break;
       case Waypoint::Kind::Position:
       case Waypoint::Kind::Retract: t += 60.0 * d / f.positioning_mm_min; break;

@@ -64,7 +64,7 @@ ProbePlan loadPlan(const std::string& path);
 /// Positions the probe passes through, in order, for the whole plan (shared by the time
 /// estimate, the program writer and the stroke check).
 struct Waypoint {
-  enum class Kind { Rapid, Position, Index, Probe, Retract } kind;
+  enum class Kind { ClimbZ, Rapid, Position, Index, Probe, Retract } kind;  // ClimbZ: Z alone
   Eigen::Vector3d position_m;  // ball centre, machine frame, mm
   Pose pose;                   // rotary pose in force (deg, papers' convention)
   int point_id = 0;            // for Probe/Retract

@@ -23,6 +23,7 @@ struct Op {
   } kind = Kind::Comment;
   Eigen::Vector3d xyz = Eigen::Vector3d::Zero();
   std::vector<std::pair<char, double>> rotary;  // for Index: axis letter, controller angle (deg)
+  bool z_only = false;                          // Rapid: move Z alone (X, Y stay where they are)
   double feed = 0.0;                            // per minute, program units
   std::string text;                             // Comment
   int point_id = 0;                             // Probe: plan point id (1-based)

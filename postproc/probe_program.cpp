@@ -40,6 +40,10 @@ nc::Program probeProgram(const ProbePlan& plan, const std::string& dialect) {
     nc::Op op;
     op.xyz = w.position_m * k;
     switch (w.kind) {
+      case Waypoint::Kind::ClimbZ:
+        op.kind = nc::Op::Kind::Rapid;
+        op.z_only = true;
+        break;
       case Waypoint::Kind::Rapid: op.kind = nc::Op::Kind::Rapid; break;
       case Waypoint::Kind::Position:
       case Waypoint::Kind::Retract:
