@@ -27,6 +27,12 @@ struct Op {
   double feed = 0.0;                            // per minute, program units
   std::string text;                             // Comment
   int point_id = 0;                             // Probe: plan point id (1-based)
+  // Probe, double touch (what real probing macros do against trigger latency): when
+  // retract_mm > 0, the first touch at `feed` is followed by a back-off of retract_mm along the
+  // approach and a second touch at slow_feed toward xyz; the second touch is the one recorded.
+  // A dialect that cannot do it must throw std::invalid_argument.
+  double retract_mm = 0.0;   // program units
+  double slow_feed = 0.0;    // per minute, program units
   Eigen::Vector3d nominal_trigger = Eigen::Vector3d::Zero();  // Probe: expected ball centre
   std::string pose_name;                                      // Probe: e.g. "III"
 };
