@@ -111,7 +111,31 @@ class ProbeLength : public ModelExtension {
   }
 };
 
+class RotaryErrorMotionC2 : public ModelExtension {
+ public:
+  std::string cause() const override { return "rotary_error_motion"; }
+  std::string variant() const override { return "C_radial_2nd"; }
+  std::string describe() const override {
+    return "the C axis's centre moves with its angle (second-order radial error motion, EXC and EYC in cos 2C)";
+  }
+  std::vector<ExtensionParameter> parameters() const override {
+    return {{"EXC_cos2C", "um", kUmPerMm, 1e-6}, {"EYC_cos2C", "um", kUmPerMm, 1e-6}};
+  }
+  LocationErrors errorsAt(const Eigen::VectorXd& p, const ObservationContext& o, const LocationErrors& e) const override {
+    LocationErrors out = e;
+    if (!o.point) return out;
+    // The C axis rides on A: its radial motion is a shift in the A frame, i.e. dx_AY (X stays X
+    // under A) and dy_CA (Y of the C axis in the A frame).
+    const double c2 = std::cos(2.0 * degToRad(o.point->pose.C));
+    out.values[0] += p[0] * c2;
+    out.values[3] += p[1] * c2;
+    return out;
+  }
+};
+
 }  // namespace
+
+ExtensionPtr rotaryErrorMotionC2() { return std::make_shared<RotaryErrorMotionC2>(); }
 
 ExtensionPtr thermalDriftLinear() { return std::make_shared<DriftLinear>(); }
 ExtensionPtr thermalDriftPerRepeat(int runs) { return std::make_shared<DriftPerRepeat>(runs); }
@@ -120,12 +144,12 @@ ExtensionPtr linearAxisSquareness() { return std::make_shared<Squareness>(); }
 ExtensionPtr probeLength() { return std::make_shared<ProbeLength>(); }
 
 std::vector<ExtensionPtr> catalogFor(const ProbePlan& plan, int runs) {
-  (void)plan;
   std::vector<ExtensionPtr> c = {thermalDriftLinear()};
   if (runs >= 3) c.push_back(thermalDriftPerRepeat(runs));
   c.push_back(probePretravel());
   c.push_back(linearAxisSquareness());
   c.push_back(probeLength());
+  if (plan.machine.kinematics == Kinematics::TableAC) c.push_back(rotaryErrorMotionC2());
   return c;
 }
 

@@ -9,6 +9,7 @@
 //                            per-point offsets and is harmless)
 //  linear_axis_squareness    S_xy, S_xz, S_yz of 000 Eq. (23) (um/m)
 //  probe_length              the ball centre sits dL below where the controller thinks (um)
+//  rotary_error_motion       the C axis's centre moves with C: second-order radial error motion
 #include <string>
 #include <vector>
 
@@ -21,6 +22,10 @@ ExtensionPtr thermalDriftPerRepeat(int runs);
 ExtensionPtr probePretravel();
 ExtensionPtr linearAxisSquareness();
 ExtensionPtr probeLength();
+/// rotary_error_motion: second-order radial error motion of the C axis, EXC = r_x cos 2C,
+/// EYC = r_y cos 2C (um). Its first order is a location error, and with C at 0/90/180/270 deg
+/// only the cos 2C terms are visible.
+ExtensionPtr rotaryErrorMotionC2();
 
 /// The candidate extensions for a plan with `runs` repeats.
 std::vector<ExtensionPtr> catalogFor(const ProbePlan& plan, int runs);

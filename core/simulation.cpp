@@ -20,6 +20,7 @@ Plane truePlane_m(const ProbePlan& plan, const ProbePoint& point, const Truth& t
   const Plane w = truth.artefact.face(*plan.machine.artefact, point.face);
   LocationErrors e = truth.errors;
   if (truth.drift) e.values += truth.drift(truth.start_time_s + point.t_s);
+  if (truth.pose_dependent) e.values += truth.pose_dependent(point.pose);
   const Eigen::Isometry3d T = T_m_w(e, point.pose);
   return Plane{T * w.point, T.linear() * w.normal};
 }

@@ -30,6 +30,9 @@ struct Truth {
   /// Direction-dependent pretravel (um) as a function of the approach direction (machine frame),
   /// added to pretravel_um.
   std::function<double(const Eigen::Vector3d& approach_m)> pretravel_by_direction_um;
+  /// Position-dependent (component) errors of the rotary axes: change of the location errors
+  /// (mm / rad) as a function of the commanded pose (rotary_error_motion).
+  std::function<ErrorVector(const Pose& pose)> pose_dependent;
 };
 
 /// Distance s (mm) along the approach from the nominal trigger at which the ball of radius r

@@ -4,6 +4,7 @@
 // clean data; require confounded causes to be reported as such, not as findings.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -150,6 +151,47 @@ TEST(HiddenDrift, RealSpindleDriftWithItsQuantisationChatterIsOneDriftNotTwoCaus
   ASSERT_TRUE(d.effectFound()) << diagnosisText(d);
   EXPECT_EQ(d.findings.size(), 1u) << "the chatter must not become a second cause\n" << diagnosisText(d);
   EXPECT_EQ(d.findings.front().cause, "thermal_drift");
+}
+
+class HiddenRotaryErrorMotion : public ::testing::TestWithParam<std::pair<double, int>> {};
+
+TEST_P(HiddenRotaryErrorMotion, SecondOrderRadialMotionOfCIsFound) {
+  // A 2-4 um second-order radial error motion of C (EXC = r cos 2C), exact in the simulator.
+  const ProbePlan plan = test::touch154Plan();
+  const double r_um = GetParam().first;
+  Truth t = test::truthWith(test::table4Mean());
+  t.noise_um = 0.7;
+  t.pose_dependent = [r_um](const Pose& p) {
+    ErrorVector d = ErrorVector::Zero();
+    d[0] = umToMm(r_um) * std::cos(2.0 * degToRad(p.C));
+    return d;
+  };
+  const Diagnosis d = diagnose(plan, repeats(plan, t, GetParam().second), options());
+  ASSERT_TRUE(d.effectFound()) << diagnosisText(d);
+  const Finding& f = d.findings.front();
+  EXPECT_EQ(f.cause, "rotary_error_motion") << diagnosisText(d);
+  EXPECT_NEAR(f.parameters[0].value, r_um, 3.0 * f.parameters[0].u);
+  EXPECT_NEAR(f.parameters[1].value, 0.0, 4.0 * f.parameters[1].u);
+  // The baseline reads part of it as dx_AY: the extended fit is closer to the truth.
+  EXPECT_LT(std::abs(f.fit.estimate.reportValue(0) - 14.6), std::abs(d.baseline.estimate.reportValue(0) - 14.6) + 0.05);
+}
+
+INSTANTIATE_TEST_SUITE_P(SizesAndSeeds, HiddenRotaryErrorMotion,
+                         ::testing::Values(std::make_pair(3.0, 21), std::make_pair(-2.0, 22), std::make_pair(4.0, 23)));
+
+TEST(HiddenSquareness, LinearAxesOutOfSquareAreFound) {
+  // 000 Table 5's size: 3 um / 100 mm (30 um/m) in S_xy and S_yz.
+  const ProbePlan plan = test::touch154Plan();
+  Truth t = test::truthWith(test::table4Mean());
+  t.noise_um = 0.7;
+  t.linear_axis_error = [](const Eigen::Vector3d& c) { return Eigen::Vector3d(30e-6 * c.y(), 30e-6 * c.z(), 0.0); };
+  const Diagnosis d = diagnose(plan, repeats(plan, t, 31), options());
+  ASSERT_TRUE(d.effectFound()) << diagnosisText(d);
+  const Finding& f = d.findings.front();
+  EXPECT_EQ(f.cause, "linear_axis_squareness") << diagnosisText(d);
+  EXPECT_NEAR(f.parameters[0].value, 30.0, 3.0 * f.parameters[0].u) << "S_xy";
+  EXPECT_NEAR(f.parameters[1].value, 0.0, 4.0 * f.parameters[1].u) << "S_xz";
+  EXPECT_NEAR(f.parameters[2].value, 30.0, 3.0 * f.parameters[2].u) << "S_yz";
 }
 
 TEST(CleanData, NoFalseAlarmOver20Seeds) {
