@@ -124,6 +124,45 @@ Truth truthFromJson(const JsonDoc& doc, Kinematics kinematics) {
       ff.tilt_v_rad = numberOr(doc, f, "tilt_v_mrad", 0.0) * 1e-3;
     }
   }
+  if (j.contains("drift")) {
+    // Linear drift of location errors: {"dz_AY": {"rate": 6.0, "unit": "um/h"}, ...}
+    ErrorVector rate = ErrorVector::Zero();  // per second, mm or rad
+    for (const auto& [name, entry] : j["drift"].items()) {
+      const int i = parameterIndex(kinematics, name);
+      if (i < 0) doc.fail(name, "unknown location error '" + name + "' in drift");
+      if (!entry.is_object() || !entry.contains("rate") || !entry["rate"].is_number())
+        doc.fail(name, "drift of '" + name + "' needs {\"rate\": number, \"unit\": \"um/h\" or \"mdeg/h\"}");
+      const std::string unit = entry.value("unit", "");
+      const bool length = locationParameters(kinematics)[i].kind == ParamKind::Length;
+      if (length && unit != "um/h") doc.fail(name, "drift unit of '" + name + "' must be um/h");
+      if (!length && unit != "mdeg/h") doc.fail(name, "drift unit of '" + name + "' must be mdeg/h");
+      const double v = entry["rate"].get<double>() / 3600.0;
+      rate[i] = length ? umToMm(v) : mdegToRad(v);
+    }
+    t.drift = [rate](double ts) { return ErrorVector(rate * ts); };
+  }
+  if (j.contains("rotary_error_motion")) {
+    // Second-order radial error motion of C: {"EXC_cos2C_um": 3.0, "EYC_cos2C_um": 0.0}
+    if (kinematics != Kinematics::TableAC) doc.fail("rotary_error_motion", "rotary_error_motion needs an A/C machine");
+    const Json& r = j["rotary_error_motion"];
+    const double ex = umToMm(numberOr(doc, r, "EXC_cos2C_um", 0.0)), ey = umToMm(numberOr(doc, r, "EYC_cos2C_um", 0.0));
+    t.pose_dependent = [ex, ey](const Pose& p) {
+      ErrorVector d = ErrorVector::Zero();
+      const double c2 = std::cos(2.0 * degToRad(p.C));
+      d[0] = ex * c2;  // the C axis rides on A: x in the A frame is machine x
+      d[3] = ey * c2;  // y of the C axis in the A frame: dy_CA
+      return d;
+    };
+  }
+  if (j.contains("linear_axis_squareness")) {
+    // 000 Eq. (23): {"S_xy_um_per_m": 30, "S_xz_um_per_m": 0, "S_yz_um_per_m": 30}
+    const Json& s = j["linear_axis_squareness"];
+    const double sxy = numberOr(doc, s, "S_xy_um_per_m", 0.0) * 1e-6, sxz = numberOr(doc, s, "S_xz_um_per_m", 0.0) * 1e-6,
+                 syz = numberOr(doc, s, "S_yz_um_per_m", 0.0) * 1e-6;
+    t.linear_axis_error = [sxy, sxz, syz](const Eigen::Vector3d& c) {
+      return Eigen::Vector3d(sxy * c.y() + sxz * c.z(), syz * c.z(), 0.0);
+    };
+  }
   t.noise_um = numberOr(doc, j, "probe_noise_um", 0.0);
   t.pretravel_um = numberOr(doc, j, "probe_pretravel_um", 0.0);
   t.start_time_s = numberOr(doc, j, "start_time_s", 0.0);
