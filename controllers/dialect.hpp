@@ -22,6 +22,7 @@ struct OffsetRequest {
   std::string report_file;                  // provenance, for the file's header
   std::string previous_text;                // the existing offsets file, if any ("" = none)
   bool force = false;                       // allow corrections beyond the plausibility limit
+  std::string path;                         // the output file: a dialect may pick its form by extension
 };
 
 class Dialect {

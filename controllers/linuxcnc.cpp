@@ -1,6 +1,9 @@
 // LinuxCNC 2.9 (rs274ngc): G38.2 probing with an explicit #5070 check, results through
 // (LOGOPEN,...)/(LOG,...), compensation as trt-kins HAL pins (../shared/reference/controllers.md
-// Sec. 1).
+// Sec. 1) or, for an offsets file named *.ngc, as the G54 shift of 000 Sec. 4.5 (G10 L2 P1).
+// With the machine's retract_mm > 0 each point is a double touch: G38.3 at the probing feed
+// (checked by #5070), a relative back-off, and the recorded G38.2 at the slow feed. Both forms
+// run unchanged on a real LinuxCNC in tests/e2e/linuxcnc (docs/e2e-linuxcnc.md).
 //
 // Results line per point, written by the program's LOG comment:
 //   P<id> <#5061 %.6f> <#5062> <#5063> <rotary %.4f ...> <#5070 %d>
@@ -12,6 +15,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <optional>
 #include <set>
 #include <stdexcept>
 
@@ -28,6 +33,8 @@ constexpr const char* kDialect = "linuxcnc";
 /// src/emc/linuxcnc.h, verified with rs274: 252 accepted, 253 rejected).
 constexpr size_t kMaxLineChars = 252;
 constexpr int kOwordBase = 1000;
+/// The second touch's check of a double touch: its own o-number (o-words label one if/endif).
+constexpr int kSecondTouchOwordBase = 500000;
 
 int parameterOf(char axis) { return axis == 'A' ? 5064 : axis == 'B' ? 5065 : 5066; }
 
@@ -127,10 +134,36 @@ class LinuxCncDialect final : public Dialect {
           if (!(op.feed > 0)) throw std::invalid_argument(fmt::format("point {}: probing feed must be > 0", op.point_id));
           const int o = kOwordBase + op.point_id;
           if (!op.text.empty()) line(comment(op.text));
-          line(fmt::format("G38.2 X{} Y{} Z{} F{}", L(x.x()), L(x.y()), L(x.z()), F(op.feed)));
-          line(fmt::format("o{} if [#5070 NE 1]", o));
-          line(fmt::format("(ABORT, rotacal: point {} did not trigger)", op.point_id));
-          line(fmt::format("o{} endif", o));
+          if (op.retract_mm > 0) {
+            // Double touch (fast, back off, slow; the slow one is recorded): LinuxCNC samples the
+            // probe once per servo period, so a trigger lies up to feed x period past the contact.
+            // The first touch is G38.3 so that a piece that is not there stops the program with
+            // our ABORT naming the point (G38.2 would stop it with the controller's generic
+            // "G38.2 move finished without making contact"); the #5070 check makes it as strict.
+            if (!(op.slow_feed > 0))
+              throw std::invalid_argument(fmt::format("point {}: double touch needs a slow feed > 0", op.point_id));
+            const Eigen::Vector3d d = x - op.nominal_trigger;  // end = trigger + overtravel x approach
+            if (!(d.norm() > 1e-9))
+              throw std::invalid_argument(
+                  fmt::format("point {}: double touch needs the nominal trigger before the end point", op.point_id));
+            const Eigen::Vector3d back = -op.retract_mm * d.normalized();
+            line(fmt::format("G38.3 X{} Y{} Z{} F{}", L(x.x()), L(x.y()), L(x.z()), F(op.feed)));
+            line(fmt::format("o{} if [#5070 NE 1]", o));
+            line(fmt::format("(ABORT, rotacal: point {} did not trigger)", op.point_id));
+            line(fmt::format("o{} endif", o));
+            // relative back-off from where the first touch stopped, against the approach
+            line(fmt::format("G91 G0 X{} Y{} Z{}", L(back.x()), L(back.y()), L(back.z())));
+            line("G90");
+            line(fmt::format("G38.2 X{} Y{} Z{} F{}", L(x.x()), L(x.y()), L(x.z()), F(op.slow_feed)));
+            line(fmt::format("o{} if [#5070 NE 1]", kSecondTouchOwordBase + op.point_id));
+            line(fmt::format("(ABORT, rotacal: point {} did not trigger on the second touch)", op.point_id));
+            line(fmt::format("o{} endif", kSecondTouchOwordBase + op.point_id));
+          } else {
+            line(fmt::format("G38.2 X{} Y{} Z{} F{}", L(x.x()), L(x.y()), L(x.z()), F(op.feed)));
+            line(fmt::format("o{} if [#5070 NE 1]", o));
+            line(fmt::format("(ABORT, rotacal: point {} did not trigger)", op.point_id));
+            line(fmt::format("o{} endif", o));
+          }
           line(fmt::format("(LOG,P{} %.6f#5061 %.6f#5062 %.6f#5063{} %d#5070)", op.point_id, log_rotary));
           break;
         }
@@ -233,6 +266,7 @@ class LinuxCncDialect final : public Dialect {
   }
 
   std::string writeOffsets(const OffsetRequest& r) const override {
+    if (endsWithNgc(r.path)) return writeWorkOffsetProgram(r);
     ctl::requirePlausible(r);
     const ProbePlan& plan = *r.plan;
     const MachineModel& m = plan.machine;
@@ -305,6 +339,75 @@ class LinuxCncDialect final : public Dialect {
     return out;
   }
 
+  static bool endsWithNgc(const std::string& path) {
+    return path.size() >= 4 && ctl::upper(path.substr(path.size() - 4)) == ".NGC";
+  }
+
+  /// The shift route of 000 Sec. 4.5 as an NGC program (an offsets file named *.ngc): the G54
+  /// work offset moves by (dx_AY, dy_AY, dz_AY) and the A axis zero by a_AY. Why this form: the
+  /// generated cycle runs in identity (joint) kinematics, where the xyzac-trt-kins pins do
+  /// nothing; a work offset acts in every kinematics, and it is what 000 applies. With
+  /// machine = program + offset, a table displaced by d is seen at d - offset; the A zero shift
+  /// o_A turns the table by the controller's sign times o_A, so o_A = sign x a_AY cancels a_AY
+  /// (exactly for the translations, to second order in the small angles for a_AY).
+  std::string writeWorkOffsetProgram(const OffsetRequest& r) const {
+    ctl::requirePlausible(r);
+    const MachineModel& m = r.plan->machine;
+    if (r.identified.kinematics != Kinematics::TableAC || !m.hasRotary('A'))
+      throw std::invalid_argument("the G10 work-offset form (.ngc) is written for A/C tables only; use a .hal file");
+    const bool inch = m.units == LengthUnit::Inch;
+    const double k = inch ? 1.0 / kMmPerInch : 1.0;  // mm -> program units
+    const int dl = inch ? 5 : 4;
+    // Previous offsets: the G10 L2 P1 line of the file this one replaces (the loop accumulates).
+    std::map<char, double> previous{{'X', 0.0}, {'Y', 0.0}, {'Z', 0.0}, {'A', 0.0}};
+    bool had_previous = false;
+    for (const auto& l : ctl::splitLines(r.previous_text)) {
+      std::string code = l.text;
+      const size_t paren = code.find('(');
+      if (paren != std::string::npos) code.resize(paren);
+      const auto t = ctl::tokens(ctl::upper(code));
+      if (t.size() < 3 || t[0] != "G10" || t[1] != "L2" || t[2] != "P1") continue;
+      had_previous = true;
+      for (size_t i = 3; i < t.size(); ++i) {
+        const auto v = t[i].size() > 1 ? ctl::parseNumber(t[i].substr(1)) : std::nullopt;
+        if (!v || !previous.count(t[i][0]))
+          throw std::invalid_argument(fmt::format("previous offsets file, line {}: '{}' is not one of X Y Z A <number>",
+                                                  l.number, t[i]));
+        previous[t[i][0]] = *v;
+      }
+    }
+    if (!r.previous_text.empty() && !had_previous)
+      throw std::invalid_argument("previous offsets file has no 'G10 L2 P1' line: not a rotacal work-offset file");
+    const int sign_a = m.controllerSign('A', kDialect);
+    const std::map<char, double> change{{'X', r.identified.get("dx_AY") * k},
+                                        {'Y', r.identified.get("dy_AY") * k},
+                                        {'Z', r.identified.get("dz_AY") * k},
+                                        {'A', sign_a * radToDeg(r.identified.get("a_AY"))}};
+    std::string out;
+    auto line = [&](const std::string& s) { out += s + "\n"; };
+    line("%");
+    line(comment("rotacal: 000 Sec. 4.5 shift route as the G54 work offset [LinuxCNC]"));
+    line(comment(fmt::format("Provenance: {}; cycle {}, machine {}", r.report_file.empty() ? "no report" : r.report_file,
+                             r.plan->cycle, m.name)));
+    line(comment("Run it once before the cycle; it changes G54 only. Identified, papers' convention, k = 1:"));
+    for (const auto& s : ctl::identifiedLines(r)) line(comment(s));
+    line(comment(fmt::format("Mapping: G54 X += dx_AY, Y += dy_AY, Z += dz_AY [{}], A += {:+d} x a_AY [deg]",
+                             unitName(inch), sign_a)));
+    line(comment("Not applied [no shift expresses them]: dy_CA, b_AY, c_AY, b_CA"));
+    std::string g10 = "G10 L2 P1";
+    for (char axis : {'X', 'Y', 'Z', 'A'}) {
+      const int dec = axis == 'A' ? 6 : dl + 2;
+      line(comment(fmt::format("{}: previous {} change {} new {}", axis, ctl::fixed(previous[axis], dec),
+                               ctl::fixed(change.at(axis), dec), ctl::fixed(previous[axis] + change.at(axis), dec))));
+      g10 += fmt::format(" {}{}", axis, ctl::fixed(previous[axis] + change.at(axis), dec));
+    }
+    line(inch ? "G20" : "G21");
+    line(g10);
+    line("M2");
+    line("%");
+    return out;
+  }
+
   std::vector<std::string> check(const std::string& text, const ProbePlan& plan) const override {
     const auto blocks = nc::readProgram(text);
     std::vector<std::string> out = ctl::readerIssues(blocks);
@@ -331,11 +434,26 @@ class LinuxCncDialect final : public Dialect {
         }
       }
       if (b.control || b.words.empty()) continue;
-      for (double g : {38.3, 38.4, 38.5})
+      // G38.4/G38.5 probe away from the piece; G38.3 does not stop the program by itself, which
+      // the #5070 check below makes up for (the double touch's first touch uses it).
+      for (double g : {38.4, 38.5})
         if (b.hasWord('G', g)) problem(b.line, fmt::format("G{} does not stop the program without contact: use G38.2", g));
-      if (!b.hasWord('G', 38.2)) continue;
-      ++probes;
-      if (!b.find('X') && !b.find('Y') && !b.find('Z')) problem(b.line, "G38.2 without an axis word");
+      const bool g382 = b.hasWord('G', 38.2), g383 = b.hasWord('G', 38.3);
+      if (!g382 && !g383) continue;
+      const std::string g = g382 ? "G38.2" : "G38.3";
+      // A recorded touch: a probing move whose position is LOGged before the next probing move.
+      for (size_t k = i + 1; k < blocks.size(); ++k) {
+        const nc::Block& d = blocks[k];
+        if (!d.control && (d.hasWord('G', 38.2) || d.hasWord('G', 38.3))) break;
+        bool logged = false;
+        for (const auto& cm : d.comments)
+          if (ctl::upper(ctl::trim(cm)).rfind("LOG,P", 0) == 0) logged = true;
+        if (logged) {
+          ++probes;
+          break;
+        }
+      }
+      if (!b.find('X') && !b.find('Y') && !b.find('Z')) problem(b.line, g + " without an axis word");
       // The next 3 blocks must open "o<n> if [#5070 NE 1]" whose body has an (ABORT, ...).
       bool checked = false;
       size_t j = i;
@@ -357,11 +475,13 @@ class LinuxCncDialect final : public Dialect {
         }
         break;
       }
-      if (!checked) problem(b.line, "G38.2 is not followed by 'o<n> if [#5070 NE 1]' with an (ABORT, ...)");
+      if (!checked) problem(b.line, g + " is not followed by 'o<n> if [#5070 NE 1]' with an (ABORT, ...)");
     }
     const int last_line = blocks.empty() ? 1 : blocks.back().line;
     if (static_cast<size_t>(probes) != plan.points.size())
-      problem(last_line, fmt::format("{} G38.2 moves, the plan has {} points", probes, plan.points.size()));
+      problem(last_line, fmt::format("{} recorded touches [G38.2/G38.3 moves whose position is LOGged], the plan "
+                                     "has {} points",
+                                     probes, plan.points.size()));
     for (auto& s : ctl::strokeProblems(blocks, plan, kDialect)) out.push_back(std::move(s));
     // The end: M2 or M30 as the last block with code; a leading '%' needs a closing one, after
     // which LinuxCNC reads nothing.

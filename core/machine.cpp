@@ -116,6 +116,8 @@ MachineModel machineFromJson(const JsonDoc& doc, const Json& j) {
     m.feeds.positioning_mm_min = numberOr(doc, f, "positioning_mm_min", m.feeds.positioning_mm_min);
     m.feeds.probing_mm_min = numberOr(doc, f, "probing_mm_min", m.feeds.probing_mm_min);
     m.feeds.rotary_deg_min = numberOr(doc, f, "rotary_deg_min", m.feeds.rotary_deg_min);
+    m.feeds.probing_slow_mm_min = numberOr(doc, f, "probing_slow_mm_min", 0.0);
+    if (m.feeds.probing_slow_mm_min < 0) doc.fail("probing_slow_mm_min", "field 'probing_slow_mm_min' must be >= 0");
     requirePositive(doc, "probing_mm_min", m.feeds.probing_mm_min);
     requirePositive(doc, "positioning_mm_min", m.feeds.positioning_mm_min);
   }
@@ -124,6 +126,12 @@ MachineModel machineFromJson(const JsonDoc& doc, const Json& j) {
   m.overtravel_mm = numberOr(doc, j, "overtravel_mm", m.overtravel_mm);
   requirePositive(doc, "approach_mm", m.approach_mm);
   requirePositive(doc, "overtravel_mm", m.overtravel_mm);
+  m.retract_mm = numberOr(doc, j, "retract_mm", 0.0);
+  if (m.retract_mm < 0) doc.fail("retract_mm", "field 'retract_mm' must be >= 0 (0 = single touch)");
+  if (m.retract_mm > 0 && !(m.feeds.probing_slow_mm_min > 0))
+    doc.fail("retract_mm", "retract_mm > 0 (double touch) needs feeds.probing_slow_mm_min > 0 for the second touch");
+  if (m.retract_mm > 0 && m.retract_mm >= m.approach_mm)
+    doc.fail("retract_mm", "retract_mm must be smaller than approach_mm: the back-off stays inside the approach");
   if (j.contains("artefact")) {
     const Json& a = j["artefact"];
     const std::string type = requireString(doc, a, "type");
@@ -170,9 +178,12 @@ Json machineToJson(const MachineModel& m) {
                 {"positioning_mm_min", m.feeds.positioning_mm_min},
                 {"probing_mm_min", m.feeds.probing_mm_min},
                 {"rotary_deg_min", m.feeds.rotary_deg_min}};
+  // Written only for a double touch, so that single-touch plans stay as they were.
+  if (m.feeds.probing_slow_mm_min > 0) j["feeds"]["probing_slow_mm_min"] = m.feeds.probing_slow_mm_min;
   j["clearance_mm"] = m.clearance_mm;
   j["approach_mm"] = m.approach_mm;
   j["overtravel_mm"] = m.overtravel_mm;
+  if (m.retract_mm > 0) j["retract_mm"] = m.retract_mm;
   if (m.artefact) {
     j["artefact"] = {{"type", "square_column"},
                      {"top_centre_w_mm", {m.artefact->top_centre_w.x(), m.artefact->top_centre_w.y(), m.artefact->top_centre_w.z()}},

@@ -43,7 +43,11 @@ struct ProbeSpec {
 struct Feeds {
   double rapid_mm_min = 20000.0;
   double positioning_mm_min = 2000.0;  // G1 moves near the piece
-  double probing_mm_min = 100.0;       // guarded move
+  double probing_mm_min = 100.0;       // guarded move (the first touch of a double touch)
+  // Second, slow touch of a double touch (what probing macros do against trigger latency: the
+  // controller samples the probe once per servo period, so a trigger is late by up to
+  // feed x period). Used only when MachineModel::retract_mm > 0; 0 = single touch.
+  double probing_slow_mm_min = 0.0;
   double rotary_deg_min = 3600.0;
 };
 
@@ -60,6 +64,7 @@ struct MachineModel {
   double clearance_mm = 10.0;            // above the artefact for moves between points
   double approach_mm = 5.0;              // start of a probing move, before the nominal trigger
   double overtravel_mm = 2.0;            // end of a probing move, past the nominal trigger
+  double retract_mm = 0.0;               // double touch: back-off after the first touch (0 = single touch)
   std::optional<SquareColumn> artefact;
 
   const RotaryAxis& rotaryAxis(char name) const;  // throws std::invalid_argument

@@ -31,6 +31,9 @@ nc::Program probeProgram(const ProbePlan& plan, const std::string& dialect) {
                           : "probe: controlled point = probe ball centre (no length compensation)",
       fmt::format("ball diameter {:.3f} mm, probing feed {:.1f} mm/min", m.probe.ball_diameter_mm, m.feeds.probing_mm_min),
   };
+  if (m.retract_mm > 0)
+    prog.header.push_back(fmt::format("double touch: back off {:.3f} mm, second touch at {:.1f} mm/min is recorded",
+                                      m.retract_mm, m.feeds.probing_slow_mm_min));
   for (const auto& r : m.rotary) {
     const int s = m.controllerSign(r.name, dialect);
     prog.header.push_back(fmt::format("{} angles: controller = {} x paper convention (000 Eq. (1))", r.name, s > 0 ? "+1" : "-1"));
@@ -68,6 +71,10 @@ nc::Program probeProgram(const ProbePlan& plan, const std::string& dialect) {
       case Waypoint::Kind::Probe: {
         op.kind = nc::Op::Kind::Probe;
         op.feed = m.feeds.probing_mm_min * k;
+        if (m.retract_mm > 0) {  // double touch: fast first touch, back off, slow recorded touch
+          op.retract_mm = m.retract_mm * k;
+          op.slow_feed = m.feeds.probing_slow_mm_min * k;
+        }
         op.point_id = w.point_id;
         const ProbePoint* p = plan.findPoint(w.point_id);
         op.nominal_trigger = p->trigger_m_mm * k;

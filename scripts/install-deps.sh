@@ -6,7 +6,9 @@ if [ "$(id -u)" != 0 ]; then SUDO="sudo"; fi
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update
 # linuxcnc-uspace: LinuxCNC's own interpreter (rs274), which reads our LinuxCNC programs in the
-# tests. --no-install-recommends keeps its recommended RT kernel and Qt stack off the machine.
+# tests, and the controller of the end-to-end tests (tests/e2e); linuxcnc-uspace-dev: halcompile,
+# which builds their realtime virtual probe. --no-install-recommends keeps the recommended RT
+# kernel and Qt stack off the machine.
 $SUDO apt-get install -y --no-install-recommends \
   build-essential cmake libeigen3-dev libfmt-dev nlohmann-json3-dev libcli11-dev \
-  libgtest-dev libgmock-dev linuxcnc-uspace
+  libgtest-dev libgmock-dev linuxcnc-uspace linuxcnc-uspace-dev

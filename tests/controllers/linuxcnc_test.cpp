@@ -240,7 +240,97 @@ TEST(LinuxCncCheck, CatchesLineSyntaxAndStructureFaults) {
                     const size_t g = test::lineStarting(v, "G38.2");
                     v.erase(v.begin() + static_cast<long>(g), v.begin() + static_cast<long>(g) + 5);
                   }),
-                  "153 G38.2 moves, the plan has 154 points"));
+                  "153 recorded touches [G38.2/G38.3 moves whose position is LOGged], the plan has 154 points"));
+}
+
+// ---- double touch ----
+
+/// The A/C test machine with a double touch: first touch at 600 mm/min, back off 0.05 mm,
+/// recorded touch at 10 mm/min (the e2e machine's values).
+ProbePlan doubleTouchPlan() {
+  MachineModel m = test::acTestMachine();
+  m.feeds.probing_mm_min = 600.0;
+  m.feeds.probing_slow_mm_min = 10.0;
+  m.retract_mm = 0.05;
+  return makePlan("touch154", m, {});
+}
+
+TEST(LinuxCncDoubleTouch, ZeroFieldsInTheMachineFileGiveTheSingleTouchProgram) {
+  const ProbePlan plan = test::acPlan();
+  std::string json = test::kAcMachineJson;
+  json.insert(json.rfind('}'), R"(, "retract_mm": 0, "feeds": {"probing_slow_mm_min": 0})");
+  const JsonDoc doc = parseJsonText(json, "zero_fields.json");
+  const ProbePlan zero = makePlan("touch154", machineFromJson(doc, doc.value), {});
+  const std::string single = lc().writeProgram(probeProgram(plan, "linuxcnc"));
+  EXPECT_EQ(lc().writeProgram(probeProgram(zero, "linuxcnc")), single);
+  EXPECT_EQ(single.find("G38.3"), std::string::npos);
+  EXPECT_EQ(single.find("G91"), std::string::npos);
+}
+
+TEST(LinuxCncDoubleTouch, FastTouchBackOffAlongTheApproachThenSlowRecordedTouch) {
+  const ProbePlan plan = doubleTouchPlan();
+  const std::string text = lc().writeProgram(probeProgram(plan, "linuxcnc"));
+  EXPECT_EQ(lc().check(text, plan), std::vector<std::string>{});
+  const auto ls = lines(text);
+  const ProbePoint& p1 = *plan.findPoint(1);
+  // the end of the probing line: overtravel past the nominal trigger along the approach
+  const Eigen::Vector3d end = p1.trigger_m_mm + plan.machine.overtravel_mm * p1.approach_m;
+  const Eigen::Vector3d back = -0.05 * p1.approach_m;
+  auto num = [](double v) { return fmt::format("{:.4f}", v == 0.0 ? 0.0 : v); };
+  const std::string xyz = fmt::format("X{} Y{} Z{}", num(end.x()), num(end.y()), num(end.z()));
+  const size_t g = test::lineStarting(ls, "G38.3");
+  EXPECT_EQ(ls[g], "G38.3 " + xyz + " F600.0");
+  EXPECT_EQ(ls[g + 1], "o1001 if [#5070 NE 1]");
+  EXPECT_EQ(ls[g + 2], "(ABORT, rotacal: point 1 did not trigger)");
+  EXPECT_EQ(ls[g + 3], "o1001 endif");
+  EXPECT_EQ(ls[g + 4], fmt::format("G91 G0 X{} Y{} Z{}", num(back.x()), num(back.y()), num(back.z())));
+  EXPECT_EQ(ls[g + 5], "G90");
+  EXPECT_EQ(ls[g + 6], "G38.2 " + xyz + " F10.0");
+  EXPECT_EQ(ls[g + 7], "o500001 if [#5070 NE 1]");
+  EXPECT_EQ(ls[g + 10], "(LOG,P1 %.6f#5061 %.6f#5062 %.6f#5063 %.4f#5064 %.4f#5066 %d#5070)");
+  size_t first = 0, second = 0;
+  for (const auto& l : ls) {
+    first += l.rfind("G38.3 ", 0) == 0;
+    second += l.rfind("G38.2 ", 0) == 0;
+  }
+  EXPECT_EQ(first, plan.points.size());
+  EXPECT_EQ(second, plan.points.size());
+}
+
+TEST(LinuxCncDoubleTouch, CheckerCountsRecordedTouchesAndWantsTheFirstTouchChecked) {
+  const ProbePlan plan = doubleTouchPlan();
+  const auto ls = lines(lc().writeProgram(probeProgram(plan, "linuxcnc")));
+  auto v = ls;
+  v.erase(v.begin() + static_cast<long>(test::lineStarting(v, "(LOG,P1 ")));
+  auto problems = lc().check(test::join(v), plan);
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_NE(problems[0].find("153 recorded touches"), std::string::npos) << problems[0];
+  v = ls;
+  const size_t g = test::lineStarting(v, "G38.3");
+  v.erase(v.begin() + static_cast<long>(g) + 2);  // the first touch's (ABORT, ...)
+  problems = lc().check(test::join(v), plan);
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_EQ(problems[0].rfind(fmt::format("{}: G38.3 is not followed", g + 1), 0), 0u) << problems[0];
+}
+
+TEST(LinuxCncDoubleTouch, MachineFileNeedsASlowFeedAndABackOffInsideTheApproach) {
+  auto msg = [](const std::string& extra) {
+    std::string json = test::kAcMachineJson;
+    json.insert(json.rfind('}'), extra);
+    return messageOf<InputError>([&] {
+      const JsonDoc doc = parseJsonText(json, "m.json");
+      machineFromJson(doc, doc.value);
+    });
+  };
+  EXPECT_NE(msg(R"(, "retract_mm": 0.05)").find("probing_slow_mm_min > 0"), std::string::npos);
+  EXPECT_NE(msg(R"(, "retract_mm": 6, "feeds": {"probing_slow_mm_min": 10})").find("smaller than approach_mm"),
+            std::string::npos);
+  EXPECT_NE(msg(R"(, "retract_mm": -1)").find("must be >= 0"), std::string::npos);
+  const MachineModel m = doubleTouchPlan().machine;
+  const Json j = machineToJson(m);
+  EXPECT_EQ(j["retract_mm"].get<double>(), 0.05);
+  EXPECT_EQ(j["feeds"]["probing_slow_mm_min"].get<double>(), 10.0);
+  EXPECT_FALSE(machineToJson(test::acTestMachine()).contains("retract_mm")) << "single touch: the file as before";
 }
 
 // ---- offsets ----
@@ -338,6 +428,62 @@ TEST(LinuxCncOffsets, PreviousFileWithANonNumberIsRefused) {
   OffsetRequest r = request(plan);
   r.previous_text = "setp xyzac-trt-kins.x-rot-point [KINS]X\n";
   EXPECT_THROW(lc().writeOffsets(r), std::invalid_argument);
+}
+
+
+// ---- offsets as a G10 work-offset program (*.ngc) ----
+
+/// The number after `letter` on the "G10 L2 P1" line.
+double g10Word(const std::string& text, char letter) {
+  for (const auto& l : lines(text)) {
+    if (l.rfind("G10 L2 P1", 0) != 0) continue;
+    const size_t at = l.find(std::string(" ") + letter);
+    if (at == std::string::npos) break;
+    return std::stod(l.substr(at + 2));
+  }
+  throw std::runtime_error(std::string("no G10 L2 P1 word ") + letter + " in\n" + text);
+}
+
+TEST(LinuxCncOffsets, NgcFileShiftsG54ByTheAPivotAndTheAZero) {
+  const ProbePlan plan = test::acPlan();
+  OffsetRequest r = request(plan);
+  r.identified = table4();
+  r.path = "out/offsets.ngc";
+  const std::string ngc = lc().writeOffsets(r);
+  // machine = program + offset: a table displaced by (dx, dy, dz)_AY is seen at 0 (mm)
+  EXPECT_NEAR(g10Word(ngc, 'X'), 0.0146, 0.5e-6 + 1e-12);
+  EXPECT_NEAR(g10Word(ngc, 'Y'), 0.0232, 0.5e-6 + 1e-12);
+  EXPECT_NEAR(g10Word(ngc, 'Z'), 0.0277, 0.5e-6 + 1e-12);
+  // a_AY = -0.5 mdeg, LinuxCNC's A counts the other way (sign -1): +0.0005 deg
+  EXPECT_NEAR(g10Word(ngc, 'A'), 0.0005, 0.5e-6 + 1e-12);
+  const auto ls = lines(ngc);
+  EXPECT_EQ(ls.front(), "%");
+  EXPECT_EQ(ls[ls.size() - 2], "M2");
+  EXPECT_NE(ngc.find("dy_CA, b_AY, c_AY, b_CA"), std::string::npos) << "what it cannot apply is named";
+  for (const auto& l : ls) EXPECT_LE(l.size(), 252u) << l;
+  // the loop: a second correction adds to the first
+  r.previous_text = ngc;
+  const std::string again = lc().writeOffsets(r);
+  EXPECT_NEAR(g10Word(again, 'X'), 2 * 0.0146, 1e-6 + 1e-12);
+  EXPECT_NEAR(g10Word(again, 'A'), 2 * 0.0005, 1e-6 + 1e-12);
+}
+
+TEST(LinuxCncOffsets, NgcFormRefusesAForeignPreviousFileAndBcMachines) {
+  const ProbePlan plan = test::acPlan();
+  OffsetRequest r = request(plan);
+  r.path = "offsets.NGC";
+  r.previous_text = "G0 X1\nM2\n";
+  EXPECT_NE(messageOf<std::invalid_argument>([&] { lc().writeOffsets(r); }).find("no 'G10 L2 P1' line"),
+            std::string::npos);
+  r.previous_text = "G10 L2 P1 X1 Q2\n";
+  EXPECT_NE(messageOf<std::invalid_argument>([&] { lc().writeOffsets(r); }).find("'Q2'"), std::string::npos);
+  ProbePlan bc;
+  bc.cycle = "rtest";
+  bc.machine = test::machineFrom(test::kBcMachineJson);
+  OffsetRequest b = request(bc);
+  b.path = "offsets.ngc";
+  EXPECT_NE(messageOf<std::invalid_argument>([&] { lc().writeOffsets(b); }).find("A/C tables only"),
+            std::string::npos);
 }
 
 }  // namespace

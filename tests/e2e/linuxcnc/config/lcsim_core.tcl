@@ -1,0 +1,51 @@
+# lcsim_core.tcl -- HAL for the headless XYZAC trunnion simulation.
+# Run by LinuxCNC (haltcl) with the INI sections available as ::SECTION(item)
+# and the environment as ::env().
+#
+# rotacal's copy: realtime probe only (the Python fallback of the shared
+# harness is late by whole servo periods, too coarse for the e2e tolerances),
+# and no kinematics switching (identity kinematics throughout).
+#
+# Environment (exported by ../run.sh):
+#   LCSIM_PARAMS_HAL  setp file generated from the truth (truth_params.py + lcsim_params.py)
+
+# --- motion, kinematics ------------------------------------------------------
+# the INI value is a Tcl list (one element per occurrence): split "module sparm=..." into words
+eval loadrt [lindex $::KINS(KINEMATICS) 0]
+loadrt [lindex $::EMCMOT(EMCMOT) 0] servo_period_nsec=$::EMCMOT(SERVO_PERIOD) num_joints=$::KINS(JOINTS)
+addf motion-command-handler servo-thread
+addf motion-controller      servo-thread
+
+# ideal servo: feedback = command
+for {set j 0} {$j < $::KINS(JOINTS)} {incr j} {
+    net j${j}-motor joint.$j.motor-pos-cmd => joint.$j.motor-pos-fb
+}
+
+# estop / tool change loopbacks (no hardware, no GUI tool-change prompt)
+net estop-loop       iocontrol.0.user-enable-out => iocontrol.0.emc-enable-in
+net tool-prep-loop   iocontrol.0.tool-prepare    => iocontrol.0.tool-prepared
+net tool-change-loop iocontrol.0.tool-change     => iocontrol.0.tool-changed
+
+# motion.switchkins-type stays unconnected at 0: identity kinematics
+# (sparm=identityfirst in the INI). G43 still reaches the kinematics module.
+net :tool-offset     motion.tooloffset.z  => xyzac-trt-kins.tool-offset
+
+# --- virtual probe -----------------------------------------------------------
+loadrt vtouchprobe
+# after motion-controller: the sample taken here (commanded joint positions
+# of this period) is the one motion reads next period, when it also records
+# carte_pos_fb = fwd(same joint positions) as the probe point
+addf vtouchprobe.0 servo-thread
+net :jx joint.0.pos-cmd => vtouchprobe.0.joint-x
+net :jy joint.1.pos-cmd => vtouchprobe.0.joint-y
+net :jz joint.2.pos-cmd => vtouchprobe.0.joint-z
+net :ja joint.3.pos-cmd => vtouchprobe.0.joint-a
+net :jc joint.4.pos-cmd => vtouchprobe.0.joint-c
+net :probe vtouchprobe.0.probe => motion.probe-input
+
+# --- parameters: nominal kinematics + true machine/artefact ------------------
+if {[info exists ::env(LCSIM_PARAMS_HAL)] && [file exists $::env(LCSIM_PARAMS_HAL)]} {
+    source $::env(LCSIM_PARAMS_HAL)
+} else {
+    puts stderr "lcsim_core.tcl: LCSIM_PARAMS_HAL not set, using component defaults"
+}

@@ -1,0 +1,146 @@
+#!/usr/bin/env bash
+# run.sh -- run one of rotacal's LinuxCNC programs, unchanged, on a real LinuxCNC 2.9
+# controller (headless, identity kinematics) whose virtual touch probe plays a machine with
+# the location errors of a rotacal TRUTH.json. Adapted from shared/tools/linuxcnc-sim/run.sh.
+#
+# Usage: run.sh --ngc PROGRAM --truth TRUTH.json --machine MACHINE.json --out DIR
+#               [--pre-ngc OFFSETS.ngc] [--timeout S] [--comp-build DIR]
+#   --ngc FILE        the program (rotacal generate --dialect linuxcnc); it runs as written
+#   --truth FILE      rotacal-truth/1: the true machine and piece (scripts/truth_params.py)
+#   --machine FILE    rotacal-machine/1: the nominal piece and probe ball
+#   --out DIR         run directory: LinuxCNC's INI, var file and the program's LOG land here
+#   --pre-ngc FILE    a program run first in the same session (the G10 work-offset program
+#                     written by rotacal analyze --offsets X.ngc)
+#   --timeout S       hard limit for the whole LinuxCNC session (default 900)
+#   --comp-build DIR  where halcompile builds vtouchprobe.so (default /tmp/rotacal-e2e-comp)
+# The program's (LOGOPEN,name) file is copied to DIR/name. Exit status: 0 ok, 1 program or
+# controller error (DIR/driver_status.json has the messages), 2 timeout, 3 setup problem.
+set -u -o pipefail
+
+HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+PY=/usr/bin/python3          # Debian's interpreter: it has the linuxcnc and hal modules
+export PYTHONDONTWRITEBYTECODE=1   # no __pycache__ in the source tree
+
+NGC="" PRE="" TRUTH="" MACHINE="" OUT="" TIMEOUT=900 BUILD=/tmp/rotacal-e2e-comp
+while [ $# -gt 0 ]; do
+    case "$1" in
+        --ngc) NGC="$2"; shift 2;;
+        --pre-ngc) PRE="$2"; shift 2;;
+        --truth) TRUTH="$2"; shift 2;;
+        --machine) MACHINE="$2"; shift 2;;
+        --out) OUT="$2"; shift 2;;
+        --timeout) TIMEOUT="$2"; shift 2;;
+        --comp-build) BUILD="$2"; shift 2;;
+        -h|--help) sed -n '2,20p' "$0" | sed 's/^# \{0,1\}//'; exit 0;;
+        *) echo "run.sh: unknown option $1 (see --help)" >&2; exit 3;;
+    esac
+done
+die() { echo "run.sh: $*" >&2; exit 3; }
+abspath() { echo "$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"; }
+[ -n "$NGC" ] && [ -n "$TRUTH" ] && [ -n "$MACHINE" ] && [ -n "$OUT" ] || die "--ngc, --truth, --machine and --out are required"
+for f in "$NGC" "$TRUTH" "$MACHINE" ${PRE:+"$PRE"}; do [ -f "$f" ] || die "file not found: $f"; done
+[[ "$TIMEOUT" =~ ^[0-9]+$ ]] || die "--timeout must be whole seconds"
+NGC="$(abspath "$NGC")" TRUTH="$(abspath "$TRUTH")" MACHINE="$(abspath "$MACHINE")"
+[ -n "$PRE" ] && PRE="$(abspath "$PRE")"
+
+command -v linuxcnc >/dev/null || die "linuxcnc not found (Debian package linuxcnc-uspace)"
+command -v halcompile >/dev/null || die "halcompile not found (Debian package linuxcnc-uspace-dev)"
+"$PY" -c "import linuxcnc, hal" 2>/dev/null || die "$PY cannot import linuxcnc/hal (linuxcnc-uspace)"
+[ "$(id -u)" = 0 ] || die "needs root: rtapi_app loads realtime modules only from /usr/lib/linuxcnc/modules"
+LOCK=/tmp/linuxcnc.lock      # LinuxCNC allows one instance per machine
+if [ -e "$LOCK" ]; then
+    if pidof milltask rtapi_app linuxcncsvr >/dev/null 2>&1; then
+        die "another LinuxCNC instance is running ($LOCK); not starting"
+    fi
+    echo "run.sh: removing stale $LOCK (no LinuxCNC process alive)"
+    rm -f "$LOCK"
+fi
+
+mkdir -p "$OUT" || die "cannot create $OUT"
+OUT="$(cd "$OUT" && pwd)"
+rm -rf "$OUT/config" && mkdir -p "$OUT/config" || die "cannot create $OUT/config"
+T_START=$SECONDS
+
+# ---------------------------------------------------- realtime component
+# uspace rtapi_app loads realtime modules only from LinuxCNC's module dir
+MODDIR=/usr/lib/linuxcnc/modules
+mkdir -p "$BUILD" || die "cannot create $BUILD"
+if [ ! -f "$BUILD/vtouchprobe.so" ] || ! cmp -s "$HERE/comp/vtouchprobe.comp" "$BUILD/vtouchprobe.comp"; then
+    cp "$HERE/comp/vtouchprobe.comp" "$BUILD/vtouchprobe.comp"
+    (cd "$BUILD" && halcompile --compile vtouchprobe.comp) > "$OUT/build.log" 2>&1 \
+        || { rm -f "$BUILD/vtouchprobe.comp"; die "halcompile vtouchprobe.comp failed (see $OUT/build.log)"; }
+fi
+if ! cmp -s "$BUILD/vtouchprobe.so" "$MODDIR/vtouchprobe.so"; then
+    cp "$BUILD/vtouchprobe.so" "$MODDIR/vtouchprobe.so" || die "cannot install vtouchprobe.so into $MODDIR"
+fi
+
+# ------------------------------------------------------ truth -> HAL pins
+"$PY" "$HERE/scripts/truth_params.py" --truth "$TRUTH" --machine "$MACHINE" -o "$OUT/params.json" \
+    || die "cannot turn $TRUTH into the probe's parameters"
+"$PY" "$HERE/scripts/lcsim_params.py" "$OUT/params.json" "$OUT/params.hal" || die "bad parameters $OUT/params.json"
+
+# ---------------------------------------------- per-run LinuxCNC configuration
+sed "s#@HARNESS@#$HERE#g" "$HERE/config/lcsim_xyzac.ini" > "$OUT/config/lcsim_xyzac.ini"
+cp "$HERE/config/lcsim.tbl" "$OUT/config/"
+# the program's relative LOGOPEN file resolves in the INI's directory
+LOGNAME_="$(sed -n 's/^[[:space:]]*([Ll][Oo][Gg][Oo][Pp][Ee][Nn],\([^)]*\)).*/\1/p' "$NGC" | head -1)"
+
+export LCSIM_NGC="$NGC" LCSIM_PRE_NGC="$PRE" LCSIM_OUT="$OUT" LCSIM_PARAMS_HAL="$OUT/params.hal"
+export LCSIM_TIMEOUT=$(( TIMEOUT > 40 ? TIMEOUT - 30 : TIMEOUT * 3 / 4 ))   # the driver's own limit
+# rtapi_app refuses to run as root unless given a fallback uid
+export RTAPI_UID="${RTAPI_UID:-65534}"
+export RTAPI_FIFO_PATH="/tmp/rotacal-e2e-rtapi-$$.fifo"
+rm -f "$OUT/driver_status.json" "$OUT/driver.log"
+tmp_before="$(ls -d /tmp/linuxcnc.debug.* /tmp/linuxcnc.print.* 2>/dev/null | sort)"
+
+echo "run.sh: LinuxCNC starting (timeout ${TIMEOUT}s), run directory $OUT"
+# own session: the watchdog can address the whole tree by its process group
+HOME="$OUT" setsid linuxcnc -r "$OUT/config/lcsim_xyzac.ini" > "$OUT/linuxcnc.log" 2>&1 < /dev/null &
+LPID=$!
+deadline=$(( SECONDS + TIMEOUT ))
+stage=0
+while kill -0 "$LPID" 2>/dev/null; do
+    if [ $SECONDS -ge $deadline ]; then
+        stage=$((stage + 1))
+        case $stage in
+            1) echo "run.sh: TIMEOUT -- stopping the driver (clean LinuxCNC shutdown follows)"
+               [ -f "$OUT/driver.pid" ] && kill -TERM "$(cat "$OUT/driver.pid")" 2>/dev/null;;
+            2) echo "run.sh: still running -- TERM to the linuxcnc script ($LPID)"
+               kill -TERM "$LPID" 2>/dev/null;;
+            *) echo "run.sh: still running -- KILL process group $LPID, stop realtime"
+               kill -KILL -- "-$LPID" 2>/dev/null
+               /usr/lib/linuxcnc/realtime stop >/dev/null 2>&1
+               rm -f "$LOCK"
+               break;;
+        esac
+        deadline=$(( SECONDS + 20 ))
+    fi
+    sleep 0.2
+done
+wait "$LPID" 2>/dev/null
+LRC=$?
+rm -f "$RTAPI_FIFO_PATH"
+for f in $(ls -d /tmp/linuxcnc.debug.* /tmp/linuxcnc.print.* 2>/dev/null | sort); do
+    grep -qxF "$f" <<< "$tmp_before" || rm -f "$f"     # linuxcnc's own mktemp files of this run
+done
+T_RUN=$(( SECONDS - T_START ))
+
+RC=0
+[ $LRC -eq 0 ] || RC=1
+grep -q '"result": "ok"' "$OUT/driver_status.json" 2>/dev/null || RC=1
+grep -q '"result": "timeout"' "$OUT/driver_status.json" 2>/dev/null && RC=2
+[ $stage -gt 0 ] && RC=2
+if [ -n "$LOGNAME_" ] && [ -f "$OUT/config/$LOGNAME_" ]; then cp "$OUT/config/$LOGNAME_" "$OUT/$LOGNAME_"; fi
+echo "run.sh: LinuxCNC session finished in ${T_RUN}s (linuxcnc exit $LRC)"
+if [ -f "$OUT/driver_status.json" ]; then
+    "$PY" - "$OUT/driver_status.json" <<'EOF'
+import json, sys
+s = json.load(open(sys.argv[1]))
+print("run.sh: driver result=%s, program %s s, driver total %s s"
+      % (s["result"], s["phases"].get("program_s", "-"), s.get("wall_s")))
+for e in s["errors"]:
+    print("run.sh: ERROR: %s" % e)
+EOF
+fi
+echo "run.sh: exit $RC"
+exit $RC
