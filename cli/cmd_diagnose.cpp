@@ -20,7 +20,7 @@ std::vector<Command> diagnoseCommands(CLI::App& app, const Common& common) {
   auto* cmd = app.add_subcommand("diagnose", "find what the model misses, name the cause, extend the model, measure the gain");
   cmd->add_option("--plan", a->plan_file, "PLAN.json")->required();
   cmd->add_option("--results", a->results, "RESULTS... (repeats of the plan, in time order)")->required();
-  cmd->add_option("--dialect", a->dialect, "csv | linuxcnc | fanuc")->required();
+  cmd->add_option("--dialect", a->dialect, "csv | linuxcnc | fanuc | haas | siemens | heidenhain | okuma")->required();
   cmd->add_option("--json", a->json_out, "DIAGNOSIS.json")->required();
   cmd->add_option("--text", a->text_out, "the readable summary, also printed on stdout");
   cmd->add_option("--alpha", a->alpha, "false-alarm rate of the tests (default 0.001)");

@@ -134,6 +134,7 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
     req.u = a.main.u;
     req.report_file = json_out.empty() ? results.front() : json_out;
     req.force = force;
+    req.path = offsets_out;
     if (std::filesystem::exists(offsets_out)) req.previous_text = readTextFile(offsets_out);
     std::string off;
     try {
@@ -173,7 +174,7 @@ std::vector<Command> touchCommands(CLI::App& app, const Common& common) {
 
   auto* gen = app.add_subcommand("generate", "write the NC program of a plan in a controller dialect");
   gen->add_option("--plan", a->plan_file, "PLAN.json")->required();
-  gen->add_option("--dialect", a->dialect, "linuxcnc | fanuc")->required();
+  gen->add_option("--dialect", a->dialect, "linuxcnc | fanuc | haas | siemens | heidenhain | okuma")->required();
   gen->add_option("-o,--output", a->out, "PROGRAM")->required();
   cmds.push_back({gen, [a, &common] { return cmdGenerate(common, a->plan_file, a->dialect, a->out); }});
 
@@ -183,7 +184,7 @@ std::vector<Command> touchCommands(CLI::App& app, const Common& common) {
   auto* noise_opt = sim->add_option("--noise-um", a->noise_um, "probe repeatability, standard deviation (um)");
   sim->add_option("--seed", a->seed, "random seed");
   auto* start_opt = sim->add_option("--start-s", a->start_s, "clock at the cycle start (s), for repeats");
-  sim->add_option("--dialect", a->dialect, "csv | linuxcnc | fanuc")->required();
+  sim->add_option("--dialect", a->dialect, "csv | linuxcnc | fanuc | haas | siemens | heidenhain | okuma")->required();
   sim->add_option("-o,--output", a->out, "RESULTS")->required();
   cmds.push_back({sim, [a, &common, noise_opt, start_opt] {
                     return cmdSimulate(common, a->plan_file, a->truth_file, a->noise_um, noise_opt->count() > 0, a->seed,
@@ -193,7 +194,7 @@ std::vector<Command> touchCommands(CLI::App& app, const Common& common) {
   auto* ana = app.add_subcommand("analyze", "identify the location errors from the controller's results");
   ana->add_option("--plan", a->plan_file, "PLAN.json")->required();
   ana->add_option("--results", a->results, "RESULTS... (repeats of the plan, in time order)")->required();
-  ana->add_option("--dialect", a->dialect, "csv | linuxcnc | fanuc")->required();
+  ana->add_option("--dialect", a->dialect, "csv | linuxcnc | fanuc | haas | siemens | heidenhain | okuma")->required();
   ana->add_option("--method", a->method, "lsq_per_point (form-immune, default) | lsq_rigid_setup | closed_form");
   ana->add_option("--json", a->json_out, "REPORT.json");
   ana->add_option("--text", a->text_out, "the readable summary, also printed on stdout");

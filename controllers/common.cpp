@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -230,6 +231,124 @@ size_t nextNonBlank(const std::vector<nc::Block>& blocks, size_t i) {
   for (size_t k = i + 1; k < blocks.size(); ++k)
     if (!blocks[k].empty()) return k;
   return blocks.size();
+}
+
+
+namespace {
+// Days since 1970-01-01 of a proleptic Gregorian date (H. Hinnant's days_from_civil).
+long long daysFromCivil(long long y, unsigned m, unsigned d) {
+  y -= m <= 2;
+  const long long era = (y >= 0 ? y : y - 399) / 400;
+  const unsigned yoe = static_cast<unsigned>(y - era * 400);
+  const unsigned doy = (153 * (m + (m > 2 ? -3 : 9)) + 2) / 5 + d - 1;
+  const unsigned doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
+  return era * 146097 + static_cast<long long>(doe) - 719468;
+}
+void civilFromDays(long long z, long long& y, unsigned& m, unsigned& d) {
+  z += 719468;
+  const long long era = (z >= 0 ? z : z - 146096) / 146097;
+  const unsigned doe = static_cast<unsigned>(z - era * 146097);
+  const unsigned yoe = (doe - doe / 1460 + doe / 36524 - doe / 146096) / 365;
+  y = static_cast<long long>(yoe) + era * 400;
+  const unsigned doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+  const unsigned mp = (5 * doy + 2) / 153;
+  d = doy - (153 * mp + 2) / 5 + 1;
+  m = mp < 10 ? mp + 3 : mp - 9;
+  y += m <= 2;
+}
+const long long kEpochDays = daysFromCivil(kClockEpochYear, 1, 1);
+}  // namespace
+
+std::optional<double> clockSeconds(long yyyymmdd, long hhmmss) {
+  const long y = yyyymmdd / 10000, mo = yyyymmdd / 100 % 100, d = yyyymmdd % 100;
+  const long h = hhmmss / 10000, mi = hhmmss / 100 % 100, s = hhmmss % 100;
+  if (yyyymmdd < 0 || hhmmss < 0 || y < 1900 || y > 9999 || mo < 1 || mo > 12 || d < 1 || h > 23 || mi > 59 || s > 59)
+    return std::nullopt;
+  static const int kDays[] = {31, 29, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31};
+  const bool leap = (y % 4 == 0 && y % 100 != 0) || y % 400 == 0;
+  if (d > kDays[mo - 1] || (mo == 2 && d == 29 && !leap)) return std::nullopt;
+  const long long days = daysFromCivil(y, static_cast<unsigned>(mo), static_cast<unsigned>(d)) - kEpochDays;
+  return static_cast<double>(days * 86400 + h * 3600 + mi * 60 + s);
+}
+
+ClockStamp clockStamp(double seconds) {
+  if (!std::isfinite(seconds)) throw std::invalid_argument("a time stamp must be a finite number of seconds");
+  const long long s = static_cast<long long>(std::floor(seconds));
+  const long long day = (s >= 0 ? s / 86400 : -((-s + 86399) / 86400));
+  const long long sod = s - day * 86400;
+  long long y = 0;
+  unsigned m = 0, d = 0;
+  civilFromDays(day + kEpochDays, y, m, d);
+  if (y < 1900 || y > 9999) throw std::invalid_argument(fmt::format("time stamp {} s is outside the years 1900-9999", seconds));
+  return {static_cast<long>(y * 10000 + m * 100 + d), static_cast<long>(sod / 3600 * 10000 + sod / 60 % 60 * 100 + sod % 60)};
+}
+
+LetteredLine letteredFields(const std::string& s, std::string_view letters, const std::string& file, int line) {
+  size_t i = 0;
+  auto skip = [&]() {
+    while (i < s.size() && (s[i] == ' ' || s[i] == '\t')) ++i;
+  };
+  std::string expected = "P<id>";
+  for (char c : letters) expected += fmt::format(" {}..", c);
+  skip();
+  if (i >= s.size() || s[i] != 'P') fail(file, line, fmt::format("expected '{}', got '{}'", expected, trim(s)));
+  ++i;
+  skip();
+  const size_t id_begin = i;
+  while (i < s.size() && s[i] >= '0' && s[i] <= '9') ++i;
+  const auto id = parseDigits(std::string_view(s).substr(id_begin, i - id_begin));
+  if (!id || *id == 0 || (i < s.size() && s[i] != ' ' && s[i] != '\t' && letters.find(s[i]) != 0))
+    fail(file, line, fmt::format("'{}' does not start with a point id P<n>", trim(s)));
+  LetteredLine out;
+  out.id = *id;
+  for (size_t n = 0; n < letters.size(); ++n) {
+    skip();
+    if (i >= s.size() || s[i] != letters[n])
+      fail(file, line, fmt::format("point {}: expected '{}' at column {} ('{}')", *id, letters[n], i + 1, expected));
+    ++i;
+    skip();
+    const size_t b = i;
+    while (i < s.size() && s[i] != ' ' && s[i] != '\t' && (n + 1 == letters.size() || s[i] != letters[n + 1])) ++i;
+    out.fields.push_back(s.substr(b, i - b));
+  }
+  skip();
+  if (i != s.size())
+    fail(file, line, fmt::format("point {}: unexpected text '{}' after {}", *id, s.substr(i), letters.back()));
+  return out;
+}
+
+std::optional<double> parseNumberComma(std::string_view token) {
+  std::string t(token);
+  if (std::count(t.begin(), t.end(), ',') + std::count(t.begin(), t.end(), '.') > 1) return std::nullopt;
+  for (auto& c : t)
+    if (c == ',') c = '.';
+  return parseNumber(t);
+}
+
+std::vector<nc::Block> motionBlocks(const std::vector<MotionEndpoint>& endpoints, bool inch) {
+  std::vector<nc::Block> blocks;
+  nc::Block unit;
+  unit.line = 0;
+  unit.code = inch ? "G20" : "G21";
+  unit.words.push_back({'G', inch ? "20" : "21", false, inch ? 20.0 : 21.0});
+  blocks.push_back(unit);
+  for (const auto& e : endpoints) {
+    nc::Block b;
+    b.line = e.line;
+    b.code = "motion";
+    for (const auto& [axis, v] : e.axes) b.words.push_back({axis, fixed(v, 6), true, v});
+    blocks.push_back(std::move(b));
+  }
+  return blocks;
+}
+
+std::optional<AxisDirection> axisAligned(const Eigen::Vector3d& d) {
+  const double n = d.norm();
+  if (!(n > 0)) return std::nullopt;
+  const Eigen::Vector3d u = d / n;
+  for (int a = 0; a < 3; ++a)
+    if (std::abs(std::abs(u[a]) - 1.0) < 1e-9) return AxisDirection{a, u[a] > 0 ? 1 : -1};
+  return std::nullopt;
 }
 
 }  // namespace rotacal::ctl

@@ -98,4 +98,56 @@ std::vector<std::string> readerIssues(const std::vector<nc::Block>& blocks);
 /// Index of the next non-blank block after `i` (blocks.size() when none).
 size_t nextNonBlank(const std::vector<nc::Block>& blocks, size_t i);
 
+
+// ---- Additions for the haas / siemens / heidenhain / okuma dialects and the Fanuc clock ----
+
+/// Epoch of the controllers' wall clocks in results files: 2000-01-01 00:00:00 (control local
+/// time, no time zone: every repeat of a calibration runs on the same control). t_s of a point =
+/// seconds since this epoch, so repeats share one clock (contract.md "Neutral results").
+constexpr int kClockEpochYear = 2000;
+
+/// Seconds since kClockEpochYear-01-01 00:00:00 of a date YYYYMMDD and a time HHMMSS (as Fanuc
+/// #3011/#3012 hold them); nullopt when the date or the time is not a valid calendar value.
+std::optional<double> clockSeconds(long yyyymmdd, long hhmmss);
+
+struct ClockStamp {
+  long yyyymmdd = 0;
+  long hhmmss = 0;
+};
+/// Date and time of floor(seconds) since the epoch (inverse of clockSeconds on whole seconds).
+/// Throws std::invalid_argument for a non-finite value or a year outside 1900..9999.
+ClockStamp clockStamp(double seconds_since_epoch);
+
+/// The text after each letter of `letters` in a line "P<id> X.. Y.. Z.. ...": the line starts
+/// with 'P' and the id digits, then each letter of `letters` in order, each followed by its
+/// field (spaces between a letter and its field, and between fields, are allowed; a field ends
+/// at the next space after its first character or at the next expected letter). Throws
+/// InputError(file, line, ...) naming what is wrong. Returns the id and the field texts.
+struct LetteredLine {
+  long id = 0;
+  std::vector<std::string> fields;
+};
+LetteredLine letteredFields(const std::string& s, std::string_view letters, const std::string& file, int line);
+
+/// Like parseNumber, also accepting a decimal comma instead of the point (Heidenhain prints
+/// "-293,733" with a German language setting) and a trailing point or comma ("12." "12,").
+std::optional<double> parseNumberComma(std::string_view token);
+
+/// Converts a program's text lines into neutral blocks for strokeProblems: each entry is a line
+/// number and its X/Y/Z/A/B/C values (absolute, in the program's unit) of one motion endpoint.
+struct MotionEndpoint {
+  int line = 0;
+  std::vector<std::pair<char, double>> axes;
+};
+std::vector<nc::Block> motionBlocks(const std::vector<MotionEndpoint>& endpoints, bool inch);
+
+/// Unit direction of a probing move (from the nominal trigger toward the end point) when it is
+/// along one machine axis: axis index 0..2 and sign +-1; nullopt when it is not axis-aligned
+/// within 1e-9.
+struct AxisDirection {
+  int axis = 0;
+  int sign = 1;
+};
+std::optional<AxisDirection> axisAligned(const Eigen::Vector3d& direction);
+
 }  // namespace rotacal::ctl

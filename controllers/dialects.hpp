@@ -13,6 +13,30 @@ namespace rotacal {
 const Dialect& csvDialect();
 const Dialect& linuxcncDialect();
 const Dialect& fanucDialect();
+const Dialect& haasDialect();
+const Dialect& siemensDialect();
+const Dialect& heidenhainDialect();
+const Dialect& okumaDialect();
+
+/// Changes (mm) of the Haas MRZP settings 255, 256, 257 (X, Y, Z of the rotary centre): the
+/// tilting axis's pivot, A/C: (dx_AY, dy_AY, dz_AY), B/C: (dx_BY, dy_CB, dz_BY). dy_CA / dx_CB
+/// (offset between the axes) has no setting. Mapping UNVERIFIED on a machine.
+std::vector<std::pair<std::string, double>> haasMrzpChanges(const LocationErrors& identified);
+
+/// Siemens toolcarrier 1 corrections (mapping UNVERIFIED on a machine): fine offsets added
+/// (mm; l2 fine $TC_CARR44-46 = pivot of the tilting axis, l3 fine $TC_CARR55-57 = second axis
+/// relative to the first), axis vectors v1 ($TC_CARR7-9, tilting axis) and v2 ($TC_CARR10-12, C)
+/// set to the identified unit directions, angle offset $TC_CARR24 of the tilting axis added (deg).
+struct SiemensToolcarrierChanges {
+  std::vector<std::pair<std::string, double>> add_length;
+  std::vector<std::pair<std::string, double>> set_vector;
+  double add_angle_deg = 0.0;
+};
+SiemensToolcarrierChanges siemensToolcarrierChanges(const LocationErrors& identified);
+
+/// The FN 16 format files the heidenhain program prints through (file name, text): they must be
+/// saved in TNC:\ROTACAL\ on the control; the program lists them in its header comments.
+std::vector<std::pair<std::string, std::string>> heidenhainFormatFiles(const std::string& cycle, int points);
 
 /// LinuxCNC kinematics component of a table machine: "xyzac-trt-kins" or "xyzbc-trt-kins".
 std::string linuxcncKinsComponent(Kinematics kinematics);

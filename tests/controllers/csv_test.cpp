@@ -18,11 +18,12 @@ namespace {
 using test::lines;
 using test::messageOf;
 
-TEST(Registry, KnowsTheThreeDialectsAndRejectsOthers) {
-  EXPECT_EQ(dialectNames(), (std::vector<std::string>{"csv", "linuxcnc", "fanuc"}));
+TEST(Registry, KnowsTheContractDialectsAndRejectsOthers) {
+  EXPECT_EQ(dialectNames(),
+            (std::vector<std::string>{"csv", "linuxcnc", "fanuc", "haas", "siemens", "heidenhain", "okuma"}));
   for (const auto& n : dialectNames()) EXPECT_EQ(dialectByName(n).name(), n);
-  const std::string msg = messageOf<std::invalid_argument>([] { dialectByName("heidenhain"); });
-  EXPECT_NE(msg.find("heidenhain"), std::string::npos) << msg;
+  const std::string msg = messageOf<std::invalid_argument>([] { dialectByName("mazak"); });
+  EXPECT_NE(msg.find("mazak"), std::string::npos) << msg;
   EXPECT_NE(msg.find("linuxcnc"), std::string::npos) << msg;
 }
 

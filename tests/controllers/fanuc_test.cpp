@@ -43,10 +43,15 @@ TEST(FanucResults, RoundTripWithinThePrintedDigits) {
   const std::string text = fc().writeResults(plan, run);
   const auto ls = lines(text);
   EXPECT_EQ(ls[0], "ROTACAL-RESULTS DIALECT FANUC CYCLE TOUCH154 POINTS 154 UNIT MM");
+  // The first trigger's second on the 2000-01-01 epoch: the run starts at 0 s, the first point
+  // is probed at the plan's t_s + 0.25 s (< 60 s, so HHMMSS is that many seconds).
+  const long first_s = static_cast<long>(std::floor(plan.points[0].t_s + 0.25));
+  ASSERT_LT(first_s, 60);
+  EXPECT_EQ(ls[1], fmt::format("DATE 20000101 TIME {:>6}", first_s));
   EXPECT_EQ(ls.back(), "END");
   EXPECT_NE(text.find("\r\n"), std::string::npos) << "CR LF like a Fanuc punch";
-  EXPECT_TRUE(std::regex_match(ls[1], std::regex(R"(P1 X[ -]*\d+\.\d{4} Y[ -]*\d+\.\d{4} Z[ -]*\d+\.\d{4} T *\d+)")))
-      << ls[1];
+  EXPECT_TRUE(std::regex_match(ls[2], std::regex(R"(P1 X[ -]*\d+\.\d{4} Y[ -]*\d+\.\d{4} Z[ -]*\d+\.\d{4} T *\d+)")))
+      << ls[2];
   const MeasurementRun back = fc().parseResults(text, "res.txt", plan);
   ASSERT_EQ(back.points.size(), plan.points.size());
   for (size_t i = 0; i < back.points.size(); ++i) {
@@ -59,19 +64,21 @@ TEST(FanucResults, RoundTripWithinThePrintedDigits) {
 TEST(FanucResults, ParserAcceptsTheFormsDprntMayPrint) {
   const ProbePlan plan = test::acPlan();
   auto ls = lines(fc().writeResults(plan, test::displacedRun(plan)));
-  ls[1] = "P1 X0051.0010 Y-0235.0000 Z  150.0000 T 12345.";
-  ls[2] = "P2 X51.0010 Y  -215.0000 Z150.0000 T0000012346";
-  ls[3] = "  P3   X 51.0010   Y-185.0000   Z 150.0000   T    12347  ";
+  ls[1] = "DATE 20261122 TIME 014119";  // leading zero (parameter 6001) instead of a space
+  ls[2] = "P1 X0051.0010 Y-0235.0000 Z  150.0000 T 12345.";
+  ls[3] = "P2 X51.0010 Y  -215.0000 Z150.0000 T0000012346";
+  ls[4] = "  P3   X 51.0010   Y-185.0000   Z 150.0000   T    12347  ";
   std::string text = "\x12%\r\n";  // DC2 of POPEN and a tape mark
   for (size_t i = 0; i < ls.size(); ++i) text += ls[i] + (i % 2 ? "\r" : "\r\n");
   text += "%\x14";
   const MeasurementRun back = fc().parseResults(text, "res.txt", plan);
   ASSERT_EQ(back.points.size(), plan.points.size());
   EXPECT_EQ(back.points[0].position_m_mm, Eigen::Vector3d(51.001, -235.0, 150.0));
-  EXPECT_DOUBLE_EQ(back.points[0].t_s, 12.345);
+  // 2026-11-22 01:41:19 is 848626879 s after 2000-01-01 00:00:00 (Python's datetime).
+  EXPECT_DOUBLE_EQ(back.points[0].t_s, 848626879.0 + 12.345);
   EXPECT_EQ(back.points[1].position_m_mm.y(), -215.0);
-  EXPECT_DOUBLE_EQ(back.points[1].t_s, 12.346);
-  EXPECT_DOUBLE_EQ(back.points[2].t_s, 12.347);
+  EXPECT_DOUBLE_EQ(back.points[1].t_s, 848626879.0 + 12.346);
+  EXPECT_DOUBLE_EQ(back.points[2].t_s, 848626879.0 + 12.347);
 }
 
 TEST(FanucResults, InchMachinePrintsInchesAndParsesBackToMm) {
@@ -99,14 +106,14 @@ class FanucRejects : public ::testing::Test {
 
 TEST_F(FanucRejects, MissingPointAtTheLastLine) {
   auto v = ls;
-  v.erase(v.begin() + 44);
+  v.erase(v.begin() + 45);  // lines: header, DATE, P1 ...
   expectAt(v, v.size(), "point 44 is missing");
 }
 
 TEST_F(FanucRejects, ProgramThatStoppedEarlyHasNoEnd) {
   auto v = ls;
-  v.resize(45);  // header + 44 points: the alarm stopped the program
-  expectAt(v, 45, "point 45 is missing and there is no END line");
+  v.resize(46);  // header + DATE + 44 points: the alarm stopped the program
+  expectAt(v, 46, "point 45 is missing and there is no END line");
   v = ls;
   v.pop_back();
   expectAt(v, v.size(), "no END line");
@@ -114,8 +121,8 @@ TEST_F(FanucRejects, ProgramThatStoppedEarlyHasNoEnd) {
 
 TEST_F(FanucRejects, DuplicatedPointAtItsSecondLine) {
   auto v = ls;
-  v.insert(v.begin() + 9, ls[8]);
-  expectAt(v, 10, "point 8 appears twice (first at line 9)");
+  v.insert(v.begin() + 10, ls[9]);
+  expectAt(v, 11, "point 8 appears twice (first at line 10)");
 }
 
 TEST_F(FanucRejects, PointIdNotInThePlan) {
@@ -288,6 +295,52 @@ TEST(FanucOffsets, IncrementalG54ShiftWithTheFanucSign) {
   EXPECT_THROW(fc().writeOffsets(r), std::invalid_argument);
   r.force = true;
   EXPECT_NE(fc().writeOffsets(r).find("X-0.7000"), std::string::npos);
+}
+
+TEST(FanucResults, RepeatsShareTheControlClock) {
+  const ProbePlan plan = test::acPlan();
+  // Two repeats on the common clock (s since 2000-01-01), the second 2 h later.
+  for (double start : {750000000.0, 750007200.0}) {
+    MeasurementRun run = test::displacedRun(plan);
+    for (auto& p : run.points) p.t_s += start;
+    const std::string text = fc().writeResults(plan, run);
+    // 750000000 s = 2023-10-07 13:20:00 (Python's datetime); +2 h = 15:20:00; the header holds
+    // the first trigger's second (plan t_s + 0.25 s, < 60 s).
+    const long first_s = static_cast<long>(std::floor(plan.points[0].t_s + 0.25));
+    ASSERT_LT(first_s, 60);
+    EXPECT_EQ(lines(text)[1], fmt::format("DATE 20231007 TIME {}", (start == 750000000.0 ? 132000 : 152000) + first_s));
+    const MeasurementRun back = fc().parseResults(text, "res.txt", plan);
+    for (size_t i = 0; i < back.points.size(); ++i)
+      EXPECT_NEAR(back.points[i].t_s, run.points[i].t_s, kTimerRoundingS + 1e-6);
+  }
+}
+
+TEST_F(FanucRejects, ClockLineMissingOrInvalid) {
+  auto v = ls;
+  v.erase(v.begin() + 1);
+  expectAt(v, 2, "expected 'DATE YYYYMMDD TIME HHMMSS' after the header");
+  v = ls;
+  v[1] = "DATE 20230230 TIME 120000";
+  expectAt(v, 2, "DATE 20230230 TIME 120000 is not a date YYYYMMDD and a time HHMMSS");
+  v[1] = "DATE 20230228 TIME 126000";
+  expectAt(v, 2, "DATE 20230228 TIME 126000 is not a date");
+}
+
+TEST(FanucProgram, ReadsTheClockBeforeZeroingTheTimer) {
+  const ProbePlan plan = test::acPlan();
+  const std::string text = fc().writeProgram(probeProgram(plan, "fanuc"));
+  EXPECT_NE(text.find("\nPOPEN\n#1=#3011\n#2=#3012\n#3001=0\n"
+                      "DPRNT[ROTACAL-RESULTS*DIALECT*FANUC*CYCLE*TOUCH154*POINTS*154*UNIT*MM]\n"
+                      "DPRNT[DATE*#1[80]*TIME*#2[60]]\n"),
+            std::string::npos);
+}
+
+TEST(FanucProgram, DoubleTouchIsRefusedNotIgnored) {
+  const ProbePlan plan = test::acPlan();
+  nc::Program p = probeProgram(plan, "fanuc");
+  for (auto& op : p.ops)
+    if (op.kind == nc::Op::Kind::Probe) op.retract_mm = 1.0;
+  EXPECT_THROW(fc().writeProgram(p), std::invalid_argument);
 }
 
 }  // namespace

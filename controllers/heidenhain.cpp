@@ -1,0 +1,469 @@
+// Heidenhain TNC 640, Klartext (../shared/reference/controllers.md Sec. 5): every line starts
+// with its block number, `0 BEGIN PGM NAME MM` ... `N END PGM NAME MM`, comments after ';'.
+// Probing with touch-probe cycle 0 (REF. PLANE): `TCH PROBE 0.0 REF. PLANE Q10 X+` (result
+// parameter, probing axis and direction) and `TCH PROBE 0.1 X.. Y.. Z..` (the pre-position, which
+// is where the safe path already stands). Cycle 0 moves along one axis only, so the two other
+// coordinates of the ball centre are those of the pre-position; the program stores the three in
+// the nonvolatile QR1-QR4 (QR1 = point id) and prints them with FN 16: F-PRINT through format
+// files, whose text is in the program's header comments (the control needs them as files).
+//
+// Results, as the format files print them (decimal commas with a German language setting; the
+// parser accepts commas and points):
+//   ROTACAL HEIDENHAIN CYCLE TOUCH154 POINTS 154 UNIT MM
+//   P   17 X  123,4560 Y -200,0000 Z  173,0000
+//   T20261122 014119
+//   END
+// T = YEAR4 MONTH DAY HOUR MIN SEC at the point (format-file keywords [H-426TM] 686): t_s =
+// seconds since 2000-01-01, whole seconds (the control prints the current second, truncated).
+// A point that does not trigger prints "NOT-TRIGGERED P   17" and the program stops.
+//
+// UNVERIFIED, and the conservative choice made for each:
+// - The Klartext form of cycle 0 and that Q10 holds the ball-centre coordinate along the probing
+//   axis in the active datum (not the surface): the parser takes it so; the lines printed are
+//   the raw values, so a different convention can be corrected afterwards.
+// - No-trigger reaction of cycle 0 (believed: error and stop): the program also checks that the
+//   result lies short of the planned end point (FN 11/12 ... GOTO LBL) and then prints
+//   NOT-TRIGGERED, shows it on the screen (F-PRINT / SCREEN:) and stops (STOP).
+// - FN 16 format-file lines with Q parameters ("%10.4LF", QR2;) and that repeated F-PRINTs to
+//   the same file within a run append: a leftover file from an earlier run shows up as a second
+//   header line, which the parser rejects.
+// - Inverse-time feed: never used. Inch: the program is always written in MM (Heidenhain inch
+//   feeds are in 0.1 in/min), so the results are in mm whatever the machine's unit.
+// - Probing feed and maximum travel of cycle 0 come from the touch-probe table, not from the
+//   program: set them to the plan's probing feed and approach + overtravel.
+// - Line length: 80 characters (Autodesk's Heidenhain post).
+#include <fmt/format.h>
+
+#include <cmath>
+#include <limits>
+#include <map>
+#include <optional>
+#include <regex>
+#include <set>
+#include <stdexcept>
+
+#include "controllers/common.hpp"
+#include "controllers/dialects.hpp"
+#include "core/units.hpp"
+
+namespace rotacal {
+namespace {
+
+constexpr const char* kDialect = "heidenhain";
+constexpr size_t kMaxLineChars = 80;
+constexpr int kLabelBase = 1000;  // LBL 1000 + id: the no-trigger section of point id
+constexpr const char* kDir = "TNC:\\ROTACAL\\";
+/// Distance (mm) short of the end point below which a result counts as "not triggered": a
+/// triggered probe stops the overtravel (mm) before the end, an untriggered one at or beyond it.
+constexpr double kNoTriggerMm = 0.01;
+
+/// Signed Klartext number: "+51.0000", "-235.0000" (never "-0.0000").
+std::string H(double v, int decimals = 4) {
+  const std::string s = ctl::fixed(v, decimals);
+  return s[0] == '-' ? s : "+" + s;
+}
+
+std::string safeName(std::string_view name) {
+  std::string s;
+  for (char c : ctl::upper(name)) s += ((c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9')) ? c : '_';
+  if (s.empty()) s = "ROTACAL";
+  if (s.size() > 24) s.resize(24);
+  return s;
+}
+
+std::string commentText(std::string_view text) {
+  std::string s;
+  for (char c : text) {
+    const char d = (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) ? ' ' : c;
+    if (d == ' ' && (s.empty() || s.back() == ' ')) continue;
+    s += d;
+  }
+  return ctl::trim(s);
+}
+
+std::string headerText(const std::string& cycle, int points) {
+  return fmt::format("ROTACAL HEIDENHAIN CYCLE {} POINTS {} UNIT MM", safeName(cycle), points);
+}
+
+class HeidenhainDialect final : public Dialect {
+ public:
+  std::string_view name() const override { return kDialect; }
+  std::string_view programExtension() const override { return ".h"; }
+  std::string_view resultsExtension() const override { return ".txt"; }
+
+  std::string writeProgram(const nc::Program& p) const override {
+    const double k = p.unit == nc::Unit::Inch ? kMmPerInch : 1.0;  // always MM programs
+    int probes = 0;
+    for (const auto& op : p.ops) probes += op.kind == nc::Op::Kind::Probe;
+    if (p.point_count != 0 && p.point_count != probes)
+      throw std::invalid_argument(fmt::format("program has {} probing moves but point_count {}", probes, p.point_count));
+    const std::string name = safeName(p.name.empty() ? "ROTACAL" : p.name);
+    const std::string results = std::string(kDir) + safeName(p.results_file.empty() ? "ROTACAL" : p.results_file) + ".TXT";
+    double safe_z = -std::numeric_limits<double>::infinity();
+    for (const auto& op : p.ops)
+      if (op.kind == nc::Op::Kind::Rapid) safe_z = std::max(safe_z, op.xyz.z() * k);
+    if (!std::isfinite(safe_z)) throw std::invalid_argument("the heidenhain program needs a rapid move to a safe height");
+
+    std::vector<std::string> body;
+    auto line = [&](const std::string& s) { body.push_back(s); };
+    auto commentLines = [&](std::string_view text) {
+      const std::string s = commentText(text);
+      const size_t width = kMaxLineChars - 8;  // block number, space, "; "
+      size_t i = 0;
+      while (i < s.size()) {
+        size_t n = std::min(width, s.size() - i);
+        if (i + n < s.size()) {
+          const size_t sp = s.rfind(' ', i + n);
+          if (sp != std::string::npos && sp > i) n = sp - i;
+        }
+        line("; " + ctl::trim(s.substr(i, n)));
+        i += n;
+        while (i < s.size() && s[i] == ' ') ++i;
+      }
+    };
+    auto print = [&](const std::string& format_file) { line(fmt::format("FN 16: F-PRINT {}{} / {}", kDir, format_file, results)); };
+
+    line(fmt::format("BEGIN PGM {} MM", name));
+    commentLines(p.name + " generated by rotacal, dialect heidenhain (TNC 640 Klartext)");
+    for (const auto& h : p.header) commentLines(h);
+    commentLines("X Y Z = probe ball centre in machine coordinates: datum at the intersection of the rotary axes, "
+                 "no PLANE function, no M128 / TCPM active");
+    commentLines("touch probe table: probing feed and maximum travel of this cycle come from there");
+    commentLines(fmt::format("results: FN 16 to {}; uses QR1-QR4", results));
+    commentLines(fmt::format("format files: save the text after each '=' below as the named file in {}", kDir));
+    for (const auto& [file, text] : heidenhainFormatFiles(p.cycle, probes)) line(fmt::format("; {}={}", file, text));
+    if (p.probe_tool > 0) line(fmt::format("TOOL CALL {} Z", p.probe_tool));
+    else commentLines("activate the touch probe (TOOL CALL) before the start");
+    print("RCH.A");
+    Eigen::Vector3d cur(0, 0, 0);
+    bool cur_known = false;
+    std::vector<int> ids;
+    for (const auto& op : p.ops) {
+      const Eigen::Vector3d x = op.xyz * k;
+      switch (op.kind) {
+        case nc::Op::Kind::Comment: commentLines(op.text); break;
+        case nc::Op::Kind::Rapid:
+          if (op.z_only) {
+            line(fmt::format("L Z{} R0 FMAX", H(x.z())));
+            cur.z() = x.z();
+          } else {
+            line(fmt::format("L X{} Y{} Z{} R0 FMAX", H(x.x()), H(x.y()), H(x.z())));
+            cur = x;
+            cur_known = true;
+          }
+          break;
+        case nc::Op::Kind::Linear:
+          line(fmt::format("L X{} Y{} Z{} R0 F{}", H(x.x()), H(x.y()), H(x.z()), ctl::fixed(op.feed * k, 0)));
+          cur = x;
+          cur_known = true;
+          break;
+        case nc::Op::Kind::Index: {
+          std::string s = "L";
+          for (const auto& [axis, deg] : op.rotary) s += fmt::format(" {}{}", axis, H(deg));
+          line(s + " R0 FMAX");
+          break;
+        }
+        case nc::Op::Kind::Probe: {
+          const int id = op.point_id;
+          if (id <= 0 || kLabelBase + id > 65535) throw std::invalid_argument(fmt::format("point id {} out of range", id));
+          if (op.retract_mm > 0)
+            throw std::invalid_argument(fmt::format(
+                "point {}: cycle 0 records a single touch; a double touch (retract_mm > 0) is not implemented", id));
+          if (!cur_known) throw std::invalid_argument(fmt::format("point {}: probing before any positioning move", id));
+          const auto dir = ctl::axisAligned(x - cur);
+          if (!dir)
+            throw std::invalid_argument(fmt::format(
+                "point {}: cycle 0 probes along one machine axis; this approach is not axis-aligned", id));
+          const char axis = "XYZ"[dir->axis];
+          const double end = x[dir->axis];
+          if (!op.text.empty()) commentLines(op.text);
+          line(fmt::format("TCH PROBE 0.0 REF. PLANE Q10 {}{}", axis, dir->sign > 0 ? '+' : '-'));
+          line(fmt::format("TCH PROBE 0.1 X{} Y{} Z{}", H(cur.x()), H(cur.y()), H(cur.z())));
+          // Not triggered: the result is not at least kNoTriggerMm short of the end point.
+          const double limit = end - dir->sign * kNoTriggerMm;
+          line(fmt::format("FN {}: IF +Q10 {} {} GOTO LBL {}", dir->sign > 0 ? 11 : 12, dir->sign > 0 ? "GT" : "LT",
+                           H(limit), kLabelBase + id));
+          line(fmt::format("FN 0: QR1 = +{}", id));
+          for (int a = 0; a < 3; ++a)
+            line(a == dir->axis ? fmt::format("FN 0: QR{} = +Q10", 2 + a) : fmt::format("FN 0: QR{} = {}", 2 + a, H(cur[a])));
+          print("RCP.A");
+          print("RCT.A");
+          ids.push_back(id);
+          break;
+        }
+      }
+    }
+    print("RCE.A");
+    line(fmt::format("L Z{} R0 FMAX M30", H(safe_z)));
+    for (int id : ids) {
+      line(fmt::format("LBL {}", kLabelBase + id));
+      line(fmt::format("FN 0: QR1 = +{}", id));
+      print("RCN.A");
+      line(fmt::format("FN 16: F-PRINT {}RCN.A / SCREEN:", kDir));
+      line("STOP");
+      line(fmt::format("L Z{} R0 FMAX M30", H(safe_z)));
+    }
+    std::string out;
+    int n = 0;
+    for (const auto& s : body) {
+      const std::string l = fmt::format("{} {}", n++, s);
+      if (l.size() > kMaxLineChars)
+        throw std::invalid_argument(fmt::format("line longer than {} characters: {}", kMaxLineChars, l));
+      out += l + "\n";
+    }
+    out += fmt::format("{} END PGM {} MM\n", n, name);
+    return out;
+  }
+
+  std::string writeResults(const ProbePlan& plan, const MeasurementRun& run) const override {
+    auto comma = [](std::string s) {
+      for (auto& c : s)
+        if (c == '.') c = ',';
+      return s;
+    };
+    std::string out = headerText(plan.cycle, static_cast<int>(plan.points.size())) + "\n";
+    for (const auto& t : run.points) {
+      if (!plan.findPoint(t.point_id)) throw std::invalid_argument(fmt::format("run point {} is not in the plan", t.point_id));
+      if (std::isnan(t.t_s))
+        throw std::invalid_argument(fmt::format("point {} has no time: the heidenhain program prints the clock", t.point_id));
+      const Eigen::Vector3d& x = t.position_m_mm;
+      out += fmt::format("P{:>5} X{:>10} Y{:>10} Z{:>10}\n", t.point_id, comma(ctl::fixed(x.x(), 4)),
+                         comma(ctl::fixed(x.y(), 4)), comma(ctl::fixed(x.z(), 4)));
+      const ctl::ClockStamp c = ctl::clockStamp(t.t_s);
+      out += fmt::format("T{:08d} {:06d}\n", c.yyyymmdd, c.hhmmss);
+    }
+    out += "END\n";
+    return out;
+  }
+
+  MeasurementRun parseResults(const std::string& text, const std::string& file, const ProbePlan& plan) const override {
+    const std::string expected_header = headerText(plan.cycle, static_cast<int>(plan.points.size()));
+    ctl::PointCollector points(plan, file);
+    bool header = false;
+    int end_line = 0;
+    int last = 1;
+    struct Pending {
+      int line = 0;
+      long id = 0;
+      Eigen::Vector3d x;
+    };
+    std::optional<Pending> pending;  // a P line waiting for its T line
+    for (const auto& l : ctl::splitLines(text)) {
+      const std::string s = ctl::trim(l.text);
+      if (s.empty()) continue;
+      last = l.number;
+      if (end_line) ctl::fail(file, l.number, fmt::format("text after END (line {}): '{}'", end_line, s));
+      const auto t = ctl::tokens(s);
+      if (t[0] == "ROTACAL") {
+        if (header) ctl::fail(file, l.number, "a second header line: one run per results file (delete the old file)");
+        header = true;
+        if (t.size() != 8 || t[1] != "HEIDENHAIN" || t[2] != "CYCLE" || t[4] != "POINTS" || t[6] != "UNIT" || t[7] != "MM")
+          ctl::fail(file, l.number, fmt::format("expected the header '{}', got '{}'", expected_header, s));
+        if (t[3] != safeName(plan.cycle))
+          ctl::fail(file, l.number, fmt::format("results of cycle '{}', the plan is '{}'", t[3], safeName(plan.cycle)));
+        const auto n = ctl::parseDigits(t[5]);
+        if (!n) ctl::fail(file, l.number, fmt::format("POINTS '{}' is not a number", t[5]));
+        if (static_cast<size_t>(*n) != plan.points.size())
+          ctl::fail(file, l.number, fmt::format("header says POINTS {} but the plan has {} points", *n, plan.points.size()));
+        continue;
+      }
+      if (!header) ctl::fail(file, l.number, fmt::format("expected the header '{}', got '{}'", expected_header, s));
+      if (t[0] == "NOT-TRIGGERED") {
+        std::string id_text = s.substr(std::string("NOT-TRIGGERED").size());
+        id_text = ctl::trim(id_text);
+        const auto id = id_text.size() > 1 && id_text[0] == 'P' ? ctl::parseDigits(ctl::trim(id_text.substr(1)))
+                                                                 : std::nullopt;
+        if (!id) ctl::fail(file, l.number, fmt::format("expected 'NOT-TRIGGERED P<id>', got '{}'", s));
+        ctl::fail(file, l.number, fmt::format("point {} was not triggered: the program stopped there", *id));
+      }
+      if (s[0] == 'T' && s != "END") {
+        if (!pending) ctl::fail(file, l.number, fmt::format("time line '{}' without a point line before it", s));
+        const auto date = t.size() == 2 ? ctl::parseDigits(t[0].substr(1)) : std::nullopt;
+        const auto time = t.size() == 2 ? ctl::parseDigits(t[1]) : std::nullopt;
+        const auto secs = date && time ? ctl::clockSeconds(*date, *time) : std::nullopt;
+        if (!secs)
+          ctl::fail(file, l.number,
+                    fmt::format("time of point {} '{}' is not 'TYYYYMMDD HHMMSS'", pending->id, s));
+        points.add(pending->line, static_cast<int>(pending->id), pending->x, *secs);
+        pending.reset();
+        continue;
+      }
+      if (pending) ctl::fail(file, l.number, fmt::format("point {} (line {}) has no time line", pending->id, pending->line));
+      if (s == "END") {
+        end_line = l.number;
+        continue;
+      }
+      const auto f = ctl::letteredFields(s, "XYZ", file, l.number);
+      Eigen::Vector3d x;
+      for (int i = 0; i < 3; ++i) {
+        const auto v = ctl::parseNumberComma(f.fields[static_cast<size_t>(i)]);
+        if (!v)
+          ctl::fail(file, l.number,
+                    fmt::format("{} '{}' of point {} is not a number", "XYZ"[i], f.fields[static_cast<size_t>(i)], f.id));
+        x[i] = *v;
+      }
+      pending = Pending{l.number, f.id, x};
+    }
+    if (!header) ctl::fail(file, 1, fmt::format("empty results file: expected the header '{}'", expected_header));
+    if (pending) ctl::fail(file, last, fmt::format("point {} (line {}) has no time line", pending->id, pending->line));
+    if (!end_line) {
+      if (const int missing = points.firstMissing())
+        ctl::fail(file, last, fmt::format("point {} is missing and there is no END line: the program stopped early", missing));
+      ctl::fail(file, last, "no END line after the last point: the file is incomplete");
+    }
+    return points.finish(last);
+  }
+
+  std::string writeOffsets(const OffsetRequest& r) const override {
+    ctl::requirePlausible(r);
+    const ProbePlan& plan = *r.plan;
+    const MachineModel& m = plan.machine;
+    const bool ac = r.identified.kinematics == Kinematics::TableAC;
+    const LocationErrors& e = r.identified;
+    const char tilt = ac ? 'A' : 'B';
+    const Eigen::Vector3d pivot = ac ? Eigen::Vector3d(e.get("dx_AY"), e.get("dy_AY"), e.get("dz_AY"))
+                                     : Eigen::Vector3d(e.get("dx_BY"), e.get("dy_CB"), e.get("dz_BY"));
+    const Eigen::Vector3d second = ac ? Eigen::Vector3d(0, e.get("dy_CA"), 0) : Eigen::Vector3d(e.get("dx_CB"), 0, 0);
+    const double zero_deg = (m.hasRotary(tilt) ? m.controllerSign(tilt, kDialect) : 1) *
+                            radToDeg(e.get(ac ? "a_AY" : "b_BY"));
+    std::vector<std::string> body;
+    auto c = [&](const std::string& s) { body.push_back("; " + s); };
+    c(fmt::format("rotacal kinematics / preset correction, table {}/C, TNC 640", tilt));
+    c(fmt::format("provenance: {}; cycle {}, machine {}", r.report_file.empty() ? "(no report)" : r.report_file,
+                  plan.cycle, m.name));
+    c("identified (papers' convention), value +- u (k = 1):");
+    for (const auto& s : ctl::identifiedLines(r)) c("  " + s);
+    c("what it changes: nothing by itself. Direct writes of the kinematics");
+    c("description from NC are OEM-protected (UNVERIFIED): enter by hand or let");
+    c("KinematicsOpt (cycle 451) optimize. Old values are on the control;");
+    c("new = old + change. Lengths mm, machine coordinates, rotaries at 0 deg.");
+    c(fmt::format("kinematics, transformation to the {} axis: X {} Y {} Z {}", tilt, H(pivot.x()), H(pivot.y()),
+                  H(pivot.z())));
+    c(fmt::format("kinematics, transformation {} axis to C axis: X {} Y {} Z {}", tilt, H(second.x()), H(second.y()),
+                  H(second.z())));
+    c(fmt::format("preset table, {} axis of the active preset: {} deg", tilt, H(zero_deg)));
+    c(ac ? "reported only (axis directions): b_AY, c_AY, b_CA" : "reported only (axis directions): a_BY, c_BY, a_CB");
+    std::string out = "0 BEGIN PGM ROTACAL_KIN MM\n";
+    int n = 1;
+    for (const auto& s : body) out += fmt::format("{} {}\n", n++, s);
+    out += fmt::format("{} END PGM ROTACAL_KIN MM\n", n);
+    return out;
+  }
+
+  std::vector<std::string> check(const std::string& text, const ProbePlan& plan) const override {
+    std::vector<std::string> out;
+    auto problem = [&](int line, const std::string& what) { out.push_back(fmt::format("{}: {}", line, what)); };
+    const auto ls = ctl::splitLines(text);
+    std::vector<std::string> code(ls.size());  // without the block number and the ';' comment
+    static const std::regex numbered(R"(^(\d+) (.*)$)");
+    long expect = 0;
+    for (size_t i = 0; i < ls.size(); ++i) {
+      const std::string& raw = ls[i].text;
+      const int n = ls[i].number;
+      if (raw.size() > kMaxLineChars) problem(n, fmt::format("line has {} characters, more than {}", raw.size(), kMaxLineChars));
+      std::smatch mt;
+      if (!std::regex_match(raw, mt, numbered)) {
+        problem(n, "line does not start with a block number");
+        continue;
+      }
+      if (std::stol(mt[1].str()) != expect) problem(n, fmt::format("block number {} where {} was expected", mt[1].str(), expect));
+      expect = std::stol(mt[1].str()) + 1;
+      const std::string rest = mt[2].str();
+      const size_t sc = rest.find(';');
+      code[i] = ctl::trim(sc == std::string::npos ? rest : rest.substr(0, sc));
+    }
+    std::set<std::string> labels;
+    for (const auto& s : code)
+      if (s.rfind("LBL ", 0) == 0) labels.insert(s.substr(4));
+    static const std::regex begin(R"(^BEGIN PGM (\w+) (MM|INCH)$)");
+    static const std::regex endpgm(R"(^END PGM (\w+) (MM|INCH)$)");
+    std::smatch bm, em;
+    if (code.empty() || !std::regex_match(code.front(), bm, begin)) problem(1, "the program does not start with BEGIN PGM NAME MM");
+    if (code.empty() || !std::regex_match(code.back(), em, endpgm) || (!bm.empty() && bm[1].str() != em[1].str()))
+      problem(ls.empty() ? 1 : ls.back().number, "the program does not end with END PGM and the name of its BEGIN PGM");
+    const bool inch = !bm.empty() && bm[2].str() == "INCH";
+    static const std::regex word(R"(([XYZABC])([+-]?)(\d+(\.\d*)?))");
+    static const std::regex probe0(R"(^TCH PROBE 0\.0 REF\. PLANE Q10 ([XYZ])([+-])$)");
+    static const std::regex check(R"(^FN (11|12): IF \+Q10 (GT|LT) ([+-]\d+\.\d+) GOTO LBL (\d+)$)");
+    std::vector<ctl::MotionEndpoint> moves;
+    int probes = 0;
+    for (size_t i = 0; i < ls.size(); ++i) {
+      const std::string& s = code[i];
+      const int n = ls[i].number;
+      if (s.find("M128") != std::string::npos || s.find("TCPM") != std::string::npos || s.rfind("PLANE ", 0) == 0)
+        problem(n, "TCP or a tilted plane: the probe positions are machine coordinates");
+      const bool positioning = s.rfind("L ", 0) == 0 || s.rfind("TCH PROBE 0.1 ", 0) == 0;
+      if (positioning) {
+        ctl::MotionEndpoint e{n, {}};
+        for (auto it = std::sregex_iterator(s.begin(), s.end(), word); it != std::sregex_iterator(); ++it) {
+          const auto& w = *it;
+          if (w[2].str().empty() || w[4].str().empty())
+            problem(n, fmt::format("{}{}{} needs an explicit sign and a decimal point", w[1].str(), w[2].str(), w[3].str()));
+          e.axes.emplace_back(w[1].str()[0], std::stod(w[2].str() + w[3].str()));
+        }
+        if (s.rfind("L ", 0) == 0 && s.find(" R0") == std::string::npos) problem(n, "L block without R0");
+        if (s.rfind("L ", 0) == 0 && s.find(" FMAX") == std::string::npos && s.find(" F") == std::string::npos)
+          problem(n, "L block without a feed");
+        moves.push_back(e);
+      }
+      std::smatch pm;
+      if (!std::regex_match(s, pm, probe0)) continue;
+      ++probes;
+      // Next code lines: TCH PROBE 0.1 <pre-position>, FN 11|12 IF +Q10 GT|LT v GOTO LBL n,
+      // with a label section that stops (STOP).
+      auto next = [&](size_t j) {
+        for (++j; j < ls.size(); ++j)
+          if (!code[j].empty() && code[j][0] != ';') return j;
+        return ls.size();
+      };
+      const size_t a = next(i);
+      const size_t b = a < ls.size() ? next(a) : ls.size();
+      std::smatch cm;
+      bool ok = a < ls.size() && code[a].rfind("TCH PROBE 0.1 ", 0) == 0 && b < ls.size() &&
+                std::regex_match(code[b], cm, check);
+      if (ok) {
+        const bool plus = pm[2].str() == "+";
+        ok = (plus && cm[1].str() == "11" && cm[2].str() == "GT") || (!plus && cm[1].str() == "12" && cm[2].str() == "LT");
+        bool stops = false;
+        const std::string label = cm[4].str();
+        for (size_t q = 0; ok && q < ls.size(); ++q) {
+          if (code[q] != "LBL " + label) continue;
+          for (size_t r = next(q); r < ls.size() && code[r].rfind("LBL ", 0) != 0; r = next(r))
+            if (code[r] == "STOP") stops = true;
+        }
+        ok = ok && stops;
+      }
+      if (!ok)
+        problem(n, "TCH PROBE 0 is not followed by TCH PROBE 0.1 and the no-trigger check "
+                   "(FN 11/12: IF +Q10 GT/LT end GOTO LBL n, LBL n ... STOP)");
+    }
+    for (size_t i = 0; i < ls.size(); ++i) {
+      const size_t g = code[i].find("GOTO LBL ");
+      if (g != std::string::npos && !labels.count(code[i].substr(g + 9)))
+        problem(ls[i].number, fmt::format("jump to the undefined label {}", code[i].substr(g + 9)));
+    }
+    if (static_cast<size_t>(probes) != plan.points.size())
+      problem(ls.empty() ? 1 : ls.back().number, fmt::format("{} TCH PROBE 0 cycles, the plan has {} points", probes, plan.points.size()));
+    for (auto& s : ctl::strokeProblems(ctl::motionBlocks(moves, inch), plan, kDialect)) out.push_back(std::move(s));
+    return out;
+  }
+};
+
+}  // namespace
+
+std::vector<std::pair<std::string, std::string>> heidenhainFormatFiles(const std::string& cycle, int points) {
+  return {
+      {"RCH.A", fmt::format("\"{}\\n\";", headerText(cycle, points))},
+      {"RCP.A", "\"P%5.0LF X%10.4LF Y%10.4LF Z%10.4LF\\n\",QR1,QR2,QR3,QR4;"},
+      {"RCT.A", "\"T%4d%02.2d%02.2d %02.2d%02.2d%02.2d\\n\",YEAR4,MONTH,DAY,HOUR,MIN,SEC;"},
+      {"RCE.A", "\"END\\n\";"},
+      {"RCN.A", "\"NOT-TRIGGERED P%5.0LF\\n\",QR1;"},
+  };
+}
+
+const Dialect& heidenhainDialect() {
+  static const HeidenhainDialect d;
+  return d;
+}
+
+}  // namespace rotacal

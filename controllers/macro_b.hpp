@@ -1,0 +1,62 @@
+#pragma once
+// Custom Macro B programs shared by the Fanuc-compatible dialects (fanuc, haas): G31 skip
+// moves with an explicit no-trigger check, results through POPEN/DPRNT/PCLOS with the
+// control's date and time in the header and the ms timer per point, and the strict checker.
+// Each dialect supplies its flavour (program number, retained variables, look-ahead) and its
+// own offset writer (../shared/reference/controllers.md Sec. 2 and 3).
+//
+// Results, as the program's DPRNTs print them (rotacal's rendering, see fanucDprntNumber):
+//   ROTACAL-RESULTS DIALECT FANUC CYCLE TOUCH154 POINTS 154 UNIT MM
+//   DATE 20261122 TIME  14119
+//   P17 X 123.4560 Y-200.0000 Z 173.0000 T    12345
+//   END
+// DATE/TIME = #3011 (YYYYMMDD) and #3012 (HHMMSS) read at the start, where the ms timer #3001 is
+// zeroed; T = #3001 at the trigger. t_s = seconds of (DATE, TIME) since 2000-01-01 + T / 1000:
+// a clock common to all repeats (the header's second is truncated, so every t_s of a run is
+// early by the same fraction of a second, < 1 s; drift analysis works on hours).
+#include <string>
+#include <vector>
+
+#include "controllers/dialect.hpp"
+
+namespace rotacal {
+
+struct MacroBFlavor {
+  std::string name;                 // dialect name: "fanuc"
+  std::string tag;                  // in the results header: "FANUC"
+  std::string title;                // in the program's first comment
+  int program_digits = 4;           // O1234 (Fanuc), O01234 (Haas: O + 5 digits)
+  int store_base = 700;             // retained variables of the current pose, 4 per point
+  int max_points_per_pose = 70;     // store_base + 4 n - 1 must stay retained
+  int time_digits = 9;              // DPRNT [t0] of the ms timer
+  bool lookahead_g103 = false;      // Haas: DPRNT runs at look-ahead time -> G103 P1
+  int max_dprnt_digits = 0;         // > 0: DPRNT [ab] needs a + b <= this (older Haas: 8)
+  std::vector<std::string> notes;   // extra operator comments at the top
+};
+
+class MacroBDialect : public Dialect {
+ public:
+  explicit MacroBDialect(MacroBFlavor flavor) : f_(std::move(flavor)) {}
+  std::string_view name() const override { return f_.name; }
+  std::string_view programExtension() const override { return ".nc"; }
+  std::string_view resultsExtension() const override { return ".txt"; }
+  std::string writeProgram(const nc::Program& program) const override;
+  std::string writeResults(const ProbePlan& plan, const MeasurementRun& run) const override;
+  MeasurementRun parseResults(const std::string& text, const std::string& file, const ProbePlan& plan) const override;
+  std::vector<std::string> check(const std::string& program_text, const ProbePlan& plan) const override;
+
+ protected:
+  const MacroBFlavor& flavor() const { return f_; }
+
+ private:
+  MacroBFlavor f_;
+};
+
+namespace macro_b {
+/// Upper-case comment lines "(...)" of at most 80 characters in Fanuc's safe character set.
+std::vector<std::string> comments(std::string_view text);
+/// DPRNT text: A-Z 0-9 and '-', '.', '/'.
+std::string dprntText(std::string_view text);
+}  // namespace macro_b
+
+}  // namespace rotacal

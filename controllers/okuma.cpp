@@ -1,0 +1,400 @@
+// Okuma OSP-P300 (user task) (../shared/reference/controllers.md Sec. 6, mostly from real
+// code, not manuals): G31 skip moves, skip position read from VSKPX/VSKPY/VSKPZ, storage in
+// common variables VC1-VC7, a no-trigger check that raises a user alarm (VUACM[1] text +
+// VDOUT[992]), results written with FWRITC/PUT/WRITE/CLOSE, compensation as a work-offset shift
+// (VZOFX[n]... writable from the program).
+//
+// Results, as the program's PUT/WRITE lines write them:
+//   ROTACAL-RESULTS DIALECT OKUMA CYCLE TOUCH154 POINTS 154 UNIT MM
+//   P17 X123.4560 Y-200.0000 Z173.0000
+//   END
+// and "NOT-TRIGGERED P17" before the alarm when a point does not trigger. No time: Okuma's time
+// variables are UNVERIFIED; t_s = NaN (the analysis then uses the plan's times).
+//
+// UNVERIFIED, and the conservative choice made for each:
+// - VSKPX/Y/Z as the skip position in work coordinates, and the no-trigger behaviour of G31:
+//   the check tests the distance to the end point (an untriggered skip ends there), so a control
+//   whose VSKP* hold the end point, or that ignores G31's signal, raises the alarm.
+// - File output (no documented form; Autodesk's Okuma post writes no results file): the
+//   user-task I/O commands FWRITC <file>;A (open for append), PUT 'text' and PUT VCn,4 (value
+//   with 4 decimals) into the line buffer, WRITE C (write the buffer as one line), CLOSE C. The
+//   parser reads exactly that text and tolerates spaces, '+' signs and leading zeros in numbers.
+// - Line length: 80 characters. G93: never used.
+// - VC1-VC7 free for this program (standard: VC1-VC200).
+#include <fmt/format.h>
+
+#include <cmath>
+#include <limits>
+#include <regex>
+#include <set>
+#include <stdexcept>
+
+#include "controllers/common.hpp"
+#include "controllers/dialects.hpp"
+#include "core/units.hpp"
+
+namespace rotacal {
+namespace {
+
+constexpr const char* kDialect = "okuma";
+constexpr size_t kMaxLineChars = 80;
+constexpr int kLabelBase = 1000;  // label N<1000 + id> after each point's check
+
+std::string unitName(bool inch) { return inch ? "INCH" : "MM"; }
+
+std::string safeName(std::string_view name) {
+  std::string s;
+  for (char c : ctl::upper(name)) s += ((c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9')) ? c : '-';
+  return s.empty() ? "ROTACAL" : s;
+}
+
+/// "(...)" comment lines: upper case, no parentheses inside, at most 80 characters.
+std::vector<std::string> comments(std::string_view text) {
+  std::string s;
+  for (char c : ctl::upper(text)) {
+    const bool ok = (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == ' ' || c == '.' || c == ',' || c == '-' ||
+                    c == '+' || c == '/' || c == ':' || c == '=';
+    const char d = c == '_' ? '-' : (ok ? c : ' ');
+    if (d == ' ' && (s.empty() || s.back() == ' ')) continue;
+    s += d;
+  }
+  const size_t width = kMaxLineChars - 2;
+  std::vector<std::string> out;
+  size_t i = 0;
+  while (i < s.size()) {
+    size_t n = std::min(width, s.size() - i);
+    if (i + n < s.size()) {
+      const size_t sp = s.rfind(' ', i + n);
+      if (sp != std::string::npos && sp > i) n = sp - i;
+    }
+    out.push_back("(" + ctl::trim(s.substr(i, n)) + ")");
+    i += n;
+    while (i < s.size() && s[i] == ' ') ++i;
+  }
+  if (out.empty()) out.push_back("()");
+  return out;
+}
+
+std::string minus(const std::string& var, double v) {
+  return v < 0 ? fmt::format("{}+{}", var, ctl::fixed(-v, 4)) : fmt::format("{}-{}", var, ctl::fixed(v, 4));
+}
+
+class OkumaDialect final : public Dialect {
+ public:
+  std::string_view name() const override { return kDialect; }
+  std::string_view programExtension() const override { return ".min"; }
+  std::string_view resultsExtension() const override { return ".txt"; }
+
+  std::string writeProgram(const nc::Program& p) const override {
+    const bool inch = p.unit == nc::Unit::Inch;
+    auto L = [](double v) { return ctl::fixed(v, 4); };
+    auto F = [&](double v) { return ctl::fixed(v, inch ? 3 : 1); };
+    int probes = 0;
+    for (const auto& op : p.ops) probes += op.kind == nc::Op::Kind::Probe;
+    if (p.point_count != 0 && p.point_count != probes)
+      throw std::invalid_argument(fmt::format("program has {} probing moves but point_count {}", probes, p.point_count));
+    const std::string file = safeName(p.results_file.empty() ? "ROTACAL" : p.results_file);
+    const std::string no_trigger_sq = inch ? "0.000001" : "0.0001";
+    std::string out;
+    auto line = [&](const std::string& s) {
+      if (s.size() > kMaxLineChars)
+        throw std::invalid_argument(fmt::format("line longer than {} characters: {}", kMaxLineChars, s));
+      out += s;
+      out += '\n';
+    };
+    auto commentLines = [&](std::string_view text) {
+      for (const auto& c : comments(text)) line(c);
+    };
+    auto put = [&](const std::string& text) {
+      line(fmt::format("PUT '{}'", text));
+      line("WRITE C");
+    };
+    line(fmt::format("O{} (ROTACAL)", p.number));
+    commentLines(p.name + " generated by rotacal, dialect okuma OSP-P300 user task");
+    for (const auto& h : p.header) commentLines(h);
+    commentLines("X Y Z = probe ball centre in machine coordinates: work offset at the intersection of the rotary "
+                 "axes, no TCP or tilted plane active");
+    commentLines(fmt::format("results: FWRITC to MD1:{}.TXT - output commands UNVERIFIED; uses VC1 to VC7", file));
+    commentLines("a point that does not trigger raises a user alarm");
+    line(inch ? "G20" : "G21");
+    line("G17 G40 G80 G90 G94");
+    line("G15 H1");
+    if (p.probe_tool > 0) {
+      line(fmt::format("T{} M06", p.probe_tool));
+      line(fmt::format("G56 H{}", p.probe_tool));
+    }
+    line(fmt::format("FWRITC MD1:{}.TXT;A", file));
+    put(fmt::format("ROTACAL-RESULTS DIALECT OKUMA CYCLE {} POINTS {} UNIT {}", safeName(p.cycle), probes, unitName(inch)));
+    for (const auto& op : p.ops) {
+      const Eigen::Vector3d& x = op.xyz;
+      switch (op.kind) {
+        case nc::Op::Kind::Comment: commentLines(op.text); break;
+        case nc::Op::Kind::Rapid:
+          line(op.z_only ? fmt::format("G00 Z{}", L(x.z())) : fmt::format("G00 X{} Y{} Z{}", L(x.x()), L(x.y()), L(x.z())));
+          break;
+        case nc::Op::Kind::Linear:
+          line(fmt::format("G01 X{} Y{} Z{} F{}", L(x.x()), L(x.y()), L(x.z()), F(op.feed)));
+          break;
+        case nc::Op::Kind::Index: {
+          std::string s = "G00";
+          for (const auto& [axis, deg] : op.rotary) s += fmt::format(" {}{}", axis, L(deg));
+          line(s);
+          break;
+        }
+        case nc::Op::Kind::Probe: {
+          const int id = op.point_id;
+          if (id <= 0 || id > 8999) throw std::invalid_argument(fmt::format("point id {} out of range 1..8999", id));
+          if (!(op.feed > 0)) throw std::invalid_argument(fmt::format("point {}: probing feed must be > 0", id));
+          if (op.retract_mm > 0)
+            throw std::invalid_argument(fmt::format(
+                "point {}: the okuma program records a single touch; a double touch (retract_mm > 0) is not implemented",
+                id));
+          if (!op.text.empty()) commentLines(op.text);
+          line(fmt::format("G31 X{} Y{} Z{} F{}", L(x.x()), L(x.y()), L(x.z()), F(op.feed)));
+          line("VC1=VSKPX");
+          line("VC2=VSKPY");
+          line("VC3=VSKPZ");
+          line(fmt::format("VC4={}", minus("VC1", x.x())));
+          line(fmt::format("VC5={}", minus("VC2", x.y())));
+          line(fmt::format("VC6={}", minus("VC3", x.z())));
+          line(fmt::format("IF [VC4*VC4+VC5*VC5+VC6*VC6 GT {}] N{}", no_trigger_sq, kLabelBase + id));
+          put(fmt::format("NOT-TRIGGERED P{}", id));
+          line("CLOSE C");
+          line(fmt::format("VUACM[1]='PT{} NO TRIGGER'", id));
+          line(fmt::format("VDOUT[992]={}", kLabelBase + id));
+          line(fmt::format("N{} PUT 'P{} X'", kLabelBase + id, id));
+          line("PUT VC1,4");
+          line("PUT ' Y'");
+          line("PUT VC2,4");
+          line("PUT ' Z'");
+          line("PUT VC3,4");
+          line("WRITE C");
+          break;
+        }
+      }
+    }
+    put("END");
+    line("CLOSE C");
+    line("M02");
+    return out;
+  }
+
+  std::string writeResults(const ProbePlan& plan, const MeasurementRun& run) const override {
+    const bool inch = plan.machine.units == LengthUnit::Inch;
+    const double k = inch ? 1.0 / kMmPerInch : 1.0;
+    std::string out = fmt::format("ROTACAL-RESULTS DIALECT OKUMA CYCLE {} POINTS {} UNIT {}\r\n", safeName(plan.cycle),
+                                  plan.points.size(), unitName(inch));
+    for (const auto& t : run.points) {
+      if (!plan.findPoint(t.point_id)) throw std::invalid_argument(fmt::format("run point {} is not in the plan", t.point_id));
+      const Eigen::Vector3d x = t.position_m_mm * k;
+      out += fmt::format("P{} X{} Y{} Z{}\r\n", t.point_id, ctl::fixed(x.x(), 4), ctl::fixed(x.y(), 4), ctl::fixed(x.z(), 4));
+    }
+    out += "END\r\n";
+    return out;
+  }
+
+  MeasurementRun parseResults(const std::string& text, const std::string& file, const ProbePlan& plan) const override {
+    const std::string expected_header = fmt::format("ROTACAL-RESULTS DIALECT OKUMA CYCLE {} POINTS {} UNIT MM|INCH",
+                                                    safeName(plan.cycle), plan.points.size());
+    ctl::PointCollector points(plan, file);
+    bool header = false;
+    int end_line = 0;
+    double k = 1.0;
+    int last = 1;
+    for (const auto& l : ctl::splitLines(text)) {
+      const std::string s = ctl::trim(l.text);
+      if (s.empty()) continue;
+      last = l.number;
+      if (end_line) ctl::fail(file, l.number, fmt::format("text after END (line {}): '{}'", end_line, s));
+      const auto t = ctl::tokens(s);
+      if (t[0] == "ROTACAL-RESULTS") {
+        if (header) ctl::fail(file, l.number, "a second header line: one run per results file (FWRITC appends: delete the old file)");
+        header = true;
+        if (t.size() != 9 || t[1] != "DIALECT" || t[3] != "CYCLE" || t[5] != "POINTS" || t[7] != "UNIT")
+          ctl::fail(file, l.number, fmt::format("expected the header '{}', got '{}'", expected_header, s));
+        if (t[2] != "OKUMA") ctl::fail(file, l.number, fmt::format("results of dialect '{}', expected OKUMA", t[2]));
+        if (t[4] != safeName(plan.cycle))
+          ctl::fail(file, l.number, fmt::format("results of cycle '{}', the plan is '{}'", t[4], safeName(plan.cycle)));
+        const auto n = ctl::parseDigits(t[6]);
+        if (!n) ctl::fail(file, l.number, fmt::format("POINTS '{}' is not a number", t[6]));
+        if (static_cast<size_t>(*n) != plan.points.size())
+          ctl::fail(file, l.number, fmt::format("header says POINTS {} but the plan has {} points", *n, plan.points.size()));
+        if (t[8] == "MM") k = 1.0;
+        else if (t[8] == "INCH") k = kMmPerInch;
+        else ctl::fail(file, l.number, fmt::format("UNIT '{}' must be MM or INCH", t[8]));
+        continue;
+      }
+      if (!header) ctl::fail(file, l.number, fmt::format("expected the header '{}', got '{}'", expected_header, s));
+      if (s == "END") {
+        end_line = l.number;
+        continue;
+      }
+      if (t[0] == "NOT-TRIGGERED") {
+        const auto id = t.size() == 2 && t[1].size() > 1 && t[1][0] == 'P' ? ctl::parseDigits(t[1].substr(1)) : std::nullopt;
+        if (!id) ctl::fail(file, l.number, fmt::format("expected 'NOT-TRIGGERED P<id>', got '{}'", s));
+        ctl::fail(file, l.number, fmt::format("point {} was not triggered: the program stopped there", *id));
+      }
+      const auto f = ctl::letteredFields(s, "XYZ", file, l.number);
+      Eigen::Vector3d x;
+      for (int i = 0; i < 3; ++i) {
+        const auto v = ctl::parseNumber(f.fields[static_cast<size_t>(i)]);
+        if (!v)
+          ctl::fail(file, l.number,
+                    fmt::format("{} '{}' of point {} is not a number", "XYZ"[i], f.fields[static_cast<size_t>(i)], f.id));
+        x[i] = *v * k;
+      }
+      points.add(l.number, static_cast<int>(f.id), x, std::numeric_limits<double>::quiet_NaN());
+    }
+    if (!header) ctl::fail(file, 1, fmt::format("empty results file: expected the header '{}'", expected_header));
+    if (!end_line) {
+      if (const int missing = points.firstMissing())
+        ctl::fail(file, last, fmt::format("point {} is missing and there is no END line: the program stopped early", missing));
+      ctl::fail(file, last, "no END line after the last point: the file is incomplete");
+    }
+    return points.finish(last);
+  }
+
+  std::string writeOffsets(const OffsetRequest& r) const override {
+    ctl::requirePlausible(r);
+    const ProbePlan& plan = *r.plan;
+    const MachineModel& m = plan.machine;
+    const bool ac = r.identified.kinematics == Kinematics::TableAC;
+    const bool inch = m.units == LengthUnit::Inch;
+    const double k = inch ? 1.0 / kMmPerInch : 1.0;
+    const LocationErrors& e = r.identified;
+    const char tilt = ac ? 'A' : 'B';
+    const Eigen::Vector3d shift = ac ? Eigen::Vector3d(e.get("dx_AY"), e.get("dy_AY"), e.get("dz_AY"))
+                                     : Eigen::Vector3d(e.get("dx_BY"), e.get("dy_CB"), e.get("dz_BY"));
+    const double zero_deg = (m.hasRotary(tilt) ? m.controllerSign(tilt, kDialect) : 1) *
+                            radToDeg(e.get(ac ? "a_AY" : "b_BY"));
+    std::string out;
+    auto line = [&](const std::string& s) { out += s + "\n"; };
+    auto commentLines = [&](std::string_view text) {
+      for (const auto& c : comments(text)) line(c);
+    };
+    auto add = [&](const std::string& var, double v, int decimals) {
+      line(fmt::format("{0}[1]={0}[1]{1}{2}", var, v < 0 ? "-" : "+", ctl::fixed(std::abs(v), decimals)));
+    };
+    line("O9001 (ROTACAL OFFSET)");
+    commentLines(fmt::format("ROTACAL WORK OFFSET CORRECTION, TABLE {}/C, OKUMA OSP-P300. PROVENANCE: {} CYCLE {} "
+                             "MACHINE {}",
+                             tilt, r.report_file.empty() ? "NO REPORT" : r.report_file, plan.cycle, m.name));
+    commentLines("IDENTIFIED, PAPERS CONVENTION, VALUE +- STANDARD UNCERTAINTY K=1:");
+    for (const auto& s : ctl::identifiedLines(r)) commentLines(s);
+    commentLines(fmt::format("WHAT IT CHANGES: WORK OFFSET 1 (G15 H1) X Y Z SHIFTED BY THE {} PIVOT, {} BY THE ZERO "
+                             "ERROR. NEW = OLD + CHANGE; OLD VALUES ARE ON THE CONTROL. {} - UNVERIFIED SIGN: CHECK "
+                             "THE WORK OFFSET PAGE BEFORE AND AFTER.",
+                             tilt, tilt, inch ? "INCH" : "MM"));
+    add("VZOFX", shift.x() * k, 4);
+    add("VZOFY", shift.y() * k, 4);
+    add("VZOFZ", shift.z() * k, 4);
+    add(ac ? "VZOFA" : "VZOFB", zero_deg, 4);
+    commentLines(ac ? "REPORTED ONLY: DY-CA, B-AY, C-AY, B-CA." : "REPORTED ONLY: DX-CB, A-BY, C-BY, A-CB.");
+    line("M02");
+    return out;
+  }
+
+  std::vector<std::string> check(const std::string& text, const ProbePlan& plan) const override {
+    std::vector<std::string> out;
+    auto problem = [&](int line, const std::string& what) { out.push_back(fmt::format("{}: {}", line, what)); };
+    const auto ls = ctl::splitLines(text);
+    std::vector<std::string> code(ls.size());
+    for (size_t i = 0; i < ls.size(); ++i) {
+      std::string c;
+      int depth = 0;
+      bool quote = false;
+      for (char ch : ls[i].text) {
+        if (ch == '\'' && depth == 0) quote = !quote;
+        if (!quote && ch == '(') ++depth;
+        if (depth == 0) c += ch;
+        if (!quote && ch == ')') {
+          if (--depth < 0) problem(ls[i].number, "')' without '('");
+        }
+      }
+      if (depth > 0) problem(ls[i].number, "comment not closed");
+      if (quote) problem(ls[i].number, "quote not closed");
+      code[i] = ctl::trim(c);
+    }
+    auto nextCode = [&](size_t i) {
+      for (size_t j = i + 1; j < ls.size(); ++j)
+        if (!code[j].empty()) return j;
+      return ls.size();
+    };
+    std::set<std::string> labels;
+    static const std::regex label_re(R"(^(N\d+) )");
+    for (const auto& c : code) {
+      std::smatch m;
+      if (std::regex_search(c, m, label_re)) labels.insert(m[1].str());
+    }
+    static const std::regex motion(R"(^G(00|01|31)( [XYZABC]-?\d+\.\d+)+( F\d+\.\d+)?$)");
+    std::string motion_text;
+    bool inch = false, open = false;
+    int probes = 0;
+    for (size_t i = 0; i < ls.size(); ++i) {
+      const std::string& s = code[i];
+      const int n = ls[i].number;
+      if (ls[i].text.size() > kMaxLineChars)
+        problem(n, fmt::format("line has {} characters, more than {}", ls[i].text.size(), kMaxLineChars));
+      if (s == "G20" || s == "G21") inch = s == "G20";
+      if (s.rfind("FWRITC ", 0) == 0) open = true;
+      if ((s.rfind("PUT ", 0) == 0 || s.find(" PUT ") != std::string::npos || s == "WRITE C") && !open)
+        problem(n, "output before FWRITC (or after CLOSE C)");
+      // The CLOSE C of a no-trigger branch (followed by the alarm) does not end the main output.
+      if (s == "CLOSE C" && !(nextCode(i) < ls.size() && code[nextCode(i)].rfind("VUACM", 0) == 0)) open = false;
+      static const std::regex g93(R"(\bG93\b)");
+      if (std::regex_search(s, g93)) problem(n, "G93 inverse time: rotacal probes and positions under G94 only");
+      const bool is_motion = s.rfind("G00 ", 0) == 0 || s.rfind("G01 ", 0) == 0 || s.rfind("G31 ", 0) == 0;
+      if (is_motion && !std::regex_match(s, motion))
+        problem(n, fmt::format("motion block '{}' is not of the generated form (decimal point on every word)", s));
+      motion_text += (is_motion ? s : std::string()) + "\n";
+      const size_t g = s.find("] N");
+      if (s.rfind("IF ", 0) == 0 && (g == std::string::npos || !labels.count(ctl::trim(s.substr(g + 2)))))
+        problem(n, "IF without a defined label to jump to");
+      if (s.rfind("G31 ", 0) != 0) continue;
+      ++probes;
+      if (s.find(" F") == std::string::npos) problem(n, "G31 without F on its block");
+      std::vector<std::string> next;
+      size_t j = i;
+      for (int c = 0; c < 13; ++c) {
+        j = nextCode(j);
+        next.push_back(j < ls.size() ? code[j] : "");
+      }
+      bool ok = next[0] == "VC1=VSKPX" && next[1] == "VC2=VSKPY" && next[2] == "VC3=VSKPZ" &&
+                next[3].rfind("VC4=VC1", 0) == 0 && next[4].rfind("VC5=VC2", 0) == 0 && next[5].rfind("VC6=VC3", 0) == 0 &&
+                next[6].rfind("IF [VC4*VC4+VC5*VC5+VC6*VC6 GT ", 0) == 0 && next[10].rfind("VUACM[1]=", 0) == 0 &&
+                next[11].rfind("VDOUT[992]=", 0) == 0;
+      if (ok) {
+        const std::string label = ctl::trim(next[6].substr(next[6].find("] N") + 2));
+        ok = next[12].rfind(label + " ", 0) == 0;
+      }
+      if (!ok)
+        problem(n, "G31 is not followed by the no-trigger check (VSKPX-Z read, IF [distance GT ..] N.., "
+                   "VUACM and VDOUT[992] alarm, then the label)");
+    }
+    if (open) problem(ls.empty() ? 1 : ls.back().number, "FWRITC without CLOSE C");
+    if (static_cast<size_t>(probes) != plan.points.size())
+      problem(ls.empty() ? 1 : ls.back().number, fmt::format("{} G31 moves, the plan has {} points", probes, plan.points.size()));
+    const auto blocks = nc::readProgram(std::string(inch ? "G20" : "G21") + "\n" + motion_text);
+    std::vector<nc::Block> shifted;
+    for (size_t i = 0; i < blocks.size(); ++i) {
+      nc::Block b = blocks[i];
+      b.line = static_cast<int>(i);  // line 0: the unit; then the program's own numbering
+      shifted.push_back(std::move(b));
+    }
+    for (auto& s : ctl::strokeProblems(shifted, plan, kDialect)) out.push_back(std::move(s));
+    size_t last = ls.size();
+    for (size_t i = 0; i < ls.size(); ++i)
+      if (!code[i].empty()) last = i;
+    if (last == ls.size() || code[last] != "M02") problem(last == ls.size() ? 1 : ls[last].number, "the program does not end with M02");
+    return out;
+  }
+};
+
+}  // namespace
+
+const Dialect& okumaDialect() {
+  static const OkumaDialect d;
+  return d;
+}
+
+}  // namespace rotacal

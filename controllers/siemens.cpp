@@ -1,0 +1,460 @@
+// Siemens Sinumerik 840D sl / ONE (../shared/reference/controllers.md Sec. 4): measuring moves
+// `MEAS=1 G1 ...` (probe 1, the move's distance-to-go deleted at the trigger), `STOPRE` before
+// reading the measured values `$AA_MW[X]` (work coordinates), a no-trigger check on both
+// `$AC_MEA[1]` and the distance to the end point, storage in R parameters, output with
+// `SPRINT` + `WRITE` (one line per call, LF appended by the control).
+//
+// Results, as the program's WRITE calls produce them:
+//   ROTACAL-RESULTS DIALECT SIEMENS CYCLE TOUCH154 POINTS 154 UNIT MM
+//   P17 X  123.4560 Y -200.0000 Z  173.0000
+//   END
+// or, when a point did not trigger, its last line is "NOT-TRIGGERED P17" (the program then stops
+// with a message). No time: the clock variables $A_YEAR..$A_MSECOND / $AC_TIME are UNVERIFIED and
+// the documented ones ($AC_OPERATING_TIME, ...) are run-time counters that need MD27860 and do
+// not share an epoch between repeats; t_s = NaN (the analysis then uses the plan's times).
+//
+// UNVERIFIED, and the conservative choice made for each:
+// - $AC_MEA[1] staying 0 without a trigger: the check also tests the distance of the measured
+//   position to the end point (an untriggered move ends there exactly), like the Fanuc check.
+// - Block length: lines kept within 80 characters (Autodesk's limit for its other posts).
+// - R parameters retained and at least R90-R99 available (MD28050): only R90-R95 are used.
+// - WRITE error codes: ERR <> 0 is treated as a failure that stops the program.
+// - Number form of SPRINT "%10.4F": read as C's %10.4f; the parser accepts any spacing and sign.
+// - G93 rules: never used; probing and positioning run under G94.
+#include <fmt/format.h>
+
+#include <cmath>
+#include <limits>
+#include <regex>
+#include <set>
+#include <stdexcept>
+
+#include "controllers/common.hpp"
+#include "controllers/dialects.hpp"
+#include "core/units.hpp"
+
+namespace rotacal {
+namespace {
+
+constexpr const char* kDialect = "siemens";
+constexpr size_t kMaxLineChars = 80;  // UNVERIFIED for Sinumerik: conservative
+constexpr int kDecimals = 4;          // SPRINT %10.4F and program coordinates
+
+std::string unitName(bool inch) { return inch ? "INCH" : "MM"; }
+
+/// Comment text for ';' comments: printable ASCII, upper-cased (the control's editor shows
+/// lower case, but some transfer tools do not keep it), at most `width` characters per line.
+std::vector<std::string> comments(std::string_view text) {
+  std::string s;
+  for (char c : ctl::upper(text)) {
+    const char d = (static_cast<unsigned char>(c) < 0x20 || c == 0x7f || c == '"') ? ' ' : c;
+    if (d == ' ' && (s.empty() || s.back() == ' ')) continue;
+    s += d;
+  }
+  const size_t width = kMaxLineChars - 2;
+  std::vector<std::string> out;
+  size_t i = 0;
+  while (i < s.size()) {
+    size_t n = std::min(width, s.size() - i);
+    if (i + n < s.size()) {
+      const size_t sp = s.rfind(' ', i + n);
+      if (sp != std::string::npos && sp > i) n = sp - i;
+    }
+    out.push_back("; " + ctl::trim(s.substr(i, n)));
+    i += n;
+    while (i < s.size() && s[i] == ' ') ++i;
+  }
+  if (out.empty()) out.push_back(";");
+  return out;
+}
+
+/// Program / file name: A-Z 0-9 '_' only, starting with a letter (Sinumerik name rules are
+/// UNVERIFIED: this is the common subset).
+std::string safeName(std::string_view name) {
+  std::string s;
+  for (char c : ctl::upper(name)) s += ((c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9')) ? c : '_';
+  if (s.empty() || !(s[0] >= 'A' && s[0] <= 'Z')) s = "R_" + s;
+  if (s.size() > 24) s.resize(24);
+  return s;
+}
+
+std::string signedDiff(const std::string& var, double v) {
+  return v < 0 ? fmt::format("{}+{}", var, ctl::fixed(-v, kDecimals)) : fmt::format("{}-{}", var, ctl::fixed(v, kDecimals));
+}
+
+class SiemensDialect final : public Dialect {
+ public:
+  std::string_view name() const override { return kDialect; }
+  std::string_view programExtension() const override { return ".mpf"; }
+  std::string_view resultsExtension() const override { return ".txt"; }
+
+  std::string writeProgram(const nc::Program& p) const override {
+    const bool inch = p.unit == nc::Unit::Inch;
+    auto L = [](double v) { return ctl::fixed(v, kDecimals); };
+    auto F = [&](double v) { return ctl::fixed(v, inch ? 3 : 1); };
+    int probes = 0;
+    for (const auto& op : p.ops) probes += op.kind == nc::Op::Kind::Probe;
+    if (p.point_count != 0 && p.point_count != probes)
+      throw std::invalid_argument(fmt::format("program has {} probing moves but point_count {}", probes, p.point_count));
+    const std::string prog = safeName(p.name.empty() ? "ROTACAL" : p.name);
+    const std::string file = safeName(p.results_file.empty() ? "ROTACAL_RESULTS" : p.results_file);
+    const std::string write = fmt::format("WRITE(ERR,\"{}\",TXT)", file);
+    // An untriggered move ends at its end point: (10 um)^2 in mm, (0.001 in)^2 in inch.
+    const std::string no_trigger_sq = inch ? "0.000001" : "0.0001";
+
+    std::string out;
+    auto line = [&](const std::string& s) {
+      if (s.size() > kMaxLineChars)
+        throw std::invalid_argument(fmt::format("line longer than {} characters: {}", kMaxLineChars, s));
+      out += s;
+      out += '\n';
+    };
+    auto commentLines = [&](std::string_view text) {
+      for (const auto& c : comments(text)) line(c);
+    };
+    auto writeText = [&](const std::string& text) {
+      line(fmt::format("TXT=\"{}\"", text));
+      line(write);
+      line("IF ERR<>0 GOTOF WRFAIL");
+    };
+    line(fmt::format("; %_N_{}_MPF", prog));
+    commentLines(p.name + " generated by rotacal, dialect siemens (Sinumerik 840D sl / ONE)");
+    for (const auto& h : p.header) commentLines(h);
+    commentLines("X Y Z = probe ball centre in machine coordinates: G54 at the intersection of the rotary axes, "
+                 "no TRAORI, no CYCLE800 plane, no toolcarrier active");
+    commentLines(fmt::format("results: WRITE to file {} next to this program (one line per call); no time", file));
+    commentLines("uses R90-R95; a point that does not trigger writes NOT-TRIGGERED and stops with a message");
+    line("DEF INT ERR");
+    line("DEF STRING[120] TXT");
+    line(inch ? "G70" : "G71");
+    line("G17 G40 G90 G94");
+    line("G54");
+    if (p.probe_tool > 0) {
+      line(fmt::format("T{} M6", p.probe_tool));
+      line("D1");
+    }
+    writeText(fmt::format("ROTACAL-RESULTS DIALECT SIEMENS CYCLE {} POINTS {} UNIT {}", safeName(p.cycle), probes,
+                          unitName(inch)));
+    std::vector<int> ids;
+    for (const auto& op : p.ops) {
+      const Eigen::Vector3d& x = op.xyz;
+      switch (op.kind) {
+        case nc::Op::Kind::Comment: commentLines(op.text); break;
+        case nc::Op::Kind::Rapid:
+          line(op.z_only ? fmt::format("G0 Z{}", L(x.z())) : fmt::format("G0 X{} Y{} Z{}", L(x.x()), L(x.y()), L(x.z())));
+          break;
+        case nc::Op::Kind::Linear:
+          line(fmt::format("G1 X{} Y{} Z{} F{}", L(x.x()), L(x.y()), L(x.z()), F(op.feed)));
+          break;
+        case nc::Op::Kind::Index: {
+          std::string s = "G0";
+          for (const auto& [axis, deg] : op.rotary) s += fmt::format(" {}{}", axis, L(deg));
+          line(s);
+          break;
+        }
+        case nc::Op::Kind::Probe: {
+          const int id = op.point_id;
+          if (id <= 0) throw std::invalid_argument("probing move without a point id");
+          if (!(op.feed > 0)) throw std::invalid_argument(fmt::format("point {}: probing feed must be > 0", id));
+          if (op.retract_mm > 0)
+            throw std::invalid_argument(fmt::format(
+                "point {}: the siemens program records a single touch; a double touch (retract_mm > 0) is not "
+                "implemented",
+                id));
+          if (!op.text.empty()) commentLines(op.text);
+          line(fmt::format("MEAS=1 G1 X{} Y{} Z{} F{}", L(x.x()), L(x.y()), L(x.z()), F(op.feed)));
+          line("STOPRE");
+          line("R90=$AA_MW[X]");
+          line("R91=$AA_MW[Y]");
+          line("R92=$AA_MW[Z]");
+          line(fmt::format("R93={}", signedDiff("R90", x.x())));
+          line(fmt::format("R94={}", signedDiff("R91", x.y())));
+          line(fmt::format("R95={}", signedDiff("R92", x.z())));
+          line(fmt::format("IF ($AC_MEA[1]==0) OR (R93*R93+R94*R94+R95*R95<{}) GOTOF NOHIT{}", no_trigger_sq, id));
+          line(fmt::format("TXT=SPRINT(\"P{} X%10.4F Y%10.4F Z%10.4F\",R90,R91,R92)", id));
+          line(write);
+          line("IF ERR<>0 GOTOF WRFAIL");
+          ids.push_back(id);
+          break;
+        }
+      }
+    }
+    writeText("END");
+    line("GOTOF FINISH");
+    for (int id : ids) {
+      line(fmt::format("NOHIT{}:", id));
+      line(fmt::format("TXT=\"NOT-TRIGGERED P{}\"", id));
+      line(write);
+      line(fmt::format("MSG(\"ROTACAL: POINT {} NOT TRIGGERED\")", id));
+      line("M0");
+      line("GOTOF FINISH");
+    }
+    line("WRFAIL:");
+    line(fmt::format("MSG(\"ROTACAL: WRITE TO {} FAILED\")", file));
+    line("M0");
+    line("FINISH:");
+    line("M30");
+    return out;
+  }
+
+  std::string writeResults(const ProbePlan& plan, const MeasurementRun& run) const override {
+    const bool inch = plan.machine.units == LengthUnit::Inch;
+    const double k = inch ? 1.0 / kMmPerInch : 1.0;
+    std::string out = fmt::format("ROTACAL-RESULTS DIALECT SIEMENS CYCLE {} POINTS {} UNIT {}\n", safeName(plan.cycle),
+                                  plan.points.size(), unitName(inch));
+    for (const auto& t : run.points) {
+      if (!plan.findPoint(t.point_id)) throw std::invalid_argument(fmt::format("run point {} is not in the plan", t.point_id));
+      const Eigen::Vector3d x = t.position_m_mm * k;
+      out += fmt::format("P{} X{:>10} Y{:>10} Z{:>10}\n", t.point_id, ctl::fixed(x.x(), kDecimals),
+                         ctl::fixed(x.y(), kDecimals), ctl::fixed(x.z(), kDecimals));
+    }
+    out += "END\n";
+    return out;
+  }
+
+  MeasurementRun parseResults(const std::string& text, const std::string& file, const ProbePlan& plan) const override {
+    const std::string expected_header = fmt::format("ROTACAL-RESULTS DIALECT SIEMENS CYCLE {} POINTS {} UNIT MM|INCH",
+                                                    safeName(plan.cycle), plan.points.size());
+    ctl::PointCollector points(plan, file);
+    bool header = false;
+    int end_line = 0;
+    double k = 1.0;
+    int last = 1;
+    for (const auto& l : ctl::splitLines(text)) {
+      const std::string s = ctl::trim(l.text);
+      if (s.empty()) continue;
+      last = l.number;
+      if (end_line) ctl::fail(file, l.number, fmt::format("text after END (line {}): '{}'", end_line, s));
+      const auto t = ctl::tokens(s);
+      if (t[0] == "ROTACAL-RESULTS") {
+        if (header) ctl::fail(file, l.number, "a second header line: one run per results file");
+        header = true;
+        if (t.size() != 9 || t[1] != "DIALECT" || t[3] != "CYCLE" || t[5] != "POINTS" || t[7] != "UNIT")
+          ctl::fail(file, l.number, fmt::format("expected the header '{}', got '{}'", expected_header, s));
+        if (t[2] != "SIEMENS") ctl::fail(file, l.number, fmt::format("results of dialect '{}', expected SIEMENS", t[2]));
+        if (t[4] != safeName(plan.cycle))
+          ctl::fail(file, l.number, fmt::format("results of cycle '{}', the plan is '{}'", t[4], safeName(plan.cycle)));
+        const auto n = ctl::parseDigits(t[6]);
+        if (!n) ctl::fail(file, l.number, fmt::format("POINTS '{}' is not a number", t[6]));
+        if (static_cast<size_t>(*n) != plan.points.size())
+          ctl::fail(file, l.number, fmt::format("header says POINTS {} but the plan has {} points", *n, plan.points.size()));
+        if (t[8] == "MM") k = 1.0;
+        else if (t[8] == "INCH") k = kMmPerInch;
+        else ctl::fail(file, l.number, fmt::format("UNIT '{}' must be MM or INCH", t[8]));
+        continue;
+      }
+      if (!header) ctl::fail(file, l.number, fmt::format("expected the header '{}', got '{}'", expected_header, s));
+      if (s == "END") {
+        end_line = l.number;
+        continue;
+      }
+      if (t[0] == "NOT-TRIGGERED") {
+        const auto id = t.size() == 2 && t[1].size() > 1 && t[1][0] == 'P' ? ctl::parseDigits(t[1].substr(1)) : std::nullopt;
+        if (!id) ctl::fail(file, l.number, fmt::format("expected 'NOT-TRIGGERED P<id>', got '{}'", s));
+        ctl::fail(file, l.number, fmt::format("point {} was not triggered: the program stopped there", *id));
+      }
+      const auto f = ctl::letteredFields(s, "XYZ", file, l.number);
+      Eigen::Vector3d x;
+      for (int i = 0; i < 3; ++i) {
+        const auto v = ctl::parseNumber(f.fields[static_cast<size_t>(i)]);
+        if (!v)
+          ctl::fail(file, l.number,
+                    fmt::format("{} '{}' of point {} is not a number", "XYZ"[i], f.fields[static_cast<size_t>(i)], f.id));
+        x[i] = *v * k;
+      }
+      points.add(l.number, static_cast<int>(f.id), x, std::numeric_limits<double>::quiet_NaN());
+    }
+    if (!header) ctl::fail(file, 1, fmt::format("empty results file: expected the header '{}'", expected_header));
+    if (!end_line) {
+      if (const int missing = points.firstMissing())
+        ctl::fail(file, last, fmt::format("point {} is missing and there is no END line: the program stopped early", missing));
+      ctl::fail(file, last, "no END line after the last point: the file is incomplete");
+    }
+    return points.finish(last);
+  }
+
+  std::string writeOffsets(const OffsetRequest& r) const override {
+    ctl::requirePlausible(r);
+    const ProbePlan& plan = *r.plan;
+    const MachineModel& m = plan.machine;
+    const bool ac = r.identified.kinematics == Kinematics::TableAC;
+    const bool inch = m.units == LengthUnit::Inch;
+    const double k = inch ? 1.0 / kMmPerInch : 1.0;
+    const auto c = siemensToolcarrierChanges(r.identified);
+    const char tilt = ac ? 'A' : 'B';
+    std::string out;
+    auto line = [&](const std::string& s) { out += s + "\n"; };
+    auto commentLines = [&](std::string_view text) {
+      for (const auto& s : comments(text)) line(s);
+    };
+    line("; %_N_ROTACAL_TCARR_MPF");
+    commentLines(fmt::format("rotacal toolcarrier correction, table {}/C, Sinumerik 840D sl / ONE. Provenance: {}, "
+                             "cycle {}, machine {}.",
+                             tilt, r.report_file.empty() ? "(no report)" : r.report_file, plan.cycle, m.name));
+    commentLines("identified location errors (papers' convention), value +- standard uncertainty (k = 1):");
+    for (const auto& s : ctl::identifiedLines(r)) commentLines(s);
+    commentLines("what it changes: toolcarrier 1 (edit the index if yours differs): fine offsets of l2 "
+                 "($TC_CARR44-46, pivot of the tilting axis) and l3 ($TC_CARR55-57, second axis to first) are "
+                 "increased by the changes below; the axis vectors v1 ($TC_CARR7-9) and v2 ($TC_CARR10-12) "
+                 "are set to the identified directions; the angle offset of axis 1 ($TC_CARR24) is increased.");
+    commentLines("old values: on the control (this program adds to them); new = old + change. Fine offsets need "
+                 "the fine correction enabled, and the mapping and the axis order are UNVERIFIED: check the "
+                 "toolcarrier data before and after, then activate with TCARR=1.");
+    commentLines(fmt::format("units: {} and degrees", inch ? "inch" : "mm"));
+    for (const auto& [name, v] : c.add_length)
+      line(fmt::format("{0}[1]={0}[1]{1}{2}", name, v < 0 ? "-" : "+", ctl::fixed(std::abs(v * k), 4)));
+    for (const auto& [name, v] : c.set_vector) line(fmt::format("{}[1]={}", name, ctl::fixed(v, 6)));
+    line(fmt::format("$TC_CARR24[1]=$TC_CARR24[1]{}{}", c.add_angle_deg < 0 ? "-" : "+",
+                     ctl::fixed(std::abs(c.add_angle_deg), 4)));
+    line("M30");
+    return out;
+  }
+
+  std::vector<std::string> check(const std::string& text, const ProbePlan& plan) const override {
+    std::vector<std::string> out;
+    auto problem = [&](int line, const std::string& what) { out.push_back(fmt::format("{}: {}", line, what)); };
+    const auto ls = ctl::splitLines(text);
+    // Code of each line without its ';' comment.
+    std::vector<std::string> code(ls.size());
+    for (size_t i = 0; i < ls.size(); ++i) {
+      const size_t sc = ls[i].text.find(';');
+      code[i] = ctl::trim(sc == std::string::npos ? ls[i].text : ls[i].text.substr(0, sc));
+    }
+    auto nextCode = [&](size_t i) {
+      for (size_t j = i + 1; j < ls.size(); ++j)
+        if (!code[j].empty()) return j;
+      return ls.size();
+    };
+    std::set<std::string> labels;
+    for (size_t i = 0; i < ls.size(); ++i)
+      if (!code[i].empty() && code[i].back() == ':') labels.insert(code[i].substr(0, code[i].size() - 1));
+    static const std::regex motion(R"(^(MEAS=1 )?G[01]( [XYZABC]-?\d+(\.\d+)?)+( F\d+(\.\d+)?)?$)");
+    static const std::regex axis_word(R"(\b([XYZABCF])(-?\d+(\.\d*)?)\b)");
+    std::string motion_text;  // X/Y/Z/A/B/C motion lines for the stroke check, same line numbers
+    bool statements = false, inch = false;
+    int probes = 0;
+    const std::string meas_check = "IF ($AC_MEA[1]==0) OR (R93*R93+R94*R94+R95*R95<";
+    for (size_t i = 0; i < ls.size(); ++i) {
+      const std::string& s = code[i];
+      const int n = ls[i].number;
+      if (ls[i].text.size() > kMaxLineChars)
+        problem(n, fmt::format("line has {} characters, more than {}", ls[i].text.size(), kMaxLineChars));
+      int depth = 0;
+      bool quote = false;
+      for (char ch : s) {
+        if (ch == '"') quote = !quote;
+        if (quote) continue;
+        if (ch == '(' || ch == '[') ++depth;
+        if (ch == ')' || ch == ']') --depth;
+      }
+      if (depth != 0 || quote) problem(n, "unbalanced ( ), [ ] or quotes");
+      std::string m = s;
+      if (s == "G71" || s == "G70") inch = s == "G70";
+      if (s.rfind("DEF ", 0) == 0) {
+        if (statements) problem(n, "DEF after the first statement (definitions must come first)");
+      } else if (!s.empty()) {
+        statements = true;
+      }
+      static const std::regex g93(R"(\bG93\b)");
+      if (std::regex_search(s, g93)) problem(n, "G93 inverse time: rotacal probes and positions under G94 only");
+      for (const std::string kw : {"GOTOF ", "GOTOB "}) {
+        const size_t g = s.find(kw);
+        if (g != std::string::npos && !labels.count(ctl::trim(s.substr(g + kw.size()))))
+          problem(n, fmt::format("jump to the undefined label '{}'", ctl::trim(s.substr(g + kw.size()))));
+      }
+      const bool is_motion = s.rfind("G0 ", 0) == 0 || s.rfind("G1 ", 0) == 0 || s.rfind("MEAS=", 0) == 0;
+      if (is_motion) {
+        if (!std::regex_match(s, motion)) problem(n, fmt::format("motion block '{}' is not of the generated form", s));
+        for (auto it = std::sregex_iterator(s.begin(), s.end(), axis_word); it != std::sregex_iterator(); ++it)
+          if ((*it)[2].str().find('.') == std::string::npos)
+            problem(n, fmt::format("{}{} has no decimal point", (*it)[1].str(), (*it)[2].str()));
+        m = s.rfind("MEAS=1 ", 0) == 0 ? s.substr(7) : s;
+        motion_text += m;
+      }
+      motion_text += '\n';
+      if (s.rfind("MEAS=", 0) != 0) continue;
+      ++probes;
+      if (s.rfind("MEAS=1 G1 ", 0) != 0) problem(n, "measuring move must be 'MEAS=1 G1 ...'");
+      if (s.find(" F") == std::string::npos) problem(n, "measuring move without F on its block");
+      // Then: STOPRE, the three $AA_MW reads, the distances, the IF ... GOTOF NOHIT<id>, whose
+      // label section writes NOT-TRIGGERED and stops with M0.
+      std::vector<std::string> next;
+      size_t j = i;
+      for (int c = 0; c < 8; ++c) {
+        j = nextCode(j);
+        next.push_back(j < ls.size() ? code[j] : "");
+      }
+      const bool ok = next[0] == "STOPRE" && next[1] == "R90=$AA_MW[X]" && next[2] == "R91=$AA_MW[Y]" &&
+                      next[3] == "R92=$AA_MW[Z]" && next[4].rfind("R93=R90", 0) == 0 && next[5].rfind("R94=R91", 0) == 0 &&
+                      next[6].rfind("R95=R92", 0) == 0 && next[7].rfind(meas_check, 0) == 0;
+      bool stops = false;
+      if (ok) {
+        const size_t g = next[7].find("GOTOF ");
+        const std::string label = g == std::string::npos ? "" : ctl::trim(next[7].substr(g + 6));
+        for (size_t q = 0; q < ls.size(); ++q) {
+          if (code[q] != label + ":") continue;
+          for (size_t r = nextCode(q); r < ls.size() && code[r].back() != ':'; r = nextCode(r))
+            if (code[r] == "M0") stops = true;
+        }
+      }
+      if (!ok || !stops)
+        problem(n, "MEAS=1 is not followed by STOPRE, the $AA_MW reads and the no-trigger check "
+                   "(IF ($AC_MEA[1]==0) OR (distance) GOTOF label, label: ... M0)");
+    }
+    if (static_cast<size_t>(probes) != plan.points.size())
+      problem(ls.empty() ? 1 : ls.back().number,
+              fmt::format("{} MEAS=1 moves, the plan has {} points", probes, plan.points.size()));
+    const auto blocks = nc::readProgram((inch ? "G20" : "G21") + std::string(";\n").substr(1) + motion_text);
+    // The unit line above shifted the numbering by one: renumber.
+    std::vector<nc::Block> shifted;
+    nc::Block unit = blocks.front();
+    unit.line = 0;
+    shifted.push_back(unit);
+    for (size_t i = 1; i < blocks.size(); ++i) {
+      nc::Block b = blocks[i];
+      b.line = static_cast<int>(i);
+      shifted.push_back(std::move(b));
+    }
+    for (auto& s : ctl::strokeProblems(shifted, plan, kDialect)) out.push_back(std::move(s));
+    size_t last = ls.size();
+    for (size_t i = 0; i < ls.size(); ++i)
+      if (!code[i].empty()) last = i;
+    if (last == ls.size() || code[last] != "M30")
+      problem(last == ls.size() ? 1 : ls[last].number, "the program does not end with M30");
+    return out;
+  }
+};
+
+}  // namespace
+
+SiemensToolcarrierChanges siemensToolcarrierChanges(const LocationErrors& e) {
+  SiemensToolcarrierChanges c;
+  if (e.kinematics == Kinematics::TableAC) {
+    c.add_length = {{"$TC_CARR44", e.get("dx_AY")}, {"$TC_CARR45", e.get("dy_AY")}, {"$TC_CARR46", e.get("dz_AY")},
+                    {"$TC_CARR55", 0.0},            {"$TC_CARR56", e.get("dy_CA")}, {"$TC_CARR57", 0.0}};
+    // A axis nominally +X, turned by b_AY about Y and c_AY about Z; C axis nominally +Z turned by
+    // b_CA about Y (small angles, then normalized).
+    const Eigen::Vector3d v1 = Eigen::Vector3d(1.0, e.get("c_AY"), -e.get("b_AY")).normalized();
+    const Eigen::Vector3d v2 = Eigen::Vector3d(e.get("b_CA"), 0.0, 1.0).normalized();
+    c.set_vector = {{"$TC_CARR7", v1.x()},  {"$TC_CARR8", v1.y()},  {"$TC_CARR9", v1.z()},
+                    {"$TC_CARR10", v2.x()}, {"$TC_CARR11", v2.y()}, {"$TC_CARR12", v2.z()}};
+    c.add_angle_deg = radToDeg(e.get("a_AY"));
+  } else {
+    c.add_length = {{"$TC_CARR44", e.get("dx_BY")}, {"$TC_CARR45", e.get("dy_CB")}, {"$TC_CARR46", e.get("dz_BY")},
+                    {"$TC_CARR55", e.get("dx_CB")}, {"$TC_CARR56", 0.0},            {"$TC_CARR57", 0.0}};
+    // B axis nominally +Y, turned by a_BY about X and c_BY about Z; C axis +Z turned by a_CB about X.
+    const Eigen::Vector3d v1 = Eigen::Vector3d(-e.get("c_BY"), 1.0, e.get("a_BY")).normalized();
+    const Eigen::Vector3d v2 = Eigen::Vector3d(0.0, -e.get("a_CB"), 1.0).normalized();
+    c.set_vector = {{"$TC_CARR7", v1.x()},  {"$TC_CARR8", v1.y()},  {"$TC_CARR9", v1.z()},
+                    {"$TC_CARR10", v2.x()}, {"$TC_CARR11", v2.y()}, {"$TC_CARR12", v2.z()}};
+    c.add_angle_deg = radToDeg(e.get("b_BY"));
+  }
+  return c;
+}
+
+const Dialect& siemensDialect() {
+  static const SiemensDialect d;
+  return d;
+}
+
+}  // namespace rotacal

@@ -1,0 +1,169 @@
+// The Heidenhain TNC 640 Klartext dialect: block numbers on every line, BEGIN/END PGM, cycle 0
+// with the no-trigger check, FN 16 results with decimal commas and the control's clock per
+// point; the parser reads commas and points and names the line of every fault; the checker
+// catches planted faults; the offsets file lists the kinematics / preset values to enter.
+#include <gtest/gtest.h>
+
+#include <fmt/format.h>
+
+#include <regex>
+
+#include "dialect_battery.hpp"
+
+namespace rotacal {
+namespace {
+
+using test::lines;
+
+const Dialect& hh() { return dialectByName("heidenhain"); }
+
+TEST(HeidenhainResults, RoundTripWithinThePrintedDigitsAndWholeSeconds) {
+  test::expectRoundTrip(hh(), test::acPlan(), 1.0, 4, test::Clock::Seconds);
+  // Inch machines: the program is written in MM, so are the results.
+  test::expectRoundTrip(hh(), test::acPlan(LengthUnit::Inch), 1.0, 4, test::Clock::Seconds);
+}
+
+TEST(HeidenhainResults, DecimalCommasAndTimeLines) {
+  const ProbePlan plan = test::acPlan();
+  MeasurementRun run;
+  run.points.push_back({1, Eigen::Vector3d(53.58401, -235.0, 150.0), 750000000.9});
+  const auto ls = lines(hh().writeResults(plan, run));
+  EXPECT_EQ(ls[0], "ROTACAL HEIDENHAIN CYCLE TOUCH154 POINTS 154 UNIT MM");
+  EXPECT_EQ(ls[1], "P    1 X   53,5840 Y -235,0000 Z  150,0000");
+  EXPECT_EQ(ls[2], "T20231007 132000");  // 750000000 s after 2000-01-01 (Python's datetime)
+}
+
+TEST(HeidenhainResults, ParserAcceptsPointsAndCommas) {
+  const ProbePlan plan = test::acPlan();
+  auto ls = lines(hh().writeResults(plan, test::displacedRun(plan)));
+  ls[1] = "P1 X53.5840 Y-235,0000 Z +150.0000";
+  ls[2] = "T20240229 235959";
+  const MeasurementRun back = hh().parseResults(test::join(ls, "\r\n"), "res.txt", plan);
+  EXPECT_EQ(back.points[0].position_m_mm, Eigen::Vector3d(53.584, -235.0, 150.0));
+  EXPECT_EQ(back.points[0].t_s, 762566399.0);  // 2024-02-29 23:59:59 (Python's datetime)
+}
+
+TEST(HeidenhainResults, RecoversInjectedErrors) { test::expectRecovery(hh(), test::acPlan()); }
+
+TEST(HeidenhainResults, RejectsWithTheLine) {
+  const ProbePlan plan = test::acPlan();
+  const auto ls = lines(hh().writeResults(plan, test::displacedRun(plan)));
+  auto v = ls;
+  v.resize(7);  // header + 3 points with their time lines
+  v.push_back("NOT-TRIGGERED P    4");
+  EXPECT_NE(test::parseError(hh(), test::join(v), plan).find("res.txt:8: point 4 was not triggered"), std::string::npos);
+  v = ls;
+  v[3] = "P    2 X   53,54,41 Y -215,0000 Z  150,0000";
+  EXPECT_NE(test::parseError(hh(), test::join(v), plan).find("res.txt:4: X '53,54,41' of point 2 is not a number"),
+            std::string::npos);
+  v = ls;
+  v.erase(v.begin() + 4);  // the time line of point 2
+  EXPECT_NE(test::parseError(hh(), test::join(v), plan).find("res.txt:5: point 2 (line 4) has no time line"),
+            std::string::npos);
+  v = ls;
+  v[2] = "T20231307 132000";
+  EXPECT_NE(test::parseError(hh(), test::join(v), plan).find("res.txt:3: time of point 1"), std::string::npos);
+  v = ls;
+  v.insert(v.begin() + 1, ls[0]);
+  EXPECT_NE(test::parseError(hh(), test::join(v), plan).find("res.txt:2: a second header line"), std::string::npos);
+  v = ls;
+  v.erase(v.begin() + 5, v.begin() + 7);  // point 3 and its time
+  EXPECT_NE(test::parseError(hh(), test::join(v), plan).find(fmt::format("res.txt:{}: point 3 is missing", v.size())),
+            std::string::npos);
+}
+
+TEST(HeidenhainProgram, KlartextFrameAndCycle0) {
+  const ProbePlan plan = test::acPlan();
+  nc::Program prog = probeProgram(plan, "heidenhain");
+  const std::string text = hh().writeProgram(prog);
+  const auto ls = lines(text);
+  EXPECT_EQ(ls[0], "0 BEGIN PGM ROTACAL_TOUCH154 MM");
+  EXPECT_EQ(ls.back(), fmt::format("{} END PGM ROTACAL_TOUCH154 MM", ls.size() - 1));
+  for (size_t i = 0; i < ls.size(); ++i) {
+    EXPECT_EQ(ls[i].rfind(std::to_string(i) + " ", 0), 0u) << ls[i];
+    EXPECT_LE(ls[i].size(), 80u) << ls[i];
+  }
+  // Point 1: +X face, probed in -X from the approach start 58 to the end 51 (trigger 53.584).
+  size_t g = 0;
+  for (size_t i = 0; i < ls.size(); ++i)
+    if (ls[i].find("TCH PROBE 0.0") != std::string::npos) {
+      g = i;
+      break;
+    }
+  auto body = [&](size_t i) { return ls[i].substr(ls[i].find(' ') + 1); };
+  EXPECT_EQ(body(g), "TCH PROBE 0.0 REF. PLANE Q10 X-");
+  EXPECT_EQ(body(g + 1), "TCH PROBE 0.1 X+58.0000 Y-235.0000 Z+150.0000");
+  EXPECT_EQ(body(g + 2), "FN 12: IF +Q10 LT +51.0100 GOTO LBL 1001");
+  EXPECT_EQ(body(g + 4), "FN 0: QR2 = +Q10");
+  EXPECT_EQ(body(g + 5), "FN 0: QR3 = -235.0000");
+  EXPECT_EQ(body(g + 7), "FN 16: F-PRINT TNC:\\ROTACAL\\RCP.A / TNC:\\ROTACAL\\ROTACAL_TOUCH154.TXT");
+  // The format files are in the header comments, verbatim.
+  for (const auto& [file, content] : heidenhainFormatFiles("touch154", 154))
+    EXPECT_NE(text.find(fmt::format(" ; {}={}\n", file, content)), std::string::npos) << file;
+}
+
+TEST(HeidenhainProgram, GeneratedProgramsPassTheChecker) { test::expectCleanPrograms(hh()); }
+
+TEST(HeidenhainProgram, RefusesWhatCycle0CannotDo) {
+  const ProbePlan plan = test::acPlan();
+  nc::Program p = probeProgram(plan, "heidenhain");
+  for (auto& op : p.ops)
+    if (op.kind == nc::Op::Kind::Probe) {
+      op.xyz.y() += 1.0;  // no longer along one axis
+      break;
+    }
+  EXPECT_THROW(hh().writeProgram(p), std::invalid_argument);
+}
+
+class HeidenhainCheck : public ::testing::Test {
+ protected:
+  ProbePlan plan = test::acPlan();
+  std::vector<std::string> ls = lines(hh().writeProgram(probeProgram(plan, "heidenhain")));
+  size_t g = [this] {
+    for (size_t i = 0; i < ls.size(); ++i)
+      if (ls[i].find("TCH PROBE 0.0") != std::string::npos) return i;
+    return size_t{0};
+  }();
+  std::vector<std::string> with(const std::function<void(std::vector<std::string>&)>& edit) {
+    auto v = ls;
+    edit(v);
+    return hh().check(test::join(v), plan);
+  }
+  std::string at(size_t i, const std::string& body) const { return fmt::format("{} {}", i, body); }
+};
+
+TEST_F(HeidenhainCheck, CatchesPlantedFaults) {
+  auto ps = with([&](auto& v) { v[g + 2] = at(g + 2, "FN 0: Q99 = +0"); });  // the check removed
+  EXPECT_TRUE(test::hasProblem(ps, fmt::format("{}: TCH PROBE 0 is not followed", g + 1))) << ps.size();
+  ps = with([&](auto& v) { v[g + 2] = at(g + 2, "FN 11: IF +Q10 GT +51.0100 GOTO LBL 1001"); });  // wrong direction
+  EXPECT_TRUE(test::hasProblem(ps, fmt::format("{}: TCH PROBE 0 is not followed", g + 1)));
+  EXPECT_TRUE(test::hasProblem(with([&](auto& v) { v[g + 1] = at(g + 1, "TCH PROBE 0.1 X+58.0000 Y-335.0000 Z+150.0000"); }),
+                               fmt::format("{}: Y = -335.0000 mm is outside the stroke", g + 2)));
+  EXPECT_TRUE(test::hasProblem(with([&](auto& v) { v[g - 1] = at(g - 1, "L X+58.0000 Y-235 Z+150.0000 R0 F2000"); }),
+                               "Y-235 needs an explicit sign and a decimal point"));
+  EXPECT_TRUE(test::hasProblem(with([&](auto& v) { v[5] = "; no block number"; }), "6: line does not start with a block number"));
+  EXPECT_TRUE(test::hasProblem(with([&](auto& v) { v[5] = "7 ; wrong number"; }), "block number 7 where 5 was expected"));
+  EXPECT_TRUE(test::hasProblem(with([&](auto& v) { v[5] = at(5, "; " + std::string(80, 'x')); }), "more than 80"));
+  EXPECT_TRUE(test::hasProblem(with([&](auto& v) { v.back() = at(v.size() - 1, "END PGM OTHER MM"); }), "END PGM"));
+  EXPECT_TRUE(test::hasProblem(with([&](auto& v) { v[5] = at(5, "L A+0.0000 M128"); }), "TCP or a tilted plane"));
+}
+
+TEST(HeidenhainOffsets, KinematicsAndPresetValuesToEnter) {
+  const ProbePlan plan = test::acPlan();
+  const std::string text = hh().writeOffsets(test::table4Request(plan));
+  EXPECT_NE(text.find("; kinematics, transformation to the A axis: X +0.0146 Y +0.0232 Z +0.0277\n"), std::string::npos)
+      << text;
+  EXPECT_NE(text.find("; kinematics, transformation A axis to C axis: X +0.0000 Y +0.0039 Z +0.0000\n"),
+            std::string::npos);
+  EXPECT_NE(text.find("; preset table, A axis of the active preset: -0.0005 deg\n"), std::string::npos);
+  const auto ls = lines(text);
+  EXPECT_EQ(ls[0], "0 BEGIN PGM ROTACAL_KIN MM");
+  for (size_t i = 0; i < ls.size(); ++i) {
+    EXPECT_EQ(ls[i].rfind(std::to_string(i) + " ", 0), 0u) << ls[i];
+    EXPECT_LE(ls[i].size(), 80u) << ls[i];
+  }
+  test::expectPlausibilityLimit(hh(), plan, "X +0.7000 Y +0.0232");
+}
+
+}  // namespace
+}  // namespace rotacal

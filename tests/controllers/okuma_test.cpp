@@ -1,0 +1,118 @@
+// The Okuma OSP-P300 dialect: G31 with VSKPX-Z, the distance check and a user alarm; results
+// written by PUT/WRITE round-trip and recover injected errors; the parser rejects what the
+// program did not write; the checker catches planted faults; the work offset shift is written.
+#include <gtest/gtest.h>
+
+#include <fmt/format.h>
+
+#include "dialect_battery.hpp"
+
+namespace rotacal {
+namespace {
+
+using test::lines;
+
+const Dialect& ok() { return dialectByName("okuma"); }
+
+TEST(OkumaResults, RoundTripWithinThePrintedDigitsAndNoTime) {
+  test::expectRoundTrip(ok(), test::acPlan(), 1.0, 4, test::Clock::None);
+  test::expectRoundTrip(ok(), test::acPlan(LengthUnit::Inch), 25.4, 4, test::Clock::None);
+}
+
+TEST(OkumaResults, LinesAndTolerance) {
+  const ProbePlan plan = test::acPlan();
+  auto ls = lines(ok().writeResults(plan, test::displacedRun(plan)));
+  EXPECT_EQ(ls[0], "ROTACAL-RESULTS DIALECT OKUMA CYCLE TOUCH154 POINTS 154 UNIT MM");
+  EXPECT_EQ(ls.back(), "END");
+  ls[1] = "P1 X+53.5840 Y-235.0000 Z 0150.0000";  // '+', spaces and leading zeros are accepted
+  const MeasurementRun back = ok().parseResults(test::join(ls, "\r\n"), "res.txt", plan);
+  EXPECT_EQ(back.points[0].position_m_mm, Eigen::Vector3d(53.584, -235.0, 150.0));
+}
+
+TEST(OkumaResults, RecoversInjectedErrors) { test::expectRecovery(ok(), test::acPlan()); }
+
+TEST(OkumaResults, RejectsWithTheLine) {
+  const ProbePlan plan = test::acPlan();
+  const auto ls = lines(ok().writeResults(plan, test::displacedRun(plan)));
+  auto v = ls;
+  v.resize(30);
+  v.push_back("NOT-TRIGGERED P30");
+  EXPECT_NE(test::parseError(ok(), test::join(v), plan).find("res.txt:31: point 30 was not triggered"), std::string::npos);
+  v = ls;
+  v[2] = "P2 X53.5441 Y-215.0000";
+  EXPECT_NE(test::parseError(ok(), test::join(v), plan).find("res.txt:3: point 2: expected 'Z'"), std::string::npos);
+  v = ls;
+  v[2] = "P2 X53.5441 Y-215.0000 Z150.0000 T5";
+  EXPECT_NE(test::parseError(ok(), test::join(v), plan).find("res.txt:3: point 2: unexpected text"), std::string::npos);
+  v = ls;
+  v.insert(v.begin() + 2, "P999 X1.0000 Y2.0000 Z3.0000");
+  EXPECT_NE(test::parseError(ok(), test::join(v), plan).find("res.txt:3: point 999 is not in the plan"), std::string::npos);
+  v = ls;
+  v.insert(v.begin() + 3, ls[0]);
+  EXPECT_NE(test::parseError(ok(), test::join(v), plan).find("res.txt:4: a second header line"), std::string::npos);
+}
+
+TEST(OkumaProgram, ProbeBlockCheckAndOutput) {
+  const ProbePlan plan = test::acPlan();
+  const std::string text = ok().writeProgram(probeProgram(plan, "okuma"));
+  const auto ls = lines(text);
+  EXPECT_EQ(ls[0], "O7154 (ROTACAL)");
+  EXPECT_NE(text.find("\nFWRITC MD1:ROTACAL-TOUCH154.TXT;A\n"
+                      "PUT 'ROTACAL-RESULTS DIALECT OKUMA CYCLE TOUCH154 POINTS 154 UNIT MM'\nWRITE C\n"),
+            std::string::npos);
+  const size_t g = test::lineStarting(ls, "G31");
+  EXPECT_EQ(ls[g], "G31 X51.0000 Y-235.0000 Z150.0000 F100.0");
+  EXPECT_EQ(ls[g + 1], "VC1=VSKPX");
+  EXPECT_EQ(ls[g + 4], "VC4=VC1-51.0000");
+  EXPECT_EQ(ls[g + 5], "VC5=VC2+235.0000");
+  EXPECT_EQ(ls[g + 7], "IF [VC4*VC4+VC5*VC5+VC6*VC6 GT 0.0001] N1001");
+  EXPECT_EQ(ls[g + 8], "PUT 'NOT-TRIGGERED P1'");
+  EXPECT_EQ(ls[g + 11], "VUACM[1]='PT1 NO TRIGGER'");
+  EXPECT_EQ(ls[g + 12], "VDOUT[992]=1001");
+  EXPECT_EQ(ls[g + 13], "N1001 PUT 'P1 X'");
+  EXPECT_EQ(ls[g + 14], "PUT VC1,4");
+  EXPECT_EQ(ls[g + 19], "WRITE C");
+  EXPECT_EQ(ls.back(), "M02");
+}
+
+TEST(OkumaProgram, GeneratedProgramsPassTheChecker) { test::expectCleanPrograms(ok()); }
+
+class OkumaCheck : public ::testing::Test {
+ protected:
+  ProbePlan plan = test::acPlan();
+  std::vector<std::string> ls = lines(ok().writeProgram(probeProgram(plan, "okuma")));
+  size_t g = test::lineStarting(ls, "G31");
+  std::vector<std::string> with(const std::function<void(std::vector<std::string>&)>& edit) {
+    auto v = ls;
+    edit(v);
+    return ok().check(test::join(v), plan);
+  }
+};
+
+TEST_F(OkumaCheck, CatchesPlantedFaults) {
+  auto ps = with([&](auto& v) { v.erase(v.begin() + static_cast<long>(g) + 12); });  // VDOUT alarm
+  ASSERT_EQ(ps.size(), 1u);
+  EXPECT_EQ(ps[0].rfind(fmt::format("{}: G31 is not followed by the no-trigger check", g + 1), 0), 0u) << ps[0];
+  EXPECT_TRUE(test::hasProblem(with([&](auto& v) { v[g] = "G31 X51.0000 Y-235.0000 Z150 F100.0"; }), "not of the generated form"));
+  EXPECT_TRUE(test::hasProblem(with([&](auto& v) { v[g] = "G31 X51.0000 Y-235.0000 Z450.0000 F100.0"; }),
+                               fmt::format("{}: Z = 450.0000 mm is outside the stroke", g + 1)));
+  EXPECT_TRUE(test::hasProblem(with([&](auto& v) { v[g + 13] = "N1002 PUT 'P1 X'"; }), "IF without a defined label"));
+  EXPECT_TRUE(test::hasProblem(with([&](auto& v) { v.erase(v.end() - 2); }), "FWRITC without CLOSE C"));
+  EXPECT_TRUE(test::hasProblem(with([&](auto& v) { v[3] = "(" + std::string(90, 'X') + ")"; }), "more than 80"));
+  EXPECT_TRUE(test::hasProblem(with([&](auto& v) { v[3] = "(OPEN"; }), "comment not closed"));
+  EXPECT_TRUE(test::hasProblem(with([&](auto& v) { v.pop_back(); }), "does not end with M02"));
+}
+
+TEST(OkumaOffsets, WorkOffsetShift) {
+  const ProbePlan plan = test::acPlan();
+  const std::string text = ok().writeOffsets(test::table4Request(plan));
+  EXPECT_NE(text.find("\nVZOFX[1]=VZOFX[1]+0.0146\nVZOFY[1]=VZOFY[1]+0.0232\nVZOFZ[1]=VZOFZ[1]+0.0277\n"
+                      "VZOFA[1]=VZOFA[1]-0.0005\n"),
+            std::string::npos)
+      << text;
+  for (const auto& l : lines(text)) EXPECT_LE(l.size(), 80u) << l;
+  test::expectPlausibilityLimit(ok(), plan, "VZOFX[1]=VZOFX[1]+0.7000");
+}
+
+}  // namespace
+}  // namespace rotacal
