@@ -23,6 +23,7 @@ struct Command {
 };
 
 std::vector<Command> touchCommands(CLI::App& app, const Common& common);
+std::vector<Command> uncertaintyCommands(CLI::App& app, const Common& common);
 std::vector<Command> diagnoseCommands(CLI::App& app, const Common& common);
 
 /// A failure tied to a file given on the command line, when the core cannot name a line.

@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   Common common;
   app.add_flag("-q,--quiet", common.quiet, "print nothing on success");
   std::vector<Command> commands = touchCommands(app, common);
+  for (auto& c : uncertaintyCommands(app, common)) commands.push_back(c);
   for (auto& c : diagnoseCommands(app, common)) commands.push_back(c);
 
   try {

@@ -87,12 +87,13 @@ struct ContributorSet {
   bool validate(std::string* why) const;
 };
 
-/// Units accepted, converted to internal units by factor:
-///   lengths  um, mm
-///   slopes   um/m (= ppm), ppm, um/100mm, um/mm, mm/m, urad, mrad   (for *_lin, S_*, setup_orientation)
-///   angles   urad, mrad, mdeg, um/100mm                             (form_error tilt)
-/// Returns false when the unit does not fit the kind.
-bool unitFactor(ContributorKind kind, std::string_view unit, double* factor);
+/// Units accepted, with their factor to internal units:
+///   Length  um, mm                                                    -> mm
+///   Ratio   um/m (= ppm), ppm, um/100mm, um/mm, mm/m, urad, mrad, mdeg  -> mm/mm or rad
+/// (slopes and small angles are the same quantity: 3 um/100mm = 30 urad). Returns false when the
+/// unit is not one of its class.
+enum class Quantity { Length, Ratio };
+bool unitFactor(Quantity quantity, std::string_view unit, double* factor);
 
 ContributorSet contributorsFromJson(const JsonDoc& doc);
 ContributorSet loadContributors(const std::string& path);

@@ -9,8 +9,9 @@ namespace rotacal {
 
 void AxisNodes::locate(double q, int* k, double* t) const {
   const int n = static_cast<int>(mm[0].size());
-  const double f = q / spacing_mm - first;
-  int i = static_cast<int>(std::floor(f));
+  const double f = q * (inv_spacing > 0.0 ? inv_spacing : 1.0 / spacing_mm) - first;
+  int i = static_cast<int>(f);  // floor without a libm call (the hot loop of the Monte Carlo)
+  if (f < i) --i;
   if (i < 0) {
     *k = 0;
     *t = 0.0;
@@ -59,8 +60,15 @@ bool LinearAxisModel::validate(std::string* why) const {
 
 void drawAxisNodes(const LinearAxisModel& model, int axis, double lo, double hi, Rng& rng, AxisNodes* out) {
   if (!(hi >= lo)) throw std::invalid_argument("drawAxisNodes: empty coordinate range");
+  if (model.u_rand.col(axis).maxCoeff() <= 0.0) {
+    out->spacing_mm = 0.0;
+    out->inv_spacing = 0.0;
+    for (auto& v : out->mm) v.clear();
+    return;
+  }
   const double p = model.spacing_min_mm + (model.spacing_max_mm - model.spacing_min_mm) * rng.uniform();
   out->spacing_mm = p;
+  out->inv_spacing = 1.0 / p;
   out->first = static_cast<int>(std::floor(lo / p)) - 1;
   const int last = static_cast<int>(std::ceil(hi / p)) + 1;
   const size_t n = static_cast<size_t>(last - out->first + 1);
@@ -72,15 +80,13 @@ void drawAxisNodes(const LinearAxisModel& model, int axis, double lo, double hi,
   }
 }
 
-LinearAxisErrors drawLinearAxisErrors(const LinearAxisModel& model, const Eigen::Vector3d& lo,
-                                      const Eigen::Vector3d& hi, Rng& rng_fixed, std::array<Rng*, 3> rng_axis) {
-  LinearAxisErrors e;
-  for (int a = 0; a < 3; ++a) e.scale[a] = model.u_scale[a] * rng_fixed.normal();
-  e.S_xy = model.u_S_xy * rng_fixed.normal();
-  e.S_xz = model.u_S_xz * rng_fixed.normal();
-  e.S_yz = model.u_S_yz * rng_fixed.normal();
-  for (int a = 0; a < 3; ++a) drawAxisNodes(model, a, lo[a], hi[a], *rng_axis[static_cast<size_t>(a)], &e.nodes[static_cast<size_t>(a)]);
-  return e;
+void drawLinearAxisErrors(const LinearAxisModel& model, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
+                          Rng& rng_fixed, const std::array<Rng*, 3>& rng_axis, LinearAxisErrors* e) {
+  for (int a = 0; a < 3; ++a) e->scale[a] = model.u_scale[a] * rng_fixed.normal();
+  e->S_xy = model.u_S_xy * rng_fixed.normal();
+  e->S_xz = model.u_S_xz * rng_fixed.normal();
+  e->S_yz = model.u_S_yz * rng_fixed.normal();
+  for (int a = 0; a < 3; ++a) drawAxisNodes(model, a, lo[a], hi[a], *rng_axis[static_cast<size_t>(a)], &e->nodes[static_cast<size_t>(a)]);
 }
 
 }  // namespace rotacal

@@ -29,6 +29,7 @@ namespace rotacal {
 /// Interpolated node values of one axis for the three error directions.
 struct AxisNodes {
   double spacing_mm = 0.0;                 // p_a; 0: no random part
+  double inv_spacing = 0.0;                // 1 / p_a when set by drawAxisNodes (0: computed)
   int first = 0;                           // index i of the first stored node (at p_a * first)
   std::array<std::vector<double>, 3> mm;   // node values per error direction (x, y, z), mm
 
@@ -60,17 +61,15 @@ struct LinearAxisModel {
   bool validate(std::string* why) const;
 };
 
-/// The random streams a draw uses, so that each part can be drawn alone, identically.
-enum class LinearAxisPart { Scale, Squareness, RandomX, RandomY, RandomZ };
-
-/// Draws the node spacing and the unit node values (N(0, 1)) of one axis covering [lo, hi] with
-/// one node to spare on each side. Values are scaled by u_rand afterwards (so a zero
-/// uncertainty still consumes the same random numbers: draws stay aligned between contributor sets).
+/// Draws the node spacing and the node values of one axis covering [lo, hi] with one node to
+/// spare on each side (interpolation never leaves the drawn nodes for positions within um of the
+/// range). An axis whose three random uncertainties are zero draws nothing (spacing 0).
 void drawAxisNodes(const LinearAxisModel& model, int axis, double lo_mm, double hi_mm, Rng& rng, AxisNodes* out);
 
-/// A full realisation: scale and squareness from `rng_fixed`, axis a's nodes from rng_axis[a],
-/// covering the coordinate ranges lo..hi (machine frame).
-LinearAxisErrors drawLinearAxisErrors(const LinearAxisModel& model, const Eigen::Vector3d& lo_mm,
-                                      const Eigen::Vector3d& hi_mm, Rng& rng_fixed, std::array<Rng*, 3> rng_axis);
+/// A full realisation: scale and squareness from `rng_fixed` (6 normal variates, always drawn),
+/// axis a's nodes from rng_axis[a], covering the coordinate ranges lo..hi (machine frame).
+/// Reuses out's storage (no allocation once sized).
+void drawLinearAxisErrors(const LinearAxisModel& model, const Eigen::Vector3d& lo_mm, const Eigen::Vector3d& hi_mm,
+                          Rng& rng_fixed, const std::array<Rng*, 3>& rng_axis, LinearAxisErrors* out);
 
 }  // namespace rotacal
