@@ -112,6 +112,9 @@ Json planToJson(const ProbePlan& plan) {
                    {"trigger_m_mm", vec(p.trigger_m_mm)},
                    {"approach_m", vec(p.approach_m)},
                    {"t_s", p.t_s}});
+    if (p.sphere)
+      pts.back()["sphere"] = {{"id", p.sphere->id}, {"center_w_mm", vec(p.sphere->center_w_mm)},
+                              {"radius_mm", p.sphere->radius_mm}};
   }
   j["points"] = pts;
   return j;
@@ -156,6 +159,16 @@ ProbePlan planFromJson(const JsonDoc& doc) {
     if (std::abs(p.approach_m.norm() - 1.0) > 1e-6 || std::abs(p.normal_w.norm() - 1.0) > 1e-6)
       doc.fail("approach_m", fmt::format("point {}: approach_m and normal_w must be unit vectors", p.id));
     p.t_s = numberOr(doc, q, "t_s", 0.0);
+    if (q.contains("sphere")) {
+      const Json& sj = q["sphere"];
+      if (!sj.is_object()) doc.fail("sphere", fmt::format("point {}: 'sphere' must be an object", p.id));
+      SphereTarget st;
+      st.id = static_cast<int>(requireNumber(doc, sj, "id"));
+      st.center_w_mm = vecFrom(doc, sj, "center_w_mm");
+      st.radius_mm = requireNumber(doc, sj, "radius_mm");
+      if (!(st.radius_mm > 0)) doc.fail("radius_mm", fmt::format("point {}: sphere radius must be positive", p.id));
+      p.sphere = st;
+    }
     if (p.id != static_cast<int>(plan.points.size()) + 1)
       doc.fail("id", fmt::format("point ids must run 1, 2, 3, ... in order (found {} at position {})", p.id,
                                  plan.points.size() + 1));

@@ -5,6 +5,7 @@
 // intersection), mm.
 #include <Eigen/Core>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,14 @@
 #include "core/machine.hpp"
 
 namespace rotacal {
+
+/// A calibration sphere touched by a sphere cycle (spheres3, spaceframe): its id, its nominal
+/// centre in the workpiece (table) frame and its radius (contract.md, PLAN.json "sphere").
+struct SphereTarget {
+  int id = 0;
+  Eigen::Vector3d center_w_mm = Eigen::Vector3d::Zero();
+  double radius_mm = 0.0;
+};
 
 struct ProbePoint {
   int id = 0;                   // 1-based, order of probing
@@ -26,6 +35,7 @@ struct ProbePoint {
   Eigen::Vector3d trigger_m_mm = Eigen::Vector3d::Zero();  // ball centre at trigger, perfect machine
   Eigen::Vector3d approach_m = -Eigen::Vector3d::UnitZ();  // unit direction of the probing move
   double t_s = 0.0;                                        // planned seconds from cycle start
+  std::optional<SphereTarget> sphere;                      // set on sphere cycles: the touched sphere
 
   Eigen::Vector3d start_m(double approach_mm) const { return trigger_m_mm - approach_mm * approach_m; }
   Eigen::Vector3d end_m(double overtravel_mm) const { return trigger_m_mm + overtravel_mm * approach_m; }

@@ -16,31 +16,75 @@ double ballPlaneContact(const Eigen::Vector3d& c0, const Eigen::Vector3d& u, dou
   return (r - plane.normal.dot(c0 - plane.point)) / nu;
 }
 
+double ballSphereContact(const Eigen::Vector3d& c0, const Eigen::Vector3d& u, double r,
+                         const Eigen::Vector3d& x, double R) {
+  // |d + s u|^2 = rho^2 with d = c0 - x, |u| = 1: s = -d.u -+ sqrt((d.u)^2 - |d|^2 + rho^2).
+  const Eigen::Vector3d d = c0 - x;
+  const double rho = r + R;
+  const double du = d.dot(u);
+  const double disc = du * du - d.squaredNorm() + rho * rho;
+  if (disc < 0) throw std::invalid_argument("approach line misses the sphere");
+  // The first contact on the way in: the smaller root (the ball moves along +u).
+  return -du - std::sqrt(disc);
+}
+
+namespace {
+
+// The true table transform at a point's pose and time (location errors + drift + pose-dependent,
+// or the truth's own full transform).
+Eigen::Isometry3d trueTable_m_w(const ProbePoint& point, const Truth& truth) {
+  const double t = truth.start_time_s + point.t_s;
+  if (truth.table_transform) return truth.table_transform(point.pose, t);
+  LocationErrors e = truth.errors;
+  if (truth.drift) e.values += truth.drift(t);
+  if (truth.pose_dependent) e.values += truth.pose_dependent(point.pose);
+  return T_m_w(e, point.pose);
+}
+
+}  // namespace
+
 Plane truePlane_m(const ProbePlan& plan, const ProbePoint& point, const Truth& truth) {
   const Plane w = truth.artefact.face(*plan.machine.artefact, point.face);
-  LocationErrors e = truth.errors;
-  if (truth.drift) e.values += truth.drift(truth.start_time_s + point.t_s);
-  if (truth.pose_dependent) e.values += truth.pose_dependent(point.pose);
-  const Eigen::Isometry3d T = T_m_w(e, point.pose);
+  const Eigen::Isometry3d T = trueTable_m_w(point, truth);
   return Plane{T * w.point, T.linear() * w.normal};
 }
 
 MeasurementRun simulate(const ProbePlan& plan, const Truth& truth, const SimulationOptions& options) {
-  if (!plan.machine.artefact) throw std::invalid_argument("plan has no artefact to simulate");
   std::mt19937_64 rng(options.seed);
   std::normal_distribution<double> noise(0.0, 1.0);
   const double r = plan.machine.probe.ball_radius_mm();
   MeasurementRun run;
   run.source = "simulation";
   for (const auto& p : plan.points) {
-    const Plane plane = truePlane_m(plan, p, truth);
-    double s = ballPlaneContact(p.trigger_m_mm, p.approach_m, r, plane);
+    if (!p.sphere && !plan.machine.artefact) throw std::invalid_argument("plan has no artefact to simulate");
+    // The surface the ball meets: the face plane, or for sphere cycles the true sphere.
+    std::function<double(const Eigen::Vector3d&)> contact;
+    if (p.sphere) {
+      const auto err = truth.sphere_center_error_w_mm.find(p.sphere->id);
+      const Eigen::Vector3d c_w =
+          p.sphere->center_w_mm + (err == truth.sphere_center_error_w_mm.end() ? Eigen::Vector3d::Zero() : err->second);
+      const Eigen::Vector3d c_m = trueTable_m_w(p, truth) * c_w;
+      const double R = p.sphere->radius_mm;
+      contact = [&p, r, c_m, R](const Eigen::Vector3d& c0) {
+        try {
+          return ballSphereContact(c0, p.approach_m, r, c_m, R);
+        } catch (const std::invalid_argument&) {
+          throw std::runtime_error(fmt::format("point {} (pose {}, sphere {}): the probe would not trigger: the "
+                                               "approach line misses the sphere",
+                                               p.id, p.pose_name, p.sphere->id));
+        }
+      };
+    } else {
+      const Plane plane = truePlane_m(plan, p, truth);
+      contact = [&p, r, plane](const Eigen::Vector3d& c0) { return ballPlaneContact(c0, p.approach_m, r, plane); };
+    }
+    double s = contact(p.trigger_m_mm);
     if (truth.linear_axis_error) {
       // The controller reads c(s) = c0 + s u while the ball is at c(s) + E(c(s)): solve
       // n.(c(s) + E(c(s)) - x) = r by fixed-point iteration (E varies by um per mm: contraction ~1e-3).
       for (int it = 0; it < 50; ++it) {
         const Eigen::Vector3d c = p.trigger_m_mm + s * p.approach_m;
-        const double next = ballPlaneContact(p.trigger_m_mm + truth.linear_axis_error(c), p.approach_m, r, plane);
+        const double next = contact(p.trigger_m_mm + truth.linear_axis_error(c));
         const bool done = std::abs(next - s) < 1e-13;
         s = next;
         if (done) break;
@@ -48,9 +92,10 @@ MeasurementRun simulate(const ProbePlan& plan, const Truth& truth, const Simulat
     }
     if (s < -plan.machine.approach_mm || s > plan.machine.overtravel_mm)
       throw std::runtime_error(fmt::format(
-          "point {} (pose {}, face {}): the probe would not trigger: the surface is {:.3f} mm from the nominal "
+          "point {} (pose {}, {}): the probe would not trigger: the surface is {:.3f} mm from the nominal "
           "trigger, outside the search range [-{:.3f}, +{:.3f}] mm",
-          p.id, p.pose_name, faceName(p.face), s, plan.machine.approach_mm, plan.machine.overtravel_mm));
+          p.id, p.pose_name,
+          p.sphere ? fmt::format("sphere {}", p.sphere->id) : fmt::format("face {}", faceName(p.face)), s, plan.machine.approach_mm, plan.machine.overtravel_mm));
     s += umToMm(truth.pretravel_um);
     if (truth.pretravel_by_direction_um) s += umToMm(truth.pretravel_by_direction_um(p.approach_m));
     if (truth.noise_um > 0) s += umToMm(truth.noise_um) * noise(rng);

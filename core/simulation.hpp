@@ -4,6 +4,7 @@
 // radius moving along the plan's approach line. No small-angle approximation anywhere.
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <optional>
 #include <string>
 
@@ -33,11 +34,24 @@ struct Truth {
   /// Position-dependent (component) errors of the rotary axes: change of the location errors
   /// (mm / rad) as a function of the commanded pose (rotary_error_motion).
   std::function<ErrorVector(const Pose& pose)> pose_dependent;
+  /// Sphere cycles: true centre minus nominal centre of each sphere (by SphereTarget::id),
+  /// workpiece frame, mm. Missing spheres are where the plan says.
+  std::map<int, Eigen::Vector3d> sphere_center_error_w_mm;
+  /// Sphere cycles: the full true pose of the table (T_m_w at a commanded pose), when the
+  /// truth holds more than location errors (component errors of a rotary axis as full
+  /// transforms). Empty: T_m_w of the location errors (+ drift, + pose_dependent).
+  std::function<Eigen::Isometry3d(const Pose& pose, double t_s)> table_transform;
 };
 
 /// Distance s (mm) along the approach from the nominal trigger at which the ball of radius r
 /// first touches the plane, both in the machine frame: n.(c0 + s u - x) = r.
 double ballPlaneContact(const Eigen::Vector3d& c0_m, const Eigen::Vector3d& u_m, double r_mm, const Plane& plane_m);
+
+/// Distance s (mm) along the approach from the nominal trigger at which the ball of radius r
+/// first touches the sphere of radius R centred at x (machine frame): the smaller root of
+/// |c0 + s u - x| = r + R. Throws std::invalid_argument when the line misses the sphere.
+double ballSphereContact(const Eigen::Vector3d& c0_m, const Eigen::Vector3d& u_m, double r_mm,
+                         const Eigen::Vector3d& center_m_mm, double R_mm);
 
 /// The true face plane of a point in the machine frame at its pose.
 Plane truePlane_m(const ProbePlan& plan, const ProbePoint& point, const Truth& truth);

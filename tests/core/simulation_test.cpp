@@ -103,3 +103,64 @@ TEST(Simulation, OutOfRangeSurfaceIsANoTrigger) {
 
 }  // namespace
 }  // namespace rotacal
+
+namespace rotacal {
+namespace {
+
+// Ball on sphere against bisection of the centre distance along the approach line.
+TEST(Simulation, BallSphereContactIsTheFirstTouchOnTheWayIn) {
+  const Eigen::Vector3d x(10.0, -20.0, 30.0);
+  const double r = 3.0, R = 12.7;
+  const Eigen::Vector3d u = Eigen::Vector3d(-1.0, 0.3, -0.2).normalized();
+  const Eigen::Vector3d c0 = x - (r + R) * u + Eigen::Vector3d(0.0, 0.4, 0.7);  // off the centre line
+  const double s = ballSphereContact(c0, u, r, x, R);
+  EXPECT_NEAR((c0 + s * u - x).norm(), r + R, 1e-12);  // on the contact sphere, to rounding
+  double lo = s - 5.0, hi = s + 1e-3;                      // outside before, inside just after
+  auto gap = [&](double t) { return (c0 + t * u - x).norm() - (r + R); };
+  ASSERT_GT(gap(lo), 0.0);
+  ASSERT_LT(gap(hi), 0.0);
+  for (int i = 0; i < 200; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (gap(mid) > 0 ? lo : hi) = mid;
+  }
+  EXPECT_NEAR(s, 0.5 * (lo + hi), 1e-10);
+  EXPECT_THROW(ballSphereContact(c0 + 50.0 * Eigen::Vector3d::UnitY(), u, r, x, R), std::invalid_argument);
+}
+
+TEST(Simulation, SphereTouchFollowsTheTrueTableAndTheSphereError) {
+  // A one-point sphere plan on the A/C machine: the trigger moves by the sphere's error plus
+  // what the location errors do to its centre, projected on the approach (exact for a touch
+  // through the centre).
+  ProbePlan plan = test::touch154Plan();
+  ProbePoint p;
+  p.id = 1;
+  p.pose.A = -30.0;
+  p.pose.C = 45.0;
+  SphereTarget st{2, Eigen::Vector3d(120.0, 0.0, 50.0), 12.7};
+  p.sphere = st;
+  const double r = plan.machine.probe.ball_radius_mm();
+  LocationErrors nominal;
+  nominal.kinematics = plan.machine.kinematics;
+  const Eigen::Vector3d c_m = T_m_w(nominal, p.pose) * st.center_w_mm;
+  p.approach_m = -Eigen::Vector3d::UnitZ();
+  p.trigger_m_mm = c_m + (r + st.radius_mm) * Eigen::Vector3d::UnitZ();
+  plan.points = {p};
+  Truth truth;
+  truth.errors = nominal;
+  truth.errors.set("dx_AY", 0.010);
+  truth.errors.set("dz_AY", 0.020);
+  truth.errors.set("a_AY", 1e-4);
+  truth.sphere_center_error_w_mm[2] = Eigen::Vector3d(0.0, 0.0, 0.005);
+  const MeasurementRun run = simulate(plan, truth, SimulationOptions{});
+  const Eigen::Vector3d true_c = T_m_w(truth.errors, p.pose) * (st.center_w_mm + Eigen::Vector3d(0, 0, 0.005));
+  EXPECT_NEAR((run.points[0].position_m_mm - true_c).norm(), r + st.radius_mm, 1e-12);
+  // The plan round-trips its sphere through PLAN.json.
+  const ProbePlan back = planFromJson(JsonDoc{planToJson(plan), "plan.json", ""});
+  ASSERT_TRUE(back.points[0].sphere.has_value());
+  EXPECT_EQ(back.points[0].sphere->id, 2);
+  EXPECT_DOUBLE_EQ(back.points[0].sphere->radius_mm, 12.7);
+  EXPECT_TRUE(back.points[0].sphere->center_w_mm.isApprox(st.center_w_mm));
+}
+
+}  // namespace
+}  // namespace rotacal
