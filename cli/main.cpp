@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   std::vector<Command> commands = touchCommands(app, common);
   for (auto& c : uncertaintyCommands(app, common)) commands.push_back(c);
   for (auto& c : diagnoseCommands(app, common)) commands.push_back(c);
+  for (auto& c : compensateCommands(app, common)) commands.push_back(c);
 
   try {
     app.parse(argc, argv);

@@ -49,6 +49,7 @@ Json analysisToJson(const Analysis& a) {
   j["format"] = "rotacal-report/1";
   j["cycle"] = a.plan->cycle;
   j["machine"] = a.plan->machine.name;
+  j["machine_model"] = machineToJson(a.plan->machine);  // for `compensate` and the history
   j["method"] = std::string(methodName(m.method));
   j["results"] = a.result_files;
   j["location_errors"] = locationErrorsJson(m.estimate, m.u);

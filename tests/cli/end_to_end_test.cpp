@@ -6,12 +6,15 @@
 #include <array>
 #include <cstdio>
 #include <filesystem>
+#include <cmath>
 #include <fstream>
+#include <regex>
 #include <sstream>
 #include <string>
 
 #include <nlohmann/json.hpp>
 
+#include "core/compensation.hpp"
 #include "test_util.hpp"
 
 namespace rotacal {
@@ -168,6 +171,60 @@ TEST_F(Cli, RepeatsAreAnalyzedPerRunAndTogether) {
   const double u = r["location_errors"]["dx_AY"]["u"].get<double>();
   EXPECT_GT(u, 0.0);
   EXPECT_NEAR(dx, 14.6, 4 * u);
+}
+
+}  // namespace
+}  // namespace rotacal
+
+namespace rotacal {
+namespace {
+
+// compensate: the contract's command on the bundled example. The rewritten program's numbers are
+// checked against the exact simulator in tests/postproc/compensate_program_test.cpp; here the
+// command's behaviour: the errors come from the report, the output is whole and the previous one
+// kept, and what cannot be rewritten is refused with the right exit code.
+TEST_F(Cli, CompensateRewritesTheProgramForTheReportsErrors) {
+  const nlohmann::json report = analyzeThrough("csv", "lsq_per_point", ".csv");
+  ASSERT_TRUE(report.contains("machine_model"));
+  ASSERT_EQ(sh("generate --plan " + p("plan.json") + " --dialect fanuc -o " + p("t.nc")).code, 0);
+  const auto r = sh("compensate --program " + p("t.nc") + " --report " + p("report.json") + " --dialect fanuc -o " +
+                    p("tc.nc"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  const std::string out = slurp(p("tc.nc"));
+  EXPECT_NE(out.find("(dx_AY 14.60 um, dy_AY 23.20 um, dz_AY 27.70 um"), std::string::npos) << out.substr(0, 600);
+  // The first guarded move moves by what the core computes for the identified errors.
+  const std::regex g31(R"(G31 X(-?[0-9.]+) Y(-?[0-9.]+) Z(-?[0-9.]+))");
+  std::smatch a, b;
+  const std::string in = slurp(p("t.nc"));
+  ASSERT_TRUE(std::regex_search(in, a, g31));
+  ASSERT_TRUE(std::regex_search(out, b, g31));
+  LocationErrors e = test::table4Mean();
+  const Eigen::Vector3d x(std::stod(a[1]), std::stod(a[2]), std::stod(a[3]));
+  const Pose q;  // the first pose of touch154: A = 0, C = 0
+  const CompensatedCommand cc = compensatePose(e, q);
+  Pose printed = cc.pose;
+  printed.A = std::round(cc.pose.A * 1e4) / 1e4;
+  printed.C = std::round(cc.pose.C * 1e4) / 1e4;
+  const Eigen::Vector3d x2 = compensatedPosition(e, q, x, printed);
+  // The report's errors carry the fit's 1e-6 um / 1e-7 mdeg, the program 4 decimals.
+  EXPECT_NEAR(std::stod(b[1]), x2.x(), 0.5e-4 + 1e-9);
+  EXPECT_NEAR(std::stod(b[2]), x2.y(), 0.5e-4 + 1e-9);
+  EXPECT_NEAR(std::stod(b[3]), x2.z(), 0.5e-4 + 1e-9);
+  // Again: the previous output is kept.
+  ASSERT_EQ(sh("compensate --program " + p("t.nc") + " --report " + p("report.json") + " --dialect fanuc -o " +
+               p("tc.nc")).code,
+            0);
+  EXPECT_TRUE(fs::exists(p("tc.nc.bak")));
+  // Heidenhain Klartext is not rewritten (usage error); a report without errors is bad input.
+  EXPECT_EQ(sh("compensate --program " + p("t.nc") + " --report " + p("report.json") + " --dialect heidenhain -o " +
+               p("x.h")).code,
+            2);
+  std::ofstream(p("bad.json")) << R"({"format": "rotacal-report/1", "machine_model": {}})";
+  const auto bad = sh("compensate --program " + p("t.nc") + " --report " + p("bad.json") + " --dialect fanuc -o " +
+                      p("x.nc"));
+  EXPECT_EQ(bad.code, 1);
+  EXPECT_NE(bad.out.find("bad.json"), std::string::npos) << bad.out;
+  EXPECT_FALSE(fs::exists(p("x.nc")));
 }
 
 }  // namespace

@@ -1,0 +1,149 @@
+// `rotacal compensate`: the post-processor route of contract.md. Reads an NC program and the
+// REPORT.json of `analyze`, and writes the program rewritten so that the machine with the
+// identified location errors moves the tool as the nominal machine would have
+// (postproc/compensate_program.hpp, docs/compensation.md).
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "cli/command.hpp"
+#include "core/errors.hpp"
+#include "core/json_io.hpp"
+#include "core/machine.hpp"
+#include "core/units.hpp"
+#include "postproc/compensate_program.hpp"
+
+namespace rotacal {
+namespace {
+
+// The syntax the rewrite needs from a word-address dialect. Heidenhain Klartext (L X+.. Y+..)
+// is not word-address G-code and the neutral csv is no program: both are refused.
+NcSyntax syntaxOf(const std::string& dialect) {
+  NcSyntax s;
+  s.dialect = dialect;
+  if (dialect == "linuxcnc" || dialect == "fanuc" || dialect == "haas" || dialect == "okuma") return s;
+  if (dialect == "siemens") {
+    s.comment = NcSyntax::Comment::Semicolon;
+    return s;
+  }
+  if (dialect == "heidenhain")
+    throw CLI::ValidationError("--dialect", "heidenhain: Klartext programs are not rewritten; enter the kinematics "
+                                            "values of `analyze --offsets` instead (docs/compensation.md)");
+  throw CLI::ValidationError("--dialect", "'" + dialect + "' has no NC programs to compensate (linuxcnc, fanuc, haas, "
+                                          "siemens, okuma)");
+}
+
+// The identified location errors of a REPORT.json (contract.md), in mm / rad.
+LocationErrors errorsFromReport(const JsonDoc& doc, Kinematics k) {
+  const Json& j = doc.value;
+  if (!j.is_object() || j.value("format", "") != "rotacal-report/1")
+    doc.fail("format", "not a rotacal report (expected \"format\": \"rotacal-report/1\")");
+  if (!j.contains("location_errors") || !j["location_errors"].is_object())
+    doc.fail("location_errors", "the report has no 'location_errors'");
+  LocationErrors e;
+  e.kinematics = k;
+  for (const auto& [name, entry] : j["location_errors"].items()) {
+    const int i = parameterIndex(k, name);
+    if (i < 0) doc.fail(name, "'" + name + "' is not a location error of this machine's kinematics");
+    if (!entry.is_object() || !entry.contains("value") || !entry["value"].is_number())
+      doc.fail(name, "'" + name + "' needs {\"value\": number, \"unit\": ...}");
+    const double v = entry["value"].get<double>();
+    const std::string unit = entry.value("unit", "");
+    const ParamKind kind = locationParameters(k)[i].kind;
+    if (kind == ParamKind::Length) {
+      if (unit == "um") e.values[i] = umToMm(v);
+      else if (unit == "mm") e.values[i] = v;
+      else doc.fail(name, "unit of '" + name + "' must be um or mm");
+    } else {
+      if (unit == "mdeg") e.values[i] = mdegToRad(v);
+      else if (unit == "urad") e.values[i] = v * 1e-6;
+      else if (unit == "rad") e.values[i] = v;
+      else doc.fail(name, "unit of '" + name + "' must be mdeg, urad or rad");
+    }
+  }
+  return e;
+}
+
+std::vector<double> parseTriple(const std::string& opt, const std::string& text) {
+  std::vector<double> v;
+  size_t start = 0;
+  while (start <= text.size()) {
+    const size_t comma = text.find(',', start);
+    const std::string part = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    try {
+      size_t used = 0;
+      v.push_back(std::stod(part, &used));
+      if (used != part.size()) throw std::invalid_argument(part);
+    } catch (const std::exception&) {
+      throw CLI::ValidationError(opt, "expected X,Y,Z in mm, got '" + text + "'");
+    }
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  if (v.size() != 3) throw CLI::ValidationError(opt, "expected X,Y,Z in mm, got '" + text + "'");
+  return v;
+}
+
+int cmdCompensate(const Common& c, const std::string& program_file, const std::string& report_file,
+                  const std::string& machine_file, const std::string& dialect, const std::string& origin,
+                  const std::string& out) {
+  const NcSyntax syntax = syntaxOf(dialect);
+  const JsonDoc report = readJsonFile(report_file);
+  MachineModel machine;
+  if (!machine_file.empty()) {
+    machine = loadMachine(machine_file);
+  } else if (report.value.is_object() && report.value.contains("machine_model")) {
+    machine = machineFromJson(report, report.value["machine_model"]);
+  } else {
+    failFile(report_file, "the report does not carry its machine ('machine_model', written by analyze since this "
+                          "version): give --machine MACHINE.json");
+  }
+  const LocationErrors errors = errorsFromReport(report, machine.kinematics);
+  ProgramCompensationOptions opt;
+  if (!origin.empty()) {
+    const auto v = parseTriple("--program-origin", origin);
+    opt.program_origin_m_mm = Eigen::Vector3d(v[0], v[1], v[2]);
+  }
+  opt.header.push_back(fmt::format("rotacal compensate: rewritten for the location errors of {}", report_file));
+  std::string values;
+  for (int i = 0; i < kNumLocationErrors; ++i) {
+    const auto& p = locationParameters(machine.kinematics)[i];
+    values += fmt::format("{}{} {:.2f} {}", values.empty() ? "" : ", ", p.name, errors.reportValue(i), reportUnit(p.kind));
+  }
+  opt.header.push_back(values);
+  opt.header.push_back("do not compensate twice: run this program only on the uncompensated machine");
+  const std::string text = readTextFile(program_file);
+  const ProgramCompensation r = compensateProgram(text, program_file, machine, errors, syntax, opt);
+  writeFileAtomic(out, r.text);
+  say(c, fmt::format("compensate: {} of {} motion blocks rewritten ({} left as written: machine-coordinate moves or "
+                     "before every axis was known); largest shift {:.2f} um, largest rotary change {:.2f} mdeg, tool "
+                     "direction not restorable by the rotary axes up to {:.2f} urad -> {}\n",
+                     r.compensated_blocks, r.motion_blocks, r.uncompensated_blocks, mmToUm(r.max_shift_mm),
+                     r.max_rotary_change_deg * 1000.0, r.max_direction_residual_rad * 1e6, out));
+  return 0;
+}
+
+}  // namespace
+
+std::vector<Command> compensateCommands(CLI::App& app, const Common& common) {
+  struct Args {
+    std::string program, report, machine, dialect, origin, out;
+  };
+  auto a = std::make_shared<Args>();
+  auto* cmd = app.add_subcommand("compensate", "rewrite an NC program to cancel the identified location errors");
+  cmd->add_option("--program", a->program, "IN: the NC program (machine coordinates, no TCP)")->required();
+  cmd->add_option("--report", a->report, "REPORT.json of analyze")->required();
+  cmd->add_option("--dialect", a->dialect, "linuxcnc | fanuc | haas | siemens | okuma")->required();
+  cmd->add_option("--machine", a->machine, "MACHINE.json (default: the machine recorded in the report)");
+  cmd->add_option("--program-origin", a->origin,
+                  "X,Y,Z (mm): machine position of the program zero relative to the rotary-axis intersection (default "
+                  "0,0,0)");
+  cmd->add_option("-o,--output", a->out, "OUT: the rewritten program")->required();
+  return {{cmd, [a, &common] {
+             return cmdCompensate(common, a->program, a->report, a->machine, a->dialect, a->origin, a->out);
+           }}};
+}
+
+}  // namespace rotacal

@@ -1,0 +1,266 @@
+#include "postproc/compensate_program.hpp"
+
+#include <array>
+#include <cmath>
+#include <map>
+#include <optional>
+#include <string_view>
+
+#include <fmt/format.h>
+
+#include "core/errors.hpp"
+#include "gcode/reader.hpp"
+
+namespace rotacal {
+namespace {
+
+constexpr double kMmPerInch = 25.4;
+constexpr double kStrokeTolMm = 1e-3;  // rounding of the printed decimals, with margin
+
+std::string fixedText(double v, int decimals) {
+  std::string s = fmt::format("{:.{}f}", v, decimals);
+  if (s.find_first_not_of("-0.") == std::string::npos) s = fmt::format("{:.{}f}", 0.0, decimals);  // no "-0.0000"
+  return s;
+}
+
+double parsedBack(const std::string& s) { return std::stod(s); }
+
+std::string upper(std::string_view s) {
+  std::string r(s);
+  for (auto& c : r) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return r;
+}
+
+double& poseAxis(Pose& p, char axis) { return axis == 'A' ? p.A : axis == 'B' ? p.B : p.C; }
+
+// Modal state of the program as the rewrite needs it, in the nominal (uncompensated) command.
+struct Modal {
+  bool inch = false;
+  bool incremental = false;
+  enum class Motion { Linear, Arc } motion = Motion::Linear;
+  std::array<std::optional<double>, 3> xyz_mm;  // program coordinates, mm
+  std::map<char, std::optional<double>> rotary;  // paper-convention angles, deg
+};
+
+}  // namespace
+
+ProgramCompensation compensateProgram(const std::string& text, const std::string& file, const MachineModel& machine,
+                                      const LocationErrors& errors, const NcSyntax& syntax,
+                                      const ProgramCompensationOptions& options) {
+  options.pose.validate();
+  if (errors.kinematics != machine.kinematics)
+    throw std::invalid_argument("compensate: the location errors are for another kinematics than the machine");
+  const std::vector<nc::Block> blocks = nc::readProgram(text);
+  ProgramCompensation out;
+  Modal m;
+  m.inch = machine.units == LengthUnit::Inch;
+  std::vector<char> rotary_letters;
+  for (const auto& r : machine.rotary) {
+    rotary_letters.push_back(r.name);
+    m.rotary[r.name] = std::nullopt;
+  }
+  auto isRotary = [&](char c) { return m.rotary.count(c) > 0; };
+  // The rotary words as last printed: a block rewritten at a compensated pose must also carry a
+  // rotary word the block lacks when the machine is not yet at the compensated angle.
+  std::map<char, std::string> printed_rotary;
+  auto notePrinted = [&](const nc::Block& b) {
+    for (const auto& w : b.words)
+      if (isRotary(w.letter)) printed_rotary[w.letter] = w.text;
+  };
+  auto fail = [&](int line, const std::string& why) -> void { throw InputError(file, line, why); };
+  // Cache: the compensated pose depends only on the nominal pose.
+  std::map<std::array<double, 3>, CompensatedCommand> pose_cache;
+
+  auto comment = [&](const std::string& c) {
+    return syntax.comment == NcSyntax::Comment::Parentheses ? "(" + c + ")" : ";" + c;
+  };
+
+  // Header: after a leading '%' and a Fanuc-style O-number line.
+  size_t header_at = 0;
+  while (header_at < blocks.size() &&
+         (blocks[header_at].percent ||
+          (!blocks[header_at].words.empty() && blocks[header_at].words.front().letter == 'O' && !blocks[header_at].control)))
+    ++header_at;
+
+  std::string result;
+  auto emit = [&](const std::string& line) {
+    result += line;
+    result += '\n';
+  };
+
+  for (size_t bi = 0; bi < blocks.size(); ++bi) {
+    if (bi == header_at)
+      for (const auto& h : options.header) emit(comment(h));
+    const nc::Block& b = blocks[bi];
+    if (!b.issues.empty()) fail(b.line, b.issues.front());
+    if (b.control || b.percent || b.words.empty()) {
+      emit(b.raw);
+      continue;
+    }
+    const std::string code_upper = upper(b.code);
+    for (const char* kw : {"TRAORI", "TRANSMIT", "TRACYL", "CYCLE800", "ROT ", "AROT", "TRANS ", "ATRANS"})
+      if (code_upper.find(kw) != std::string::npos)
+        fail(b.line, fmt::format("{} changes the coordinate frame inside the program: compensate a program in plain "
+                                 "machine coordinates, or through the kinematics (analyze --offsets)",
+                                 std::string(kw)));
+    bool machine_coords = false, home = false;
+    for (const auto& w : b.words) {
+      if (w.letter != 'G') continue;
+      if (!w.value) fail(b.line, "a G word that is an expression cannot be followed");
+      const double g = *w.value;
+      auto is = [&](double v) { return std::abs(g - v) < 1e-9; };
+      if (is(20)) m.inch = true;
+      else if (is(21)) m.inch = false;
+      else if (is(90)) m.incremental = false;
+      else if (is(91)) m.incremental = true;
+      else if (is(0) || is(1) || is(31) || is(38.2) || is(38.3) || is(38.4) || is(38.5)) m.motion = Modal::Motion::Linear;
+      else if (is(2) || is(3)) m.motion = Modal::Motion::Arc;
+      else if (is(53)) machine_coords = true;
+      else if (is(28) || is(30)) home = true;
+      else if (is(10) || is(92) || is(52))
+        fail(b.line, fmt::format("G{} changes an offset inside the program: the rewrite cannot know the new program "
+                                 "zero; set offsets before the program and give --program-origin",
+                                 w.text));
+      else if (is(43.4) || is(43.5) || is(68) || is(68.2) || is(68.3) || is(68.4) || is(69.1) || is(234) || is(169))
+        fail(b.line, fmt::format("G{} (tool-centre-point control or a tilted work plane): such programs are "
+                                 "compensated by the control's kinematics, not by rewriting (analyze --offsets)",
+                                 w.text));
+    }
+    // Axis words of this block.
+    bool has_axis = false;
+    for (const auto& w : b.words) {
+      const bool lin = w.letter == 'X' || w.letter == 'Y' || w.letter == 'Z';
+      if (!lin && !isRotary(w.letter)) continue;
+      has_axis = true;
+      if (!w.value)
+        fail(b.line, fmt::format("{}{} is an expression or a parameter: compensate needs literal coordinates",
+                                 w.letter, w.text));
+    }
+    if (!has_axis) {
+      emit(b.raw);
+      continue;
+    }
+    ++out.motion_blocks;
+    const double unit_mm = m.inch ? kMmPerInch : 1.0;
+    if (machine_coords || home) {
+      // Machine-coordinate moves (tool change, parking) do not address the workpiece: unchanged,
+      // and the axes they move are no longer known in program coordinates.
+      for (const auto& w : b.words) {
+        if (w.letter == 'X') m.xyz_mm[0].reset();
+        else if (w.letter == 'Y') m.xyz_mm[1].reset();
+        else if (w.letter == 'Z') m.xyz_mm[2].reset();
+        else if (isRotary(w.letter)) m.rotary[w.letter].reset();
+      }
+      if (home)
+        for (auto& v : m.xyz_mm) v.reset();
+      ++out.uncompensated_blocks;
+      notePrinted(b);
+      emit(b.raw);
+      continue;
+    }
+    if (m.motion == Modal::Motion::Arc)
+      fail(b.line, "an arc (G2/G3) cannot be compensated point by point: on the machine with errors its plane is "
+                   "tilted; output linear moves (G1) from CAM, or compensate through the kinematics (analyze --offsets)");
+    // The nominal command before and after this block.
+    const std::array<std::optional<double>, 3> before = m.xyz_mm;
+    for (const auto& w : b.words) {
+      const int i = w.letter == 'X' ? 0 : w.letter == 'Y' ? 1 : w.letter == 'Z' ? 2 : -1;
+      if (i >= 0) {
+        const double v = *w.value * unit_mm;
+        if (m.incremental) {
+          if (m.xyz_mm[i]) m.xyz_mm[i] = *m.xyz_mm[i] + v;
+        } else {
+          m.xyz_mm[i] = v;
+        }
+      } else if (isRotary(w.letter)) {
+        if (m.incremental)
+          fail(b.line, fmt::format("an incremental (G91) move of {} cannot be compensated: command rotary axes in G90",
+                                   w.letter));
+        m.rotary[w.letter] = *w.value * machine.controllerSign(w.letter, syntax.dialect);
+      }
+    }
+    bool known = m.xyz_mm[0] && m.xyz_mm[1] && m.xyz_mm[2];
+    for (const auto& [c, v] : m.rotary) known = known && v.has_value();
+    if (m.incremental) known = known && before[0] && before[1] && before[2];
+    if (!known) {
+      ++out.uncompensated_blocks;
+      notePrinted(b);
+      emit(b.raw);
+      continue;
+    }
+    Pose q;
+    for (const auto& [c, v] : m.rotary) poseAxis(q, c) = *v;
+    const std::array<double, 3> key{q.A, q.B, q.C};
+    auto it = pose_cache.find(key);
+    if (it == pose_cache.end()) it = pose_cache.emplace(key, compensatePose(errors, q, options.pose)).first;
+    const CompensatedCommand& cc = it->second;
+    // The rotary words as they will be printed; the position is computed for exactly those.
+    Pose q_cmd = q;
+    std::map<char, std::string> rotary_text;
+    for (char c : rotary_letters) {
+      const int sign = machine.controllerSign(c, syntax.dialect);
+      Pose tmp = cc.pose;
+      const std::string t = fixedText(sign * poseAxis(tmp, c), syntax.angle_decimals);
+      rotary_text[c] = t;
+      poseAxis(q_cmd, c) = sign * parsedBack(t);
+      out.max_rotary_change_deg = std::max(out.max_rotary_change_deg, std::abs(poseAxis(q_cmd, c) - poseAxis(q, c)));
+    }
+    out.max_direction_residual_rad =
+        std::max(out.max_direction_residual_rad, toolDirectionError(errors, q_cmd, q, options.pose.tool_axis_m));
+    auto compensate = [&](const std::array<std::optional<double>, 3>& xyz) {
+      const Eigen::Vector3d x_m(*xyz[0], *xyz[1], *xyz[2]);
+      return Eigen::Vector3d(compensatedPosition(errors, q, x_m + options.program_origin_m_mm, q_cmd) -
+                             options.program_origin_m_mm);
+    };
+    const Eigen::Vector3d x_nom(*m.xyz_mm[0], *m.xyz_mm[1], *m.xyz_mm[2]);
+    const Eigen::Vector3d x_new = compensate(m.xyz_mm);
+    out.max_shift_mm = std::max(out.max_shift_mm, (x_new - x_nom).norm());
+    // Stroke check of the endpoint the machine will actually be commanded to.
+    const Eigen::Vector3d x_machine = x_new + options.program_origin_m_mm;
+    const std::array<const AxisRange*, 3> strokes{&machine.x, &machine.y, &machine.z};
+    for (int i = 0; i < 3; ++i)
+      if (!strokes[i]->contains(x_machine[i], kStrokeTolMm))
+        fail(b.line, fmt::format("the compensated {} {:.4f} mm is outside the stroke [{}, {}] mm", "XYZ"[i],
+                                 x_machine[i], strokes[i]->min, strokes[i]->max));
+    Eigen::Vector3d words = x_new;
+    if (m.incremental) words = x_new - compensate(before);
+    const int dec = m.inch ? syntax.length_decimals_inch : syntax.length_decimals_mm;
+    std::string line = b.block_delete ? "/" : "";
+    bool axes_written = false;
+    for (const auto& w : b.words) {
+      const bool lin = w.letter == 'X' || w.letter == 'Y' || w.letter == 'Z';
+      if (lin || isRotary(w.letter)) {
+        if (axes_written) continue;
+        axes_written = true;
+        std::string a;
+        for (int i = 0; i < 3; ++i) a += fmt::format("{}{}{}", a.empty() ? "" : " ", "XYZ"[i], fixedText(words[i] / unit_mm, dec));
+        for (char c : rotary_letters) {
+          bool in_block = false;
+          for (const auto& w2 : b.words) in_block = in_block || w2.letter == c;
+          const auto pr = printed_rotary.find(c);
+          const bool moved = pr == printed_rotary.end() || std::abs(parsedBack(pr->second) - parsedBack(rotary_text[c])) > 1e-12;
+          if (moved && !in_block && m.incremental)
+            fail(b.line, fmt::format("the compensated {} must be commanded before this incremental (G91) move: "
+                                     "give the rotary axes in a G90 block first",
+                                     c));
+          if (in_block || moved) {
+            a += fmt::format(" {}{}", c, rotary_text[c]);
+            printed_rotary[c] = rotary_text[c];
+          }
+        }
+        line += (line.empty() || line == "/" ? "" : " ") + a;
+        continue;
+      }
+      line += (line.empty() || line == "/" ? "" : " ") + std::string(1, w.letter) + w.text;
+    }
+    for (const auto& c : b.comments) line += " " + comment(c);
+    emit(line);
+    ++out.compensated_blocks;
+  }
+  if (header_at >= blocks.size())
+    for (const auto& h : options.header) emit(comment(h));
+  out.text = std::move(result);
+  return out;
+}
+
+}  // namespace rotacal

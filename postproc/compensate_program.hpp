@@ -1,0 +1,54 @@
+#pragma once
+// Compensation by rewriting an NC program (the post-processor route): every motion endpoint of a
+// word-address program (LinuxCNC, Fanuc Custom Macro B, Haas, Okuma, Siemens G-code) is replaced
+// by the command that puts the controlled point, with the nominal tool direction, on the same
+// workpiece point on the machine with the identified location errors (core/compensation.hpp).
+// The program must command machine coordinates (work offset at a known position relative to the
+// rotary-axis intersection) without tool-centre-point control; anything the rewrite cannot keep
+// exact is refused with FILE:LINE: why.
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "core/compensation.hpp"
+#include "core/machine.hpp"
+
+namespace rotacal {
+
+/// How the program spells what the rewrite writes (from the dialect, chosen in the CLI).
+struct NcSyntax {
+  std::string dialect;            // the rotary axes' counting sign (MachineModel::controllerSign)
+  int length_decimals_mm = 4;
+  int length_decimals_inch = 5;
+  int angle_decimals = 4;
+  enum class Comment { Parentheses, Semicolon } comment = Comment::Parentheses;
+};
+
+struct ProgramCompensationOptions {
+  /// Machine position (mm) of the program zero relative to the rotary-axis intersection (0 when
+  /// the work offset sits at the intersection, as in rotacal's own programs).
+  Eigen::Vector3d program_origin_m_mm = Eigen::Vector3d::Zero();
+  CompensationOptions pose;
+  std::vector<std::string> header;  // provenance lines written as comments at the top
+};
+
+struct ProgramCompensation {
+  std::string text;
+  int motion_blocks = 0;        // blocks with axis words
+  int compensated_blocks = 0;   // rewritten
+  int uncompensated_blocks = 0; // passed unchanged: machine-coordinate moves (G53, G28, G30) or
+                                // before every axis had a known position
+  double max_shift_mm = 0.0;             // largest change of a linear endpoint
+  double max_rotary_change_deg = 0.0;    // largest change of a rotary word
+  double max_direction_residual_rad = 0.0;  // tool direction the rotary axes could not restore
+};
+
+/// Rewrites `text` (read from `file`, for messages). Throws InputError(file, line, why) on what
+/// cannot be compensated exactly: arcs, tool-centre-point control, tilted work planes, offset
+/// changes inside the program, incremental rotary moves, axis words that are expressions, and a
+/// compensated endpoint outside the machine's strokes.
+ProgramCompensation compensateProgram(const std::string& text, const std::string& file, const MachineModel& machine,
+                                      const LocationErrors& errors, const NcSyntax& syntax,
+                                      const ProgramCompensationOptions& options);
+
+}  // namespace rotacal

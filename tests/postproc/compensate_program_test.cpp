@@ -1,0 +1,218 @@
+// The rewritten program against an independent path: a small G90 interpreter in this test reads
+// each probing move (pose, start, end) of the original and of the compensated LinuxCNC program;
+// the exact simulator then runs the original on the nominal machine and the compensated one on
+// the machine with 000 Table 4's errors, both against the same true test piece. The ball centre
+// at every trigger, seen from the workpiece, must be the same; the uncompensated program on the
+// machine with errors must miss by the errors' size (so the check can fail).
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include "controllers/dialect.hpp"
+#include "core/errors.hpp"
+#include "core/simulation.hpp"
+#include "postproc/compensate_program.hpp"
+#include "postproc/probe_program.hpp"
+#include "test_util.hpp"
+
+namespace rotacal {
+namespace {
+
+std::string fixedOf(double v) { return fmt::format("{:.4f}", v); }
+
+struct ProbeMove {
+  Pose pose;  // papers' convention
+  Eigen::Vector3d start, end;
+};
+
+// G90 only, X Y Z A C literal words, G38.2 is the recorded probe (the double touch is off).
+std::vector<ProbeMove> probeMoves(const std::string& text, int sign) {
+  std::vector<ProbeMove> moves;
+  Eigen::Vector3d x = Eigen::Vector3d::Constant(NAN);
+  Pose q;
+  std::istringstream in(text);
+  std::string line;
+  const std::regex word(R"(([XYZAC])(-?[0-9]+\.[0-9]+))");
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '(' || line[0] == 'o' || line[0] == '%') continue;
+    Eigen::Vector3d nx = x;
+    for (auto it = std::sregex_iterator(line.begin(), line.end(), word); it != std::sregex_iterator(); ++it) {
+      const char c = (*it)[1].str()[0];
+      const double v = std::stod((*it)[2].str());
+      if (c == 'X') nx.x() = v;
+      if (c == 'Y') nx.y() = v;
+      if (c == 'Z') nx.z() = v;
+      if (c == 'A') q.A = sign * v;
+      if (c == 'C') q.C = sign * v;
+    }
+    if (line.rfind("G38.2", 0) == 0) moves.push_back({q, x, nx});
+    x = nx;
+  }
+  return moves;
+}
+
+// The plan of the probing moves as the machine executes them.
+ProbePlan planOfMoves(const ProbePlan& base, const std::vector<ProbeMove>& moves) {
+  ProbePlan p = base;
+  for (size_t i = 0; i < moves.size(); ++i) {
+    ProbePoint& pt = p.points[i];
+    pt.pose = moves[i].pose;
+    pt.approach_m = (moves[i].end - moves[i].start).normalized();
+    pt.trigger_m_mm = moves[i].end - base.machine.overtravel_mm * pt.approach_m;
+  }
+  return p;
+}
+
+struct Fixture {
+  ProbePlan plan = test::touch154Plan();
+  LocationErrors errors = test::table4Mean();
+  Truth piece;  // the true test piece of the bundled truth: set up 0.5 mm / 2 mrad off, top tilted
+  std::string program;
+  Fixture() {
+    piece = loadTruth(test::sourcePath("examples/truth/table4_mean.json"), Kinematics::TableAC);
+    piece.errors = LocationErrors{};
+    program = dialectByName("linuxcnc").writeProgram(probeProgram(plan, "linuxcnc"));
+  }
+  ProgramCompensation compensate(const LocationErrors& e) const {
+    return compensateProgram(program, "touch154.ngc", plan.machine, e, NcSyntax{"linuxcnc"}, {});
+  }
+  // Ball centres at trigger in the workpiece frame when `text` runs on a machine with `e`.
+  std::vector<Eigen::Vector3d> triggersInWorkpiece(const std::string& text, const LocationErrors& e) const {
+    const auto moves = probeMoves(text, plan.machine.controllerSign('A', "linuxcnc"));
+    EXPECT_EQ(moves.size(), plan.points.size());
+    const ProbePlan p = planOfMoves(plan, moves);
+    Truth t = piece;
+    t.errors = e;
+    const MeasurementRun run = simulate(p, t, SimulationOptions{});
+    std::vector<Eigen::Vector3d> w;
+    for (size_t i = 0; i < run.points.size(); ++i)
+      w.push_back(T_m_w(e, p.points[i].pose).inverse() * run.points[i].position_m_mm);
+    return w;
+  }
+};
+
+TEST(CompensateProgram, CompensatedProgramOnTheMachineWithErrorsTouchesWhereTheNominalDoes) {
+  const Fixture f;
+  const ProgramCompensation c = f.compensate(f.errors);
+  const auto nominal = f.triggersInWorkpiece(f.program, LocationErrors{});
+  const auto compensated = f.triggersInWorkpiece(c.text, f.errors);
+  const auto uncompensated = f.triggersInWorkpiece(f.program, f.errors);
+  double worst = 0, worst_uncomp = 0;
+  for (size_t i = 0; i < nominal.size(); ++i) {
+    worst = std::max(worst, (compensated[i] - nominal[i]).norm());
+    worst_uncomp = std::max(worst_uncomp, (uncompensated[i] - nominal[i]).norm());
+  }
+  // 4 printed decimals: +-0.05 um per coordinate (0.087 um in space), plus the tool direction the
+  // rotary axes cannot restore at A = 0 (< 2 urad) over the few mm of the probing line.
+  std::printf("compensated vs nominal: worst %.4f um; uncompensated: worst %.2f um; direction residual %.3f urad\n",
+              mmToUm(worst), mmToUm(worst_uncomp), c.max_direction_residual_rad * 1e6);
+  EXPECT_LT(mmToUm(worst), 0.1);
+  EXPECT_GT(mmToUm(worst_uncomp), 20.0);  // Table 4's errors: tens of um at the piece
+  EXPECT_EQ(c.compensated_blocks + c.uncompensated_blocks, c.motion_blocks);
+  EXPECT_LE(c.uncompensated_blocks, 2);  // the first climb and index, before X and Y are known
+  EXPECT_LT(c.max_direction_residual_rad, mdegToRad(0.2) + 1e-9);  // at most b_CA, the tilt about Y at A = 0
+}
+
+TEST(CompensateProgram, ZeroErrorsReproduceEveryCoordinate) {
+  const Fixture f;
+  const ProgramCompensation c = f.compensate(LocationErrors{});
+  const int sign = f.plan.machine.controllerSign('A', "linuxcnc");
+  const auto a = probeMoves(f.program, sign), b = probeMoves(c.text, sign);
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i) {
+    EXPECT_LT((a[i].end - b[i].end).norm(), 1e-12);
+    EXPECT_LT((a[i].start - b[i].start).norm(), 1e-12);
+    EXPECT_DOUBLE_EQ(a[i].pose.A, b[i].pose.A);
+    EXPECT_DOUBLE_EQ(a[i].pose.C, b[i].pose.C);
+  }
+  EXPECT_LT(c.max_shift_mm, 1e-12);  // rounding of the HTM round trip only
+}
+
+TEST(CompensateProgram, LinuxcncInterpreterAcceptsTheRewrittenProgram) {
+  const char* rs274 = "/usr/bin/rs274";
+  if (!std::filesystem::exists(rs274)) GTEST_SKIP() << "rs274 (linuxcnc-uspace) not installed";
+  const Fixture f;
+  std::string text = f.compensate(f.errors).text;
+  text = std::regex_replace(text, std::regex("#5070"), "1");  // a probe that trips (rs274's canon never does)
+  const auto dir = std::filesystem::temp_directory_path() / fmt::format("rotacal_comp_{}", ::getpid());
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "c.ngc") << text;
+  const std::string cmd =
+      fmt::format("cd '{}' && {} -g c.ngc < /dev/null > out.txt 2> err.txt", dir.string(), rs274);
+  const int status = std::system(cmd.c_str());
+  std::ifstream out(dir / "out.txt"), err(dir / "err.txt");
+  std::stringstream so, se;
+  so << out.rdbuf();
+  se << err.rdbuf();
+  EXPECT_EQ(status, 0) << se.str();
+  const std::string o = so.str();
+  int probes = 0;
+  for (size_t p = o.find("STRAIGHT_PROBE"); p != std::string::npos; p = o.find("STRAIGHT_PROBE", p + 1)) ++probes;
+  EXPECT_EQ(probes, 154);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(CompensateProgram, IncrementalLinearMovesGetTheRotatedIncrement) {
+  const Fixture f;
+  const std::string prog = "%\nG20 G90\nG0 X1.0 Y-8.0 Z6.0 A-30.0 C45.0\nG91 G1 X0.5 Y0.25 Z-0.125 F10.0\nG90\n%\n";
+  const LocationErrors e = f.errors;
+  const ProgramCompensation c = compensateProgram(prog, "inc.ngc", f.plan.machine, e, NcSyntax{"linuxcnc"}, {});
+  // Independent: the two absolute points compensated by the core, differenced.
+  const int sa = f.plan.machine.controllerSign('A', "linuxcnc"), sc = f.plan.machine.controllerSign('C', "linuxcnc");
+  Pose q;
+  q.A = sa * -30.0;  // the program counts in the controller's sense (MACHINE.json)
+  q.C = sc * 45.0;
+  const CompensatedCommand cc = compensatePose(e, q);
+  Pose q_printed = cc.pose;
+  q_printed.A = sa * std::stod(fixedOf(sa * cc.pose.A));
+  q_printed.C = sc * std::stod(fixedOf(sc * cc.pose.C));
+  const Eigen::Vector3d p0 = Eigen::Vector3d(1.0, -8.0, 6.0) * 25.4, d = Eigen::Vector3d(0.5, 0.25, -0.125) * 25.4;
+  const Eigen::Vector3d inc = (compensatedPosition(e, q, p0 + d, q_printed) - compensatedPosition(e, q, p0, q_printed)) / 25.4;
+  const std::regex w(R"(G91 G1 X(-?[0-9.]+) Y(-?[0-9.]+) Z(-?[0-9.]+) F10\.0)");
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(c.text, m, w)) << c.text;
+  EXPECT_NEAR(std::stod(m[1].str()), inc.x(), 0.5e-5 + 1e-12);  // 5 decimals in inch
+  EXPECT_NEAR(std::stod(m[2].str()), inc.y(), 0.5e-5 + 1e-12);
+  EXPECT_NEAR(std::stod(m[3].str()), inc.z(), 0.5e-5 + 1e-12);
+  // A rotation of 0.5 mdeg tilts the increment: it is not the written one.
+  EXPECT_GT((inc - Eigen::Vector3d(0.5, 0.25, -0.125)).norm(), 1e-6);
+}
+
+TEST(CompensateProgram, RefusesWhatItCannotKeepExactNamingTheLine) {
+  const Fixture f;
+  auto lineOf = [&](const std::string& prog) -> std::string {
+    try {
+      compensateProgram(prog, "p.ngc", f.plan.machine, f.errors, NcSyntax{"linuxcnc"}, {});
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "accepted";
+  };
+  const std::string head = "G21 G90\nG0 X10.0 Y-200.0 Z200.0 A0.0 C0.0\n";
+  EXPECT_NE(lineOf(head + "G2 X20.0 Y-200.0 I5.0 J0.0\n").find("p.ngc:3: an arc"), std::string::npos);
+  EXPECT_NE(lineOf(head + "G43.4 H1\n").find("p.ngc:3: G43.4"), std::string::npos);
+  EXPECT_NE(lineOf(head + "G91 G0 A10.0\n").find("p.ngc:3: an incremental (G91) move of A"), std::string::npos);
+  EXPECT_NE(lineOf(head + "G1 X[#1+2] F100.0\n").find("p.ngc:3: X[#1+2] is an expression"), std::string::npos);
+  EXPECT_NE(lineOf(head + "G10 L2 P1 X1.0\n").find("p.ngc:3: G10 changes an offset"), std::string::npos);
+  EXPECT_NE(lineOf(head + "G0 X900.0\n").find("p.ngc:3: the compensated X"), std::string::npos);
+}
+
+TEST(CompensateProgram, FanucHeaderGoesAfterTheProgramNumber) {
+  const Fixture f;
+  const std::string prog = "%\nO7154 (TEST)\nG21 G90\nG0 X10.0 Y-200.0 Z200.0 A0.0 C0.0\nM30\n%\n";
+  const ProgramCompensation c =
+      compensateProgram(prog, "p.nc", f.plan.machine, f.errors, NcSyntax{"fanuc"}, {{0, 0, 0}, {}, {"HELLO"}});
+  EXPECT_EQ(c.text.rfind("%\nO7154 (TEST)\n(HELLO)\nG21 G90\n", 0), 0u) << c.text;
+}
+
+}  // namespace
+}  // namespace rotacal
