@@ -4,6 +4,7 @@
 #include <cmath>
 #include <map>
 #include <optional>
+#include <regex>
 #include <string_view>
 
 #include <fmt/format.h>
@@ -29,6 +30,20 @@ std::string upper(std::string_view s) {
   std::string r(s);
   for (auto& c : r) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
   return r;
+}
+
+// A line of a richer dialect that is a statement, not a word-address block: an assignment to a
+// named variable (R90=, VC1=, TXT=, $TC_CARR1=), a call or keyword (WRITE(, MSG(, DEF, IF, GOTOF,
+// PUT, FWRITC, ...), or a label (NOHIT1:). An assignment to an axis letter (X=10, Siemens) is a
+// motion and is not a statement.
+bool isStatement(const std::string& code) {
+  static const std::regex stmt(
+      R"(^\s*(N\d+\s+)?(([A-Z_$][A-Z0-9_$]*)(\[[^\]]*\])?\s*=|[A-Z_][A-Z0-9_]*\s*\(|[A-Z_][A-Z0-9_]*:|(DEF|IF|ELSE|ENDIF|GOTOF|GOTOB|GOTO|STOPRE|FWRITC|FREADC|PUT|WRITE|CLOSE|WHILE|ENDWHILE|LOOP|ENDLOOP|RET|MSG|SPRINT)\b))",
+      std::regex::icase);
+  std::smatch m;
+  if (!std::regex_search(code, m, stmt)) return false;
+  const std::string name = upper(m.str(3));
+  return !(name.size() == 1 && std::string("XYZABC").find(name) != std::string::npos);
 }
 
 double& poseAxis(Pose& p, char axis) { return axis == 'A' ? p.A : axis == 'B' ? p.B : p.C; }
@@ -91,7 +106,25 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
   for (size_t bi = 0; bi < blocks.size(); ++bi) {
     if (bi == header_at)
       for (const auto& h : options.header) emit(comment(h));
-    const nc::Block& b = blocks[bi];
+    nc::Block b = blocks[bi];
+    // Statements of the richer dialects (Siemens DEF/IF/WRITE/R90=..., Okuma VC1=.../PUT/FWRITC,
+    // labels) carry no motion: they pass as written. A Siemens measuring prefix (MEAS=1 G1 ...)
+    // is kept and the move behind it rewritten.
+    std::string prefix;
+    {
+      static const std::regex measuring(R"(^\s*(N\d+\s+)?(MEAS|MEAW)\s*=\s*-?\d+\s+)", std::regex::icase);
+      std::smatch mm;
+      if (std::regex_search(b.raw, mm, measuring)) {
+        prefix = mm.str(0);
+        const int line_no = b.line;
+        b = nc::readProgram(b.raw.substr(prefix.size())).front();
+        b.line = line_no;
+        b.raw = blocks[bi].raw;
+      } else if (isStatement(b.code)) {
+        emit(b.raw);
+        continue;
+      }
+    }
     if (!b.issues.empty()) fail(b.line, b.issues.front());
     if (b.control || b.percent || b.words.empty()) {
       emit(b.raw);
@@ -225,7 +258,7 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
     Eigen::Vector3d words = x_new;
     if (m.incremental) words = x_new - compensate(before);
     const int dec = m.inch ? syntax.length_decimals_inch : syntax.length_decimals_mm;
-    std::string line = b.block_delete ? "/" : "";
+    std::string line = prefix + (b.block_delete ? "/" : "");
     bool axes_written = false;
     for (const auto& w : b.words) {
       const bool lin = w.letter == 'X' || w.letter == 'Y' || w.letter == 'Z';
@@ -248,10 +281,10 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
             printed_rotary[c] = rotary_text[c];
           }
         }
-        line += (line.empty() || line == "/" ? "" : " ") + a;
+        line += (line.empty() || line.back() == '/' || line.back() == ' ' ? "" : " ") + a;
         continue;
       }
-      line += (line.empty() || line == "/" ? "" : " ") + std::string(1, w.letter) + w.text;
+      line += (line.empty() || line.back() == '/' || line.back() == ' ' ? "" : " ") + std::string(1, w.letter) + w.text;
     }
     for (const auto& c : b.comments) line += " " + comment(c);
     emit(line);

@@ -216,3 +216,36 @@ TEST(CompensateProgram, FanucHeaderGoesAfterTheProgramNumber) {
 
 }  // namespace
 }  // namespace rotacal
+
+namespace rotacal {
+namespace {
+
+// Every word-address dialect's own touch154 program, rewritten, probes the same compensated end
+// points as the LinuxCNC one (whose end points the exact simulator checks above): the statements
+// of the richer dialects (Siemens DEF/IF/WRITE/R90=, MEAS=1 prefixes, Okuma VC/PUT/FWRITC) pass
+// through and only the motion is rewritten.
+TEST(CompensateProgram, EveryWordAddressDialectGetsTheSameGuardedEndPoints) {
+  const ProbePlan plan = test::touch154Plan();
+  const LocationErrors e = test::table4Mean();
+  auto endpoints = [&](const std::string& dialect) {
+    const std::string text = dialectByName(dialect).writeProgram(probeProgram(plan, dialect));
+    const NcSyntax syntax{dialect, 4, 5, 4,
+                          dialect == "siemens" ? NcSyntax::Comment::Semicolon : NcSyntax::Comment::Parentheses};
+    const std::string out = compensateProgram(text, dialect, plan.machine, e, syntax, {}).text;
+    const std::regex guarded(R"((?:G38\.2|G31|MEAS=1 G1) X(-?[0-9.]+) Y(-?[0-9.]+) Z(-?[0-9.]+))");
+    std::vector<Eigen::Vector3d> v;
+    for (auto it = std::sregex_iterator(out.begin(), out.end(), guarded); it != std::sregex_iterator(); ++it)
+      v.emplace_back(std::stod((*it)[1]), std::stod((*it)[2]), std::stod((*it)[3]));
+    return v;
+  };
+  const auto ref = endpoints("linuxcnc");
+  ASSERT_EQ(ref.size(), plan.points.size());
+  for (const char* d : {"fanuc", "haas", "siemens", "okuma"}) {
+    const auto v = endpoints(d);
+    ASSERT_EQ(v.size(), ref.size()) << d;
+    for (size_t i = 0; i < v.size(); ++i) EXPECT_LT((v[i] - ref[i]).norm(), 1e-9) << d << " point " << i + 1;
+  }
+}
+
+}  // namespace
+}  // namespace rotacal
