@@ -6,6 +6,7 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "core/errors.hpp"
@@ -349,6 +350,68 @@ std::optional<AxisDirection> axisAligned(const Eigen::Vector3d& d) {
   for (int a = 0; a < 3; ++a)
     if (std::abs(std::abs(u[a]) - 1.0) < 1e-9) return AxisDirection{a, u[a] > 0 ? 1 : -1};
   return std::nullopt;
+}
+
+MeasurementRun parseTaggedResults(const std::string& text, const std::string& file, const ProbePlan& plan,
+                                std::string_view tag, std::string_view cycle_token, std::string_view second_header_why) {
+  const std::string expected_header = fmt::format("ROTACAL-RESULTS DIALECT {} CYCLE {} POINTS {} UNIT MM|INCH", tag, cycle_token,
+                                                  plan.points.size());
+  PointCollector points(plan, file);
+  bool header = false;
+  int end_line = 0;
+  double k = 1.0;
+  int last = 1;
+  for (const auto& l : splitLines(text)) {
+    const std::string s = trim(l.text);
+    if (s.empty()) continue;
+    last = l.number;
+    if (end_line) fail(file, l.number, fmt::format("text after END (line {}): '{}'", end_line, s));
+    const auto t = tokens(s);
+    if (t[0] == "ROTACAL-RESULTS") {
+      if (header) fail(file, l.number, fmt::format("a second header line: one run per results file{}", second_header_why));
+      header = true;
+      if (t.size() != 9 || t[1] != "DIALECT" || t[3] != "CYCLE" || t[5] != "POINTS" || t[7] != "UNIT")
+        fail(file, l.number, fmt::format("expected the header '{}', got '{}'", expected_header, s));
+      if (t[2] != tag) fail(file, l.number, fmt::format("results of dialect '{}', expected {}", t[2], tag));
+      if (t[4] != cycle_token)
+        fail(file, l.number, fmt::format("results of cycle '{}', the plan is '{}'", t[4], cycle_token));
+      const auto n = parseDigits(t[6]);
+      if (!n) fail(file, l.number, fmt::format("POINTS '{}' is not a number", t[6]));
+      if (static_cast<size_t>(*n) != plan.points.size())
+        fail(file, l.number, fmt::format("header says POINTS {} but the plan has {} points", *n, plan.points.size()));
+      if (t[8] == "MM") k = 1.0;
+      else if (t[8] == "INCH") k = kMmPerInch;
+      else fail(file, l.number, fmt::format("UNIT '{}' must be MM or INCH", t[8]));
+      continue;
+    }
+    if (!header) fail(file, l.number, fmt::format("expected the header '{}', got '{}'", expected_header, s));
+    if (s == "END") {
+      end_line = l.number;
+      continue;
+    }
+    if (t[0] == "NOT-TRIGGERED") {
+      const auto id = t.size() == 2 && t[1].size() > 1 && t[1][0] == 'P' ? parseDigits(t[1].substr(1)) : std::nullopt;
+      if (!id) fail(file, l.number, fmt::format("expected 'NOT-TRIGGERED P<id>', got '{}'", s));
+      fail(file, l.number, fmt::format("point {} was not triggered: the program stopped there", *id));
+    }
+    const auto f = letteredFields(s, "XYZ", file, l.number);
+    Eigen::Vector3d x;
+    for (int i = 0; i < 3; ++i) {
+      const auto v = parseNumber(f.fields[static_cast<size_t>(i)]);
+      if (!v)
+        fail(file, l.number,
+                  fmt::format("{} '{}' of point {} is not a number", "XYZ"[i], f.fields[static_cast<size_t>(i)], f.id));
+      x[i] = *v * k;
+    }
+    points.add(l.number, static_cast<int>(f.id), x, std::numeric_limits<double>::quiet_NaN());
+  }
+  if (!header) fail(file, 1, fmt::format("empty results file: expected the header '{}'", expected_header));
+  if (!end_line) {
+    if (const int missing = points.firstMissing())
+      fail(file, last, fmt::format("point {} is missing and there is no END line: the program stopped early", missing));
+    fail(file, last, "no END line after the last point: the file is incomplete");
+  }
+  return points.finish(last);
 }
 
 }  // namespace rotacal::ctl

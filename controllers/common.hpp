@@ -150,4 +150,12 @@ struct AxisDirection {
 };
 std::optional<AxisDirection> axisAligned(const Eigen::Vector3d& direction);
 
+/// The results text of the dialects that print tagged lines with their own output statements
+/// (Siemens WRITE, Okuma PUT): the header "ROTACAL-RESULTS DIALECT <tag> CYCLE <cycle_token>
+/// POINTS <n> UNIT MM|INCH", one "P<id> X<x> Y<y> Z<z>" line per point (any spacing),
+/// "NOT-TRIGGERED P<id>" where the program stopped, and "END". `second_header_why` is added to
+/// the message when a second header shows an appended old run.
+MeasurementRun parseTaggedResults(const std::string& text, const std::string& file, const ProbePlan& plan,
+                                  std::string_view tag, std::string_view cycle_token, std::string_view second_header_why);
+
 }  // namespace rotacal::ctl

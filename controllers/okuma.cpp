@@ -194,64 +194,7 @@ class OkumaDialect final : public Dialect {
   }
 
   MeasurementRun parseResults(const std::string& text, const std::string& file, const ProbePlan& plan) const override {
-    const std::string expected_header = fmt::format("ROTACAL-RESULTS DIALECT OKUMA CYCLE {} POINTS {} UNIT MM|INCH",
-                                                    safeName(plan.cycle), plan.points.size());
-    ctl::PointCollector points(plan, file);
-    bool header = false;
-    int end_line = 0;
-    double k = 1.0;
-    int last = 1;
-    for (const auto& l : ctl::splitLines(text)) {
-      const std::string s = ctl::trim(l.text);
-      if (s.empty()) continue;
-      last = l.number;
-      if (end_line) ctl::fail(file, l.number, fmt::format("text after END (line {}): '{}'", end_line, s));
-      const auto t = ctl::tokens(s);
-      if (t[0] == "ROTACAL-RESULTS") {
-        if (header) ctl::fail(file, l.number, "a second header line: one run per results file (FWRITC appends: delete the old file)");
-        header = true;
-        if (t.size() != 9 || t[1] != "DIALECT" || t[3] != "CYCLE" || t[5] != "POINTS" || t[7] != "UNIT")
-          ctl::fail(file, l.number, fmt::format("expected the header '{}', got '{}'", expected_header, s));
-        if (t[2] != "OKUMA") ctl::fail(file, l.number, fmt::format("results of dialect '{}', expected OKUMA", t[2]));
-        if (t[4] != safeName(plan.cycle))
-          ctl::fail(file, l.number, fmt::format("results of cycle '{}', the plan is '{}'", t[4], safeName(plan.cycle)));
-        const auto n = ctl::parseDigits(t[6]);
-        if (!n) ctl::fail(file, l.number, fmt::format("POINTS '{}' is not a number", t[6]));
-        if (static_cast<size_t>(*n) != plan.points.size())
-          ctl::fail(file, l.number, fmt::format("header says POINTS {} but the plan has {} points", *n, plan.points.size()));
-        if (t[8] == "MM") k = 1.0;
-        else if (t[8] == "INCH") k = kMmPerInch;
-        else ctl::fail(file, l.number, fmt::format("UNIT '{}' must be MM or INCH", t[8]));
-        continue;
-      }
-      if (!header) ctl::fail(file, l.number, fmt::format("expected the header '{}', got '{}'", expected_header, s));
-      if (s == "END") {
-        end_line = l.number;
-        continue;
-      }
-      if (t[0] == "NOT-TRIGGERED") {
-        const auto id = t.size() == 2 && t[1].size() > 1 && t[1][0] == 'P' ? ctl::parseDigits(t[1].substr(1)) : std::nullopt;
-        if (!id) ctl::fail(file, l.number, fmt::format("expected 'NOT-TRIGGERED P<id>', got '{}'", s));
-        ctl::fail(file, l.number, fmt::format("point {} was not triggered: the program stopped there", *id));
-      }
-      const auto f = ctl::letteredFields(s, "XYZ", file, l.number);
-      Eigen::Vector3d x;
-      for (int i = 0; i < 3; ++i) {
-        const auto v = ctl::parseNumber(f.fields[static_cast<size_t>(i)]);
-        if (!v)
-          ctl::fail(file, l.number,
-                    fmt::format("{} '{}' of point {} is not a number", "XYZ"[i], f.fields[static_cast<size_t>(i)], f.id));
-        x[i] = *v * k;
-      }
-      points.add(l.number, static_cast<int>(f.id), x, std::numeric_limits<double>::quiet_NaN());
-    }
-    if (!header) ctl::fail(file, 1, fmt::format("empty results file: expected the header '{}'", expected_header));
-    if (!end_line) {
-      if (const int missing = points.firstMissing())
-        ctl::fail(file, last, fmt::format("point {} is missing and there is no END line: the program stopped early", missing));
-      ctl::fail(file, last, "no END line after the last point: the file is incomplete");
-    }
-    return points.finish(last);
+    return ctl::parseTaggedResults(text, file, plan, "OKUMA", safeName(plan.cycle), " (FWRITC appends: delete the old file)");
   }
 
   std::string writeOffsets(const OffsetRequest& r) const override {
