@@ -9,6 +9,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "controllers/result_checks.hpp"
 #include "core/errors.hpp"
 #include "core/units.hpp"
 
@@ -112,12 +113,14 @@ PointCollector::PointCollector(const ProbePlan& plan, std::string file) : plan_(
 }
 
 void PointCollector::add(int line, int id, const Eigen::Vector3d& p, double t_s) {
-  if (!plan_.findPoint(id))
+  const ProbePoint* point = plan_.findPoint(id);
+  if (!point)
     fail(file_, line,
          fmt::format("point {} is not in the plan ({} cycle, {} points)", id, plan_.cycle, plan_.points.size()));
   const auto it = seen_line_.find(id);
   if (it != seen_line_.end())
     fail(file_, line, fmt::format("point {} appears twice (first at line {})", id, it->second));
+  requireOnProbingMove(plan_, *point, p, file_, line);
   seen_line_[id] = line;
   run_.points.push_back({id, p, t_s});
 }
@@ -356,6 +359,7 @@ MeasurementRun parseTaggedResults(const std::string& text, const std::string& fi
                                 std::string_view tag, std::string_view cycle_token, std::string_view second_header_why) {
   const std::string expected_header = fmt::format("ROTACAL-RESULTS DIALECT {} CYCLE {} POINTS {} UNIT MM|INCH", tag, cycle_token,
                                                   plan.points.size());
+  requireText(text, file);
   PointCollector points(plan, file);
   bool header = false;
   int end_line = 0;

@@ -8,6 +8,7 @@
 
 #include "controllers/common.hpp"
 #include "controllers/dialects.hpp"
+#include "controllers/result_checks.hpp"
 #include "core/units.hpp"
 
 namespace rotacal {
@@ -48,6 +49,7 @@ class CsvDialect final : public Dialect {
   }
 
   MeasurementRun parseResults(const std::string& text, const std::string& file, const ProbePlan& plan) const override {
+    ctl::requireText(text, file);
     const auto lines = ctl::splitLines(text);
     ctl::PointCollector points(plan, file);
     bool header = false;

@@ -44,6 +44,7 @@
 
 #include "controllers/common.hpp"
 #include "controllers/dialects.hpp"
+#include "controllers/result_checks.hpp"
 #include "core/units.hpp"
 
 namespace rotacal {
@@ -237,6 +238,7 @@ class HeidenhainDialect final : public Dialect {
   }
 
   MeasurementRun parseResults(const std::string& text, const std::string& file, const ProbePlan& plan) const override {
+    ctl::requireText(text, file);
     const std::string expected_header = headerText(plan.cycle, static_cast<int>(plan.points.size()));
     ctl::PointCollector points(plan, file);
     bool header = false;

@@ -22,6 +22,7 @@
 
 #include "controllers/common.hpp"
 #include "controllers/dialects.hpp"
+#include "controllers/result_checks.hpp"
 #include "core/units.hpp"
 
 namespace rotacal {
@@ -29,6 +30,9 @@ namespace {
 
 constexpr const char* kFormat = "rotacal-results/1";
 constexpr const char* kDialect = "linuxcnc";
+/// Rotary positions logged with a point must match its pose within this (deg): the log prints 4
+/// decimals and the axes stand still while probing.
+constexpr double kRotaryLogTolDeg = 1e-3;
 /// LinuxCNC rejects a line of 253 characters or more ("Command too long"; LINELEN 255 in
 /// src/emc/linuxcnc.h, verified with rs274: 252 accepted, 253 rejected).
 constexpr size_t kMaxLineChars = 252;
@@ -202,6 +206,7 @@ class LinuxCncDialect final : public Dialect {
     const std::string expected_header =
         fmt::format("{} dialect={} cycle={} points={} unit=mm|inch", kFormat, kDialect, plan.cycle, plan.points.size());
 
+    ctl::requireText(text, file);
     ctl::PointCollector points(plan, file);
     bool header = false;
     double k = 1.0;
@@ -253,7 +258,23 @@ class LinuxCncDialect final : public Dialect {
       for (size_t i = 0; i < 3 + n_rot; ++i) {
         const auto v = ctl::parseNumber(t[1 + i]);
         if (!v) ctl::fail(file, l.number, fmt::format("'{}' (field {} of point {}) is not a number", t[1 + i], i + 2, *id));
-        if (i < 3) x[static_cast<int>(i)] = *v * k;
+        if (i < 3) {
+          x[static_cast<int>(i)] = *v * k;
+          continue;
+        }
+        // The logged rotary position must be the point's planned pose (in the controller's
+        // sign): a line of another plan or pose would otherwise pass on its coordinates alone.
+        // 1 mdeg covers the 4 printed decimals; a continuous axis may log any turn.
+        const RotaryAxis& r = plan.machine.rotary[i - 3];
+        const ProbePoint* p = plan.findPoint(static_cast<int>(*id));
+        if (!p) continue;  // PointCollector names the unknown id
+        const double planned = plan.machine.controllerSign(r.name, kDialect) * ctl::poseAngle(p->pose, r.name);
+        double diff = *v - planned;
+        if (r.continuous) diff = std::remainder(diff, 360.0);
+        if (!(std::abs(diff) <= kRotaryLogTolDeg))
+          ctl::fail(file, l.number,
+                    fmt::format("point {} was logged at {} = {} deg, but its pose commands {} = {} deg", *id, r.name,
+                                t[1 + i], r.name, ctl::fixed(planned, 4)));
       }
       const std::string& ok = t[n_fields - 1];
       if (ok == "0") ctl::fail(file, l.number, fmt::format("point {} was not triggered (#5070 = 0)", *id));

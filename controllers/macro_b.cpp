@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "controllers/common.hpp"
+#include "controllers/result_checks.hpp"
 #include "controllers/dialects.hpp"
 #include "core/units.hpp"
 
@@ -232,10 +233,12 @@ std::string MacroBDialect::writeResults(const ProbePlan& plan, const Measurement
 }
 
 MeasurementRun MacroBDialect::parseResults(const std::string& raw, const std::string& file, const ProbePlan& plan) const {
-  // Punch control codes (DC2/DC4 from POPEN/PCLOS, NUL feed) are dropped; '%' lines skipped.
+  // Punch control codes are dropped (NUL feed, DC1-DC4 from POPEN/PCLOS, DEL tape feed); any
+  // other byte outside printable ASCII is a damaged file. '%' lines are skipped.
   std::string text;
   for (char c : raw)
-    if (c == '\n' || c == '\r' || c == '\t' || (static_cast<unsigned char>(c) >= 0x20 && c != 0x7f)) text += c;
+    if (c != 0x00 && c != 0x7f && (c < 0x11 || c > 0x14)) text += c;
+  ctl::requireText(text, file);
   const std::string expected_header =
       fmt::format("ROTACAL-RESULTS DIALECT {} CYCLE {} POINTS {} UNIT MM|INCH", f_.tag, dprntText(plan.cycle),
                   plan.points.size());
