@@ -18,7 +18,14 @@ namespace {
 constexpr size_t kMaxLineChars = 80;  // conservative: Autodesk's Fanuc and Haas posts keep to 80; limit UNVERIFIED
 constexpr int kLabelBase = 1000;       // N<1000 + id>: the no-trigger check jumps there
 constexpr int kMaxLabel = 99999;
-constexpr int kIntDigits = 4, kDecimals = 4;  // DPRNT [44] for X Y Z (mm and inch)
+// DPRNT fields of the trigger X Y Z: [44] in mm, [35] in inch. With [44] an inch result is rounded
+// by up to 1.27 um per coordinate, which moves the identified errors by up to 3.1 um
+// (docs/dialects.md, digits bound); the fifth inch decimal brings that to 0.31 um (a control that
+// holds #5061 only to 0.0001 in prints a trailing 0). a + b = 8 suits older Haas controls.
+constexpr int kIntDigits = 4, kDecimals = 4;
+constexpr int kIntDigitsInch = 3, kDecimalsInch = 5;
+int xyzIntDigits(bool inch) { return inch ? kIntDigitsInch : kIntDigits; }
+int xyzDecimals(bool inch) { return inch ? kDecimalsInch : kDecimals; }
 
 /// Upper-case comment text in Fanuc's safe character set (letters, digits, space and . , - + /
 /// : = *); anything else becomes a space; runs of spaces collapse.
@@ -141,8 +148,9 @@ std::string MacroBDialect::writeProgram(const nc::Program& p) const {
   auto flush = [&]() {
     for (size_t j = 0; j < pose_points.size(); ++j) {
       const int b = f_.store_base + 4 * static_cast<int>(j);
-      line(fmt::format("DPRNT[P{}*X#{}[{}{}]*Y#{}[{}{}]*Z#{}[{}{}]*T#{}[{}0]]", pose_points[j], b, kIntDigits, kDecimals,
-                       b + 1, kIntDigits, kDecimals, b + 2, kIntDigits, kDecimals, b + 3, f_.time_digits));
+      const int a = xyzIntDigits(inch), d = xyzDecimals(inch);
+      line(fmt::format("DPRNT[P{}*X#{}[{}{}]*Y#{}[{}{}]*Z#{}[{}{}]*T#{}[{}0]]", pose_points[j], b, a, d, b + 1, a, d,
+                       b + 2, a, d, b + 3, f_.time_digits));
     }
     pose_points.clear();
   };
@@ -224,8 +232,9 @@ std::string MacroBDialect::writeResults(const ProbePlan& plan, const Measurement
   for (const auto& t : run.points) {
     if (!plan.findPoint(t.point_id)) throw std::invalid_argument(fmt::format("run point {} is not in the plan", t.point_id));
     const Eigen::Vector3d x = t.position_m_mm * k;
-    out += fmt::format("P{} X{} Y{} Z{} T{}\r\n", t.point_id, fanucDprntNumber(x.x(), kIntDigits, kDecimals),
-                       fanucDprntNumber(x.y(), kIntDigits, kDecimals), fanucDprntNumber(x.z(), kIntDigits, kDecimals),
+    const int a = xyzIntDigits(inch), d = xyzDecimals(inch);
+    out += fmt::format("P{} X{} Y{} Z{} T{}\r\n", t.point_id, fanucDprntNumber(x.x(), a, d),
+                       fanucDprntNumber(x.y(), a, d), fanucDprntNumber(x.z(), a, d),
                        fanucDprntNumber(std::round((t.t_s - t0) * 1000.0), f_.time_digits, 0));
   }
   out += "END\r\n";

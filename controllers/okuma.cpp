@@ -17,7 +17,8 @@
 //   whose VSKP* hold the end point, or that ignores G31's signal, raises the alarm.
 // - File output (no documented form; Autodesk's Okuma post writes no results file): the
 //   user-task I/O commands FWRITC <file>;A (open for append), PUT 'text' and PUT VCn,4 (value
-//   with 4 decimals) into the line buffer, WRITE C (write the buffer as one line), CLOSE C. The
+//   with 4 decimals; VCn,5 on an inch machine) into the line buffer, WRITE C (write the buffer
+//   as one line), CLOSE C. The
 //   parser reads exactly that text and tolerates spaces, '+' signs and leading zeros in numbers.
 // - Line length: 80 characters. G93: never used.
 // - VC1-VC7 free for this program (standard: VC1-VC200).
@@ -41,6 +42,9 @@ constexpr size_t kMaxLineChars = 80;
 constexpr int kLabelBase = 1000;  // label N<1000 + id> after each point's check
 
 std::string unitName(bool inch) { return inch ? "INCH" : "MM"; }
+// Decimals of the printed trigger coordinates (PUT VCn,d): 4 in mm, 5 in inch (4 inch decimals
+// would round by up to 1.27 um and move the identified errors by up to 3.1 um, docs/dialects.md).
+int resultDecimals(bool inch) { return inch ? 5 : 4; }
 
 std::string safeName(std::string_view name) {
   std::string s;
@@ -163,11 +167,11 @@ class OkumaDialect final : public Dialect {
           line(fmt::format("VUACM[1]='PT{} NO TRIGGER'", id));
           line(fmt::format("VDOUT[992]={}", kLabelBase + id));
           line(fmt::format("N{} PUT 'P{} X'", kLabelBase + id, id));
-          line("PUT VC1,4");
+          line(fmt::format("PUT VC1,{}", resultDecimals(inch)));
           line("PUT ' Y'");
-          line("PUT VC2,4");
+          line(fmt::format("PUT VC2,{}", resultDecimals(inch)));
           line("PUT ' Z'");
-          line("PUT VC3,4");
+          line(fmt::format("PUT VC3,{}", resultDecimals(inch)));
           line("WRITE C");
           break;
         }
@@ -187,7 +191,8 @@ class OkumaDialect final : public Dialect {
     for (const auto& t : run.points) {
       if (!plan.findPoint(t.point_id)) throw std::invalid_argument(fmt::format("run point {} is not in the plan", t.point_id));
       const Eigen::Vector3d x = t.position_m_mm * k;
-      out += fmt::format("P{} X{} Y{} Z{}\r\n", t.point_id, ctl::fixed(x.x(), 4), ctl::fixed(x.y(), 4), ctl::fixed(x.z(), 4));
+      const int d = resultDecimals(inch);
+      out += fmt::format("P{} X{} Y{} Z{}\r\n", t.point_id, ctl::fixed(x.x(), d), ctl::fixed(x.y(), d), ctl::fixed(x.z(), d));
     }
     out += "END\r\n";
     return out;

@@ -19,7 +19,8 @@
 // - Block length: lines kept within 80 characters (Autodesk's limit for its other posts).
 // - R parameters retained and at least R90-R99 available (MD28050): only R90-R95 are used.
 // - WRITE error codes: ERR <> 0 is treated as a failure that stops the program.
-// - Number form of SPRINT "%10.4F": read as C's %10.4f; the parser accepts any spacing and sign.
+// - Number form of SPRINT "%10.4F" (inch: "%10.5F"): read as C's %10.4f; the parser accepts any
+//   spacing and sign.
 // - G93 rules: never used; probing and positioning run under G94.
 #include <fmt/format.h>
 
@@ -39,6 +40,9 @@ namespace {
 constexpr const char* kDialect = "siemens";
 constexpr size_t kMaxLineChars = 80;  // UNVERIFIED for Sinumerik: conservative
 constexpr int kDecimals = 4;          // SPRINT %10.4F and program coordinates
+// Results in inch: SPRINT %10.5F (4 inch decimals would round by up to 1.27 um and move the
+// identified errors by up to 3.1 um, docs/dialects.md).
+int resultDecimals(bool inch) { return inch ? 5 : kDecimals; }
 
 std::string unitName(bool inch) { return inch ? "INCH" : "MM"; }
 
@@ -171,7 +175,7 @@ class SiemensDialect final : public Dialect {
           line(fmt::format("R94={}", signedDiff("R91", x.y())));
           line(fmt::format("R95={}", signedDiff("R92", x.z())));
           line(fmt::format("IF ($AC_MEA[1]==0) OR (R93*R93+R94*R94+R95*R95<{}) GOTOF NOHIT{}", no_trigger_sq, id));
-          line(fmt::format("TXT=SPRINT(\"P{} X%10.4F Y%10.4F Z%10.4F\",R90,R91,R92)", id));
+          line(fmt::format("TXT=SPRINT(\"P{0} X%10.{1}F Y%10.{1}F Z%10.{1}F\",R90,R91,R92)", id, resultDecimals(inch)));
           line(write);
           line("IF ERR<>0 GOTOF WRFAIL");
           ids.push_back(id);
@@ -205,8 +209,8 @@ class SiemensDialect final : public Dialect {
     for (const auto& t : run.points) {
       if (!plan.findPoint(t.point_id)) throw std::invalid_argument(fmt::format("run point {} is not in the plan", t.point_id));
       const Eigen::Vector3d x = t.position_m_mm * k;
-      out += fmt::format("P{} X{:>10} Y{:>10} Z{:>10}\n", t.point_id, ctl::fixed(x.x(), kDecimals),
-                         ctl::fixed(x.y(), kDecimals), ctl::fixed(x.z(), kDecimals));
+      out += fmt::format("P{} X{:>10} Y{:>10} Z{:>10}\n", t.point_id, ctl::fixed(x.x(), resultDecimals(inch)),
+                         ctl::fixed(x.y(), resultDecimals(inch)), ctl::fixed(x.z(), resultDecimals(inch)));
     }
     out += "END\n";
     return out;

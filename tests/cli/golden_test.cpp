@@ -226,10 +226,10 @@ TEST(CliInch, EveryDialectRoundTripsOnAnInchCopyOfTheMachine) {
   }
   for (const auto& d : kDialects)
     for (int i = 0; i < 8; ++i) {
-      // 4 inch decimals round each coordinate by up to 1.27 um; digits_bound_test computes the
-      // bound per parameter on this plan: at most 3.14 um / 0.88 mdeg (LinuxCNC's 6 decimals:
-      // 0.01 of that; Heidenhain prints mm: 0.13 um / 0.035 mdeg).
-      const double tol = d == "linuxcnc" ? 0.01 : d == "heidenhain" ? 0.13 : (i < 4 ? 3.14 : 0.88);
+      // 5 inch decimals round each coordinate by up to 0.127 um; digits_bound_test computes the
+      // bound per parameter on this plan: at most 0.32 um / 0.09 mdeg (LinuxCNC's 6 decimals:
+      // 0.1 of that; Heidenhain prints 4 mm decimals: 0.13 um / 0.035 mdeg).
+      const double tol = d == "linuxcnc" ? 0.04 : d == "heidenhain" ? 0.13 : (i < 4 ? 0.32 : 0.09);
       EXPECT_NEAR(values[d][static_cast<size_t>(i)], values["csv"][static_cast<size_t>(i)], tol) << d << " " << names[i];
     }
 }

@@ -28,13 +28,14 @@ namespace {
 
 struct Printed {
   const char* dialect;
-  int decimals;  // of every printed coordinate
-  bool mm_only;  // prints mm on an inch machine too
+  int decimals;       // of every printed coordinate, mm machine
+  int inch_decimals;  // on an inch machine
+  bool mm_only;       // prints mm on an inch machine too
 };
-// From the writers: LinuxCNC LOG %.6f; DPRNT [44]; SPRINT %10.4F; Heidenhain format file 4
-// decimals, always MM; Okuma PUT VCn,4.
-const Printed kPrinted[] = {{"linuxcnc", 6, false}, {"fanuc", 4, false},     {"haas", 4, false},
-                            {"siemens", 4, false},  {"heidenhain", 4, true}, {"okuma", 4, false}};
+// From the writers: LinuxCNC LOG %.6f; DPRNT [44] / inch [35]; SPRINT %10.4F / inch %10.5F;
+// Heidenhain format file 4 decimals, always MM; Okuma PUT VCn,4 / inch VCn,5.
+const Printed kPrinted[] = {{"linuxcnc", 6, 6, false}, {"fanuc", 4, 5, false},     {"haas", 4, 5, false},
+                            {"siemens", 4, 5, false},  {"heidenhain", 4, 4, true}, {"okuma", 4, 5, false}};
 
 struct BoundSetup {
   ProbePlan plan;
@@ -84,7 +85,8 @@ TEST_P(DigitsBound, DialectPathEqualsCsvPathWithinThePrintedDigitsBound) {
   ASSERT_EQ(s.csv.summary.termination, Termination::Converged) << s.csv.summary.message;
   const Dialect& d = dialectByName(printed.dialect);
   const bool inch = unit == LengthUnit::Inch && !printed.mm_only;
-  const double half_unit_mm = 0.5 * std::pow(10.0, -printed.decimals) * (inch ? kMmPerInch : 1.0);
+  const int decimals = unit == LengthUnit::Inch ? printed.inch_decimals : printed.decimals;
+  const double half_unit_mm = 0.5 * std::pow(10.0, -decimals) * (inch ? kMmPerInch : 1.0);
 
   const MeasurementRun run = d.parseResults(d.writeResults(s.plan, s.sim), "sim.txt", s.plan);
   ASSERT_EQ(run.points.size(), s.sim.points.size());
@@ -118,7 +120,7 @@ TEST_P(DigitsBound, DialectPathEqualsCsvPathWithinThePrintedDigitsBound) {
                          reportUnit(p.kind));
   }
   // |dialect - csv| / bound per parameter, for the report (docs/dialects.md).
-  std::printf("[bound] %s %s:%s\n", printed.dialect, inch ? "inch" : "mm", table.c_str());
+  std::printf("[bound] %s %s, %d decimals:%s\n", printed.dialect, inch ? "inch" : "mm", decimals, table.c_str());
   // The rounding was exercised: the dialect's run differs from the exact one.
   EXPECT_GT(ds.cwiseAbs().maxCoeff(), 0.1 * half_unit_mm);
 }

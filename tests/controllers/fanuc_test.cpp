@@ -87,8 +87,8 @@ TEST(FanucResults, InchMachinePrintsInchesAndParsesBackToMm) {
   const std::string text = fc().writeResults(plan, run);
   EXPECT_NE(lines(text)[0].find("UNIT INCH"), std::string::npos);
   const MeasurementRun back = fc().parseResults(text, "res.txt", plan);
-  // [44] in inch: half a unit of the 4th decimal of an inch, in mm.
-  constexpr double kDprntRoundingInchInMm = 0.5e-4 * 25.4 + 1e-12;
+  // [35] in inch: half a unit of the 5th decimal of an inch, in mm.
+  constexpr double kDprntRoundingInchInMm = 0.5e-5 * 25.4 + 1e-12;
   for (size_t i = 0; i < back.points.size(); ++i)
     EXPECT_LE((back.points[i].position_m_mm - run.points[i].position_m_mm).cwiseAbs().maxCoeff(),
               kDprntRoundingInchInMm);
@@ -182,6 +182,7 @@ TEST(FanucProgram, InchProgramUsesG20AndPassesTheChecker) {
   const std::string text = fc().writeProgram(probeProgram(plan, "fanuc"));
   EXPECT_NE(text.find("\nG20\n"), std::string::npos);
   EXPECT_NE(text.find("]GT0.000001]GOTO1001\n"), std::string::npos) << "(0.001 in)^2 no-trigger threshold";
+  EXPECT_NE(text.find("\nDPRNT[P1*X#700[35]*Y#701[35]*Z#702[35]*T#703[90]]\n"), std::string::npos) << "5 inch decimals";
   EXPECT_EQ(fc().check(text, plan), std::vector<std::string>{});
 }
 

@@ -16,7 +16,7 @@ const Dialect& hs() { return dialectByName("haas"); }
 
 TEST(HaasResults, RoundTripWithinThePrintedDigitsAndTheMsTimer) {
   test::expectRoundTrip(hs(), test::acPlan(), 1.0, 4, test::Clock::Milliseconds);
-  test::expectRoundTrip(hs(), test::acPlan(LengthUnit::Inch), 25.4, 4, test::Clock::Milliseconds);
+  test::expectRoundTrip(hs(), test::acPlan(LengthUnit::Inch), 25.4, 5, test::Clock::Milliseconds);
 }
 
 TEST(HaasResults, HeaderClockAndPointLines) {

@@ -16,7 +16,7 @@ const Dialect& ok() { return dialectByName("okuma"); }
 
 TEST(OkumaResults, RoundTripWithinThePrintedDigitsAndNoTime) {
   test::expectRoundTrip(ok(), test::acPlan(), 1.0, 4, test::Clock::None);
-  test::expectRoundTrip(ok(), test::acPlan(LengthUnit::Inch), 25.4, 4, test::Clock::None);
+  test::expectRoundTrip(ok(), test::acPlan(LengthUnit::Inch), 25.4, 5, test::Clock::None);
 }
 
 TEST(OkumaResults, LinesAndTolerance) {
