@@ -5,6 +5,7 @@
 
 #include "cli/command.hpp"
 #include "cli/output.hpp"
+#include "cli/progress.hpp"
 #include "core/diagnosis.hpp"
 #include "core/diagnosis_figures.hpp"
 #include "core/json_io.hpp"
@@ -37,7 +38,15 @@ std::vector<Command> diagnoseCommands(CLI::App& app, const Common& common) {
              o.prior_sigma_um = plan.machine.probe.repeatability_um;
              std::string why;
              if (!o.validate(&why)) throw CLI::ValidationError("--alpha", why);
+             const auto progress = progressIndicator(common, "rotacal diagnose", "candidate fits");
+             auto total = std::make_shared<int>(0);
+             if (progress)
+               o.progress = [progress, total](int done, int all) {
+                 *total = all;
+                 progress(done, all);
+               };
              const Diagnosis dg = diagnose(plan, runs, o);
+             if (progress && *total > 0) progress(*total, *total);  // ends the line
              if (dg.baseline.summary.termination != Termination::Converged)
                failFile(a->results.front(), "baseline fit failed: " + dg.baseline.summary.message);
              const std::string text = diagnosisText(dg);

@@ -74,13 +74,27 @@ std::string numCell(double v, int decimals) {
   return std::isfinite(v) ? "<span class=\"n\">" + num(v, decimals) + "</span>" : "&ndash;";
 }
 
+/// Keys of a parameter object in the papers' order (000 Table 1, 002 Table 2), others after in
+/// their own order (JSON objects come back sorted by name).
+std::vector<std::string> paperOrder(const Json& obj) {
+  static const std::vector<std::string> order = {"dx_AY", "dy_AY", "dz_AY", "dy_CA", "a_AY", "b_AY", "c_AY", "b_CA",
+                                                 "dx_BY", "dy_CB", "dz_BY", "a_BY", "b_BY", "c_BY"};
+  std::vector<std::string> out;
+  for (const auto& n : order)
+    if (obj.contains(n)) out.push_back(n);
+  for (const auto& [k, v] : obj.items())
+    if (std::find(order.begin(), order.end(), k) == order.end()) out.push_back(k);
+  return out;
+}
+
 /// A table of location errors {"name": {"value","unit","u","iso"}} with optional extra columns.
 std::string locationTable(const Json& le, const std::vector<std::pair<std::string, const Json*>>& others = {}) {
   std::string s = "<table class=\"params\">";
   std::vector<std::string> head = {"parameter", "ISO 230-7", "value", "u (k = 1)", "unit"};
   for (const auto& o : others) head.push_back(escape(o.first));
   s += row(head, true);
-  for (const auto& [name, e] : le.items()) {
+  for (const auto& name : paperOrder(le)) {
+    const Json& e = le[name];
     std::vector<std::string> cells = {escape(name), escape(str(e, "iso")), numCell(dbl(e, "value"), 3),
                                       numCell(dbl(e, "u"), 3), escape(str(e, "unit"))};
     for (const auto& o : others) {
@@ -288,7 +302,8 @@ std::vector<Figure> runFigures(const Json& doc) {
   std::map<std::string, std::pair<Figure*, size_t>> index;
   for (size_t r = 0; r < rit->size(); ++r) {
     const Json& le = (*rit)[r]["location_errors"];
-    for (const auto& [name, e] : le.items()) {
+    for (const auto& name : paperOrder(le)) {
+      const Json& e = le[name];
       Figure* f = str(e, "unit") == "um" ? &lengths : &angles;
       if (!index.count(name)) {
         index[name] = {f, f->series.size()};
@@ -442,7 +457,8 @@ std::string historyBody(const Json& doc) {
   if (doc.contains("trends")) {
     s += "<h2>Trend of each parameter</h2><p class=\"note\">" + escape(str(doc, "test")) + "</p><table>" +
          row({"parameter", "unit", "drift", "drift rate", "chi2 / dof (drift fit)", "step", "step size", "verdict"}, true);
-    for (const auto& [name, t] : doc["trends"].items()) {
+    for (const auto& name : paperOrder(doc["trends"])) {
+      const Json& t = doc["trends"][name];
       const std::string verdict = str(t, "verdict");
       const std::string cls = verdict == "step" ? "flag-step" : verdict == "drift" ? "flag-drift" : "";
       s += fmt::format("<tr class=\"{}\">", cls);
