@@ -1,5 +1,6 @@
 #include "history/trend_report.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <map>
@@ -41,6 +42,14 @@ Json historyJson(const std::string& machine_id, const std::vector<Calibration>& 
     }
   }
   j["calibrations"] = cl;
+  // The papers' order (000 Table 1, 002 Table 2), others after.
+  static const std::vector<std::string> paper = {"dx_AY", "dy_AY", "dz_AY", "dy_CA", "a_AY", "b_AY", "c_AY", "b_CA",
+                                                 "dx_BY", "dy_CB", "dz_BY", "a_BY", "b_BY", "c_BY"};
+  std::stable_sort(order.begin(), order.end(), [](const std::string& a, const std::string& b) {
+    const auto ia = std::find(paper.begin(), paper.end(), a) - paper.begin();
+    const auto ib = std::find(paper.begin(), paper.end(), b) - paper.begin();
+    return ia < ib;
+  });
   Json trends = Json::object(), figures = Json::array();
   for (const auto& name : order) {
     const auto& pts = series[name];
@@ -107,6 +116,26 @@ Json historyJson(const std::string& machine_id, const std::vector<Calibration>& 
                                 seqs[name][static_cast<size_t>(*t.step_after)]);
     else if (t.drift)
       fig["note"] = fmt::format("Drift of {:.3f} {}/day (u {:.3f}).", t.drift_per_day, unit[name], t.drift_u);
+    if (t.step_after) {
+      // Draw the step as a step: both levels at the midpoint between the calibrations around it.
+      const size_t k = static_cast<size_t>(*t.step_after);
+      const double tm = r6(0.5 * (pts[k].t_days + pts[k + 1].t_days));
+      const double slope = t.step_drift_per_day;
+      Json fx = Json::array(), fy = Json::array();
+      for (size_t i = 0; i < pts.size(); ++i) {
+        fx.push_back(x[i]);
+        fy.push_back(fit[i]);
+        if (i == k) {
+          const double before = fit[k].get<double>() + slope * (tm - pts[k].t_days);
+          fx.push_back(tm);
+          fy.push_back(r6(before));
+          fx.push_back(tm);
+          fy.push_back(r6(before + t.step_size));
+        }
+      }
+      fig["series"][1]["x"] = fx;
+      fig["series"][1]["y"] = fy;
+    }
     figures.push_back(fig);
   }
   j["trends"] = trends;
