@@ -4,7 +4,10 @@
 #include <vector>
 
 #include "cli/command.hpp"
+#include "cli/output.hpp"
+#include "cli/progress.hpp"
 #include "core/diagnosis.hpp"
+#include "core/diagnosis_figures.hpp"
 #include "core/json_io.hpp"
 #include "core/probe_plan.hpp"
 
@@ -12,7 +15,7 @@ namespace rotacal {
 
 std::vector<Command> diagnoseCommands(CLI::App& app, const Common& common) {
   struct Args {
-    std::string plan_file, dialect, json_out, text_out;
+    std::string plan_file, dialect, json_out, text_out, html_out;
     std::vector<std::string> results;
     double alpha = 1e-3;
   };
@@ -21,7 +24,8 @@ std::vector<Command> diagnoseCommands(CLI::App& app, const Common& common) {
   cmd->add_option("--plan", a->plan_file, "PLAN.json")->required();
   cmd->add_option("--results", a->results, "RESULTS... (repeats of the plan, in time order)")->required();
   cmd->add_option("--dialect", a->dialect, "csv | linuxcnc | fanuc | haas | siemens | heidenhain | okuma")->required();
-  cmd->add_option("--json", a->json_out, "DIAGNOSIS.json")->required();
+  cmd->add_option("--json", a->json_out, "DIAGNOSIS.json (- for stdout)")->required();
+  cmd->add_option("--html", a->html_out, "DIAGNOSIS.html: the report to look at, self-contained");
   cmd->add_option("--text", a->text_out, "the readable summary, also printed on stdout");
   cmd->add_option("--alpha", a->alpha, "false-alarm rate of the tests (default 0.001)");
   return {{cmd, [a, &common] {
@@ -34,13 +38,24 @@ std::vector<Command> diagnoseCommands(CLI::App& app, const Common& common) {
              o.prior_sigma_um = plan.machine.probe.repeatability_um;
              std::string why;
              if (!o.validate(&why)) throw CLI::ValidationError("--alpha", why);
+             const auto progress = progressIndicator(common, "rotacal diagnose", "candidate fits");
+             auto total = std::make_shared<int>(0);
+             if (progress)
+               o.progress = [progress, total](int done, int all) {
+                 *total = all;
+                 progress(done, all);
+               };
              const Diagnosis dg = diagnose(plan, runs, o);
+             if (progress && *total > 0) progress(*total, *total);  // ends the line
              if (dg.baseline.summary.termination != Termination::Converged)
                failFile(a->results.front(), "baseline fit failed: " + dg.baseline.summary.message);
              const std::string text = diagnosisText(dg);
-             writeFileAtomic(a->json_out, diagnosisToJson(dg).dump(1) + "\n");
+             Json dj = diagnosisToJson(dg);
+             dj["figures"] = diagnosisFigures(dg, plan);  // drawn by the HTML report
+             writeOutput(a->json_out, dj.dump(1) + "\n");
+             writeHtml(a->html_out, dj);
              if (!a->text_out.empty()) writeFileAtomic(a->text_out, text);
-             say(common, text);
+             sayUnlessPiped(common, text, a->json_out, a->html_out);
              return 0;
            }}};
 }

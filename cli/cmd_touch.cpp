@@ -9,11 +9,13 @@
 #include <fmt/format.h>
 
 #include "cli/command.hpp"
+#include "cli/output.hpp"
 #include "controllers/dialect.hpp"
 #include "core/errors.hpp"
 #include "core/identification.hpp"
 #include "core/json_io.hpp"
 #include "core/machine.hpp"
+#include "core/point_deviations.hpp"
 #include "core/probe_plan.hpp"
 #include "core/report.hpp"
 #include "core/simulation.hpp"
@@ -88,7 +90,8 @@ int cmdSimulate(const Common& c, const std::string& plan_file, const std::string
 
 int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<std::string>& results,
                const std::string& dialect_name, const std::string& method_name, const std::string& json_out,
-               const std::string& text_out, const std::string& offsets_out, bool force) {
+               const std::string& text_out, const std::string& offsets_out, bool force,
+               const std::string& html_out) {
   const ProbePlan plan = loadPlan(plan_file);
   const Dialect& d = dialectOrFail(dialect_name);
   Method method;
@@ -125,14 +128,17 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
     }
   }
   const std::string text = analysisText(a);
-  if (!json_out.empty()) writeFileAtomic(json_out, analysisToJson(a).dump(1) + "\n");
+  Json report_json = analysisToJson(a);
+  report_json["points"] = pointDeviationsJson(plan, runs, a.main);  // the HTML report's deviation views
+  if (!json_out.empty()) writeOutput(json_out, report_json.dump(1) + "\n");
+  writeHtml(html_out, report_json);
   if (!text_out.empty()) writeFileAtomic(text_out, text);
   if (!offsets_out.empty()) {
     OffsetRequest req;
     req.plan = &plan;
     req.identified = a.main.estimate;
     req.u = a.main.u;
-    req.report_file = json_out.empty() ? results.front() : json_out;
+    req.report_file = json_out.empty() || json_out == "-" ? results.front() : json_out;
     req.force = force;
     req.path = offsets_out;
     if (std::filesystem::exists(offsets_out)) req.previous_text = readTextFile(offsets_out);
@@ -144,7 +150,7 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
     }
     writeFileAtomic(offsets_out, off);
   }
-  say(c, text);
+  sayUnlessPiped(c, text, json_out, html_out);
   if (a.main.summary.termination != Termination::Converged)
     std::fprintf(stderr, "rotacal: warning: %s\n", a.main.summary.message.c_str());
   return 0;
@@ -156,7 +162,7 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
 std::vector<Command> touchCommands(CLI::App& app, const Common& common) {
   struct Args {
     std::string cycle, machine_file, plan_file, dialect, out, truth_file, method = "lsq_per_point", json_out, text_out,
-        offsets_out;
+        offsets_out, html_out;
     std::vector<std::string> sets, results;
     double noise_um = 0.0, start_s = 0.0;
     std::uint64_t seed = 1;
@@ -196,13 +202,14 @@ std::vector<Command> touchCommands(CLI::App& app, const Common& common) {
   ana->add_option("--results", a->results, "RESULTS... (repeats of the plan, in time order)")->required();
   ana->add_option("--dialect", a->dialect, "csv | linuxcnc | fanuc | haas | siemens | heidenhain | okuma")->required();
   ana->add_option("--method", a->method, "lsq_per_point (form-immune, default) | lsq_rigid_setup | closed_form");
-  ana->add_option("--json", a->json_out, "REPORT.json");
+  ana->add_option("--json", a->json_out, "REPORT.json (- for stdout)");
+  ana->add_option("--html", a->html_out, "REPORT.html: the report to look at, self-contained");
   ana->add_option("--text", a->text_out, "the readable summary, also printed on stdout");
   ana->add_option("--offsets", a->offsets_out, "compensation in the dialect's own form");
   ana->add_flag("--force", a->force, "write offsets beyond the plausibility limit");
   cmds.push_back({ana, [a, &common] {
                     return cmdAnalyze(common, a->plan_file, a->results, a->dialect, a->method, a->json_out, a->text_out,
-                                      a->offsets_out, a->force);
+                                      a->offsets_out, a->force, a->html_out);
                   }});
   return cmds;
 }

@@ -14,6 +14,8 @@
 #include <fmt/format.h>
 
 #include "cli/command.hpp"
+#include "cli/output.hpp"
+#include "cli/progress.hpp"
 #include "core/contributors.hpp"
 #include "core/errors.hpp"
 #include "core/json_io.hpp"
@@ -26,20 +28,6 @@
 
 namespace rotacal {
 namespace {
-
-/// "\r  640/1000 runs" on stderr when it is a terminal, at most every 0.1 s.
-std::function<void(int, int)> progressIndicator(const Common& c, const std::string& what) {
-  if (c.quiet || !isatty(fileno(stderr))) return {};
-  auto last = std::make_shared<std::chrono::steady_clock::time_point>();
-  return [last, what](int done, int total) {
-    const auto now = std::chrono::steady_clock::now();
-    if (done < total && now - *last < std::chrono::milliseconds(100)) return;
-    *last = now;
-    std::fprintf(stderr, "\r%s: %d/%d runs (%3.0f %%)%s", what.c_str(), done, total, 100.0 * done / total,
-                 done == total ? "\n" : "");
-    std::fflush(stderr);
-  };
-}
 
 std::vector<UncertaintyMethod> parseMethods(const std::string& list) {
   std::vector<UncertaintyMethod> out;
@@ -87,9 +75,9 @@ int cmdUncertainty(const Common& c, const std::string& plan_file, const std::str
   const std::string text = uncertaintyText(s, cs) +
                            fmt::format("\ntime: {:.3f} s to linearise the chain, {:.3f} s for {} runs on {} thread(s)\n",
                                        s.setup_seconds, s.run_seconds, s.runs, s.threads);
-  writeFileAtomic(json_out, uncertaintyToJson(s, cs, plan_file).dump(1) + "\n");
+  writeOutput(json_out, uncertaintyToJson(s, cs, plan_file).dump(1) + "\n");
   if (!text_out.empty()) writeFileAtomic(text_out, text);
-  say(c, text);
+  sayUnlessPiped(c, text, json_out);
   if (s.failed > 0) std::fprintf(stderr, "rotacal: warning: %d least-squares identifications did not converge\n", s.failed);
   return 0;
 }
@@ -203,8 +191,11 @@ int cmdDesign(const Common& c, const std::string& machine_file, const std::strin
   const ContributorSet cs = loadContributors(contrib_file);
   const auto t0 = std::chrono::steady_clock::now();
   DesignResult d;
+  const auto progress = progressIndicator(c, "rotacal design", "exchange steps");
+  o.progress = progress;
   try {
     d = designPlan(machine, cs, o);
+    if (progress) progress(o.exchange_passes, o.exchange_passes);  // ends the line
   } catch (const std::invalid_argument& e) {
     failFile(machine_file, e.what());
   }
@@ -268,9 +259,9 @@ int cmdDesign(const Common& c, const std::string& machine_file, const std::strin
     Json sw = Json::array();
     for (const auto& r : sweep_rows) sw.push_back(rowJson(r));
     if (!sweep_rows.empty()) j["sweep"] = sw;
-    writeFileAtomic(json_out, j.dump(1) + "\n");
+    writeOutput(json_out, j.dump(1) + "\n");
   }
-  say(c, t);
+  sayUnlessPiped(c, t, json_out);
   return 0;
 }
 
@@ -294,7 +285,7 @@ std::vector<Command> uncertaintyCommands(CLI::App& app, const Common& common) {
   unc->add_option("--runs", a->runs, "Monte Carlo runs (000: 1000)")->required();
   unc->add_option("--seed", a->seed, "random seed (results do not depend on the thread count)");
   unc->add_flag("--combined-only", a->combined_only, "skip the per-contributor table");
-  unc->add_option("--json", a->json_out, "OUT.json (rotacal-uncertainty/1)")->required();
+  unc->add_option("--json", a->json_out, "OUT.json (rotacal-uncertainty/1; - for stdout)")->required();
   unc->add_flag("--exact", a->exact,
                 "exact simulation of every point and the estimators themselves in every run (slow; default: the "
                 "chain linearised, checked against this in the tests)");
@@ -322,7 +313,7 @@ std::vector<Command> uncertaintyCommands(CLI::App& app, const Common& common) {
   des->add_option("--runs", a->design_runs, "Monte Carlo runs of the comparison (default 1000)");
   des->add_option("--seed", a->seed, "random seed of the comparison");
   des->add_option("-o,--output", a->out, "PLAN.json of the designed cycle")->required();
-  des->add_option("--json", a->json_out, "DESIGN.json: the design and the comparison");
+  des->add_option("--json", a->json_out, "DESIGN.json: the design and the comparison (- for stdout)");
   cmds.push_back({des, [a, &common] {
                     return cmdDesign(common, a->machine_file, a->contrib_file, a->points, a->criterion, a->a_list,
                                      a->c_list, a->passes, a->sweep, a->design_runs, a->seed, a->out, a->json_out);

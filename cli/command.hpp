@@ -26,6 +26,8 @@ std::vector<Command> touchCommands(CLI::App& app, const Common& common);
 std::vector<Command> uncertaintyCommands(CLI::App& app, const Common& common);
 std::vector<Command> diagnoseCommands(CLI::App& app, const Common& common);
 std::vector<Command> compensateCommands(CLI::App& app, const Common& common);
+std::vector<Command> reportCommands(CLI::App& app, const Common& common);
+std::vector<Command> historyCommands(CLI::App& app, const Common& common);
 
 /// A failure tied to a file given on the command line, when the core cannot name a line.
 [[noreturn]] inline void failFile(const std::string& file, const std::string& what) { throw InputError(file, 0, what); }

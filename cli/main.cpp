@@ -23,6 +23,8 @@ int main(int argc, char** argv) {
   for (auto& c : uncertaintyCommands(app, common)) commands.push_back(c);
   for (auto& c : diagnoseCommands(app, common)) commands.push_back(c);
   for (auto& c : compensateCommands(app, common)) commands.push_back(c);
+  for (auto& c : reportCommands(app, common)) commands.push_back(c);
+  for (auto& c : historyCommands(app, common)) commands.push_back(c);
 
   try {
     app.parse(argc, argv);

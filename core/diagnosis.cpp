@@ -225,6 +225,9 @@ Diagnosis diagnose(const ProbePlan& plan, const std::vector<MeasurementRun>& run
     std::vector<Model> trials;
     std::vector<size_t> trial_cand;
     for (size_t c = 0; c < cands.size(); ++c) {
+      if (options.progress)
+        options.progress(step * static_cast<int>(cands.size()) + static_cast<int>(c),
+                         options.max_causes * static_cast<int>(cands.size()));
       if (used_causes.count(cands[c]->cause())) continue;
       Model t;
       t.ext = current.ext;

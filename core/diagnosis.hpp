@@ -6,6 +6,7 @@
 // predicts held-out data (leave one pose out) better by a margin the sampling of that
 // held-out residual cannot explain. Causes the plan cannot tell from the location errors (or
 // from each other) are listed as confounded, with how to separate them.
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,8 @@ struct DiagnosisOptions {
   double max_correlation = 0.95;  // above this a cause is reported as confounded with a location error
   double prior_sigma_um = 0.7;  // the probe's repeatability (MACHINE.json)
   std::vector<ExtensionPtr> candidates;  // empty: the catalog for the plan
+  /// Called before each candidate fit with (fits done, fits at most); may be empty.
+  std::function<void(int done, int total)> progress;
 
   bool validate(std::string* why) const;
 };

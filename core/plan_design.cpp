@@ -329,6 +329,8 @@ DesignResult designPlan(const MachineModel& machine, const ContributorSet& cs, c
   for (int pass = 0; pass < o.exchange_passes; ++pass) {
     int swaps = 0;
     for (size_t s = 0; s < S.size(); ++s) {
+      if (o.progress)
+        o.progress(pass * static_cast<int>(S.size()) + static_cast<int>(s), o.exchange_passes * static_cast<int>(S.size()));
       int best_i = -1;
       double best_f = f * (1.0 - 1e-9);
       for (int i = 0; i < n; ++i) {

@@ -25,6 +25,7 @@
 // reaches it by the rule of the touch154 plan (core/touch154.hpp: no face pointing down; on a
 // face not facing up the probe body, stylus_length above the ball, clears the piece's top by
 // body_clearance) and its probing moves stay within the strokes.
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -44,6 +45,8 @@ struct DesignOptions {
   std::vector<double> top_offsets_mm{-40, -20, 0, 20, 40};   // grid on the top, from its centre
   enum class Criterion { A, D } criterion = Criterion::A;
   int exchange_passes = 2;
+  /// Called after each slot of each exchange pass with (slots done, slots in all); may be empty.
+  std::function<void(int done, int total)> progress;
 
   bool validate(std::string* why) const;
 };

@@ -1,0 +1,307 @@
+#include "history/store.hpp"
+
+#include <sqlite3.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <filesystem>
+#include <memory>
+#include <stdexcept>
+
+#include "core/errors.hpp"
+
+namespace rotacal::history {
+
+namespace {
+
+constexpr int kSchemaVersion = 1;
+constexpr int kBusyTimeoutMs = 30000;  // concurrent adds wait for each other this long at most
+
+const char* kSchema = R"sql(
+CREATE TABLE IF NOT EXISTS meta(key TEXT PRIMARY KEY, value TEXT NOT NULL);
+CREATE TABLE IF NOT EXISTS calibration(
+  id INTEGER PRIMARY KEY AUTOINCREMENT,
+  machine_id TEXT NOT NULL,
+  time_s REAL NOT NULL,
+  time_utc TEXT NOT NULL,
+  added_utc TEXT NOT NULL,
+  cycle TEXT NOT NULL,
+  method TEXT NOT NULL,
+  machine_name TEXT NOT NULL,
+  source TEXT NOT NULL,
+  residual_rms_um REAL NOT NULL,
+  points_used INTEGER NOT NULL,
+  plan_json TEXT NOT NULL);
+CREATE INDEX IF NOT EXISTS calibration_by_machine ON calibration(machine_id, time_s, id);
+CREATE TABLE IF NOT EXISTS parameter(
+  calibration_id INTEGER NOT NULL REFERENCES calibration(id) ON DELETE CASCADE,
+  name TEXT NOT NULL,
+  iso TEXT NOT NULL,
+  unit TEXT NOT NULL,
+  value REAL NOT NULL,
+  u REAL NOT NULL,
+  PRIMARY KEY(calibration_id, name));
+)sql";
+
+struct Stmt {
+  sqlite3_stmt* s = nullptr;
+  ~Stmt() { sqlite3_finalize(s); }
+};
+
+}  // namespace
+
+std::string defaultDatabasePath() {
+  namespace fs = std::filesystem;
+  if (const char* x = std::getenv("XDG_DATA_HOME"); x != nullptr && *x == '/')
+    return (fs::path(x) / "rotacal" / "history.sqlite").string();
+  const char* home = std::getenv("HOME");
+  if (home == nullptr || *home == '\0') throw std::runtime_error("neither XDG_DATA_HOME nor HOME is set: give --db FILE");
+  return (fs::path(home) / ".local" / "share" / "rotacal" / "history.sqlite").string();
+}
+
+double parseIsoTime(const std::string& text) {
+  int Y = 0, M = 0, D = 0, h = 0, m = 0, s = 0;
+  char tail = 0;
+  const int n = std::sscanf(text.c_str(), "%4d-%2d-%2dT%2d:%2d:%2d%c", &Y, &M, &D, &h, &m, &s, &tail);
+  const bool date_only = n == 3 && text.size() == 10;
+  if (!date_only && !(n == 7 && tail == 'Z' && text.size() == 20))
+    throw std::invalid_argument("time '" + text + "' is not YYYY-MM-DD or YYYY-MM-DDThh:mm:ssZ (UTC)");
+  if (M < 1 || M > 12 || D < 1 || D > 31 || h > 23 || m > 59 || s > 60)
+    throw std::invalid_argument("time '" + text + "' is out of range");
+  std::tm tm{};
+  tm.tm_year = Y - 1900;
+  tm.tm_mon = M - 1;
+  tm.tm_mday = D;
+  tm.tm_hour = h;
+  tm.tm_min = m;
+  tm.tm_sec = s;
+  return static_cast<double>(timegm(&tm));
+}
+
+std::string isoTime(double unix_s) {
+  const std::time_t t = static_cast<std::time_t>(std::floor(unix_s));
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+Calibration calibrationFromReport(const JsonDoc& doc, const std::string& machine_id, double time_s) {
+  const Json& j = doc.value;
+  if (!j.is_object() || j.value("format", "") != "rotacal-report/1")
+    doc.fail("format", "not a rotacal report (format rotacal-report/1 expected)");
+  Calibration c;
+  c.machine_id = machine_id;
+  c.time_s = time_s;
+  c.time_utc = isoTime(time_s);
+  c.cycle = requireString(doc, j, "cycle");
+  c.method = j.value("method", "");
+  c.machine_name = j.value("machine", "");
+  c.residual_rms_um = requireNumber(doc, j, "residual_rms_um");
+  c.points_used = static_cast<int>(numberOr(doc, j, "points_used", 0));
+  c.source = doc.file;
+  Json plan = {{"cycle", c.cycle}};
+  if (j.contains("machine_model")) plan["machine"] = j["machine_model"];
+  c.plan_json = plan.dump();
+  if (!j.contains("location_errors") || !j["location_errors"].is_object() || j["location_errors"].empty())
+    doc.fail("location_errors", "no location_errors in the report");
+  for (const auto& [name, e] : j["location_errors"].items()) {
+    StoredParameter p;
+    p.name = name;
+    p.value = requireNumber(doc, e, "value");
+    p.u = requireNumber(doc, e, "u");
+    p.unit = requireString(doc, e, "unit");
+    p.iso = e.value("iso", "");
+    c.parameters.push_back(p);
+  }
+  return c;
+}
+
+Database::Database(const std::string& path, bool create) : path_(path) {
+  namespace fs = std::filesystem;
+  if (!create && !fs::exists(path)) throw InputError(path, 0, "no history database here (add a calibration first)");
+  if (create && fs::path(path).has_parent_path()) {
+    std::error_code ec;
+    fs::create_directories(fs::path(path).parent_path(), ec);
+  }
+  const int flags = SQLITE_OPEN_READWRITE | (create ? SQLITE_OPEN_CREATE : 0) | SQLITE_OPEN_FULLMUTEX;
+  if (sqlite3_open_v2(path.c_str(), &db_, flags, nullptr) != SQLITE_OK) fail("cannot open");
+  sqlite3_busy_timeout(db_, kBusyTimeoutMs);
+  // Reading the schema is the first touch of the file's content: a file that is not a
+  // database (or whose header is damaged) fails here with SQLITE_NOTADB.
+  exec("PRAGMA foreign_keys=ON");
+  {
+    Stmt st;
+    if (sqlite3_prepare_v2(db_, "PRAGMA journal_mode=WAL", -1, &st.s, nullptr) != SQLITE_OK) fail("cannot read");
+    if (sqlite3_step(st.s) != SQLITE_ROW) fail("cannot set WAL mode");
+  }
+  exec("PRAGMA synchronous=NORMAL");
+  // Creating the schema: one writer at a time, and idempotent.
+  exec("BEGIN IMMEDIATE");
+  try {
+    {
+      Stmt st;
+      if (sqlite3_prepare_v2(db_, "SELECT count(*) FROM sqlite_master WHERE type='table' AND name NOT IN "
+                                  "('meta','calibration','parameter','sqlite_sequence')",
+                             -1, &st.s, nullptr) != SQLITE_OK)
+        fail("cannot read the schema");
+      sqlite3_step(st.s);
+      if (sqlite3_column_int(st.s, 0) != 0) fail("not a rotacal history database (it holds other tables)");
+    }
+    exec(kSchema);
+    exec("INSERT OR IGNORE INTO meta(key, value) VALUES('format', 'rotacal-history/1')");
+    exec(("INSERT OR IGNORE INTO meta(key, value) VALUES('schema_version', '" + std::to_string(kSchemaVersion) + "')").c_str());
+    {
+      Stmt st;
+      if (sqlite3_prepare_v2(db_, "SELECT value FROM meta WHERE key='schema_version'", -1, &st.s, nullptr) != SQLITE_OK ||
+          sqlite3_step(st.s) != SQLITE_ROW)
+        fail("cannot read the schema version");
+      const std::string v = reinterpret_cast<const char*>(sqlite3_column_text(st.s, 0));
+      if (v != std::to_string(kSchemaVersion)) fail("schema version " + v + " is not the " + std::to_string(kSchemaVersion) + " this rotacal reads");
+    }
+    exec("COMMIT");
+  } catch (...) {
+    sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+    throw;
+  }
+  // A damaged page behind a valid header shows up only when read: check the whole file.
+  Stmt st;
+  if (sqlite3_prepare_v2(db_, "PRAGMA quick_check", -1, &st.s, nullptr) != SQLITE_OK) fail("cannot check");
+  if (sqlite3_step(st.s) != SQLITE_ROW) fail("integrity check failed");
+  const std::string ok = reinterpret_cast<const char*>(sqlite3_column_text(st.s, 0));
+  if (ok != "ok") fail("damaged (integrity check: " + ok + ")");
+}
+
+Database::~Database() { sqlite3_close(db_); }
+
+void Database::fail(const std::string& what) const {
+  std::string msg = what;
+  if (db_ != nullptr) {
+    const int code = sqlite3_errcode(db_);
+    if (code == SQLITE_NOTADB || code == SQLITE_CORRUPT)
+      msg = "not a rotacal history database, or damaged (" + std::string(sqlite3_errmsg(db_)) +
+            "); keep it for inspection and use --db NEW_FILE";
+    else if (code != SQLITE_OK && code != SQLITE_ROW && code != SQLITE_DONE)
+      msg += ": " + std::string(sqlite3_errmsg(db_));
+  }
+  throw InputError(path_, 0, msg);
+}
+
+void Database::exec(const char* sql) const {
+  char* err = nullptr;
+  if (sqlite3_exec(db_, sql, nullptr, nullptr, &err) != SQLITE_OK) {
+    const std::string e = err ? err : "unknown";
+    sqlite3_free(err);
+    fail(e);
+  }
+}
+
+long long Database::add(const Calibration& c) {
+  exec("BEGIN IMMEDIATE");
+  try {
+    Stmt st;
+    if (sqlite3_prepare_v2(db_,
+                           "INSERT INTO calibration(machine_id, time_s, time_utc, added_utc, cycle, method, machine_name, "
+                           "source, residual_rms_um, points_used, plan_json) VALUES(?,?,?,?,?,?,?,?,?,?,?)",
+                           -1, &st.s, nullptr) != SQLITE_OK)
+      fail("cannot prepare the insert");
+    const std::string added = isoTime(static_cast<double>(std::time(nullptr)));
+    sqlite3_bind_text(st.s, 1, c.machine_id.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_double(st.s, 2, c.time_s);
+    sqlite3_bind_text(st.s, 3, c.time_utc.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(st.s, 4, added.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(st.s, 5, c.cycle.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(st.s, 6, c.method.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(st.s, 7, c.machine_name.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(st.s, 8, c.source.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_double(st.s, 9, c.residual_rms_um);
+    sqlite3_bind_int(st.s, 10, c.points_used);
+    sqlite3_bind_text(st.s, 11, c.plan_json.c_str(), -1, SQLITE_TRANSIENT);
+    if (sqlite3_step(st.s) != SQLITE_DONE) fail("cannot store the calibration");
+    const long long id = sqlite3_last_insert_rowid(db_);
+    Stmt ps;
+    if (sqlite3_prepare_v2(db_, "INSERT INTO parameter(calibration_id, name, iso, unit, value, u) VALUES(?,?,?,?,?,?)", -1,
+                           &ps.s, nullptr) != SQLITE_OK)
+      fail("cannot prepare the insert");
+    for (const auto& p : c.parameters) {
+      sqlite3_reset(ps.s);
+      sqlite3_bind_int64(ps.s, 1, id);
+      sqlite3_bind_text(ps.s, 2, p.name.c_str(), -1, SQLITE_TRANSIENT);
+      sqlite3_bind_text(ps.s, 3, p.iso.c_str(), -1, SQLITE_TRANSIENT);
+      sqlite3_bind_text(ps.s, 4, p.unit.c_str(), -1, SQLITE_TRANSIENT);
+      sqlite3_bind_double(ps.s, 5, p.value);
+      sqlite3_bind_double(ps.s, 6, p.u);
+      if (sqlite3_step(ps.s) != SQLITE_DONE) fail("cannot store parameter " + p.name);
+    }
+    exec("COMMIT");
+    return id;
+  } catch (...) {
+    sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+    throw;
+  }
+}
+
+std::vector<Calibration> Database::list(const std::string& machine_id) const {
+  std::vector<Calibration> out;
+  Stmt st;
+  if (sqlite3_prepare_v2(db_,
+                         "SELECT id, time_s, time_utc, cycle, method, machine_name, source, residual_rms_um, points_used, "
+                         "plan_json FROM calibration WHERE machine_id = ? ORDER BY time_s, id",
+                         -1, &st.s, nullptr) != SQLITE_OK)
+    fail("cannot read the calibrations");
+  sqlite3_bind_text(st.s, 1, machine_id.c_str(), -1, SQLITE_TRANSIENT);
+  auto text = [&](int col) {
+    const unsigned char* t = sqlite3_column_text(st.s, col);
+    return t ? std::string(reinterpret_cast<const char*>(t)) : std::string();
+  };
+  int rc;
+  while ((rc = sqlite3_step(st.s)) == SQLITE_ROW) {
+    Calibration c;
+    c.id = sqlite3_column_int64(st.s, 0);
+    c.machine_id = machine_id;
+    c.time_s = sqlite3_column_double(st.s, 1);
+    c.time_utc = text(2);
+    c.cycle = text(3);
+    c.method = text(4);
+    c.machine_name = text(5);
+    c.source = text(6);
+    c.residual_rms_um = sqlite3_column_double(st.s, 7);
+    c.points_used = sqlite3_column_int(st.s, 8);
+    c.plan_json = text(9);
+    out.push_back(std::move(c));
+  }
+  if (rc != SQLITE_DONE) fail("cannot read the calibrations");
+  Stmt ps;
+  if (sqlite3_prepare_v2(db_, "SELECT name, iso, unit, value, u FROM parameter WHERE calibration_id = ? ORDER BY rowid", -1,
+                         &ps.s, nullptr) != SQLITE_OK)
+    fail("cannot read the parameters");
+  for (auto& c : out) {
+    sqlite3_reset(ps.s);
+    sqlite3_bind_int64(ps.s, 1, c.id);
+    while ((rc = sqlite3_step(ps.s)) == SQLITE_ROW) {
+      StoredParameter p;
+      p.name = reinterpret_cast<const char*>(sqlite3_column_text(ps.s, 0));
+      p.iso = reinterpret_cast<const char*>(sqlite3_column_text(ps.s, 1));
+      p.unit = reinterpret_cast<const char*>(sqlite3_column_text(ps.s, 2));
+      p.value = sqlite3_column_double(ps.s, 3);
+      p.u = sqlite3_column_double(ps.s, 4);
+      c.parameters.push_back(p);
+    }
+    if (rc != SQLITE_DONE) fail("cannot read the parameters");
+  }
+  return out;
+}
+
+std::vector<std::string> Database::machines() const {
+  std::vector<std::string> out;
+  Stmt st;
+  if (sqlite3_prepare_v2(db_, "SELECT DISTINCT machine_id FROM calibration ORDER BY machine_id", -1, &st.s, nullptr) != SQLITE_OK)
+    fail("cannot read the machines");
+  while (sqlite3_step(st.s) == SQLITE_ROW) out.emplace_back(reinterpret_cast<const char*>(sqlite3_column_text(st.s, 0)));
+  return out;
+}
+
+}  // namespace rotacal::history

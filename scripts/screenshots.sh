@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# Regenerates the committed screenshots of the HTML reports (docs/img/, shown in the README and
+# docs/reports.md): one per report kind, taken by the browser tests in headless Chromium.
+# Needs a configured build (scripts/test.sh or the README's cmake lines) and chromium.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+cmake --build build -j"$(nproc)" --target rotacal png_stats
+ctest --test-dir build --output-on-failure -R '^browser_(analyze_touch154|diagnose|history)$'
+mkdir -p docs/img
+cp build/browser/browser_analyze_touch154/analyze_touch154.png docs/img/report_analyze_touch154.png
+cp build/browser/browser_diagnose/diagnose.png docs/img/report_diagnose.png
+cp build/browser/browser_history/history.png docs/img/report_history.png
+ls -l docs/img/report_*.png

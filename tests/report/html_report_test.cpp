@@ -1,0 +1,99 @@
+// The HTML report's drawing, checked by computing where things must land: tick choice, the
+// mapping of data to pixels (closed form from the plot's margins), refusal of malformed figures,
+// and that each report kind holds its sections and nothing that reaches the network.
+#include <gtest/gtest.h>
+
+#include <fmt/format.h>
+
+#include <regex>
+#include <string>
+
+#include "core/json_io.hpp"
+#include "report/figure.hpp"
+#include "report/html_report.hpp"
+#include "report/svg.hpp"
+#include "test_util.hpp"
+
+namespace rotacal::report {
+namespace {
+
+int count(const std::string& text, const std::string& what) {
+  int n = 0;
+  for (size_t p = text.find(what); p != std::string::npos; p = text.find(what, p + 1)) ++n;
+  return n;
+}
+
+TEST(NiceTicks, CoverTheRangeWithRoundSteps) {
+  const auto t = niceTicks(-3.7, 12.2, 5);
+  ASSERT_GE(t.size(), 3u);
+  const double step = t[1] - t[0];
+  EXPECT_DOUBLE_EQ(step, 5.0);  // range 15.9 / 5 = 3.18 -> next of 1, 2, 2.5, 5: 5
+  EXPECT_LE(t.front(), 0.0);
+  EXPECT_GE(t.back(), 10.0);
+  for (size_t i = 1; i < t.size(); ++i) EXPECT_NEAR(t[i] - t[i - 1], step, 1e-12);
+}
+
+TEST(SvgPlot, MapsDataToPixelsLinearly) {
+  // Ticks of [0, 10] are 0..10 exactly, so x = 0 lands on the left edge of the plot area
+  // (64 px) and x = 10 on the right (width - 16); y = 0 on the bottom, y = 10 on the top (28 px).
+  Figure f{"t", "t", "", {"x", "mm", {}}, {"y", "um", {}}, {{"s", "points", {0, 10}, {0, 10}, {}}}, {}};
+  const std::string svg = svgPlot(f, 400, 300);
+  const int legend_h = 18, bottom = 44 + legend_h;
+  const double ph = 300 - 28 - bottom;
+  EXPECT_NE(svg.find("<circle cx=\"64.0\" cy=\"" + fmt::format("{:.1f}", 28 + ph) + "\""), std::string::npos) << svg;
+  EXPECT_NE(svg.find("<circle cx=\"384.0\" cy=\"28.0\""), std::string::npos) << svg;
+  EXPECT_NE(svg.find(">x (mm)<"), std::string::npos);
+  EXPECT_NE(svg.find(">y (um)<"), std::string::npos);
+}
+
+TEST(Figures, MalformedFiguresAreRefusedWithTheirName) {
+  Json j = Json::parse(R"({"id": "bad_one", "x": {"label": "C", "unit": "deg"}, "y": {"label": "e", "unit": "um"},
+                          "series": [{"name": "s", "x": [1, 2, 3], "y": [1, 2]}]})");
+  try {
+    figureFromJson(j);
+    FAIL() << "accepted x and y of different lengths";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("bad_one"), std::string::npos) << e.what();
+  }
+  j["series"][0]["y"] = {1, 2, 3};
+  EXPECT_NO_THROW(figureFromJson(j));
+  j["y"].erase("unit");
+  EXPECT_THROW(figureFromJson(j), std::invalid_argument);  // every axis carries its unit
+  j["y"]["unit"] = "um";
+  j["series"][0]["style"] = "bars";
+  EXPECT_THROW(figureFromJson(j), std::invalid_argument);
+}
+
+TEST(Figures, RoundTripThroughJson) {
+  const JsonDoc doc = readJsonFile(test::sourcePath("tests/report/fixtures/figures_fixture.json"));
+  for (const auto& fj : doc.value["figures"]) {
+    const Figure f = figureFromJson(fj);
+    EXPECT_EQ(figureToJson(f), fj) << f.id;
+  }
+}
+
+TEST(HtmlReport, FixtureDrawsEveryFigureSeriesAndBand) {
+  const JsonDoc doc = readJsonFile(test::sourcePath("tests/report/fixtures/figures_fixture.json"));
+  const std::string html = reportHtml(doc.value);
+  EXPECT_EQ(count(html, "<svg"), 3);
+  EXPECT_EQ(count(html, "class=\"band\""), 1);
+  EXPECT_EQ(count(html, "<polyline class=\"series\""), 2);  // the two line series
+  EXPECT_EQ(count(html, "class=\"errorbar\""), 12 + 9);    // one per point with u
+  // Self-contained: nothing fetched.
+  EXPECT_EQ(html.find("src="), std::string::npos);
+  EXPECT_EQ(html.find("href="), std::string::npos);
+  EXPECT_EQ(html.find("@import"), std::string::npos);
+}
+
+TEST(HtmlReport, TextIsEscaped) {
+  Json doc = {{"format", "x"},
+              {"figures", Json::array({{{"id", "a"}, {"title", "<script>alert(1)</script>"}, {"x", {{"label", "x"}, {"unit", "mm"}}},
+                                        {"y", {{"label", "y"}, {"unit", "um"}}},
+                                        {"series", Json::array({{{"name", "s"}, {"x", {1}}, {"y", {1}}}})}}})}};
+  const std::string html = reportHtml(doc);
+  EXPECT_EQ(html.find("<script>alert"), std::string::npos);
+  EXPECT_NE(html.find("&lt;script&gt;alert(1)"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace rotacal::report
