@@ -43,14 +43,17 @@ SpaceframeLayout SpaceframeLayout::fromOptions(const CycleOptions& options) {
     else if (key == "mpe_a_um") l.spec.A_um = parseNumber(key, value);
     else if (key == "mpe_k_um_per_m") l.spec.K_um_per_m = parseNumber(key, value);
     else if (key == "min_touch_angle_deg") l.min_touch_angle_deg = parseNumber(key, value);
+    else if (key == "nominal_from") l.nominal_from = value;
     else
       throw std::invalid_argument("unknown option '" + key +
                                   "' for cycle spaceframe (known: theta_list, phi_list, origin_w_mm, sphere_diameter_mm, "
-                                  "mpe_a_um, mpe_k_um_per_m, min_touch_angle_deg)");
+                                  "mpe_a_um, mpe_k_um_per_m, min_touch_angle_deg, nominal_from)");
   }
   if (!(l.sphere_diameter_mm > 0)) throw std::invalid_argument("option sphere_diameter_mm must be positive");
   if (l.spec.A_um < 0 || l.spec.K_um_per_m < 0 || l.spec.A_um + l.spec.K_um_per_m <= 0)
     throw std::invalid_argument("options mpe_a_um and mpe_k_um_per_m must be >= 0 and not both zero");
+  if (l.nominal_from != "table1" && l.nominal_from != "initial")
+    throw std::invalid_argument("option nominal_from must be table1 or initial, got '" + l.nominal_from + "'");
   if (!(l.min_touch_angle_deg >= 0 && l.min_touch_angle_deg < 90))
     throw std::invalid_argument("option min_touch_angle_deg must lie in [0, 90)");
   return l;
@@ -63,7 +66,8 @@ CycleOptions SpaceframeLayout::toOptions() const {
           {"sphere_diameter_mm", fmt::format("{:g}", sphere_diameter_mm)},
           {"mpe_a_um", fmt::format("{:g}", spec.A_um)},
           {"mpe_k_um_per_m", fmt::format("{:g}", spec.K_um_per_m)},
-          {"min_touch_angle_deg", fmt::format("{:g}", min_touch_angle_deg)}};
+          {"min_touch_angle_deg", fmt::format("{:g}", min_touch_angle_deg)},
+          {"nominal_from", nominal_from}};
 }
 
 ProbePlan makeSpaceframePlan(const MachineModel& machine, const CycleOptions& options) {
@@ -135,6 +139,11 @@ ProbePlan makeSpaceframePlan(const MachineModel& machine, const CycleOptions& op
                                                   name, s, touches));
       }
     }
+  }
+  if (l.nominal_from == "initial") {
+    bool has_initial = false;
+    for (const auto& p : plan.poses) has_initial = has_initial || (p.pose.A == 0.0 && p.pose.C == 0.0);
+    if (!has_initial) throw std::invalid_argument("nominal_from=initial needs theta = 0 and phi = 0 in the map");
   }
   const auto bad = strokeViolations(plan);
   if (!bad.empty()) throw std::invalid_argument("plan does not fit the machine: " + bad.front());
@@ -264,9 +273,30 @@ SpaceframeAnalysis analyzeSpaceframe(const ProbePlan& plan, const std::vector<Me
     a.fits.push_back(mean);
     a.measured_m_mm.push_back(mean.centre_mm);
   }
-  std::vector<Eigen::Vector3d> nominal;
-  for (const auto& f : a.points) nominal.push_back(f.nominal_m_mm);
-  a.lengths = lengthErrors(a.measured_m_mm, nominal);
+  // The L_n points: Table 1 through the map, or (003's self-calibration) the centres measured at
+  // theta = phi = 0 through the map.
+  auto nominalPoints = [&](const std::vector<Eigen::Vector3d>& centres) {
+    std::vector<Eigen::Vector3d> out;
+    std::map<int, Eigen::Vector3d> initial_w;  // sphere -> centre at theta = phi = 0, workpiece frame
+    if (layout.nominal_from == "initial")
+      for (size_t i = 0; i < a.points.size(); ++i)
+        if (a.points[i].pose.A == 0.0 && a.points[i].pose.C == 0.0 && !initial_w.count(a.points[i].sphere))
+          initial_w[a.points[i].sphere] = T_m_w_nominal(plan.machine.kinematics, a.points[i].pose).inverse() * centres[i];
+    for (const auto& f : a.points) {
+      if (layout.nominal_from == "table1") {
+        out.push_back(f.nominal_m_mm);
+        continue;
+      }
+      const auto it = initial_w.find(f.sphere);
+      if (it == initial_w.end())
+        throw std::invalid_argument(
+            fmt::format("nominal_from=initial: sphere {} was not measured at theta = phi = 0", f.sphere));
+      out.push_back(T_m_w_nominal(plan.machine.kinematics, f.pose) * it->second);
+    }
+    return out;
+  };
+  a.nominal_m_mm = nominalPoints(a.measured_m_mm);
+  a.lengths = lengthErrors(a.measured_m_mm, a.nominal_m_mm);
   a.verdict = checkLengths(a.lengths, a.spec);
 
   // Least squares on the measured centres (3 per point): exact model, Gauss-Newton, Jacobian by
@@ -332,9 +362,11 @@ SpaceframeAnalysis analyzeSpaceframe(const ProbePlan& plan, const std::vector<Me
   // How much of dL the identified model explains: dL minus the dL of the model's readings.
   std::vector<Eigen::Vector3d> predicted;
   for (const auto& f : a.points) predicted.push_back(a.model.fittedCentre_m(plan, f, layout.origin_w_mm));
+  const std::vector<Eigen::Vector3d> predicted_nominal = nominalPoints(predicted);
   double s_before = 0.0, s_after = 0.0;
   for (const auto& L : a.lengths) {
-    const double dL_model = (predicted[L.j] - predicted[L.k]).norm() - L.nominal_mm;
+    const double dL_model =
+        (predicted[L.j] - predicted[L.k]).norm() - (predicted_nominal[L.j] - predicted_nominal[L.k]).norm();
     s_before += L.dL_mm() * L.dL_mm();
     s_after += (L.dL_mm() - dL_model) * (L.dL_mm() - dL_model);
   }
@@ -445,6 +477,7 @@ Json spaceframeReportJson(const SpaceframeAnalysis& a, const ProbePlan& plan, co
                   {"residual_rms_um", round6(a.summary.residual_rms_um)}};
   const auto& w = a.verdict.worst_index >= 0 ? a.lengths[a.verdict.worst_index] : LengthError{};
   j["lengths"] = {{"points", a.points.size()},
+                  {"nominal_from", SpaceframeLayout::fromOptions(plan.options).nominal_from},
                   {"count", a.lengths.size()},
                   {"A_um", a.spec.A_um},
                   {"K_um_per_m", a.spec.K_um_per_m},
@@ -460,7 +493,7 @@ Json spaceframeReportJson(const SpaceframeAnalysis& a, const ProbePlan& plan, co
   for (size_t i = 0; i < a.points.size(); ++i) {
     const auto& f = a.points[i];
     const auto& fit = a.fits[i];
-    const Eigen::Vector3d d = a.measured_m_mm[i] - f.nominal_m_mm;
+    const Eigen::Vector3d d = a.measured_m_mm[i] - a.nominal_m_mm[i];
     pts.push_back({{"point", i + 1},
                    {"pose", f.pose_name},
                    {"sphere", f.sphere},

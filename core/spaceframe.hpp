@@ -31,6 +31,10 @@ struct SpaceframeLayout {
   double sphere_diameter_mm = 19.05;                         // 003: about 19 mm (3/4")
   LengthSpec spec;                                           // A (um), K (um/m)
   double min_touch_angle_deg = 60.0;  // touch normals must point this far from the sphere's stem
+  /// Where the nominal points come from: "table1" (the frame's coordinates as calibrated, 003
+  /// Table 1) or "initial" (003 Sec. 3.1: the centres this machine measured at theta = phi = 0,
+  /// turned by the nominal map: self-calibration; needs the pose theta = phi = 0 in the map).
+  std::string nominal_from = "table1";
 
   static SpaceframeLayout fromOptions(const CycleOptions& options);
   CycleOptions toOptions() const;
@@ -93,6 +97,7 @@ struct SpaceframeAnalysis {
   std::vector<FramePoint> points;
   std::vector<SphereFit> fits;                 // per point (repeats: the mean centre)
   std::vector<Eigen::Vector3d> measured_m_mm;  // fitted centres
+  std::vector<Eigen::Vector3d> nominal_m_mm;   // the L_n points (table1 or initial, see layout)
   std::vector<LengthError> lengths;            // 003 Eq. (2)-(4)
   LengthSpec spec;
   LengthVerdict verdict;
