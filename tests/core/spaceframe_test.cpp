@@ -250,3 +250,24 @@ TEST(SpaceframeAnalysis, SelfCalibrationFromTheInitialPose) {
 
 }  // namespace
 }  // namespace rotacal
+
+namespace rotacal {
+namespace {
+
+// Several results files are repeats (contract): each centre is the mean of the repeats' fits.
+TEST(SpaceframeAnalysis, RepeatsAverageTheCentres) {
+  const ProbePlan plan = makePlan("spaceframe", a120(), {{"theta_list", "0,120,240"}, {"phi_list", "-90,0,90"}});
+  Truth truth;
+  truth.errors = test::table4Mean();
+  truth.noise_um = 0.7;
+  const MeasurementRun r1 = simulate(plan, truth, {1}), r2 = simulate(plan, truth, {2});
+  const SpaceframeAnalysis a1 = analyzeSpaceframe(plan, {r1}), a2 = analyzeSpaceframe(plan, {r2});
+  const SpaceframeAnalysis both = analyzeSpaceframe(plan, {r1, r2});
+  ASSERT_EQ(both.measured_m_mm.size(), 63u);
+  for (size_t i = 0; i < both.measured_m_mm.size(); ++i)
+    EXPECT_LT((both.measured_m_mm[i] - 0.5 * (a1.measured_m_mm[i] + a2.measured_m_mm[i])).norm(), 1e-12);
+  EXPECT_EQ(both.triggers, 2 * a1.triggers);
+}
+
+}  // namespace
+}  // namespace rotacal
