@@ -270,6 +270,11 @@ SpaceframeAnalysis analyzeSpaceframe(const ProbePlan& plan, const std::vector<Me
       else mean.residual_rms_um = std::max(mean.residual_rms_um, fit.residual_rms_um);
     }
     mean.centre_mm = sum / static_cast<double>(runs.size());
+    const double dev_um = mmToUm(mean.rho_mm - fo.rho_mm);  // first run's fit
+    a.radius_mean_dev_um += dev_um / static_cast<double>(a.points.size());
+    a.radius_max_dev_um = std::max(a.radius_max_dev_um, std::abs(dev_um));
+    a.radius_limit_um = std::max(2.0, 6.0 * plan.machine.probe.repeatability_um);
+    if (std::abs(dev_um) > a.radius_limit_um) ++a.radius_outside;
     a.fits.push_back(mean);
     a.measured_m_mm.push_back(mean.centre_mm);
   }
@@ -505,6 +510,11 @@ Json spaceframeReportJson(const SpaceframeAnalysis& a, const ProbePlan& plan, co
                                                           : Json(nullptr)}});
   }
   j["frame_points"] = pts;
+  j["sphere_radius_check"] = {{"nominal_mm", a.points.empty() ? 0.0 : plan.findPoint(a.points.front().point_ids.front())->sphere->radius_mm},
+                              {"mean_deviation_um", round6(a.radius_mean_dev_um)},
+                              {"max_abs_deviation_um", round6(a.radius_max_dev_um)},
+                              {"limit_um", round6(a.radius_limit_um)},
+                              {"outside", a.radius_outside}};
   j["figures"] = figuresJson(a);
   return j;
 }
@@ -516,6 +526,11 @@ std::string spaceframeText(const SpaceframeAnalysis& a, const ProbePlan& plan) {
                    a.lengths.size());
   s += fmt::format("length error dL = Lm - Ln: max |dL| {:.3f} um, rms {:.3f} um\n", a.verdict.max_abs_dL_um,
                    a.verdict.rms_dL_um);
+  s += fmt::format("sphere fits: fitted radius - nominal {:+.3f} um on average, at most {:.3f} um{}\n",
+                   a.radius_mean_dev_um, a.radius_max_dev_um,
+                   a.radius_outside ? fmt::format(" ({} beyond {:.1f} um: probe pretravel, ball size or a dirty sphere?)",
+                                                  a.radius_outside, a.radius_limit_um)
+                                    : std::string());
   s += fmt::format("U = +-({:g} um + {:g} um/m L): {} ({} lengths outside, worst |dL|/U = {:.3f})\n\n", a.spec.A_um,
                    a.spec.K_um_per_m, a.verdict.pass ? "PASS" : "FAIL", a.verdict.outside, a.verdict.worst_ratio);
   s += fmt::format("identification ({}, rank {}/{}, {} dof), what explains dL:\n", a.summary.termination, a.summary.rank,

@@ -107,6 +107,12 @@ struct SpaceframeAnalysis {
   double dL_rms_um = 0.0;                      // before: the measured dL
   double dL_unexplained_rms_um = 0.0;          // dL minus the dL the identified model predicts
   int triggers = 0;
+  /// Plausibility of the sphere fits: fitted radius - nominal radius. A pretravel or a wrong
+  /// ball diameter shows as every sphere smaller or larger; a dirty sphere or a bad touch as one.
+  double radius_limit_um = 0.0;       // max(2 um, 6 x probe repeatability): far beyond the fits' noise
+  double radius_max_dev_um = 0.0;     // largest |fitted - nominal|
+  double radius_mean_dev_um = 0.0;    // mean of fitted - nominal
+  int radius_outside = 0;             // fits beyond the limit
 };
 
 /// Fits every sphere, forms the lengths, checks them and identifies the model. Throws

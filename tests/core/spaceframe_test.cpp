@@ -271,3 +271,27 @@ TEST(SpaceframeAnalysis, RepeatsAverageTheCentres) {
 
 }  // namespace
 }  // namespace rotacal
+
+namespace rotacal {
+namespace {
+
+// The fitted radius is the sphere fits' plausibility check: a 10 um pretravel (every trigger
+// 10 um late along its approach) makes every sphere 10 um smaller; without it the fits agree with
+// the nominal radius to the numerical floor.
+TEST(SpaceframeAnalysis, FittedRadiusRevealsPretravel) {
+  const ProbePlan plan = makePlan("spaceframe", a120(), {{"theta_list", "0,120,240"}, {"phi_list", "-90,0,90"}});
+  Truth truth;
+  truth.errors = test::table4Mean();
+  const SpaceframeAnalysis clean = analyzeSpaceframe(plan, {simulate(plan, truth, {1})});
+  EXPECT_LT(clean.radius_max_dev_um, 1e-6);
+  EXPECT_EQ(clean.radius_outside, 0);
+  truth.pretravel_um = 10.0;
+  const SpaceframeAnalysis late = analyzeSpaceframe(plan, {simulate(plan, truth, {1})});
+  // The approach lines miss the true centres by up to ~40 um (the location errors move the
+  // spheres): 10 um along such a line is 10 (1 - (40 um / 12.5 mm)^2 / 2) um radially, 5e-5 um less.
+  EXPECT_NEAR(late.radius_mean_dev_um, -10.0, 1e-4);
+  EXPECT_EQ(late.radius_outside, static_cast<int>(late.points.size()));
+}
+
+}  // namespace
+}  // namespace rotacal
