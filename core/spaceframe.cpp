@@ -172,7 +172,8 @@ std::vector<FramePoint> framePoints(const ProbePlan& plan) {
 
 Eigen::Matrix<double, FrameModel::kSize, 1> FrameModel::toVector() const {
   Eigen::Matrix<double, kSize, 1> v;
-  v << errors.values, scale, setup_translation_mm, setup_rotation_rad;
+  v.head<kRigidSize>() << errors.values, scale, setup_translation_mm, setup_rotation_rad;
+  for (int i = 0; i < 7; ++i) v.segment<3>(kRigidSize + 3 * i) = sphere_offset_w_mm[i];
   return v;
 }
 
@@ -183,11 +184,26 @@ FrameModel FrameModel::fromVector(Kinematics k, const Eigen::Matrix<double, kSiz
   m.scale = v.segment<3>(kNumLocationErrors);
   m.setup_translation_mm = v.segment<3>(kNumLocationErrors + 3);
   m.setup_rotation_rad = v.segment<3>(kNumLocationErrors + 6);
+  for (int i = 0; i < 7; ++i) m.sphere_offset_w_mm[i] = v.segment<3>(kRigidSize + 3 * i);
   return m;
 }
 
+std::vector<int> activeParameters(bool frame_free) {
+  std::vector<int> a;
+  for (int i = 0; i < kNumLocationErrors; ++i) a.push_back(i);
+  if (!frame_free) {
+    for (int i = kNumLocationErrors; i < FrameModel::kRigidSize; ++i) a.push_back(i);
+    return a;
+  }
+  a.push_back(kNumLocationErrors);
+  a.push_back(kNumLocationErrors + 1);
+  for (int i = FrameModel::kRigidSize; i < FrameModel::kSize; ++i) a.push_back(i);
+  return a;
+}
+
 Eigen::Vector3d FrameModel::actualCentre_m(const FramePoint& p, const Eigen::Vector3d& origin_w) const {
-  const Eigen::Vector3d c_w = setupTransform(setup_translation_mm, setup_rotation_rad, origin_w) * p.center_w_mm;
+  const Eigen::Vector3d c_w =
+      setupTransform(setup_translation_mm, setup_rotation_rad, origin_w) * (p.center_w_mm + sphere_offset_w_mm.at(p.sphere - 1));
   return T_m_w(errors, p.pose) * c_w;
 }
 
@@ -230,6 +246,7 @@ ModelVector reportScale(Kinematics k) {
   s.segment<3>(kNumLocationErrors).setConstant(1e6);
   s.segment<3>(kNumLocationErrors + 3).setConstant(kUmPerMm);
   s.segment<3>(kNumLocationErrors + 6).setConstant(kMdegPerRad);
+  s.tail<21>().setConstant(kUmPerMm);
   return s;
 }
 
@@ -317,17 +334,21 @@ SpaceframeAnalysis analyzeSpaceframe(const ProbePlan& plan, const std::vector<Me
     for (int i = 0; i < n; ++i) res.segment<3>(3 * i) = a.measured_m_mm[i] - fm.fittedCentre_m(plan, a.points[i], layout.origin_w_mm);
     return res;
   };
-  Eigen::MatrixXd J(m, FrameModel::kSize);  // d(model)/d(parameter in report units), mm per unit
+  const std::vector<int> active = activeParameters(layout.nominal_from == "initial");
+  const int np = static_cast<int>(active.size());
+  a.summary.parameters = np;
+  Eigen::MatrixXd J(m, np);  // d(model)/d(parameter in report units), mm per unit
   Eigen::VectorXd res = residuals(x);
   Eigen::JacobiSVD<Eigen::MatrixXd> svd;
   a.summary.termination = "max_iterations";
   for (int it = 0; it < options.max_iterations; ++it) {
-    for (int c = 0; c < FrameModel::kSize; ++c) {
+    for (int k = 0; k < np; ++k) {
+      const int c = active[k];
       const double h = options.finite_step_scale / unit[c];
       ModelVector xp = x, xm = x;
       xp[c] += h;
       xm[c] -= h;
-      J.col(c) = -(residuals(xp) - residuals(xm)) / (2.0 * options.finite_step_scale);
+      J.col(k) = -(residuals(xp) - residuals(xm)) / (2.0 * options.finite_step_scale);
     }
     svd.compute(J, Eigen::ComputeThinU | Eigen::ComputeThinV);
     const auto& sv = svd.singularValues();
@@ -336,12 +357,12 @@ SpaceframeAnalysis analyzeSpaceframe(const ProbePlan& plan, const std::vector<Me
     for (int i = 0; i < sv.size(); ++i) rank += sv[i] > tol ? 1 : 0;
     a.summary.rank = rank;
     a.summary.condition = sv[rank - 1] > 0 ? sv[0] / sv[rank - 1] : INFINITY;
-    if (rank < FrameModel::kSize) {
+    if (rank < np) {
       a.summary.termination = "rank_deficient";
       break;
     }
     const Eigen::VectorXd step_units = svd.solve(res);  // J step = res
-    x += step_units.cwiseQuotient(unit);
+    for (int k = 0; k < np; ++k) x[active[k]] += step_units[k] / unit[active[k]];
     res = residuals(x);
     a.summary.iterations = it + 1;
     // 1e-6 um / mdeg / um/m: far below any resolution, above the floor the sphere fits (converged
@@ -361,8 +382,9 @@ SpaceframeAnalysis analyzeSpaceframe(const ProbePlan& plan, const std::vector<Me
     // stored in mm / rad / 1 like the model.
     const Eigen::MatrixXd V = svd.matrixV();
     const Eigen::VectorXd s2 = svd.singularValues().cwiseAbs2();
-    for (int c = 0; c < FrameModel::kSize; ++c)
-      a.u[c] = umToMm(a.summary.sigma_um) * std::sqrt((V.row(c).transpose().cwiseAbs2().cwiseQuotient(s2)).sum()) / unit[c];
+    for (int k = 0; k < np; ++k)
+      a.u[active[k]] = umToMm(a.summary.sigma_um) * std::sqrt((V.row(k).transpose().cwiseAbs2().cwiseQuotient(s2)).sum()) /
+                       unit[active[k]];
   }
   // How much of dL the identified model explains: dL minus the dL of the model's readings.
   std::vector<Eigen::Vector3d> predicted;
@@ -467,8 +489,23 @@ Json spaceframeReportJson(const SpaceframeAnalysis& a, const ProbePlan& plan, co
                                             {"unit", "mdeg"},
                                             {"u", round6(radToMdeg(a.u[kNumLocationErrors + 6 + i]))}};
   }
+  const bool frame_free = SpaceframeLayout::fromOptions(plan.options).nominal_from == "initial";
+  j["frame"] = frame_free ? "self_calibration" : "calibrated";
+  if (frame_free) {
+    // Scale Z is the reference (an isotropic scale is the frame's size); the setup is in the offsets.
+    sc["Z"]["note"] = "reference: X and Y are relative to Z (self-calibration cannot see an isotropic scale)";
+    Json sp = Json::object();
+    for (int i = 0; i < 7; ++i) {
+      const Eigen::Vector3d d = a.model.sphere_offset_w_mm[i];
+      const Eigen::Vector3d ud = a.u.segment<3>(FrameModel::kRigidSize + 3 * i);
+      sp[std::to_string(i + 1)] = {{"offset_w_um", {round6(mmToUm(d.x())), round6(mmToUm(d.y())), round6(mmToUm(d.z()))}},
+                                   {"u_um", {round6(mmToUm(ud.x())), round6(mmToUm(ud.y())), round6(mmToUm(ud.z()))}}};
+    }
+    j["frame_spheres"] = sp;
+  } else {
+    j["frame_setup"] = st;
+  }
   j["linear_axis_scale"] = sc;
-  j["frame_setup"] = st;
   j["residual_rms_um"] = round6(a.summary.residual_rms_um);
   j["points_used"] = a.triggers;
   j["summary"] = {{"termination", a.summary.termination},
@@ -544,6 +581,13 @@ std::string spaceframeText(const SpaceframeAnalysis& a, const ProbePlan& plan) {
   for (int i = 0; i < 3; ++i)
     s += fmt::format("  scale {}        {:>10.3f} +- {:.3f} um/m\n", ax[i], a.model.scale[i] * 1e6,
                      a.u[kNumLocationErrors + i] * 1e6);
+  if (SpaceframeLayout::fromOptions(plan.options).nominal_from == "initial") {
+    s += "  (self-calibration: scale Z is the reference; the frame's spheres are fitted too:)\n";
+    for (int i = 0; i < 7; ++i)
+      s += fmt::format("  sphere {} offset {:>8.3f} {:>8.3f} {:>8.3f} um\n", i + 1,
+                       mmToUm(a.model.sphere_offset_w_mm[i].x()), mmToUm(a.model.sphere_offset_w_mm[i].y()),
+                       mmToUm(a.model.sphere_offset_w_mm[i].z()));
+  }
   s += fmt::format("centre residual rms {:.3f} um; dL rms {:.3f} um, left unexplained {:.3f} um\n",
                    a.summary.residual_rms_um, a.dL_rms_um, a.dL_unexplained_rms_um);
   return s;

@@ -62,8 +62,15 @@ struct FrameModel {
   Eigen::Vector3d scale = Eigen::Vector3d::Zero();          // s_x, s_y, s_z (dimensionless)
   Eigen::Vector3d setup_translation_mm = Eigen::Vector3d::Zero();
   Eigen::Vector3d setup_rotation_rad = Eigen::Vector3d::Zero();
+  /// Self-calibration (nominal_from=initial): each sphere's true centre minus Table 1's, frame
+  /// coordinates, mm (spheres 1..7). Zero when the frame is taken as calibrated.
+  std::array<Eigen::Vector3d, 7> sphere_offset_w_mm = {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
+                                                      Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
+                                                      Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
+                                                      Eigen::Vector3d::Zero()};  // Eigen does not zero by itself
 
-  static constexpr int kSize = kNumLocationErrors + 9;
+  static constexpr int kRigidSize = kNumLocationErrors + 9;  // errors, scale, setup
+  static constexpr int kSize = kRigidSize + 21;                // + sphere offsets
   Eigen::Matrix<double, kSize, 1> toVector() const;  // mm, rad, 1
   static FrameModel fromVector(Kinematics k, const Eigen::Matrix<double, kSize, 1>& v);
   /// Actual centre of a frame point, machine frame (exact HTMs).
@@ -81,11 +88,17 @@ struct SpaceframeOptions {
   bool validate() const { return finite_step_scale > 0 && max_iterations > 0 && rank_tolerance > 0; }
 };
 
+/// Which parameters the least squares fits. Calibrated frame (nominal_from=table1): location
+/// errors, scale X/Y/Z, setup. Self-calibration (nominal_from=initial): location errors, scale
+/// X and Y relative to Z, and every sphere's offset (which hold the setup): an isotropic scale
+/// of the machine and the frame's size are the same thing to the data, so Z is the reference.
+std::vector<int> activeParameters(bool frame_free);
+
 struct SpaceframeSummary {
   std::string termination;           // "converged", "max_iterations", "rank_deficient"
   int iterations = 0;
   int observations = 0;              // 3 per centre
-  int parameters = FrameModel::kSize;
+  int parameters = 0;
   int rank = 0;
   double condition = 0.0;
   int dof = 0;

@@ -171,9 +171,9 @@ TEST(SpaceframeAnalysis, RecoversLocationScaleAndSetupErrorsNoiseFree) {
   const Truth truth = knownTruth(plan, truth_model);
   const SpaceframeAnalysis a = analyzeSpaceframe(plan, {simulate(plan, truth, {1})});
   EXPECT_EQ(a.summary.termination, "converged");
-  EXPECT_EQ(a.summary.rank, FrameModel::kSize);
+  EXPECT_EQ(a.summary.rank, FrameModel::kRigidSize);
   const auto est = a.model.toVector(), ref = truth_model.toVector();
-  for (int i = 0; i < FrameModel::kSize; ++i)
+  for (int i = 0; i < FrameModel::kSize; ++i)  // the sphere offsets stay 0: the frame is calibrated
     EXPECT_LE(std::abs(est[i] - ref[i]), 1e-3 * std::abs(ref[i])) << "parameter " << i;
   // The model is exact: nothing of dL is left unexplained (um; the fits' floor is ~1e-10 um).
   EXPECT_GT(a.dL_rms_um, 1.0);
@@ -189,7 +189,7 @@ TEST(SpaceframeAnalysis, WithNoiseTheErrorsLieWithinTheirUncertainty) {
   const SpaceframeAnalysis a = analyzeSpaceframe(plan, {simulate(plan, truth, {7})});
   const auto est = a.model.toVector(), ref = truth_model.toVector();
   int beyond2u = 0;
-  for (int i = 0; i < FrameModel::kSize; ++i) {
+  for (int i = 0; i < FrameModel::kRigidSize; ++i) {
     ASSERT_GT(a.u[i], 0.0);
     EXPECT_LE(std::abs(est[i] - ref[i]), 3.5 * a.u[i]) << "parameter " << i;  // 3.5 u: 17 parameters, p < 1 %
     beyond2u += std::abs(est[i] - ref[i]) > 2 * a.u[i] ? 1 : 0;
@@ -291,6 +291,48 @@ TEST(SpaceframeAnalysis, FittedRadiusRevealsPretravel) {
   // spheres): 10 um along such a line is 10 (1 - (40 um / 12.5 mm)^2 / 2) um radially, 5e-5 um less.
   EXPECT_NEAR(late.radius_mean_dev_um, -10.0, 1e-4);
   EXPECT_EQ(late.radius_outside, static_cast<int>(late.points.size()));
+}
+
+}  // namespace
+}  // namespace rotacal
+
+namespace rotacal {
+namespace {
+
+// Self-calibration identification (nominal_from=initial): the frame's spheres are unknowns. A
+// frame whose spheres 3 and 5 are off, on a machine with location errors and an anisotropic
+// scale: the location errors come back to 1e-3 of their size, the scales as X and Y relative to
+// Z, (1 + s_x) / (1 + s_z) - 1, and each sphere's offset as the true centre seen through the
+// reference scale: (c + d) / (1 + s_z) - c (an isotropic scale and the frame's size are one thing).
+TEST(SpaceframeAnalysis, SelfCalibrationIdentifiesTheFrameToo) {
+  const ProbePlan plan = makePlan("spaceframe", a120(), {{"nominal_from", "initial"}});
+  const SpaceframeLayout l = SpaceframeLayout::fromOptions(plan.options);
+  Truth truth;
+  truth.errors = test::table4Mean();
+  const Eigen::Vector3d sc(20e-6, -15e-6, 30e-6);
+  truth.linear_axis_error = [sc](const Eigen::Vector3d& c) { return Eigen::Vector3d(sc.cwiseProduct(c)); };
+  truth.sphere_center_error_w_mm = {{3, Eigen::Vector3d(0.012, -0.008, 0.02)}, {5, Eigen::Vector3d(-0.01, 0.0, -0.015)}};
+  const SpaceframeAnalysis a = analyzeSpaceframe(plan, {simulate(plan, truth, {1})});
+  EXPECT_EQ(a.summary.termination, "converged");
+  EXPECT_EQ(a.summary.rank, 31);
+  // Location errors: the translations also shrink by 1 / (1 + s_z) (30 um x 30e-6: 1e-6 um).
+  for (int i = 0; i < kNumLocationErrors; ++i)
+    EXPECT_NEAR(a.model.errors.values[i], truth.errors.values[i], 1e-3 * std::abs(truth.errors.values[i])) << i;
+  EXPECT_NEAR(a.model.scale.x(), (1 + sc.x()) / (1 + sc.z()) - 1, 1e-3 * std::abs(sc.x() - sc.z()));
+  EXPECT_NEAR(a.model.scale.y(), (1 + sc.y()) / (1 + sc.z()) - 1, 1e-3 * std::abs(sc.y() - sc.z()));
+  EXPECT_EQ(a.model.scale.z(), 0.0);
+  for (int s = 1; s <= 7; ++s) {
+    const Eigen::Vector3d c = l.origin_w_mm + spaceFrameTable1_mm()[s - 1];
+    const auto it = truth.sphere_center_error_w_mm.find(s);
+    const Eigen::Vector3d d = it == truth.sphere_center_error_w_mm.end() ? Eigen::Vector3d::Zero() : it->second;
+    const Eigen::Vector3d expect = (c + d) / (1 + sc.z()) - c;
+    // 1e-3 of the largest offset (about 5 um from the 30 um/m reference scale on 180 mm).
+    EXPECT_LT((a.model.sphere_offset_w_mm[s - 1] - expect).norm(), 1e-3 * 0.025) << "sphere " << s;
+  }
+  // The reference scale also shrinks the spheres seen through it (30 um/m of 12.5 mm: 0.4 um);
+  // the fitted radius takes that up exactly only for touches through the centre, and the
+  // location errors move the approach lines ~40 um off it: a 1e-5 um remainder, not 1e-10.
+  EXPECT_LT(a.dL_unexplained_rms_um, 1e-4);
 }
 
 }  // namespace
