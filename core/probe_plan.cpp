@@ -12,6 +12,7 @@
 namespace rotacal {
 
 }  // namespace rotacal
+#include "core/spaceframe.hpp"
 #include "core/touch154.hpp"
 namespace rotacal {
 
@@ -30,6 +31,7 @@ const PlanPose& ProbePlan::poseByName(const std::string& name) const {
 
 ProbePlan makePlan(const std::string& cycle, const MachineModel& machine, const CycleOptions& options) {
   if (cycle == "touch154") return makeTouch154Plan(machine, options);
+  if (cycle == "spaceframe") return makeSpaceframePlan(machine, options);
   static const char* later[] = {"rtest", "spheres3", "tooltip", "spaceframe"};
   for (const char* c : later)
     if (cycle == c)

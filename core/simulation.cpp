@@ -208,6 +208,17 @@ Truth truthFromJson(const JsonDoc& doc, Kinematics kinematics) {
       return Eigen::Vector3d(sxy * c.y() + sxz * c.z(), syz * c.z(), 0.0);
     };
   }
+  if (j.contains("linear_axis_scale")) {
+    // Scale errors of the linear axes (003's scale error): actual = read (1 + s), per axis:
+    // {"X_um_per_m": 50, "Y_um_per_m": 0, "Z_um_per_m": 0}. Adds to the squareness above.
+    const Json& s = j["linear_axis_scale"];
+    const Eigen::Vector3d sc(numberOr(doc, s, "X_um_per_m", 0.0) * 1e-6, numberOr(doc, s, "Y_um_per_m", 0.0) * 1e-6,
+                             numberOr(doc, s, "Z_um_per_m", 0.0) * 1e-6);
+    auto before = t.linear_axis_error;
+    t.linear_axis_error = [sc, before](const Eigen::Vector3d& c) {
+      return Eigen::Vector3d(sc.cwiseProduct(c) + (before ? before(c) : Eigen::Vector3d::Zero()));
+    };
+  }
   t.noise_um = numberOr(doc, j, "probe_noise_um", 0.0);
   t.pretravel_um = numberOr(doc, j, "probe_pretravel_um", 0.0);
   t.start_time_s = numberOr(doc, j, "start_time_s", 0.0);

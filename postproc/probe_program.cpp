@@ -79,7 +79,8 @@ nc::Program probeProgram(const ProbePlan& plan, const std::string& dialect) {
         const ProbePoint* p = plan.findPoint(w.point_id);
         op.nominal_trigger = p->trigger_m_mm * k;
         op.pose_name = p->pose_name;
-        op.text = fmt::format("P{} pose {} target {} face {}", p->id, p->pose_name, p->target, faceName(p->face));
+        op.text = p->sphere ? fmt::format("P{} pose {} sphere {}", p->id, p->pose_name, p->sphere->id)
+                            : fmt::format("P{} pose {} target {} face {}", p->id, p->pose_name, p->target, faceName(p->face));
         break;
       }
     }

@@ -1,0 +1,59 @@
+#include "core/sphere_centre_fit.hpp"
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace rotacal {
+
+SphereFit fitSphereCentre(const std::vector<Eigen::Vector3d>& t, const Eigen::Vector3d& start,
+                          const SphereFitOptions& o) {
+  if (!o.validate()) throw std::invalid_argument("sphere fit: rho_mm must be positive");
+  const bool fit_r = o.fit_radius;  // 4 triggers in 3 directions fix centre and radius
+  const int np = fit_r ? 4 : 3;
+  if (static_cast<int>(t.size()) < 4)
+    throw std::invalid_argument(fmt::format("sphere fit needs at least 4 triggers, got {}", t.size()));
+  const int n = static_cast<int>(t.size());
+  Eigen::Vector3d c = start;
+  double rho = o.rho_mm;
+  SphereFit f;
+  Eigen::MatrixXd J(n, np);
+  Eigen::VectorXd r(n);
+  for (int it = 0; it < o.max_iterations; ++it) {
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Vector3d d = t[i] - c;
+      const double dn = d.norm();
+      r[i] = dn - rho;
+      J.row(i).head<3>() = -d.transpose() / dn;  // d(|t - c|)/dc
+      if (fit_r) J(i, 3) = -1.0;
+    }
+    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(J);
+    if (qr.rank() < np) throw std::invalid_argument("sphere fit: the triggers do not fix the centre (singular layout)");
+    const Eigen::VectorXd step = qr.solve(-r);
+    c += step.head<3>();
+    if (fit_r) rho += step[3];
+    if (step.norm() < 1e-13) {
+      f.converged = true;
+      break;
+    }
+  }
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d d = t[i] - c;
+    r[i] = d.norm() - rho;
+    J.row(i).head<3>() = -d.transpose() / d.norm();
+    if (fit_r) J(i, 3) = -1.0;
+  }
+  f.centre_mm = c;
+  f.rho_mm = rho;
+  f.radius_fitted = fit_r;
+  f.triggers = n;
+  f.dof = n - np;
+  f.residual_rms_um = 1e3 * std::sqrt(r.squaredNorm() / n);
+  const Eigen::MatrixXd N = J.transpose() * J;
+  f.cov_centre_per_sigma2 = N.inverse().topLeftCorner<3, 3>();
+  return f;
+}
+
+}  // namespace rotacal

@@ -1,0 +1,33 @@
+#pragma once
+// The centre of a sphere from probe triggers: each trigger is the probe-ball centre when the ball
+// touched, so it lies at rho = R + r (sphere radius + ball radius) from the sphere centre. Exact
+// geometry, Gauss-Newton on |t_i - c| - rho.
+#include <Eigen/Core>
+#include <vector>
+
+namespace rotacal {
+
+struct SphereFitOptions {
+  double rho_mm = 0.0;       // nominal R + r; start value of the fitted radius
+  bool fit_radius = true;    // fit rho too (4 triggers then fix it exactly; 5 leave one dof)
+  int max_iterations = 50;
+  bool validate() const { return rho_mm > 0 && max_iterations > 0; }
+};
+
+struct SphereFit {
+  Eigen::Vector3d centre_mm = Eigen::Vector3d::Zero();
+  double rho_mm = 0.0;             // fitted (or held) R + r
+  bool radius_fitted = false;
+  double residual_rms_um = 0.0;
+  int triggers = 0;
+  int dof = 0;
+  Eigen::Matrix3d cov_centre_per_sigma2 = Eigen::Matrix3d::Zero();  // (J^T J)^-1 block, mm^2 per mm^2 of noise
+  bool converged = false;
+};
+
+/// Fits the sphere; start is a centre guess (the nominal centre). Throws std::invalid_argument
+/// with fewer than 4 triggers or a layout that does not fix the unknowns.
+SphereFit fitSphereCentre(const std::vector<Eigen::Vector3d>& triggers_mm, const Eigen::Vector3d& start_mm,
+                          const SphereFitOptions& options);
+
+}  // namespace rotacal
