@@ -125,8 +125,10 @@ class OkumaDialect final : public Dialect {
     }
     line(fmt::format("FWRITC MD1:{}.TXT;A", file));
     put(fmt::format("ROTACAL-RESULTS DIALECT OKUMA CYCLE {} POINTS {} UNIT {}", safeName(p.cycle), probes, unitName(inch)));
+    ctl::ModeGuard guard;
     for (const auto& op : p.ops) {
       const Eigen::Vector3d& x = op.xyz;
+      guard.apply(op);
       switch (op.kind) {
         case nc::Op::Kind::Comment: commentLines(op.text); break;
         case nc::Op::Kind::Rapid:
@@ -141,6 +143,15 @@ class OkumaDialect final : public Dialect {
           line(s);
           break;
         }
+        case nc::Op::Kind::Mode:
+          // G93 on OSP: UNVERIFIED in controllers.md; F on every block is the safe form.
+          line(fmt::format("{} {}", op.incremental ? "G91" : "G90", op.inverse_time ? "G01 G93" : "G94"));
+          break;
+        case nc::Op::Kind::RotaryLinear: line(ctl::rotaryLinearWords(op, p.unit, " ")); break;
+        case nc::Op::Kind::Pause:
+          if (op.dwell_s > 0) line(fmt::format("G04 F{}", ctl::trimmed(op.dwell_s, 3)));  // UNVERIFIED: F seconds
+          else line("M00");
+          break;
         case nc::Op::Kind::Probe: {
           const int id = op.point_id;
           if (id <= 0 || id > 8999) throw std::invalid_argument(fmt::format("point id {} out of range 1..8999", id));
@@ -315,8 +326,9 @@ class OkumaDialect final : public Dialect {
                    "VUACM and VDOUT[992] alarm, then the label)");
     }
     if (open) problem(ls.empty() ? 1 : ls.back().number, "FWRITC without CLOSE C");
-    if (static_cast<size_t>(probes) != plan.points.size())
-      problem(ls.empty() ? 1 : ls.back().number, fmt::format("{} G31 moves, the plan has {} points", probes, plan.points.size()));
+    if (static_cast<size_t>(probes) != ctl::expectedProbes(plan))
+      problem(ls.empty() ? 1 : ls.back().number, fmt::format("{} G31 moves, the plan has {} points", probes, ctl::expectedProbes(plan)));
+    for (auto& s : ctl::inverseTimeProblems(nc::readProgram(text), ctl::isProbingBlock)) out.push_back(std::move(s));
     const auto blocks = nc::readProgram(std::string(inch ? "G20" : "G21") + "\n" + motion_text);
     std::vector<nc::Block> shifted;
     for (size_t i = 0; i < blocks.size(); ++i) {
