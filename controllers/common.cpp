@@ -479,6 +479,8 @@ std::vector<std::string> inverseTimeProblems(const std::vector<nc::Block>& block
       if (g == 0 || g == 1 || g == 2 || g == 3) motion = static_cast<int>(g);
     }
     if (!g93) continue;
+    // Non-motion G codes whose X/P words are no axis moves: dwell (G04 X2.), data setting (G10).
+    if (b.hasWord('G', 4) || b.hasWord('G', 10)) continue;
     if (isProbe && isProbe(b)) {
       out.push_back(fmt::format("{}: probing under inverse-time feed G93 (switch to G94 first)", b.line));
       continue;

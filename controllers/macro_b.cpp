@@ -413,7 +413,7 @@ std::vector<std::string> MacroBDialect::check(const std::string& text, const Pro
       if (needs_point && w.value && !w.has_decimal_point)
         problem(b.line, fmt::format("{}{} has no decimal point (read in least input increments)", w.letter, w.text));
     }
-    if (b.hasWord('G', 93)) problem(b.line, "G93 inverse time: rotacal probes and positions under G94 only");
+    if (b.hasWord('G', 93) && plan.cycle != "tooltip") problem(b.line, "G93 inverse time: rotacal probes and positions under G94 only");
     if (!b.hasWord('G', 31)) continue;
     ++probes;
     if (!b.find('X') && !b.find('Y') && !b.find('Z')) problem(b.line, "G31 without an axis word");

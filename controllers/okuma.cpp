@@ -19,7 +19,7 @@
 //   user-task I/O commands FWRITC <file>;A (open for append), PUT 'text' and PUT VCn,4 (value
 //   with 4 decimals) into the line buffer, WRITE C (write the buffer as one line), CLOSE C. The
 //   parser reads exactly that text and tolerates spaces, '+' signs and leading zeros in numbers.
-// - Line length: 80 characters. G93: never used.
+// - Line length: 80 characters. G93: only in the tooltip cycle (004), F on every block.
 // - VC1-VC7 free for this program (standard: VC1-VC200).
 #include <fmt/format.h>
 
@@ -296,7 +296,7 @@ class OkumaDialect final : public Dialect {
       // The CLOSE C of a no-trigger branch (followed by the alarm) does not end the main output.
       if (s == "CLOSE C" && !(nextCode(i) < ls.size() && code[nextCode(i)].rfind("VUACM", 0) == 0)) open = false;
       static const std::regex g93(R"(\bG93\b)");
-      if (std::regex_search(s, g93)) problem(n, "G93 inverse time: rotacal probes and positions under G94 only");
+      if (plan.cycle != "tooltip" && std::regex_search(s, g93)) problem(n, "G93 inverse time: rotacal probes and positions under G94 only");
       const bool is_motion = s.rfind("G00 ", 0) == 0 || s.rfind("G01 ", 0) == 0 || s.rfind("G31 ", 0) == 0;
       if (is_motion && !std::regex_match(s, motion))
         problem(n, fmt::format("motion block '{}' is not of the generated form (decimal point on every word)", s));

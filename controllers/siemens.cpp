@@ -20,7 +20,7 @@
 // - R parameters retained and at least R90-R99 available (MD28050): only R90-R95 are used.
 // - WRITE error codes: ERR <> 0 is treated as a failure that stops the program.
 // - Number form of SPRINT "%10.4F": read as C's %10.4f; the parser accepts any spacing and sign.
-// - G93 rules: never used; probing and positioning run under G94.
+// - G93: only in the tooltip cycle (004), F on every block; probing and positioning run under G94.
 #include <fmt/format.h>
 
 #include <cmath>
@@ -311,7 +311,7 @@ class SiemensDialect final : public Dialect {
         statements = true;
       }
       static const std::regex g93(R"(\bG93\b)");
-      if (std::regex_search(s, g93)) problem(n, "G93 inverse time: rotacal probes and positions under G94 only");
+      if (plan.cycle != "tooltip" && std::regex_search(s, g93)) problem(n, "G93 inverse time: rotacal probes and positions under G94 only");
       for (const std::string kw : {"GOTOF ", "GOTOB "}) {
         const size_t g = s.find(kw);
         if (g != std::string::npos && !labels.count(ctl::trim(s.substr(g + kw.size()))))
