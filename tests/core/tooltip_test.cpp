@@ -110,6 +110,18 @@ TEST(TooltipFit, NoiseFreeRecoversPivotAndAngularErrorTo1e3) {
   }
 }
 
+TEST(TooltipFit, DynamicSweepsAtSeveralOtherAnglesRecoverTheErrors) {
+  // 004 Sec. VI: A back and forth twice at B = 0 and 30 deg; every reading enters the fit.
+  const ProbePlan plan = plan004({{"sweeps", "2"}, {"other_deg", "0,30"}, {"step_deg", "15"}});
+  const TooltipTruth t = truthOf(45.0, -2.0, 4.0, 3.0, -1.0);
+  const TooltipFit f = fitTooltip(plan, {simulateTooltip(plan, t, 1)}, {});
+  ASSERT_TRUE(f.converged);
+  EXPECT_EQ(f.angles_deg.front(), -90.0);
+  EXPECT_NEAR(f.dR_um, 45.0, 1e-3 * 45.0);
+  for (size_t k = 0; k < f.angles_deg.size(); ++k)
+    EXPECT_NEAR(f.e_mdeg[k], t.angularErrorMdeg(f.angles_deg[k]), 1e-3 * 10.0) << f.angles_deg[k];
+}
+
 TEST(TooltipFit, WithNoiseWithinUncertainty) {
   int dR_outside = 0, e_outside = 0, e_total = 0;
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {
