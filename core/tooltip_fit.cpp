@@ -238,6 +238,21 @@ double fSurvival(double f, double d1, double d2) {
   return incompleteBeta(d2 / 2.0, d1 / 2.0, d2 / (d2 + d1 * f));
 }
 
+TooltipModelEval evaluateTooltipModel(const ProbePlan& plan, const std::vector<TooltipRun>& runs, const Eigen::VectorXd& x) {
+  const Problem p = makeProblem(plan, runs);
+  if (x.size() != p.J() + 1) throw std::invalid_argument("tooltip model: x must hold one angle per distinct angle and dR");
+  TooltipModelEval e;
+  e.angles = p.J();
+  const int m = 2 * static_cast<int>(p.obs.size());
+  e.model_um.resize(m);
+  e.J_model_x.resize(m, p.J() + 1);
+  for (size_t i = 0; i < p.obs.size(); ++i) {
+    e.model_um.segment<2>(2 * static_cast<int>(i)) = p.model(p.obs[i], x);
+    e.J_model_x.middleRows(2 * static_cast<int>(i), 2) = p.jacobian(p.obs[i], x);
+  }
+  return e;
+}
+
 bool TooltipFitOptions::validate(std::string* why) const {
   if (max_iterations < 1 || !(step_tol > 0) || sigma_floor_um < 0) {
     if (why) *why = "tooltip fit options: max_iterations >= 1, step_tol > 0, sigma_floor_um >= 0";

@@ -9,6 +9,7 @@
 // e_k per commanded angle and one pivot-length error dR (model "angular+pivot"), or e_k alone
 // (model "angular", 004's). Gauss-Newton on the exact model (each step a linear least squares),
 // standard uncertainties from the residual (k = 1).
+#include <Eigen/Core>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,16 @@ struct TooltipFit {
   double last_step_um = 0.0;     // size of the last Gauss-Newton step (linearisation check)
   std::vector<double> res_t_um, res_z_um;  // residual per reading (data - model)
 };
+
+/// The exact model of every non-zero reading (transverse, Z interleaved; um) at the parameters
+/// x = [e_0 .. e_{J-1} (rad, one per distinct angle, ascending), dR (mm)] and its analytic
+/// Jacobian J_model_x (what the Gauss-Newton uses; tests check it against finite differences).
+struct TooltipModelEval {
+  Eigen::VectorXd model_um;
+  Eigen::MatrixXd J_model_x;
+  int angles = 0;
+};
+TooltipModelEval evaluateTooltipModel(const ProbePlan& plan, const std::vector<TooltipRun>& runs, const Eigen::VectorXd& x);
 
 /// Fits readings of one or more repeats of `plan`.
 TooltipFit fitTooltip(const ProbePlan& plan, const std::vector<TooltipRun>& runs, const TooltipFitOptions& options);

@@ -96,6 +96,29 @@ TEST(TooltipSimulate, AngularErrorIsTangentialClosedForm) {
   }
 }
 
+TEST(TooltipFit, JacobianMatchesFiniteDifferences) {
+  for (const char* axis : {"A", "B"}) {
+    const ProbePlan plan = plan004({{"axis", axis}, {"other_deg", "0,30"}});
+    const std::vector<TooltipRun> runs = {simulateTooltip(plan, truthOf(20, 1, 2, 3, 4), 1)};
+    Eigen::VectorXd x = Eigen::VectorXd::Zero(20);
+    for (int j = 0; j < 19; ++j) x[j] = mdegToRad(5.0 * std::sin(j));
+    x[19] = 0.03;  // mm
+    const TooltipModelEval e = evaluateTooltipModel(plan, runs, x);
+    ASSERT_EQ(e.angles, 19);
+    for (int c = 0; c < 20; ++c) {
+      const double h = c < 19 ? 1e-7 : 1e-5;  // rad, mm: central differences, truncation ~h^2
+      Eigen::VectorXd xp = x, xm = x;
+      xp[c] += h;
+      xm[c] -= h;
+      const Eigen::VectorXd fd =
+          (evaluateTooltipModel(plan, runs, xp).model_um - evaluateTooltipModel(plan, runs, xm).model_um) / (2 * h);
+      // um per rad ~ 4e5, um per mm ~ 1e3: relative 1e-6 of the column's size
+      EXPECT_LT((fd - e.J_model_x.col(c)).cwiseAbs().maxCoeff(), 1e-6 * (1.0 + e.J_model_x.col(c).cwiseAbs().maxCoeff()))
+          << axis << " column " << c;
+    }
+  }
+}
+
 TEST(TooltipFit, NoiseFreeRecoversPivotAndAngularErrorTo1e3) {
   for (char axis : {'A', 'B'}) {
     const ProbePlan plan = plan004({{"axis", std::string(1, axis)}});
