@@ -3,6 +3,7 @@
 #include <string>
 #include <vector>
 
+#include "cli/cmd_tooltip.hpp"
 #include "cli/command.hpp"
 #include "cli/output.hpp"
 #include "cli/progress.hpp"
@@ -31,6 +32,8 @@ std::vector<Command> diagnoseCommands(CLI::App& app, const Common& common) {
   return {{cmd, [a, &common] {
              const ProbePlan plan = loadPlan(a->plan_file);
              const Dialect& d = dialectOrFail(a->dialect);
+             if (plan.cycle == "tooltip")
+               return diagnoseTooltipCmd(common, plan, a->results, a->alpha, a->json_out, a->text_out);
              std::vector<MeasurementRun> runs;
              for (const auto& f : a->results) runs.push_back(d.parseResults(readTextFile(f), f, plan));
              DiagnosisOptions o;

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "cli/cmd_spaceframe.hpp"
+#include "cli/cmd_tooltip.hpp"
 #include "cli/command.hpp"
 #include "cli/output.hpp"
 #include "controllers/dialect.hpp"
@@ -22,6 +23,7 @@
 #include "core/simulation.hpp"
 #include "core/units.hpp"
 #include "postproc/probe_program.hpp"
+#include "postproc/tooltip_program.hpp"
 
 namespace rotacal {
 namespace {
@@ -56,7 +58,7 @@ int cmdGenerate(const Common& c, const std::string& plan_file, const std::string
   const Dialect& d = dialectOrFail(dialect_name);
   std::string text;
   try {
-    text = d.writeProgram(probeProgram(plan, dialect_name));
+    text = d.writeProgram(plan.cycle == "tooltip" ? tooltipProgram(plan, dialect_name) : probeProgram(plan, dialect_name));
   } catch (const std::invalid_argument& e) {
     failFile(plan_file, e.what());
   }
@@ -64,7 +66,8 @@ int cmdGenerate(const Common& c, const std::string& plan_file, const std::string
   if (!problems.empty())
     failFile(out, "generated program fails the " + std::string(d.name()) + " checker: " + problems.front());
   writeFileAtomic(out, text);
-  say(c, fmt::format("{} program: {} probing moves -> {}\n", d.name(), plan.points.size(), out));
+  say(c, fmt::format("{} program: {} {} -> {}\n", d.name(), plan.points.size(),
+                     plan.cycle == "tooltip" ? "tool-tip poses" : "probing moves", out));
   return 0;
 }
 
@@ -72,6 +75,11 @@ int cmdSimulate(const Common& c, const std::string& plan_file, const std::string
                 bool noise_given, std::uint64_t seed, double start_s, bool start_given, const std::string& dialect_name,
                 const std::string& out) {
   const ProbePlan plan = loadPlan(plan_file);
+  if (plan.cycle == "tooltip") {
+    (void)start_s, (void)start_given;
+    dialectOrFail(dialect_name);
+    return simulateTooltipCmd(c, plan, truth_file, noise_um, noise_given, seed, out);
+  }
   Truth truth = loadTruth(truth_file, plan.machine.kinematics);
   if (noise_given) truth.noise_um = noise_um;
   if (start_given) truth.start_time_s = start_s;
@@ -95,6 +103,11 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
                const std::string& html_out) {
   const ProbePlan plan = loadPlan(plan_file);
   const Dialect& d = dialectOrFail(dialect_name);
+  if (plan.cycle == "tooltip") {
+    if (!offsets_out.empty()) failFile(offsets_out, "the tooltip cycle writes no offsets (a head's pivot length and angular "
+                                                    "errors go into the machine's kinematics tables by hand)");
+    return analyzeTooltipCmd(c, plan, results, json_out, text_out);
+  }
   Method method;
   try {
     method = methodFromName(method_name);

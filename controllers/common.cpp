@@ -418,4 +418,84 @@ MeasurementRun parseTaggedResults(const std::string& text, const std::string& fi
   return points.finish(last);
 }
 
+size_t expectedProbes(const ProbePlan& plan) { return plan.cycle == "tooltip" ? 0 : plan.points.size(); }
+
+std::string trimmed(double v, int decimals) {
+  std::string s = fixed(v, decimals);
+  if (s.find('.') != std::string::npos)
+    while (!s.empty() && s.back() == '0') s.pop_back();
+  if (s == "-0." || s == "-.") s = "0.";
+  return s;
+}
+
+std::string rotaryLinearWords(const nc::Op& op, nc::Unit unit, const std::string& sep) {
+  const int dec = nc::rotaryLinearDecimals(unit);
+  std::string s;
+  for (char axis : op.axes) {
+    if (axis < 'X' || axis > 'Z') throw std::invalid_argument(std::string("rotary-linear move: bad linear axis ") + axis);
+    if (!s.empty()) s += sep;
+    s += axis + fixed(op.xyz[axis - 'X'], dec);
+  }
+  for (const auto& [axis, deg] : op.rotary) {
+    if (!s.empty()) s += sep;
+    s += axis + trimmed(deg, 4);
+  }
+  if (op.feed > 0) s += sep + "F" + trimmed(op.feed, 4);
+  return s;
+}
+
+void ModeGuard::apply(const nc::Op& op) {
+  switch (op.kind) {
+    case nc::Op::Kind::Mode: inverse_time_ = op.inverse_time; break;
+    case nc::Op::Kind::Probe:
+      if (inverse_time_) throw std::invalid_argument("a probing move under inverse-time feed (G93): switch to G94 first");
+      break;
+    case nc::Op::Kind::RotaryLinear:
+      if (inverse_time_ && !(op.feed > 0))
+        throw std::invalid_argument("an inverse-time (G93) move needs its own F word on every block");
+      break;
+    case nc::Op::Kind::Linear:
+      if (inverse_time_) throw std::invalid_argument("a per-minute linear move under inverse-time feed (G93)");
+      break;
+    case nc::Op::Kind::Comment:
+    case nc::Op::Kind::Rapid:
+    case nc::Op::Kind::Index:
+    case nc::Op::Kind::Pause: break;
+  }
+}
+
+bool isProbingBlock(const nc::Block& b) {
+  return b.hasWord('G', 31) || b.hasWord('G', 38.2) || b.hasWord('G', 38.3) || b.hasWord('G', 38.4) ||
+         b.hasWord('G', 38.5) || ctl::upper(b.code).find("MEAS") != std::string::npos;
+}
+
+std::vector<std::string> inverseTimeProblems(const std::vector<nc::Block>& blocks, bool (*isProbe)(const nc::Block&)) {
+  std::vector<std::string> out;
+  bool g93 = false;
+  int motion = 0;
+  for (const auto& b : blocks) {
+    if (b.control || b.words.empty()) continue;
+    for (const auto& w : b.words) {
+      if (w.letter != 'G' || !w.value) continue;
+      const double g = *w.value;
+      if (g == 93) g93 = true;
+      if (g == 94 || g == 95) g93 = false;
+      if (g == 0 || g == 1 || g == 2 || g == 3) motion = static_cast<int>(g);
+    }
+    if (!g93) continue;
+    // Non-motion G codes whose X/P words are no axis moves: dwell (G04 X2.), data setting (G10).
+    if (b.hasWord('G', 4) || b.hasWord('G', 10)) continue;
+    if (isProbe && isProbe(b)) {
+      out.push_back(fmt::format("{}: probing under inverse-time feed G93 (switch to G94 first)", b.line));
+      continue;
+    }
+    bool axis_word = false;
+    for (const auto& w : b.words)
+      if ((w.letter >= 'X' && w.letter <= 'Z') || (w.letter >= 'A' && w.letter <= 'C')) axis_word = true;
+    if (axis_word && motion >= 1 && !b.find('F'))
+      out.push_back(fmt::format("{}: inverse-time (G93) move without an F word", b.line));
+  }
+  return out;
+}
+
 }  // namespace rotacal::ctl

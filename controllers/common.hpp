@@ -158,4 +158,30 @@ std::optional<AxisDirection> axisAligned(const Eigen::Vector3d& direction);
 MeasurementRun parseTaggedResults(const std::string& text, const std::string& file, const ProbePlan& plan,
                                   std::string_view tag, std::string_view cycle_token, std::string_view second_header_why);
 
+/// The fixed-tool-tip ops (nc::Op Mode, RotaryLinear, Pause; 004 Table 1).
+/// Probing moves a plan's program holds: 0 for the tooltip cycle (the laser reads), else one
+/// per plan point.
+size_t expectedProbes(const ProbePlan& plan);
+/// `v` with at most `decimals` digits, trailing zeros dropped, the point kept: 5 -> "5.",
+/// 2.5 -> "2.5" (004 Table 1's "A5.", "F2.").
+std::string trimmed(double v, int decimals);
+/// The words of a RotaryLinear op: "Y-1.3073Z-0.0571A5.F2." (sep = "") or with spaces.
+std::string rotaryLinearWords(const nc::Op& op, nc::Unit unit, const std::string& sep);
+/// Modal state of a writer: throws std::invalid_argument for a probing move under inverse time
+/// (LinuxCNC: "Cannot probe with zero feed rate") or an inverse-time move without F.
+class ModeGuard {
+ public:
+  void apply(const nc::Op& op);
+  bool inverseTime() const { return inverse_time_; }
+
+ private:
+  bool inverse_time_ = false;
+};
+/// ISO word-address checks of the modes: under G93 every G1/G2/G3 block with an axis word
+/// carries F, and no block under G93 probes (`isProbe`).
+std::vector<std::string> inverseTimeProblems(const std::vector<nc::Block>& blocks,
+                                             bool (*isProbe)(const nc::Block& block));
+/// Any dialect's probing block: G31, G38.x, MEAS=, TCH PROBE.
+bool isProbingBlock(const nc::Block& block);
+
 }  // namespace rotacal::ctl

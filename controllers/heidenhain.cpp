@@ -139,8 +139,10 @@ class HeidenhainDialect final : public Dialect {
     Eigen::Vector3d cur(0, 0, 0);
     bool cur_known = false;
     std::vector<int> ids;
+    ctl::ModeGuard guard;
     for (const auto& op : p.ops) {
       const Eigen::Vector3d x = op.xyz * k;
+      guard.apply(op);
       switch (op.kind) {
         case nc::Op::Kind::Comment: commentLines(op.text); break;
         case nc::Op::Kind::Rapid:
@@ -164,6 +166,25 @@ class HeidenhainDialect final : public Dialect {
           line(s + " R0 FMAX");
           break;
         }
+        case nc::Op::Kind::Mode:
+          // Inverse-time feed is UNVERIFIED for Klartext (../shared/reference/controllers.md
+          // Sec. 5): refuse rather than guess. Absolute, per-minute is Klartext's default.
+          if (op.inverse_time || op.incremental)
+            throw std::invalid_argument(
+                "heidenhain: inverse-time feed (G93) is not verified for Klartext (controllers.md Sec. 5), so the "
+                "fixed-tool-tip cycle (tooltip) is refused for this dialect; use linuxcnc, fanuc, haas, siemens or okuma");
+          break;
+        case nc::Op::Kind::RotaryLinear:
+          throw std::invalid_argument("heidenhain: simultaneous rotary-linear moves with inverse-time feed are refused "
+                                      "(inverse time not verified, controllers.md Sec. 5)");
+        case nc::Op::Kind::Pause:
+          if (op.dwell_s > 0) {
+            line("CYCL DEF 9.0 DWELL TIME");
+            line(fmt::format("CYCL DEF 9.1 DWELL {}", ctl::fixed(op.dwell_s, 1)));
+          } else {
+            line("STOP");
+          }
+          break;
         case nc::Op::Kind::Probe: {
           const int id = op.point_id;
           if (id <= 0 || kLabelBase + id > 65535) throw std::invalid_argument(fmt::format("point id {} out of range", id));
@@ -444,8 +465,9 @@ class HeidenhainDialect final : public Dialect {
       if (g != std::string::npos && !labels.count(code[i].substr(g + 9)))
         problem(ls[i].number, fmt::format("jump to the undefined label {}", code[i].substr(g + 9)));
     }
-    if (static_cast<size_t>(probes) != plan.points.size())
-      problem(ls.empty() ? 1 : ls.back().number, fmt::format("{} TCH PROBE 0 cycles, the plan has {} points", probes, plan.points.size()));
+    if (static_cast<size_t>(probes) != ctl::expectedProbes(plan))
+      problem(ls.empty() ? 1 : ls.back().number, fmt::format("{} TCH PROBE 0 cycles, the plan has {} points", probes, ctl::expectedProbes(plan)));
+    if (plan.cycle == "tooltip") problem(1, "heidenhain: the tooltip cycle needs inverse-time feed, not verified for Klartext");
     for (auto& s : ctl::strokeProblems(ctl::motionBlocks(moves, inch), plan, kDialect)) out.push_back(std::move(s));
     return out;
   }

@@ -117,8 +117,10 @@ class LinuxCncDialect final : public Dialect {
                      unitName(inch)));
     std::string log_rotary;
     for (char a : p.rotary_axes) log_rotary += fmt::format(" %.4f#{}", parameterOf(a));
+    ctl::ModeGuard guard;
     for (const auto& op : p.ops) {
       const Eigen::Vector3d& x = op.xyz;
+      guard.apply(op);
       switch (op.kind) {
         case nc::Op::Kind::Comment: line(comment(op.text)); break;
         case nc::Op::Kind::Rapid:
@@ -133,6 +135,18 @@ class LinuxCncDialect final : public Dialect {
           line(s);
           break;
         }
+        case nc::Op::Kind::Mode:
+          // 004 Table 1: "G91 G01 G93 F2." puts G1 in force for the word-only blocks after it.
+          if (op.inverse_time && op.feed > 0)
+            line(fmt::format("{} G01 G93 F{}", op.incremental ? "G91" : "G90", ctl::trimmed(op.feed, 4)));
+          else
+            line(fmt::format("{} {}", op.incremental ? "G91" : "G90", op.inverse_time ? "G93" : "G94"));
+          break;
+        case nc::Op::Kind::RotaryLinear: line(ctl::rotaryLinearWords(op, p.unit, "")); break;
+        case nc::Op::Kind::Pause:
+          if (op.dwell_s > 0) line(fmt::format("G4 P{}", ctl::trimmed(op.dwell_s, 3)));  // P: seconds
+          else line("M0 " + comment(op.text.empty() ? "program stop" : op.text));
+          break;
         case nc::Op::Kind::Probe: {
           if (op.point_id <= 0) throw std::invalid_argument("probing move without a point id");
           if (!(op.feed > 0)) throw std::invalid_argument(fmt::format("point {}: probing feed must be > 0", op.point_id));
@@ -499,10 +513,11 @@ class LinuxCncDialect final : public Dialect {
       if (!checked) problem(b.line, g + " is not followed by 'o<n> if [#5070 NE 1]' with an (ABORT, ...)");
     }
     const int last_line = blocks.empty() ? 1 : blocks.back().line;
-    if (static_cast<size_t>(probes) != plan.points.size())
+    if (static_cast<size_t>(probes) != ctl::expectedProbes(plan))
       problem(last_line, fmt::format("{} recorded touches [G38.2/G38.3 moves whose position is LOGged], the plan "
                                      "has {} points",
-                                     probes, plan.points.size()));
+                                     probes, ctl::expectedProbes(plan)));
+    for (auto& s : ctl::inverseTimeProblems(blocks, ctl::isProbingBlock)) out.push_back(std::move(s));
     for (auto& s : ctl::strokeProblems(blocks, plan, kDialect)) out.push_back(std::move(s));
     // The end: M2 or M30 as the last block with code; a leading '%' needs a closing one, after
     // which LinuxCNC reads nothing.

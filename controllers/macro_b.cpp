@@ -154,8 +154,10 @@ std::string MacroBDialect::writeProgram(const nc::Program& p) const {
     }
     pose_points.clear();
   };
+  ctl::ModeGuard guard;
   for (const auto& op : p.ops) {
     const Eigen::Vector3d& x = op.xyz;
+    guard.apply(op);
     switch (op.kind) {
       case nc::Op::Kind::Comment: commentLines(op.text); break;
       case nc::Op::Kind::Rapid:
@@ -171,6 +173,20 @@ std::string MacroBDialect::writeProgram(const nc::Program& p) const {
         line(s);
         break;
       }
+      case nc::Op::Kind::Mode:
+        // 004 Table 1: "G91 G01 G93 F2."; G93 with F on every block (Haas: [HaasMan]; Fanuc:
+        // UNVERIFIED in controllers.md, F on every block is the safe form).
+        if (op.inverse_time && op.feed > 0)
+          line(fmt::format("{} G01 G93 F{}", op.incremental ? "G91" : "G90", ctl::trimmed(op.feed, 4)));
+        else
+          line(fmt::format("{} {}", op.incremental ? "G91" : "G90", op.inverse_time ? "G93" : "G94"));
+        break;
+      case nc::Op::Kind::RotaryLinear: line(ctl::rotaryLinearWords(op, p.unit, "")); break;
+      case nc::Op::Kind::Pause:
+        // G04 X: seconds with a decimal point (Fanuc and Haas; P would be milliseconds).
+        if (op.dwell_s > 0) line(fmt::format("G04 X{}", ctl::trimmed(op.dwell_s, 3)));
+        else line("M00");
+        break;
       case nc::Op::Kind::Probe: {
         const int id = op.point_id;
         if (id <= 0 || kLabelBase + id > kMaxLabel)
@@ -409,7 +425,7 @@ std::vector<std::string> MacroBDialect::check(const std::string& text, const Pro
       if (needs_point && w.value && !w.has_decimal_point)
         problem(b.line, fmt::format("{}{} has no decimal point (read in least input increments)", w.letter, w.text));
     }
-    if (b.hasWord('G', 93)) problem(b.line, "G93 inverse time: rotacal probes and positions under G94 only");
+    if (b.hasWord('G', 93) && plan.cycle != "tooltip") problem(b.line, "G93 inverse time: rotacal probes and positions under G94 only");
     if (!b.hasWord('G', 31)) continue;
     ++probes;
     if (!b.find('X') && !b.find('Y') && !b.find('Z')) problem(b.line, "G31 without an axis word");
@@ -440,8 +456,9 @@ std::vector<std::string> MacroBDialect::check(const std::string& text, const Pro
                       "#3000 alarm, N n)");
   }
   const int last_line = blocks.empty() ? 1 : blocks.back().line;
-  if (static_cast<size_t>(probes) != plan.points.size())
-    problem(last_line, fmt::format("{} G31 moves, the plan has {} points", probes, plan.points.size()));
+  if (static_cast<size_t>(probes) != ctl::expectedProbes(plan))
+    problem(last_line, fmt::format("{} G31 moves, the plan has {} points", probes, ctl::expectedProbes(plan)));
+  for (auto& s : ctl::inverseTimeProblems(blocks, ctl::isProbingBlock)) out.push_back(std::move(s));
   for (auto& s : ctl::strokeProblems(blocks, plan, f_.name)) out.push_back(std::move(s));
   // Starts with '%', ends with M30 then '%'.
   std::vector<const nc::Block*> nonblank;

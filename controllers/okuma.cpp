@@ -20,7 +20,7 @@
 //   with 4 decimals; VCn,5 on an inch machine) into the line buffer, WRITE C (write the buffer
 //   as one line), CLOSE C. The
 //   parser reads exactly that text and tolerates spaces, '+' signs and leading zeros in numbers.
-// - Line length: 80 characters. G93: never used.
+// - Line length: 80 characters. G93: only in the tooltip cycle (004), F on every block.
 // - VC1-VC7 free for this program (standard: VC1-VC200).
 #include <fmt/format.h>
 
@@ -129,8 +129,10 @@ class OkumaDialect final : public Dialect {
     }
     line(fmt::format("FWRITC MD1:{}.TXT;A", file));
     put(fmt::format("ROTACAL-RESULTS DIALECT OKUMA CYCLE {} POINTS {} UNIT {}", safeName(p.cycle), probes, unitName(inch)));
+    ctl::ModeGuard guard;
     for (const auto& op : p.ops) {
       const Eigen::Vector3d& x = op.xyz;
+      guard.apply(op);
       switch (op.kind) {
         case nc::Op::Kind::Comment: commentLines(op.text); break;
         case nc::Op::Kind::Rapid:
@@ -145,6 +147,15 @@ class OkumaDialect final : public Dialect {
           line(s);
           break;
         }
+        case nc::Op::Kind::Mode:
+          // G93 on OSP: UNVERIFIED in controllers.md; F on every block is the safe form.
+          line(fmt::format("{} {}", op.incremental ? "G91" : "G90", op.inverse_time ? "G01 G93" : "G94"));
+          break;
+        case nc::Op::Kind::RotaryLinear: line(ctl::rotaryLinearWords(op, p.unit, " ")); break;
+        case nc::Op::Kind::Pause:
+          if (op.dwell_s > 0) line(fmt::format("G04 F{}", ctl::trimmed(op.dwell_s, 3)));  // UNVERIFIED: F seconds
+          else line("M00");
+          break;
         case nc::Op::Kind::Probe: {
           const int id = op.point_id;
           if (id <= 0 || id > 8999) throw std::invalid_argument(fmt::format("point id {} out of range 1..8999", id));
@@ -290,7 +301,7 @@ class OkumaDialect final : public Dialect {
       // The CLOSE C of a no-trigger branch (followed by the alarm) does not end the main output.
       if (s == "CLOSE C" && !(nextCode(i) < ls.size() && code[nextCode(i)].rfind("VUACM", 0) == 0)) open = false;
       static const std::regex g93(R"(\bG93\b)");
-      if (std::regex_search(s, g93)) problem(n, "G93 inverse time: rotacal probes and positions under G94 only");
+      if (plan.cycle != "tooltip" && std::regex_search(s, g93)) problem(n, "G93 inverse time: rotacal probes and positions under G94 only");
       const bool is_motion = s.rfind("G00 ", 0) == 0 || s.rfind("G01 ", 0) == 0 || s.rfind("G31 ", 0) == 0;
       if (is_motion && !std::regex_match(s, motion))
         problem(n, fmt::format("motion block '{}' is not of the generated form (decimal point on every word)", s));
@@ -320,8 +331,9 @@ class OkumaDialect final : public Dialect {
                    "VUACM and VDOUT[992] alarm, then the label)");
     }
     if (open) problem(ls.empty() ? 1 : ls.back().number, "FWRITC without CLOSE C");
-    if (static_cast<size_t>(probes) != plan.points.size())
-      problem(ls.empty() ? 1 : ls.back().number, fmt::format("{} G31 moves, the plan has {} points", probes, plan.points.size()));
+    if (static_cast<size_t>(probes) != ctl::expectedProbes(plan))
+      problem(ls.empty() ? 1 : ls.back().number, fmt::format("{} G31 moves, the plan has {} points", probes, ctl::expectedProbes(plan)));
+    for (auto& s : ctl::inverseTimeProblems(nc::readProgram(text), ctl::isProbingBlock)) out.push_back(std::move(s));
     const auto blocks = nc::readProgram(std::string(inch ? "G20" : "G21") + "\n" + motion_text);
     std::vector<nc::Block> shifted;
     for (size_t i = 0; i < blocks.size(); ++i) {

@@ -21,7 +21,7 @@
 // - WRITE error codes: ERR <> 0 is treated as a failure that stops the program.
 // - Number form of SPRINT "%10.4F" (inch: "%10.5F"): read as C's %10.4f; the parser accepts any
 //   spacing and sign.
-// - G93 rules: never used; probing and positioning run under G94.
+// - G93: only in the tooltip cycle (004), F on every block; probing and positioning run under G94.
 #include <fmt/format.h>
 
 #include <cmath>
@@ -140,8 +140,10 @@ class SiemensDialect final : public Dialect {
     writeText(fmt::format("ROTACAL-RESULTS DIALECT SIEMENS CYCLE {} POINTS {} UNIT {}", safeName(p.cycle), probes,
                           unitName(inch)));
     std::vector<int> ids;
+    ctl::ModeGuard guard;
     for (const auto& op : p.ops) {
       const Eigen::Vector3d& x = op.xyz;
+      guard.apply(op);
       switch (op.kind) {
         case nc::Op::Kind::Comment: commentLines(op.text); break;
         case nc::Op::Kind::Rapid:
@@ -156,6 +158,16 @@ class SiemensDialect final : public Dialect {
           line(s);
           break;
         }
+        case nc::Op::Kind::Mode:
+          // G93 inverse time (F = 1/min): the F-every-block rule is UNVERIFIED for Sinumerik;
+          // F on every block is the safe form.
+          line(fmt::format("{} {}", op.incremental ? "G91" : "G90", op.inverse_time ? "G1 G93" : "G94"));
+          break;
+        case nc::Op::Kind::RotaryLinear: line(ctl::rotaryLinearWords(op, p.unit, " ")); break;
+        case nc::Op::Kind::Pause:
+          if (op.dwell_s > 0) line(fmt::format("G4 F{}", ctl::trimmed(op.dwell_s, 3)));  // F: seconds, own block
+          else line("M0");
+          break;
         case nc::Op::Kind::Probe: {
           const int id = op.point_id;
           if (id <= 0) throw std::invalid_argument("probing move without a point id");
@@ -303,7 +315,7 @@ class SiemensDialect final : public Dialect {
         statements = true;
       }
       static const std::regex g93(R"(\bG93\b)");
-      if (std::regex_search(s, g93)) problem(n, "G93 inverse time: rotacal probes and positions under G94 only");
+      if (plan.cycle != "tooltip" && std::regex_search(s, g93)) problem(n, "G93 inverse time: rotacal probes and positions under G94 only");
       for (const std::string kw : {"GOTOF ", "GOTOB "}) {
         const size_t g = s.find(kw);
         if (g != std::string::npos && !labels.count(ctl::trim(s.substr(g + kw.size()))))
@@ -348,9 +360,10 @@ class SiemensDialect final : public Dialect {
         problem(n, "MEAS=1 is not followed by STOPRE, the $AA_MW reads and the no-trigger check "
                    "(IF ($AC_MEA[1]==0) OR (distance) GOTOF label, label: ... M0)");
     }
-    if (static_cast<size_t>(probes) != plan.points.size())
+    if (static_cast<size_t>(probes) != ctl::expectedProbes(plan))
       problem(ls.empty() ? 1 : ls.back().number,
-              fmt::format("{} MEAS=1 moves, the plan has {} points", probes, plan.points.size()));
+              fmt::format("{} MEAS=1 moves, the plan has {} points", probes, ctl::expectedProbes(plan)));
+    for (auto& s : ctl::inverseTimeProblems(nc::readProgram(text), ctl::isProbingBlock)) out.push_back(std::move(s));
     const auto blocks = nc::readProgram((inch ? "G20" : "G21") + std::string(";\n").substr(1) + motion_text);
     // The unit line above shifted the numbering by one: renumber.
     std::vector<nc::Block> shifted;

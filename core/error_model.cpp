@@ -6,15 +6,22 @@
 
 namespace rotacal {
 
+namespace {
+constexpr const char* kNoTableErrors =
+    "a spindle-head machine (head_ab) has no table location errors: use --cycle tooltip";
+}  // namespace
+
 std::string_view kinematicsName(Kinematics kinematics) {
+  if (kinematics == Kinematics::HeadAB) return "head_ab";
   return kinematics == Kinematics::TableAC ? "table_ac" : "table_bc";
 }
 
 Kinematics kinematicsFromName(std::string_view name) {
   if (name == "table_ac") return Kinematics::TableAC;
   if (name == "table_bc") return Kinematics::TableBC;
+  if (name == "head_ab") return Kinematics::HeadAB;
   throw std::invalid_argument("unknown kinematics '" + std::string(name) +
-                              "' (expected table_ac or table_bc)");
+                              "' (expected table_ac, table_bc or head_ab)");
 }
 
 const std::vector<ParameterInfo>& locationParameters(Kinematics kinematics) {
@@ -39,6 +46,7 @@ const std::vector<ParameterInfo>& locationParameters(Kinematics kinematics) {
       {"a_CB", "A0C-A0B", K::Angle, "squareness of the C axis to the B axis around X (002: alpha_CB^0)"},
       {"dx_CB", "X0C-X0B", K::Length, "offset of the C axis from the B axis in X (002: dx_CB^0)"},
   };
+  if (kinematics == Kinematics::HeadAB) throw std::invalid_argument(kNoTableErrors);
   return kinematics == Kinematics::TableAC ? ac : bc;
 }
 
@@ -92,6 +100,7 @@ const std::vector<ChainFactor>& kinematicChain(Kinematics kinematics) {
       {M::Rx, S::Parameter, 6}, {M::Tx, S::Parameter, 7},
       {M::Rz, S::NegativeAxis, 2},
   };
+  if (kinematics == Kinematics::HeadAB) throw std::invalid_argument(kNoTableErrors);
   return kinematics == Kinematics::TableAC ? ac : bc;
 }
 

@@ -19,9 +19,11 @@
 
 namespace rotacal {
 
-enum class Kinematics { TableAC, TableBC };
+// HeadAB: a spindle head tilting in A and B about a pivot, the tool tip at distance R from it
+// (004 Sec. IV); it has no table location errors and serves the tooltip cycle (core/tooltip.hpp).
+enum class Kinematics { TableAC, TableBC, HeadAB };
 
-std::string_view kinematicsName(Kinematics kinematics);       // "table_ac", "table_bc"
+std::string_view kinematicsName(Kinematics kinematics);       // "table_ac", "table_bc", "head_ab"
 Kinematics kinematicsFromName(std::string_view name);         // throws std::invalid_argument
 
 enum class ParamKind { Length, Angle };

@@ -72,7 +72,7 @@ MachineModel machineFromJson(const JsonDoc& doc, const Json& j) {
   m.x = rangeFrom(doc, s, "X");
   m.y = rangeFrom(doc, s, "Y");
   m.z = rangeFrom(doc, s, "Z");
-  const std::string rot = m.kinematics == Kinematics::TableAC ? "AC" : "BC";
+  const std::string rot = m.kinematics == Kinematics::TableAC ? "AC" : m.kinematics == Kinematics::HeadAB ? "AB" : "BC";
   if (!j.contains("rotary_axes") || !j["rotary_axes"].is_object())
     doc.fail("rotary_axes", "missing object 'rotary_axes'");
   for (char axis : rot) {

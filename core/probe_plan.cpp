@@ -13,6 +13,7 @@ namespace rotacal {
 
 }  // namespace rotacal
 #include "core/spaceframe.hpp"
+#include "core/tooltip.hpp"
 #include "core/touch154.hpp"
 namespace rotacal {
 
@@ -32,7 +33,8 @@ const PlanPose& ProbePlan::poseByName(const std::string& name) const {
 ProbePlan makePlan(const std::string& cycle, const MachineModel& machine, const CycleOptions& options) {
   if (cycle == "touch154") return makeTouch154Plan(machine, options);
   if (cycle == "spaceframe") return makeSpaceframePlan(machine, options);
-  static const char* later[] = {"rtest", "spheres3", "tooltip", "spaceframe"};
+  if (cycle == "tooltip") return makeTooltipPlan(machine, options);
+  static const char* later[] = {"rtest", "spheres3"};
   for (const char* c : later)
     if (cycle == c)
       throw std::invalid_argument("cycle '" + cycle + "' is not available in this version (available: touch154)");
@@ -65,6 +67,7 @@ Json vec(const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()}); 
 
 Json poseJson(Kinematics k, const Pose& p) {
   if (k == Kinematics::TableAC) return {{"A", p.A}, {"C", p.C}};
+  if (k == Kinematics::HeadAB) return {{"A", p.A}, {"B", p.B}};
   return {{"B", p.B}, {"C", p.C}};
 }
 

@@ -20,7 +20,17 @@ struct Op {
     Linear,    // G1 to xyz at feed
     Index,     // rotary axes to `rotary` (clear of the piece: the writer needs nothing else)
     Probe,     // guarded move from the current position toward xyz at feed; must trigger
+    // The fixed-tool-tip cycle (004). Probing is never allowed under inverse time.
+    Mode,          // distance mode (G90 / G91) and feed mode (G94 / G93), `incremental`, `inverse_time`
+    RotaryLinear,  // G1 of the linear axes named in `axes` (xyz, increments under G91) together with
+                   // `rotary`; under G93 `feed` is 1 / minutes of the move and goes on every block.
+                   // Lengths with rotaryLinearDecimals(), angles without trailing zeros ("A5.", 004).
+    Pause,         // dwell_s > 0: dwell for a reading; dwell_s = 0: program stop (M0) for the operator
   } kind = Kind::Comment;
+  bool incremental = false;   // Mode
+  bool inverse_time = false;  // Mode
+  std::string axes;           // RotaryLinear: linear axes to write, e.g. "YZ"
+  double dwell_s = 0.0;       // Pause
   Eigen::Vector3d xyz = Eigen::Vector3d::Zero();
   std::vector<std::pair<char, double>> rotary;  // for Index: axis letter, controller angle (deg)
   bool z_only = false;                          // Rapid: move Z alone (X, Y stay where they are)
@@ -36,6 +46,9 @@ struct Op {
   Eigen::Vector3d nominal_trigger = Eigen::Vector3d::Zero();  // Probe: expected ball centre
   std::string pose_name;                                      // Probe: e.g. "III"
 };
+
+/// Decimals of the RotaryLinear lengths: 004 Table 1 writes inch to 0.0001; mm to 0.001.
+inline int rotaryLinearDecimals(Unit unit) { return unit == Unit::Inch ? 4 : 3; }
 
 struct Program {
   std::string name;                  // e.g. "ROTACAL_TOUCH154"
