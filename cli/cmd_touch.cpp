@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "cli/cmd_rtest.hpp"
 #include "cli/command.hpp"
 #include "controllers/dialect.hpp"
 #include "core/errors.hpp"
@@ -19,6 +20,7 @@
 #include "core/simulation.hpp"
 #include "core/units.hpp"
 #include "postproc/probe_program.hpp"
+#include "postproc/rtest_program.hpp"
 
 namespace rotacal {
 namespace {
@@ -53,7 +55,7 @@ int cmdGenerate(const Common& c, const std::string& plan_file, const std::string
   const Dialect& d = dialectOrFail(dialect_name);
   std::string text;
   try {
-    text = d.writeProgram(probeProgram(plan, dialect_name));
+    text = d.writeProgram(plan.cycle == "rtest" ? rtestProgram(plan, dialect_name) : probeProgram(plan, dialect_name));
   } catch (const std::invalid_argument& e) {
     failFile(plan_file, e.what());
   }
@@ -61,7 +63,8 @@ int cmdGenerate(const Common& c, const std::string& plan_file, const std::string
   if (!problems.empty())
     failFile(out, "generated program fails the " + std::string(d.name()) + " checker: " + problems.front());
   writeFileAtomic(out, text);
-  say(c, fmt::format("{} program: {} probing moves -> {}\n", d.name(), plan.points.size(), out));
+  say(c, fmt::format("{} program: {} {} -> {}\n", d.name(), plan.points.size(),
+                     plan.cycle == "rtest" ? "R-test poses" : "probing moves", out));
   return 0;
 }
 
@@ -69,6 +72,7 @@ int cmdSimulate(const Common& c, const std::string& plan_file, const std::string
                 bool noise_given, std::uint64_t seed, double start_s, bool start_given, const std::string& dialect_name,
                 const std::string& out) {
   const ProbePlan plan = loadPlan(plan_file);
+  if (plan.cycle == "rtest") return rtestSimulate(c, plan, truth_file, noise_um, noise_given, seed, start_s, out);
   Truth truth = loadTruth(truth_file, plan.machine.kinematics);
   if (noise_given) truth.noise_um = noise_um;
   if (start_given) truth.start_time_s = start_s;
@@ -91,6 +95,7 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
                const std::string& text_out, const std::string& offsets_out, bool force) {
   const ProbePlan plan = loadPlan(plan_file);
   const Dialect& d = dialectOrFail(dialect_name);
+  if (plan.cycle == "rtest") return rtestAnalyze(c, plan, results, json_out, text_out, offsets_out);
   Method method;
   try {
     method = methodFromName(method_name);

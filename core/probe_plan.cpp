@@ -13,6 +13,7 @@ namespace rotacal {
 
 }  // namespace rotacal
 #include "core/touch154.hpp"
+#include "core/rtest.hpp"
 namespace rotacal {
 
 const ProbePoint* ProbePlan::findPoint(int id) const {
@@ -30,7 +31,8 @@ const PlanPose& ProbePlan::poseByName(const std::string& name) const {
 
 ProbePlan makePlan(const std::string& cycle, const MachineModel& machine, const CycleOptions& options) {
   if (cycle == "touch154") return makeTouch154Plan(machine, options);
-  static const char* later[] = {"rtest", "spheres3", "tooltip", "spaceframe"};
+  if (cycle == "rtest") return makeRtestPlan(machine, options);
+  static const char* later[] = {"spheres3", "tooltip", "spaceframe"};
   for (const char* c : later)
     if (cycle == c)
       throw std::invalid_argument("cycle '" + cycle + "' is not available in this version (available: touch154)");

@@ -20,11 +20,17 @@ struct Op {
     Linear,    // G1 to xyz at feed
     Index,     // rotary axes to `rotary` (clear of the piece: the writer needs nothing else)
     Probe,     // guarded move from the current position toward xyz at feed; must trigger
+    Dwell,        // wait `seconds` (rtest: the sensors settle before the static reading)
+    Read,         // trigger a reading of an external device (rtest: the R-test logger), point_id
+    RepeatBegin,  // run the ops up to the matching RepeatEnd `count` times (>= 1); nestable
+    RepeatEnd,
   } kind = Kind::Comment;
   Eigen::Vector3d xyz = Eigen::Vector3d::Zero();
   std::vector<std::pair<char, double>> rotary;  // for Index: axis letter, controller angle (deg)
   bool z_only = false;                          // Rapid: move Z alone (X, Y stay where they are)
-  double feed = 0.0;                            // per minute, program units
+  double feed = 0.0;                            // per minute, program units (Index: deg/min, 0 = rapid)
+  double seconds = 0.0;                         // Dwell
+  int count = 0;                                // RepeatBegin
   std::string text;                             // Comment
   int point_id = 0;                             // Probe: plan point id (1-based)
   // Probe, double touch (what real probing macros do against trigger latency): when
