@@ -3,6 +3,7 @@
 #include <string>
 #include <vector>
 
+#include "cli/cmd_rtest.hpp"
 #include "cli/command.hpp"
 #include "core/diagnosis.hpp"
 #include "core/json_io.hpp"
@@ -27,6 +28,7 @@ std::vector<Command> diagnoseCommands(CLI::App& app, const Common& common) {
   return {{cmd, [a, &common] {
              const ProbePlan plan = loadPlan(a->plan_file);
              const Dialect& d = dialectOrFail(a->dialect);
+             if (plan.cycle == "rtest") return rtestDiagnose(common, plan, a->results, a->json_out, a->text_out, a->alpha);
              std::vector<MeasurementRun> runs;
              for (const auto& f : a->results) runs.push_back(d.parseResults(readTextFile(f), f, plan));
              DiagnosisOptions o;

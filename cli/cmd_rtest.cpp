@@ -4,6 +4,7 @@
 
 #include "core/json_io.hpp"
 #include "core/rtest.hpp"
+#include "core/rtest_diagnosis.hpp"
 #include "core/rtest_fit.hpp"
 #include "core/simulation.hpp"
 
@@ -32,11 +33,9 @@ int rtestSimulate(const Common& c, const ProbePlan& plan, const std::string& tru
   return 0;
 }
 
-int rtestAnalyze(const Common& c, const ProbePlan& plan, const std::vector<std::string>& results,
-                 const std::string& json_out, const std::string& text_out, const std::string& offsets_out) {
-  if (!offsets_out.empty())
-    throw CLI::ValidationError("--offsets", "the R-test cycle reports position-dependent errors and their drift; it "
-                                            "writes no offsets (use touch154 for the location errors)");
+namespace {
+
+std::vector<RtestCycle> readCycles(const ProbePlan& plan, const std::vector<std::string>& results) {
   std::vector<RtestCycle> cycles;
   for (const auto& f : results) {
     const RtestSeries s = parseRtestResults(readTextFile(f), f, plan);
@@ -46,10 +45,48 @@ int rtestAnalyze(const Common& c, const ProbePlan& plan, const std::vector<std::
       cycles.push_back(cy);
     }
   }
+  return cycles;
+}
+
+double sensorSigma(const ProbePlan& plan) {
+  return parseNumber("sensor_noise_um",
+                     plan.options.count("sensor_noise_um") ? plan.options.at("sensor_noise_um") : std::string("0.2"));
+}
+
+}  // namespace
+
+int rtestDiagnose(const Common& c, const ProbePlan& plan, const std::vector<std::string>& results,
+                  const std::string& json_out, const std::string& text_out, double alpha) {
+  const std::vector<RtestCycle> cycles = readCycles(plan, results);
+  RtestDiagnosisOptions o;
+  o.alpha = alpha;
+  o.sensor_sigma_um = sensorSigma(plan);
+  try {
+    o.validate();
+  } catch (const std::invalid_argument& e) {
+    throw CLI::ValidationError("--alpha", e.what());
+  }
+  RtestDiagnosis d;
+  try {
+    d = diagnoseRtest(plan, cycles, o);
+  } catch (const std::invalid_argument& e) {
+    failFile(results.front(), e.what());
+  }
+  const std::string text = rtestDiagnosisText(plan, d);
+  writeFileAtomic(json_out, rtestDiagnosisJson(plan, d).dump(1) + "\n");
+  if (!text_out.empty()) writeFileAtomic(text_out, text);
+  say(c, text);
+  return 0;
+}
+
+int rtestAnalyze(const Common& c, const ProbePlan& plan, const std::vector<std::string>& results,
+                 const std::string& json_out, const std::string& text_out, const std::string& offsets_out) {
+  if (!offsets_out.empty())
+    throw CLI::ValidationError("--offsets", "the R-test cycle reports position-dependent errors and their drift; it "
+                                            "writes no offsets (use touch154 for the location errors)");
+  const std::vector<RtestCycle> cycles = readCycles(plan, results);
   RtestFitOptions o;
-  o.sensor_sigma_um = parseNumber("sensor_noise_um", plan.options.count("sensor_noise_um")
-                                                         ? plan.options.at("sensor_noise_um")
-                                                         : std::string("0.2"));
+  o.sensor_sigma_um = sensorSigma(plan);
   RtestAnalysis a;
   try {
     a = analyzeRtest(plan, cycles, o);

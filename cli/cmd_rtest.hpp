@@ -14,5 +14,7 @@ int rtestSimulate(const Common& c, const ProbePlan& plan, const std::string& tru
                   std::uint64_t seed, double start_s, const std::string& out);
 int rtestAnalyze(const Common& c, const ProbePlan& plan, const std::vector<std::string>& results,
                  const std::string& json_out, const std::string& text_out, const std::string& offsets_out);
+int rtestDiagnose(const Common& c, const ProbePlan& plan, const std::vector<std::string>& results,
+                  const std::string& json_out, const std::string& text_out, double alpha);
 
 }  // namespace rotacal
