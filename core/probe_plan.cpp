@@ -35,7 +35,7 @@ ProbePlan makePlan(const std::string& cycle, const MachineModel& machine, const 
   static const char* later[] = {"spheres3", "tooltip", "spaceframe"};
   for (const char* c : later)
     if (cycle == c)
-      throw std::invalid_argument("cycle '" + cycle + "' is not available in this version (available: touch154)");
+      throw std::invalid_argument("cycle '" + cycle + "' is not available in this version (available: touch154, rtest)");
   throw std::invalid_argument("unknown cycle '" + cycle + "' (expected touch154, rtest, spheres3, tooltip, spaceframe)");
 }
 
