@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "cli/cmd_tooltip.hpp"
+#include "cli/cmd_rtest.hpp"
 #include "cli/command.hpp"
 #include "cli/output.hpp"
 #include "cli/progress.hpp"
@@ -34,6 +35,7 @@ std::vector<Command> diagnoseCommands(CLI::App& app, const Common& common) {
              const Dialect& d = dialectOrFail(a->dialect);
              if (plan.cycle == "tooltip")
                return diagnoseTooltipCmd(common, plan, a->results, a->alpha, a->json_out, a->text_out);
+             if (plan.cycle == "rtest") return rtestDiagnose(common, plan, a->results, a->json_out, a->text_out, a->alpha);
              std::vector<MeasurementRun> runs;
              for (const auto& f : a->results) runs.push_back(d.parseResults(readTextFile(f), f, plan));
              DiagnosisOptions o;

@@ -10,6 +10,7 @@
 
 #include "cli/cmd_spaceframe.hpp"
 #include "cli/cmd_tooltip.hpp"
+#include "cli/cmd_rtest.hpp"
 #include "cli/command.hpp"
 #include "cli/output.hpp"
 #include "controllers/dialect.hpp"
@@ -24,6 +25,7 @@
 #include "core/units.hpp"
 #include "postproc/probe_program.hpp"
 #include "postproc/tooltip_program.hpp"
+#include "postproc/rtest_program.hpp"
 
 namespace rotacal {
 namespace {
@@ -58,7 +60,9 @@ int cmdGenerate(const Common& c, const std::string& plan_file, const std::string
   const Dialect& d = dialectOrFail(dialect_name);
   std::string text;
   try {
-    text = d.writeProgram(plan.cycle == "tooltip" ? tooltipProgram(plan, dialect_name) : probeProgram(plan, dialect_name));
+    text = d.writeProgram(plan.cycle == "tooltip" ? tooltipProgram(plan, dialect_name)
+                          : plan.cycle == "rtest" ? rtestProgram(plan, dialect_name)
+                                                  : probeProgram(plan, dialect_name));
   } catch (const std::invalid_argument& e) {
     failFile(plan_file, e.what());
   }
@@ -67,7 +71,10 @@ int cmdGenerate(const Common& c, const std::string& plan_file, const std::string
     failFile(out, "generated program fails the " + std::string(d.name()) + " checker: " + problems.front());
   writeFileAtomic(out, text);
   say(c, fmt::format("{} program: {} {} -> {}\n", d.name(), plan.points.size(),
-                     plan.cycle == "tooltip" ? "tool-tip poses" : "probing moves", out));
+                     plan.cycle == "tooltip" ? "tool-tip poses"
+                     : plan.cycle == "rtest" ? "R-test poses"
+                                             : "probing moves",
+                     out));
   return 0;
 }
 
@@ -80,6 +87,7 @@ int cmdSimulate(const Common& c, const std::string& plan_file, const std::string
     dialectOrFail(dialect_name);
     return simulateTooltipCmd(c, plan, truth_file, noise_um, noise_given, seed, out);
   }
+  if (plan.cycle == "rtest") return rtestSimulate(c, plan, truth_file, noise_um, noise_given, seed, start_s, out);
   Truth truth = loadTruth(truth_file, plan.machine.kinematics);
   if (noise_given) truth.noise_um = noise_um;
   if (start_given) truth.start_time_s = start_s;
@@ -108,6 +116,7 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
                                                     "errors go into the machine's kinematics tables by hand)");
     return analyzeTooltipCmd(c, plan, results, json_out, text_out);
   }
+  if (plan.cycle == "rtest") return rtestAnalyze(c, plan, results, json_out, text_out, offsets_out);
   Method method;
   try {
     method = methodFromName(method_name);

@@ -98,6 +98,8 @@ class HeidenhainDialect final : public Dialect {
     for (const auto& op : p.ops) probes += op.kind == nc::Op::Kind::Probe;
     if (p.point_count != 0 && p.point_count != probes)
       throw std::invalid_argument(fmt::format("program has {} probing moves but point_count {}", probes, p.point_count));
+    if (probes == 0)  // the result format files below are built per probing move
+      throw std::invalid_argument("the heidenhain program records probing moves and this one has none (rtest: use linuxcnc)");
     const std::string name = safeName(p.name.empty() ? "ROTACAL" : p.name);
     const std::string results = std::string(kDir) + safeName(p.results_file.empty() ? "ROTACAL" : p.results_file) + ".TXT";
     double safe_z = -std::numeric_limits<double>::infinity();
@@ -161,6 +163,9 @@ class HeidenhainDialect final : public Dialect {
           cur_known = true;
           break;
         case nc::Op::Kind::Index: {
+          if (op.feed > 0)
+            throw std::invalid_argument(fmt::format("the {} program indexes at rapid only; a rotary move at a feed "
+                                                    "(R-test reciprocation) is written for linuxcnc only", "heidenhain"));
           std::string s = "L";
           for (const auto& [axis, deg] : op.rotary) s += fmt::format(" {}{}", axis, H(deg));
           line(s + " R0 FMAX");
@@ -185,6 +190,13 @@ class HeidenhainDialect final : public Dialect {
             line("STOP");
           }
           break;
+        case nc::Op::Kind::Dwell:
+        case nc::Op::Kind::Read:
+        case nc::Op::Kind::RepeatBegin:
+        case nc::Op::Kind::RepeatEnd:
+          // The R-test program (002): dwell, logger trigger and loops are spelled for linuxcnc only so far.
+          throw std::invalid_argument(fmt::format("the {} program cannot express an R-test dwell, logger trigger or loop "
+                                                  "in this version: generate the rtest program for linuxcnc", "heidenhain"));
         case nc::Op::Kind::Probe: {
           const int id = op.point_id;
           if (id <= 0 || kLabelBase + id > 65535) throw std::invalid_argument(fmt::format("point id {} out of range", id));

@@ -39,6 +39,11 @@ constexpr size_t kMaxLineChars = 252;
 constexpr int kOwordBase = 1000;
 /// The second touch's check of a double touch: its own o-number (o-words label one if/endif).
 constexpr int kSecondTouchOwordBase = 500000;
+/// R-test (002): o-words of the repeat loops, the digital output that triggers the R-test
+/// logger, and its pulse length (s).
+constexpr int kRepeatOwordBase = 900000;
+constexpr int kReadOutput = 0;
+constexpr double kReadPulseS = 0.2;
 
 int parameterOf(char axis) { return axis == 'A' ? 5064 : axis == 'B' ? 5065 : 5066; }
 
@@ -118,6 +123,8 @@ class LinuxCncDialect final : public Dialect {
     std::string log_rotary;
     for (char a : p.rotary_axes) log_rotary += fmt::format(" %.4f#{}", parameterOf(a));
     ctl::ModeGuard guard;
+    std::vector<int> repeats;  // open o-word repeat blocks
+    int next_repeat = 0;
     for (const auto& op : p.ops) {
       const Eigen::Vector3d& x = op.xyz;
       guard.apply(op);
@@ -130,8 +137,10 @@ class LinuxCncDialect final : public Dialect {
           line(fmt::format("G1 X{} Y{} Z{} F{}", L(x.x()), L(x.y()), L(x.z()), F(op.feed)));
           break;
         case nc::Op::Kind::Index: {
-          std::string s = "G0";
+          // feed > 0: a rotary move at that feed (deg/min under G94: the R-test reciprocation)
+          std::string s = op.feed > 0 ? "G1" : "G0";
           for (const auto& [axis, deg] : op.rotary) s += fmt::format(" {}{}", axis, Ang(deg));
+          if (op.feed > 0) s += " F" + ctl::fixed(op.feed, 1);
           line(s);
           break;
         }
@@ -146,6 +155,28 @@ class LinuxCncDialect final : public Dialect {
         case nc::Op::Kind::Pause:
           if (op.dwell_s > 0) line(fmt::format("G4 P{}", ctl::trimmed(op.dwell_s, 3)));  // P: seconds
           else line("M0 " + comment(op.text.empty() ? "program stop" : op.text));
+          break;
+        case nc::Op::Kind::Dwell:
+          if (!(op.seconds >= 0)) throw std::invalid_argument("dwell must be >= 0 s");
+          line("G4 P" + ctl::fixed(op.seconds, 3));
+          break;
+        case nc::Op::Kind::Read:
+          // R-test reading: a pulse on motion.digital-out-00 (wired to the R-test logger's
+          // trigger input) while the machine stands still after the dwell.
+          if (!op.text.empty()) line(comment(op.text));
+          line(fmt::format("M64 P{}", kReadOutput));
+          line("G4 P" + ctl::fixed(kReadPulseS, 3));
+          line(fmt::format("M65 P{}", kReadOutput));
+          break;
+        case nc::Op::Kind::RepeatBegin:
+          if (op.count < 1) throw std::invalid_argument(fmt::format("repeat count {} must be >= 1", op.count));
+          repeats.push_back(kRepeatOwordBase + next_repeat++);
+          line(fmt::format("o{} repeat [{}]", repeats.back(), op.count));
+          break;
+        case nc::Op::Kind::RepeatEnd:
+          if (repeats.empty()) throw std::invalid_argument("repeat end without a repeat");
+          line(fmt::format("o{} endrepeat", repeats.back()));
+          repeats.pop_back();
           break;
         case nc::Op::Kind::Probe: {
           if (op.point_id <= 0) throw std::invalid_argument("probing move without a point id");
@@ -187,6 +218,7 @@ class LinuxCncDialect final : public Dialect {
         }
       }
     }
+    if (!repeats.empty()) throw std::invalid_argument("a repeat without its end");
     line("(LOGCLOSE)");
     line("M2");
     line("%");
@@ -513,7 +545,22 @@ class LinuxCncDialect final : public Dialect {
       if (!checked) problem(b.line, g + " is not followed by 'o<n> if [#5070 NE 1]' with an (ABORT, ...)");
     }
     const int last_line = blocks.empty() ? 1 : blocks.back().line;
-    if (static_cast<size_t>(probes) != ctl::expectedProbes(plan))
+    if (plan.cycle == "rtest") {
+      // R-test: every logger trigger (M64 P0) after a dwell, each cycle's poses all read.
+      size_t reads = 0;
+      const nc::Block* prev = nullptr;
+      for (const auto& b : blocks) {
+        if (b.control || b.words.empty()) continue;
+        if (b.hasWord('M', 64)) {
+          ++reads;
+          if (!prev || !prev->hasWord('G', 4)) problem(b.line, "R-test reading (M64) without a dwell (G4) before it");
+        }
+        prev = &b;
+      }
+      if (reads == 0 || reads % plan.points.size() != 0)
+        problem(last_line, fmt::format("{} R-test readings [M64 P{}], not a multiple of the plan's {} poses", reads,
+                                       kReadOutput, plan.points.size()));
+    } else if (static_cast<size_t>(probes) != ctl::expectedProbes(plan))
       problem(last_line, fmt::format("{} recorded touches [G38.2/G38.3 moves whose position is LOGged], the plan "
                                      "has {} points",
                                      probes, ctl::expectedProbes(plan)));

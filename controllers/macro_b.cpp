@@ -167,6 +167,9 @@ std::string MacroBDialect::writeProgram(const nc::Program& p) const {
         line(fmt::format("G01 X{} Y{} Z{} F{}", L(x.x()), L(x.y()), L(x.z()), F(op.feed)));
         break;
       case nc::Op::Kind::Index: {
+        if (op.feed > 0)
+          throw std::invalid_argument(fmt::format("the {} program indexes at rapid only; a rotary move at a feed "
+                                                  "(R-test reciprocation) is written for linuxcnc only", f_.name));
         flush();
         std::string s = "G00";
         for (const auto& [axis, deg] : op.rotary) s += fmt::format(" {}{}", axis, Ang(deg));
@@ -187,6 +190,13 @@ std::string MacroBDialect::writeProgram(const nc::Program& p) const {
         if (op.dwell_s > 0) line(fmt::format("G04 X{}", ctl::trimmed(op.dwell_s, 3)));
         else line("M00");
         break;
+      case nc::Op::Kind::Dwell:
+      case nc::Op::Kind::Read:
+      case nc::Op::Kind::RepeatBegin:
+      case nc::Op::Kind::RepeatEnd:
+        // The R-test program (002): dwell, logger trigger and loops are spelled for linuxcnc only so far.
+        throw std::invalid_argument(fmt::format("the {} program cannot express an R-test dwell, logger trigger or loop "
+                                                "in this version: generate the rtest program for linuxcnc", f_.name));
       case nc::Op::Kind::Probe: {
         const int id = op.point_id;
         if (id <= 0 || kLabelBase + id > kMaxLabel)

@@ -153,6 +153,9 @@ class SiemensDialect final : public Dialect {
           line(fmt::format("G1 X{} Y{} Z{} F{}", L(x.x()), L(x.y()), L(x.z()), F(op.feed)));
           break;
         case nc::Op::Kind::Index: {
+          if (op.feed > 0)
+            throw std::invalid_argument(fmt::format("the {} program indexes at rapid only; a rotary move at a feed "
+                                                    "(R-test reciprocation) is written for linuxcnc only", "siemens"));
           std::string s = "G0";
           for (const auto& [axis, deg] : op.rotary) s += fmt::format(" {}{}", axis, L(deg));
           line(s);
@@ -168,6 +171,13 @@ class SiemensDialect final : public Dialect {
           if (op.dwell_s > 0) line(fmt::format("G4 F{}", ctl::trimmed(op.dwell_s, 3)));  // F: seconds, own block
           else line("M0");
           break;
+        case nc::Op::Kind::Dwell:
+        case nc::Op::Kind::Read:
+        case nc::Op::Kind::RepeatBegin:
+        case nc::Op::Kind::RepeatEnd:
+          // The R-test program (002): dwell, logger trigger and loops are spelled for linuxcnc only so far.
+          throw std::invalid_argument(fmt::format("the {} program cannot express an R-test dwell, logger trigger or loop "
+                                                  "in this version: generate the rtest program for linuxcnc", "siemens"));
         case nc::Op::Kind::Probe: {
           const int id = op.point_id;
           if (id <= 0) throw std::invalid_argument("probing move without a point id");

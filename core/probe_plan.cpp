@@ -15,6 +15,7 @@ namespace rotacal {
 #include "core/spaceframe.hpp"
 #include "core/tooltip.hpp"
 #include "core/touch154.hpp"
+#include "core/rtest.hpp"
 namespace rotacal {
 
 const ProbePoint* ProbePlan::findPoint(int id) const {
@@ -34,10 +35,11 @@ ProbePlan makePlan(const std::string& cycle, const MachineModel& machine, const 
   if (cycle == "touch154") return makeTouch154Plan(machine, options);
   if (cycle == "spaceframe") return makeSpaceframePlan(machine, options);
   if (cycle == "tooltip") return makeTooltipPlan(machine, options);
-  static const char* later[] = {"rtest", "spheres3"};
+  if (cycle == "rtest") return makeRtestPlan(machine, options);
+  static const char* later[] = {"spheres3"};
   for (const char* c : later)
     if (cycle == c)
-      throw std::invalid_argument("cycle '" + cycle + "' is not available in this version (available: touch154)");
+      throw std::invalid_argument("cycle '" + cycle + "' is not available in this version (available: touch154, rtest)");
   throw std::invalid_argument("unknown cycle '" + cycle + "' (expected touch154, rtest, spheres3, tooltip, spaceframe)");
 }
 

@@ -26,6 +26,10 @@ struct Op {
                    // `rotary`; under G93 `feed` is 1 / minutes of the move and goes on every block.
                    // Lengths with rotaryLinearDecimals(), angles without trailing zeros ("A5.", 004).
     Pause,         // dwell_s > 0: dwell for a reading; dwell_s = 0: program stop (M0) for the operator
+    Dwell,        // wait `seconds` (rtest: the sensors settle before the static reading)
+    Read,         // trigger a reading of an external device (rtest: the R-test logger), point_id
+    RepeatBegin,  // run the ops up to the matching RepeatEnd `count` times (>= 1); nestable
+    RepeatEnd,
   } kind = Kind::Comment;
   bool incremental = false;   // Mode
   bool inverse_time = false;  // Mode
@@ -34,7 +38,9 @@ struct Op {
   Eigen::Vector3d xyz = Eigen::Vector3d::Zero();
   std::vector<std::pair<char, double>> rotary;  // for Index: axis letter, controller angle (deg)
   bool z_only = false;                          // Rapid: move Z alone (X, Y stay where they are)
-  double feed = 0.0;                            // per minute, program units
+  double feed = 0.0;                            // per minute, program units (Index: deg/min, 0 = rapid)
+  double seconds = 0.0;                         // Dwell
+  int count = 0;                                // RepeatBegin
   std::string text;                             // Comment
   int point_id = 0;                             // Probe: plan point id (1-based)
   // Probe, double touch (what real probing macros do against trigger latency): when

@@ -69,7 +69,7 @@ TEST(Touch154, LayoutIsAParameterAndBadOptionsAreRefused) {
   EXPECT_EQ(wide.points.size(), 154u);
   EXPECT_THROW(makePlan("touch154", m, {{"bogus", "1"}}), std::invalid_argument);
   EXPECT_THROW(makePlan("touch154", m, {{"side_offsets_mm", "-60,0"}}), std::invalid_argument);
-  EXPECT_THROW(makePlan("rtest", m, {}), std::invalid_argument);
+  EXPECT_THROW(makePlan("no_such_cycle", m, {}), std::invalid_argument);
 }
 
 TEST(Touch154, PlanThatLeavesTheStrokeIsRefused) {
