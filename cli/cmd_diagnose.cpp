@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "cli/command.hpp"
+#include "cli/spheres3_cli.hpp"
 #include "core/diagnosis.hpp"
 #include "core/json_io.hpp"
 #include "core/probe_plan.hpp"
@@ -29,6 +30,8 @@ std::vector<Command> diagnoseCommands(CLI::App& app, const Common& common) {
              const Dialect& d = dialectOrFail(a->dialect);
              std::vector<MeasurementRun> runs;
              for (const auto& f : a->results) runs.push_back(d.parseResults(readTextFile(f), f, plan));
+             if (plan.cycle == "spheres3")
+               return diagnoseSpheres3Cli(common, plan, runs, a->results, a->alpha, a->json_out, a->text_out);
              DiagnosisOptions o;
              o.alpha = a->alpha;
              o.prior_sigma_um = plan.machine.probe.repeatability_um;

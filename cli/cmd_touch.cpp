@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "cli/command.hpp"
+#include "cli/spheres3_cli.hpp"
 #include "controllers/dialect.hpp"
 #include "core/errors.hpp"
 #include "core/identification.hpp"
@@ -99,6 +100,7 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
   }
   std::vector<MeasurementRun> runs;
   for (const auto& f : results) runs.push_back(d.parseResults(readTextFile(f), f, plan));
+  if (plan.cycle == "spheres3") return analyzeSpheres3(c, plan, runs, results, json_out, text_out, offsets_out);
 
   IdentificationOptions opt;
   opt.method = method;
@@ -166,7 +168,7 @@ std::vector<Command> touchCommands(CLI::App& app, const Common& common) {
   std::vector<Command> cmds;
 
   auto* plan = app.add_subcommand("plan", "make the probing plan of a cycle for a machine");
-  plan->add_option("--cycle", a->cycle, "touch154 (000); rtest, spheres3, tooltip, spaceframe later")->required();
+  plan->add_option("--cycle", a->cycle, "touch154 (000), spheres3 (001); rtest, tooltip, spaceframe later")->required();
   plan->add_option("--machine", a->machine_file, "MACHINE.json")->required();
   plan->add_option("--set", a->sets, "cycle option KEY=VALUE (repeatable), e.g. side_depth_mm=25");
   plan->add_option("-o,--output", a->out, "PLAN.json")->required();

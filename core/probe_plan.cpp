@@ -12,6 +12,7 @@
 namespace rotacal {
 
 }  // namespace rotacal
+#include "core/spheres3.hpp"
 #include "core/touch154.hpp"
 namespace rotacal {
 
@@ -30,10 +31,11 @@ const PlanPose& ProbePlan::poseByName(const std::string& name) const {
 
 ProbePlan makePlan(const std::string& cycle, const MachineModel& machine, const CycleOptions& options) {
   if (cycle == "touch154") return makeTouch154Plan(machine, options);
-  static const char* later[] = {"rtest", "spheres3", "tooltip", "spaceframe"};
+  if (cycle == "spheres3") return makeSpheres3Plan(machine, options);
+  static const char* later[] = {"rtest", "tooltip", "spaceframe"};
   for (const char* c : later)
     if (cycle == c)
-      throw std::invalid_argument("cycle '" + cycle + "' is not available in this version (available: touch154)");
+      throw std::invalid_argument("cycle '" + cycle + "' is not available in this version (available: touch154, spheres3)");
   throw std::invalid_argument("unknown cycle '" + cycle + "' (expected touch154, rtest, spheres3, tooltip, spaceframe)");
 }
 
