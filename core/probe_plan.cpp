@@ -216,13 +216,19 @@ std::vector<Waypoint> plannedPath(const ProbePlan& plan) {
     push(Waypoint::Kind::Rapid, Eigen::Vector3d(start.x(), start.y(), safe_z));
   }
   push(Waypoint::Kind::Rapid, Eigen::Vector3d(cur.x(), cur.y(), plan.index_z_mm));
-  // Drop zero-length moves (e.g. when the start is already at the safe height).
+  // Drop zero-length moves (e.g. when the start is already at the safe height). After the first
+  // climb the real XY is unknown (the climb waypoint carries the first touch's XY only for the
+  // stroke check): keep the first XY move at the index height, or the program would go straight
+  // down to the first start from wherever it stood.
   std::vector<Waypoint> out;
+  bool xy_known = true;
   for (const auto& w : path) {
-    if (!out.empty() && w.kind != Waypoint::Kind::Index && w.kind != Waypoint::Kind::Probe &&
-        (w.position_m - out.back().position_m).norm() < 1e-9)
+    if (w.kind == Waypoint::Kind::ClimbZ) xy_known = false;
+    else if (xy_known && !out.empty() && w.kind != Waypoint::Kind::Index && w.kind != Waypoint::Kind::Probe &&
+             (w.position_m - out.back().position_m).norm() < 1e-9)
       continue;
     out.push_back(w);
+    if (w.kind != Waypoint::Kind::ClimbZ && w.kind != Waypoint::Kind::Index) xy_known = true;
   }
   return out;
 }

@@ -45,8 +45,20 @@ TEST(Spheres3Plan, PathClimbsBeforeMovingAndIndexesAtIndexZ) {
   const auto path = plannedPath(plan);
   ASSERT_FALSE(path.empty());
   EXPECT_EQ(path.front().kind, Waypoint::Kind::ClimbZ);  // Z alone first: the start is unknown
+  // Then the C index, then the first XY move at the index height (not a dive from an unknown XY).
+  ASSERT_GE(path.size(), 4u);
+  EXPECT_EQ(path[1].kind, Waypoint::Kind::Index);
+  EXPECT_EQ(path[2].kind, Waypoint::Kind::Rapid);
+  EXPECT_NEAR(path[2].position_m.z(), plan.index_z_mm, 1e-9);
+  EXPECT_EQ(path[3].kind, Waypoint::Kind::Position);
+  EXPECT_LT((path[3].position_m - path[2].position_m).head<2>().norm(), 1e-9);  // straight down
   Eigen::Vector3d prev = path.front().position_m;
   for (const auto& w : path) {
+    // Feed moves (down to a start, probing, retract) never move in XY and Z at once, except
+    // the probing line itself.
+    if (w.kind == Waypoint::Kind::Position) {
+      EXPECT_LT((w.position_m - prev).head<2>().norm(), 1e-9);
+    }
     if (w.kind == Waypoint::Kind::Index) {
       EXPECT_NEAR(w.position_m.z(), plan.index_z_mm, 1e-9);
     }

@@ -110,7 +110,14 @@ def compare(got, want, label):
               % (name, got[name], w, d, unit, tol))
 
 
-def lateness(work, run_dir, plan, offsets=None, cycle="touch154", points=154):
+# The program writes the probing line to 4 decimals: a plan line through non-round coordinates
+# (the spheres sit at 220 mm x cos 30 deg ...) is moved off it by up to 0.05 um in each of the
+# two directions across it. The recorded position is where the ball really was, so the analysis
+# is not affected; only this check needs the bound.
+ROUNDING_ACROSS_UM = 0.05 * 2 ** 0.5
+
+
+def lateness(work, run_dir, plan, offsets=None, cycle="touch154", points=154, across_um=0.001):
     out = os.path.join(run_dir, "lateness.json")
     cmd = ["/usr/bin/python3", os.path.join(HERE, "scripts", "lateness.py"), "--params",
            os.path.join(run_dir, "params.json"), "--plan", plan, "--results",
@@ -128,7 +135,8 @@ def lateness(work, run_dir, plan, offsets=None, cycle="touch154", points=154):
     check(s["over_um"]["min"] >= -0.001 and s["over_um"]["max"] <= bound_um + 0.001,
           "every trigger 0 .. %.3f um (F%g x 1 ms) past the exact contact: %.3f .. %.3f um"
           % (bound_um, slow, s["over_um"]["min"], s["over_um"]["max"]))
-    check(s["across_um_max"] <= 0.001, "no trigger off the approach line (max %.4f um)" % s["across_um_max"])
+    check(s["across_um_max"] <= across_um, "no trigger off the approach line by more than %.4f um (max %.4f um)"
+          % (across_um, s["across_um_max"]))
     return s
 
 
@@ -194,7 +202,7 @@ def run_spheres3(a):
     run = os.path.join(work, "run")
     _, t = sh([RUN, "--ngc", ngc, "--truth", TRUTH, "--machine", MACHINE, "--plan", plan, "--out", run,
                "--timeout", "1200"])
-    lat = lateness(work, run, plan, cycle="spheres3", points=n_points)
+    lat = lateness(work, run, plan, cycle="spheres3", points=n_points, across_um=ROUNDING_ACROSS_UM)
     rep = os.path.join(work, "report.json")
     sh([a.rotacal, "analyze", "--plan", plan, "--results", os.path.join(run, "rotacal_spheres3.txt"),
         "--dialect", "linuxcnc", "--json", rep])
