@@ -13,6 +13,7 @@
 #include "cli/cmd_rtest.hpp"
 #include "cli/command.hpp"
 #include "cli/output.hpp"
+#include "cli/spheres3_cli.hpp"
 #include "controllers/dialect.hpp"
 #include "core/errors.hpp"
 #include "core/identification.hpp"
@@ -126,6 +127,7 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
   std::vector<MeasurementRun> runs;
   for (const auto& f : results) runs.push_back(d.parseResults(readTextFile(f), f, plan));
   if (plan.cycle == "spaceframe") return analyzeSpaceframeCommand(c, plan, runs, results, json_out, text_out, offsets_out);
+  if (plan.cycle == "spheres3") return analyzeSpheres3(c, plan, runs, results, json_out, text_out, offsets_out);
 
   IdentificationOptions opt;
   opt.method = method;
@@ -196,7 +198,8 @@ std::vector<Command> touchCommands(CLI::App& app, const Common& common) {
   std::vector<Command> cmds;
 
   auto* plan = app.add_subcommand("plan", "make the probing plan of a cycle for a machine");
-  plan->add_option("--cycle", a->cycle, "touch154 (000), spaceframe (003); rtest, spheres3, tooltip later")->required();
+  plan->add_option("--cycle", a->cycle,
+                   "touch154 (000), spheres3 (001), rtest (002), spaceframe (003), tooltip (004)")->required();
   plan->add_option("--machine", a->machine_file, "MACHINE.json")->required();
   plan->add_option("--set", a->sets, "cycle option KEY=VALUE (repeatable), e.g. side_depth_mm=25");
   plan->add_option("-o,--output", a->out, "PLAN.json")->required();

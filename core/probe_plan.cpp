@@ -14,6 +14,7 @@ namespace rotacal {
 }  // namespace rotacal
 #include "core/spaceframe.hpp"
 #include "core/tooltip.hpp"
+#include "core/spheres3.hpp"
 #include "core/touch154.hpp"
 #include "core/rtest.hpp"
 namespace rotacal {
@@ -33,13 +34,10 @@ const PlanPose& ProbePlan::poseByName(const std::string& name) const {
 
 ProbePlan makePlan(const std::string& cycle, const MachineModel& machine, const CycleOptions& options) {
   if (cycle == "touch154") return makeTouch154Plan(machine, options);
+  if (cycle == "spheres3") return makeSpheres3Plan(machine, options);
+  if (cycle == "rtest") return makeRtestPlan(machine, options);
   if (cycle == "spaceframe") return makeSpaceframePlan(machine, options);
   if (cycle == "tooltip") return makeTooltipPlan(machine, options);
-  if (cycle == "rtest") return makeRtestPlan(machine, options);
-  static const char* later[] = {"spheres3"};
-  for (const char* c : later)
-    if (cycle == c)
-      throw std::invalid_argument("cycle '" + cycle + "' is not available in this version (available: touch154, rtest)");
   throw std::invalid_argument("unknown cycle '" + cycle + "' (expected touch154, rtest, spheres3, tooltip, spaceframe)");
 }
 
@@ -221,13 +219,19 @@ std::vector<Waypoint> plannedPath(const ProbePlan& plan) {
     push(Waypoint::Kind::Rapid, Eigen::Vector3d(start.x(), start.y(), safe_z));
   }
   push(Waypoint::Kind::Rapid, Eigen::Vector3d(cur.x(), cur.y(), plan.index_z_mm));
-  // Drop zero-length moves (e.g. when the start is already at the safe height).
+  // Drop zero-length moves (e.g. when the start is already at the safe height). After the first
+  // climb the real XY is unknown (the climb waypoint carries the first touch's XY only for the
+  // stroke check): keep the first XY move at the index height, or the program would go straight
+  // down to the first start from wherever it stood.
   std::vector<Waypoint> out;
+  bool xy_known = true;
   for (const auto& w : path) {
-    if (!out.empty() && w.kind != Waypoint::Kind::Index && w.kind != Waypoint::Kind::Probe &&
-        (w.position_m - out.back().position_m).norm() < 1e-9)
+    if (w.kind == Waypoint::Kind::ClimbZ) xy_known = false;
+    else if (xy_known && !out.empty() && w.kind != Waypoint::Kind::Index && w.kind != Waypoint::Kind::Probe &&
+             (w.position_m - out.back().position_m).norm() < 1e-9)
       continue;
     out.push_back(w);
+    if (w.kind != Waypoint::Kind::ClimbZ && w.kind != Waypoint::Kind::Index) xy_known = true;
   }
   return out;
 }

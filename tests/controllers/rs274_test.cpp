@@ -115,5 +115,18 @@ TEST_F(Rs274, TrippingProbeRunsToTheEndAndLogsAParsableResultsFile) {
   }
 }
 
+// The three-sphere cycle (001): 180 probing moves at 12 C angles, through the interpreter.
+TEST(Rs274Spheres3, TrippingProbeRunsToTheEnd) {
+  if (!fs::exists(kRs274)) GTEST_SKIP() << kRs274 << " not found: install linuxcnc-uspace to run this test";
+  const ProbePlan plan = makePlan("spheres3", test::acTestMachine(), {});
+  const std::string program = dialectByName("linuxcnc").writeProgram(probeProgram(plan, "linuxcnc"));
+  const Rs274Run r = runRs274(std::regex_replace(program, std::regex("#5070"), "1"), "spheres3");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(std::regex_replace(r.err, std::regex(R"(executing|\s)"), ""), "") << r.err;
+  EXPECT_EQ(count(r.out, "STRAIGHT_PROBE("), plan.points.size());
+  EXPECT_EQ(count(r.out, "LOGOPEN(\"rotacal_spheres3.txt\")"), 1u);
+  EXPECT_EQ(count(r.out, "PROGRAM_END()"), 1u);
+}
+
 }  // namespace
 }  // namespace rotacal

@@ -4,10 +4,11 @@
 # the location errors of a rotacal TRUTH.json. Adapted from shared/tools/linuxcnc-sim/run.sh.
 #
 # Usage: run.sh --ngc PROGRAM --truth TRUTH.json --machine MACHINE.json --out DIR
-#               [--pre-ngc OFFSETS.ngc] [--timeout S] [--comp-build DIR]
+#               [--plan PLAN.json] [--pre-ngc OFFSETS.ngc] [--timeout S] [--comp-build DIR]
 #   --ngc FILE        the program (rotacal generate --dialect linuxcnc); it runs as written
 #   --truth FILE      rotacal-truth/1: the true machine and piece (scripts/truth_params.py)
 #   --machine FILE    rotacal-machine/1: the nominal piece and probe ball
+#   --plan FILE       rotacal-plan/1 of a sphere cycle: its spheres join the virtual piece
 #   --out DIR         run directory: LinuxCNC's INI, var file and the program's LOG land here
 #   --pre-ngc FILE    a program run first in the same session (the G10 work-offset program
 #                     written by rotacal analyze --offsets X.ngc)
@@ -21,13 +22,14 @@ HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 PY=/usr/bin/python3          # Debian's interpreter: it has the linuxcnc and hal modules
 export PYTHONDONTWRITEBYTECODE=1   # no __pycache__ in the source tree
 
-NGC="" PRE="" TRUTH="" MACHINE="" OUT="" TIMEOUT=900 BUILD=/tmp/rotacal-e2e-comp
+NGC="" PRE="" TRUTH="" MACHINE="" PLAN="" OUT="" TIMEOUT=900 BUILD=/tmp/rotacal-e2e-comp
 while [ $# -gt 0 ]; do
     case "$1" in
         --ngc) NGC="$2"; shift 2;;
         --pre-ngc) PRE="$2"; shift 2;;
         --truth) TRUTH="$2"; shift 2;;
         --machine) MACHINE="$2"; shift 2;;
+        --plan) PLAN="$2"; shift 2;;
         --out) OUT="$2"; shift 2;;
         --timeout) TIMEOUT="$2"; shift 2;;
         --comp-build) BUILD="$2"; shift 2;;
@@ -38,10 +40,11 @@ done
 die() { echo "run.sh: $*" >&2; exit 3; }
 abspath() { echo "$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"; }
 [ -n "$NGC" ] && [ -n "$TRUTH" ] && [ -n "$MACHINE" ] && [ -n "$OUT" ] || die "--ngc, --truth, --machine and --out are required"
-for f in "$NGC" "$TRUTH" "$MACHINE" ${PRE:+"$PRE"}; do [ -f "$f" ] || die "file not found: $f"; done
+for f in "$NGC" "$TRUTH" "$MACHINE" ${PRE:+"$PRE"} ${PLAN:+"$PLAN"}; do [ -f "$f" ] || die "file not found: $f"; done
 [[ "$TIMEOUT" =~ ^[0-9]+$ ]] || die "--timeout must be whole seconds"
 NGC="$(abspath "$NGC")" TRUTH="$(abspath "$TRUTH")" MACHINE="$(abspath "$MACHINE")"
 [ -n "$PRE" ] && PRE="$(abspath "$PRE")"
+[ -n "$PLAN" ] && PLAN="$(abspath "$PLAN")"
 
 command -v linuxcnc >/dev/null || die "linuxcnc not found (Debian package linuxcnc-uspace)"
 command -v halcompile >/dev/null || die "halcompile not found (Debian package linuxcnc-uspace-dev)"
@@ -75,7 +78,7 @@ if ! cmp -s "$BUILD/vtouchprobe.so" "$MODDIR/vtouchprobe.so"; then
 fi
 
 # ------------------------------------------------------ truth -> HAL pins
-"$PY" "$HERE/scripts/truth_params.py" --truth "$TRUTH" --machine "$MACHINE" -o "$OUT/params.json" \
+"$PY" "$HERE/scripts/truth_params.py" --truth "$TRUTH" --machine "$MACHINE" ${PLAN:+--plan "$PLAN"} -o "$OUT/params.json" \
     || die "cannot turn $TRUTH into the probe's parameters"
 "$PY" "$HERE/scripts/lcsim_params.py" "$OUT/params.json" "$OUT/params.hal" || die "bad parameters $OUT/params.json"
 
