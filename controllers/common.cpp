@@ -460,7 +460,11 @@ void ModeGuard::apply(const nc::Op& op) {
     case nc::Op::Kind::Comment:
     case nc::Op::Kind::Rapid:
     case nc::Op::Kind::Index:
-    case nc::Op::Kind::Pause: break;
+    case nc::Op::Kind::Pause:
+    case nc::Op::Kind::Dwell:
+    case nc::Op::Kind::Read:
+    case nc::Op::Kind::RepeatBegin:
+    case nc::Op::Kind::RepeatEnd: break;
   }
 }
 
