@@ -35,12 +35,12 @@ std::vector<Command> diagnoseCommands(CLI::App& app, const Common& common) {
              const ProbePlan plan = loadPlan(a->plan_file);
              const Dialect& d = dialectOrFail(a->dialect);
              if (plan.cycle == "tooltip")
-               return diagnoseTooltipCmd(common, plan, a->results, a->alpha, a->json_out, a->text_out);
-             if (plan.cycle == "rtest") return rtestDiagnose(common, plan, a->results, a->json_out, a->text_out, a->alpha);
+               return diagnoseTooltipCmd(common, plan, a->results, a->alpha, a->json_out, a->text_out, a->html_out);
+             if (plan.cycle == "rtest") return rtestDiagnose(common, plan, a->results, a->json_out, a->text_out, a->alpha, a->html_out);
              std::vector<MeasurementRun> runs;
              for (const auto& f : a->results) runs.push_back(d.parseResults(readTextFile(f), f, plan));
              if (plan.cycle == "spheres3")
-               return diagnoseSpheres3Cli(common, plan, runs, a->results, a->alpha, a->json_out, a->text_out);
+               return diagnoseSpheres3Cli(common, plan, runs, a->results, a->alpha, a->json_out, a->text_out, a->html_out);
              DiagnosisOptions o;
              o.alpha = a->alpha;
              o.prior_sigma_um = plan.machine.probe.repeatability_um;

@@ -1,4 +1,5 @@
 #include "cli/cmd_rtest.hpp"
+#include "cli/output.hpp"
 
 #include <fmt/format.h>
 
@@ -56,7 +57,7 @@ double sensorSigma(const ProbePlan& plan) {
 }  // namespace
 
 int rtestDiagnose(const Common& c, const ProbePlan& plan, const std::vector<std::string>& results,
-                  const std::string& json_out, const std::string& text_out, double alpha) {
+                  const std::string& json_out, const std::string& text_out, double alpha, const std::string& html_out) {
   const std::vector<RtestCycle> cycles = readCycles(plan, results);
   RtestDiagnosisOptions o;
   o.alpha = alpha;
@@ -73,14 +74,16 @@ int rtestDiagnose(const Common& c, const ProbePlan& plan, const std::vector<std:
     failFile(results.front(), e.what());
   }
   const std::string text = rtestDiagnosisText(plan, d);
-  writeFileAtomic(json_out, rtestDiagnosisJson(plan, d).dump(1) + "\n");
+  const auto doc_json = rtestDiagnosisJson(plan, d);
+  writeOutput(json_out, doc_json.dump(1) + "\n");
+  writeHtml(html_out, doc_json);
   if (!text_out.empty()) writeFileAtomic(text_out, text);
-  say(c, text);
+  sayUnlessPiped(c, text, json_out, html_out);
   return 0;
 }
 
 int rtestAnalyze(const Common& c, const ProbePlan& plan, const std::vector<std::string>& results,
-                 const std::string& json_out, const std::string& text_out, const std::string& offsets_out) {
+                 const std::string& json_out, const std::string& text_out, const std::string& offsets_out, const std::string& html_out) {
   if (!offsets_out.empty())
     throw CLI::ValidationError("--offsets", "the R-test cycle reports position-dependent errors and their drift; it "
                                             "writes no offsets (use touch154 for the location errors)");
@@ -94,9 +97,11 @@ int rtestAnalyze(const Common& c, const ProbePlan& plan, const std::vector<std::
     failFile(results.front(), e.what());
   }
   const std::string text = rtestReportText(plan, a);
-  if (!json_out.empty()) writeFileAtomic(json_out, rtestReportJson(plan, cycles, a, results).dump(1) + "\n");
+  const auto doc_json = rtestReportJson(plan, cycles, a, results);
+  if (!json_out.empty()) writeOutput(json_out, doc_json.dump(1) + "\n");
+  writeHtml(html_out, doc_json);
   if (!text_out.empty()) writeFileAtomic(text_out, text);
-  say(c, text);
+  sayUnlessPiped(c, text, json_out, html_out);
   return 0;
 }
 

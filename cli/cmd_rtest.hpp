@@ -13,8 +13,8 @@ namespace rotacal {
 int rtestSimulate(const Common& c, const ProbePlan& plan, const std::string& truth_file, double noise_um, bool noise_given,
                   std::uint64_t seed, double start_s, const std::string& out);
 int rtestAnalyze(const Common& c, const ProbePlan& plan, const std::vector<std::string>& results,
-                 const std::string& json_out, const std::string& text_out, const std::string& offsets_out);
+                 const std::string& json_out, const std::string& text_out, const std::string& offsets_out, const std::string& html_out);
 int rtestDiagnose(const Common& c, const ProbePlan& plan, const std::vector<std::string>& results,
-                  const std::string& json_out, const std::string& text_out, double alpha);
+                  const std::string& json_out, const std::string& text_out, double alpha, const std::string& html_out);
 
 }  // namespace rotacal

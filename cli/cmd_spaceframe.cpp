@@ -1,4 +1,5 @@
 #include "cli/cmd_spaceframe.hpp"
+#include "cli/output.hpp"
 
 #include <stdexcept>
 
@@ -9,7 +10,7 @@ namespace rotacal {
 
 int analyzeSpaceframeCommand(const Common& c, const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
                              const std::vector<std::string>& result_files, const std::string& json_out,
-                             const std::string& text_out, const std::string& offsets_out) {
+                             const std::string& text_out, const std::string& offsets_out, const std::string& html_out) {
   if (!offsets_out.empty())
     throw CLI::ValidationError("--offsets", "a spaceframe analysis is a performance test: it writes no offsets "
                                             "(calibrate with touch154 and use its offsets)");
@@ -20,9 +21,11 @@ int analyzeSpaceframeCommand(const Common& c, const ProbePlan& plan, const std::
     failFile(result_files.front(), e.what());
   }
   const std::string text = spaceframeText(a, plan);
-  if (!json_out.empty()) writeFileAtomic(json_out, spaceframeReportJson(a, plan, result_files).dump(1) + "\n");
+  const auto doc_json = spaceframeReportJson(a, plan, result_files);
+  if (!json_out.empty()) writeOutput(json_out, doc_json.dump(1) + "\n");
+  writeHtml(html_out, doc_json);
   if (!text_out.empty()) writeFileAtomic(text_out, text);
-  say(c, text);
+  sayUnlessPiped(c, text, json_out, html_out);
   if (a.summary.termination != "converged")
     std::fprintf(stderr, "rotacal: warning: spaceframe identification %s\n", a.summary.termination.c_str());
   return 0;

@@ -1,4 +1,5 @@
 #include "cli/cmd_tooltip.hpp"
+#include "cli/output.hpp"
 
 #include <fmt/format.h>
 
@@ -36,7 +37,7 @@ int simulateTooltipCmd(const Common& c, const ProbePlan& plan, const std::string
 }
 
 int analyzeTooltipCmd(const Common& c, const ProbePlan& plan, const std::vector<std::string>& results,
-                      const std::string& json_out, const std::string& text_out) {
+                      const std::string& json_out, const std::string& text_out, const std::string& html_out) {
   const std::vector<TooltipRun> runs = readRuns(plan, results);
   TooltipAnalysis a;
   try {
@@ -46,14 +47,16 @@ int analyzeTooltipCmd(const Common& c, const ProbePlan& plan, const std::vector<
   }
   a.result_files = results;
   const std::string text = tooltipReportText(plan, a);
-  if (!json_out.empty()) writeFileAtomic(json_out, tooltipReportJson(plan, runs, a).dump(1) + "\n");
+  const auto doc_json = tooltipReportJson(plan, runs, a);
+  if (!json_out.empty()) writeOutput(json_out, doc_json.dump(1) + "\n");
+  writeHtml(html_out, doc_json);
   if (!text_out.empty()) writeFileAtomic(text_out, text);
-  say(c, text);
+  sayUnlessPiped(c, text, json_out, html_out);
   return 0;
 }
 
 int diagnoseTooltipCmd(const Common& c, const ProbePlan& plan, const std::vector<std::string>& results, double alpha,
-                       const std::string& json_out, const std::string& text_out) {
+                       const std::string& json_out, const std::string& text_out, const std::string& html_out) {
   const std::vector<TooltipRun> runs = readRuns(plan, results);
   TooltipDiagnosisOptions o;
   o.alpha = alpha;
@@ -66,9 +69,11 @@ int diagnoseTooltipCmd(const Common& c, const ProbePlan& plan, const std::vector
     failFile(results.front(), e.what());
   }
   const std::string text = tooltipDiagnosisText(d);
-  writeFileAtomic(json_out, tooltipDiagnosisJson(d).dump(1) + "\n");
+  const auto doc_json = tooltipDiagnosisJson(d);
+  writeOutput(json_out, doc_json.dump(1) + "\n");
+  writeHtml(html_out, doc_json);
   if (!text_out.empty()) writeFileAtomic(text_out, text);
-  say(c, text);
+  sayUnlessPiped(c, text, json_out, html_out);
   return 0;
 }
 

@@ -14,8 +14,8 @@ namespace rotacal {
 int simulateTooltipCmd(const Common& c, const ProbePlan& plan, const std::string& truth_file, double noise_um,
                        bool noise_given, std::uint64_t seed, const std::string& out);
 int analyzeTooltipCmd(const Common& c, const ProbePlan& plan, const std::vector<std::string>& results,
-                      const std::string& json_out, const std::string& text_out);
+                      const std::string& json_out, const std::string& text_out, const std::string& html_out);
 int diagnoseTooltipCmd(const Common& c, const ProbePlan& plan, const std::vector<std::string>& results, double alpha,
-                       const std::string& json_out, const std::string& text_out);
+                       const std::string& json_out, const std::string& text_out, const std::string& html_out);
 
 }  // namespace rotacal

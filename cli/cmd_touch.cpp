@@ -115,9 +115,9 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
   if (plan.cycle == "tooltip") {
     if (!offsets_out.empty()) failFile(offsets_out, "the tooltip cycle writes no offsets (a head's pivot length and angular "
                                                     "errors go into the machine's kinematics tables by hand)");
-    return analyzeTooltipCmd(c, plan, results, json_out, text_out);
+    return analyzeTooltipCmd(c, plan, results, json_out, text_out, html_out);
   }
-  if (plan.cycle == "rtest") return rtestAnalyze(c, plan, results, json_out, text_out, offsets_out);
+  if (plan.cycle == "rtest") return rtestAnalyze(c, plan, results, json_out, text_out, offsets_out, html_out);
   Method method;
   try {
     method = methodFromName(method_name);
@@ -126,8 +126,8 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
   }
   std::vector<MeasurementRun> runs;
   for (const auto& f : results) runs.push_back(d.parseResults(readTextFile(f), f, plan));
-  if (plan.cycle == "spaceframe") return analyzeSpaceframeCommand(c, plan, runs, results, json_out, text_out, offsets_out);
-  if (plan.cycle == "spheres3") return analyzeSpheres3(c, plan, runs, results, json_out, text_out, offsets_out);
+  if (plan.cycle == "spaceframe") return analyzeSpaceframeCommand(c, plan, runs, results, json_out, text_out, offsets_out, html_out);
+  if (plan.cycle == "spheres3") return analyzeSpheres3(c, plan, runs, results, json_out, text_out, offsets_out, html_out);
 
   IdentificationOptions opt;
   opt.method = method;

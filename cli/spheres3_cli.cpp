@@ -1,4 +1,5 @@
 #include "cli/spheres3_cli.hpp"
+#include "cli/output.hpp"
 
 #include <cstdio>
 #include <stdexcept>
@@ -11,7 +12,7 @@ namespace rotacal {
 
 int analyzeSpheres3(const Common& c, const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
                     const std::vector<std::string>& result_files, const std::string& json_out,
-                    const std::string& text_out, const std::string& offsets_out) {
+                    const std::string& text_out, const std::string& offsets_out, const std::string& html_out) {
   if (!offsets_out.empty())
     throw CLI::ValidationError("--offsets",
                                "spheres3 identifies component errors as functions of C: they need the controller's "
@@ -25,15 +26,17 @@ int analyzeSpheres3(const Common& c, const ProbePlan& plan, const std::vector<Me
     failFile(result_files.front(), e.what());
   }
   const std::string text = spheres3Text(r);
-  if (!json_out.empty()) writeFileAtomic(json_out, spheres3ReportJson(plan, r, result_files).dump(1) + "\n");
+  const auto doc_json = spheres3ReportJson(plan, r, result_files);
+  if (!json_out.empty()) writeOutput(json_out, doc_json.dump(1) + "\n");
+  writeHtml(html_out, doc_json);
   if (!text_out.empty()) writeFileAtomic(text_out, text);
-  say(c, text);
+  sayUnlessPiped(c, text, json_out, html_out);
   return 0;
 }
 
 int diagnoseSpheres3Cli(const Common& c, const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
                         const std::vector<std::string>& result_files, double alpha, const std::string& json_out,
-                        const std::string& text_out) {
+                        const std::string& text_out, const std::string& html_out) {
   DiagnosisOptions o;
   o.alpha = alpha;
   o.prior_sigma_um = plan.machine.probe.repeatability_um;
@@ -46,9 +49,11 @@ int diagnoseSpheres3Cli(const Common& c, const ProbePlan& plan, const std::vecto
     failFile(result_files.front(), e.what());
   }
   const std::string text = spheres3DiagnosisText(d);
-  writeFileAtomic(json_out, spheres3DiagnosisJson(d).dump(1) + "\n");
+  const auto doc_json = spheres3DiagnosisJson(d);
+  writeOutput(json_out, doc_json.dump(1) + "\n");
+  writeHtml(html_out, doc_json);
   if (!text_out.empty()) writeFileAtomic(text_out, text);
-  say(c, text);
+  sayUnlessPiped(c, text, json_out, html_out);
   return 0;
 }
 

@@ -98,6 +98,11 @@ class HeidenhainDialect final : public Dialect {
     for (const auto& op : p.ops) probes += op.kind == nc::Op::Kind::Probe;
     if (p.point_count != 0 && p.point_count != probes)
       throw std::invalid_argument(fmt::format("program has {} probing moves but point_count {}", probes, p.point_count));
+    for (const auto& op : p.ops)  // the tool-tip cycle: refuse with the reason, not the probe count
+      if (op.kind == nc::Op::Kind::Mode && (op.inverse_time || op.incremental))
+        throw std::invalid_argument(
+            "heidenhain: inverse-time feed (G93) is not verified for Klartext (controllers.md Sec. 5), so the "
+            "fixed-tool-tip cycle (tooltip) is refused for this dialect; use linuxcnc, fanuc, haas, siemens or okuma");
     if (probes == 0)  // the result format files below are built per probing move
       throw std::invalid_argument("the heidenhain program records probing moves and this one has none (rtest: use linuxcnc)");
     const std::string name = safeName(p.name.empty() ? "ROTACAL" : p.name);
