@@ -17,7 +17,7 @@ $R generate --plan "$O/plan.json" --dialect fanuc -o "$O/touch154.nc"
 $R simulate --plan "$O/plan.json" --truth examples/truth/table4_mean.json --noise-um 0.7 --seed 1 \
    --dialect linuxcnc -o "$O/results.txt"
 $R analyze --plan "$O/plan.json" --results "$O/results.txt" --dialect linuxcnc \
-   --json "$O/REPORT.json" --text "$O/REPORT.txt" --offsets "$O/offsets.hal"
+   --json "$O/REPORT.json" --text "$O/REPORT.txt" --html "$O/REPORT.html" --offsets "$O/offsets.hal"
 echo
-echo "outputs in $O: plan.json touch154.ngc touch154.nc results.txt REPORT.json REPORT.txt offsets.hal"
+echo "outputs in $O: plan.json touch154.ngc touch154.nc results.txt REPORT.json REPORT.txt REPORT.html offsets.hal"
 echo "truth injected: examples/truth/table4_mean.json (000 Table 4 mean column)"
