@@ -214,6 +214,7 @@ Json rtestReportJson(const ProbePlan& plan, const std::vector<RtestCycle>& cycle
   Json j;
   j["format"] = "rotacal-report/1";
   j["cycle"] = "rtest";
+  j["machine"] = plan.machine.name;
   j["kinematics"] = std::string(kinematicsName(k));
   j["results"] = files;
   j["method"] = "002 Eq. (6): linearised least squares at every tilt angle, per cycle";

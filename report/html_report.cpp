@@ -339,14 +339,20 @@ std::string analyzeBody(const Json& doc) {
   }
   s += row({"points used", escape(str(doc, "points_used"))});
   s += row({"residual rms", numCell(dbl(doc, "residual_rms_um"), 3) + " um"});
-  if (!sum.empty()) {
+  // The cycles' summaries carry different fields (e.g. tooltip has no rank): show what is there.
+  if (sum.contains("sigma_um"))
     s += row({"noise estimate", numCell(dbl(sum, "sigma_um"), 3) + fmt::format(" um ({} dof)", escape(str(sum, "dof")))});
+  if (sum.contains("rank"))
     s += row({"rank / condition", escape(str(sum, "rank")) + " / " + escape(str(sum, "condition"))});
-    s += row({"termination", escape(str(sum, "termination")) + ": " + escape(str(sum, "message"))});
-  }
+  if (sum.contains("termination"))
+    s += row({"termination", escape(str(sum, "termination")) +
+                                 (sum.contains("message") ? ": " + escape(str(sum, "message")) : std::string())});
   s += "</table>\n";
 
-  s += "<h2>Identified location errors</h2>\n";
+  // rtest's table is the first cycle's position-dependent errors at B = 0, tooltip's the pivot
+  // length: not location errors in ISO 230-7's sense.
+  const std::string cyc = str(doc, "cycle");
+  s += cyc == "rtest" || cyc == "tooltip" ? "<h2>Identified errors</h2>\n" : "<h2>Identified location errors</h2>\n";
   std::vector<std::pair<std::string, const Json*>> others;
   if (doc.contains("other_methods"))
     for (const auto& [name, o] : doc["other_methods"].items())
