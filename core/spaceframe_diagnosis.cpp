@@ -320,6 +320,11 @@ Json spaceframeDiagnosisJson(const SpaceframeDiagnosis& d, const ProbePlan& plan
                                "{}: {:+.1f} um over 100 mm); recalibrate the axis (laser interferometer) or compensate its "
                                "pitch",
                                s.x(), s.y(), s.z(), "XYZ"[big], s[big] * 0.1);
+    Json params = Json::object();  // the contract's parameters: the cause's own terms
+    for (int i = 0; i < 3; ++i)
+      params[std::string("scale_") + "XYZ"[i]] = {{"value", round6(s[i])}, {"unit", "um/m"},
+                                                   {"u", round6(d.candidate.u[kNumLocationErrors + i] * 1e6)}};
+    e["parameters"] = params;
     e["holdout_rms_um"] = round6(d.candidate_holdout_rms_um);
     e["gain_pct"] = round6(d.gain_pct);
     findings.push_back(e);

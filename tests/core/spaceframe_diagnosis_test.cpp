@@ -104,6 +104,8 @@ TEST(SpaceframeDiagnosis, HiddenXScaleIsFoundWithItsSize) {
   ASSERT_EQ(j["findings"].size(), 1u);
   EXPECT_EQ(j["findings"][0]["cause"], "linear_axis_scale");
   EXPECT_NEAR(j["findings"][0]["linear_axis_scale"]["X"]["value"].get<double>(), s.x() * 1e6, 1e-5);
+  EXPECT_NEAR(j["findings"][0]["parameters"]["scale_X"]["value"].get<double>(), s.x() * 1e6, 1e-5);
+  EXPECT_NEAR(j["findings"][0]["location_errors"]["dx_AY"]["value"].get<double>(), mmToUm(d.candidate.model.errors.values[0]), 1e-6);
   EXPECT_TRUE(j["baseline"].contains("location_errors"));
   EXPECT_FALSE(j["baseline"].contains("linear_axis_scale"));
 }
