@@ -258,9 +258,23 @@ Json fitJson(const SpaceframeFit& f) {
     st[std::string("rotation_") + ax[i]] = {{"value", round6(radToMdeg(f.model.setup_rotation_rad[i]))}, {"unit", "mdeg"},
                                             {"u", round6(radToMdeg(f.u[kNumLocationErrors + 6 + i]))}};
   }
-  j["frame_setup"] = st;
-  bool has_scale = false;
-  for (int i : f.active) has_scale = has_scale || isScale(i);
+  bool has_scale = false, has_setup = false;
+  for (int i : f.active) {
+    has_scale = has_scale || isScale(i);
+    has_setup = has_setup || (i >= kNumLocationErrors + 3 && i < FrameModel::kRigidSize);
+  }
+  if (has_setup) {
+    j["frame_setup"] = st;
+  } else {  // self-calibration: the setup is held in every sphere's offset
+    Json sp = Json::object();
+    for (int i = 0; i < 7; ++i) {
+      const Eigen::Vector3d o = f.model.sphere_offset_w_mm[static_cast<size_t>(i)];
+      const Eigen::Vector3d uo = f.u.segment<3>(FrameModel::kRigidSize + 3 * i);
+      sp[std::to_string(i + 1)] = {{"offset_w_um", {round6(mmToUm(o.x())), round6(mmToUm(o.y())), round6(mmToUm(o.z()))}},
+                                   {"u_um", {round6(mmToUm(uo.x())), round6(mmToUm(uo.y())), round6(mmToUm(uo.z()))}}};
+    }
+    j["frame_spheres"] = sp;
+  }
   if (has_scale) {
     Json sc = Json::object();
     for (int i = 0; i < 3; ++i)
@@ -285,7 +299,7 @@ Json spaceframeDiagnosisJson(const SpaceframeDiagnosis& d, const ProbePlan& plan
   j["cycle"] = "spaceframe";
   j["machine"] = plan.machine.name;
   Json b = fitJson(d.baseline);
-  b["model"] = "rotary-axis location errors and the frame's setup on the table (no linear-axis scale errors)";
+  b["model"] = "rotary-axis location errors and the frame (its setup on the table; every sphere when it self-calibrates), no linear-axis scale errors";
   b["holdout_rms_um"] = round6(d.baseline_holdout_rms_um);
   b["p_value"] = d.baseline_p_value;
   j["baseline"] = b;
@@ -336,7 +350,7 @@ Json spaceframeDiagnosisJson(const SpaceframeDiagnosis& d, const ProbePlan& plan
 
 std::string spaceframeDiagnosisText(const SpaceframeDiagnosis& d) {
   std::string s = fmt::format(
-      "spaceframe diagnosis: baseline (location errors + frame setup) residual {:.3f} um rms, held-out {:.3f} um rms "
+      "spaceframe diagnosis: baseline (location errors + frame) residual {:.3f} um rms, held-out {:.3f} um rms "
       "(leave one of {} orientations out); chi2 {:.1f} on {} dof at sigma {:.3f} um (p {:.2g})\n",
       d.baseline.residual_rms_um, d.baseline_holdout_rms_um, d.holdout_groups, d.baseline.chi2, d.baseline.dof, d.sigma_um,
       d.baseline_p_value);
