@@ -8,6 +8,7 @@
 #include "cli/command.hpp"
 #include "cli/output.hpp"
 #include "cli/progress.hpp"
+#include "cli/spaceframe_diagnose_cli.hpp"
 #include "cli/spheres3_cli.hpp"
 #include "core/diagnosis.hpp"
 #include "core/diagnosis_figures.hpp"
@@ -41,6 +42,8 @@ std::vector<Command> diagnoseCommands(CLI::App& app, const Common& common) {
              for (const auto& f : a->results) runs.push_back(d.parseResults(readTextFile(f), f, plan));
              if (plan.cycle == "spheres3")
                return diagnoseSpheres3Cli(common, plan, runs, a->results, a->alpha, a->json_out, a->text_out, a->html_out);
+             if (plan.cycle == "spaceframe")
+               return diagnoseSpaceframeCli(common, plan, runs, a->results, a->alpha, a->json_out, a->text_out, a->html_out);
              DiagnosisOptions o;
              o.alpha = a->alpha;
              o.prior_sigma_um = plan.machine.probe.repeatability_um;

@@ -1,0 +1,101 @@
+// `rotacal diagnose` on a spaceframe plan end to end: plan -> simulate (the bundled truth with
+// X/Y/Z scale errors 20/-15/30 um/m) -> diagnose names linear_axis_scale with those sizes within
+// 3 u; the same machine without scale errors gives no finding; bad results fail cleanly.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "test_util.hpp"
+
+namespace rotacal {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Run {
+  int code;
+  std::string out;
+};
+
+Run sh(const std::string& args) {
+  const std::string cmd = std::string(ROTACAL_CLI) + " " + args + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  std::string out;
+  std::array<char, 4096> buf{};
+  while (p && fgets(buf.data(), buf.size(), p)) out += buf.data();
+  const int status = p ? pclose(p) : -1;
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+class SpaceframeDiagnoseCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir = fs::path(ROTACAL_BINARY_DIR) / "test_tmp" /
+          ("sfdiag_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const auto r = sh("plan --cycle spaceframe --machine " + test::sourcePath("examples/machines/ac_trunnion.json") +
+                      " --set phi_list=-90,-45,0 -o " + p("plan.json"));
+    ASSERT_EQ(r.code, 0) << r.out;
+  }
+  std::string p(const std::string& name) const { return (dir / name).string(); }
+  nlohmann::json load(const std::string& name) const { return nlohmann::json::parse(std::ifstream(p(name))); }
+  fs::path dir;
+};
+
+TEST_F(SpaceframeDiagnoseCli, BundledScaleTruthIsNamed) {
+  auto r = sh("simulate --plan " + p("plan.json") + " --truth " + test::sourcePath("examples/truth/spaceframe_scale.json") +
+              " --seed 5 --dialect linuxcnc -o " + p("res.txt"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  r = sh("diagnose --plan " + p("plan.json") + " --results " + p("res.txt") + " --dialect linuxcnc --json " +
+         p("D.json") + " --html " + p("D.html") + " --text " + p("D.txt"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto d = load("D.json");
+  EXPECT_EQ(d["format"], "rotacal-diagnosis/1");
+  EXPECT_EQ(d["cycle"], "spaceframe");
+  EXPECT_EQ(d["verdict"], "effect_found");
+  ASSERT_EQ(d["findings"].size(), 1u);
+  const auto& f = d["findings"][0];
+  EXPECT_EQ(f["cause"], "linear_axis_scale");
+  const std::array<double, 3> truth{20, -15, 30};  // um/m, examples/truth/spaceframe_scale.json
+  for (int i = 0; i < 3; ++i) {
+    const auto& s = f["parameters"][std::string("scale_") + "XYZ"[i]];
+    EXPECT_NEAR(s["value"].get<double>(), truth[static_cast<size_t>(i)], 3 * s["u"].get<double>()) << "XYZ"[i];
+  }
+  EXPECT_GT(f["gain_pct"].get<double>(), 25.0);
+  EXPECT_LT(f["holdout_rms_um"].get<double>(), d["baseline"]["holdout_rms_um"].get<double>());
+  EXPECT_TRUE(fs::file_size(p("D.html")) > 1000);
+  EXPECT_TRUE(fs::exists(p("D.txt")));
+}
+
+TEST_F(SpaceframeDiagnoseCli, NoScaleNoFinding) {
+  std::ofstream(p("truth.json")) << R"({"format": "rotacal-truth/1",
+    "location_errors": {"dx_AY": {"value": 14.6, "unit": "um"}, "dy_AY": {"value": 23.2, "unit": "um"},
+                        "c_AY": {"value": -0.5, "unit": "mdeg"}}, "probe_noise_um": 0.7})";
+  auto r = sh("simulate --plan " + p("plan.json") + " --truth " + p("truth.json") + " --seed 2 --dialect csv -o " + p("res.csv"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  r = sh("diagnose --plan " + p("plan.json") + " --results " + p("res.csv") + " --dialect csv --json " + p("D.json"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto d = load("D.json");
+  EXPECT_EQ(d["verdict"], "no_significant_effect");
+  EXPECT_TRUE(d["findings"].empty());
+  EXPECT_NEAR(d["baseline"]["location_errors"]["dx_AY"]["value"].get<double>(), 14.6,
+              3 * d["baseline"]["location_errors"]["dx_AY"]["u"].get<double>());
+}
+
+TEST_F(SpaceframeDiagnoseCli, BadResultsFailWithoutOutput) {
+  std::ofstream(p("bad.csv")) << "point,x_mm,y_mm,z_mm,t_s\n1,0,0,0,\n";
+  const auto r = sh("diagnose --plan " + p("plan.json") + " --results " + p("bad.csv") + " --dialect csv --json " + p("D.json"));
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.out.find("bad.csv"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(p("D.json")));
+}
+
+}  // namespace
+}  // namespace rotacal
