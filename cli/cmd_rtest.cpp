@@ -74,11 +74,7 @@ int rtestDiagnose(const Common& c, const ProbePlan& plan, const std::vector<std:
     failFile(results.front(), e.what());
   }
   const std::string text = rtestDiagnosisText(plan, d);
-  const auto doc_json = rtestDiagnosisJson(plan, d);
-  writeOutput(json_out, doc_json.dump(1) + "\n");
-  writeHtml(html_out, doc_json);
-  if (!text_out.empty()) writeFileAtomic(text_out, text);
-  sayUnlessPiped(c, text, json_out, html_out);
+  writeDocuments(c, rtestDiagnosisJson(plan, d), text, json_out, text_out, html_out);
   return 0;
 }
 
@@ -97,11 +93,7 @@ int rtestAnalyze(const Common& c, const ProbePlan& plan, const std::vector<std::
     failFile(results.front(), e.what());
   }
   const std::string text = rtestReportText(plan, a);
-  const auto doc_json = rtestReportJson(plan, cycles, a, results);
-  if (!json_out.empty()) writeOutput(json_out, doc_json.dump(1) + "\n");
-  writeHtml(html_out, doc_json);
-  if (!text_out.empty()) writeFileAtomic(text_out, text);
-  sayUnlessPiped(c, text, json_out, html_out);
+  writeDocuments(c, rtestReportJson(plan, cycles, a, results), text, json_out, text_out, html_out);
   return 0;
 }
 

@@ -21,11 +21,7 @@ int analyzeSpaceframeCommand(const Common& c, const ProbePlan& plan, const std::
     failFile(result_files.front(), e.what());
   }
   const std::string text = spaceframeText(a, plan);
-  const auto doc_json = spaceframeReportJson(a, plan, result_files);
-  if (!json_out.empty()) writeOutput(json_out, doc_json.dump(1) + "\n");
-  writeHtml(html_out, doc_json);
-  if (!text_out.empty()) writeFileAtomic(text_out, text);
-  sayUnlessPiped(c, text, json_out, html_out);
+  writeDocuments(c, spaceframeReportJson(a, plan, result_files), text, json_out, text_out, html_out);
   if (a.summary.termination != "converged")
     std::fprintf(stderr, "rotacal: warning: spaceframe identification %s\n", a.summary.termination.c_str());
   return 0;

@@ -47,11 +47,7 @@ int analyzeTooltipCmd(const Common& c, const ProbePlan& plan, const std::vector<
   }
   a.result_files = results;
   const std::string text = tooltipReportText(plan, a);
-  const auto doc_json = tooltipReportJson(plan, runs, a);
-  if (!json_out.empty()) writeOutput(json_out, doc_json.dump(1) + "\n");
-  writeHtml(html_out, doc_json);
-  if (!text_out.empty()) writeFileAtomic(text_out, text);
-  sayUnlessPiped(c, text, json_out, html_out);
+  writeDocuments(c, tooltipReportJson(plan, runs, a), text, json_out, text_out, html_out);
   return 0;
 }
 
@@ -69,11 +65,7 @@ int diagnoseTooltipCmd(const Common& c, const ProbePlan& plan, const std::vector
     failFile(results.front(), e.what());
   }
   const std::string text = tooltipDiagnosisText(d);
-  const auto doc_json = tooltipDiagnosisJson(d);
-  writeOutput(json_out, doc_json.dump(1) + "\n");
-  writeHtml(html_out, doc_json);
-  if (!text_out.empty()) writeFileAtomic(text_out, text);
-  sayUnlessPiped(c, text, json_out, html_out);
+  writeDocuments(c, tooltipDiagnosisJson(d), text, json_out, text_out, html_out);
   return 0;
 }
 

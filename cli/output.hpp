@@ -38,4 +38,14 @@ inline void sayUnlessPiped(const Common& c, const std::string& text, const std::
   say(c, text);
 }
 
+/// Everything an analysis or a diagnosis hands the user: the JSON document (file or stdout), the
+/// HTML page drawn from it, and the readable summary (file and terminal). Empty paths are skipped.
+inline void writeDocuments(const Common& c, const Json& doc, const std::string& text, const std::string& json_out,
+                           const std::string& text_out, const std::string& html_out) {
+  if (!json_out.empty()) writeOutput(json_out, doc.dump(1) + "\n");
+  writeHtml(html_out, doc);
+  if (!text_out.empty()) writeFileAtomic(text_out, text);
+  sayUnlessPiped(c, text, json_out, html_out);
+}
+
 }  // namespace rotacal

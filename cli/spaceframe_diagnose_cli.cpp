@@ -25,11 +25,7 @@ int diagnoseSpaceframeCli(const Common& c, const ProbePlan& plan, const std::vec
   if (!d.baseline.converged || !d.candidate.converged)
     failFile(result_files.front(), "spaceframe diagnosis: a model fit did not converge");
   const std::string text = spaceframeDiagnosisText(d);
-  const auto doc_json = spaceframeDiagnosisJson(d, plan);
-  writeOutput(json_out, doc_json.dump(1) + "\n");
-  writeHtml(html_out, doc_json);
-  if (!text_out.empty()) writeFileAtomic(text_out, text);
-  sayUnlessPiped(c, text, json_out, html_out);
+  writeDocuments(c, spaceframeDiagnosisJson(d, plan), text, json_out, text_out, html_out);
   return 0;
 }
 

@@ -26,11 +26,7 @@ int analyzeSpheres3(const Common& c, const ProbePlan& plan, const std::vector<Me
     failFile(result_files.front(), e.what());
   }
   const std::string text = spheres3Text(r);
-  const auto doc_json = spheres3ReportJson(plan, r, result_files);
-  if (!json_out.empty()) writeOutput(json_out, doc_json.dump(1) + "\n");
-  writeHtml(html_out, doc_json);
-  if (!text_out.empty()) writeFileAtomic(text_out, text);
-  sayUnlessPiped(c, text, json_out, html_out);
+  writeDocuments(c, spheres3ReportJson(plan, r, result_files), text, json_out, text_out, html_out);
   return 0;
 }
 
@@ -49,11 +45,7 @@ int diagnoseSpheres3Cli(const Common& c, const ProbePlan& plan, const std::vecto
     failFile(result_files.front(), e.what());
   }
   const std::string text = spheres3DiagnosisText(d);
-  const auto doc_json = spheres3DiagnosisJson(d);
-  writeOutput(json_out, doc_json.dump(1) + "\n");
-  writeHtml(html_out, doc_json);
-  if (!text_out.empty()) writeFileAtomic(text_out, text);
-  sayUnlessPiped(c, text, json_out, html_out);
+  writeDocuments(c, spheres3DiagnosisJson(d), text, json_out, text_out, html_out);
   return 0;
 }
 

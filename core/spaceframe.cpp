@@ -188,6 +188,17 @@ FrameModel FrameModel::fromVector(Kinematics k, const Eigen::Matrix<double, kSiz
   return m;
 }
 
+Eigen::Matrix<double, FrameModel::kSize, 1> FrameModel::reportUnits(Kinematics k) {
+  Eigen::Matrix<double, kSize, 1> s;
+  const auto& params = locationParameters(k);
+  for (int i = 0; i < kNumLocationErrors; ++i) s[i] = params[i].kind == ParamKind::Length ? kUmPerMm : kMdegPerRad;
+  s.segment<3>(kNumLocationErrors).setConstant(1e6);
+  s.segment<3>(kNumLocationErrors + 3).setConstant(kUmPerMm);
+  s.segment<3>(kNumLocationErrors + 6).setConstant(kMdegPerRad);
+  s.tail<21>().setConstant(kUmPerMm);
+  return s;
+}
+
 std::vector<int> activeParameters(bool frame_free) {
   std::vector<int> a;
   for (int i = 0; i < kNumLocationErrors; ++i) a.push_back(i);
@@ -238,17 +249,6 @@ namespace {
 
 using ModelVector = Eigen::Matrix<double, FrameModel::kSize, 1>;
 
-// Report units per parameter: um, mdeg, um/m, um, mdeg.
-ModelVector reportScale(Kinematics k) {
-  ModelVector s;
-  const auto& params = locationParameters(k);
-  for (int i = 0; i < kNumLocationErrors; ++i) s[i] = params[i].kind == ParamKind::Length ? kUmPerMm : kMdegPerRad;
-  s.segment<3>(kNumLocationErrors).setConstant(1e6);
-  s.segment<3>(kNumLocationErrors + 3).setConstant(kUmPerMm);
-  s.segment<3>(kNumLocationErrors + 6).setConstant(kMdegPerRad);
-  s.tail<21>().setConstant(kUmPerMm);
-  return s;
-}
 
 }  // namespace
 
@@ -324,7 +324,7 @@ SpaceframeAnalysis analyzeSpaceframe(const ProbePlan& plan, const std::vector<Me
   // Least squares on the measured centres (3 per point): exact model, Gauss-Newton, Jacobian by
   // central differences in report units (um, mdeg, um/m), SVD with a rank check.
   const Kinematics kin = plan.machine.kinematics;
-  const ModelVector unit = reportScale(kin);
+  const ModelVector unit = FrameModel::reportUnits(kin);
   const int n = static_cast<int>(a.points.size());
   const int m = 3 * n;
   ModelVector x = ModelVector::Zero();  // mm / rad / 1
@@ -573,7 +573,7 @@ std::string spaceframeText(const SpaceframeAnalysis& a, const ProbePlan& plan) {
   s += fmt::format("identification ({}, rank {}/{}, {} dof), what explains dL:\n", a.summary.termination, a.summary.rank,
                    a.summary.parameters, a.summary.dof);
   const auto& params = locationParameters(a.model.errors.kinematics);
-  const ModelVector unit = reportScale(a.model.errors.kinematics);
+  const ModelVector unit = FrameModel::reportUnits(a.model.errors.kinematics);
   for (int i = 0; i < kNumLocationErrors; ++i)
     s += fmt::format("  {:<8} {:<5} {:>10.3f} +- {:.3f} {}\n", params[i].name, params[i].iso, a.model.errors.reportValue(i),
                      a.u[i] * unit[i], reportUnit(params[i].kind));

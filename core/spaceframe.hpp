@@ -73,6 +73,9 @@ struct FrameModel {
   static constexpr int kSize = kRigidSize + 21;                // + sphere offsets
   Eigen::Matrix<double, kSize, 1> toVector() const;  // mm, rad, 1
   static FrameModel fromVector(Kinematics k, const Eigen::Matrix<double, kSize, 1>& v);
+  /// Report units per entry of toVector() (um, mdeg, um/m, um, mdeg, um per mm / rad / 1): the
+  /// identification and the diagnosis take their Jacobians in these.
+  static Eigen::Matrix<double, kSize, 1> reportUnits(Kinematics k);
   /// Actual centre of a frame point, machine frame (exact HTMs).
   Eigen::Vector3d actualCentre_m(const FramePoint& p, const Eigen::Vector3d& origin_w) const;
   /// What the analysis reports as the centre on such a machine: the sphere fit of the triggers the

@@ -16,17 +16,6 @@ namespace {
 
 using ModelVector = Eigen::Matrix<double, FrameModel::kSize, 1>;
 
-// Report units per parameter (um, mdeg, um/m, um, mdeg, um): the Jacobian is taken in these.
-ModelVector reportUnits(Kinematics k) {
-  ModelVector s;
-  const auto& params = locationParameters(k);
-  for (int i = 0; i < kNumLocationErrors; ++i) s[i] = params[i].kind == ParamKind::Length ? kUmPerMm : kMdegPerRad;
-  s.segment<3>(kNumLocationErrors).setConstant(1e6);
-  s.segment<3>(kNumLocationErrors + 3).setConstant(kUmPerMm);
-  s.segment<3>(kNumLocationErrors + 6).setConstant(kMdegPerRad);
-  s.tail<21>().setConstant(kUmPerMm);
-  return s;
-}
 
 bool isScale(int index) { return index >= kNumLocationErrors && index < kNumLocationErrors + 3; }
 
@@ -174,7 +163,7 @@ SpaceframeDiagnosis diagnoseSpaceframe(const ProbePlan& plan, const std::vector<
   pb.origin_w_mm = layout.origin_w_mm;
   pb.points = a.points;
   pb.measured_m_mm = a.measured_m_mm;
-  pb.unit = reportUnits(pb.kin);
+  pb.unit = FrameModel::reportUnits(pb.kin);
   double ss_fit = 0.0;
   int dof_fit = 0;
   for (const auto& fit : a.fits) {
