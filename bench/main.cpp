@@ -17,6 +17,7 @@
 
 #include <fmt/format.h>
 
+#include "cycles/cycle.hpp"
 #include "controllers/dialect.hpp"
 #include "core/causes.hpp"
 #include "core/closed_form.hpp"

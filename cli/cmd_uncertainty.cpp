@@ -13,6 +13,7 @@
 
 #include <fmt/format.h>
 
+#include "cycles/cycle.hpp"
 #include "cli/command.hpp"
 #include "cli/output.hpp"
 #include "cli/progress.hpp"

@@ -22,9 +22,8 @@ struct Command {
   std::function<int()> run;
 };
 
-std::vector<Command> touchCommands(CLI::App& app, const Common& common);
+std::vector<Command> cycleCommands(CLI::App& app, const Common& common);  // plan generate simulate analyze diagnose
 std::vector<Command> uncertaintyCommands(CLI::App& app, const Common& common);
-std::vector<Command> diagnoseCommands(CLI::App& app, const Common& common);
 std::vector<Command> compensateCommands(CLI::App& app, const Common& common);
 std::vector<Command> reportCommands(CLI::App& app, const Common& common);
 std::vector<Command> historyCommands(CLI::App& app, const Common& common);

@@ -19,9 +19,8 @@ int main(int argc, char** argv) {
   app.fallthrough();  // global flags (--quiet) also after the subcommand
   Common common;
   app.add_flag("-q,--quiet", common.quiet, "print nothing on success");
-  std::vector<Command> commands = touchCommands(app, common);
+  std::vector<Command> commands = cycleCommands(app, common);
   for (auto& c : uncertaintyCommands(app, common)) commands.push_back(c);
-  for (auto& c : diagnoseCommands(app, common)) commands.push_back(c);
   for (auto& c : compensateCommands(app, common)) commands.push_back(c);
   for (auto& c : reportCommands(app, common)) commands.push_back(c);
   for (auto& c : historyCommands(app, common)) commands.push_back(c);

@@ -12,11 +12,6 @@
 namespace rotacal {
 
 }  // namespace rotacal
-#include "core/spaceframe.hpp"
-#include "core/tooltip.hpp"
-#include "core/spheres3.hpp"
-#include "core/touch154.hpp"
-#include "core/rtest.hpp"
 namespace rotacal {
 
 const ProbePoint* ProbePlan::findPoint(int id) const {
@@ -30,15 +25,6 @@ const PlanPose& ProbePlan::poseByName(const std::string& name) const {
   for (const auto& p : poses)
     if (p.name == name) return p;
   throw std::invalid_argument("plan has no pose '" + name + "'");
-}
-
-ProbePlan makePlan(const std::string& cycle, const MachineModel& machine, const CycleOptions& options) {
-  if (cycle == "touch154") return makeTouch154Plan(machine, options);
-  if (cycle == "spheres3") return makeSpheres3Plan(machine, options);
-  if (cycle == "rtest") return makeRtestPlan(machine, options);
-  if (cycle == "spaceframe") return makeSpaceframePlan(machine, options);
-  if (cycle == "tooltip") return makeTooltipPlan(machine, options);
-  throw std::invalid_argument("unknown cycle '" + cycle + "' (expected touch154, rtest, spheres3, tooltip, spaceframe)");
 }
 
 double parseNumber(const std::string& key, const std::string& text) {

@@ -63,10 +63,6 @@ struct ProbePlan {
 /// Cycle options from `--set KEY=VALUE`.
 using CycleOptions = std::map<std::string, std::string>;
 
-/// Builds the plan of a cycle. Throws std::invalid_argument on an unknown cycle or option, or a
-/// plan that does not fit the machine (stroke, reach), naming what is wrong.
-ProbePlan makePlan(const std::string& cycle, const MachineModel& machine, const CycleOptions& options);
-
 Json planToJson(const ProbePlan& plan);
 ProbePlan planFromJson(const JsonDoc& doc);
 ProbePlan loadPlan(const std::string& path);

@@ -141,17 +141,22 @@ struct View {
 std::string deviationViews(const Json& doc) {
   const auto pit = doc.find("points");
   if (pit == doc.end() || !pit->is_array() || pit->empty()) return {};
-  const bool touch154 = str(doc, "cycle") == "touch154";
+  // A cycle whose plan follows a paper's figures names them (REPORT.json "figure_titles").
+  const Json no_titles = Json::object();
+  const Json& titles = doc.contains("figure_titles") && doc["figure_titles"].is_object() ? doc["figure_titles"] : no_titles;
+  auto title = [&](const char* fig, const char* fallback) {
+    return titles.contains(fig) && titles[fig].is_string() ? titles[fig].get<std::string>() : std::string(fallback);
+  };
   const char* axes = "XYZ";
   std::vector<View> views = {
-      {"fig7", touch154 ? "Probed positions at A = 0 (000 Fig. 7)" : "Probed positions, untilted poses",
+      {"fig7", title("fig7", "Probed positions, untilted poses"),
        "Black dots: nominal contact points on a perfect machine; red circles: measured, the deviation along the face "
        "normal magnified. Includes the test piece's setup and form errors.",
        false, false, {{0, 1}, {1, 2}}, {5, 25, 100, 500}, 25},
-      {"fig8", touch154 ? "Relative displacements at A = 0 (000 Fig. 8, Eq. (21))" : "Relative displacements, untilted poses",
+      {"fig8", title("fig8", "Relative displacements, untilted poses"),
        "Deviation minus the same target's deviation at the first pose: setup and form cancel, the rotary axes' errors remain.",
        true, false, {{0, 1}, {0, 2}, {1, 2}}, {100, 500, 2000, 8000}, 500},
-      {"fig9", touch154 ? "Relative displacements at A = -90 deg (000 Fig. 9)" : "Relative displacements, tilted poses",
+      {"fig9", title("fig9", "Relative displacements, tilted poses"),
        "As above, at the tilted poses.", true, true, {{0, 1}, {0, 2}}, {100, 500, 2000, 8000}, 500}};
 
   // Poses of run 1 in plan order.
@@ -349,10 +354,10 @@ std::string analyzeBody(const Json& doc) {
                                  (sum.contains("message") ? ": " + escape(str(sum, "message")) : std::string())});
   s += "</table>\n";
 
-  // rtest's table is the first cycle's position-dependent errors at B = 0, tooltip's the pivot
-  // length: not location errors in ISO 230-7's sense.
-  const std::string cyc = str(doc, "cycle");
-  s += cyc == "rtest" || cyc == "tooltip" ? "<h2>Identified errors</h2>\n" : "<h2>Identified location errors</h2>\n";
+  // A cycle whose table holds other than location errors in ISO 230-7's sense (position-dependent
+  // errors, a pivot length) names it (REPORT.json "errors_heading").
+  s += "<h2>" + escape(doc.contains("errors_heading") ? str(doc, "errors_heading") : std::string("Identified location errors")) +
+       "</h2>\n";
   std::vector<std::pair<std::string, const Json*>> others;
   if (doc.contains("other_methods"))
     for (const auto& [name, o] : doc["other_methods"].items())

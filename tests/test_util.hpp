@@ -5,6 +5,7 @@
 
 #include <string>
 
+#include "cycles/cycle.hpp"
 #include "core/machine.hpp"
 #include "core/probe_plan.hpp"
 #include "core/simulation.hpp"

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "cycles/cycle.hpp"
 #include "controllers/dialect.hpp"
 #include "core/json_io.hpp"
 #include "core/machine.hpp"

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <regex>
 
+#include "cycles/cycle.hpp"
 #include "controllers/dialects.hpp"
 #include "core/errors.hpp"
 #include "core/units.hpp"

@@ -17,6 +17,7 @@
 #include <regex>
 #include <sstream>
 
+#include "cycles/cycle.hpp"
 #include "controllers/dialects.hpp"
 #include "ctl_test_util.hpp"
 #include "postproc/probe_program.hpp"

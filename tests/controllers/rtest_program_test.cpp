@@ -13,6 +13,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "cycles/cycle.hpp"
 #include "controllers/dialect.hpp"
 #include "core/machine.hpp"
 #include "core/probe_plan.hpp"

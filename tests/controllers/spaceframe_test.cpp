@@ -13,6 +13,7 @@
 #include <regex>
 #include <sstream>
 
+#include "cycles/cycle.hpp"
 #include "controllers/dialects.hpp"
 #include "core/simulation.hpp"
 #include "core/spaceframe.hpp"

@@ -14,6 +14,7 @@
 #include <regex>
 #include <sstream>
 
+#include "cycles/cycle.hpp"
 #include "controllers/dialects.hpp"
 #include "core/tooltip.hpp"
 #include "core/units.hpp"

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <fstream>
 
+#include "cycles/cycle.hpp"
 #include "core/machine.hpp"
 #include "core/rtest.hpp"
 #include "core/rtest_diagnosis.hpp"

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "cycles/cycle.hpp"
 #include "core/errors.hpp"
 #include "core/machine.hpp"
 #include "core/rtest.hpp"

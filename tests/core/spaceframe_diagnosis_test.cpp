@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <random>
 
+#include "cycles/cycle.hpp"
 #include "core/simulation.hpp"
 #include "core/spaceframe_diagnosis.hpp"
 #include "core/transforms.hpp"

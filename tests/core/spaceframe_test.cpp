@@ -6,6 +6,7 @@
 #include <Eigen/Dense>
 #include <cmath>
 
+#include "cycles/cycle.hpp"
 #include "core/simulation.hpp"
 #include "core/space_frame.hpp"
 #include "core/spaceframe.hpp"

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <random>
 
+#include "cycles/cycle.hpp"
 #include "core/spheres3_diagnosis.hpp"
 #include "test_util.hpp"
 

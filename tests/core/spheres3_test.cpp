@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "cycles/cycle.hpp"
 #include "core/spheres3.hpp"
 #include "core/spheres3_identification.hpp"
 #include "test_util.hpp"

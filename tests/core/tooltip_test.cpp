@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "cycles/cycle.hpp"
 #include "core/errors.hpp"
 #include "core/tooltip.hpp"
 #include "core/tooltip_fit.hpp"

@@ -4,6 +4,7 @@
 
 #include <map>
 
+#include "cycles/cycle.hpp"
 #include "core/probe_plan.hpp"
 #include "test_util.hpp"
 

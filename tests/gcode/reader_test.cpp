@@ -5,6 +5,7 @@
 
 #include <random>
 
+#include "cycles/cycle.hpp"
 #include "controllers/dialect.hpp"
 #include "core/json_io.hpp"
 #include "core/machine.hpp"

@@ -3,6 +3,7 @@
 // machine's unit.
 #include <gtest/gtest.h>
 
+#include "cycles/cycle.hpp"
 #include "postproc/probe_program.hpp"
 #include "test_util.hpp"
 

@@ -1,0 +1,301 @@
+// The verbs of contract.md that every cycle answers: plan, generate, simulate, analyze, diagnose.
+// Each asks the registry (cycles/cycle.hpp) for the cycle and hands it the dialect's reader and
+// writer; no cycle is named here.
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "cli/command.hpp"
+#include "cli/output.hpp"
+#include "cli/progress.hpp"
+#include "controllers/dialect.hpp"
+#include "core/errors.hpp"
+#include "core/json_io.hpp"
+#include "core/machine.hpp"
+#include "core/probe_plan.hpp"
+#include "cycles/cycle.hpp"
+
+namespace rotacal {
+namespace {
+
+CycleOptions parseSets(const std::vector<std::string>& sets) {
+  CycleOptions o;
+  for (const auto& s : sets) {
+    const auto eq = s.find('=');
+    if (eq == std::string::npos || eq == 0) throw CLI::ValidationError("--set", "expected KEY=VALUE, got '" + s + "'");
+    o[s.substr(0, eq)] = s.substr(eq + 1);
+  }
+  return o;
+}
+
+std::string cycleList() {
+  std::string s;
+  for (const Cycle* c : cycles()) s += fmt::format("{}{} ({})", s.empty() ? "" : ", ", c->name(), c->summary().substr(0, 3));
+  return s;
+}
+
+const Cycle& cycleOfPlanFile(const ProbePlan& plan, const std::string& plan_file) {
+  try {
+    return cycleOfPlan(plan);
+  } catch (const std::invalid_argument& e) {
+    failFile(plan_file, e.what());
+  }
+}
+
+DialectIO dialectIO(const Dialect& d) {
+  return {std::string(d.name()),
+          [&d](const std::string& text, const std::string& file, const ProbePlan& plan) {
+            return d.parseResults(text, file, plan);
+          },
+          [&d](const ProbePlan& plan, const MeasurementRun& run) { return d.writeResults(plan, run); }};
+}
+
+std::vector<InputFile> readInputs(const std::vector<std::string>& paths) {
+  std::vector<InputFile> files;
+  for (const auto& p : paths) files.push_back({p, readTextFile(p)});
+  return files;
+}
+
+// Core and cycles throw std::invalid_argument for data that cannot be analyzed without naming a
+// file: the results are what was analyzed.
+template <class F>
+auto onResults(const std::vector<std::string>& results, F&& f) {
+  try {
+    return f();
+  } catch (const std::invalid_argument& e) {
+    failFile(results.front(), e.what());
+  }
+}
+
+void warn(const std::vector<std::string>& warnings) {
+  for (const auto& w : warnings) std::fprintf(stderr, "rotacal: warning: %s\n", w.c_str());
+}
+
+int cmdPlan(const Common& c, const std::string& cycle_name, const std::string& machine_file,
+            const std::vector<std::string>& sets, const std::string& out) {
+  const Cycle* cycle = nullptr;
+  try {
+    cycle = &cycleByName(cycle_name);
+  } catch (const std::invalid_argument& e) {
+    throw CLI::ValidationError("--cycle", e.what());
+  }
+  const MachineModel machine = loadMachine(machine_file);
+  ProbePlan plan;
+  try {
+    plan = cycle->plan(machine, parseSets(sets));
+  } catch (const std::invalid_argument& e) {
+    failFile(machine_file, e.what());
+  }
+  writeFileAtomic(out, planToJson(plan).dump(1) + "\n");
+  say(c, fmt::format("plan {}: {} points in {} poses, about {:.0f} s of machine time -> {}\n", plan.cycle,
+                     plan.points.size(), plan.poses.size(), plan.points.empty() ? 0.0 : plan.points.back().t_s, out));
+  return 0;
+}
+
+int cmdGenerate(const Common& c, const std::string& plan_file, const std::string& dialect_name, const std::string& out) {
+  const ProbePlan plan = loadPlan(plan_file);
+  const Cycle& cycle = cycleOfPlanFile(plan, plan_file);
+  const Dialect& d = dialectOrFail(dialect_name);
+  std::string text;
+  try {
+    text = d.writeProgram(cycle.program(plan, dialect_name));
+  } catch (const std::invalid_argument& e) {
+    failFile(plan_file, e.what());
+  }
+  const auto problems = d.check(text, plan);
+  if (!problems.empty())
+    failFile(out, "generated program fails the " + std::string(d.name()) + " checker: " + problems.front());
+  writeFileAtomic(out, text);
+  say(c, fmt::format("{} program: {} {} -> {}\n", d.name(), plan.points.size(), cycle.pointNoun(), out));
+  return 0;
+}
+
+int cmdSimulate(const Common& c, const std::string& plan_file, const std::string& truth_file,
+                std::optional<double> noise_um, std::uint64_t seed, std::optional<double> start_s,
+                const std::string& dialect_name, const std::string& out) {
+  if (noise_um && !(std::isfinite(*noise_um) && *noise_um >= 0))
+    throw CLI::ValidationError("--noise-um", "must be a finite number >= 0");
+  if (start_s && !std::isfinite(*start_s)) throw CLI::ValidationError("--start-s", "must be a finite number");
+  const ProbePlan plan = loadPlan(plan_file);
+  const Cycle& cycle = cycleOfPlanFile(plan, plan_file);
+  const Dialect& d = dialectOrFail(dialect_name);
+  const DialectIO io = dialectIO(d);
+  SimulateRequest r;
+  r.plan = &plan;
+  r.truth = {truth_file, readTextFile(truth_file)};
+  r.noise_um = noise_um;
+  r.start_s = start_s;
+  r.seed = seed;
+  r.dialect = &io;
+  Simulated s;
+  try {
+    s = cycle.simulate(r);
+  } catch (const std::invalid_argument& e) {
+    failFile(truth_file, e.what());
+  }
+  writeFileAtomic(out, s.results_text);
+  say(c, s.message + " -> " + out + "\n");
+  return 0;
+}
+
+int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<std::string>& results,
+               const std::string& dialect_name, const std::string& method, const std::string& json_out,
+               const std::string& text_out, const std::string& offsets_out, bool force, const std::string& html_out) {
+  const ProbePlan plan = loadPlan(plan_file);
+  const Cycle& cycle = cycleOfPlanFile(plan, plan_file);
+  const Dialect& d = dialectOrFail(dialect_name);
+  if (!offsets_out.empty() && !cycle.noOffsetsReason().empty())
+    throw CLI::ValidationError("--offsets", std::string(cycle.noOffsetsReason()));
+  const auto methods = cycle.methods();
+  if (!method.empty() && std::find(methods.begin(), methods.end(), method) == methods.end()) {
+    std::string known;
+    for (const auto& m : methods) known += (known.empty() ? "" : ", ") + m;
+    throw CLI::ValidationError("--method", "the " + plan.cycle + " cycle has no method '" + method + "'" +
+                                               (known.empty() ? std::string(" (it has one estimator)")
+                                                              : " (known: " + known + ")"));
+  }
+  const DialectIO io = dialectIO(d);
+  AnalyzeRequest r;
+  r.plan = &plan;
+  r.results = readInputs(results);
+  r.dialect = &io;
+  r.method = method;
+  const CycleDocuments docs = onResults(results, [&] { return cycle.analyze(r); });
+  if (!json_out.empty()) writeOutput(json_out, docs.doc.dump(1) + "\n");
+  writeHtml(html_out, docs.doc);
+  if (!text_out.empty()) writeFileAtomic(text_out, docs.text);
+  if (!offsets_out.empty() && docs.offsets) {
+    OffsetRequest req;
+    req.plan = &plan;
+    req.identified = docs.offsets->identified;
+    req.u = docs.offsets->u;
+    req.report_file = json_out.empty() || json_out == "-" ? results.front() : json_out;
+    req.force = force;
+    req.path = offsets_out;
+    if (std::filesystem::exists(offsets_out)) req.previous_text = readTextFile(offsets_out);
+    std::string off;
+    try {
+      off = d.writeOffsets(req);
+    } catch (const std::invalid_argument& e) {
+      failFile(offsets_out, e.what());
+    }
+    writeFileAtomic(offsets_out, off);
+  }
+  sayUnlessPiped(c, docs.text, json_out, html_out);
+  warn(docs.warnings);
+  return 0;
+}
+
+int cmdDiagnose(const Common& c, const std::string& plan_file, const std::vector<std::string>& results,
+                const std::string& dialect_name, double alpha, const std::string& json_out, const std::string& text_out,
+                const std::string& html_out) {
+  if (!(alpha > 0 && alpha < 0.5)) throw CLI::ValidationError("--alpha", "alpha must be in (0, 0.5)");
+  const ProbePlan plan = loadPlan(plan_file);
+  const Cycle& cycle = cycleOfPlanFile(plan, plan_file);
+  const Dialect& d = dialectOrFail(dialect_name);
+  const DialectIO io = dialectIO(d);
+  DiagnoseRequest r;
+  r.plan = &plan;
+  r.results = readInputs(results);
+  r.dialect = &io;
+  r.alpha = alpha;
+  const auto progress = progressIndicator(c, "rotacal diagnose", "candidate fits");
+  auto total = std::make_shared<int>(0);
+  if (progress)
+    r.progress = [progress, total](int done, int all) {
+      *total = all;
+      progress(done, all);
+    };
+  const CycleDocuments docs = onResults(results, [&] { return cycle.diagnose(r); });
+  if (progress && *total > 0) progress(*total, *total);  // ends the line
+  writeDocuments(c, docs.doc, docs.text, json_out, text_out, html_out);
+  warn(docs.warnings);
+  return 0;
+}
+
+}  // namespace
+
+std::vector<Command> cycleCommands(CLI::App& app, const Common& common) {
+  struct Args {
+    std::string cycle, machine_file, plan_file, dialect, out, truth_file, method, json_out, text_out, offsets_out,
+        html_out;
+    std::vector<std::string> sets, results;
+    double noise_um = 0.0, start_s = 0.0, alpha = 1e-3;
+    std::uint64_t seed = 1;
+    bool force = false;
+  };
+  auto a = std::make_shared<Args>();
+  std::vector<Command> cmds;
+  const std::string results_dialects = "csv | " + [] {
+    std::string s;
+    for (const auto& n : dialectNames())
+      if (n != "csv") s += (s.empty() ? "" : " | ") + n;
+    return s;
+  }();
+
+  auto* plan = app.add_subcommand("plan", "make the probing plan of a cycle for a machine");
+  plan->add_option("--cycle", a->cycle, cycleList())->required();
+  plan->add_option("--machine", a->machine_file, "MACHINE.json")->required();
+  plan->add_option("--set", a->sets, "cycle option KEY=VALUE (repeatable), e.g. side_depth_mm=25");
+  plan->add_option("-o,--output", a->out, "PLAN.json")->required();
+  cmds.push_back({plan, [a, &common] { return cmdPlan(common, a->cycle, a->machine_file, a->sets, a->out); }});
+
+  auto* gen = app.add_subcommand("generate", "write the NC program of a plan in a controller dialect");
+  gen->add_option("--plan", a->plan_file, "PLAN.json")->required();
+  gen->add_option("--dialect", a->dialect, "linuxcnc | fanuc | haas | siemens | heidenhain | okuma")->required();
+  gen->add_option("-o,--output", a->out, "PROGRAM")->required();
+  cmds.push_back({gen, [a, &common] { return cmdGenerate(common, a->plan_file, a->dialect, a->out); }});
+
+  auto* sim = app.add_subcommand("simulate", "what the controller records on a machine with known errors");
+  sim->add_option("--plan", a->plan_file, "PLAN.json")->required();
+  sim->add_option("--truth", a->truth_file, "TRUTH.json")->required();
+  auto* noise_opt = sim->add_option("--noise-um", a->noise_um, "probe repeatability, standard deviation (um)");
+  sim->add_option("--seed", a->seed, "random seed");
+  auto* start_opt = sim->add_option("--start-s", a->start_s, "clock at the cycle start (s), for repeats");
+  sim->add_option("--dialect", a->dialect, results_dialects)->required();
+  sim->add_option("-o,--output", a->out, "RESULTS")->required();
+  cmds.push_back({sim, [a, &common, noise_opt, start_opt] {
+                    return cmdSimulate(common, a->plan_file, a->truth_file,
+                                       noise_opt->count() ? std::optional<double>(a->noise_um) : std::nullopt, a->seed,
+                                       start_opt->count() ? std::optional<double>(a->start_s) : std::nullopt,
+                                       a->dialect, a->out);
+                  }});
+
+  auto* ana = app.add_subcommand("analyze", "identify the errors of a cycle from the controller's results");
+  ana->add_option("--plan", a->plan_file, "PLAN.json")->required();
+  ana->add_option("--results", a->results, "RESULTS... (repeats of the plan, in time order)")->required();
+  ana->add_option("--dialect", a->dialect, results_dialects)->required();
+  ana->add_option("--method", a->method, "the estimator, for cycles that have several (touch: lsq_per_point, "
+                                         "lsq_rigid_setup, closed_form)");
+  ana->add_option("--json", a->json_out, "REPORT.json (- for stdout)");
+  ana->add_option("--html", a->html_out, "REPORT.html: the report to look at, self-contained");
+  ana->add_option("--text", a->text_out, "the readable summary, also printed on stdout");
+  ana->add_option("--offsets", a->offsets_out, "compensation in the dialect's own form");
+  ana->add_flag("--force", a->force, "write offsets beyond the plausibility limit");
+  cmds.push_back({ana, [a, &common] {
+                    return cmdAnalyze(common, a->plan_file, a->results, a->dialect, a->method, a->json_out, a->text_out,
+                                      a->offsets_out, a->force, a->html_out);
+                  }});
+
+  auto* dia = app.add_subcommand("diagnose", "find what the model misses, name the cause, extend the model, measure the gain");
+  dia->add_option("--plan", a->plan_file, "PLAN.json")->required();
+  dia->add_option("--results", a->results, "RESULTS... (repeats of the plan, in time order)")->required();
+  dia->add_option("--dialect", a->dialect, results_dialects)->required();
+  dia->add_option("--json", a->json_out, "DIAGNOSIS.json (- for stdout)")->required();
+  dia->add_option("--html", a->html_out, "DIAGNOSIS.html: the report to look at, self-contained");
+  dia->add_option("--text", a->text_out, "the readable summary, also printed on stdout");
+  dia->add_option("--alpha", a->alpha, "false-alarm rate of the tests (default 0.001)");
+  cmds.push_back({dia, [a, &common] {
+                    return cmdDiagnose(common, a->plan_file, a->results, a->dialect, a->alpha, a->json_out,
+                                       a->text_out, a->html_out);
+                  }});
+  return cmds;
+}
+
+}  // namespace rotacal

@@ -1,0 +1,133 @@
+#pragma once
+// A measuring cycle: everything a verb of the command line needs from it, behind one interface.
+// The CLI looks a cycle up by name (`plan --cycle`) or by a plan's `cycle` field and never tests
+// a cycle name itself; cycles/registry.cpp is the only list of cycles. A cycle never includes
+// controllers/: the CLI hands it the dialect's results reader and writer (DialectIO) and writes
+// the offsets a cycle returns with the dialect's own writer.
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/error_model.hpp"
+#include "core/json_io.hpp"
+#include "core/measurement.hpp"
+#include "core/probe_plan.hpp"
+#include "gcode/program.hpp"
+
+namespace rotacal {
+
+/// The dialect the user named, as a cycle may use it: what the controller writes back for a
+/// plan and how to read it. Touch cycles read and write through it; cycles whose results come
+/// from another device (an R-test logger, a laser) read their own format and ignore it.
+struct DialectIO {
+  std::string name;
+  std::function<MeasurementRun(const std::string& text, const std::string& file, const ProbePlan& plan)> read_results;
+  std::function<std::string(const ProbePlan& plan, const MeasurementRun& run)> write_results;
+};
+
+/// A file named on the command line, read by the CLI (cycles stay pure functions of text).
+struct InputFile {
+  std::string path;
+  std::string text;
+};
+
+struct SimulateRequest {
+  const ProbePlan* plan = nullptr;
+  InputFile truth;                   // TRUTH.json
+  std::optional<double> noise_um;    // --noise-um: overrides the truth file's noise
+  std::optional<double> start_s;     // --start-s: clock at the cycle start, for repeats
+  std::uint64_t seed = 1;
+  const DialectIO* dialect = nullptr;
+};
+
+struct Simulated {
+  std::string results_text;  // what the controller (or device) writes
+  std::string message;       // one line for the terminal, without the output path
+};
+
+struct AnalyzeRequest {
+  const ProbePlan* plan = nullptr;
+  std::vector<InputFile> results;  // repeats of the plan, in time order
+  const DialectIO* dialect = nullptr;
+  std::string method;              // "" = the cycle's default; one of Cycle::methods()
+};
+
+struct DiagnoseRequest {
+  const ProbePlan* plan = nullptr;
+  std::vector<InputFile> results;
+  const DialectIO* dialect = nullptr;
+  double alpha = 1e-3;             // false-alarm rate of the tests, validated by the CLI
+  std::function<void(int done, int all)> progress;  // may be empty
+};
+
+/// Corrections an analysis hands to the dialect's offsets writer (000 Sec. 4.5).
+struct LocationCorrection {
+  LocationErrors identified;            // mm / rad, papers' convention
+  ErrorVector u = ErrorVector::Zero();  // standard uncertainties, mm / rad
+};
+
+/// What analyze or diagnose produce: the JSON document (REPORT.json / DIAGNOSIS.json, from which
+/// the HTML report is drawn), the readable summary, warnings for stderr, and for analyze the
+/// corrections a dialect may write as offsets.
+struct CycleDocuments {
+  Json doc;
+  std::string text;
+  std::vector<std::string> warnings;
+  std::optional<LocationCorrection> offsets;
+};
+
+/// The smallest run of a cycle: a bundled machine it suits (a path under the source tree) and
+/// options that keep it short. The test battery over every cycle and the README start from it.
+struct CycleExample {
+  std::string machine;
+  CycleOptions options;
+};
+
+class Cycle {
+ public:
+  virtual ~Cycle() = default;
+
+  /// The name `plan --cycle` takes and the plan's `cycle` field carries.
+  virtual std::string_view name() const = 0;
+  /// Other plan `cycle` values this cycle analyzes (plans written by other tools or commands).
+  virtual std::vector<std::string> aliases() const { return {}; }
+  /// One line for --help: the source paper and what the cycle identifies.
+  virtual std::string_view summary() const = 0;
+  virtual CycleExample example() const = 0;
+
+  /// The plan of the cycle. Throws std::invalid_argument naming the option or the limit.
+  virtual ProbePlan plan(const MachineModel& machine, const CycleOptions& options) const = 0;
+
+  /// The dialect-neutral program of a plan; `dialect` selects only the controller's conventions
+  /// the plan needs (rotary sign). Throws std::invalid_argument when it cannot be expressed.
+  virtual nc::Program program(const ProbePlan& plan, const std::string& dialect) const = 0;
+  /// What one plan point is in a program, for the terminal ("probing moves").
+  virtual std::string_view pointNoun() const { return "probing moves"; }
+
+  /// What the controller records on a machine with known errors (exact simulation).
+  virtual Simulated simulate(const SimulateRequest& request) const = 0;
+
+  /// Estimation methods `analyze --method` accepts; the first is the default. Empty: none to choose.
+  virtual std::vector<std::string> methods() const { return {}; }
+  virtual CycleDocuments analyze(const AnalyzeRequest& request) const = 0;
+  /// Empty when analyze returns corrections for `--offsets`; otherwise why the cycle writes none.
+  virtual std::string_view noOffsetsReason() const { return {}; }
+  virtual CycleDocuments diagnose(const DiagnoseRequest& request) const = 0;
+};
+
+/// Every cycle, in the registry's order.
+const std::vector<const Cycle*>& cycles();
+std::vector<std::string> cycleNames();
+/// By `plan --cycle` name. Throws std::invalid_argument listing the names.
+const Cycle& cycleByName(std::string_view name);
+/// The cycle that analyzes a plan (its name or one of its aliases). Throws std::invalid_argument.
+const Cycle& cycleOfPlan(const ProbePlan& plan);
+
+/// The plan of the named cycle. Throws std::invalid_argument on an unknown cycle or option, or a
+/// plan that does not fit the machine (stroke, reach), naming what is wrong.
+ProbePlan makePlan(const std::string& cycle, const MachineModel& machine, const CycleOptions& options);
+
+}  // namespace rotacal

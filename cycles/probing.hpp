@@ -1,0 +1,18 @@
+#pragma once
+// What the touch-probe cycles share between them: the controller's results are read through the
+// dialect, and simulated by the exact simulator (full HTMs, ball-on-surface contact).
+#include <vector>
+
+#include "cycles/cycle.hpp"
+
+namespace rotacal {
+
+/// Every results file of the request, read by the dialect's reader against the plan.
+std::vector<MeasurementRun> readProbeRuns(const ProbePlan& plan, const std::vector<InputFile>& results,
+                                          const DialectIO& dialect);
+
+/// The triggers of every plan point on the machine of the truth file, written as the dialect's
+/// results. Throws InputError naming the truth file when the probe would not trigger.
+Simulated simulateProbing(const SimulateRequest& request);
+
+}  // namespace rotacal

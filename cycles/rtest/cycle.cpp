@@ -1,0 +1,114 @@
+// rtest (002): the position-dependent errors of the tilt axis with an R-test, and their thermal
+// drift. The R-test logger writes its own CSV whatever the controller; no offsets (the errors
+// depend on position and time).
+#include <fmt/format.h>
+
+#include "core/errors.hpp"
+#include "core/rtest.hpp"
+#include "core/rtest_diagnosis.hpp"
+#include "core/rtest_fit.hpp"
+#include "core/simulation.hpp"
+#include "cycles/cycle.hpp"
+#include "postproc/rtest_program.hpp"
+
+namespace rotacal {
+namespace {
+
+std::vector<RtestCycle> readCycles(const ProbePlan& plan, const std::vector<InputFile>& results) {
+  std::vector<RtestCycle> cycles;
+  for (const auto& f : results) {
+    const RtestSeries s = parseRtestResults(f.text, f.path, plan);
+    for (const auto& cy : s.cycles) {
+      if (!cycles.empty() && cy.readings.front().t_s < cycles.back().readings.back().t_s)
+        throw InputError(f.path, 0, "cycles must be in time order across the results files");
+      cycles.push_back(cy);
+    }
+  }
+  return cycles;
+}
+
+double sensorSigma(const ProbePlan& plan) {
+  return parseNumber("sensor_noise_um",
+                     plan.options.count("sensor_noise_um") ? plan.options.at("sensor_noise_um") : std::string("0.2"));
+}
+
+class Rtest final : public Cycle {
+ public:
+  std::string_view name() const override { return "rtest"; }
+  std::string_view summary() const override {
+    return "002: the position-dependent errors of the tilt axis with an R-test, and their thermal drift";
+  }
+  CycleExample example() const override { return {"examples/machines/bc_trunnion.json", {}}; }
+  ProbePlan plan(const MachineModel& machine, const CycleOptions& options) const override {
+    return makeRtestPlan(machine, options);
+  }
+  nc::Program program(const ProbePlan& plan, const std::string& dialect) const override {
+    return rtestProgram(plan, dialect);
+  }
+  std::string_view pointNoun() const override { return "R-test poses"; }
+
+  Simulated simulate(const SimulateRequest& r) const override {
+    const ProbePlan& plan = *r.plan;
+    const JsonDoc doc = parseJsonText(r.truth.text, r.truth.path);
+    Truth truth = truthFromJson(doc, plan.machine.kinematics);
+    RtestTruthExtras extras;
+    rtestTruthFromJson(doc, plan.machine.kinematics, truth, extras);
+    RtestSimOptions o;
+    o.seed = r.seed;
+    o.noise_um = r.noise_um ? *r.noise_um : truth.noise_um;
+    o.start_s = r.start_s.value_or(0.0);
+    if (o.noise_um < 0) throw InputError(r.truth.path, 0, "the sensor noise must be >= 0");
+    RtestSeries s;
+    try {
+      s = simulateRtest(plan, truth, extras, o);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(r.truth.path, 0, e.what());
+    }
+    return {rtestResultsCsv(plan, s),
+            fmt::format("simulated {} R-test cycle(s) of {} readings (sensor noise {:.3f} um, seed {})", s.cycles.size(),
+                        plan.points.size(), o.noise_um, r.seed)};
+  }
+
+  std::string_view noOffsetsReason() const override {
+    return "the R-test cycle reports position-dependent errors and their drift; it writes no offsets (use touch154 for the "
+        "location errors)";
+  }
+
+  CycleDocuments analyze(const AnalyzeRequest& r) const override {
+    const ProbePlan& plan = *r.plan;
+    const std::vector<RtestCycle> cycles = readCycles(plan, r.results);
+    RtestFitOptions o;
+    o.sensor_sigma_um = sensorSigma(plan);
+    const RtestAnalysis a = analyzeRtest(plan, cycles, o);
+    std::vector<std::string> files;
+    for (const auto& f : r.results) files.push_back(f.path);
+    CycleDocuments out;
+    out.text = rtestReportText(plan, a);
+    out.doc = rtestReportJson(plan, cycles, a, files);
+    out.doc["errors_heading"] = "Identified errors";  // the first cycle's position-dependent errors at B = 0, not location errors in ISO 230-7's sense
+    return out;
+  }
+
+  CycleDocuments diagnose(const DiagnoseRequest& r) const override {
+    const ProbePlan& plan = *r.plan;
+    const std::vector<RtestCycle> cycles = readCycles(plan, r.results);
+    RtestDiagnosisOptions o;
+    o.alpha = r.alpha;
+    o.sensor_sigma_um = sensorSigma(plan);
+    o.validate();
+    const RtestDiagnosis d = diagnoseRtest(plan, cycles, o);
+    CycleDocuments out;
+    out.text = rtestDiagnosisText(plan, d);
+    out.doc = rtestDiagnosisJson(plan, d);
+    return out;
+  }
+};
+
+}  // namespace
+
+const Cycle& rtestCycle() {
+  static const Rtest cycle;
+  return cycle;
+}
+
+}  // namespace rotacal

@@ -1,0 +1,66 @@
+// spaceframe (003): length errors of a 7-sphere frame against U = +-(A + K L), and what explains them.
+#include "core/diagnosis.hpp"
+#include "core/errors.hpp"
+#include "core/spaceframe.hpp"
+#include "core/spaceframe_diagnosis.hpp"
+#include "cycles/cycle.hpp"
+#include "cycles/probing.hpp"
+#include "postproc/probe_program.hpp"
+
+namespace rotacal {
+namespace {
+
+class Spaceframe final : public Cycle {
+ public:
+  std::string_view name() const override { return "spaceframe"; }
+  std::string_view summary() const override {
+    return "003: length errors of a 7-sphere frame against U = +-(A + K L), and what explains them";
+  }
+  CycleExample example() const override { return {"examples/machines/ac_trunnion.json", {{"phi_list", "-90,-45,0"}}}; }
+  ProbePlan plan(const MachineModel& machine, const CycleOptions& options) const override {
+    return makeSpaceframePlan(machine, options);
+  }
+  nc::Program program(const ProbePlan& plan, const std::string& dialect) const override {
+    return probeProgram(plan, dialect);
+  }
+  Simulated simulate(const SimulateRequest& request) const override { return simulateProbing(request); }
+
+  std::string_view noOffsetsReason() const override {
+    return "a spaceframe analysis is a performance test: it writes no offsets (calibrate with touch154 and use its offsets)";
+  }
+
+  CycleDocuments analyze(const AnalyzeRequest& r) const override {
+    const ProbePlan& plan = *r.plan;
+    const SpaceframeAnalysis a = analyzeSpaceframe(plan, readProbeRuns(plan, r.results, *r.dialect));
+    std::vector<std::string> files;
+    for (const auto& f : r.results) files.push_back(f.path);
+    CycleDocuments out;
+    out.text = spaceframeText(a, plan);
+    out.doc = spaceframeReportJson(a, plan, files);
+    if (a.summary.termination != "converged") out.warnings.push_back("spaceframe identification " + a.summary.termination);
+    return out;
+  }
+
+  CycleDocuments diagnose(const DiagnoseRequest& r) const override {
+    const ProbePlan& plan = *r.plan;
+    DiagnosisOptions o;
+    o.alpha = r.alpha;
+    o.prior_sigma_um = plan.machine.probe.repeatability_um;
+    const SpaceframeDiagnosis d = diagnoseSpaceframe(plan, readProbeRuns(plan, r.results, *r.dialect), o);
+    if (!d.baseline.converged || !d.candidate.converged)
+      throw InputError(r.results.front().path, 0, "spaceframe diagnosis: a model fit did not converge");
+    CycleDocuments out;
+    out.text = spaceframeDiagnosisText(d);
+    out.doc = spaceframeDiagnosisJson(d, plan);
+    return out;
+  }
+};
+
+}  // namespace
+
+const Cycle& spaceframeCycle() {
+  static const Spaceframe cycle;
+  return cycle;
+}
+
+}  // namespace rotacal

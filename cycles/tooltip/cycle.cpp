@@ -1,0 +1,91 @@
+// tooltip (004): angular positioning error and pivot length of a head's axis from a fixed-tool-tip
+// program. The laser writes its own file whatever the controller; no offsets.
+#include <fmt/format.h>
+
+#include "core/errors.hpp"
+#include "core/tooltip.hpp"
+#include "core/tooltip_fit.hpp"
+#include "cycles/cycle.hpp"
+#include "postproc/tooltip_program.hpp"
+
+namespace rotacal {
+namespace {
+
+std::vector<TooltipRun> readRuns(const ProbePlan& plan, const std::vector<InputFile>& results) {
+  std::vector<TooltipRun> runs;
+  for (const auto& f : results) runs.push_back(parseTooltipResults(f.text, f.path, plan));
+  return runs;
+}
+
+class Tooltip final : public Cycle {
+ public:
+  std::string_view name() const override { return "tooltip"; }
+  std::string_view summary() const override {
+    return "004: angular positioning error and pivot length of a head's axis from a fixed-tool-tip program";
+  }
+  CycleExample example() const override { return {"examples/machines/head_ab.json", {}}; }
+  ProbePlan plan(const MachineModel& machine, const CycleOptions& options) const override {
+    return makeTooltipPlan(machine, options);
+  }
+  nc::Program program(const ProbePlan& plan, const std::string& dialect) const override {
+    return tooltipProgram(plan, dialect);
+  }
+  std::string_view pointNoun() const override { return "tool-tip poses"; }
+
+  Simulated simulate(const SimulateRequest& r) const override {
+    const ProbePlan& plan = *r.plan;
+    const JsonDoc doc = parseJsonText(r.truth.text, r.truth.path);
+    TooltipTruth truth = tooltipTruthFrom(doc, doc.value);
+    if (r.noise_um) truth.noise_um = *r.noise_um;
+    if (truth.noise_um < 0) throw InputError(r.truth.path, 0, "the laser noise must be >= 0");
+    TooltipRun run;
+    try {
+      run = simulateTooltip(plan, truth, r.seed);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(r.truth.path, 0, e.what());
+    }
+    return {tooltipResultsText(plan, run),
+            fmt::format("simulated {} tool-tip readings (dR {:.3f} um, noise {:.3f} um, seed {})", run.size(),
+                        truth.dR_um, truth.noise_um, r.seed)};
+  }
+
+  std::string_view noOffsetsReason() const override {
+    return "the tooltip cycle writes no offsets (a head's pivot length and angular errors go into the machine's "
+        "kinematics tables by hand)";
+  }
+
+  CycleDocuments analyze(const AnalyzeRequest& r) const override {
+    const ProbePlan& plan = *r.plan;
+    const std::vector<TooltipRun> runs = readRuns(plan, r.results);
+    TooltipAnalysis a = analyzeTooltip(plan, runs);
+    for (const auto& f : r.results) a.result_files.push_back(f.path);
+    CycleDocuments out;
+    out.text = tooltipReportText(plan, a);
+    out.doc = tooltipReportJson(plan, runs, a);
+    out.doc["errors_heading"] = "Identified errors";  // a pivot length and angular errors, not location errors in ISO 230-7's sense
+    return out;
+  }
+
+  CycleDocuments diagnose(const DiagnoseRequest& r) const override {
+    const ProbePlan& plan = *r.plan;
+    const std::vector<TooltipRun> runs = readRuns(plan, r.results);
+    TooltipDiagnosisOptions o;
+    o.alpha = r.alpha;
+    std::string why;
+    if (!o.validate(&why)) throw std::invalid_argument(why);
+    const TooltipDiagnosis d = diagnoseTooltip(plan, runs, o);
+    CycleDocuments out;
+    out.text = tooltipDiagnosisText(d);
+    out.doc = tooltipDiagnosisJson(d);
+    return out;
+  }
+};
+
+}  // namespace
+
+const Cycle& tooltipCycle() {
+  static const Tooltip cycle;
+  return cycle;
+}
+
+}  // namespace rotacal

@@ -1,0 +1,107 @@
+// touch154 (000): the 8 location errors of an A/C table from 154 touches on a square column.
+// Plans written by `rotacal design` (cycle "touch_designed") are analyzed the same way.
+#include <stdexcept>
+
+#include "core/diagnosis.hpp"
+#include "core/diagnosis_figures.hpp"
+#include "core/errors.hpp"
+#include "core/identification.hpp"
+#include "core/point_deviations.hpp"
+#include "core/report.hpp"
+#include "core/touch154.hpp"
+#include "cycles/cycle.hpp"
+#include "cycles/probing.hpp"
+#include "postproc/probe_program.hpp"
+
+namespace rotacal {
+namespace {
+
+class Touch154 final : public Cycle {
+ public:
+  std::string_view name() const override { return "touch154"; }
+  std::vector<std::string> aliases() const override { return {"touch_designed"}; }
+  std::string_view summary() const override { return "000: the 8 location errors of an A/C table from 154 touches"; }
+  CycleExample example() const override { return {"examples/machines/ac_trunnion.json", {}}; }
+
+  ProbePlan plan(const MachineModel& machine, const CycleOptions& options) const override {
+    return makeTouch154Plan(machine, options);
+  }
+  nc::Program program(const ProbePlan& plan, const std::string& dialect) const override {
+    return probeProgram(plan, dialect);
+  }
+  Simulated simulate(const SimulateRequest& request) const override { return simulateProbing(request); }
+
+  std::vector<std::string> methods() const override {
+    return {std::string(methodName(Method::LeastSquaresPerPoint)), std::string(methodName(Method::LeastSquaresRigidSetup)),
+            std::string(methodName(Method::ClosedForm))};
+  }
+
+  CycleDocuments analyze(const AnalyzeRequest& r) const override {
+    const ProbePlan& plan = *r.plan;
+    const Method method = methodFromName(r.method.empty() ? methods().front() : r.method);
+    const std::vector<MeasurementRun> runs = readProbeRuns(plan, r.results, *r.dialect);
+    IdentificationOptions opt;
+    opt.method = method;
+    opt.prior_sigma_um = plan.machine.probe.repeatability_um;
+    Analysis a;
+    a.plan = &plan;
+    for (const auto& f : r.results) a.result_files.push_back(f.path);
+    a.main = identify(plan, runs, opt);
+    if (a.main.summary.termination == Termination::RankDeficient || a.main.summary.termination == Termination::InvalidInput)
+      throw InputError(r.results.front().path, 0, a.main.summary.message);
+    if (runs.size() > 1)
+      for (const auto& run : runs) a.per_run.push_back(identify(plan, {run}, opt));
+    for (Method other : {Method::LeastSquaresPerPoint, Method::LeastSquaresRigidSetup, Method::ClosedForm}) {
+      if (other == method) continue;
+      IdentificationOptions o = opt;
+      o.method = other;
+      a.other_methods.push_back(identify(plan, runs, o));
+    }
+    if (plan.cycle == name()) {
+      try {
+        a.patterns = touch154Patterns(plan, runs.front());
+      } catch (const std::invalid_argument&) {
+        // a reduced plan has no complete pattern set; the least squares still runs
+      }
+    }
+    CycleDocuments out;
+    out.text = analysisText(a);
+    out.doc = analysisToJson(a);
+    out.doc["points"] = pointDeviationsJson(plan, runs, a.main);  // the HTML report's deviation views
+    if (plan.cycle == name())  // the poses of 000 Fig. 5: the report's views are the paper's figures
+      out.doc["figure_titles"] = {{"fig7", "Probed positions at A = 0 (000 Fig. 7)"},
+                                  {"fig8", "Relative displacements at A = 0 (000 Fig. 8, Eq. (21))"},
+                                  {"fig9", "Relative displacements at A = -90 deg (000 Fig. 9)"}};
+    out.offsets = LocationCorrection{a.main.estimate, a.main.u};
+    if (a.main.summary.termination != Termination::Converged) out.warnings.push_back(a.main.summary.message);
+    return out;
+  }
+
+  CycleDocuments diagnose(const DiagnoseRequest& r) const override {
+    const ProbePlan& plan = *r.plan;
+    const std::vector<MeasurementRun> runs = readProbeRuns(plan, r.results, *r.dialect);
+    DiagnosisOptions o;
+    o.alpha = r.alpha;
+    o.prior_sigma_um = plan.machine.probe.repeatability_um;
+    o.progress = r.progress;
+    std::string why;
+    if (!o.validate(&why)) throw std::invalid_argument(why);
+    const Diagnosis dg = rotacal::diagnose(plan, runs, o);
+    if (dg.baseline.summary.termination != Termination::Converged)
+      throw InputError(r.results.front().path, 0, "baseline fit failed: " + dg.baseline.summary.message);
+    CycleDocuments out;
+    out.text = diagnosisText(dg);
+    out.doc = diagnosisToJson(dg);
+    out.doc["figures"] = diagnosisFigures(dg, plan);  // drawn by the HTML report
+    return out;
+  }
+};
+
+}  // namespace
+
+const Cycle& touch154Cycle() {
+  static const Touch154 cycle;
+  return cycle;
+}
+
+}  // namespace rotacal

@@ -1,0 +1,130 @@
+// One battery over every cycle of the registry (the dialect battery of tests/controllers is the
+// model): plan -> program in every dialect -> simulate -> analyze -> diagnose -> HTML report,
+// and a malformed results file rejected naming the file. A new cycle is tested by being listed.
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "controllers/dialect.hpp"
+#include "core/errors.hpp"
+#include "core/machine.hpp"
+#include "cycles/cycle.hpp"
+#include "report/html_report.hpp"
+#include "test_util.hpp"
+
+namespace rotacal {
+namespace {
+
+DialectIO ioOf(const Dialect& d) {
+  return {std::string(d.name()),
+          [&d](const std::string& text, const std::string& file, const ProbePlan& plan) {
+            return d.parseResults(text, file, plan);
+          },
+          [&d](const ProbePlan& plan, const MeasurementRun& run) { return d.writeResults(plan, run); }};
+}
+
+class CycleBattery : public ::testing::TestWithParam<std::string> {
+ protected:
+  const Cycle& cycle() const { return cycleByName(GetParam()); }
+  ProbePlan plan() const {
+    const CycleExample ex = cycle().example();
+    return cycle().plan(loadMachine(test::sourcePath(ex.machine)), ex.options);
+  }
+};
+
+TEST_P(CycleBattery, PlanCarriesTheCycleAndFitsTheMachine) {
+  const ProbePlan p = plan();
+  EXPECT_EQ(p.cycle, cycle().name());
+  EXPECT_EQ(&cycleOfPlan(p), &cycle());
+  ASSERT_FALSE(p.points.empty());
+  // The plan survives its own file format.
+  const ProbePlan back = planFromJson(parseJsonText(planToJson(p).dump(1), "plan.json"));
+  EXPECT_EQ(back.cycle, p.cycle);
+  EXPECT_EQ(back.points.size(), p.points.size());
+}
+
+TEST_P(CycleBattery, ProgramInEveryDialectPassesItsCheckerOrIsRefusedWithAReason) {
+  const ProbePlan p = plan();
+  int written = 0;
+  for (const auto& name : dialectNames()) {
+    if (name == "csv") continue;
+    const Dialect& d = dialectByName(name);
+    std::string text;
+    try {
+      text = d.writeProgram(cycle().program(p, name));
+    } catch (const std::invalid_argument& e) {
+      EXPECT_GT(std::string(e.what()).size(), 20u) << name << ": a refusal must say why";
+      continue;
+    }
+    const auto problems = d.check(text, p);
+    EXPECT_TRUE(problems.empty()) << name << ": " << (problems.empty() ? "" : problems.front());
+    ++written;
+  }
+  EXPECT_GE(written, 1) << "a cycle runs on at least one controller";
+}
+
+TEST_P(CycleBattery, SimulateAnalyzeDiagnoseAndReport) {
+  const ProbePlan p = plan();
+  const DialectIO io = ioOf(dialectByName("csv"));
+  SimulateRequest s;
+  s.plan = &p;
+  s.truth = {"truth.json", R"({"format": "rotacal-truth/1"})"};
+  s.noise_um = 0.3;
+  s.seed = 7;
+  s.dialect = &io;
+  const Simulated sim = cycle().simulate(s);
+  ASSERT_FALSE(sim.results_text.empty());
+
+  AnalyzeRequest a;
+  a.plan = &p;
+  a.results = {{"r1.txt", sim.results_text}};
+  a.dialect = &io;
+  const CycleDocuments rep = cycle().analyze(a);
+  EXPECT_FALSE(rep.text.empty());
+  EXPECT_EQ(rep.doc.value("cycle", std::string()), p.cycle);
+  EXPECT_EQ(rep.offsets.has_value(), cycle().noOffsetsReason().empty());
+  const std::string html = report::reportHtml(rep.doc);
+  EXPECT_NE(html.find("<html"), std::string::npos);
+
+  DiagnoseRequest dr;
+  dr.plan = &p;
+  dr.results = {{"r1.txt", sim.results_text}};
+  dr.dialect = &io;
+  const CycleDocuments dg = cycle().diagnose(dr);
+  EXPECT_FALSE(dg.text.empty());
+  EXPECT_NE(report::reportHtml(dg.doc).find("<html"), std::string::npos);
+}
+
+TEST_P(CycleBattery, MalformedResultsAreRejectedNamingTheFile) {
+  const ProbePlan p = plan();
+  const DialectIO io = ioOf(dialectByName("csv"));
+  SimulateRequest s;
+  s.plan = &p;
+  s.truth = {"truth.json", R"({"format": "rotacal-truth/1"})"};
+  s.dialect = &io;
+  const std::string good = cycle().simulate(s).results_text;
+  // Half the lines: points (or readings) are missing.
+  size_t cut = good.size() / 2;
+  cut = good.rfind('\n', cut) + 1;
+  for (const std::string& bad : {good.substr(0, cut), good.substr(0, cut) + "1,2,three\n"}) {
+    AnalyzeRequest a;
+    a.plan = &p;
+    a.results = {{"bad_results.txt", bad}};
+    a.dialect = &io;
+    try {
+      cycle().analyze(a);
+      ADD_FAILURE() << "accepted a malformed results file";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.file(), "bad_results.txt") << e.what();
+    } catch (const std::invalid_argument& e) {
+      ADD_FAILURE() << "rejected without naming the file: " << e.what();
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryCycle, CycleBattery, ::testing::ValuesIn(cycleNames()),
+                         [](const ::testing::TestParamInfo<std::string>& i) { return i.param; });
+
+}  // namespace
+}  // namespace rotacal
