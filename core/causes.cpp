@@ -165,7 +165,7 @@ std::string separationHint(const std::string& cause, const std::vector<std::stri
            " on a piece that stays near one place: probe the piece at a second location (another X/Y/Z position) or "
            "calibrate the linear axes separately (000 Sec. 2.2)";
   if (cause == "probe_pretravel")
-    return "direction-dependent pretravel of a touch154 plan shifts the same points as " + list +
+    return "direction-dependent pretravel of 000's 154-point plan shifts the same points as " + list +
            ": calibrate the probe on a reference sphere or ring gauge first (ISO 230-10), or probe each target from "
            "two opposite directions at one pose";
   return "add poses or points where the columns of the Jacobian of " + cause + " and " + list + " differ";

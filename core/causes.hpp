@@ -10,8 +10,8 @@
 //  linear_axis_squareness    S_xy, S_xz, S_yz of 000 Eq. (23) (um/m)
 //  probe_length              the ball centre sits dL below where the controller thinks (um)
 //  rotary_error_motion       the C axis's centre moves with C: second-order radial error motion
-//  pivot_length              tooltip cycle (004) only, not a touch-cycle extension: the tool tip
-//                            is R + dR from the pivot; diagnoseTooltip() in core/tooltip_fit.hpp
+//  pivot_length              fixed-tool-tip cycle (004) only, not a touch-cycle extension: the tool tip
+//                            is R + dR from the pivot; that cycle diagnoses it
 #include <string>
 #include <vector>
 

@@ -1,5 +1,5 @@
 #pragma once
-// The closed-form identification of 000 Sec. 3.2 / 4.3 for the touch154 plan.
+// The closed-form identification of 000 Sec. 3.2 / 4.3 for 000's 154-point plan.
 //
 // Each probing pattern (000 Fig. 2) becomes one linear equation in the eight location errors,
 // built from the relative displacements of Eq. (21), dp = p(pose) - D_a(-A) D_c(-C) p(I), each

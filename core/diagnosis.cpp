@@ -1,4 +1,5 @@
 #include "core/diagnosis.hpp"
+#include "core/statistics.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -24,37 +25,6 @@ bool DiagnosisOptions::validate(std::string* why) const {
   if (max_causes < 1) return fail("max_causes must be >= 1");
   if (!(prior_sigma_um > 0)) return fail("prior_sigma_um must be > 0");
   return true;
-}
-
-// ---- chi-square upper tail: regularized incomplete gamma Q(k/2, x/2) (series / continued fraction).
-double chiSquareSurvival(double x, double k) {
-  if (x <= 0) return 1.0;
-  const double a = k / 2.0, z = x / 2.0;
-  const double gln = std::lgamma(a);
-  if (z < a + 1.0) {
-    double sum = 1.0 / a, del = sum, ap = a;
-    for (int n = 0; n < 1000; ++n) {
-      ap += 1.0;
-      del *= z / ap;
-      sum += del;
-      if (std::abs(del) < std::abs(sum) * 1e-15) break;
-    }
-    return std::max(0.0, 1.0 - sum * std::exp(-z + a * std::log(z) - gln));
-  }
-  double b = z + 1.0 - a, c = 1.0 / 1e-300, d = 1.0 / b, h = d;
-  for (int i = 1; i < 1000; ++i) {
-    const double an = -i * (i - a);
-    b += 2.0;
-    d = an * d + b;
-    if (std::abs(d) < 1e-300) d = 1e-300;
-    c = b + an / c;
-    if (std::abs(c) < 1e-300) c = 1e-300;
-    d = 1.0 / d;
-    const double del = d * c;
-    h *= del;
-    if (std::abs(del - 1.0) < 1e-15) break;
-  }
-  return std::exp(-z + a * std::log(z) - gln) * h;
 }
 
 namespace {

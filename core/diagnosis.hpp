@@ -13,6 +13,7 @@
 #include "core/identification.hpp"
 #include "core/json_io.hpp"
 #include "core/model_extension.hpp"
+#include "core/statistics.hpp"  // chiSquareSurvival, once declared here
 
 namespace rotacal {
 
@@ -91,8 +92,5 @@ Diagnosis diagnose(const ProbePlan& plan, const std::vector<MeasurementRun>& run
 
 Json diagnosisToJson(const Diagnosis& d);
 std::string diagnosisText(const Diagnosis& d);
-
-/// Upper tail of the chi-square distribution, P(X > x) with k degrees of freedom.
-double chiSquareSurvival(double x, double k);
 
 }  // namespace rotacal

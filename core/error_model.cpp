@@ -8,7 +8,7 @@ namespace rotacal {
 
 namespace {
 constexpr const char* kNoTableErrors =
-    "a spindle-head machine (head_ab) has no table location errors: use --cycle tooltip";
+    "a spindle-head machine (head_ab) has no table location errors: use the fixed-tool-tip cycle (004)";
 }  // namespace
 
 std::string_view kinematicsName(Kinematics kinematics) {

@@ -20,7 +20,7 @@
 namespace rotacal {
 
 // HeadAB: a spindle head tilting in A and B about a pivot, the tool tip at distance R from it
-// (004 Sec. IV); it has no table location errors and serves the tooltip cycle (core/tooltip.hpp).
+// (004 Sec. IV); it has no table location errors and serves the fixed-tool-tip cycle (004).
 enum class Kinematics { TableAC, TableBC, HeadAB };
 
 std::string_view kinematicsName(Kinematics kinematics);       // "table_ac", "table_bc", "head_ab"

@@ -34,7 +34,7 @@ struct IdentificationOptions {
   /// Singular values of the column-scaled Jacobian below this fraction of the largest one count
   /// as zero: the parameters in their null space are reported as not identifiable. 1e-6 sits
   /// far above the finite-difference noise of extension columns (~1e-9) and far below any
-  /// usable conditioning (touch154: condition ~1e3).
+  /// usable conditioning (000's 154-point plan: condition ~1e3).
   double rank_tolerance = 1e-6;
   /// Probe repeatability (um, k = 1) used for the closed form's uncertainty, and reported beside
   /// the fit's own noise estimate.

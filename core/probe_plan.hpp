@@ -16,7 +16,7 @@
 
 namespace rotacal {
 
-/// A calibration sphere touched by a sphere cycle (spheres3, spaceframe): its id, its nominal
+/// A calibration sphere touched by a sphere cycle (three table spheres, a space frame): its id, its nominal
 /// centre in the workpiece (table) frame and its radius (contract.md, PLAN.json "sphere").
 struct SphereTarget {
   int id = 0;

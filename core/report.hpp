@@ -16,7 +16,7 @@ struct Analysis {
   IdentificationResult main;                  // all runs together
   std::vector<IdentificationResult> per_run;  // each repeat alone (000 Table 4 columns)
   std::vector<IdentificationResult> other_methods;  // the same data by the other estimators
-  std::vector<PatternEquation> patterns;      // closed form, first run (touch154)
+  std::vector<PatternEquation> patterns;      // closed form, first run (000's plan)
 };
 
 Json locationErrorsJson(const LocationErrors& estimate, const ErrorVector& u);

@@ -34,6 +34,7 @@ SphereFit fitSphereCentre(const std::vector<Eigen::Vector3d>& t, const Eigen::Ve
     const Eigen::VectorXd step = qr.solve(-r);
     c += step.head<3>();
     if (fit_r) rho += step[3];
+    f.iterations = it + 1;
     if (step.norm() < 1e-13) {
       f.converged = true;
       break;
@@ -50,7 +51,8 @@ SphereFit fitSphereCentre(const std::vector<Eigen::Vector3d>& t, const Eigen::Ve
   f.radius_fitted = fit_r;
   f.triggers = n;
   f.dof = n - np;
-  f.residual_rms_um = 1e3 * std::sqrt(r.squaredNorm() / n);
+  f.rss_mm2 = r.squaredNorm();
+  f.residual_rms_um = 1e3 * std::sqrt(f.rss_mm2 / n);
   const Eigen::MatrixXd N = J.transpose() * J;
   f.cov_centre_per_sigma2 = N.inverse().topLeftCorner<3, 3>();
   return f;

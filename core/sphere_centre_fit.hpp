@@ -19,7 +19,9 @@ struct SphereFit {
   double rho_mm = 0.0;             // fitted (or held) R + r
   bool radius_fitted = false;
   double residual_rms_um = 0.0;
+  double rss_mm2 = 0.0;            // sum of squared radial residuals
   int triggers = 0;
+  int iterations = 0;
   int dof = 0;
   Eigen::Matrix3d cov_centre_per_sigma2 = Eigen::Matrix3d::Zero();  // (J^T J)^-1 block, mm^2 per mm^2 of noise
   bool converged = false;

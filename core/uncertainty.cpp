@@ -71,7 +71,7 @@ constexpr int kStreamsPerRun = 16;
 enum Stream { kRepeat = 0, kRough, kPretravel, kLinearFixed, kNodesX, kNodesY, kNodesZ, kSetup, kForm };
 
 /// Pre-travel along an approach direction u from the six directional values (+X -X +Y -Y +Z -Z):
-/// sum_k u_k^2 v(k, sign u_k). Exact for the axis-parallel approaches of touch154; a smooth
+/// sum_k u_k^2 v(k, sign u_k). Exact for the axis-parallel approaches of 000's 154-point plan; a smooth
 /// blend for oblique ones (the weights sum to 1).
 double pretravelAlong(const std::array<double, 6>& v, const Eigen::Vector3d& u) {
   double s = 0.0;

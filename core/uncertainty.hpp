@@ -15,7 +15,7 @@
 //                      identify(LeastSquaresPerPoint) with the linear_axis_squareness extension
 //                      (core/causes.hpp), as `diagnose` re-estimates them
 //  lsq_per_point       `analyze`'s default: identify(LeastSquaresPerPoint), no extension
-// The closed forms need the touch154 poses; they are left out for other plans.
+// The closed forms need the poses of 000's 154-point plan; they are left out for other plans.
 //
 // Two evaluations of the same runs (same random numbers):
 //  - exact: the exact simulator (core/simulation.hpp) of every point, then the estimators

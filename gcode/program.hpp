@@ -26,8 +26,8 @@ struct Op {
                    // `rotary`; under G93 `feed` is 1 / minutes of the move and goes on every block.
                    // Lengths with rotaryLinearDecimals(), angles without trailing zeros ("A5.", 004).
     Pause,         // dwell_s > 0: dwell for a reading; dwell_s = 0: program stop (M0) for the operator
-    Dwell,        // wait `seconds` (rtest: the sensors settle before the static reading)
-    Read,         // trigger a reading of an external device (rtest: the R-test logger), point_id
+    Dwell,        // wait `seconds` (R-test: the sensors settle before the static reading)
+    Read,         // trigger a reading of an external device (the R-test logger), point_id
     RepeatBegin,  // run the ops up to the matching RepeatEnd `count` times (>= 1); nestable
     RepeatEnd,
   } kind = Kind::Comment;

@@ -344,7 +344,7 @@ std::string analyzeBody(const Json& doc) {
   }
   s += row({"points used", escape(str(doc, "points_used"))});
   s += row({"residual rms", numCell(dbl(doc, "residual_rms_um"), 3) + " um"});
-  // The cycles' summaries carry different fields (e.g. tooltip has no rank): show what is there.
+  // The cycles' summaries carry different fields (e.g. a tool-tip fit has no rank): show what is there.
   if (sum.contains("sigma_um"))
     s += row({"noise estimate", numCell(dbl(sum, "sigma_um"), 3) + fmt::format(" um ({} dof)", escape(str(sum, "dof")))});
   if (sum.contains("rank"))

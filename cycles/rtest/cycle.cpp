@@ -4,12 +4,12 @@
 #include <fmt/format.h>
 
 #include "core/errors.hpp"
-#include "core/rtest.hpp"
-#include "core/rtest_diagnosis.hpp"
-#include "core/rtest_fit.hpp"
+#include "cycles/rtest/plan.hpp"
+#include "cycles/rtest/diagnose.hpp"
+#include "cycles/rtest/analyze.hpp"
 #include "core/simulation.hpp"
 #include "cycles/cycle.hpp"
-#include "postproc/rtest_program.hpp"
+#include "cycles/rtest/program.hpp"
 
 namespace rotacal {
 namespace {

@@ -1,8 +1,8 @@
 // spaceframe (003): length errors of a 7-sphere frame against U = +-(A + K L), and what explains them.
 #include "core/diagnosis.hpp"
 #include "core/errors.hpp"
-#include "core/spaceframe.hpp"
-#include "core/spaceframe_diagnosis.hpp"
+#include "cycles/spaceframe/analyze.hpp"
+#include "cycles/spaceframe/diagnose.hpp"
 #include "cycles/cycle.hpp"
 #include "cycles/probing.hpp"
 #include "postproc/probe_program.hpp"

@@ -1,8 +1,8 @@
 // spheres3 (001): the 4 location and 6 component errors of the C axis from three spheres.
 #include "core/diagnosis.hpp"
-#include "core/spheres3.hpp"
-#include "core/spheres3_diagnosis.hpp"
-#include "core/spheres3_identification.hpp"
+#include "cycles/spheres3/plan.hpp"
+#include "cycles/spheres3/diagnose.hpp"
+#include "cycles/spheres3/analyze.hpp"
 #include "cycles/cycle.hpp"
 #include "cycles/probing.hpp"
 #include "postproc/probe_program.hpp"

@@ -3,10 +3,10 @@
 #include <fmt/format.h>
 
 #include "core/errors.hpp"
-#include "core/tooltip.hpp"
-#include "core/tooltip_fit.hpp"
+#include "cycles/tooltip/plan.hpp"
+#include "cycles/tooltip/analyze.hpp"
 #include "cycles/cycle.hpp"
-#include "postproc/tooltip_program.hpp"
+#include "cycles/tooltip/program.hpp"
 
 namespace rotacal {
 namespace {

@@ -1,0 +1,65 @@
+#include "core/statistics.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include <boost/math/distributions/chi_squared.hpp>
+#include <boost/math/distributions/fisher_f.hpp>
+#include <boost/math/distributions/normal.hpp>
+#include <boost/math/distributions/students_t.hpp>
+
+namespace rotacal {
+namespace {
+
+// Errors as std::invalid_argument (core's rule), never Boost's own exception types or errno.
+using Policy = boost::math::policies::policy<boost::math::policies::domain_error<boost::math::policies::throw_on_error>,
+                                             boost::math::policies::overflow_error<boost::math::policies::throw_on_error>>;
+
+template <class F>
+double guarded(const char* what, F&& f) {
+  try {
+    return f();
+  } catch (const std::exception& e) {
+    throw std::invalid_argument(std::string(what) + ": " + e.what());
+  }
+}
+
+}  // namespace
+
+double chiSquareSurvival(double x, double k) {
+  if (!(k > 0)) throw std::invalid_argument("chiSquareSurvival: k must be > 0");
+  if (!(x > 0)) return 1.0;
+  if (std::isinf(x)) return 0.0;
+  return guarded("chiSquareSurvival",
+                 [&] { return cdf(complement(boost::math::chi_squared_distribution<double, Policy>(k), x)); });
+}
+
+double chiSquareUpperQuantile(double p, double k) {
+  if (!(k > 0) || !(p > 0 && p < 1)) throw std::invalid_argument("chiSquareUpperQuantile: k > 0 and p in (0, 1)");
+  return guarded("chiSquareUpperQuantile",
+                 [&] { return quantile(complement(boost::math::chi_squared_distribution<double, Policy>(k), p)); });
+}
+
+double studentTwoSided(double t, double nu) {
+  if (!(nu > 0)) throw std::invalid_argument("studentTwoSided: nu must be > 0");
+  if (std::isnan(t)) throw std::invalid_argument("studentTwoSided: t is not a number");
+  if (std::isinf(t)) return 0.0;
+  return guarded("studentTwoSided", [&] {
+    return 2.0 * cdf(complement(boost::math::students_t_distribution<double, Policy>(nu), std::abs(t)));
+  });
+}
+
+double fSurvival(double f, double d1, double d2) {
+  if (!(d1 > 0) || !(d2 > 0)) throw std::invalid_argument("fSurvival: d1 and d2 must be > 0");
+  if (!(f > 0)) return 1.0;
+  if (std::isinf(f)) return 0.0;
+  return guarded("fSurvival",
+                 [&] { return cdf(complement(boost::math::fisher_f_distribution<double, Policy>(d1, d2), f)); });
+}
+
+double normalQuantile(double p) {
+  if (!(p > 0 && p < 1)) throw std::invalid_argument("normalQuantile: p must be in (0, 1)");
+  return guarded("normalQuantile", [&] { return quantile(boost::math::normal_distribution<double, Policy>(), p); });
+}
+
+}  // namespace rotacal

@@ -1,0 +1,19 @@
+#pragma once
+// The distributions every cycle's tests use, from Boost.Math (Debian libboost-math-dev): the
+// field's maintained implementation, in place of the hand-written tails each cycle once had.
+// Upper tails are computed directly (complement), so p-values far below 1e-16 keep their digits.
+
+namespace rotacal {
+
+/// P(X > x) for X ~ chi-square with k degrees of freedom (k > 0). 1 for x <= 0.
+double chiSquareSurvival(double x, double k);
+/// The x with P(X > x) = p for chi-square with k degrees of freedom; p in (0, 1).
+double chiSquareUpperQuantile(double p, double k);
+/// P(|T| > |t|) for Student's t with nu > 0 degrees of freedom.
+double studentTwoSided(double t, double nu);
+/// P(F > f) for Fisher's F with (d1, d2) degrees of freedom. 1 for f <= 0.
+double fSurvival(double f, double d1, double d2);
+/// The z with P(Z < z) = p for the standard normal; p in (0, 1).
+double normalQuantile(double p);
+
+}  // namespace rotacal

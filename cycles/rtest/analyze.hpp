@@ -1,0 +1,66 @@
+#pragma once
+// Identification of the R-test cycle: the linearised least squares of 002 Eq. (6) for the six
+// position-dependent errors of 002 Table 2 at every tilt angle of the plan, from each measuring
+// cycle, and their change with time across cycles (002 Fig. 10).
+//
+// Conventions (docs/rtest.md):
+//  - Eq. (4): the sensors are zeroed once, at tilt 0, C 0, before the first cycle. In the first
+//    cycle the reference reading is wq(0,0) of that same cycle and Eq. (6) applies as written;
+//    later cycles read against the reference of the first cycle, so the first cycle's estimate
+//    enters their model (and their uncertainty).
+//  - Tool length (002 Sec. 4.3): at tilt 0 a Z shift of the table is along the C axis and moves
+//    the sphere the same at every C, which the reset cancels: dz (dz_BY, dz_AY) at tilt 0 is not
+//    observable in the first cycle and is fixed to 0 there. A tool-length error (or that Z shift)
+//    is indistinguishable from it and appears in the translations at the other tilts as a fixed
+//    pattern; changes with time are free of it. Likewise c (c_BY, c_AY) at tilt 0, a rotation
+//    about the C axis, is the C zero that the reset at C = 0 defines: fixed to 0 in the first
+//    cycle, and a value c0 there shifts the rotations at the other tilts by -c0 about their C axis.
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "core/json_io.hpp"
+#include "core/probe_plan.hpp"
+#include "cycles/rtest/plan.hpp"
+
+namespace rotacal {
+
+/// J_wq_w: derivative of the sphere centre in the workpiece frame (mm) with respect to the six
+/// errors of the pose's tilt (mm, rad), exact at zero error: wq = T_m_w^-1 rq with rq fixed.
+Eigen::Matrix<double, 3, kRtestParams> J_wq_omega(Kinematics kinematics, const Pose& pose, const Eigen::Vector3d& nest_w);
+
+struct RtestFitOptions {
+  double sensor_sigma_um = 0.2;  // the sensors' repeatability: a floor for the noise estimate
+  void validate() const;         // throws std::invalid_argument
+};
+
+/// One cycle's estimate. value/u: 6 x (tilts), mm or rad, order of rtestParameterIndices.
+struct RtestCycleFit {
+  double t_s = 0.0;
+  Eigen::MatrixXd value;
+  Eigen::MatrixXd u;
+  Eigen::MatrixXd cov;              // 6 N x 6 N, column 6 i + p
+  double residual_rms_um = 0.0;     // readings minus the linear model
+  double linearisation_um = 0.0;    // max |exact model - linear model| at the estimate
+  double sigma_um = 0.0;            // noise used for u: max(sensor_sigma, residual estimate)
+  bool dz_reference_fixed = false;  // first cycle: dz and c at tilt 0 fixed to 0
+  std::vector<Eigen::Vector3d> residual_w_mm;  // per reading
+};
+
+struct RtestAnalysis {
+  Kinematics kinematics = Kinematics::TableBC;
+  std::vector<double> tilt_deg;
+  std::vector<RtestCycleFit> cycles;
+  // Linear trend across cycles (weighted by u): per second, mm/s or rad/s; zero with one cycle.
+  Eigen::MatrixXd rate, rate_u;
+  Eigen::MatrixXd change;  // last cycle minus first, mm or rad
+};
+
+RtestAnalysis analyzeRtest(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, const RtestFitOptions& options);
+
+/// REPORT.json of the R-test (contract, extended): per cycle estimates, drift, figures.
+Json rtestReportJson(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, const RtestAnalysis& analysis,
+                     const std::vector<std::string>& result_files);
+std::string rtestReportText(const ProbePlan& plan, const RtestAnalysis& analysis);
+
+}  // namespace rotacal

@@ -1,0 +1,129 @@
+#include "cycles/rtest/program.hpp"
+
+#include <fmt/format.h>
+
+#include "cycles/rtest/plan.hpp"
+#include "core/units.hpp"
+#include "postproc/probe_program.hpp"
+
+namespace rotacal {
+
+nc::Program rtestProgram(const ProbePlan& plan, const std::string& dialect) {
+  const MachineModel& m = plan.machine;
+  const Kinematics kin = m.kinematics;
+  const char tilt = tiltAxis(kin);
+  const RtestSchedule sched = rtestSchedule(plan);
+  nc::Program prog;
+  prog.cycle = plan.cycle;
+  prog.name = "ROTACAL_RTEST";
+  prog.number = 7002;
+  prog.unit = m.units == LengthUnit::Inch ? nc::Unit::Inch : nc::Unit::Millimetre;
+  const double k = m.units == LengthUnit::Inch ? 1.0 / kMmPerInch : 1.0;
+  prog.probe_tool = m.probe.tool_number;
+  prog.results_file = "rotacal_rtest";
+  prog.point_count = 0;  // no probing moves: the readings come from the R-test logger
+  for (const auto& r : m.rotary) prog.rotary_axes.push_back(r.name);
+  const Eigen::Vector3d nest = rtestNest_w(plan);
+  prog.header = {
+      fmt::format("rotacal static R-test cycle (002), {} poses per cycle, {} cycle(s)", plan.points.size(), sched.cycles()),
+      fmt::format("machine: {}", m.name),
+      "work offset: origin at the intersection of the rotary axes, no rotation",
+      fmt::format("sphere {:.3f} mm on the spindle; X Y Z = sphere centre; nest at {:.3f} {:.3f} {:.3f} mm on the table",
+                  m.probe.ball_diameter_mm, nest.x(), nest.y(), nest.z()),
+      fmt::format("each pose: enter along the nest axis, dwell, READ = trigger the R-test logger [pose id]"),
+      fmt::format("reset: the logger zeroes the sensors at the first reading at {} 0 C 0 [002 Eq. 4]", tilt),
+  };
+  if (sched.thermal)
+    prog.header.push_back(fmt::format("thermal test: every {:g} min for {:g} h, {} reciprocates {:g} to {:g} deg at "
+                                      "{:g} deg/min in between",
+                                      sched.interval_s / 60.0, sched.duration_s / 3600.0, tilt, sched.recip_from_deg,
+                                      sched.recip_to_deg, sched.recip_feed_deg_min));
+  for (const auto& r : m.rotary) {
+    const int s = m.controllerSign(r.name, dialect);
+    prog.header.push_back(fmt::format("{} angles: controller = {} x paper convention", r.name, s > 0 ? "+1" : "-1"));
+  }
+  auto comment = [&](const std::string& t) {
+    nc::Op c;
+    c.kind = nc::Op::Kind::Comment;
+    c.text = t;
+    prog.ops.push_back(c);
+  };
+  auto index = [&](const Pose& pose, bool tilt_only, double feed) {
+    nc::Op op;
+    op.kind = nc::Op::Kind::Index;
+    op.feed = feed;
+    for (const auto& r : m.rotary) {
+      if (tilt_only && r.name != tilt) continue;
+      const double paper = r.name == 'A' ? pose.A : (r.name == 'B' ? pose.B : pose.C);
+      op.rotary.emplace_back(r.name, controllerAngle(m, r.name, dialect, paper));
+    }
+    prog.ops.push_back(op);
+  };
+  const auto moves = rtestCycleMoves(plan);
+  auto cycle = [&](const std::string& title) {
+    comment(title);
+    for (const auto& mv : moves) {
+      nc::Op op;
+      op.xyz = mv.position_m * k;
+      switch (mv.kind) {
+        case RtestMove::Kind::ClimbZ:
+          op.kind = nc::Op::Kind::Rapid;
+          op.z_only = true;
+          break;
+        case RtestMove::Kind::Rapid: op.kind = nc::Op::Kind::Rapid; break;
+        case RtestMove::Kind::Linear:
+          op.kind = nc::Op::Kind::Linear;
+          op.feed = m.feeds.positioning_mm_min * k;
+          break;
+        case RtestMove::Kind::Index: {
+          std::string name;
+          for (const auto& p : plan.points)
+            if (p.pose.A == mv.pose.A && p.pose.B == mv.pose.B && p.pose.C == mv.pose.C) name = p.pose_name;
+          comment("pose " + name);
+          index(mv.pose, false, 0.0);
+          continue;
+        }
+        case RtestMove::Kind::Dwell:
+          op.kind = nc::Op::Kind::Dwell;
+          op.seconds = mv.seconds;
+          break;
+        case RtestMove::Kind::Read:
+          op.kind = nc::Op::Kind::Read;
+          op.point_id = mv.point_id;
+          op.pose_name = plan.points[mv.point_id - 1].pose_name;
+          op.text = fmt::format("R-test reading pose {} {}", mv.point_id, op.pose_name);
+          break;
+      }
+      prog.ops.push_back(op);
+    }
+  };
+  cycle("measuring cycle 1");
+  if (sched.thermal && sched.cycles() > 1) {
+    const int n = rtestReciprocations(plan);
+    nc::Op begin;
+    begin.kind = nc::Op::Kind::RepeatBegin;
+    begin.count = sched.cycles() - 1;
+    prog.ops.push_back(begin);
+    comment(fmt::format("warm-up: {} round trips of {} between {:g} and {:g} deg", n, tilt, sched.recip_from_deg,
+                        sched.recip_to_deg));
+    index(tiltPose(kin, sched.recip_from_deg, 0.0), true, 0.0);
+    if (n > 0) {
+      nc::Op inner;
+      inner.kind = nc::Op::Kind::RepeatBegin;
+      inner.count = n;
+      prog.ops.push_back(inner);
+      index(tiltPose(kin, sched.recip_to_deg, 0.0), true, sched.recip_feed_deg_min);
+      index(tiltPose(kin, sched.recip_from_deg, 0.0), true, sched.recip_feed_deg_min);
+      nc::Op end;
+      end.kind = nc::Op::Kind::RepeatEnd;
+      prog.ops.push_back(end);
+    }
+    cycle("measuring cycle 2 and later");
+    nc::Op end;
+    end.kind = nc::Op::Kind::RepeatEnd;
+    prog.ops.push_back(end);
+  }
+  return prog;
+}
+
+}  // namespace rotacal

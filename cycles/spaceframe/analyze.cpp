@@ -1,0 +1,596 @@
+#include "cycles/spaceframe/analyze.hpp"
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <map>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "core/report.hpp"
+#include "core/transforms.hpp"
+#include "core/units.hpp"
+
+namespace rotacal {
+
+namespace {
+
+std::string listText(const std::vector<double>& v) {
+  std::string s;
+  for (size_t i = 0; i < v.size(); ++i) s += (i ? "," : "") + fmt::format("{:g}", v[i]);
+  return s;
+}
+
+Eigen::Vector3d vec3Option(const std::string& key, const std::string& text) {
+  const auto v = parseNumberList(key, text);
+  if (v.size() != 3) throw std::invalid_argument("option " + key + ": expected x,y,z");
+  return {v[0], v[1], v[2]};
+}
+
+Eigen::Isometry3d setupTransform(const Eigen::Vector3d& t, const Eigen::Vector3d& w, const Eigen::Vector3d& pivot) {
+  return Eigen::Translation3d(t + pivot) * Da(w.x()) * Db(w.y()) * Dc(w.z()) * Eigen::Translation3d(-pivot);
+}
+
+}  // namespace
+
+SpaceframeLayout SpaceframeLayout::fromOptions(const CycleOptions& options) {
+  SpaceframeLayout l;
+  for (const auto& [key, value] : options) {
+    if (key == "theta_list") l.theta_deg = parseNumberList(key, value);
+    else if (key == "phi_list") l.phi_deg = parseNumberList(key, value);
+    else if (key == "origin_w_mm") l.origin_w_mm = vec3Option(key, value);
+    else if (key == "sphere_diameter_mm") l.sphere_diameter_mm = parseNumber(key, value);
+    else if (key == "mpe_a_um") l.spec.A_um = parseNumber(key, value);
+    else if (key == "mpe_k_um_per_m") l.spec.K_um_per_m = parseNumber(key, value);
+    else if (key == "min_touch_angle_deg") l.min_touch_angle_deg = parseNumber(key, value);
+    else if (key == "nominal_from") l.nominal_from = value;
+    else
+      throw std::invalid_argument("unknown option '" + key +
+                                  "' for cycle spaceframe (known: theta_list, phi_list, origin_w_mm, sphere_diameter_mm, "
+                                  "mpe_a_um, mpe_k_um_per_m, min_touch_angle_deg, nominal_from)");
+  }
+  if (!(l.sphere_diameter_mm > 0)) throw std::invalid_argument("option sphere_diameter_mm must be positive");
+  if (l.spec.A_um < 0 || l.spec.K_um_per_m < 0 || l.spec.A_um + l.spec.K_um_per_m <= 0)
+    throw std::invalid_argument("options mpe_a_um and mpe_k_um_per_m must be >= 0 and not both zero");
+  if (l.nominal_from != "table1" && l.nominal_from != "initial")
+    throw std::invalid_argument("option nominal_from must be table1 or initial, got '" + l.nominal_from + "'");
+  if (!(l.min_touch_angle_deg >= 0 && l.min_touch_angle_deg < 90))
+    throw std::invalid_argument("option min_touch_angle_deg must lie in [0, 90)");
+  return l;
+}
+
+CycleOptions SpaceframeLayout::toOptions() const {
+  return {{"theta_list", listText(theta_deg)},
+          {"phi_list", listText(phi_deg)},
+          {"origin_w_mm", fmt::format("{:g},{:g},{:g}", origin_w_mm.x(), origin_w_mm.y(), origin_w_mm.z())},
+          {"sphere_diameter_mm", fmt::format("{:g}", sphere_diameter_mm)},
+          {"mpe_a_um", fmt::format("{:g}", spec.A_um)},
+          {"mpe_k_um_per_m", fmt::format("{:g}", spec.K_um_per_m)},
+          {"min_touch_angle_deg", fmt::format("{:g}", min_touch_angle_deg)},
+          {"nominal_from", nominal_from}};
+}
+
+ProbePlan makeSpaceframePlan(const MachineModel& machine, const CycleOptions& options) {
+  if (machine.kinematics != Kinematics::TableAC)
+    throw std::invalid_argument("cycle spaceframe maps theta onto C and phi onto A: it needs an A/C table (table_ac)");
+  const SpaceframeLayout l = SpaceframeLayout::fromOptions(options);
+  const RotaryAxis& a_axis = machine.rotaryAxis('A');
+  for (double phi : l.phi_deg)
+    if (!a_axis.continuous && !a_axis.stroke_deg.contains(phi))
+      throw std::invalid_argument(fmt::format(
+          "phi = {:g} deg needs A = {:g} deg, outside the A stroke [{:g}, {:g}] deg of machine '{}' (phi maps onto A, "
+          "docs/spaceframe.md): set phi_list to tilts within the stroke, e.g. --set phi_list=-90,-45,0",
+          phi, phi, a_axis.stroke_deg.min, a_axis.stroke_deg.max, machine.name));
+  const double R = l.sphere_diameter_mm / 2.0;
+  const double r = machine.probe.ball_radius_mm();
+  const double rho = R + r;
+  const auto& table1 = spaceFrameTable1_mm();
+
+  ProbePlan plan;
+  plan.cycle = "spaceframe";
+  plan.machine = machine;
+  plan.machine.artefact.reset();  // the space frame stands on the table instead of the column
+  plan.options = l.toOptions();
+  double sweep = 0.0;
+  for (const auto& c : table1) sweep = std::max(sweep, (l.origin_w_mm + c).norm());
+  plan.index_z_mm = std::max(sweep, machine.table_diameter_mm / 2) + rho + machine.clearance_mm;
+
+  // Touch directions (machine frame, axis-aligned so every dialect can probe them): the ball
+  // moves along u and meets the sphere where its outward normal is -u. A sphere stands on a stem
+  // along the frame's -Z (003 Fig. 2): touches whose normal lies within min_touch_angle of the
+  // stem are left out (the stem, or the plate, is there).
+  const std::array<Eigen::Vector3d, 5> approaches = {Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitX(),
+                                                     Eigen::Vector3d::UnitY(), -Eigen::Vector3d::UnitY(),
+                                                     -Eigen::Vector3d::UnitZ()};
+  const double cos_limit = std::cos(degToRad(l.min_touch_angle_deg));
+  int id = 1;
+  for (double phi : l.phi_deg) {
+    for (double theta : l.theta_deg) {
+      const Pose pose{phi, 0.0, theta};
+      const std::string name = fmt::format("t{:g}p{:g}", theta, phi);
+      const Eigen::Isometry3d T = T_m_w_nominal(machine.kinematics, pose);
+      const Eigen::Vector3d stem_m = T.linear() * -Eigen::Vector3d::UnitZ();
+      double top = -1e300;
+      for (const auto& c : table1) top = std::max(top, (T * (l.origin_w_mm + c)).z());
+      plan.poses.push_back({name, pose, top + rho + machine.clearance_mm});
+      for (int s = 1; s <= 7; ++s) {
+        const Eigen::Vector3d c_w = l.origin_w_mm + table1[s - 1];
+        const Eigen::Vector3d c_m = T * c_w;
+        int touches = 0;
+        for (const auto& u : approaches) {
+          if ((-u).dot(stem_m) > cos_limit) continue;
+          ProbePoint p;
+          p.id = id++;
+          p.pose_name = name;
+          p.pose = pose;
+          p.target = s;
+          p.face = Face::Top;  // not a face: the sphere field says what is touched
+          p.normal_w = T.linear().transpose() * -u;
+          p.contact_w_mm = c_w + R * p.normal_w;
+          p.trigger_m_mm = c_m - rho * u;
+          p.approach_m = u;
+          p.sphere = SphereTarget{s, c_w, R};
+          plan.points.push_back(p);
+          ++touches;
+        }
+        if (touches < 4)
+          throw std::invalid_argument(fmt::format("pose {}: sphere {} has only {} reachable touches (4 needed); lower "
+                                                  "min_touch_angle_deg",
+                                                  name, s, touches));
+      }
+    }
+  }
+  if (l.nominal_from == "initial") {
+    bool has_initial = false;
+    for (const auto& p : plan.poses) has_initial = has_initial || (p.pose.A == 0.0 && p.pose.C == 0.0);
+    if (!has_initial) throw std::invalid_argument("nominal_from=initial needs theta = 0 and phi = 0 in the map");
+  }
+  const auto bad = strokeViolations(plan);
+  if (!bad.empty()) throw std::invalid_argument("plan does not fit the machine: " + bad.front());
+  estimateTimes(plan);
+  return plan;
+}
+
+std::vector<FramePoint> framePoints(const ProbePlan& plan) {
+  std::vector<FramePoint> out;
+  for (const auto& p : plan.points) {
+    if (!p.sphere) throw std::invalid_argument(fmt::format("point {}: not a sphere touch", p.id));
+    if (out.empty() || out.back().pose_name != p.pose_name || out.back().sphere != p.sphere->id) {
+      FramePoint f;
+      f.index = static_cast<int>(out.size());
+      f.pose_name = p.pose_name;
+      f.pose = p.pose;
+      f.sphere = p.sphere->id;
+      f.center_w_mm = p.sphere->center_w_mm;
+      f.nominal_m_mm = T_m_w_nominal(plan.machine.kinematics, p.pose) * p.sphere->center_w_mm;
+      out.push_back(f);
+    }
+    out.back().point_ids.push_back(p.id);
+  }
+  return out;
+}
+
+Eigen::Matrix<double, FrameModel::kSize, 1> FrameModel::toVector() const {
+  Eigen::Matrix<double, kSize, 1> v;
+  v.head<kRigidSize>() << errors.values, scale, setup_translation_mm, setup_rotation_rad;
+  for (int i = 0; i < 7; ++i) v.segment<3>(kRigidSize + 3 * i) = sphere_offset_w_mm[i];
+  return v;
+}
+
+FrameModel FrameModel::fromVector(Kinematics k, const Eigen::Matrix<double, kSize, 1>& v) {
+  FrameModel m;
+  m.errors.kinematics = k;
+  m.errors.values = v.head<kNumLocationErrors>();
+  m.scale = v.segment<3>(kNumLocationErrors);
+  m.setup_translation_mm = v.segment<3>(kNumLocationErrors + 3);
+  m.setup_rotation_rad = v.segment<3>(kNumLocationErrors + 6);
+  for (int i = 0; i < 7; ++i) m.sphere_offset_w_mm[i] = v.segment<3>(kRigidSize + 3 * i);
+  return m;
+}
+
+Eigen::Matrix<double, FrameModel::kSize, 1> FrameModel::reportUnits(Kinematics k) {
+  Eigen::Matrix<double, kSize, 1> s;
+  const auto& params = locationParameters(k);
+  for (int i = 0; i < kNumLocationErrors; ++i) s[i] = params[i].kind == ParamKind::Length ? kUmPerMm : kMdegPerRad;
+  s.segment<3>(kNumLocationErrors).setConstant(1e6);
+  s.segment<3>(kNumLocationErrors + 3).setConstant(kUmPerMm);
+  s.segment<3>(kNumLocationErrors + 6).setConstant(kMdegPerRad);
+  s.tail<21>().setConstant(kUmPerMm);
+  return s;
+}
+
+std::vector<int> activeParameters(bool frame_free) {
+  std::vector<int> a;
+  for (int i = 0; i < kNumLocationErrors; ++i) a.push_back(i);
+  if (!frame_free) {
+    for (int i = kNumLocationErrors; i < FrameModel::kRigidSize; ++i) a.push_back(i);
+    return a;
+  }
+  a.push_back(kNumLocationErrors);
+  a.push_back(kNumLocationErrors + 1);
+  for (int i = FrameModel::kRigidSize; i < FrameModel::kSize; ++i) a.push_back(i);
+  return a;
+}
+
+Eigen::Vector3d FrameModel::actualCentre_m(const FramePoint& p, const Eigen::Vector3d& origin_w) const {
+  const Eigen::Vector3d c_w =
+      setupTransform(setup_translation_mm, setup_rotation_rad, origin_w) * (p.center_w_mm + sphere_offset_w_mm.at(p.sphere - 1));
+  return T_m_w(errors, p.pose) * c_w;
+}
+
+namespace {
+
+SphereFitOptions fitOptions(const ProbePlan& plan, const ProbePoint& touch) {
+  SphereFitOptions fo;
+  fo.rho_mm = touch.sphere->radius_mm + plan.machine.probe.ball_radius_mm();
+  return fo;
+}
+
+}  // namespace
+
+Eigen::Vector3d FrameModel::fittedCentre_m(const ProbePlan& plan, const FramePoint& p, const Eigen::Vector3d& origin_w) const {
+  const Eigen::Vector3d x = actualCentre_m(p, origin_w);
+  const Eigen::Vector3d k = Eigen::Vector3d::Ones() + scale;  // actual = diag(k) read
+  std::vector<Eigen::Vector3d> t;
+  for (int id : p.point_ids) {
+    const ProbePoint& q = *plan.findPoint(id);
+    const double rho = q.sphere->radius_mm + plan.machine.probe.ball_radius_mm();
+    // The reading moves as c0 + s u, the ball as diag(k) (c0 + s u): |a + s b| = rho.
+    const Eigen::Vector3d a = k.cwiseProduct(q.trigger_m_mm) - x, b = k.cwiseProduct(q.approach_m);
+    const double bb = b.squaredNorm(), ab = a.dot(b);
+    const double disc = ab * ab - bb * (a.squaredNorm() - rho * rho);
+    if (disc < 0) throw std::invalid_argument(fmt::format("point {}: the model's probe misses the sphere", id));
+    t.push_back(q.trigger_m_mm + ((-ab - std::sqrt(disc)) / bb) * q.approach_m);
+  }
+  return fitSphereCentre(t, p.nominal_m_mm, fitOptions(plan, *plan.findPoint(p.point_ids.front()))).centre_mm;
+}
+
+namespace {
+
+using ModelVector = Eigen::Matrix<double, FrameModel::kSize, 1>;
+
+
+}  // namespace
+
+SpaceframeAnalysis analyzeSpaceframe(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
+                                     const SpaceframeOptions& options) {
+  if (!options.validate()) throw std::invalid_argument("spaceframe options: steps, iterations and tolerance must be positive");
+  if (plan.cycle != "spaceframe") throw std::invalid_argument("plan is not a spaceframe plan");
+  if (runs.empty()) throw std::invalid_argument("no results");
+  const SpaceframeLayout layout = SpaceframeLayout::fromOptions(plan.options);
+  SpaceframeAnalysis a;
+  a.spec = layout.spec;
+  a.points = framePoints(plan);
+
+  // Triggers by point id, per run.
+  std::vector<std::map<int, Eigen::Vector3d>> by_id(runs.size());
+  for (size_t k = 0; k < runs.size(); ++k)
+    for (const auto& t : runs[k].points) by_id[k][t.point_id] = t.position_m_mm;
+
+  for (const auto& f : a.points) {
+    const SphereFitOptions fo = fitOptions(plan, *plan.findPoint(f.point_ids.front()));
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    SphereFit mean;
+    for (size_t k = 0; k < runs.size(); ++k) {
+      std::vector<Eigen::Vector3d> t;
+      for (int id : f.point_ids) {
+        const auto it = by_id[k].find(id);
+        if (it == by_id[k].end())
+          throw std::invalid_argument(fmt::format("{}: no trigger for point {} (pose {}, sphere {})", runs[k].source, id,
+                                                  f.pose_name, f.sphere));
+        t.push_back(it->second);
+      }
+      const SphereFit fit = fitSphereCentre(t, f.nominal_m_mm, fo);
+      sum += fit.centre_mm;
+      a.triggers += fit.triggers;
+      if (k == 0) mean = fit;
+      else mean.residual_rms_um = std::max(mean.residual_rms_um, fit.residual_rms_um);
+    }
+    mean.centre_mm = sum / static_cast<double>(runs.size());
+    const double dev_um = mmToUm(mean.rho_mm - fo.rho_mm);  // first run's fit
+    a.radius_mean_dev_um += dev_um / static_cast<double>(a.points.size());
+    a.radius_max_dev_um = std::max(a.radius_max_dev_um, std::abs(dev_um));
+    a.radius_limit_um = std::max(2.0, 6.0 * plan.machine.probe.repeatability_um);
+    if (std::abs(dev_um) > a.radius_limit_um) ++a.radius_outside;
+    a.fits.push_back(mean);
+    a.measured_m_mm.push_back(mean.centre_mm);
+  }
+  // The L_n points: Table 1 through the map, or (003's self-calibration) the centres measured at
+  // theta = phi = 0 through the map.
+  auto nominalPoints = [&](const std::vector<Eigen::Vector3d>& centres) {
+    std::vector<Eigen::Vector3d> out;
+    std::map<int, Eigen::Vector3d> initial_w;  // sphere -> centre at theta = phi = 0, workpiece frame
+    if (layout.nominal_from == "initial")
+      for (size_t i = 0; i < a.points.size(); ++i)
+        if (a.points[i].pose.A == 0.0 && a.points[i].pose.C == 0.0 && !initial_w.count(a.points[i].sphere))
+          initial_w[a.points[i].sphere] = T_m_w_nominal(plan.machine.kinematics, a.points[i].pose).inverse() * centres[i];
+    for (const auto& f : a.points) {
+      if (layout.nominal_from == "table1") {
+        out.push_back(f.nominal_m_mm);
+        continue;
+      }
+      const auto it = initial_w.find(f.sphere);
+      if (it == initial_w.end())
+        throw std::invalid_argument(
+            fmt::format("nominal_from=initial: sphere {} was not measured at theta = phi = 0", f.sphere));
+      out.push_back(T_m_w_nominal(plan.machine.kinematics, f.pose) * it->second);
+    }
+    return out;
+  };
+  a.nominal_m_mm = nominalPoints(a.measured_m_mm);
+  a.lengths = lengthErrors(a.measured_m_mm, a.nominal_m_mm);
+  a.verdict = checkLengths(a.lengths, a.spec);
+
+  // Least squares on the measured centres (3 per point): exact model, Gauss-Newton, Jacobian by
+  // central differences in report units (um, mdeg, um/m), SVD with a rank check.
+  const Kinematics kin = plan.machine.kinematics;
+  const ModelVector unit = FrameModel::reportUnits(kin);
+  const int n = static_cast<int>(a.points.size());
+  const int m = 3 * n;
+  ModelVector x = ModelVector::Zero();  // mm / rad / 1
+  auto residuals = [&](const ModelVector& v) {
+    const FrameModel fm = FrameModel::fromVector(kin, v);
+    Eigen::VectorXd res(m);
+    for (int i = 0; i < n; ++i) res.segment<3>(3 * i) = a.measured_m_mm[i] - fm.fittedCentre_m(plan, a.points[i], layout.origin_w_mm);
+    return res;
+  };
+  const std::vector<int> active = activeParameters(layout.nominal_from == "initial");
+  const int np = static_cast<int>(active.size());
+  a.summary.parameters = np;
+  Eigen::MatrixXd J(m, np);  // d(model)/d(parameter in report units), mm per unit
+  Eigen::VectorXd res = residuals(x);
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd;
+  a.summary.termination = "max_iterations";
+  for (int it = 0; it < options.max_iterations; ++it) {
+    for (int k = 0; k < np; ++k) {
+      const int c = active[k];
+      const double h = options.finite_step_scale / unit[c];
+      ModelVector xp = x, xm = x;
+      xp[c] += h;
+      xm[c] -= h;
+      J.col(k) = -(residuals(xp) - residuals(xm)) / (2.0 * options.finite_step_scale);
+    }
+    svd.compute(J, Eigen::ComputeThinU | Eigen::ComputeThinV);
+    const auto& sv = svd.singularValues();
+    const double tol = options.rank_tolerance * sv[0];
+    int rank = 0;
+    for (int i = 0; i < sv.size(); ++i) rank += sv[i] > tol ? 1 : 0;
+    a.summary.rank = rank;
+    a.summary.condition = sv[rank - 1] > 0 ? sv[0] / sv[rank - 1] : INFINITY;
+    if (rank < np) {
+      a.summary.termination = "rank_deficient";
+      break;
+    }
+    const Eigen::VectorXd step_units = svd.solve(res);  // J step = res
+    for (int k = 0; k < np; ++k) x[active[k]] += step_units[k] / unit[active[k]];
+    res = residuals(x);
+    a.summary.iterations = it + 1;
+    // 1e-6 um / mdeg / um/m: far below any resolution, above the floor the sphere fits (converged
+    // to 1e-13 mm) leave in the central differences.
+    if (step_units.cwiseAbs().maxCoeff() < 1e-6) {
+      a.summary.termination = "converged";
+      break;
+    }
+  }
+  a.summary.observations = m;
+  a.summary.dof = m - a.summary.rank;
+  a.summary.residual_rms_um = mmToUm(std::sqrt(res.squaredNorm() / m));
+  a.summary.sigma_um = a.summary.dof > 0 ? mmToUm(std::sqrt(res.squaredNorm() / a.summary.dof)) : 0.0;
+  a.model = FrameModel::fromVector(kin, x);
+  if (a.summary.termination != "rank_deficient") {
+    // u (k = 1) from the a-posteriori noise: cov = sigma^2 (J^T J)^-1, J in mm per report unit;
+    // stored in mm / rad / 1 like the model.
+    const Eigen::MatrixXd V = svd.matrixV();
+    const Eigen::VectorXd s2 = svd.singularValues().cwiseAbs2();
+    for (int k = 0; k < np; ++k)
+      a.u[active[k]] = umToMm(a.summary.sigma_um) * std::sqrt((V.row(k).transpose().cwiseAbs2().cwiseQuotient(s2)).sum()) /
+                       unit[active[k]];
+  }
+  // How much of dL the identified model explains: dL minus the dL of the model's readings.
+  std::vector<Eigen::Vector3d> predicted;
+  for (const auto& f : a.points) predicted.push_back(a.model.fittedCentre_m(plan, f, layout.origin_w_mm));
+  const std::vector<Eigen::Vector3d> predicted_nominal = nominalPoints(predicted);
+  double s_before = 0.0, s_after = 0.0;
+  for (const auto& L : a.lengths) {
+    const double dL_model =
+        (predicted[L.j] - predicted[L.k]).norm() - (predicted_nominal[L.j] - predicted_nominal[L.k]).norm();
+    s_before += L.dL_mm() * L.dL_mm();
+    s_after += (L.dL_mm() - dL_model) * (L.dL_mm() - dL_model);
+  }
+  const double nl = std::max<double>(1.0, static_cast<double>(a.lengths.size()));
+  a.dL_rms_um = mmToUm(std::sqrt(s_before / nl));
+  a.dL_unexplained_rms_um = mmToUm(std::sqrt(s_after / nl));
+  return a;
+}
+
+namespace {
+
+double round6(double v) { return std::round(v * 1e6) / 1e6; }
+
+Json figuresJson(const SpaceframeAnalysis& a) {
+  // 003 Fig. 6 (dL against L with the band) as the envelope of dL per 5 mm of L, and 003 Fig. 5
+  // (frequency of lengths) per 10 mm: 49455 single points would swamp the report.
+  double Lmax = 0.0;
+  for (const auto& L : a.lengths) Lmax = std::max(Lmax, L.measured_mm);
+  const double w6 = 5.0, w5 = 10.0;
+  const int n6 = static_cast<int>(Lmax / w6) + 1, n5 = static_cast<int>(Lmax / w5) + 1;
+  std::vector<double> lo(n6, INFINITY), hi(n6, -INFINITY);
+  std::vector<int> count(n5, 0);
+  for (const auto& L : a.lengths) {
+    const int b = static_cast<int>(L.measured_mm / w6);
+    const double d = mmToUm(L.dL_mm());
+    lo[b] = std::min(lo[b], d);
+    hi[b] = std::max(hi[b], d);
+    ++count[static_cast<int>(L.measured_mm / w5)];
+  }
+  Json x = Json::array(), ylo = Json::array(), yhi = Json::array(), bx = Json::array(), blo = Json::array(),
+       bhi = Json::array();
+  for (int b = 0; b < n6; ++b) {
+    if (!std::isfinite(lo[b])) continue;
+    const double Lc = (b + 0.5) * w6;
+    x.push_back(round6(Lc));
+    ylo.push_back(round6(lo[b]));
+    yhi.push_back(round6(hi[b]));
+  }
+  for (int b = 0; b <= n6; ++b) {
+    const double L = b * w6;
+    bx.push_back(round6(L));
+    blo.push_back(round6(-a.spec.limit_um(L)));
+    bhi.push_back(round6(a.spec.limit_um(L)));
+  }
+  Json hx = Json::array(), hy = Json::array();
+  for (int b = 0; b < n5; ++b) {
+    hx.push_back(round6((b + 0.5) * w5));
+    hy.push_back(count[b]);
+  }
+  Json figs = Json::array();
+  figs.push_back({{"id", "spaceframe_dl_vs_l"},
+                  {"title", "Length error against length (003 Fig. 6)"},
+                  {"x", {{"label", "L (measured)"}, {"unit", "mm"}}},
+                  {"y", {{"label", "dL = Lm - Ln"}, {"unit", "um"}}},
+                  {"series", Json::array({{{"name", "largest dL per 5 mm of L"}, {"style", "line"}, {"x", x}, {"y", yhi}},
+                                          {{"name", "smallest dL per 5 mm of L"}, {"style", "line"}, {"x", x}, {"y", ylo}}})},
+                  {"bands", Json::array({{{"name", fmt::format("U = ±({:g} um + {:g} um/m · L)", a.spec.A_um,
+                                                               a.spec.K_um_per_m)},
+                                          {"x", bx},
+                                          {"lo", blo},
+                                          {"hi", bhi}}})},
+                  {"note", fmt::format("{} of {} lengths outside the band: {}", a.verdict.outside, a.verdict.lengths,
+                                       a.verdict.pass ? "pass" : "fail")}});
+  figs.push_back({{"id", "spaceframe_length_histogram"},
+                  {"title", "Frequency of length sizes (003 Fig. 5)"},
+                  {"x", {{"label", "L (measured)"}, {"unit", "mm"}}},
+                  {"y", {{"label", "lengths per 10 mm"}, {"unit", "1"}}},
+                  {"series", Json::array({{{"name", "lengths"}, {"style", "points"}, {"x", hx}, {"y", hy}}})},
+                  {"note", "how many of the map's lengths fall in each 10 mm of L"}});
+  return figs;
+}
+
+}  // namespace
+
+Json spaceframeReportJson(const SpaceframeAnalysis& a, const ProbePlan& plan, const std::vector<std::string>& files) {
+  Json j;
+  j["format"] = "rotacal-report/1";
+  j["cycle"] = "spaceframe";
+  j["machine"] = plan.machine.name;
+  j["machine_model"] = machineToJson(plan.machine);
+  j["method"] = "lsq_frame_centres";
+  j["results"] = files;
+  ErrorVector ue = a.u.head<kNumLocationErrors>();
+  j["location_errors"] = locationErrorsJson(a.model.errors, ue);
+  const char* ax[3] = {"X", "Y", "Z"};
+  Json sc = Json::object(), st = Json::object();
+  for (int i = 0; i < 3; ++i) {
+    sc[ax[i]] = {{"value", round6(a.model.scale[i] * 1e6)}, {"unit", "um/m"}, {"u", round6(a.u[kNumLocationErrors + i] * 1e6)}};
+    st[std::string("translation_") + ax[i]] = {{"value", round6(mmToUm(a.model.setup_translation_mm[i]))},
+                                               {"unit", "um"},
+                                               {"u", round6(mmToUm(a.u[kNumLocationErrors + 3 + i]))}};
+    st[std::string("rotation_") + ax[i]] = {{"value", round6(radToMdeg(a.model.setup_rotation_rad[i]))},
+                                            {"unit", "mdeg"},
+                                            {"u", round6(radToMdeg(a.u[kNumLocationErrors + 6 + i]))}};
+  }
+  const bool frame_free = SpaceframeLayout::fromOptions(plan.options).nominal_from == "initial";
+  j["frame"] = frame_free ? "self_calibration" : "calibrated";
+  if (frame_free) {
+    // Scale Z is the reference (an isotropic scale is the frame's size); the setup is in the offsets.
+    sc["Z"]["note"] = "reference: X and Y are relative to Z (self-calibration cannot see an isotropic scale)";
+    Json sp = Json::object();
+    for (int i = 0; i < 7; ++i) {
+      const Eigen::Vector3d d = a.model.sphere_offset_w_mm[i];
+      const Eigen::Vector3d ud = a.u.segment<3>(FrameModel::kRigidSize + 3 * i);
+      sp[std::to_string(i + 1)] = {{"offset_w_um", {round6(mmToUm(d.x())), round6(mmToUm(d.y())), round6(mmToUm(d.z()))}},
+                                   {"u_um", {round6(mmToUm(ud.x())), round6(mmToUm(ud.y())), round6(mmToUm(ud.z()))}}};
+    }
+    j["frame_spheres"] = sp;
+  } else {
+    j["frame_setup"] = st;
+  }
+  j["linear_axis_scale"] = sc;
+  j["residual_rms_um"] = round6(a.summary.residual_rms_um);
+  j["points_used"] = a.triggers;
+  j["summary"] = {{"termination", a.summary.termination},
+                  {"iterations", a.summary.iterations},
+                  {"observations", a.summary.observations},
+                  {"parameters", a.summary.parameters},
+                  {"rank", a.summary.rank},
+                  {"condition", std::isfinite(a.summary.condition) ? Json(a.summary.condition) : Json(nullptr)},
+                  {"dof", a.summary.dof},
+                  {"sigma_um", round6(a.summary.sigma_um)},
+                  {"residual_rms_um", round6(a.summary.residual_rms_um)}};
+  const auto& w = a.verdict.worst_index >= 0 ? a.lengths[a.verdict.worst_index] : LengthError{};
+  j["lengths"] = {{"points", a.points.size()},
+                  {"nominal_from", SpaceframeLayout::fromOptions(plan.options).nominal_from},
+                  {"count", a.lengths.size()},
+                  {"A_um", a.spec.A_um},
+                  {"K_um_per_m", a.spec.K_um_per_m},
+                  {"verdict", a.verdict.pass ? "pass" : "fail"},
+                  {"outside", a.verdict.outside},
+                  {"max_abs_dL_um", round6(a.verdict.max_abs_dL_um)},
+                  {"rms_dL_um", round6(a.verdict.rms_dL_um)},
+                  {"worst_ratio", round6(a.verdict.worst_ratio)},
+                  {"worst", {{"from_point", w.j + 1}, {"to_point", w.k + 1}, {"L_mm", round6(w.measured_mm)},
+                             {"dL_um", round6(mmToUm(w.dL_mm()))}, {"limit_um", round6(a.spec.limit_um(w.measured_mm))}}},
+                  {"unexplained_rms_dL_um", round6(a.dL_unexplained_rms_um)}};
+  Json pts = Json::array();
+  for (size_t i = 0; i < a.points.size(); ++i) {
+    const auto& f = a.points[i];
+    const auto& fit = a.fits[i];
+    const Eigen::Vector3d d = a.measured_m_mm[i] - a.nominal_m_mm[i];
+    pts.push_back({{"point", i + 1},
+                   {"pose", f.pose_name},
+                   {"sphere", f.sphere},
+                   {"touches", fit.triggers},
+                   {"centre_m_mm", {round6(a.measured_m_mm[i].x()), round6(a.measured_m_mm[i].y()), round6(a.measured_m_mm[i].z())}},
+                   {"deviation_um", {round6(mmToUm(d.x())), round6(mmToUm(d.y())), round6(mmToUm(d.z()))}},
+                   {"fit_rms_um", round6(fit.residual_rms_um)},
+                   {"fitted_radius_mm", fit.radius_fitted ? Json(round6(fit.rho_mm - plan.machine.probe.ball_radius_mm()))
+                                                          : Json(nullptr)}});
+  }
+  j["frame_points"] = pts;
+  j["sphere_radius_check"] = {{"nominal_mm", a.points.empty() ? 0.0 : plan.findPoint(a.points.front().point_ids.front())->sphere->radius_mm},
+                              {"mean_deviation_um", round6(a.radius_mean_dev_um)},
+                              {"max_abs_deviation_um", round6(a.radius_max_dev_um)},
+                              {"limit_um", round6(a.radius_limit_um)},
+                              {"outside", a.radius_outside}};
+  j["figures"] = figuresJson(a);
+  return j;
+}
+
+std::string spaceframeText(const SpaceframeAnalysis& a, const ProbePlan& plan) {
+  std::string s;
+  s += fmt::format("rotacal analysis: cycle spaceframe (003), machine {}\n", plan.machine.name);
+  s += fmt::format("{} sphere centres from {} touches, {} lengths (003 Eq. (5))\n", a.points.size(), a.triggers,
+                   a.lengths.size());
+  s += fmt::format("length error dL = Lm - Ln: max |dL| {:.3f} um, rms {:.3f} um\n", a.verdict.max_abs_dL_um,
+                   a.verdict.rms_dL_um);
+  s += fmt::format("sphere fits: fitted radius - nominal {:+.3f} um on average, at most {:.3f} um{}\n",
+                   a.radius_mean_dev_um, a.radius_max_dev_um,
+                   a.radius_outside ? fmt::format(" ({} beyond {:.1f} um: probe pretravel, ball size or a dirty sphere?)",
+                                                  a.radius_outside, a.radius_limit_um)
+                                    : std::string());
+  s += fmt::format("U = +-({:g} um + {:g} um/m L): {} ({} lengths outside, worst |dL|/U = {:.3f})\n\n", a.spec.A_um,
+                   a.spec.K_um_per_m, a.verdict.pass ? "PASS" : "FAIL", a.verdict.outside, a.verdict.worst_ratio);
+  s += fmt::format("identification ({}, rank {}/{}, {} dof), what explains dL:\n", a.summary.termination, a.summary.rank,
+                   a.summary.parameters, a.summary.dof);
+  const auto& params = locationParameters(a.model.errors.kinematics);
+  const ModelVector unit = FrameModel::reportUnits(a.model.errors.kinematics);
+  for (int i = 0; i < kNumLocationErrors; ++i)
+    s += fmt::format("  {:<8} {:<5} {:>10.3f} +- {:.3f} {}\n", params[i].name, params[i].iso, a.model.errors.reportValue(i),
+                     a.u[i] * unit[i], reportUnit(params[i].kind));
+  const char* ax = "XYZ";
+  for (int i = 0; i < 3; ++i)
+    s += fmt::format("  scale {}        {:>10.3f} +- {:.3f} um/m\n", ax[i], a.model.scale[i] * 1e6,
+                     a.u[kNumLocationErrors + i] * 1e6);
+  if (SpaceframeLayout::fromOptions(plan.options).nominal_from == "initial") {
+    s += "  (self-calibration: scale Z is the reference; the frame's spheres are fitted too:)\n";
+    for (int i = 0; i < 7; ++i)
+      s += fmt::format("  sphere {} offset {:>8.3f} {:>8.3f} {:>8.3f} um\n", i + 1,
+                       mmToUm(a.model.sphere_offset_w_mm[i].x()), mmToUm(a.model.sphere_offset_w_mm[i].y()),
+                       mmToUm(a.model.sphere_offset_w_mm[i].z()));
+  }
+  s += fmt::format("centre residual rms {:.3f} um; dL rms {:.3f} um, left unexplained {:.3f} um\n",
+                   a.summary.residual_rms_um, a.dL_rms_um, a.dL_unexplained_rms_um);
+  return s;
+}
+
+}  // namespace rotacal

@@ -1,0 +1,65 @@
+#include "cycles/spaceframe/frame.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "core/units.hpp"
+
+namespace rotacal {
+
+const std::array<Eigen::Vector3d, 7>& spaceFrameTable1_mm() {
+  static const std::array<Eigen::Vector3d, 7> t = {
+      Eigen::Vector3d(-0.0170, -0.2243, 73.6373),   Eigen::Vector3d(0.1266, -102.977, 0.1119),
+      Eigen::Vector3d(-88.1763, -51.6103, 149.8827), Eigen::Vector3d(-88.4696, 50.0995, -0.0242),
+      Eigen::Vector3d(-2.3838, 101.2081, 150.2041),  Eigen::Vector3d(86.5175, 51.0002, 0.0012),
+      Eigen::Vector3d(88.7260, -52.6343, 150.1732)};
+  return t;
+}
+
+Eigen::Matrix3d rotTilt003(double theta, double phi) {
+  const double ct = std::cos(theta), st = std::sin(theta), cp = std::cos(phi), sp = std::sin(phi);
+  Eigen::Matrix3d m;
+  // 003 Sec. 3.1, with +cos(phi) in (3,3) (the printed -cos(phi) is a mirror: det = -1).
+  m << ct, st * cp, st * sp,  //
+      -st, ct * cp, ct * sp,  //
+      0.0, -sp, cp;
+  return m;
+}
+
+std::uint64_t lengthCount(std::uint64_t n) { return n < 2 ? 0 : n * (n - 1) / 2; }
+
+std::vector<LengthError> lengthErrors(const std::vector<Eigen::Vector3d>& measured,
+                                      const std::vector<Eigen::Vector3d>& nominal) {
+  if (measured.size() != nominal.size()) throw std::invalid_argument("measured and nominal point counts differ");
+  std::vector<LengthError> out;
+  const int n = static_cast<int>(nominal.size());
+  out.reserve(static_cast<size_t>(lengthCount(static_cast<std::uint64_t>(n))));
+  for (int j = 0; j < n; ++j)
+    for (int k = j + 1; k < n; ++k)
+      out.push_back({j, k, (nominal[j] - nominal[k]).norm(), (measured[j] - measured[k]).norm()});
+  return out;
+}
+
+LengthVerdict checkLengths(const std::vector<LengthError>& lengths, const LengthSpec& spec) {
+  if (!(spec.A_um >= 0) || !(spec.K_um_per_m >= 0) || spec.A_um + spec.K_um_per_m <= 0)
+    throw std::invalid_argument("length specification needs A >= 0 um, K >= 0 um/m, not both zero");
+  LengthVerdict v;
+  v.lengths = static_cast<int>(lengths.size());
+  double ss = 0.0;
+  for (size_t i = 0; i < lengths.size(); ++i) {
+    const double d = std::abs(mmToUm(lengths[i].dL_mm()));
+    const double lim = spec.limit_um(lengths[i].measured_mm);
+    ss += d * d;
+    if (d > lim) ++v.outside;
+    v.max_abs_dL_um = std::max(v.max_abs_dL_um, d);
+    if (d / lim > v.worst_ratio || v.worst_index < 0) {
+      v.worst_ratio = d / lim;
+      v.worst_index = static_cast<int>(i);
+    }
+  }
+  v.rms_dL_um = lengths.empty() ? 0.0 : std::sqrt(ss / static_cast<double>(lengths.size()));
+  v.pass = v.outside == 0;
+  return v;
+}
+
+}  // namespace rotacal

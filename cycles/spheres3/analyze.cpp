@@ -1,0 +1,508 @@
+#include "cycles/spheres3/analyze.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "core/transforms.hpp"
+#include "core/units.hpp"
+
+namespace rotacal {
+
+// ---- Stage 2 model ------------------------------------------------------------------------
+
+const std::array<const char*, kNumComponentErrors>& componentNames() {
+  static const std::array<const char*, kNumComponentErrors> n = {"EXC", "EYC", "EZC", "EAC", "EBC", "ECC"};
+  return n;
+}
+const std::array<const char*, 4>& spheres3LocationNames() {
+  static const std::array<const char*, 4> n = {"Oxc", "Oyc", "Sxc", "Syc"};
+  return n;
+}
+const std::array<const char*, 4>& spheres3LocationIso() {
+  static const std::array<const char*, 4> n = {"X0C", "Y0C", "A0C", "B0C"};
+  return n;
+}
+
+namespace {
+bool isAngle(int component) { return component >= 3; }
+double toReport(int component, double v) { return isAngle(component) ? radToMdeg(v) : mmToUm(v); }
+const char* reportUnitOf(int component) { return isAngle(component) ? "mdeg" : "um"; }
+}  // namespace
+
+std::string ComponentTerm::name() const {
+  switch (kind) {
+    case Kind::Cos: return fmt::format("{}_cos{}C", componentNames()[component], k);
+    case Kind::Sin: return fmt::format("{}_sin{}C", componentNames()[component], k);
+    case Kind::CounterCos:
+      return fmt::format("{}+{}_counter{}_cos", componentNames()[component], componentNames()[component + 1], k);
+    case Kind::CounterSin:
+      return fmt::format("{}+{}_counter{}_sin", componentNames()[component], componentNames()[component + 1], k);
+  }
+  return "";
+}
+
+ComponentVector ComponentTerm::value(double c) const {
+  ComponentVector v = ComponentVector::Zero();
+  switch (kind) {
+    case Kind::Cos: v[component] = std::cos(k * c); break;
+    case Kind::Sin: v[component] = std::sin(k * c); break;
+    // The table turns at -C (p_m = Dc(-C) p_w): a vector fixed on the table is
+    // (g cos C, -g sin C); its counterpart turning at +C is what the spheres cannot absorb.
+    case Kind::CounterCos:
+      v[component] = std::cos(k * c);
+      v[component + 1] = std::sin(k * c);
+      break;
+    case Kind::CounterSin:
+      v[component] = -std::sin(k * c);
+      v[component + 1] = std::cos(k * c);
+      break;
+  }
+  return v;
+}
+
+std::vector<ComponentTerm> componentTerms(ComponentModel model, int n) {
+  using K = ComponentTerm::Kind;
+  std::vector<ComponentTerm> t;
+  if (model == ComponentModel::None) return t;
+  if (model == ComponentModel::SecondOrderRadial) {
+    for (int comp : {0, 1})
+      for (K kind : {K::Cos, K::Sin}) t.push_back({kind, comp, 2});
+    return t;
+  }
+  const bool even = n % 2 == 0;
+  const int kmax = even ? n / 2 - 1 : (n - 1) / 2;  // full cos + sin pairs
+  for (int pair : {0, 3}) {
+    t.push_back({K::CounterCos, pair, 1});
+    t.push_back({K::CounterSin, pair, 1});
+    for (int comp : {pair, pair + 1}) {
+      for (int k = 2; k <= kmax; ++k) {
+        t.push_back({K::Cos, comp, k});
+        t.push_back({K::Sin, comp, k});
+      }
+      if (even && n / 2 >= 2) t.push_back({K::Cos, comp, n / 2});
+    }
+  }
+  for (int comp : {2, 5}) {
+    for (int k = 1; k <= kmax; ++k) {
+      t.push_back({K::Cos, comp, k});
+      t.push_back({K::Sin, comp, k});
+    }
+    if (even) t.push_back({K::Cos, comp, n / 2});
+  }
+  return t;
+}
+
+bool Spheres3Options::validate(std::string* why) const {
+  auto fail = [&](const char* w) {
+    if (why) *why = w;
+    return false;
+  };
+  if (!(prior_sigma_um > 0)) return fail("prior_sigma_um must be positive");
+  if (!(radius_tolerance_um > 0)) return fail("radius_tolerance_um must be positive");
+  if (max_iterations < 1) return fail("max_iterations must be at least 1");
+  if (!(step_tolerance_mm > 0)) return fail("step_tolerance_mm must be positive");
+  return true;
+}
+
+Eigen::Isometry3d spheres3Table_m_w(const Eigen::Vector4d& L, const ComponentVector& e, double c) {
+  return Dx(L[0]) * Dy(L[1]) * Da(L[2]) * Db(L[3]) * Dx(e[0]) * Dy(e[1]) * Dz(e[2]) * Da(e[3]) * Db(e[4]) * Dc(e[5]) *
+         Dc(-c);
+}
+
+ComponentVector Spheres3Result::componentAt(double c_deg_value) const {
+  ComponentVector v = ComponentVector::Zero();
+  for (size_t t = 0; t < terms.size(); ++t) v += h[static_cast<Eigen::Index>(t)] * terms[t].value(degToRad(c_deg_value));
+  return v;
+}
+
+namespace {
+
+// Parameter vector: [Oxc Oyc Sxc Syc | s_1 s_2 s_3 (mm, table frame) | h].
+struct Model {
+  std::vector<ComponentTerm> terms;
+  int size() const { return 13 + static_cast<int>(terms.size()); }
+  Eigen::Vector4d location(const Eigen::VectorXd& th) const { return th.head<4>(); }
+  Eigen::Vector3d sphere(const Eigen::VectorXd& th, int i) const { return th.segment<3>(4 + 3 * i); }
+  ComponentVector component(const Eigen::VectorXd& th, double c) const {
+    ComponentVector v = ComponentVector::Zero();
+    for (size_t t = 0; t < terms.size(); ++t) v += th[13 + static_cast<Eigen::Index>(t)] * terms[t].value(c);
+    return v;
+  }
+  Eigen::Vector3d predict(const Eigen::VectorXd& th, int i, double c) const {
+    return spheres3Table_m_w(location(th), component(th, c), c) * sphere(th, i);
+  }
+  // Typical size of each parameter (column scaling, finite-difference step): 1 um, 10 urad.
+  double scale(int p) const {
+    if (p < 2) return 1e-3;
+    if (p < 4) return 1e-5;
+    if (p < 13) return 1e-3;
+    return isAngle(terms[static_cast<size_t>(p - 13)].component) ? 1e-5 : 1e-3;
+  }
+};
+
+}  // namespace
+
+Spheres3Result identifySpheres3(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
+                                const Spheres3Options& opt) {
+  std::string why;
+  if (!opt.validate(&why)) throw std::invalid_argument("spheres3 options: " + why);
+  if (plan.cycle != "spheres3") throw std::invalid_argument("plan is not a spheres3 plan (cycle '" + plan.cycle + "')");
+  if (runs.empty()) throw std::invalid_argument("no results");
+  Spheres3Result r;
+  r.model = opt.model;
+  const double ball = plan.machine.probe.ball_radius_mm();
+
+  // Group the plan's points: angle (pose order) x sphere.
+  std::map<std::string, int> angle_of;
+  for (const auto& p : plan.poses) {
+    angle_of[p.name] = static_cast<int>(r.c_deg.size());
+    r.c_deg.push_back(p.pose.C);
+  }
+  const int n_angles = static_cast<int>(r.c_deg.size());
+  std::vector<std::vector<int>> group(static_cast<size_t>(n_angles * 3));
+  for (const auto& p : plan.points) {
+    if (!p.sphere || p.sphere->id < 1 || p.sphere->id > 3)
+      throw std::invalid_argument(fmt::format("point {} is not a touch on sphere 1, 2 or 3", p.id));
+    const auto a = angle_of.find(p.pose_name);
+    if (a == angle_of.end()) throw std::invalid_argument(fmt::format("point {}: unknown pose '{}'", p.id, p.pose_name));
+    group[static_cast<size_t>(a->second * 3 + p.sphere->id - 1)].push_back(p.id);
+    r.nominal_w_mm[static_cast<size_t>(p.sphere->id - 1)] = p.sphere->center_w_mm;
+    r.nominal_radius_mm = p.sphere->radius_mm;
+  }
+  if (opt.hold_out_angle >= n_angles) throw std::invalid_argument("hold_out_angle beyond the plan's angles");
+
+  // Stage 1.
+  double rss_touch = 0.0;
+  int dof_touch = 0;
+  for (size_t run = 0; run < runs.size(); ++run) {
+    std::map<int, const TriggerPoint*> by_id;
+    for (const auto& t : runs[run].points) by_id[t.point_id] = &t;
+    for (int a = 0; a < n_angles; ++a)
+      for (int s = 0; s < 3; ++s) {
+        const auto& ids = group[static_cast<size_t>(a * 3 + s)];
+        std::vector<Eigen::Vector3d> pts;
+        for (int id : ids) {
+          const auto it = by_id.find(id);
+          if (it == by_id.end())
+            throw std::invalid_argument(fmt::format("{}: no trigger for point {}", runs[run].source, id));
+          pts.push_back(it->second->position_m_mm);
+        }
+        const Eigen::Vector3d guess = T_m_w_nominal(plan.machine.kinematics, plan.findPoint(ids.front())->pose) *
+                                      r.nominal_w_mm[static_cast<size_t>(s)];
+        Spheres3Observation o;
+        o.run = static_cast<int>(run);
+        o.angle = a;
+        o.sphere = s;
+        o.point_ids = ids;
+        try {
+          o.fit = fitSphereCentre(pts, guess, {r.nominal_radius_mm + ball, true, 50});
+        } catch (const std::invalid_argument& e) {
+          throw std::invalid_argument(fmt::format("{}: sphere {} at C = {:g} deg (points {}..{}): {}", runs[run].source,
+                                                  s + 1, r.c_deg[static_cast<size_t>(a)], ids.front(), ids.back(),
+                                                  e.what()));
+        }
+        const double dev_um = mmToUm(o.fit.rho_mm - ball - r.nominal_radius_mm);
+        r.max_radius_dev_um = std::max(r.max_radius_dev_um, std::abs(dev_um));
+        if (std::abs(dev_um) > opt.radius_tolerance_um)
+          throw std::invalid_argument(fmt::format(
+              "{}: sphere {} at C = {:g} deg (points {}..{}): fitted radius {:.4f} mm is {:+.1f} um from the nominal "
+              "{:.4f} mm (limit {:g} um): a bad touch (chip, coolant), a wrong sphere or ball radius in the plan",
+              runs[run].source, s + 1, r.c_deg[static_cast<size_t>(a)], ids.front(), ids.back(), o.fit.rho_mm - ball,
+              dev_um, r.nominal_radius_mm, opt.radius_tolerance_um));
+        rss_touch += o.fit.rss_mm2;
+        dof_touch += o.fit.dof;
+        o.held_out = a == opt.hold_out_angle;
+        r.points_used += static_cast<int>(ids.size());
+        r.observations.push_back(o);
+      }
+  }
+  r.sigma_touch_um = dof_touch > 0 ? mmToUm(std::sqrt(rss_touch / dof_touch)) : 0.0;
+  r.sigma_used_um = std::max(opt.prior_sigma_um, r.sigma_touch_um);
+
+  // Stage 2: weighted Gauss-Newton on the exact model.
+  Model model;
+  if (opt.hold_out_angle >= 0 && opt.model == ComponentModel::Full)
+    throw std::invalid_argument("the full component model has no spare angle to hold out");
+  model.terms = componentTerms(opt.model, n_angles);
+  r.terms = model.terms;
+  const int np = model.size();
+  r.parameters = np;
+  std::vector<Eigen::Matrix3d> whiten;  // L^-1 with cov_unit = L L^T
+  std::vector<const Spheres3Observation*> fitted;
+  for (const auto& o : r.observations) {
+    if (o.held_out) continue;
+    fitted.push_back(&o);
+    const Eigen::LLT<Eigen::Matrix3d> llt(o.fit.cov_centre_per_sigma2);
+    whiten.push_back(llt.matrixL().solve(Eigen::Matrix3d::Identity()));
+  }
+  const int m = 3 * static_cast<int>(fitted.size());
+  if (m < np) throw std::invalid_argument(fmt::format("{} centre coordinates cannot fix {} parameters", m, np));
+  Eigen::VectorXd th = Eigen::VectorXd::Zero(np);
+  for (int i = 0; i < 3; ++i) th.segment<3>(4 + 3 * i) = r.nominal_w_mm[static_cast<size_t>(i)];
+  Eigen::VectorXd scale(np);
+  for (int p = 0; p < np; ++p) scale[p] = model.scale(p);
+
+  auto residuals = [&](const Eigen::VectorXd& t) {
+    Eigen::VectorXd f(m);
+    for (size_t k = 0; k < fitted.size(); ++k) {
+      const auto& o = *fitted[k];
+      const double c = degToRad(r.c_deg[static_cast<size_t>(o.angle)]);
+      f.segment<3>(3 * static_cast<Eigen::Index>(k)) = whiten[k] * (o.fit.centre_mm - model.predict(t, o.sphere, c));
+    }
+    return f;
+  };
+  Eigen::MatrixXd Js(m, np);  // whitened, column-scaled J of the prediction
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd;
+  for (int it = 0; it < opt.max_iterations; ++it) {
+    const Eigen::VectorXd f = residuals(th);
+    for (int p = 0; p < np; ++p) {
+      // Central difference of the exact model; step 1e-3 of the parameter's typical size.
+      const double h = 1e-3 * scale[p];
+      Eigen::VectorXd tp = th, tm = th;
+      tp[p] += h;
+      tm[p] -= h;
+      Js.col(p) = -(residuals(tp) - residuals(tm)) / (2 * h) * scale[p];
+    }
+    svd.compute(Js, Eigen::ComputeThinU | Eigen::ComputeThinV);
+    const auto& sv = svd.singularValues();
+    r.rank = 0;
+    for (int i = 0; i < sv.size(); ++i)
+      if (sv[i] > 1e-9 * sv[0]) ++r.rank;
+    r.condition = sv[0] / sv[sv.size() - 1];
+    if (r.rank < np)
+      throw std::invalid_argument(fmt::format("the spheres3 model is rank deficient ({} of {} parameters identifiable)",
+                                              r.rank, np));
+    const Eigen::VectorXd step = scale.cwiseProduct(svd.solve(f));
+    th += step;
+    r.iterations = it + 1;
+    // How far the step moves any sphere centre (mm): the convergence measure of the linearisation.
+    double move = 0.0;
+    for (int i = 0; i < 3; ++i)
+      for (double c : r.c_deg) {
+        Eigen::VectorXd t0 = th - step;
+        move = std::max(move, (model.predict(th, i, degToRad(c)) - model.predict(t0, i, degToRad(c))).norm());
+      }
+    r.last_step_mm = move;
+    if (move < opt.step_tolerance_mm) break;
+  }
+  if (r.last_step_mm >= opt.step_tolerance_mm)
+    throw std::invalid_argument(fmt::format("spheres3 fit did not converge in {} iterations (last step {:.3g} um)",
+                                            opt.max_iterations, mmToUm(r.last_step_mm)));
+
+  const Eigen::VectorXd f = residuals(th);
+  const double s2 = std::pow(umToMm(r.sigma_used_um), 2);
+  r.dof = m - np;
+  r.chi2 = f.squaredNorm() / s2;
+  // Covariance of th: sigma^2 (J^T W J)^-1, from the SVD of the scaled whitened J.
+  const Eigen::VectorXd inv_s2 = svd.singularValues().cwiseInverse().cwiseAbs2();
+  const Eigen::MatrixXd cov_scaled = svd.matrixV() * inv_s2.asDiagonal() * svd.matrixV().transpose();
+  r.covariance = s2 * scale.asDiagonal() * cov_scaled * scale.asDiagonal();
+  const Eigen::VectorXd u = r.covariance.diagonal().cwiseSqrt();
+  r.location = th.head<4>();
+  r.location_u = u.head<4>();
+  for (int i = 0; i < 3; ++i) r.sphere_w_mm[static_cast<size_t>(i)] = th.segment<3>(4 + 3 * i);
+  r.h = th.tail(np - 13);
+  r.h_u = u.tail(np - 13);
+  r.values.resize(n_angles, kNumComponentErrors);
+  r.values_u.resize(n_angles, kNumComponentErrors);
+  const Eigen::MatrixXd cov_h = r.covariance.bottomRightCorner(np - 13, np - 13);
+  for (int a = 0; a < n_angles; ++a) {
+    const double c = degToRad(r.c_deg[static_cast<size_t>(a)]);
+    Eigen::MatrixXd B(kNumComponentErrors, np - 13);
+    for (int t = 0; t < np - 13; ++t) B.col(t) = model.terms[static_cast<size_t>(t)].value(c);
+    r.values.row(a) = (B * r.h).transpose();
+    r.values_u.row(a) = (B * cov_h * B.transpose()).diagonal().cwiseMax(0.0).cwiseSqrt().transpose();
+  }
+
+  // Residuals, held-out prediction, volumetric errors.
+  double ss_fit = 0.0, ss_hold = 0.0;
+  int n_fit = 0, n_hold = 0;
+  r.volumetric_before_um = Eigen::MatrixXd::Zero(n_angles, 3);
+  r.volumetric_after_location_um = Eigen::MatrixXd::Zero(n_angles, 3);
+  r.volumetric_after_um = Eigen::MatrixXd::Zero(n_angles, 3);
+  for (auto& o : r.observations) {
+    const double c = degToRad(r.c_deg[static_cast<size_t>(o.angle)]);
+    const Eigen::Vector3d s = r.sphere_w_mm[static_cast<size_t>(o.sphere)];
+    o.residual_mm = o.fit.centre_mm - model.predict(th, o.sphere, c);
+    if (o.held_out) {
+      ss_hold += o.residual_mm.squaredNorm();
+      n_hold += 3;
+    } else {
+      ss_fit += o.residual_mm.squaredNorm();
+      n_fit += 3;
+    }
+    if (o.run == 0) {
+      r.volumetric_before_um(o.angle, o.sphere) = mmToUm((o.fit.centre_mm - Dc(-c) * s).norm());
+      r.volumetric_after_location_um(o.angle, o.sphere) =
+          mmToUm((o.fit.centre_mm - spheres3Table_m_w(r.location, ComponentVector::Zero(), c) * s).norm());
+      r.volumetric_after_um(o.angle, o.sphere) = mmToUm(o.residual_mm.norm());
+    }
+  }
+  r.residual_rms_um = n_fit ? mmToUm(std::sqrt(ss_fit / n_fit)) : 0.0;
+  r.holdout_rms_um = n_hold ? mmToUm(std::sqrt(ss_hold / n_hold)) : 0.0;
+  return r;
+}
+
+// ---- Report -------------------------------------------------------------------------------
+
+namespace {
+
+double round6(double v) { return std::round(v * 1e6) / 1e6; }
+
+Json numbers(const Eigen::VectorXd& v) {
+  Json a = Json::array();
+  for (Eigen::Index i = 0; i < v.size(); ++i) a.push_back(round6(v[i]));
+  return a;
+}
+
+}  // namespace
+
+Json spheres3ReportJson(const ProbePlan& plan, const Spheres3Result& r, const std::vector<std::string>& files) {
+  Json j;
+  j["format"] = "rotacal-report/1";
+  j["cycle"] = "spheres3";
+  j["machine"] = plan.machine.name;
+  j["results"] = files;
+  j["method"] = "spheres3_lsq";
+  Json le = Json::object();
+  for (int i = 0; i < 4; ++i) {
+    const bool angle = i >= 2;
+    le[spheres3LocationNames()[static_cast<size_t>(i)]] = {
+        {"value", round6(angle ? radToMdeg(r.location[i]) : mmToUm(r.location[i]))},
+        {"unit", angle ? "mdeg" : "um"},
+        {"u", round6(angle ? radToMdeg(r.location_u[i]) : mmToUm(r.location_u[i]))},
+        {"iso", spheres3LocationIso()[static_cast<size_t>(i)]}};
+  }
+  j["location_errors"] = le;
+  j["location_errors_note"] =
+      "C-axis location at the tilt axis' zero (001 Table 1): offsets of the axis average line at z = 0 of the machine "
+      "frame, squareness as rotations about X and Y";
+  const Eigen::VectorXd c = Eigen::Map<const Eigen::VectorXd>(r.c_deg.data(), static_cast<Eigen::Index>(r.c_deg.size()));
+  Json ce = Json::object();
+  for (int k = 0; k < kNumComponentErrors; ++k) {
+    const double f = isAngle(k) ? kMdegPerRad : kUmPerMm;
+    ce[componentNames()[static_cast<size_t>(k)]] = {{"unit", reportUnitOf(k)},
+                                                   {"c_deg", numbers(c)},
+                                                   {"values", numbers(r.values.col(k) * f)},
+                                                   {"u", numbers(r.values_u.col(k) * f)}};
+  }
+  j["component_errors"] = ce;
+  Json terms = Json::array();
+  for (size_t t = 0; t < r.terms.size(); ++t) {
+    const int comp = r.terms[t].component;
+    terms.push_back({{"term", r.terms[t].name()},
+                     {"value", round6(toReport(comp, r.h[static_cast<Eigen::Index>(t)]))},
+                     {"u", round6(toReport(comp, r.h_u[static_cast<Eigen::Index>(t)]))},
+                     {"unit", reportUnitOf(comp)}});
+  }
+  j["component_error_terms"] = terms;
+  j["component_errors_convention"] =
+      "Fourier series over the sampled angles without the mean (a location error or a sphere position) and without the "
+      "first harmonic that turns with the table (a sphere position); positive EXC/EYC/EZC move the table in +X/+Y/+Z, "
+      "positive EAC/EBC/ECC turn it about +X/+Y/+Z (docs/spheres3.md)";
+  Json spheres = Json::array();
+  for (int i = 0; i < 3; ++i) {
+    const Eigen::Vector3d d = r.sphere_w_mm[static_cast<size_t>(i)] - r.nominal_w_mm[static_cast<size_t>(i)];
+    spheres.push_back({{"id", i + 1},
+                       {"center_w_mm", {round6(r.sphere_w_mm[i].x()), round6(r.sphere_w_mm[i].y()),
+                                        round6(r.sphere_w_mm[i].z())}},
+                       {"offset_from_nominal_um", {round6(mmToUm(d.x())), round6(mmToUm(d.y())), round6(mmToUm(d.z()))}}});
+  }
+  j["spheres"] = spheres;
+  j["sphere_fit"] = {{"nominal_radius_mm", r.nominal_radius_mm},
+                     {"max_radius_deviation_um", round6(r.max_radius_dev_um)},
+                     {"touch_sigma_um", round6(r.sigma_touch_um)},
+                     {"sigma_used_um", round6(r.sigma_used_um)}};
+  auto maxOf = [](const Eigen::MatrixXd& m) { return m.size() ? m.maxCoeff() : 0.0; };
+  j["volumetric_error_um"] = {{"max_before", round6(maxOf(r.volumetric_before_um))},
+                              {"max_after_location_only", round6(maxOf(r.volumetric_after_location_um))},
+                              {"max_after", round6(maxOf(r.volumetric_after_um))},
+                              {"note", "|measured sphere centre - ideal|, first run: before = perfect machine, after = "
+                                       "compensating what was identified (001 Fig. 13)"}};
+  j["residual_rms_um"] = round6(r.residual_rms_um);
+  j["points_used"] = r.points_used;
+  j["summary"] = {{"iterations", r.iterations},     {"last_step_um", mmToUm(r.last_step_mm)},
+                  {"parameters", r.parameters},     {"rank", r.rank},
+                  {"condition", r.condition},       {"dof", r.dof},
+                  {"chi2", round6(r.chi2)},         {"observations", 3 * static_cast<int>(r.observations.size())}};
+
+  // Figures (schema: /work/briefs/figures.md).
+  Json figs = Json::array();
+  for (int group = 0; group < 2; ++group) {
+    Json fig = {{"id", group == 0 ? "spheres3_component_errors_um" : "spheres3_component_errors_mdeg"},
+                {"title", group == 0 ? "C-axis component errors, translations (001 Fig. 11 a-c)"
+                                     : "C-axis component errors, rotations (001 Fig. 11 d-f)"},
+                {"x", {{"label", "C"}, {"unit", "deg"}}},
+                {"y", {{"label", "error"}, {"unit", group == 0 ? "um" : "mdeg"}}}};
+    Json series = Json::array();
+    for (int k = 3 * group; k < 3 * group + 3; ++k) {
+      const double f = isAngle(k) ? kMdegPerRad : kUmPerMm;
+      series.push_back({{"name", std::string(componentNames()[static_cast<size_t>(k)]) + "(C)"},
+                        {"style", "line"},
+                        {"x", numbers(c)},
+                        {"y", numbers(r.values.col(k) * f)},
+                        {"u", numbers(r.values_u.col(k) * f)}});
+    }
+    fig["series"] = series;
+    fig["note"] = "zero mean, no component turning with the table (docs/spheres3.md)";
+    figs.push_back(fig);
+  }
+  Json vol = {{"id", "spheres3_volumetric_error"},
+              {"title", "Volumetric error of the three spheres before/after compensation (001 Fig. 13)"},
+              {"x", {{"label", "C"}, {"unit", "deg"}}},
+              {"y", {{"label", "|measured - ideal|"}, {"unit", "um"}}}};
+  Json vs = Json::array();
+  for (int i = 0; i < 3; ++i) {
+    vs.push_back({{"name", fmt::format("sphere {} before", i + 1)}, {"style", "line"}, {"x", numbers(c)},
+                  {"y", numbers(r.volumetric_before_um.col(i))}});
+    vs.push_back({{"name", fmt::format("sphere {} after", i + 1)}, {"style", "points"}, {"x", numbers(c)},
+                  {"y", numbers(r.volumetric_after_um.col(i))}});
+  }
+  vol["series"] = vs;
+  vol["note"] = fmt::format("max {:.2f} um before, {:.2f} um after compensating location and component errors",
+                            maxOf(r.volumetric_before_um), maxOf(r.volumetric_after_um));
+  figs.push_back(vol);
+  j["figures"] = figs;
+  return j;
+}
+
+std::string spheres3Text(const Spheres3Result& r) {
+  std::string s = fmt::format("spheres3: {} touches, {} sphere centres, {} angles; touch noise {:.3f} um (1 dof per "
+                              "sphere), largest radius deviation {:.2f} um\n",
+                              r.points_used, r.observations.size(), r.c_deg.size(), r.sigma_touch_um,
+                              r.max_radius_dev_um);
+  s += "C-axis location errors (001 Table 1, k = 1):\n";
+  for (int i = 0; i < 4; ++i) {
+    const bool angle = i >= 2;
+    s += fmt::format("  {} ({})  {:+9.3f} {} +- {:.3f}\n", spheres3LocationNames()[static_cast<size_t>(i)],
+                     spheres3LocationIso()[static_cast<size_t>(i)],
+                     angle ? radToMdeg(r.location[i]) : mmToUm(r.location[i]), angle ? "mdeg" : "um  ",
+                     angle ? radToMdeg(r.location_u[i]) : mmToUm(r.location_u[i]));
+  }
+  if (!r.terms.empty()) {
+    s += "component errors at each angle (um / mdeg):\n      C";
+    for (const char* n : componentNames()) s += fmt::format(" {:>8}", n);
+    s += "\n";
+    for (size_t a = 0; a < r.c_deg.size(); ++a) {
+      s += fmt::format("  {:5.0f}", r.c_deg[a]);
+      for (int k = 0; k < kNumComponentErrors; ++k)
+        s += fmt::format(" {:8.3f}", toReport(k, r.values(static_cast<Eigen::Index>(a), k)));
+      s += "\n";
+    }
+  }
+  s += fmt::format("volumetric error (max over spheres and angles): {:.2f} um before, {:.2f} um after compensating "
+                   "the location errors, {:.2f} um after compensating location and component errors\n",
+                   r.volumetric_before_um.maxCoeff(), r.volumetric_after_location_um.maxCoeff(),
+                   r.volumetric_after_um.maxCoeff());
+  s += fmt::format("residual {:.3f} um rms, chi2 {:.1f} on {} dof, {} Gauss-Newton iterations (last step {:.2g} um)\n",
+                   r.residual_rms_um, r.chi2, r.dof, r.iterations, mmToUm(r.last_step_mm));
+  return s;
+}
+
+}  // namespace rotacal

@@ -1,0 +1,148 @@
+#pragma once
+// Analysis of the three-sphere cycle (001 Sec. 3-5), in two stages.
+//
+// Stage 1, sphere centres: the five ball centres at trigger of one sphere at one angle lie
+// exactly at rho = R + r from the true sphere centre (ball-on-sphere contact), so a least-squares
+// sphere through them (Gauss-Newton on |c_j - x| - rho, 4 unknowns, 1 redundancy) gives the
+// centre x in the machine frame. The fitted radius rho - r is compared with the nominal R as a
+// plausibility test (a chip, coolant or a wrong radius in the plan): beyond
+// `radius_tolerance_um` the analysis refuses. A uniform probe pretravel or ball-size error moves
+// all five touches along their normals alike and is absorbed by rho, not by the centre.
+//
+// Stage 2, the C axis (001 Table 1, tilt axis at 0): the sphere centre i at angle C is
+//   p_i(C) = T_L  T_E(C)  Dc(-C)  s_i
+//   T_L    = Dx(Oxc) Dy(Oyc) Da(Sxc) Db(Syc)                     4 location errors (X0C Y0C A0C B0C)
+//   T_E(C) = Dx(EXC) Dy(EYC) Dz(EZC) Da(EAC) Db(EBC) Dc(ECC)     6 component errors, functions of C
+// with s_i the spheres' true centres on the table (9 nuisance parameters). All transforms exact;
+// Gauss-Newton with a finite-difference Jacobian of this exact model, weighted by each centre's
+// covariance from stage 1.
+//
+// What the data cannot separate, and the convention that settles it (documented in
+// docs/spheres3.md): the mean of each component error over the turn is a location error (XY
+// offsets and tilts) or a sphere position (EZC, ECC); a component error that turns with the
+// table (first harmonic rotating at -C, e.g. EXC = g cos C, EYC = -g sin C) is a sphere
+// position. So the component errors are Fourier series over the N sampled angles without their
+// mean and without the rotating first harmonic:
+//   (EXC, EYC) and (EAC, EBC): counter-rotating first harmonic (cos C, sin C), (-sin C, cos C),
+//                              and cos kC, sin kC for 2 <= k < N/2 (and cos(N/2)C) per component
+//   EZC, ECC:                  cos kC, sin kC for 1 <= k < N/2 (and cos(N/2)C)
+// That is 6N - 9 terms, + 4 location errors + 9 sphere coordinates = 6N + 3: exactly the rank
+// of N rigid table poses plus the 3 inter-sphere distances. The location errors are then the
+// axis average line (ISO 230-7) at z = 0 of the machine frame. On an A/C machine at A = 0 they
+// are, to first order, Oxc = dx_AY, Oyc = dy_AY + dy_CA, Sxc = a_AY, Syc = b_AY + b_CA
+// (000 Eq. (1)); on a B/C machine at B = 0, Oxc = dx_BY + dx_CB, Oyc = dy_CB, Sxc = a_BY + a_CB,
+// Syc = b_BY (002 Eq. (2)-(3)).
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <array>
+#include <string>
+#include <vector>
+
+#include "core/json_io.hpp"
+#include "core/measurement.hpp"
+#include "core/probe_plan.hpp"
+#include "core/sphere_centre_fit.hpp"
+
+namespace rotacal {
+
+// Stage 1 is core/sphere_centre_fit.hpp (fitSphereCentre, the radius fitted).
+
+// ---- Stage 2 ------------------------------------------------------------------------------
+
+/// The six component errors of the C axis in ISO 230-7 order, lengths mm, angles rad.
+constexpr int kNumComponentErrors = 6;
+using ComponentVector = Eigen::Matrix<double, kNumComponentErrors, 1>;
+const std::array<const char*, kNumComponentErrors>& componentNames();  // EXC EYC EZC EAC EBC ECC
+const std::array<const char*, 4>& spheres3LocationNames();              // Oxc Oyc Sxc Syc
+const std::array<const char*, 4>& spheres3LocationIso();                // X0C Y0C A0C B0C
+
+/// Which component-error terms the model carries.
+enum class ComponentModel {
+  None,               // location errors only (the diagnosis baseline)
+  SecondOrderRadial,  // EXC, EYC: cos 2C and sin 2C (rotary_error_motion of issue 6)
+  Full                // every identifiable harmonic (the analysis model)
+};
+
+/// One basis function of the component errors: a 6-vector function of C.
+struct ComponentTerm {
+  enum class Kind { Cos, Sin, CounterCos, CounterSin } kind;
+  int component;  // 0..5; for Counter*: the first of the pair (0: EXC/EYC, 3: EAC/EBC)
+  int k;          // harmonic order
+  std::string name() const;  // e.g. "EXC_cos2C", "EXC+EYC_counter1_cos"
+  ComponentVector value(double c_rad) const;
+};
+std::vector<ComponentTerm> componentTerms(ComponentModel model, int n_angles);
+
+struct Spheres3Options {
+  ComponentModel model = ComponentModel::Full;
+  double prior_sigma_um = 0.7;        // probe repeatability along the normal, k = 1 (MACHINE.json)
+  double radius_tolerance_um = 10.0;  // stage 1 plausibility limit on |fitted R - nominal R|
+  int max_iterations = 20;
+  double step_tolerance_mm = 1e-9;    // largest position change of a step (1e-6 um)
+  int hold_out_angle = -1;            // index of an angle left out of the fit (predicted only)
+
+  bool validate(std::string* why) const;
+};
+
+struct Spheres3Observation {
+  int run = 0;
+  int angle = 0;   // index into c_deg
+  int sphere = 0;  // 0..2
+  SphereFit fit;
+  std::vector<int> point_ids;
+  Eigen::Vector3d residual_mm = Eigen::Vector3d::Zero();  // measured centre - model
+  bool held_out = false;
+};
+
+struct Spheres3Result {
+  ComponentModel model = ComponentModel::Full;
+  std::vector<double> c_deg;
+  std::array<Eigen::Vector3d, 3> nominal_w_mm;
+  double nominal_radius_mm = 0.0;
+  std::vector<Spheres3Observation> observations;
+
+  Eigen::Vector4d location = Eigen::Vector4d::Zero();  // Oxc Oyc (mm), Sxc Syc (rad)
+  Eigen::Vector4d location_u = Eigen::Vector4d::Zero();
+  std::array<Eigen::Vector3d, 3> sphere_w_mm;          // fitted true sphere centres, table frame
+  std::vector<ComponentTerm> terms;
+  Eigen::VectorXd h, h_u;                              // term coefficients (mm or rad)
+  Eigen::MatrixXd covariance;                          // of [location, spheres, h]
+  /// Component errors at each sampled angle (rows) and their standard uncertainty.
+  Eigen::Matrix<double, Eigen::Dynamic, kNumComponentErrors> values, values_u;
+
+  /// Volumetric error |measured centre - ideal| per angle (rows) and sphere (columns), um, first
+  /// run: before (ideal = perfect machine: Dc(-C) s_i), after compensating the location errors
+  /// only, and after compensating location and component errors (the fit's residual).
+  Eigen::MatrixXd volumetric_before_um, volumetric_after_location_um, volumetric_after_um;
+
+  double sigma_touch_um = 0.0;  // stage 1 a-posteriori touch noise, sqrt(RSS / dof)
+  double sigma_used_um = 0.0;   // max(prior, stage 1): scales the uncertainties
+  double residual_rms_um = 0.0; // stage 2 centre residual, rms per coordinate, fitted data
+  double chi2 = 0.0;            // stage 2 whitened RSS / sigma_used^2
+  int dof = 0;
+  double holdout_rms_um = 0.0;  // held-out centres' prediction error, rms per coordinate
+  int iterations = 0;
+  double last_step_mm = 0.0;    // position change of the last Gauss-Newton step (convergence)
+  int rank = 0, parameters = 0;
+  double condition = 0.0;
+  int points_used = 0;
+  double max_radius_dev_um = 0.0;
+
+  /// Component errors at any C (deg), from the fitted series.
+  ComponentVector componentAt(double c_deg) const;
+};
+
+/// Identifies the spheres3 model from one or more runs of a spheres3 plan. Throws
+/// std::invalid_argument naming the sphere, angle and points when the data are unusable
+/// (missing triggers, a sphere fit beyond the radius tolerance, a rank-deficient model).
+Spheres3Result identifySpheres3(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
+                                const Spheres3Options& options);
+
+/// The table pose of the stage-2 model at a paper-convention C (rad): T_L T_E(C) Dc(-C).
+Eigen::Isometry3d spheres3Table_m_w(const Eigen::Vector4d& location, const ComponentVector& component, double c_rad);
+
+/// REPORT.json for a spheres3 analysis (contract + component errors, volumetric errors, figures).
+Json spheres3ReportJson(const ProbePlan& plan, const Spheres3Result& r, const std::vector<std::string>& result_files);
+std::string spheres3Text(const Spheres3Result& r);
+
+}  // namespace rotacal

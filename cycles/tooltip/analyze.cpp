@@ -1,0 +1,477 @@
+#include "cycles/tooltip/analyze.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "core/units.hpp"
+
+namespace rotacal {
+namespace {
+
+Eigen::Matrix3d skewX() {
+  Eigen::Matrix3d g;
+  g << 0, 0, 0, 0, 0, -1, 0, 1, 0;
+  return g;
+}
+Eigen::Matrix3d skewY() {
+  Eigen::Matrix3d g;
+  g << 0, 0, 1, 0, 0, 0, -1, 0, 0;
+  return g;
+}
+
+/// The problem: observations and the parameter layout x = [e_0 .. e_{J-1} (rad), dR (mm)].
+struct Problem {
+  TooltipOptions o;
+  std::vector<double> angles_deg;  // distinct, ascending
+  struct Obs {
+    double theta = 0, theta_ref = 0, other = 0;  // rad
+    int j = 0, j_ref = 0;                       // angle indices
+    double t_um = 0, z_um = 0;
+    int reading = 0;                            // index in the concatenated runs
+  };
+  std::vector<Obs> obs;
+  int readings = 0;
+
+  int J() const { return static_cast<int>(angles_deg.size()); }
+  int ti() const { return o.axis == 'A' ? 1 : 0; }
+
+  Eigen::Vector3d F(double phi, double other, double r) const {
+    return o.axis == 'A' ? tipOffset_m(phi, other, r) : tipOffset_m(other, phi, r);
+  }
+  Eigen::Vector3d dFdphi(double phi, double other, double r) const {
+    if (o.axis == 'A') return skewX() * tipOffset_m(phi, other, r);
+    // F = Rx(other) Ry(phi) v: d/dphi = Rx(other) Gy Ry(phi) v.
+    return rxTimes(other, skewY() * tipOffset_m(0.0, phi, r));
+  }
+  static Eigen::Vector3d rxTimes(double a, const Eigen::Vector3d& w) {
+    return {w.x(), std::cos(a) * w.y() - std::sin(a) * w.z(), std::sin(a) * w.y() + std::cos(a) * w.z()};
+  }
+
+  /// Model (um) of one observation: transverse and Z.
+  Eigen::Vector2d model(const Obs& b, const Eigen::VectorXd& x) const {
+    const double r = o.radius_mm, rt = r + x[J()];
+    const Eigen::Vector3d d = F(b.theta + x[b.j], b.other, rt) - F(b.theta, b.other, r) -
+                              F(b.theta_ref + x[b.j_ref], b.other, rt) + F(b.theta_ref, b.other, r);
+    return mmToUm(1.0) * Eigen::Vector2d(d[ti()], d.z());
+  }
+  /// d model / d x (um per rad, um per mm), 2 x (J + 1).
+  Eigen::Matrix<double, 2, Eigen::Dynamic> jacobian(const Obs& b, const Eigen::VectorXd& x) const {
+    Eigen::Matrix<double, 2, Eigen::Dynamic> jac = Eigen::Matrix<double, 2, Eigen::Dynamic>::Zero(2, J() + 1);
+    const double rt = o.radius_mm + x[J()];
+    auto put = [&](int col, const Eigen::Vector3d& v, double s) {
+      jac(0, col) += s * mmToUm(1.0) * v[ti()];
+      jac(1, col) += s * mmToUm(1.0) * v.z();
+    };
+    put(b.j, dFdphi(b.theta + x[b.j], b.other, rt), 1.0);
+    put(b.j_ref, dFdphi(b.theta_ref + x[b.j_ref], b.other, rt), -1.0);
+    put(J(), F(b.theta + x[b.j], b.other, rt) / rt, 1.0);
+    put(J(), F(b.theta_ref + x[b.j_ref], b.other, rt) / rt, -1.0);
+    return jac;
+  }
+};
+
+Problem makeProblem(const ProbePlan& plan, const std::vector<TooltipRun>& runs) {
+  Problem p;
+  p.o = tooltipOptionsFrom(plan.options, plan.machine);
+  if (runs.empty()) throw std::invalid_argument("tooltip analysis: no results");
+  for (const auto& pt : plan.points) {
+    const double a = p.o.axis == 'A' ? pt.pose.A : pt.pose.B;
+    if (std::none_of(p.angles_deg.begin(), p.angles_deg.end(), [&](double v) { return std::abs(v - a) < 1e-9; }))
+      p.angles_deg.push_back(a);
+  }
+  std::sort(p.angles_deg.begin(), p.angles_deg.end());
+  auto index = [&](double a) {
+    for (int j = 0; j < p.J(); ++j)
+      if (std::abs(p.angles_deg[j] - a) < 1e-9) return j;
+    throw std::logic_error("tooltip: angle not in the plan");
+  };
+  const std::vector<int> refs = tooltipReferences(plan);
+  int reading = 0;
+  for (const auto& run : runs) {
+    if (run.size() != plan.points.size()) throw std::invalid_argument("tooltip analysis: a run does not match the plan");
+    for (size_t k = 0; k < run.size(); ++k, ++reading) {
+      if (refs[k] == static_cast<int>(k)) continue;  // the zero reading: 0 by construction
+      const Pose& pose = plan.points[k].pose;
+      const Pose& ref = plan.points[refs[k]].pose;
+      Problem::Obs b;
+      const double th = p.o.axis == 'A' ? pose.A : pose.B;
+      const double th_ref = p.o.axis == 'A' ? ref.A : ref.B;
+      b.theta = degToRad(th);
+      b.theta_ref = degToRad(th_ref);
+      b.other = degToRad(p.o.axis == 'A' ? pose.B : pose.A);
+      b.j = index(th);
+      b.j_ref = index(th_ref);
+      b.t_um = run[k].t_um;
+      b.z_um = run[k].z_um;
+      b.reading = reading;
+      p.obs.push_back(b);
+    }
+  }
+  p.readings = reading;
+  return p;
+}
+
+struct GnResult {
+  Eigen::VectorXd x;
+  Eigen::MatrixXd cov_unit;  // (J^T J)^-1 over the active parameters, in full layout (0 elsewhere)
+  double rss = 0;
+  int iterations = 0;
+  bool converged = false;
+  double last_step = 0;
+  int used = 0;  // observations (components)
+  int active = 0;
+};
+
+/// Gauss-Newton over the active parameters, on the observations `use` accepts.
+GnResult gaussNewton(const Problem& p, Eigen::VectorXd x, const std::vector<bool>& active,
+                     const std::function<bool(const Problem::Obs&)>& use, const TooltipFitOptions& opt) {
+  std::vector<int> cols;
+  for (int i = 0; i < static_cast<int>(active.size()); ++i)
+    if (active[i]) cols.push_back(i);
+  std::vector<const Problem::Obs*> obs;
+  for (const auto& b : p.obs)
+    if (use(b)) obs.push_back(&b);
+  const int m = 2 * static_cast<int>(obs.size()), n = static_cast<int>(cols.size());
+  GnResult g;
+  g.used = m;
+  g.active = n;
+  Eigen::MatrixXd jac(m, n);
+  Eigen::VectorXd res(m);
+  auto evaluate = [&](const Eigen::VectorXd& xx) {
+    for (size_t i = 0; i < obs.size(); ++i) {
+      const Eigen::Vector2d mdl = p.model(*obs[i], xx);
+      res(2 * i) = obs[i]->t_um - mdl[0];
+      res(2 * i + 1) = obs[i]->z_um - mdl[1];
+      const auto full = p.jacobian(*obs[i], xx);
+      for (int c = 0; c < n; ++c) {
+        jac(2 * i, c) = full(0, cols[c]);
+        jac(2 * i + 1, c) = full(1, cols[c]);
+      }
+    }
+  };
+  for (g.iterations = 1; g.iterations <= opt.max_iterations; ++g.iterations) {
+    evaluate(x);
+    // Column scaling keeps the mixed units (rad, mm) well conditioned.
+    Eigen::VectorXd scale = jac.colwise().norm().transpose();
+    for (int c = 0; c < n; ++c)
+      if (!(scale[c] > 0)) throw std::invalid_argument("tooltip fit: a parameter has no data (singular)");
+    const Eigen::MatrixXd js = jac * scale.cwiseInverse().asDiagonal();
+    const Eigen::VectorXd step = js.colPivHouseholderQr().solve(res).cwiseQuotient(scale);
+    for (int c = 0; c < n; ++c) x[cols[c]] += step[c];
+    g.last_step = step.cwiseAbs().maxCoeff();
+    if (g.last_step < opt.step_tol) {
+      g.converged = true;
+      break;
+    }
+  }
+  if (g.iterations > opt.max_iterations) g.iterations = opt.max_iterations;
+  evaluate(x);
+  g.x = x;
+  g.rss = res.squaredNorm();
+  const Eigen::MatrixXd ata = jac.transpose() * jac;
+  Eigen::FullPivLU<Eigen::MatrixXd> lu(ata);
+  if (lu.rank() < n) throw std::invalid_argument("tooltip fit: the parameters are not identifiable from these readings");
+  const Eigen::MatrixXd inv = lu.inverse();
+  g.cov_unit = Eigen::MatrixXd::Zero(x.size(), x.size());
+  for (int a = 0; a < n; ++a)
+    for (int b = 0; b < n; ++b) g.cov_unit(cols[a], cols[b]) = inv(a, b);
+  return g;
+}
+
+std::vector<bool> activeFor(const Problem& p, bool pivot, int excluded) {
+  std::vector<bool> active(p.J() + 1, false);
+  for (const auto& b : p.obs)
+    if (b.j != excluded) active[b.j] = active[b.j_ref] = true;
+  active[p.J()] = pivot;
+  return active;
+}
+
+// Regularised incomplete beta I_x(a, b) by Lentz's continued fraction (Numerical Recipes 6.4).
+
+double r6(double v) { return std::isfinite(v) ? std::round(v * 1e6) / 1e6 : v; }
+Json num(double v) { return std::isfinite(v) ? Json(r6(v)) : Json(nullptr); }
+
+}  // namespace
+
+TooltipModelEval evaluateTooltipModel(const ProbePlan& plan, const std::vector<TooltipRun>& runs, const Eigen::VectorXd& x) {
+  const Problem p = makeProblem(plan, runs);
+  if (x.size() != p.J() + 1) throw std::invalid_argument("tooltip model: x must hold one angle per distinct angle and dR");
+  TooltipModelEval e;
+  e.angles = p.J();
+  const int m = 2 * static_cast<int>(p.obs.size());
+  e.model_um.resize(m);
+  e.J_model_x.resize(m, p.J() + 1);
+  for (size_t i = 0; i < p.obs.size(); ++i) {
+    e.model_um.segment<2>(2 * static_cast<int>(i)) = p.model(p.obs[i], x);
+    e.J_model_x.middleRows(2 * static_cast<int>(i), 2) = p.jacobian(p.obs[i], x);
+  }
+  return e;
+}
+
+bool TooltipFitOptions::validate(std::string* why) const {
+  if (max_iterations < 1 || !(step_tol > 0) || sigma_floor_um < 0) {
+    if (why) *why = "tooltip fit options: max_iterations >= 1, step_tol > 0, sigma_floor_um >= 0";
+    return false;
+  }
+  return true;
+}
+
+bool TooltipDiagnosisOptions::validate(std::string* why) const {
+  if (!(alpha > 0 && alpha < 1) || min_holdout_gain < 0 || sigma_floor_um < 0) {
+    if (why) *why = "alpha must be in (0, 1), min_holdout_gain and sigma_floor_um >= 0";
+    return false;
+  }
+  return true;
+}
+
+TooltipFit fitTooltip(const ProbePlan& plan, const std::vector<TooltipRun>& runs, const TooltipFitOptions& options) {
+  std::string why;
+  if (!options.validate(&why)) throw std::invalid_argument(why);
+  const Problem p = makeProblem(plan, runs);
+  const std::vector<bool> active = activeFor(p, options.fit_pivot_length, -1);
+  const GnResult g = gaussNewton(p, Eigen::VectorXd::Zero(p.J() + 1), active, [](const Problem::Obs&) { return true; },
+                                 options);
+  TooltipFit f;
+  f.model = options.fit_pivot_length ? "angular+pivot" : "angular";
+  f.converged = g.converged;
+  f.iterations = g.iterations;
+  f.observations = g.used;
+  f.dof = g.used - g.active;
+  f.rss_um2 = g.rss;
+  f.residual_rms_um = g.used > 0 ? std::sqrt(g.rss / g.used) : 0.0;
+  const double s_data = f.dof > 0 ? std::sqrt(g.rss / f.dof) : 0.0;
+  f.sigma_um = std::max(s_data, options.sigma_floor_um);
+  f.last_step_um = g.last_step;
+  f.angles_deg = p.angles_deg;
+  for (int j = 0; j < p.J(); ++j) {
+    f.e_mdeg.push_back(active[j] ? radToMdeg(g.x[j]) : std::numeric_limits<double>::quiet_NaN());
+    f.u_e_mdeg.push_back(active[j] ? radToMdeg(f.sigma_um * std::sqrt(g.cov_unit(j, j))) : std::numeric_limits<double>::quiet_NaN());
+  }
+  if (options.fit_pivot_length) {
+    f.dR_um = mmToUm(g.x[p.J()]);
+    f.u_dR_um = mmToUm(f.sigma_um * std::sqrt(g.cov_unit(p.J(), p.J())));
+  }
+  f.res_t_um.assign(p.readings, 0.0);
+  f.res_z_um.assign(p.readings, 0.0);
+  for (const auto& b : p.obs) {
+    const Eigen::Vector2d mdl = p.model(b, g.x);
+    f.res_t_um[b.reading] = b.t_um - mdl[0];
+    f.res_z_um[b.reading] = b.z_um - mdl[1];
+  }
+  return f;
+}
+
+double tooltipHoldoutRms(const ProbePlan& plan, const std::vector<TooltipRun>& runs, const TooltipFitOptions& options) {
+  const Problem p = makeProblem(plan, runs);
+  double ss = 0;
+  int n = 0;
+  for (int j = 0; j < p.J(); ++j) {
+    if (std::abs(p.angles_deg[j]) < 1e-9) continue;  // the zero reading is in every observation
+    const std::vector<bool> active = activeFor(p, options.fit_pivot_length, j);
+    const GnResult train = gaussNewton(p, Eigen::VectorXd::Zero(p.J() + 1), active,
+                                       [j](const Problem::Obs& b) { return b.j != j; }, options);
+    std::vector<bool> only(p.J() + 1, false);
+    only[j] = true;
+    const GnResult test =
+        gaussNewton(p, train.x, only, [j](const Problem::Obs& b) { return b.j == j; }, options);
+    ss += test.rss;
+    n += test.used;
+  }
+  return n > 0 ? std::sqrt(ss / n) : 0.0;
+}
+
+std::vector<double> angularError004Mdeg(const ProbePlan& plan, const TooltipRun& run) {
+  const TooltipOptions o = tooltipOptionsFrom(plan.options, plan.machine);
+  std::vector<double> out;
+  for (const auto& r : run) {
+    const double c = std::cos(degToRad(r.angle_deg));
+    // 004: dA = -dYp / (R cos A), dYp = -dy. cos 90 deg in double is 6e-17, not 0: treat
+    // |cos| < 1e-12 as the division by zero it is.
+    out.push_back(std::abs(c) < 1e-12 ? std::numeric_limits<double>::quiet_NaN()
+                                      : radToMdeg(umToMm(r.t_um) / (o.radius_mm * c)));
+  }
+  return out;
+}
+
+TooltipAnalysis analyzeTooltip(const ProbePlan& plan, const std::vector<TooltipRun>& runs) {
+  TooltipAnalysis a;
+  TooltipFitOptions o;
+  a.joint = fitTooltip(plan, runs, o);
+  o.fit_pivot_length = false;
+  a.angular = fitTooltip(plan, runs, o);
+  a.da004_mdeg = angularError004Mdeg(plan, runs.front());
+  return a;
+}
+
+Json tooltipReportJson(const ProbePlan& plan, const std::vector<TooltipRun>& runs, const TooltipAnalysis& a) {
+  const TooltipOptions o = tooltipOptionsFrom(plan.options, plan.machine);
+  const std::string t = o.axis == 'A' ? "dy" : "dx";
+  Json j;
+  j["format"] = "rotacal-report/1";
+  j["cycle"] = "tooltip";
+  j["machine"] = plan.machine.name;
+  j["results"] = a.result_files;
+  j["axis"] = std::string(1, o.axis);
+  j["radius_mm"] = o.radius_mm;
+  j["model"] = a.joint.model;
+  j["location_errors"] = {{"dR", {{"value", r6(a.joint.dR_um)}, {"unit", "um"}, {"u", r6(a.joint.u_dR_um)},
+                                  {"iso", "pivot length (tool-tip distance) error"}}}};
+  Json ang = Json::array();
+  for (size_t k = 0; k < a.joint.angles_deg.size(); ++k)
+    ang.push_back({{"angle_deg", a.joint.angles_deg[k]},
+                   {"value", num(a.joint.e_mdeg[k])},
+                   {"u", num(a.joint.u_e_mdeg[k])},
+                   {"unit", "mdeg"},
+                   {"value_004_model", num(a.angular.e_mdeg[k])}});
+  j["angular_error"] = ang;
+  j["residual_rms_um"] = r6(a.joint.residual_rms_um);
+  j["points_used"] = a.joint.observations / 2;
+  j["summary"] = {{"converged", a.joint.converged},   {"iterations", a.joint.iterations},
+                  {"observations", a.joint.observations}, {"dof", a.joint.dof},
+                  {"sigma_um", r6(a.joint.sigma_um)},   {"last_step", a.joint.last_step_um}};
+  j["model_004"] = {{"model", "angular (004: dR = 0)"},
+                    {"residual_rms_um", r6(a.angular.residual_rms_um)},
+                    {"dof", a.angular.dof}};
+  // Figures (shared schema, /work/briefs/figures.md).
+  const TooltipRun& run = runs.front();
+  std::vector<double> x, dt, dz, mt, mz, x004, y004;
+  for (size_t k = 0; k < run.size(); ++k) {
+    x.push_back(run[k].angle_deg);
+    dt.push_back(r6(run[k].t_um));
+    dz.push_back(r6(run[k].z_um));
+    mt.push_back(r6(run[k].t_um - a.joint.res_t_um[k]));
+    mz.push_back(r6(run[k].z_um - a.joint.res_z_um[k]));
+    if (std::isfinite(a.da004_mdeg[k])) {
+      x004.push_back(run[k].angle_deg);
+      y004.push_back(r6(a.da004_mdeg[k]));
+    }
+  }
+  Json figs = Json::array();
+  figs.push_back({{"id", "tooltip_deviation"},
+                  {"title", "Tool-tip deviation vs angle (004 Fig. 3), first results file"},
+                  {"x", {{"label", std::string(1, o.axis)}, {"unit", "deg"}}},
+                  {"y", {{"label", "deviation"}, {"unit", "um"}}},
+                  {"series", Json::array({{{"name", t + " measured"}, {"style", "points"}, {"x", x}, {"y", dt}},
+                                          {{"name", "dz measured"}, {"style", "points"}, {"x", x}, {"y", dz}},
+                                          {{"name", t + " model (angular+pivot)"}, {"style", "line"}, {"x", x}, {"y", mt}},
+                                          {{"name", "dz model (angular+pivot)"}, {"style", "line"}, {"x", x}, {"y", mz}}})},
+                  {"note", "dz carries the pivot-length error that 004's formula never looks at"}});
+  std::vector<double> ea, ee, eu, e4;
+  for (size_t k = 0; k < a.joint.angles_deg.size(); ++k) {
+    ea.push_back(a.joint.angles_deg[k]);
+    ee.push_back(r6(a.joint.e_mdeg[k]));
+    eu.push_back(r6(a.joint.u_e_mdeg[k]));
+    e4.push_back(r6(a.angular.e_mdeg[k]));
+  }
+  figs.push_back({{"id", "tooltip_angular_error"},
+                  {"title", "Angular positioning error vs angle (004 Fig. 4)"},
+                  {"x", {{"label", std::string(1, o.axis)}, {"unit", "deg"}}},
+                  {"y", {{"label", "angular error"}, {"unit", "mdeg"}}},
+                  {"series", Json::array({{{"name", "004 dA = dy / (R cos A)"}, {"style", "points"}, {"x", x004}, {"y", y004}},
+                                          {{"name", "fit: angular + pivot length"}, {"style", "line"}, {"x", ea}, {"y", ee}, {"u", eu}},
+                                          {{"name", "fit: angular only (004 model)"}, {"style", "line"}, {"x", ea}, {"y", e4}}})},
+                  {"note", fmt::format("004's formula has no value at 90 deg and reads dR = {:.1f} um as dR tan A / R",
+                                       a.joint.dR_um)}});
+  j["figures"] = figs;
+  return j;
+}
+
+std::string tooltipReportText(const ProbePlan& plan, const TooltipAnalysis& a) {
+  const TooltipOptions o = tooltipOptionsFrom(plan.options, plan.machine);
+  std::string s = fmt::format("tooltip ({} axis, R = {:.3f} mm): pivot-length error dR = {:.2f} um (u {:.2f} um)\n", o.axis,
+                              o.radius_mm, a.joint.dR_um, a.joint.u_dR_um);
+  s += fmt::format("residual rms {:.3f} um (angular+pivot) vs {:.3f} um (004's angular model)\n", a.joint.residual_rms_um,
+                   a.angular.residual_rms_um);
+  s += "angle_deg  e_mdeg  u_mdeg  e_004model_mdeg\n";
+  for (size_t k = 0; k < a.joint.angles_deg.size(); ++k)
+    s += fmt::format("{:9.3f} {:7.3f} {:7.3f} {:9.3f}\n", a.joint.angles_deg[k], a.joint.e_mdeg[k], a.joint.u_e_mdeg[k],
+                     a.angular.e_mdeg[k]);
+  return s;
+}
+
+TooltipDiagnosis diagnoseTooltip(const ProbePlan& plan, const std::vector<TooltipRun>& runs,
+                                 const TooltipDiagnosisOptions& options) {
+  std::string why;
+  if (!options.validate(&why)) throw std::invalid_argument(why);
+  TooltipDiagnosis d;
+  TooltipFitOptions fo;
+  fo.sigma_floor_um = options.sigma_floor_um;
+  fo.fit_pivot_length = false;
+  d.baseline = fitTooltip(plan, runs, fo);
+  d.baseline_holdout_rms_um = tooltipHoldoutRms(plan, runs, fo);
+  fo.fit_pivot_length = true;
+  d.extended = fitTooltip(plan, runs, fo);
+  d.extended_holdout_rms_um = tooltipHoldoutRms(plan, runs, fo);
+  const double s2 = std::pow(d.extended.sigma_um, 2);
+  d.f_statistic = s2 > 0 ? std::max(0.0, d.baseline.rss_um2 - d.extended.rss_um2) / s2 : 0.0;
+  d.p_value = d.extended.dof > 0 ? fSurvival(d.f_statistic, 1, d.extended.dof) : 1.0;
+  const double gain = d.baseline_holdout_rms_um > 0 ? 1.0 - d.extended_holdout_rms_um / d.baseline_holdout_rms_um : 0.0;
+  if (!(d.p_value < options.alpha))
+    d.verdict_reason = fmt::format("F test p = {:.3g} >= alpha = {}", d.p_value, options.alpha);
+  else if (!(gain >= options.min_holdout_gain))
+    d.verdict_reason = fmt::format("held-out gain {:.1f} % below {:.1f} %", 100 * gain, 100 * options.min_holdout_gain);
+  else
+    d.found = true;
+  if (d.found) d.verdict_reason = "accepted";
+  return d;
+}
+
+Json tooltipDiagnosisJson(const TooltipDiagnosis& d) {
+  Json j;
+  j["format"] = "rotacal-diagnosis/1";
+  j["cycle"] = "tooltip";
+  j["baseline"] = {{"model", "angular (004: one angular error per angle, pivot length as programmed)"},
+                   {"residual_rms_um", r6(d.baseline.residual_rms_um)},
+                   {"holdout_rms_um", r6(d.baseline_holdout_rms_um)},
+                   {"holdout", "leave one commanded angle out"}};
+  j["verdict"] = d.found ? "effect_found" : "no_significant_effect";
+  const double gain = d.baseline_holdout_rms_um > 0 ? 100.0 * (1.0 - d.extended_holdout_rms_um / d.baseline_holdout_rms_um) : 0.0;
+  Json cand = {{"cause", "pivot_length"},
+               {"parameters", {{"dR", {{"value", r6(d.extended.dR_um)}, {"unit", "um"}, {"u", r6(d.extended.u_dR_um)}}}}},
+               {"residual_rms_um", r6(d.extended.residual_rms_um)},
+               {"holdout_rms_um", r6(d.extended_holdout_rms_um)},
+               {"gain_pct", r6(gain)},
+               {"f_statistic", r6(d.f_statistic)},
+               {"p_value", d.p_value},
+               {"verdict", d.verdict_reason}};
+  j["candidates"] = Json::array({cand});
+  Json findings = Json::array();
+  if (d.found) {
+    Json f = cand;
+    f.erase("verdict");
+    f["summary"] = fmt::format(
+        "The tool tip sits {:.1f} um (u {:.1f} um) {} from the pivot than the program assumes; 004's formula reads this "
+        "as an angular error growing with tan A.",
+        std::abs(d.extended.dR_um), d.extended.u_dR_um, d.extended.dR_um > 0 ? "farther" : "closer");
+    Json ang = Json::array();
+    for (size_t k = 0; k < d.extended.angles_deg.size(); ++k)
+      ang.push_back({{"angle_deg", d.extended.angles_deg[k]},
+                     {"value", num(d.extended.e_mdeg[k])},
+                     {"u", num(d.extended.u_e_mdeg[k])},
+                     {"unit", "mdeg"}});
+    f["angular_error"] = ang;
+    f["location_errors"] = {{"dR", {{"value", r6(d.extended.dR_um)}, {"unit", "um"}, {"u", r6(d.extended.u_dR_um)}}}};
+    findings.push_back(f);
+  }
+  j["findings"] = findings;
+  j["confounded"] = Json::array();
+  return j;
+}
+
+std::string tooltipDiagnosisText(const TooltipDiagnosis& d) {
+  std::string s = fmt::format("baseline (004 angular model): residual {:.3f} um, held-out {:.3f} um\n",
+                              d.baseline.residual_rms_um, d.baseline_holdout_rms_um);
+  s += fmt::format("pivot_length: dR = {:.2f} um (u {:.2f} um), residual {:.3f} um, held-out {:.3f} um, F = {:.3g}, p = {:.3g}\n",
+                   d.extended.dR_um, d.extended.u_dR_um, d.extended.residual_rms_um, d.extended_holdout_rms_um,
+                   d.f_statistic, d.p_value);
+  s += d.found ? "verdict: effect found (pivot_length)\n" : "verdict: no significant effect (" + d.verdict_reason + ")\n";
+  return s;
+}
+
+}  // namespace rotacal

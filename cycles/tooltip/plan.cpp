@@ -1,0 +1,317 @@
+#include "cycles/tooltip/plan.hpp"
+
+#include <cmath>
+#include <map>
+#include <set>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "core/errors.hpp"
+#include "core/rng.hpp"
+#include "core/units.hpp"
+
+namespace rotacal {
+namespace {
+
+const std::set<std::string> kKnownOptions = {"axis",  "radius_mm", "step_deg", "start_deg", "end_deg", "other_deg",
+                                             "units", "move_s",    "dwell_s",  "sweeps"};
+
+Eigen::Matrix3d rx(double a) {
+  Eigen::Matrix3d m;
+  m << 1, 0, 0, 0, std::cos(a), -std::sin(a), 0, std::sin(a), std::cos(a);
+  return m;
+}
+Eigen::Matrix3d ry(double b) {
+  Eigen::Matrix3d m;
+  m << std::cos(b), 0, std::sin(b), 0, 1, 0, -std::sin(b), 0, std::cos(b);
+  return m;
+}
+
+/// The commanded angles of one sweep, in order.
+std::vector<double> sweepAngles(const TooltipOptions& o) {
+  const int n = static_cast<int>(std::lround(o.end_deg / o.step_deg));
+  std::vector<double> out;
+  if (o.sweeps == 0) {
+    const int m = static_cast<int>(std::lround(-o.start_deg / o.step_deg));
+    for (int k = -m; k <= n; ++k) out.push_back(k * o.step_deg);
+    return out;
+  }
+  out.push_back(0.0);
+  for (int s = 0; s < o.sweeps; ++s) {
+    for (int k = 1; k <= n; ++k) out.push_back(k * o.step_deg);
+    for (int k = n - 1; k >= -n; --k) out.push_back(k * o.step_deg);
+    for (int k = -n + 1; k <= 0; ++k) out.push_back(k * o.step_deg);
+  }
+  return out;
+}
+
+Pose poseOf(const TooltipOptions& o, double theta_deg, double other_deg) {
+  Pose p;
+  (o.axis == 'A' ? p.A : p.B) = theta_deg;
+  (o.axis == 'A' ? p.B : p.A) = other_deg;
+  return p;
+}
+
+/// In-plane unit vectors of the reading: transverse (Y for A, X for B) and Z.
+int transverseIndex(char axis) { return axis == 'A' ? 1 : 0; }
+
+}  // namespace
+
+TooltipOptions tooltipOptionsFrom(const CycleOptions& options, const MachineModel& machine) {
+  for (const auto& [k, v] : options)
+    if (!kKnownOptions.count(k))
+      throw std::invalid_argument("tooltip: unknown option '" + k +
+                                  "' (expected axis, radius_mm, step_deg, end_deg, other_deg, units, move_s, dwell_s, "
+                                  "sweeps)");
+  if (machine.kinematics != Kinematics::HeadAB)
+    throw std::invalid_argument("tooltip: the fixed-tool-tip cycle needs a spindle-head machine (kinematics head_ab, "
+                                "e.g. examples/machines/head_ab.json)");
+  TooltipOptions o;
+  o.inch = machine.units == LengthUnit::Inch;
+  auto get = [&](const char* k) -> const std::string* {
+    const auto it = options.find(k);
+    return it == options.end() ? nullptr : &it->second;
+  };
+  if (auto* v = get("axis")) {
+    if (*v != "A" && *v != "B") throw std::invalid_argument("tooltip: option axis must be A or B, got '" + *v + "'");
+    o.axis = (*v)[0];
+  }
+  if (auto* v = get("radius_mm")) o.radius_mm = parseNumber("radius_mm", *v);
+  if (auto* v = get("step_deg")) o.step_deg = parseNumber("step_deg", *v);
+  if (auto* v = get("end_deg")) o.end_deg = parseNumber("end_deg", *v);
+  if (auto* v = get("start_deg")) o.start_deg = parseNumber("start_deg", *v);
+  if (auto* v = get("other_deg")) o.other_deg = parseNumberList("other_deg", *v);
+  if (auto* v = get("move_s")) o.move_s = parseNumber("move_s", *v);
+  if (auto* v = get("dwell_s")) o.dwell_s = parseNumber("dwell_s", *v);
+  if (auto* v = get("units")) {
+    if (*v != "inch" && *v != "mm") throw std::invalid_argument("tooltip: option units must be inch or mm, got '" + *v + "'");
+    o.inch = *v == "inch";
+  }
+  if (auto* v = get("sweeps")) {
+    const double s = parseNumber("sweeps", *v);
+    if (s < 0 || s != std::floor(s) || s > 100) throw std::invalid_argument("tooltip: option sweeps must be 0..100");
+    o.sweeps = static_cast<int>(s);
+  }
+  if (!(o.radius_mm > 0)) throw std::invalid_argument("tooltip: option radius_mm must be positive");
+  if (!(o.step_deg > 0) || !(o.end_deg > 0)) throw std::invalid_argument("tooltip: step_deg and end_deg must be positive");
+  const double n = o.end_deg / o.step_deg;
+  if (std::abs(n - std::round(n)) > 1e-9)
+    throw std::invalid_argument(fmt::format("tooltip: end_deg {} is not a whole number of steps of {} deg", o.end_deg,
+                                            o.step_deg));
+  if (n > 3600) throw std::invalid_argument("tooltip: more than 3600 steps");
+  const double m = -o.start_deg / o.step_deg;
+  if (o.start_deg > 0 || std::abs(m - std::round(m)) > 1e-9 || m > 3600)
+    throw std::invalid_argument("tooltip: start_deg must be <= 0 and a whole number of steps (the reading is zeroed at 0 deg)");
+  if (o.start_deg < 0 && o.sweeps > 0) throw std::invalid_argument("tooltip: start_deg is for the static test (sweeps = 0)");
+  if (!(o.move_s > 0)) throw std::invalid_argument("tooltip: option move_s must be positive");
+  if (o.dwell_s < 0) throw std::invalid_argument("tooltip: option dwell_s must be >= 0");
+  return o;
+}
+
+Eigen::Vector3d tipOffset_m(double a_rad, double b_rad, double r_mm) {
+  return rx(a_rad) * ry(b_rad) * Eigen::Vector3d(0, 0, -r_mm);
+}
+
+ProbePlan makeTooltipPlan(const MachineModel& machine, const CycleOptions& options) {
+  const TooltipOptions o = tooltipOptionsFrom(options, machine);
+  ProbePlan plan;
+  plan.cycle = "tooltip";
+  plan.machine = machine;
+  plan.options = options;
+  plan.options["axis"] = std::string(1, o.axis);
+  plan.options["radius_mm"] = fmt::format("{}", o.radius_mm);
+  plan.options["step_deg"] = fmt::format("{}", o.step_deg);
+  plan.options["end_deg"] = fmt::format("{}", o.end_deg);
+  plan.options["units"] = o.inch ? "inch" : "mm";
+  plan.index_z_mm = 0.0;
+  const std::vector<double> angles = sweepAngles(o);
+  std::vector<std::string> problems;
+  double t = 0.0;
+  for (double other : o.other_deg) {
+    const std::string name = fmt::format("{}{}", o.otherAxis(), other);
+    PlanPose pp;
+    pp.name = name;
+    pp.pose = poseOf(o, 0.0, other);
+    pp.safe_z_mm = 0.0;
+    plan.poses.push_back(pp);
+    const Pose p0 = poseOf(o, 0.0, other);
+    const Eigen::Vector3d t0 = tipOffset_m(degToRad(p0.A), degToRad(p0.B), o.radius_mm);
+    for (size_t k = 0; k < angles.size(); ++k) {
+      ProbePoint pt;
+      pt.id = static_cast<int>(plan.points.size()) + 1;
+      pt.pose_name = name;
+      pt.pose = poseOf(o, angles[k], other);
+      pt.target = 1;
+      // The fixed tip: where it was at the sweep's start, pivot at the origin (004: Yp = Zp = 0).
+      pt.contact_w_mm = t0;
+      pt.trigger_m_mm = t0 - tipOffset_m(degToRad(pt.pose.A), degToRad(pt.pose.B), o.radius_mm);
+      // The laser reads the tangential direction of the rotation at theta (004 Fig. 2).
+      const double th = degToRad(angles[k]);
+      pt.approach_m = o.axis == 'A' ? Eigen::Vector3d(0, std::cos(th), std::sin(th))
+                                    : Eigen::Vector3d(-std::cos(th), 0, std::sin(th));
+      pt.normal_w = -pt.approach_m;
+      if (k > 0) t += o.move_s + (o.sweeps == 0 ? o.dwell_s : 0.0);
+      pt.t_s = t;
+      const Eigen::Vector3d& c = pt.trigger_m_mm;
+      if (!machine.x.contains(c.x()) || !machine.y.contains(c.y()) || !machine.z.contains(c.z()))
+        problems.push_back(fmt::format("point {} ({} = {} deg): pivot at ({:.3f}, {:.3f}, {:.3f}) mm is outside the strokes",
+                                       pt.id, o.axis, angles[k], c.x(), c.y(), c.z()));
+      for (char ax : {'A', 'B'}) {
+        const double v = ax == 'A' ? pt.pose.A : pt.pose.B;
+        if (!machine.rotaryAxis(ax).continuous && !machine.rotaryAxis(ax).stroke_deg.contains(v))
+          problems.push_back(fmt::format("point {}: {} = {} deg is outside its stroke", pt.id, ax, v));
+      }
+      plan.points.push_back(pt);
+    }
+    t += 60.0;  // re-positioning between sweeps
+  }
+  if (!problems.empty())
+    throw std::invalid_argument(fmt::format("tooltip plan does not fit the machine: {}{}", problems.front(),
+                                            problems.size() > 1 ? fmt::format(" (and {} more)", problems.size() - 1) : ""));
+  return plan;
+}
+
+std::vector<int> tooltipReferences(const ProbePlan& plan) {
+  const TooltipOptions o = tooltipOptionsFrom(plan.options, plan.machine);
+  std::vector<int> refs(plan.points.size(), -1);
+  std::map<std::string, int> ref_of;
+  for (size_t k = 0; k < plan.points.size(); ++k) {
+    const Pose& p = plan.points[k].pose;
+    if (std::abs(o.axis == 'A' ? p.A : p.B) < 1e-9 && !ref_of.count(plan.points[k].pose_name))
+      ref_of[plan.points[k].pose_name] = static_cast<int>(k);
+  }
+  for (size_t k = 0; k < plan.points.size(); ++k) {
+    const auto it = ref_of.find(plan.points[k].pose_name);
+    if (it == ref_of.end())
+      throw std::invalid_argument("tooltip plan: sweep " + plan.points[k].pose_name + " has no pose at 0 deg");
+    refs[k] = it->second;
+  }
+  return refs;
+}
+
+double TooltipTruth::angularErrorMdeg(double theta_deg) const {
+  const double th = degToRad(theta_deg);
+  return offset_mdeg + slope_mdeg_per_90deg * theta_deg / 90.0 + sin_mdeg * std::sin(th) + sin2_mdeg * std::sin(2 * th);
+}
+
+TooltipTruth tooltipTruthFrom(const JsonDoc& doc, const Json& truth) {
+  TooltipTruth t;
+  if (!truth.is_object() || truth.value("format", "") != "rotacal-truth/1")
+    doc.fail("format", "not a truth file (expected \"format\": \"rotacal-truth/1\")");
+  if (truth.contains("location_errors") && !truth["location_errors"].empty())
+    doc.fail("location_errors", "a tooltip truth has no table location errors: use the 'tooltip' object");
+  t.noise_um = numberOr(doc, truth, "probe_noise_um", 0.0);
+  if (!truth.contains("tooltip")) return t;
+  const Json& j = truth["tooltip"];
+  if (!j.is_object()) doc.fail("tooltip", "'tooltip' must be an object");
+  static const std::set<std::string> known = {"dR_um", "angular_error"};
+  for (const auto& [k, v] : j.items())
+    if (!known.count(k)) doc.fail(k, "unknown tooltip truth field '" + k + "' (expected dR_um, angular_error)");
+  t.dR_um = numberOr(doc, j, "dR_um", 0.0);
+  if (j.contains("angular_error")) {
+    const Json& e = j["angular_error"];
+    static const std::set<std::string> ek = {"offset_mdeg", "slope_mdeg_per_90deg", "sin_mdeg", "sin2_mdeg"};
+    for (const auto& [k, v] : e.items())
+      if (!ek.count(k)) doc.fail(k, "unknown angular_error term '" + k + "'");
+    t.offset_mdeg = numberOr(doc, e, "offset_mdeg", 0.0);
+    t.slope_mdeg_per_90deg = numberOr(doc, e, "slope_mdeg_per_90deg", 0.0);
+    t.sin_mdeg = numberOr(doc, e, "sin_mdeg", 0.0);
+    t.sin2_mdeg = numberOr(doc, e, "sin2_mdeg", 0.0);
+  }
+  if (t.noise_um < 0) doc.fail("probe_noise_um", "noise must be >= 0");
+  return t;
+}
+
+TooltipRun simulateTooltip(const ProbePlan& plan, const TooltipTruth& truth, std::uint64_t seed) {
+  const TooltipOptions o = tooltipOptionsFrom(plan.options, plan.machine);
+  const double r_true = o.radius_mm + umToMm(truth.dR_um);
+  const int ti = transverseIndex(o.axis);
+  Rng rng(seed, 4);
+  TooltipRun run;
+  std::vector<Eigen::Vector3d> devs;
+  for (const auto& pt : plan.points) {
+    // Exact: the pivot goes where commanded; the head turns to the commanded angle plus its
+    // angular positioning error; the tip hangs at the true R.
+    Pose actual = pt.pose;
+    double& th = o.axis == 'A' ? actual.A : actual.B;
+    th += truth.angularErrorMdeg(th) / 1000.0;  // mdeg -> deg
+    const Eigen::Vector3d tip = pt.trigger_m_mm + tipOffset_m(degToRad(actual.A), degToRad(actual.B), r_true);
+    devs.push_back(tip - pt.contact_w_mm);
+  }
+  const std::vector<int> refs = tooltipReferences(plan);
+  for (size_t k = 0; k < plan.points.size(); ++k) {
+    const ProbePoint& pt = plan.points[k];
+    const Eigen::Vector3d rel = mmToUm(1.0) * (devs[k] - devs[refs[k]]);
+    TooltipReading r;
+    r.angle_deg = o.axis == 'A' ? pt.pose.A : pt.pose.B;
+    r.t_um = rel[ti];
+    r.z_um = rel.z();
+    if (truth.noise_um > 0 && refs[k] != static_cast<int>(k)) {
+      r.t_um += truth.noise_um * rng.normal();
+      r.z_um += truth.noise_um * rng.normal();
+    }
+    run.push_back(r);
+  }
+  return run;
+}
+
+std::string tooltipResultsText(const ProbePlan& plan, const TooltipRun& run) {
+  const TooltipOptions o = tooltipOptionsFrom(plan.options, plan.machine);
+  std::string out = o.axis == 'A' ? "angle_deg,dy_um,dz_um\n" : "angle_deg,dx_um,dz_um\n";
+  for (const auto& r : run) out += fmt::format("{:.4f},{:.4f},{:.4f}\n", r.angle_deg, r.t_um, r.z_um);
+  return out;
+}
+
+TooltipRun parseTooltipResults(const std::string& text, const std::string& file, const ProbePlan& plan) {
+  const TooltipOptions o = tooltipOptionsFrom(plan.options, plan.machine);
+  const std::string header = o.axis == 'A' ? "angle_deg,dy_um,dz_um" : "angle_deg,dx_um,dz_um";
+  TooltipRun run;
+  int line_no = 0;
+  size_t pos = 0;
+  bool seen_header = false;
+  while (pos < text.size()) {
+    size_t end = text.find('\n', pos);
+    if (end == std::string::npos) end = text.size();
+    std::string line = text.substr(pos, end - pos);
+    pos = end + 1;
+    ++line_no;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty() || line[0] == '#') continue;
+    if (!seen_header) {
+      if (line != header) throw InputError(file, line_no, "expected the header '" + header + "', got '" + line + "'");
+      seen_header = true;
+      continue;
+    }
+    double v[3];
+    size_t p = 0;
+    for (int i = 0; i < 3; ++i) {
+      const size_t comma = i < 2 ? line.find(',', p) : line.size();
+      if (comma == std::string::npos) throw InputError(file, line_no, "expected 3 comma-separated numbers");
+      const std::string cell = line.substr(p, comma - p);
+      try {
+        size_t used = 0;
+        v[i] = std::stod(cell, &used);
+        if (used != cell.size() || !std::isfinite(v[i])) throw std::invalid_argument("");
+      } catch (const std::exception&) {
+        throw InputError(file, line_no, "'" + cell + "' is not a number");
+      }
+      p = comma + 1;
+    }
+    const size_t k = run.size();
+    if (k >= plan.points.size())
+      throw InputError(file, line_no, fmt::format("more readings than the plan's {} poses", plan.points.size()));
+    const Pose& pose = plan.points[k].pose;
+    const double want = o.axis == 'A' ? pose.A : pose.B;
+    if (std::abs(v[0] - want) > 1e-3)
+      throw InputError(file, line_no, fmt::format("reading {} is at {} = {} deg, the plan says {} deg", k + 1, o.axis,
+                                                  v[0], want));
+    run.push_back({v[0], v[1], v[2]});
+  }
+  if (!seen_header) throw InputError(file, line_no, "empty results file (expected the header '" + header + "')");
+  if (run.size() != plan.points.size())
+    throw InputError(file, line_no, fmt::format("{} readings, the plan has {} poses", run.size(), plan.points.size()));
+  return run;
+}
+
+}  // namespace rotacal

@@ -1,0 +1,83 @@
+#pragma once
+// The fixed-tool-tip cycle of 004 (Optodyne note): on a spindle head tilting in A (about X) and
+// B (about Y) about a pivot, one rotary axis steps while the linear axes move the pivot so that
+// the tool tip (the centre of the tester's precision sphere) stays where it started:
+//   tip_m = P_m + Rx(A) Ry(B) (0, 0, -R)                       (004 Sec. IV, signs fixed so that
+//   A axis, B = b:  P_m(A) = t0 - Rx(A) Ry(b) (0, 0, -R)         Sec. V holds: at b = 0,
+//                                                                Yp = -R sin A, Zp = -R (1 - cos A))
+// A laser looking at the sphere reads the tip's deviation in the rotation plane (A: Y and Z;
+// B: X and Z), zeroed at the sweep's first pose at 0 deg (004: the start, Yp = Zp = A = 0). This header holds the plan, the exact
+// head geometry, the simulator and the results file; cycles/tooltip/analyze.hpp the analysis.
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "core/json_io.hpp"
+#include "core/machine.hpp"
+#include "core/probe_plan.hpp"
+
+namespace rotacal {
+
+/// The cycle options (`--set`), parsed and checked.
+struct TooltipOptions {
+  char axis = 'A';                  // the stepping axis
+  double radius_mm = 381.0;         // R, pivot to tool tip (004: 15 in)
+  double step_deg = 5.0;
+  double start_deg = 0.0;           // static test: first angle (<= 0; the reading is zeroed at 0)
+  double end_deg = 90.0;
+  std::vector<double> other_deg{0.0};  // angles of the other axis, one sweep each (004 Sec. VI)
+  bool inch = false;                // program units (default: the machine's)
+  double move_s = 30.0;             // time of one step: inverse-time F = 60 / move_s (004: F2.)
+  double dwell_s = 2.0;             // static test: dwell after each step for the reading (0: none)
+  int sweeps = 0;                   // 0: static 0..end; n > 0: dynamic test of 004 Sec. VI,
+                                    // 0 -> +end -> -end -> 0, n times, no dwell
+
+  char otherAxis() const { return axis == 'A' ? 'B' : 'A'; }
+};
+
+TooltipOptions tooltipOptionsFrom(const CycleOptions& options, const MachineModel& machine);
+
+/// The plan: one point per commanded angle (the reading), pose = commanded angles, trigger_m_mm =
+/// commanded pivot position, contact_w_mm = the fixed tool tip, approach_m = the laser's
+/// tangential read direction, pose_name = "<other axis><angle>" naming the sweep.
+ProbePlan makeTooltipPlan(const MachineModel& machine, const CycleOptions& options);
+
+/// Tool-tip offset from the pivot, machine frame: Rx(A) Ry(B) (0, 0, -R) (mm; angles in rad).
+Eigen::Vector3d tipOffset_m(double a_rad, double b_rad, double r_mm);
+
+/// The machine's true head (simulate): a pivot-length error dR and an angular positioning
+/// error of the stepping axis e(theta) = offset + slope theta/90deg + s1 sin theta + s2 sin 2 theta.
+struct TooltipTruth {
+  double dR_um = 0.0;
+  double offset_mdeg = 0.0;
+  double slope_mdeg_per_90deg = 0.0;
+  double sin_mdeg = 0.0;
+  double sin2_mdeg = 0.0;
+  double noise_um = 0.0;  // laser reading, standard deviation per component
+
+  double angularErrorMdeg(double theta_deg) const;
+};
+/// The "tooltip" object of TRUTH.json; missing fields are zero.
+TooltipTruth tooltipTruthFrom(const JsonDoc& doc, const Json& truth);
+
+/// One reading: the commanded angle and the deviation of the tip (actual - nominal, machine
+/// frame) in the rotation plane: `t` = the transverse component (Y for A, X for B), `z` = Z.
+struct TooltipReading {
+  double angle_deg = 0.0;
+  double t_um = 0.0;
+  double z_um = 0.0;
+};
+using TooltipRun = std::vector<TooltipReading>;
+
+/// Exact forward model: deviation of every plan point, zeroed at the first point of its sweep.
+TooltipRun simulateTooltip(const ProbePlan& plan, const TooltipTruth& truth, std::uint64_t seed);
+
+/// Index of the zero reading (the first pose at 0 deg of the same sweep) of every plan point.
+std::vector<int> tooltipReferences(const ProbePlan& plan);
+
+/// The neutral results file `angle_deg,dy_um,dz_um` (axis B: `angle_deg,dx_um,dz_um`).
+std::string tooltipResultsText(const ProbePlan& plan, const TooltipRun& run);
+/// Reads it; throws InputError(file, line, ...) on a wrong header, count or angle.
+TooltipRun parseTooltipResults(const std::string& text, const std::string& file, const ProbePlan& plan);
+
+}  // namespace rotacal

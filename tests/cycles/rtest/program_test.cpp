@@ -1,0 +1,109 @@
+// The R-test program (002): LinuxCNC text through the strict checker and LinuxCNC's own
+// interpreter (rs274 -g; skipped when not installed), the thermal schedule's loops counted in
+// what the interpreter executes; the dialects that cannot spell it refuse it.
+#include <gtest/gtest.h>
+
+#include <fmt/format.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "cycles/cycle.hpp"
+#include "controllers/dialect.hpp"
+#include "core/machine.hpp"
+#include "core/probe_plan.hpp"
+#include "cycles/rtest/plan.hpp"
+#include "cycles/rtest/program.hpp"
+
+namespace rotacal {
+namespace {
+
+namespace fs = std::filesystem;
+
+#ifdef ROTACAL_RS274
+const char* kRs274 = ROTACAL_RS274;
+#else
+const char* kRs274 = "/usr/bin/rs274";
+#endif
+
+ProbePlan plan(const CycleOptions& o) {
+  return makePlan("rtest", loadMachine(std::string(ROTACAL_SOURCE_DIR) + "/examples/machines/bc_trunnion.json"), o);
+}
+
+size_t count(const std::string& text, const std::string& what) {
+  size_t n = 0;
+  for (size_t p = text.find(what); p != std::string::npos; p = text.find(what, p + what.size())) ++n;
+  return n;
+}
+
+std::string run(const std::string& program, int* exit_code) {
+  const fs::path dir = fs::temp_directory_path() / fmt::format("rotacal_rtest_rs274_{}", ::getpid());
+  fs::create_directories(dir);
+  std::ofstream(dir / "rtest.ngc", std::ios::binary) << program;
+  const int status = std::system(
+      fmt::format("cd '{}' && '{}' -g rtest.ngc < /dev/null > out.txt 2> err.txt", dir.string(), kRs274).c_str());
+  *exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream in(dir / "out.txt");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  fs::remove_all(dir);
+  return ss.str();
+}
+
+TEST(RtestProgram, LinuxCncPassesCheckerAndRs274WithTheThermalLoops) {
+  // A short thermal schedule so that rs274 runs it in a moment: a cycle every 4 min for 0.4 h.
+  const ProbePlan p = plan({{"thermal", "1"}, {"interval_min", "4"}, {"duration_h", "0.4"}});
+  const RtestSchedule s = rtestSchedule(p);
+  ASSERT_EQ(s.cycles(), 7);  // 24 min / 4 min + 1
+  const int recips = rtestReciprocations(p);
+  ASSERT_GT(recips, 0);
+  const Dialect& d = dialectByName("linuxcnc");
+  const std::string text = d.writeProgram(rtestProgram(p, "linuxcnc"));
+  const auto problems = d.check(text, p);
+  EXPECT_TRUE(problems.empty()) << problems.front();
+  EXPECT_EQ(count(text, "M64 P0"), 50u);  // the first cycle and the loop body's cycle, 25 readings each
+  if (!fs::exists(kRs274)) GTEST_SKIP() << "rs274 not installed";
+  int rc = -1;
+  const std::string out = run(text, &rc);
+  EXPECT_EQ(rc, 0);
+  // What the interpreter executes: one trigger per pose per cycle, a dwell before each, and the
+  // reciprocation (two feed moves of B per round trip) between the cycles.
+  EXPECT_EQ(count(out, "SET_AUX_OUTPUT_BIT(0)"), 25u * 7u);
+  EXPECT_EQ(count(out, "DWELL(2.0000)"), 25u * 7u);
+  EXPECT_EQ(count(out, "PROGRAM_END()"), 1u);
+  // The reciprocation moves: B at +60 / +90 (controller sign -1 for linuxcnc on this machine),
+  // executed as STRAIGHT_FEEDs; each round trip ends at the -90 deg (paper) end.
+  size_t b90 = 0;
+  std::istringstream in(out);
+  for (std::string l; std::getline(in, l);)
+    if (l.find("STRAIGHT_FEED(") != std::string::npos && l.find(", 90.0000,") != std::string::npos) ++b90;
+  EXPECT_EQ(b90, static_cast<size_t>(recips) * 6u);
+}
+
+TEST(RtestProgram, CheckerRejectsAReadingWithoutDwellAndTheWrongCount) {
+  const ProbePlan p = plan({});
+  const Dialect& d = dialectByName("linuxcnc");
+  std::string text = d.writeProgram(rtestProgram(p, "linuxcnc"));
+  ASSERT_TRUE(d.check(text, p).empty());
+  std::string no_dwell = text;
+  no_dwell.replace(no_dwell.find("G4 P2.000"), 9, "G0 Z263.2670");
+  EXPECT_FALSE(d.check(no_dwell, p).empty());
+  std::string missing = text;
+  const size_t at = missing.find("M64 P0\n");
+  missing.erase(at, 7);
+  EXPECT_FALSE(d.check(missing, p).empty());
+}
+
+TEST(RtestProgram, DialectsWithoutLoopsRefuse) {
+  const ProbePlan p = plan({});
+  for (const char* name : {"fanuc", "haas", "siemens", "heidenhain", "okuma"})
+    EXPECT_THROW(dialectByName(name).writeProgram(rtestProgram(p, name)), std::invalid_argument) << name;
+}
+
+}  // namespace
+}  // namespace rotacal

@@ -1,0 +1,243 @@
+// The fixed-tool-tip cycle (004): plan geometry against 004's closed form, the exact simulator
+// against closed forms, identification of known errors (noise-free and with noise), 004's
+// formula and its blind spots, and the pivot_length diagnosis (hidden effect, clean seeds).
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "cycles/cycle.hpp"
+#include "core/errors.hpp"
+#include "cycles/tooltip/plan.hpp"
+#include "cycles/tooltip/analyze.hpp"
+#include "core/units.hpp"
+#include "test_util.hpp"
+
+namespace rotacal {
+namespace {
+
+MachineModel headMachine() { return loadMachine(test::sourcePath("examples/machines/head_ab.json")); }
+
+ProbePlan plan004(CycleOptions extra = {}) {
+  CycleOptions o{{"units", "inch"}, {"radius_mm", "381"}, {"step_deg", "5"}, {"end_deg", "90"}};
+  for (const auto& [k, v] : extra) o[k] = v;
+  return makePlan("tooltip", headMachine(), o);
+}
+
+TooltipTruth truthOf(double dR_um, double offset, double slope, double s1, double s2, double noise = 0) {
+  TooltipTruth t;
+  t.dR_um = dR_um;
+  t.offset_mdeg = offset;
+  t.slope_mdeg_per_90deg = slope;
+  t.sin_mdeg = s1;
+  t.sin2_mdeg = s2;
+  t.noise_um = noise;
+  return t;
+}
+
+TEST(TooltipPlan, PivotFollows004SecV) {
+  const ProbePlan plan = plan004();
+  ASSERT_EQ(plan.points.size(), 19u);  // A = 0, 5, ..., 90
+  const double r = 381.0;
+  for (const auto& p : plan.points) {
+    const double a = degToRad(p.pose.A);
+    // 004 Sec. V: Yp = -R sin A, Zp = -R (1 - cos A); X does not move. 1e-9 mm: round-off.
+    EXPECT_NEAR(p.trigger_m_mm.x(), 0.0, 1e-9);
+    EXPECT_NEAR(p.trigger_m_mm.y(), -r * std::sin(a), 1e-9);
+    EXPECT_NEAR(p.trigger_m_mm.z(), -r * (1 - std::cos(a)), 1e-9);
+    // and the tip stays at (0, 0, -R)
+    const Eigen::Vector3d tip = p.trigger_m_mm + tipOffset_m(a, 0.0, r);
+    EXPECT_LT((tip - Eigen::Vector3d(0, 0, -r)).norm(), 1e-9);
+  }
+}
+
+TEST(TooltipPlan, RejectsBadOptionsAndTableMachines) {
+  EXPECT_THROW(plan004({{"step_deg", "7"}}), std::invalid_argument);  // 90 / 7 is not whole
+  EXPECT_THROW(plan004({{"axis", "C"}}), std::invalid_argument);
+  EXPECT_THROW(plan004({{"colour", "red"}}), std::invalid_argument);
+  EXPECT_THROW(makePlan("tooltip", test::acMachine(), {}), std::invalid_argument);
+}
+
+TEST(TooltipPlan, DynamicTestOf004SecVI) {
+  const ProbePlan plan = plan004({{"sweeps", "5"}, {"other_deg", "0,30,60"}, {"step_deg", "15"}});
+  // per sweep: the zero pose + 5 x (6 up, 12 down, 6 back) steps; three B angles
+  EXPECT_EQ(plan.points.size(), 3u * (1 + 5 * 24));
+  double max_a = 0, min_a = 0;
+  for (const auto& p : plan.points) {
+    max_a = std::max(max_a, p.pose.A);
+    min_a = std::min(min_a, p.pose.A);
+    const Eigen::Vector3d tip = p.trigger_m_mm + tipOffset_m(degToRad(p.pose.A), degToRad(p.pose.B), 381.0);
+    EXPECT_LT((tip - p.contact_w_mm).norm(), 1e-9);
+  }
+  EXPECT_EQ(max_a, 90.0);
+  EXPECT_EQ(min_a, -90.0);
+}
+
+TEST(TooltipSimulate, PivotLengthErrorIsRadialClosedForm) {
+  // With dR only, the tip moves along the tool: d(A) = dR (sin A, -cos A) - dR (0, -1) (zeroed at 0).
+  const ProbePlan plan = plan004();
+  const TooltipRun run = simulateTooltip(plan, truthOf(40.0, 0, 0, 0, 0), 1);
+  for (const auto& r : run) {
+    const double a = degToRad(r.angle_deg);
+    EXPECT_NEAR(r.t_um, 40.0 * std::sin(a), 1e-6);  // um; 1e-6: double round-off of mm values
+    EXPECT_NEAR(r.z_um, 40.0 * (1 - std::cos(a)), 1e-6);
+  }
+}
+
+TEST(TooltipSimulate, AngularErrorIsTangentialClosedForm) {
+  // e = 10 mdeg constant except that the zero reading carries it too: d = R (Rx(A+e) - Rx(A)) - same at 0.
+  const ProbePlan plan = plan004();
+  const TooltipRun run = simulateTooltip(plan, truthOf(0, 10.0, 0, 0, 0), 1);
+  const double r = 381.0, e = mdegToRad(10.0);
+  for (const auto& rd : run) {
+    const double a = degToRad(rd.angle_deg);
+    const double y = r * (std::sin(a + e) - std::sin(a)) - r * std::sin(e);
+    const double z = -r * (std::cos(a + e) - std::cos(a)) + r * (std::cos(e) - 1);
+    EXPECT_NEAR(rd.t_um, mmToUm(y), 1e-6);
+    EXPECT_NEAR(rd.z_um, mmToUm(z), 1e-6);
+  }
+}
+
+TEST(TooltipFit, JacobianMatchesFiniteDifferences) {
+  for (const char* axis : {"A", "B"}) {
+    const ProbePlan plan = plan004({{"axis", axis}, {"other_deg", "0,30"}});
+    const std::vector<TooltipRun> runs = {simulateTooltip(plan, truthOf(20, 1, 2, 3, 4), 1)};
+    Eigen::VectorXd x = Eigen::VectorXd::Zero(20);
+    for (int j = 0; j < 19; ++j) x[j] = mdegToRad(5.0 * std::sin(j));
+    x[19] = 0.03;  // mm
+    const TooltipModelEval e = evaluateTooltipModel(plan, runs, x);
+    ASSERT_EQ(e.angles, 19);
+    for (int c = 0; c < 20; ++c) {
+      const double h = c < 19 ? 1e-7 : 1e-5;  // rad, mm: central differences, truncation ~h^2
+      Eigen::VectorXd xp = x, xm = x;
+      xp[c] += h;
+      xm[c] -= h;
+      const Eigen::VectorXd fd =
+          (evaluateTooltipModel(plan, runs, xp).model_um - evaluateTooltipModel(plan, runs, xm).model_um) / (2 * h);
+      // um per rad ~ 4e5, um per mm ~ 1e3: relative 1e-6 of the column's size
+      EXPECT_LT((fd - e.J_model_x.col(c)).cwiseAbs().maxCoeff(), 1e-6 * (1.0 + e.J_model_x.col(c).cwiseAbs().maxCoeff()))
+          << axis << " column " << c;
+    }
+  }
+}
+
+TEST(TooltipFit, NoiseFreeRecoversPivotAndAngularErrorTo1e3) {
+  for (char axis : {'A', 'B'}) {
+    const ProbePlan plan = plan004({{"axis", std::string(1, axis)}});
+    const TooltipTruth t = truthOf(-35.0, 4.0, 6.0, -3.0, 2.0);
+    const TooltipRun run = simulateTooltip(plan, t, 1);
+    const TooltipFit f = fitTooltip(plan, {run}, {});
+    ASSERT_TRUE(f.converged);
+    EXPECT_NEAR(f.dR_um, t.dR_um, 1e-3 * 35.0) << axis;
+    for (size_t k = 0; k < f.angles_deg.size(); ++k)
+      EXPECT_NEAR(f.e_mdeg[k], t.angularErrorMdeg(f.angles_deg[k]), 1e-3 * 10.0) << axis << " " << f.angles_deg[k];
+    EXPECT_LT(f.residual_rms_um, 1e-6);  // exact model: the residual is round-off only
+  }
+}
+
+TEST(TooltipFit, DynamicSweepsAtSeveralOtherAnglesRecoverTheErrors) {
+  // 004 Sec. VI: A back and forth twice at B = 0 and 30 deg; every reading enters the fit.
+  const ProbePlan plan = plan004({{"sweeps", "2"}, {"other_deg", "0,30"}, {"step_deg", "15"}});
+  const TooltipTruth t = truthOf(45.0, -2.0, 4.0, 3.0, -1.0);
+  const TooltipFit f = fitTooltip(plan, {simulateTooltip(plan, t, 1)}, {});
+  ASSERT_TRUE(f.converged);
+  EXPECT_EQ(f.angles_deg.front(), -90.0);
+  EXPECT_NEAR(f.dR_um, 45.0, 1e-3 * 45.0);
+  for (size_t k = 0; k < f.angles_deg.size(); ++k)
+    EXPECT_NEAR(f.e_mdeg[k], t.angularErrorMdeg(f.angles_deg[k]), 1e-3 * 10.0) << f.angles_deg[k];
+}
+
+TEST(TooltipFit, WithNoiseWithinUncertainty) {
+  int dR_outside = 0, e_outside = 0, e_total = 0;
+  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+    const ProbePlan plan = plan004();
+    const TooltipTruth t = truthOf(30.0, 2.0, -4.0, 3.0, 1.0, 2.0);
+    const TooltipFit f = fitTooltip(plan, {simulateTooltip(plan, t, seed)}, {});
+    // 3 u: 0.27 % of cases outside for a normal estimate; a loose bound on 20 seeds.
+    if (std::abs(f.dR_um - t.dR_um) > 3 * f.u_dR_um) ++dR_outside;
+    EXPECT_GT(f.u_dR_um, 0.0);
+    for (size_t k = 0; k < f.angles_deg.size(); ++k, ++e_total)
+      if (std::abs(f.e_mdeg[k] - t.angularErrorMdeg(f.angles_deg[k])) > 3 * f.u_e_mdeg[k]) ++e_outside;
+  }
+  EXPECT_LE(dR_outside, 1);
+  EXPECT_LE(e_outside, e_total / 50);
+}
+
+TEST(TooltipFit, Formula004ReadsPivotLengthAsAngularErrorAndFailsAt90) {
+  const ProbePlan plan = plan004();
+  const TooltipRun run = simulateTooltip(plan, truthOf(40.0, 0, 0, 0, 0), 1);
+  const auto da = angularError004Mdeg(plan, run);
+  for (size_t k = 0; k < run.size(); ++k) {
+    const double a = degToRad(run[k].angle_deg);
+    if (run[k].angle_deg == 90.0) {
+      EXPECT_TRUE(std::isnan(da[k]));
+      continue;
+    }
+    // 004: dA = dy / (R cos A) = dR tan A / R although the axis has no angular error.
+    EXPECT_NEAR(da[k], radToMdeg(umToMm(40.0) * std::tan(a) / 381.0), 1e-6);
+  }
+  const TooltipFit joint = fitTooltip(plan, {run}, {});
+  for (double e : joint.e_mdeg) EXPECT_NEAR(e, 0.0, 1e-6);
+}
+
+TEST(TooltipFit, FSurvivalMatchesClosedForms) {
+  // F(1, d2) is t^2: for d2 = 1 (Cauchy) P(|t| > x) = 1 - 2 atan(x) / pi.
+  EXPECT_NEAR(fSurvival(4.0, 1, 1), 1 - 2 * std::atan(2.0) / kPi, 1e-10);
+  // F(2, d2): survival = (1 + 2 f / d2)^(-d2/2).
+  EXPECT_NEAR(fSurvival(3.0, 2, 10), std::pow(1 + 2 * 3.0 / 10, -5.0), 1e-10);
+}
+
+TEST(TooltipDiagnosis, FindsHiddenPivotLengthError) {
+  int seed = 100;
+  for (double dR : {30.0, -40.0, 50.0}) {
+    for (double noise : {1.0, 3.0}) {
+      const ProbePlan plan = plan004();
+      const TooltipTruth t = truthOf(dR, 3.0, 5.0, -2.0, 1.5, noise);
+      const TooltipDiagnosis d = diagnoseTooltip(plan, {simulateTooltip(plan, t, ++seed)}, {});
+      EXPECT_TRUE(d.found) << dR << " " << noise << ": " << d.verdict_reason;
+      EXPECT_NEAR(d.extended.dR_um, dR, 3 * d.extended.u_dR_um);
+      EXPECT_LT(d.extended_holdout_rms_um, d.baseline_holdout_rms_um);
+      // the extended model recovers the angular errors better than 004's model
+      double err_b = 0, err_e = 0;
+      for (size_t k = 0; k < d.extended.angles_deg.size(); ++k) {
+        const double e = t.angularErrorMdeg(d.extended.angles_deg[k]);
+        err_b += std::pow(d.baseline.e_mdeg[k] - e, 2);
+        err_e += std::pow(d.extended.e_mdeg[k] - e, 2);
+      }
+      EXPECT_LT(err_e, err_b);
+    }
+  }
+}
+
+TEST(TooltipDiagnosis, NoFalseAlarmOnTwentyCleanSeeds) {
+  int alarms = 0;
+  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+    const ProbePlan plan = plan004();
+    // Angular errors of varying shape and size, laser/machine noise 1..5 um, no pivot error.
+    const double s = static_cast<double>(seed);
+    const TooltipTruth t = truthOf(0.0, std::fmod(s * 1.7, 5.0) - 2.5, std::fmod(s * 3.1, 8.0) - 4.0,
+                                   std::fmod(s * 2.3, 6.0) - 3.0, std::fmod(s * 1.1, 3.0) - 1.5, 1.0 + std::fmod(s, 5.0));
+    const TooltipDiagnosis d = diagnoseTooltip(plan, {simulateTooltip(plan, t, seed)}, {});
+    if (d.found) ++alarms;
+  }
+  EXPECT_EQ(alarms, 0);
+}
+
+TEST(TooltipResults, RoundTripAndErrors) {
+  const ProbePlan plan = plan004();
+  const TooltipRun run = simulateTooltip(plan, truthOf(10, 1, 0, 0, 0, 0.5), 3);
+  const std::string text = tooltipResultsText(plan, run);
+  const TooltipRun back = parseTooltipResults(text, "r.csv", plan);
+  ASSERT_EQ(back.size(), run.size());
+  for (size_t k = 0; k < run.size(); ++k) EXPECT_NEAR(back[k].t_um, run[k].t_um, 0.5e-4);
+  try {
+    parseTooltipResults("angle_deg,dy_um,dz_um\n0,0,0\n5,x,0\n", "bad.csv", plan);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line(), 3);
+  }
+  EXPECT_THROW(parseTooltipResults("angle_deg,dy_um,dz_um\n0,0,0\n", "short.csv", plan), InputError);
+  EXPECT_THROW(parseTooltipResults("a,b\n", "hdr.csv", plan), InputError);
+}
+
+}  // namespace
+}  // namespace rotacal

@@ -1,0 +1,85 @@
+// The tooltip cycle through the rotacal command: plan -> generate (every dialect; Heidenhain
+// refuses) -> simulate with a known pivot-length and angular error -> analyze (REPORT.json with
+// the injected dR, figures) -> diagnose (pivot_length found); and the contract's error form.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "cli/cli_run.hpp"
+#include "test_util.hpp"
+
+namespace rotacal {
+namespace {
+
+namespace fs = std::filesystem;
+
+using CliRun = test::CliRun;
+using test::sh;
+
+nlohmann::json readJson(const fs::path& p) {
+  std::ifstream in(p);
+  return nlohmann::json::parse(in);
+}
+
+TEST(TooltipCli, PlanGenerateSimulateAnalyzeDiagnose) {
+  const fs::path dir = fs::path(ROTACAL_BINARY_DIR) / "test_tmp" / "tooltip_cli";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string d = dir.string();
+  const std::string machine = test::sourcePath("examples/machines/head_ab.json");
+  CliRun r = sh("plan --cycle tooltip --machine " + machine +
+             " --set units=inch --set radius_mm=381 --set step_deg=5 --set end_deg=90 -o " + d + "/plan.json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  for (const char* dialect : {"linuxcnc", "fanuc", "haas", "siemens", "okuma"}) {
+    r = sh("generate --plan " + d + "/plan.json --dialect " + dialect + " -o " + d + "/p_" + dialect);
+    EXPECT_EQ(r.code, 0) << dialect << ": " << r.out;
+  }
+  r = sh("generate --plan " + d + "/plan.json --dialect heidenhain -o " + d + "/p.h");
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("inverse-time"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(d + "/p.h"));
+
+  std::ofstream(d + "/truth.json") << R"({"format": "rotacal-truth/1",
+    "tooltip": {"dR_um": 40.0, "angular_error": {"offset_mdeg": 2.0, "sin_mdeg": -3.0}}})";
+  r = sh("simulate --plan " + d + "/plan.json --truth " + d + "/truth.json --dialect csv -o " + d + "/r.csv");
+  ASSERT_EQ(r.code, 0) << r.out;
+  r = sh("analyze --plan " + d + "/plan.json --results " + d + "/r.csv --dialect csv --json " + d + "/REPORT.json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto rep = readJson(d + "/REPORT.json");
+  EXPECT_EQ(rep["format"], "rotacal-report/1");
+  EXPECT_EQ(rep["cycle"], "tooltip");
+  // The results file rounds to 1e-4 um: the recovered dR is the truth to far better than 1e-3 x 40 um.
+  EXPECT_NEAR(rep["location_errors"]["dR"]["value"].get<double>(), 40.0, 0.04);
+  EXPECT_EQ(rep["location_errors"]["dR"]["unit"], "um");
+  ASSERT_EQ(rep["figures"].size(), 2u);
+  EXPECT_EQ(rep["figures"][1]["y"]["unit"], "mdeg");
+  // 90 deg: 004's formula has no value, the joint fit has one: 2 - 3 sin 90 = -1 mdeg.
+  EXPECT_EQ(rep["figures"][1]["series"][0]["x"].size(), 18u);
+  EXPECT_NEAR(rep["angular_error"][18]["value"].get<double>(), -1.0, 0.01);
+
+  r = sh("diagnose --plan " + d + "/plan.json --results " + d + "/r.csv --dialect csv --json " + d + "/DIAG.json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto dg = readJson(d + "/DIAG.json");
+  EXPECT_EQ(dg["verdict"], "effect_found");
+  EXPECT_EQ(dg["findings"][0]["cause"], "pivot_length");
+
+  // Bad input: FILE:LINE, exit 1, nothing written.
+  std::ofstream(d + "/bad.csv") << "angle_deg,dy_um,dz_um\n0,0,0\n5,1.0,oops\n";
+  r = sh("analyze --plan " + d + "/plan.json --results " + d + "/bad.csv --dialect csv --json " + d + "/BAD.json");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.out.find("bad.csv:3:"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(d + "/BAD.json"));
+  r = sh("plan --cycle tooltip --machine " + machine + " --set step_deg=7 -o " + d + "/p2.json");
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("head_ab.json"), std::string::npos) << r.out;
+}
+
+}  // namespace
+}  // namespace rotacal
