@@ -7,6 +7,8 @@
 
 #include <fmt/format.h>
 
+#include "core/limits.hpp"
+
 #include "core/errors.hpp"
 #include "core/rng.hpp"
 #include "core/units.hpp"
@@ -208,6 +210,17 @@ RtestSchedule rtestSchedule(const ProbePlan& plan) {
   return s;
 }
 
+void rtestCheckPlanOptions(const ProbePlan& plan) {
+  const RtestSchedule s = rtestSchedule(plan);
+  if (!(s.interval_s > 0) || !(s.duration_s >= 0) || !(s.recip_feed_deg_min > 0))
+    throw std::invalid_argument("rtest: interval_min, recip_feed_deg_min must be > 0 and duration_h >= 0");
+  s.cycles();
+  if (!(optionNumber(plan, "retract_mm") > plan.machine.probe.ball_radius_mm()) || !(optionNumber(plan, "dwell_s") >= 0))
+    throw std::invalid_argument("rtest: dwell_s must be >= 0 and retract_mm larger than the sphere radius");
+  if (plan.options.count("sensor_noise_um") && !(optionNumber(plan, "sensor_noise_um") > 0))
+    throw std::invalid_argument("rtest: sensor_noise_um must be > 0");
+}
+
 Eigen::Vector3d rtestNest_w(const ProbePlan& plan) { return plan.points.front().contact_w_mm; }
 
 std::vector<RtestMove> rtestCycleMoves(const ProbePlan& plan) {
@@ -323,22 +336,25 @@ RtestSeries simulateRtest(const ProbePlan& plan, const Truth& truth, const Rtest
   return series;
 }
 
-void rtestTruthFromJson(const JsonDoc& doc, Kinematics k, Truth& truth, RtestTruthExtras& extras) {
+static void rtestTruthFrom(const JsonDoc& doc, Kinematics k, Truth& truth, RtestTruthExtras& extras) {
   const Json& j = doc.value;
+  const Limits um = Limits::symmetric(kMaxLocationErrorUm, "um");
   if (j.contains("rtest")) {
-    const Json& r = j["rtest"];
-    extras.sphere_offset_m_mm.z() = umToMm(numberOr(doc, r, "tool_length_error_um", 0.0));
+    const Json& r = requireObject(doc, j, "rtest");
+    extras.sphere_offset_m_mm.z() = umToMm(numberOr(doc, r, "tool_length_error_um", 0.0, um));
   }
   if (!j.contains("component_errors")) return;
-  const Json& ce = j["component_errors"];
+  const Json& ce = requireObject(doc, j, "component_errors");
   const std::string key = std::string(1, tiltAxis(k)) + "_deg";
-  if (!ce.is_object() || !ce.contains(key) || !ce[key].is_array() || ce[key].empty())
-    doc.fail("component_errors", "component_errors needs \"" + key + "\": [angles...]");
+  if (!ce.contains(key) || !ce[key].is_array() || ce[key].empty())
+    doc.fail(j, "component_errors", "component_errors needs \"" + key + "\": [angles...]");
+  if (ce[key].size() > static_cast<size_t>(kMaxListValues))
+    doc.fail(ce, key, fmt::format("{} has {} angles; at most {}", key, ce[key].size(), kMaxListValues));
   std::vector<double> grid;
   for (const auto& v : ce[key]) {
-    if (!v.is_number()) doc.fail(key, key + " must hold numbers");
-    grid.push_back(v.get<double>());
-    if (grid.size() > 1 && !(grid.back() > grid[grid.size() - 2])) doc.fail(key, key + " must increase");
+    if (!v.is_number()) doc.fail(ce, key, key + " must hold numbers");
+    grid.push_back(checkNumber(doc, ce, key, v.get<double>(), Limits::symmetric(kMaxAngleDeg, "deg")));
+    if (grid.size() > 1 && !(grid.back() > grid[grid.size() - 2])) doc.fail(ce, key, key + " must increase");
   }
   std::vector<std::vector<double>> values(kRtestParams, std::vector<double>(grid.size(), 0.0));
   for (const auto& [name, entry] : ce.items()) {
@@ -346,16 +362,19 @@ void rtestTruthFromJson(const JsonDoc& doc, Kinematics k, Truth& truth, RtestTru
     int p = -1;
     for (int q = 0; q < kRtestParams; ++q)
       if (rtestParameterName(k, q) == name) p = q;
-    if (p < 0) doc.fail(name, "component_errors: '" + name + "' is not one of the six errors of 002 Table 2 for this machine");
-    const std::string unit = entry.value("unit", "");
-    if (!entry.contains("values") || !entry["values"].is_array() || entry["values"].size() != grid.size())
-      doc.fail(name, fmt::format("component_errors.{} needs \"values\" with {} numbers", name, grid.size()));
+    if (p < 0)
+      doc.fail(ce, name, "component_errors: '" + name + "' is not one of the six errors of 002 Table 2 for this machine");
+    if (!entry.is_object() || !entry.contains("values") || !entry["values"].is_array() ||
+        entry["values"].size() != grid.size())
+      doc.fail(ce, name, fmt::format("component_errors.{} needs \"values\" with {} numbers", name, grid.size()));
+    const std::string unit = stringOr(doc, entry, "unit", "");
     const bool len = rtestParameterIsLength(p);
     if ((len && unit != "um") || (!len && unit != "mdeg"))
-      doc.fail(name, fmt::format("component_errors.{}: unit must be {}", name, len ? "um" : "mdeg"));
+      doc.fail(entry, "unit", fmt::format("component_errors.{}: unit must be {}", name, len ? "um" : "mdeg"));
+    const Limits lim = len ? um : Limits::symmetric(kMaxAngleErrorMdeg, "mdeg");
     for (size_t i = 0; i < grid.size(); ++i) {
-      if (!entry["values"][i].is_number()) doc.fail(name, "component_errors." + name + ": values must be numbers");
-      const double v = entry["values"][i].get<double>();
+      if (!entry["values"][i].is_number()) doc.fail(entry, "values", "component_errors." + name + ": values must be numbers");
+      const double v = checkNumber(doc, entry, "values", entry["values"][i].get<double>(), lim);
       values[p][i] = len ? umToMm(v) : mdegToRad(v);
     }
   }
@@ -371,6 +390,10 @@ void rtestTruthFromJson(const JsonDoc& doc, Kinematics k, Truth& truth, RtestTru
       d[idx[p]] += grid.size() == 1 ? values[p][0] : (1.0 - w) * values[p][i] + w * values[p][i + 1];
     return d;
   };
+}
+
+void rtestTruthFromJson(const JsonDoc& doc, Kinematics k, Truth& truth, RtestTruthExtras& extras) {
+  guardJson(doc, [&] { rtestTruthFrom(doc, k, truth, extras); });
 }
 
 std::string rtestResultsCsv(const ProbePlan& plan, const RtestSeries& series) {

@@ -7,6 +7,8 @@
 
 #include <fmt/format.h>
 
+#include "core/limits.hpp"
+
 #include "core/errors.hpp"
 #include "core/rng.hpp"
 #include "core/units.hpp"
@@ -196,31 +198,32 @@ double TooltipTruth::angularErrorMdeg(double theta_deg) const {
 }
 
 TooltipTruth tooltipTruthFrom(const JsonDoc& doc, const Json& truth) {
-  TooltipTruth t;
-  if (!truth.is_object() || truth.value("format", "") != "rotacal-truth/1")
-    doc.fail("format", "not a truth file (expected \"format\": \"rotacal-truth/1\")");
-  if (truth.contains("location_errors") && !truth["location_errors"].empty())
-    doc.fail("location_errors", "a tooltip truth has no table location errors: use the 'tooltip' object");
-  t.noise_um = numberOr(doc, truth, "probe_noise_um", 0.0);
-  if (!truth.contains("tooltip")) return t;
-  const Json& j = truth["tooltip"];
-  if (!j.is_object()) doc.fail("tooltip", "'tooltip' must be an object");
-  static const std::set<std::string> known = {"dR_um", "angular_error"};
-  for (const auto& [k, v] : j.items())
-    if (!known.count(k)) doc.fail(k, "unknown tooltip truth field '" + k + "' (expected dR_um, angular_error)");
-  t.dR_um = numberOr(doc, j, "dR_um", 0.0);
-  if (j.contains("angular_error")) {
-    const Json& e = j["angular_error"];
-    static const std::set<std::string> ek = {"offset_mdeg", "slope_mdeg_per_90deg", "sin_mdeg", "sin2_mdeg"};
-    for (const auto& [k, v] : e.items())
-      if (!ek.count(k)) doc.fail(k, "unknown angular_error term '" + k + "'");
-    t.offset_mdeg = numberOr(doc, e, "offset_mdeg", 0.0);
-    t.slope_mdeg_per_90deg = numberOr(doc, e, "slope_mdeg_per_90deg", 0.0);
-    t.sin_mdeg = numberOr(doc, e, "sin_mdeg", 0.0);
-    t.sin2_mdeg = numberOr(doc, e, "sin2_mdeg", 0.0);
-  }
-  if (t.noise_um < 0) doc.fail("probe_noise_um", "noise must be >= 0");
-  return t;
+  return guardJson(doc, [&] {
+    TooltipTruth t;
+    if (!truth.is_object() || !truth.contains("format") || truth["format"] != "rotacal-truth/1")
+      doc.fail(truth, "format", "not a truth file (expected \"format\": \"rotacal-truth/1\")");
+    if (truth.contains("location_errors") && !truth["location_errors"].empty())
+      doc.fail(truth, "location_errors", "a tooltip truth has no table location errors: use the 'tooltip' object");
+    t.noise_um = numberOr(doc, truth, "probe_noise_um", 0.0, Limits::nonNegative(kMaxNoiseUm, "um"));
+    if (!truth.contains("tooltip")) return t;
+    const Json& j = requireObject(doc, truth, "tooltip");
+    static const std::set<std::string> known = {"dR_um", "angular_error"};
+    for (const auto& [k, v] : j.items())
+      if (!known.count(k)) doc.fail(j, k, "unknown tooltip truth field '" + k + "' (expected dR_um, angular_error)");
+    t.dR_um = numberOr(doc, j, "dR_um", 0.0, Limits::symmetric(kMaxLocationErrorUm, "um"));
+    if (j.contains("angular_error")) {
+      const Json& e = requireObject(doc, j, "angular_error");
+      static const std::set<std::string> ek = {"offset_mdeg", "slope_mdeg_per_90deg", "sin_mdeg", "sin2_mdeg"};
+      for (const auto& [k, v] : e.items())
+        if (!ek.count(k)) doc.fail(e, k, "unknown angular_error term '" + k + "'");
+      const Limits mdeg = Limits::symmetric(kMaxAngleErrorMdeg, "mdeg");
+      t.offset_mdeg = numberOr(doc, e, "offset_mdeg", 0.0, mdeg);
+      t.slope_mdeg_per_90deg = numberOr(doc, e, "slope_mdeg_per_90deg", 0.0, mdeg);
+      t.sin_mdeg = numberOr(doc, e, "sin_mdeg", 0.0, mdeg);
+      t.sin2_mdeg = numberOr(doc, e, "sin2_mdeg", 0.0, mdeg);
+    }
+    return t;
+  });
 }
 
 TooltipRun simulateTooltip(const ProbePlan& plan, const TooltipTruth& truth, std::uint64_t seed) {
