@@ -19,6 +19,7 @@
 #include "core/contributors.hpp"
 #include "core/errors.hpp"
 #include "core/json_io.hpp"
+#include "core/limits.hpp"
 #include "core/machine.hpp"
 #include "core/plan_design.hpp"
 #include "core/probe_plan.hpp"
@@ -184,9 +185,24 @@ int cmdDesign(const Common& c, const std::string& machine_file, const std::strin
   if (!a_list.empty()) o.a_deg = numberList("--a-deg", a_list);
   if (!c_list.empty()) o.c_deg = numberList("--c-deg", c_list);
   o.exchange_passes = passes;
+  if (passes > kMaxExchangePasses)
+    throw CLI::ValidationError("--exchange-passes", fmt::format("at most {} (got {})", kMaxExchangePasses, passes));
   std::string why;
   if (!o.validate(&why)) throw CLI::ValidationError("--points", why);
-  if (runs < 2) throw CLI::ValidationError("--runs", "must be >= 2");
+  if (runs < 2 || runs > kMaxMonteCarloRuns)
+    throw CLI::ValidationError("--runs", fmt::format("must be from 2 to {} (got {})", kMaxMonteCarloRuns, runs));
+  // The budgets of --sweep, checked before the first design runs.
+  std::vector<int> sweep_budgets;
+  if (!sweep.empty())
+    for (double b : numberList("--sweep", sweep)) {
+      if (b != std::floor(b) || b < 0 || b > kMaxPlanPoints)
+        throw CLI::ValidationError("--sweep",
+                                   fmt::format("budgets must be whole numbers up to {} (got {:g})", kMaxPlanPoints, b));
+      DesignOptions ob = o;
+      ob.points = static_cast<int>(b);
+      if (!ob.validate(&why)) throw CLI::ValidationError("--sweep", why);
+      sweep_budgets.push_back(ob.points);
+    }
   const MachineModel machine = loadMachine(machine_file);
   const ContributorSet cs = loadContributors(contrib_file);
   const auto t0 = std::chrono::steady_clock::now();
@@ -209,18 +225,16 @@ int cmdDesign(const Common& c, const std::string& machine_file, const std::strin
   const std::string crit = o.criterion == DesignOptions::Criterion::A ? "A" : "D";
   rows.push_back(evaluate(fmt::format("designed ({}, {})", crit, o.points), d.plan, cs, runs, seed));
   std::vector<PlanRow> sweep_rows;
-  if (!sweep.empty())
-    for (double b : numberList("--sweep", sweep)) {
-      DesignOptions ob = o;
-      ob.points = static_cast<int>(b);
-      if (!ob.validate(&why)) throw CLI::ValidationError("--sweep", why);
-      try {
-        sweep_rows.push_back(evaluate(fmt::format("designed ({}, {})", crit, ob.points), designPlan(machine, cs, ob).plan,
-                                      cs, runs, seed));
-      } catch (const std::invalid_argument& e) {
-        failFile(machine_file, e.what());
-      }
+  for (int b : sweep_budgets) {
+    DesignOptions ob = o;
+    ob.points = b;
+    try {
+      sweep_rows.push_back(evaluate(fmt::format("designed ({}, {})", crit, ob.points), designPlan(machine, cs, ob).plan,
+                                    cs, runs, seed));
+    } catch (const std::invalid_argument& e) {
+      failFile(machine_file, e.what());
     }
+  }
   writeFileAtomic(out, planToJson(d.plan).dump(1) + "\n");
 
   std::string t = fmt::format("designed plan: {} touches in {} poses, {:.1f} min of machine time ({}-optimal over {} "

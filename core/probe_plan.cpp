@@ -37,12 +37,17 @@ const PlanPose& ProbePlan::poseByName(const std::string& name) const {
 }
 
 ProbePlan makePlan(const std::string& cycle, const MachineModel& machine, const CycleOptions& options) {
-  if (cycle == "touch154") return makeTouch154Plan(machine, options);
-  if (cycle == "spheres3") return makeSpheres3Plan(machine, options);
-  if (cycle == "rtest") return makeRtestPlan(machine, options);
-  if (cycle == "spaceframe") return makeSpaceframePlan(machine, options);
-  if (cycle == "tooltip") return makeTooltipPlan(machine, options);
-  throw std::invalid_argument("unknown cycle '" + cycle + "' (expected touch154, rtest, spheres3, tooltip, spaceframe)");
+  ProbePlan plan;
+  if (cycle == "touch154") plan = makeTouch154Plan(machine, options);
+  else if (cycle == "spheres3") plan = makeSpheres3Plan(machine, options);
+  else if (cycle == "rtest") plan = makeRtestPlan(machine, options);
+  else if (cycle == "spaceframe") plan = makeSpaceframePlan(machine, options);
+  else if (cycle == "tooltip") plan = makeTooltipPlan(machine, options);
+  else throw std::invalid_argument("unknown cycle '" + cycle + "' (expected touch154, rtest, spheres3, tooltip, spaceframe)");
+  // Each cycle checks its own options before building; this holds whatever they missed to the
+  // limits the plan loader enforces, so that a plan written is a plan that loads.
+  requirePlanSize("cycle " + cycle, static_cast<double>(plan.points.size()), static_cast<double>(plan.poses.size()));
+  return plan;
 }
 
 double parseNumber(const std::string& key, const std::string& text) {
@@ -60,9 +65,23 @@ std::vector<double> parseNumberList(const std::string& key, const std::string& t
   std::vector<double> out;
   std::stringstream ss(text);
   std::string item;
-  while (std::getline(ss, item, ',')) out.push_back(parseNumber(key, item));
+  while (std::getline(ss, item, ',')) {
+    if (out.size() == static_cast<size_t>(kMaxListValues))
+      throw std::invalid_argument(
+          fmt::format("option {}: more than {} values; a list option takes at most {}", key, kMaxListValues, kMaxListValues));
+    out.push_back(parseNumber(key, item));
+  }
   if (out.empty()) throw std::invalid_argument("option " + key + ": empty list");
   return out;
+}
+
+void requirePlanSize(const std::string& options, double points, double poses) {
+  if (poses > kMaxPlanPoses)
+    throw std::invalid_argument(fmt::format("{}: the plan would have {:.0f} poses; at most {} poses are allowed in one plan",
+                                            options, poses, kMaxPlanPoses));
+  if (points > kMaxPlanPoints)
+    throw std::invalid_argument(fmt::format("{}: the plan would have {:.0f} touches; at most {} are allowed in one plan",
+                                            options, points, kMaxPlanPoints));
 }
 
 namespace {

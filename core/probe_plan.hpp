@@ -87,8 +87,14 @@ std::vector<std::string> strokeViolations(const ProbePlan& plan);
 /// Fills t_s of every point from the path, the feeds and the rotary speed.
 void estimateTimes(ProbePlan& plan);
 
-/// Splits "a,b,c" into doubles; throws std::invalid_argument naming the option.
+/// Splits "a,b,c" into doubles; throws std::invalid_argument naming the option, also beyond
+/// kMaxListValues values (core/limits.hpp).
 std::vector<double> parseNumberList(const std::string& key, const std::string& text);
 double parseNumber(const std::string& key, const std::string& text);
+
+/// Throws std::invalid_argument naming `options` (what the user set, e.g. "option c_step_deg =
+/// 1e-06") when a plan of that many touches or poses would exceed kMaxPlanPoints or
+/// kMaxPlanPoses. Called with the predicted counts before a plan is built.
+void requirePlanSize(const std::string& options, double points, double poses);
 
 }  // namespace rotacal

@@ -38,7 +38,13 @@ Pose tiltPose(Kinematics k, double tilt, double c) {
 
 int RtestSchedule::cycles() const {
   if (!thermal) return 1;
-  return static_cast<int>(std::floor(duration_s / interval_s + 1e-9)) + 1;
+  // A plan file's options are checked here again: they may have been edited since `plan`.
+  const double n = std::floor(duration_s / interval_s + 1e-9) + 1.0;
+  if (!(n >= 1.0 && n <= kMaxRepeats))
+    throw std::invalid_argument(fmt::format("rtest plan: duration_h / interval_min give {:g} cycles; at most {} repeats "
+                                            "are allowed",
+                                            n, kMaxRepeats));
+  return static_cast<int>(n);
 }
 
 double RtestSchedule::strokeTime_s() const {
@@ -107,6 +113,9 @@ ProbePlan makeRtestPlan(const MachineModel& m, const CycleOptions& options) {
         "rtest: {} and c_list must contain 0: the sensors are reset at {} = C = 0 (002 Eq. (4))", tilt_key,
         tiltAxis(m.kinematics)));
   if (cs.size() < 3) throw std::invalid_argument("rtest: c_list needs at least 3 angles to locate the C axis at each tilt");
+  // One pose per reading: the tilt list times the C list.
+  requirePlanSize(fmt::format("rtest: options {} ({} values) and c_list ({} values)", tilt_key, tilts.size(), cs.size()),
+                  static_cast<double>(tilts.size() * cs.size()), static_cast<double>(tilts.size() * cs.size()));
   // 002 Sec. 4.1: the nest at [-0.448, -91.187, 40.567] mm in the workpiece frame.
   const Eigen::Vector3d nest = parseVec3("nest_w_mm", opt(options, "nest_w_mm", "-0.448,-91.187,40.567"));
   if (std::hypot(nest.x(), nest.y()) < 10.0)
@@ -127,6 +136,10 @@ ProbePlan makeRtestPlan(const MachineModel& m, const CycleOptions& options) {
   if (recip.size() != 2 || recip[0] == recip[1]) throw std::invalid_argument("rtest: recip_list must be two different angles");
   if (!(interval > 0) || !(duration >= 0) || !(rfeed > 0))
     throw std::invalid_argument("rtest: interval_min, recip_feed_deg_min must be > 0 and duration_h >= 0");
+  if (thermal == "1" && 60.0 * duration / interval + 1.0 > kMaxRepeats)
+    throw std::invalid_argument(fmt::format(
+        "rtest: options duration_h = {:g} and interval_min = {:g} give {:.0f} cycles; at most {} repeats are allowed",
+        duration, interval, std::floor(60.0 * duration / interval) + 1.0, kMaxRepeats));
   const double noise = parseNumber("sensor_noise_um", opt(options, "sensor_noise_um", "0.2"));
   if (!(noise > 0)) throw std::invalid_argument("rtest: sensor_noise_um must be > 0");
   const RotaryAxis& ta = m.rotaryAxis(tiltAxis(m.kinematics));

@@ -92,7 +92,8 @@ TooltipOptions tooltipOptionsFrom(const CycleOptions& options, const MachineMode
   }
   if (auto* v = get("sweeps")) {
     const double s = parseNumber("sweeps", *v);
-    if (s < 0 || s != std::floor(s) || s > 100) throw std::invalid_argument("tooltip: option sweeps must be 0..100");
+    if (s < 0 || s != std::floor(s) || s > kMaxRepeats)
+      throw std::invalid_argument(fmt::format("tooltip: option sweeps must be a whole number 0..{}", kMaxRepeats));
     o.sweeps = static_cast<int>(s);
   }
   if (!(o.radius_mm > 0)) throw std::invalid_argument("tooltip: option radius_mm must be positive");
@@ -101,10 +102,16 @@ TooltipOptions tooltipOptionsFrom(const CycleOptions& options, const MachineMode
   if (std::abs(n - std::round(n)) > 1e-9)
     throw std::invalid_argument(fmt::format("tooltip: end_deg {} is not a whole number of steps of {} deg", o.end_deg,
                                             o.step_deg));
-  if (n > 3600) throw std::invalid_argument("tooltip: more than 3600 steps");
   const double m = -o.start_deg / o.step_deg;
-  if (o.start_deg > 0 || std::abs(m - std::round(m)) > 1e-9 || m > 3600)
+  if (o.start_deg > 0 || std::abs(m - std::round(m)) > 1e-9)
     throw std::invalid_argument("tooltip: start_deg must be <= 0 and a whole number of steps (the reading is zeroed at 0 deg)");
+  // Readings per sweep: the static test from start_deg to end_deg; a dynamic test goes out to
+  // +end, back to -end and home again, `sweeps` times. All of it once per other_deg angle.
+  const double per_sweep = o.sweeps == 0 ? m + n + 1.0 : 1.0 + 4.0 * n * o.sweeps;
+  requirePlanSize(fmt::format("tooltip: options step_deg = {:g}, end_deg = {:g}, start_deg = {:g}, sweeps = {}, other_deg "
+                              "({} values)",
+                              o.step_deg, o.end_deg, o.start_deg, o.sweeps, o.other_deg.size()),
+                  per_sweep * static_cast<double>(o.other_deg.size()), static_cast<double>(o.other_deg.size()));
   if (o.start_deg < 0 && o.sweeps > 0) throw std::invalid_argument("tooltip: start_deg is for the static test (sweeps = 0)");
   if (!(o.move_s > 0)) throw std::invalid_argument("tooltip: option move_s must be positive");
   if (o.dwell_s < 0) throw std::invalid_argument("tooltip: option dwell_s must be >= 0");

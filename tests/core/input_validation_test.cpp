@@ -1,6 +1,6 @@
 // Bad input is refused with the file and the line of the offending value (issue 14): every field
 // of a machine, plan, truth and contributors file that is of the wrong type, not finite, of the
-// wrong sign or out of range.
+// wrong sign or out of range; every count a user can set is capped before anything is built.
 // Expected lines are found by searching the test's own text for the substituted value, never
 // by asking the parser that is under test.
 #include <gtest/gtest.h>
@@ -13,6 +13,7 @@
 #include "core/contributors.hpp"
 #include "core/errors.hpp"
 #include "core/json_io.hpp"
+#include "core/limits.hpp"
 #include "core/machine.hpp"
 #include "core/probe_plan.hpp"
 #include "core/simulation.hpp"
@@ -258,6 +259,69 @@ TEST(PlanValidation, AHandEditedSpheres3PoseWithoutTouchesIsRefusedByTheLoader) 
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("has 0 touches of sphere 2"), std::string::npos) << e.what();
   }
+}
+
+// ---- Caps --------------------------------------------------------------------------------
+
+struct CapCase {
+  std::string cycle;
+  MachineModel machine;
+  CycleOptions options;
+  std::string names;  // the option the message must name
+};
+
+std::string listOf(int n, double first, double step) {
+  std::string s;
+  for (int i = 0; i < n; ++i) s += (i ? "," : "") + fmt::format("{:g}", first + i * step);
+  return s;
+}
+
+TEST(Caps, EveryCountAUserSetsIsCappedWithTheOptionNamed) {
+  const MachineModel ac = test::acMachine();
+  const MachineModel bc = loadMachine(test::sourcePath("examples/machines/bc_trunnion.json"));
+  const MachineModel head = loadMachine(test::sourcePath("examples/machines/head_ab.json"));
+  const std::vector<CapCase> cases = {
+      {"touch154", ac, {{"top_offsets_mm", listOf(3000, -45, 0.03)}}, "top_offsets_mm"},
+      {"touch154", ac, {{"top_offsets_mm", listOf(40, -45, 2)}}, "top_offsets_mm"},  // 7 x 40^2 touches
+      {"touch154", ac, {{"side_offsets_mm", listOf(400, -45, 0.2)}}, "side_offsets_mm"},
+      {"spheres3", ac, {{"c_step_deg", "1e-6"}}, "c_step_deg"},
+      {"spheres3", ac, {{"c_step_deg", "8.4e-08"}}, "c_step_deg"},
+      {"spheres3", ac, {{"c_step_deg", "0.5"}}, "c_step_deg"},  // 720 poses
+      {"rtest", bc, {{"c_list", listOf(100, 0, 3)}}, "c_list"},    // 5 x 100 poses
+      {"rtest", bc, {{"b_list", listOf(400, -60, 0.3)}}, "b_list"},
+      {"rtest", bc, {{"thermal", "1"}, {"duration_h", "1000"}, {"interval_min", "1"}}, "duration_h"},
+      {"rtest", bc, {{"thermal", "1"}, {"interval_min", "1e-300"}}, "interval_min"},
+      {"spaceframe", ac, {{"theta_list", listOf(20, 0, 18)}, {"phi_list", listOf(20, -90, 4.5)}}, "theta_list"},
+      {"spaceframe", ac, {{"theta_list", listOf(300, 0, 1)}}, "theta_list"},  // 300 poses x 35 touches
+      {"tooltip", head, {{"step_deg", "0.001"}, {"end_deg", "90"}}, "step_deg"},
+      {"tooltip", head, {{"step_deg", "1e-300"}, {"end_deg", "90"}}, "step_deg"},
+      {"tooltip", head, {{"sweeps", "100000"}}, "sweeps"},
+      {"tooltip", head, {{"sweeps", "1000"}}, "sweeps"},  // 1000 sweeps x 4 x 18 steps
+      {"tooltip", head, {{"other_deg", listOf(400, -80, 0.4)}}, "other_deg"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.cycle + " " + c.options.begin()->first + "=" + c.options.begin()->second.substr(0, 40));
+    try {
+      makePlan(c.cycle, c.machine, c.options);
+      ADD_FAILURE() << "built";
+    } catch (const std::invalid_argument& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find(c.names), std::string::npos) << m;
+      EXPECT_TRUE(m.find("at most") != std::string::npos || m.find("0..") != std::string::npos) << m;
+    }
+  }
+}
+
+TEST(Caps, APlanAtTheCapsIsBuiltWrittenAndLoaded) {
+  // spheres3 at 1 deg: kMaxPlanPoses poses of 15 touches each.
+  const ProbePlan plan = makePlan("spheres3", test::acMachine(), {{"c_step_deg", "1"}});
+  EXPECT_EQ(plan.poses.size(), static_cast<size_t>(kMaxPlanPoses));
+  EXPECT_EQ(plan.points.size(), 15u * kMaxPlanPoses);
+  const ProbePlan back = planFromJson(parseJsonText(planToJson(plan).dump(1), "p.json"));
+  EXPECT_EQ(back.points.size(), plan.points.size());
+  // A fractional start keeps every pose name distinct.
+  const ProbePlan half = makePlan("spheres3", test::acMachine(), {{"c_step_deg", "1"}, {"c_start_deg", "0.5"}});
+  EXPECT_NO_THROW(planFromJson(parseJsonText(planToJson(half).dump(1), "p.json")));
 }
 
 // ---- Truth and contributors --------------------------------------------------------------
