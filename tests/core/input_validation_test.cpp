@@ -17,6 +17,7 @@
 #include "core/machine.hpp"
 #include "core/probe_plan.hpp"
 #include "core/simulation.hpp"
+#include "core/spheres3_identification.hpp"
 #include "test_util.hpp"
 
 namespace rotacal {
@@ -258,6 +259,23 @@ TEST(PlanValidation, AHandEditedSpheres3PoseWithoutTouchesIsRefusedByTheLoader) 
     FAIL();
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("has 0 touches of sphere 2"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Spheres3, APoseWithoutTouchesIsAnErrorNotACrash) {
+  // The identification's own guard, for plans built in code.
+  ProbePlan plan = makePlan("spheres3", test::acMachine(), {});
+  const MeasurementRun run = simulate(plan, test::truthWith(test::table4Mean()), {});
+  const std::string last = plan.poses.back().name;
+  std::vector<ProbePoint> kept;
+  for (const auto& p : plan.points)
+    if (p.pose_name != last) kept.push_back(p);
+  plan.points = kept;
+  try {
+    identifySpheres3(plan, {run}, {});
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("has 0 touches of sphere 1"), std::string::npos) << e.what();
   }
 }
 
