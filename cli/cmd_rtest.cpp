@@ -21,7 +21,6 @@ int rtestSimulate(const Common& c, const ProbePlan& plan, const std::string& tru
   o.seed = seed;
   o.noise_um = noise_given ? noise_um : truth.noise_um;
   o.start_s = start_s;
-  if (o.noise_um < 0) throw CLI::ValidationError("--noise-um", "must be >= 0");
   RtestSeries s;
   try {
     s = simulateRtest(plan, truth, extras, o);

@@ -23,7 +23,6 @@ int simulateTooltipCmd(const Common& c, const ProbePlan& plan, const std::string
   const JsonDoc doc = readJsonFile(truth_file);
   TooltipTruth truth = tooltipTruthFrom(doc, doc.value);
   if (noise_given) truth.noise_um = noise_um;
-  if (truth.noise_um < 0) throw CLI::ValidationError("--noise-um", "must be >= 0");
   TooltipRun run;
   try {
     run = simulateTooltip(plan, truth, seed);

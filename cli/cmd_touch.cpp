@@ -18,6 +18,7 @@
 #include "core/errors.hpp"
 #include "core/identification.hpp"
 #include "core/json_io.hpp"
+#include "core/limits.hpp"
 #include "core/machine.hpp"
 #include "core/point_deviations.hpp"
 #include "core/probe_plan.hpp"
@@ -82,6 +83,13 @@ int cmdGenerate(const Common& c, const std::string& plan_file, const std::string
 int cmdSimulate(const Common& c, const std::string& plan_file, const std::string& truth_file, double noise_um,
                 bool noise_given, std::uint64_t seed, double start_s, bool start_given, const std::string& dialect_name,
                 const std::string& out) {
+  // NaN would pass a "< 0" test and poison every trigger; a clock beyond the controllers' years
+  // cannot be printed.
+  if (noise_given && !(noise_um >= 0 && noise_um <= kMaxNoiseUm))
+    throw CLI::ValidationError("--noise-um", fmt::format("must be a number from 0 to {:g} um (got {})", kMaxNoiseUm, noise_um));
+  if (start_given && !(start_s >= 0 && start_s <= kMaxClockSeconds))
+    throw CLI::ValidationError("--start-s", fmt::format("must be a number of seconds from 0 to {:g} (got {})",
+                                                        kMaxClockSeconds, start_s));
   const ProbePlan plan = loadPlan(plan_file);
   if (plan.cycle == "tooltip") {
     (void)start_s, (void)start_given;
@@ -92,7 +100,6 @@ int cmdSimulate(const Common& c, const std::string& plan_file, const std::string
   Truth truth = loadTruth(truth_file, plan.machine.kinematics);
   if (noise_given) truth.noise_um = noise_um;
   if (start_given) truth.start_time_s = start_s;
-  if (truth.noise_um < 0) throw CLI::ValidationError("--noise-um", "must be >= 0");
   const Dialect& d = dialectOrFail(dialect_name);
   MeasurementRun run;
   try {
@@ -100,7 +107,13 @@ int cmdSimulate(const Common& c, const std::string& plan_file, const std::string
   } catch (const std::exception& e) {
     failFile(truth_file, e.what());
   }
-  writeFileAtomic(out, d.writeResults(plan, run));
+  std::string text;
+  try {
+    text = d.writeResults(plan, run);
+  } catch (const std::invalid_argument& e) {  // e.g. a clock the controller cannot print
+    failFile(truth_file, e.what());
+  }
+  writeFileAtomic(out, text);
   say(c, fmt::format("simulated {} triggers (noise {:.3f} um, seed {}) as {} results -> {}\n", run.points.size(),
                      truth.noise_um, seed, d.name(), out));
   return 0;

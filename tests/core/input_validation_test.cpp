@@ -10,6 +10,7 @@
 
 #include <fmt/format.h>
 
+#include "controllers/common.hpp"
 #include "core/contributors.hpp"
 #include "core/errors.hpp"
 #include "core/json_io.hpp"
@@ -386,6 +387,17 @@ TEST(ContributorValidation, AnImplausibleUncertaintyIsRefusedAtItsLine) {
   std::string text = base;
   text.replace(u, end - u, "\"u\": 1e308");
   expectRefusedAt(text, lineAt(text, u), "'u'", "c.json", contributorsFromJson);
+}
+
+// ---- The controllers' clock ---------------------------------------------------------------
+
+TEST(Clock, StampsBeyondTheControllersYearsAreRefusedNotOverflowed) {
+  for (double s : {1e300, -1e300, 1e19, 4.1e11}) EXPECT_THROW(ctl::clockStamp(s), std::invalid_argument) << s;
+  // Within range the stamp still inverts clockSeconds.
+  for (double s : {0.0, 1.0e9, 2.5e11, -3.0e9}) {
+    const auto c = ctl::clockStamp(s);
+    EXPECT_EQ(ctl::clockSeconds(c.yyyymmdd, c.hhmmss).value_or(-1), s);
+  }
 }
 
 }  // namespace
