@@ -33,13 +33,17 @@ std::vector<Command> diagnoseCommands(CLI::App& app, const Common& common) {
   cmd->add_option("--text", a->text_out, "the readable summary, also printed on stdout");
   cmd->add_option("--alpha", a->alpha, "false-alarm rate of the tests (default 0.001)");
   return {{cmd, [a, &common] {
+             std::vector<std::string> inputs = a->results;
+             inputs.push_back(a->plan_file);
+             checkOutputs({{"--json", a->json_out}, {"--text", a->text_out}, {"--html", a->html_out}}, inputs);
              const ProbePlan plan = loadPlan(a->plan_file);
              const Dialect& d = dialectOrFail(a->dialect);
              if (plan.cycle == "tooltip")
                return diagnoseTooltipCmd(common, plan, a->results, a->alpha, a->json_out, a->text_out, a->html_out);
              if (plan.cycle == "rtest") return rtestDiagnose(common, plan, a->results, a->json_out, a->text_out, a->alpha, a->html_out);
              std::vector<MeasurementRun> runs;
-             for (const auto& f : a->results) runs.push_back(d.parseResults(readTextFile(f), f, plan));
+             const std::vector<std::string> texts = readResultsFiles(a->results);
+             for (size_t i = 0; i < texts.size(); ++i) runs.push_back(d.parseResults(texts[i], a->results[i], plan));
              if (plan.cycle == "spheres3")
                return diagnoseSpheres3Cli(common, plan, runs, a->results, a->alpha, a->json_out, a->text_out, a->html_out);
              if (plan.cycle == "spaceframe")
@@ -63,10 +67,7 @@ std::vector<Command> diagnoseCommands(CLI::App& app, const Common& common) {
              const std::string text = diagnosisText(dg);
              Json dj = diagnosisToJson(dg);
              dj["figures"] = diagnosisFigures(dg, plan);  // drawn by the HTML report
-             writeOutput(a->json_out, dj.dump(1) + "\n");
-             writeHtml(a->html_out, dj);
-             if (!a->text_out.empty()) writeFileAtomic(a->text_out, text);
-             sayUnlessPiped(common, text, a->json_out, a->html_out);
+             writeDocuments(common, dj, text, a->json_out, a->text_out, a->html_out);
              return 0;
            }}};
 }

@@ -27,9 +27,12 @@ int rtestSimulate(const Common& c, const ProbePlan& plan, const std::string& tru
   } catch (const std::invalid_argument& e) {
     failFile(truth_file, e.what());
   }
-  writeFileAtomic(out, rtestResultsCsv(plan, s));
-  say(c, fmt::format("simulated {} R-test cycle(s) of {} readings (sensor noise {:.3f} um, seed {}) -> {}\n",
-                     s.cycles.size(), plan.points.size(), o.noise_um, seed, out));
+  OutputSet outputs;
+  outputs.add("-o", out, rtestResultsCsv(plan, s));
+  outputs.commit();
+  if (out != "-")
+    say(c, fmt::format("simulated {} R-test cycle(s) of {} readings (sensor noise {:.3f} um, seed {}) -> {}\n",
+                       s.cycles.size(), plan.points.size(), o.noise_um, seed, out));
   return 0;
 }
 
@@ -37,8 +40,10 @@ namespace {
 
 std::vector<RtestCycle> readCycles(const ProbePlan& plan, const std::vector<std::string>& results) {
   std::vector<RtestCycle> cycles;
-  for (const auto& f : results) {
-    const RtestSeries s = parseRtestResults(readTextFile(f), f, plan);
+  const std::vector<std::string> texts = readResultsFiles(results);
+  for (size_t i = 0; i < results.size(); ++i) {
+    const std::string& f = results[i];
+    const RtestSeries s = parseRtestResults(texts[i], f, plan);
     for (const auto& cy : s.cycles) {
       if (!cycles.empty() && cy.readings.front().t_s < cycles.back().readings.back().t_s)
         failFile(f, "cycles must be in time order across the results files");

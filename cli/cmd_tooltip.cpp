@@ -12,7 +12,8 @@ namespace {
 
 std::vector<TooltipRun> readRuns(const ProbePlan& plan, const std::vector<std::string>& results) {
   std::vector<TooltipRun> runs;
-  for (const auto& f : results) runs.push_back(parseTooltipResults(readTextFile(f), f, plan));
+  const std::vector<std::string> texts = readResultsFiles(results);
+  for (size_t i = 0; i < results.size(); ++i) runs.push_back(parseTooltipResults(texts[i], results[i], plan));
   return runs;
 }
 
@@ -29,9 +30,12 @@ int simulateTooltipCmd(const Common& c, const ProbePlan& plan, const std::string
   } catch (const std::invalid_argument& e) {
     failFile(truth_file, e.what());
   }
-  writeFileAtomic(out, tooltipResultsText(plan, run));
-  say(c, fmt::format("simulated {} tool-tip readings (dR {:.3f} um, noise {:.3f} um, seed {}) -> {}\n", run.size(),
-                     truth.dR_um, truth.noise_um, seed, out));
+  OutputSet outputs;
+  outputs.add("-o", out, tooltipResultsText(plan, run));
+  outputs.commit();
+  if (out != "-")
+    say(c, fmt::format("simulated {} tool-tip readings (dR {:.3f} um, noise {:.3f} um, seed {}) -> {}\n", run.size(),
+                       truth.dR_um, truth.noise_um, seed, out));
   return 0;
 }
 

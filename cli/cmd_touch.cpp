@@ -44,6 +44,8 @@ CycleOptions parseSets(const std::vector<std::string>& sets) {
 
 int cmdPlan(const Common& c, const std::string& cycle, const std::string& machine_file,
             const std::vector<std::string>& sets, const std::string& out) {
+  OutputSet outputs({machine_file});
+  checkOutputs({{"-o", out}}, {machine_file});
   const MachineModel machine = loadMachine(machine_file);
   ProbePlan plan;
   try {
@@ -51,13 +53,17 @@ int cmdPlan(const Common& c, const std::string& cycle, const std::string& machin
   } catch (const std::invalid_argument& e) {
     failFile(machine_file, e.what());
   }
-  writeFileAtomic(out, planToJson(plan).dump(1) + "\n");
-  say(c, fmt::format("plan {}: {} points in {} poses, about {:.0f} s of machine time -> {}\n", plan.cycle,
-                     plan.points.size(), plan.poses.size(), plan.points.empty() ? 0.0 : plan.points.back().t_s, out));
+  outputs.add("-o", out, planToJson(plan).dump(1) + "\n");
+  outputs.commit();
+  if (out != "-")
+    say(c, fmt::format("plan {}: {} points in {} poses, about {:.0f} s of machine time -> {}\n", plan.cycle,
+                       plan.points.size(), plan.poses.size(), plan.points.empty() ? 0.0 : plan.points.back().t_s, out));
   return 0;
 }
 
 int cmdGenerate(const Common& c, const std::string& plan_file, const std::string& dialect_name, const std::string& out) {
+  OutputSet outputs({plan_file});
+  checkOutputs({{"-o", out}}, {plan_file});
   const ProbePlan plan = loadPlan(plan_file);
   const Dialect& d = dialectOrFail(dialect_name);
   std::string text;
@@ -71,12 +77,14 @@ int cmdGenerate(const Common& c, const std::string& plan_file, const std::string
   const auto problems = d.check(text, plan);
   if (!problems.empty())
     failFile(out, "generated program fails the " + std::string(d.name()) + " checker: " + problems.front());
-  writeFileAtomic(out, text);
-  say(c, fmt::format("{} program: {} {} -> {}\n", d.name(), plan.points.size(),
-                     plan.cycle == "tooltip" ? "tool-tip poses"
-                     : plan.cycle == "rtest" ? "R-test poses"
-                                             : "probing moves",
-                     out));
+  outputs.add("-o", out, text);
+  outputs.commit();
+  if (out != "-")
+    say(c, fmt::format("{} program: {} {} -> {}\n", d.name(), plan.points.size(),
+                       plan.cycle == "tooltip" ? "tool-tip poses"
+                       : plan.cycle == "rtest" ? "R-test poses"
+                                               : "probing moves",
+                       out));
   return 0;
 }
 
@@ -86,10 +94,12 @@ int cmdSimulate(const Common& c, const std::string& plan_file, const std::string
   // NaN would pass a "< 0" test and poison every trigger; a clock beyond the controllers' years
   // cannot be printed.
   if (noise_given && !(noise_um >= 0 && noise_um <= kMaxNoiseUm))
-    throw CLI::ValidationError("--noise-um", fmt::format("must be a number from 0 to {:g} um (got {})", kMaxNoiseUm, noise_um));
+    throw CLI::ValidationError("--noise-um",
+                               fmt::format("must be a number from 0 to {:g} um (got {})", kMaxNoiseUm, noise_um));
   if (start_given && !(start_s >= 0 && start_s <= kMaxClockSeconds))
     throw CLI::ValidationError("--start-s", fmt::format("must be a number of seconds from 0 to {:g} (got {})",
                                                         kMaxClockSeconds, start_s));
+  checkOutputs({{"-o", out}}, {plan_file, truth_file});
   const ProbePlan plan = loadPlan(plan_file);
   if (plan.cycle == "tooltip") {
     (void)start_s, (void)start_given;
@@ -113,9 +123,12 @@ int cmdSimulate(const Common& c, const std::string& plan_file, const std::string
   } catch (const std::invalid_argument& e) {  // e.g. a clock the controller cannot print
     failFile(truth_file, e.what());
   }
-  writeFileAtomic(out, text);
-  say(c, fmt::format("simulated {} triggers (noise {:.3f} um, seed {}) as {} results -> {}\n", run.points.size(),
-                     truth.noise_um, seed, d.name(), out));
+  OutputSet outputs({plan_file, truth_file});
+  outputs.add("-o", out, std::move(text));
+  outputs.commit();
+  if (out != "-")
+    say(c, fmt::format("simulated {} triggers (noise {:.3f} um, seed {}) as {} results -> {}\n", run.points.size(),
+                       truth.noise_um, seed, d.name(), out));
   return 0;
 }
 
@@ -123,6 +136,9 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
                const std::string& dialect_name, const std::string& method_name, const std::string& json_out,
                const std::string& text_out, const std::string& offsets_out, bool force,
                const std::string& html_out) {
+  std::vector<std::string> inputs = results;
+  inputs.push_back(plan_file);
+  checkOutputs({{"--json", json_out}, {"--text", text_out}, {"--html", html_out}, {"--offsets", offsets_out}}, inputs);
   const ProbePlan plan = loadPlan(plan_file);
   const Dialect& d = dialectOrFail(dialect_name);
   if (plan.cycle == "tooltip") {
@@ -138,7 +154,8 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
     throw CLI::ValidationError("--method", e.what());
   }
   std::vector<MeasurementRun> runs;
-  for (const auto& f : results) runs.push_back(d.parseResults(readTextFile(f), f, plan));
+  const std::vector<std::string> texts = readResultsFiles(results);
+  for (size_t i = 0; i < results.size(); ++i) runs.push_back(d.parseResults(texts[i], results[i], plan));
   if (plan.cycle == "spaceframe") return analyzeSpaceframeCommand(c, plan, runs, results, json_out, text_out, offsets_out, html_out);
   if (plan.cycle == "spheres3") return analyzeSpheres3(c, plan, runs, results, json_out, text_out, offsets_out, html_out);
 
@@ -169,9 +186,10 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
   const std::string text = analysisText(a);
   Json report_json = analysisToJson(a);
   report_json["points"] = pointDeviationsJson(plan, runs, a.main);  // the HTML report's deviation views
-  if (!json_out.empty()) writeOutput(json_out, report_json.dump(1) + "\n");
-  writeHtml(html_out, report_json);
-  if (!text_out.empty()) writeFileAtomic(text_out, text);
+  OutputSet outputs(inputs);
+  outputs.add("--json", json_out, report_json.dump(1) + "\n");
+  addHtml(outputs, html_out, report_json);
+  outputs.add("--text", text_out, text);
   if (!offsets_out.empty()) {
     OffsetRequest req;
     req.plan = &plan;
@@ -187,8 +205,9 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
     } catch (const std::invalid_argument& e) {
       failFile(offsets_out, e.what());
     }
-    writeFileAtomic(offsets_out, off);
+    outputs.add("--offsets", offsets_out, std::move(off));
   }
+  outputs.commit();
   sayUnlessPiped(c, text, json_out, html_out);
   if (a.main.summary.termination != Termination::Converged)
     std::fprintf(stderr, "rotacal: warning: %s\n", a.main.summary.message.c_str());

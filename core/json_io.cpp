@@ -11,6 +11,7 @@
 #include <vector>
 
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include "core/errors.hpp"
 
@@ -231,37 +232,101 @@ JsonDoc parseJsonText(std::string text, std::string file) {
 
 JsonDoc readJsonFile(const std::string& path) { return parseJsonText(readTextFile(path), path); }
 
-void writeFileAtomic(const std::string& path, const std::string& text) {
+void writeFileAtomic(const std::string& path, const std::string& text) { writeFilesTogether({{path, text}}); }
+
+void writeFilesTogether(const std::vector<std::pair<std::string, std::string>>& files) {
   namespace fs = std::filesystem;
-  const fs::path target(path);
-  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  struct Job {
+    std::string path;
+    fs::path target, tmp, saved;
+    bool existed = false;
+  };
+  std::vector<Job> jobs;
   std::random_device rd;
-  const fs::path tmp = dir / ("." + target.filename().string() + ".tmp" + std::to_string(rd()));
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw InputError(path, 0, "cannot write (directory missing or not writable)");
-    out << text;
-    out.flush();
-    if (!out) {
-      std::error_code ec;
-      fs::remove(tmp, ec);
-      throw InputError(path, 0, "write failed");
+  auto sibling = [&](const fs::path& target, const char* what) {
+    const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+    return dir / ("." + target.filename().string() + what + std::to_string(rd()));
+  };
+  auto discard = [&] {
+    std::error_code ec;
+    for (const auto& j : jobs) {
+      if (!j.tmp.empty()) fs::remove(j.tmp, ec);
+      if (!j.saved.empty()) fs::remove(j.saved, ec);
     }
-  }
-  std::error_code ec;
-  if (fs::exists(target, ec)) {
-    fs::path bak = target;
+  };
+
+  // 1. Every target must be writable before anything is written.
+  for (const auto& [path, text] : files) {
+    (void)text;
+    std::error_code ec;
+    Job j;
+    j.path = path;
+    j.target = fs::path(path);
+    const fs::path dir = j.target.has_parent_path() ? j.target.parent_path() : fs::path(".");
+    if (j.target.filename().empty() || j.target.filename() == "." || j.target.filename() == "..")
+      throw InputError(path, 0, "cannot write: not a file name");
+    if (!fs::is_directory(dir, ec))
+      throw InputError(path, 0, "cannot write: directory '" + dir.string() + "' does not exist");
+    if (::access(dir.c_str(), W_OK) != 0)
+      throw InputError(path, 0, "cannot write: directory '" + dir.string() + "' is not writable");
+    const auto st = fs::status(j.target, ec);
+    j.existed = fs::exists(st);
+    // The rename that puts a new file in place would replace a device or a directory entry.
+    if (j.existed && !fs::is_regular_file(st))
+      throw InputError(path, 0, "cannot write: it exists and is not a regular file (use - for stdout)");
+    fs::path bak = j.target;
     bak += ".bak";
-    fs::copy_file(target, bak, fs::copy_options::overwrite_existing, ec);
-    if (ec) {
-      fs::remove(tmp, ec);
-      throw InputError(path, 0, "cannot keep the previous version as " + bak.string());
-    }
+    if (j.existed && fs::exists(bak, ec) && !fs::is_regular_file(bak, ec))
+      throw InputError(path, 0, "cannot keep the previous version: " + bak.string() + " is not a regular file");
+    jobs.push_back(j);
   }
-  fs::rename(tmp, target, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    throw InputError(path, 0, "cannot rename the temporary file into place");
+  try {
+    // 2. The new contents, each beside its target.
+    for (size_t k = 0; k < files.size(); ++k) {
+      Job& j = jobs[k];
+      j.tmp = sibling(j.target, ".tmp");
+      std::ofstream out(j.tmp, std::ios::binary | std::ios::trunc);
+      if (!out) throw InputError(j.path, 0, "cannot write (directory missing or not writable)");
+      out << files[k].second;
+      out.flush();
+      if (!out) throw InputError(j.path, 0, "write failed (disk full?)");
+    }
+    // 3. A copy of each file about to be replaced: the rollback below, then FILE.bak.
+    for (Job& j : jobs) {
+      if (!j.existed) continue;
+      std::error_code ec;
+      j.saved = sibling(j.target, ".old");
+      fs::copy_file(j.target, j.saved, fs::copy_options::overwrite_existing, ec);
+      if (ec) throw InputError(j.path, 0, "cannot keep the previous version (" + ec.message() + ")");
+    }
+  } catch (...) {
+    discard();
+    throw;
+  }
+  // 4. Into place, all of them; on a failure the ones already placed are put back.
+  for (size_t k = 0; k < jobs.size(); ++k) {
+    std::error_code ec;
+    fs::rename(jobs[k].tmp, jobs[k].target, ec);
+    if (!ec) continue;
+    for (size_t i = 0; i < k; ++i) {
+      std::error_code ignore;
+      if (jobs[i].existed) fs::rename(jobs[i].saved, jobs[i].target, ignore);
+      else fs::remove(jobs[i].target, ignore);
+      jobs[i].saved.clear();
+      jobs[i].tmp.clear();
+    }
+    const std::string path = jobs[k].path;
+    discard();
+    throw InputError(path, 0, "cannot rename the temporary file into place (" + ec.message() + ")");
+  }
+  // 5. Only now, with every output in place, may earlier backups be replaced.
+  for (const Job& j : jobs) {
+    if (!j.existed) continue;
+    std::error_code ec;
+    fs::path bak = j.target;
+    bak += ".bak";
+    fs::rename(j.saved, bak, ec);
+    if (ec) fs::remove(j.saved, ec);
   }
 }
 

@@ -41,6 +41,14 @@ auto guardJson(const JsonDoc& doc, F&& load) -> decltype(load());
 /// existing file is kept as path + ".bak" (never overwrite a user's file without a copy).
 void writeFileAtomic(const std::string& path, const std::string& text);
 
+/// Writes (path, text) pairs together or not at all: every target is checked (its directory
+/// exists and is writable, it is not a directory or a device), every text written to a
+/// temporary file beside its target, then all are renamed into place. On any failure the
+/// temporary files are removed and every file that existed is left as it was (a target already
+/// renamed is put back); InputError names the target. Replaced files are kept as FILE.bak,
+/// the earlier .bak being replaced only once all targets are in place.
+void writeFilesTogether(const std::vector<std::pair<std::string, std::string>>& files);
+
 /// The interval a number read from a file must lie in. Every number must also be finite.
 struct Limits {
   double lo = -std::numeric_limits<double>::max();
