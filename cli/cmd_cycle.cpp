@@ -17,6 +17,7 @@
 #include "controllers/dialect.hpp"
 #include "core/errors.hpp"
 #include "core/json_io.hpp"
+#include "core/limits.hpp"
 #include "core/machine.hpp"
 #include "core/probe_plan.hpp"
 #include "cycles/cycle.hpp"
@@ -56,9 +57,11 @@ DialectIO dialectIO(const Dialect& d) {
           [&d](const ProbePlan& plan, const MeasurementRun& run) { return d.writeResults(plan, run); }};
 }
 
+// Each results file a distinct repeat (readResultsFiles refuses one measurement given twice).
 std::vector<InputFile> readInputs(const std::vector<std::string>& paths) {
+  const std::vector<std::string> texts = readResultsFiles(paths);
   std::vector<InputFile> files;
-  for (const auto& p : paths) files.push_back({p, readTextFile(p)});
+  for (size_t i = 0; i < paths.size(); ++i) files.push_back({paths[i], texts[i]});
   return files;
 }
 
@@ -85,21 +88,27 @@ int cmdPlan(const Common& c, const std::string& cycle_name, const std::string& m
   } catch (const std::invalid_argument& e) {
     throw CLI::ValidationError("--cycle", e.what());
   }
+  OutputSet outputs({machine_file});
+  checkOutputs({{"-o", out}}, {machine_file});
   const MachineModel machine = loadMachine(machine_file);
   ProbePlan plan;
   try {
-    plan = cycle->plan(machine, parseSets(sets));
+    plan = makePlan(std::string(cycle->name()), machine, parseSets(sets));
   } catch (const std::invalid_argument& e) {
     failFile(machine_file, e.what());
   }
-  writeFileAtomic(out, planToJson(plan).dump(1) + "\n");
-  say(c, fmt::format("plan {}: {} points in {} poses, about {:.0f} s of machine time -> {}\n", plan.cycle,
-                     plan.points.size(), plan.poses.size(), plan.points.empty() ? 0.0 : plan.points.back().t_s, out));
+  outputs.add("-o", out, planToJson(plan).dump(1) + "\n");
+  outputs.commit();
+  if (out != "-")
+    say(c, fmt::format("plan {}: {} points in {} poses, about {:.0f} s of machine time -> {}\n", plan.cycle,
+                       plan.points.size(), plan.poses.size(), plan.points.empty() ? 0.0 : plan.points.back().t_s, out));
   return 0;
 }
 
 int cmdGenerate(const Common& c, const std::string& plan_file, const std::string& dialect_name, const std::string& out) {
-  const ProbePlan plan = loadPlan(plan_file);
+  OutputSet outputs({plan_file});
+  checkOutputs({{"-o", out}}, {plan_file});
+  const ProbePlan plan = loadCyclePlan(plan_file);
   const Cycle& cycle = cycleOfPlanFile(plan, plan_file);
   const Dialect& d = dialectOrFail(dialect_name);
   std::string text;
@@ -111,18 +120,25 @@ int cmdGenerate(const Common& c, const std::string& plan_file, const std::string
   const auto problems = d.check(text, plan);
   if (!problems.empty())
     failFile(out, "generated program fails the " + std::string(d.name()) + " checker: " + problems.front());
-  writeFileAtomic(out, text);
-  say(c, fmt::format("{} program: {} {} -> {}\n", d.name(), plan.points.size(), cycle.pointNoun(), out));
+  outputs.add("-o", out, text);
+  outputs.commit();
+  if (out != "-") say(c, fmt::format("{} program: {} {} -> {}\n", d.name(), plan.points.size(), cycle.pointNoun(), out));
   return 0;
 }
 
 int cmdSimulate(const Common& c, const std::string& plan_file, const std::string& truth_file,
                 std::optional<double> noise_um, std::uint64_t seed, std::optional<double> start_s,
                 const std::string& dialect_name, const std::string& out) {
-  if (noise_um && !(std::isfinite(*noise_um) && *noise_um >= 0))
-    throw CLI::ValidationError("--noise-um", "must be a finite number >= 0");
-  if (start_s && !std::isfinite(*start_s)) throw CLI::ValidationError("--start-s", "must be a finite number");
-  const ProbePlan plan = loadPlan(plan_file);
+  // NaN would pass a "< 0" test and poison every trigger; a clock beyond the controllers' years
+  // cannot be printed.
+  if (noise_um && !(*noise_um >= 0 && *noise_um <= kMaxNoiseUm))
+    throw CLI::ValidationError("--noise-um",
+                               fmt::format("must be a number from 0 to {:g} um (got {})", kMaxNoiseUm, *noise_um));
+  if (start_s && !(*start_s >= 0 && *start_s <= kMaxClockSeconds))
+    throw CLI::ValidationError("--start-s", fmt::format("must be a number of seconds from 0 to {:g} (got {})",
+                                                        kMaxClockSeconds, *start_s));
+  checkOutputs({{"-o", out}}, {plan_file, truth_file});
+  const ProbePlan plan = loadCyclePlan(plan_file);
   const Cycle& cycle = cycleOfPlanFile(plan, plan_file);
   const Dialect& d = dialectOrFail(dialect_name);
   const DialectIO io = dialectIO(d);
@@ -139,15 +155,20 @@ int cmdSimulate(const Common& c, const std::string& plan_file, const std::string
   } catch (const std::invalid_argument& e) {
     failFile(truth_file, e.what());
   }
-  writeFileAtomic(out, s.results_text);
-  say(c, s.message + " -> " + out + "\n");
+  OutputSet outputs({plan_file, truth_file});
+  outputs.add("-o", out, std::move(s.results_text));
+  outputs.commit();
+  if (out != "-") say(c, s.message + " -> " + out + "\n");
   return 0;
 }
 
 int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<std::string>& results,
                const std::string& dialect_name, const std::string& method, const std::string& json_out,
                const std::string& text_out, const std::string& offsets_out, bool force, const std::string& html_out) {
-  const ProbePlan plan = loadPlan(plan_file);
+  std::vector<std::string> inputs = results;
+  inputs.push_back(plan_file);
+  checkOutputs({{"--json", json_out}, {"--text", text_out}, {"--html", html_out}, {"--offsets", offsets_out}}, inputs);
+  const ProbePlan plan = loadCyclePlan(plan_file);
   const Cycle& cycle = cycleOfPlanFile(plan, plan_file);
   const Dialect& d = dialectOrFail(dialect_name);
   if (!offsets_out.empty() && !cycle.noOffsetsReason().empty())
@@ -167,9 +188,10 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
   r.dialect = &io;
   r.method = method;
   const CycleDocuments docs = onResults(results, [&] { return cycle.analyze(r); });
-  if (!json_out.empty()) writeOutput(json_out, docs.doc.dump(1) + "\n");
-  writeHtml(html_out, docs.doc);
-  if (!text_out.empty()) writeFileAtomic(text_out, docs.text);
+  OutputSet outputs(inputs);
+  outputs.add("--json", json_out, docs.doc.dump(1) + "\n");
+  addHtml(outputs, html_out, docs.doc);
+  outputs.add("--text", text_out, docs.text);
   if (!offsets_out.empty() && docs.offsets) {
     OffsetRequest req;
     req.plan = &plan;
@@ -185,8 +207,9 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
     } catch (const std::invalid_argument& e) {
       failFile(offsets_out, e.what());
     }
-    writeFileAtomic(offsets_out, off);
+    outputs.add("--offsets", offsets_out, std::move(off));
   }
+  outputs.commit();
   sayUnlessPiped(c, docs.text, json_out, html_out);
   warn(docs.warnings);
   return 0;
@@ -196,7 +219,10 @@ int cmdDiagnose(const Common& c, const std::string& plan_file, const std::vector
                 const std::string& dialect_name, double alpha, const std::string& json_out, const std::string& text_out,
                 const std::string& html_out) {
   if (!(alpha > 0 && alpha < 0.5)) throw CLI::ValidationError("--alpha", "alpha must be in (0, 0.5)");
-  const ProbePlan plan = loadPlan(plan_file);
+  std::vector<std::string> inputs = results;
+  inputs.push_back(plan_file);
+  checkOutputs({{"--json", json_out}, {"--text", text_out}, {"--html", html_out}}, inputs);
+  const ProbePlan plan = loadCyclePlan(plan_file);
   const Cycle& cycle = cycleOfPlanFile(plan, plan_file);
   const Dialect& d = dialectOrFail(dialect_name);
   const DialectIO io = dialectIO(d);

@@ -66,12 +66,15 @@ std::vector<Command> historyCommands(CLI::App& app, const Common& common) {
              std::string why;
              if (!o.validate(&why)) throw CLI::ValidationError("--alpha", why);
              const std::string path = dbPath();
+             checkOutputs({{"--json", a->json_out}, {"--html", a->html_out}}, {path});
              const history::Database db(path, false);
              const auto cals = db.list(a->machine_id);
              if (cals.empty()) failFile(path, "no calibration of machine '" + a->machine_id + "'");
              const Json h = history::historyJson(a->machine_id, cals, o);
-             if (!a->json_out.empty()) writeOutput(a->json_out, h.dump(1) + "\n");
-             writeHtml(a->html_out, h);
+             OutputSet outputs({path});
+             outputs.add("--json", a->json_out, h.dump(1) + "\n");
+             addHtml(outputs, a->html_out, h);
+             outputs.commit();
              sayUnlessPiped(common, history::historyText(h), a->json_out, a->html_out);
              return 0;
            }}};

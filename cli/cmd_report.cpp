@@ -18,14 +18,19 @@ std::vector<Command> reportCommands(CLI::App& app, const Common& common) {
   cmd->add_option("document", a->in, "the JSON document")->required();
   cmd->add_option("--html", a->html_out, "REPORT.html (- for stdout)")->required();
   return {{cmd, [a, &common] {
+             checkOutputs({{"--html", a->html_out}}, {a->in});
              const JsonDoc doc = readJsonFile(a->in);
              std::string html;
              try {
                html = report::reportHtml(doc.value);
              } catch (const std::invalid_argument& e) {
-               doc.fail("figures", e.what());
+               doc.fail(doc.value, "figures", e.what());
+             } catch (const Json::exception& e) {  // a field of the wrong type somewhere in the document
+               doc.fail(doc.value, "", std::string("cannot draw the report: ") + e.what());
              }
-             writeOutput(a->html_out, html);
+             OutputSet outputs({a->in});
+             outputs.add("--html", a->html_out, std::move(html));
+             outputs.commit();
              if (a->html_out != "-") say(common, "report -> " + a->html_out + "\n");
              return 0;
            }}};

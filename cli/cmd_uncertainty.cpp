@@ -20,6 +20,7 @@
 #include "core/contributors.hpp"
 #include "core/errors.hpp"
 #include "core/json_io.hpp"
+#include "core/limits.hpp"
 #include "core/machine.hpp"
 #include "core/plan_design.hpp"
 #include "core/probe_plan.hpp"
@@ -60,6 +61,9 @@ int cmdUncertainty(const Common& c, const std::string& plan_file, const std::str
   o.methods = parseMethods(methods);
   std::string why;
   if (!o.validate(&why)) throw CLI::ValidationError("--runs/--threads", why);
+  std::vector<std::string> inputs = {plan_file, contrib_file};
+  if (!truth_file.empty()) inputs.push_back(truth_file);
+  checkOutputs({{"--json", json_out}, {"--text", text_out}}, inputs);
   const ProbePlan plan = loadPlan(plan_file);
   const ContributorSet cs = loadContributors(contrib_file);
   o.truth.kinematics = plan.machine.kinematics;
@@ -76,8 +80,10 @@ int cmdUncertainty(const Common& c, const std::string& plan_file, const std::str
   const std::string text = uncertaintyText(s, cs) +
                            fmt::format("\ntime: {:.3f} s to linearise the chain, {:.3f} s for {} runs on {} thread(s)\n",
                                        s.setup_seconds, s.run_seconds, s.runs, s.threads);
-  writeOutput(json_out, uncertaintyToJson(s, cs, plan_file).dump(1) + "\n");
-  if (!text_out.empty()) writeFileAtomic(text_out, text);
+  OutputSet outputs(inputs);
+  outputs.add("--json", json_out, uncertaintyToJson(s, cs, plan_file).dump(1) + "\n");
+  outputs.add("--text", text_out, text);
+  outputs.commit();
   sayUnlessPiped(c, text, json_out);
   if (s.failed > 0) std::fprintf(stderr, "rotacal: warning: %d least-squares identifications did not converge\n", s.failed);
   return 0;
@@ -185,9 +191,25 @@ int cmdDesign(const Common& c, const std::string& machine_file, const std::strin
   if (!a_list.empty()) o.a_deg = numberList("--a-deg", a_list);
   if (!c_list.empty()) o.c_deg = numberList("--c-deg", c_list);
   o.exchange_passes = passes;
+  if (passes > kMaxExchangePasses)
+    throw CLI::ValidationError("--exchange-passes", fmt::format("at most {} (got {})", kMaxExchangePasses, passes));
   std::string why;
   if (!o.validate(&why)) throw CLI::ValidationError("--points", why);
-  if (runs < 2) throw CLI::ValidationError("--runs", "must be >= 2");
+  if (runs < 2 || runs > kMaxMonteCarloRuns)
+    throw CLI::ValidationError("--runs", fmt::format("must be from 2 to {} (got {})", kMaxMonteCarloRuns, runs));
+  checkOutputs({{"-o", out}, {"--json", json_out}}, {machine_file, contrib_file});
+  // The budgets of --sweep, checked before the first design runs.
+  std::vector<int> sweep_budgets;
+  if (!sweep.empty())
+    for (double b : numberList("--sweep", sweep)) {
+      if (b != std::floor(b) || b < 0 || b > kMaxPlanPoints)
+        throw CLI::ValidationError("--sweep",
+                                   fmt::format("budgets must be whole numbers up to {} (got {:g})", kMaxPlanPoints, b));
+      DesignOptions ob = o;
+      ob.points = static_cast<int>(b);
+      if (!ob.validate(&why)) throw CLI::ValidationError("--sweep", why);
+      sweep_budgets.push_back(ob.points);
+    }
   const MachineModel machine = loadMachine(machine_file);
   const ContributorSet cs = loadContributors(contrib_file);
   const auto t0 = std::chrono::steady_clock::now();
@@ -212,19 +234,18 @@ int cmdDesign(const Common& c, const std::string& machine_file, const std::strin
   const std::string crit = o.criterion == DesignOptions::Criterion::A ? "A" : "D";
   rows.push_back(evaluate(fmt::format("designed ({}, {})", crit, o.points), d.plan, cs, runs, seed));
   std::vector<PlanRow> sweep_rows;
-  if (!sweep.empty())
-    for (double b : numberList("--sweep", sweep)) {
-      DesignOptions ob = o;
-      ob.points = static_cast<int>(b);
-      if (!ob.validate(&why)) throw CLI::ValidationError("--sweep", why);
-      try {
-        sweep_rows.push_back(evaluate(fmt::format("designed ({}, {})", crit, ob.points), designPlan(machine, cs, ob).plan,
-                                      cs, runs, seed));
-      } catch (const std::invalid_argument& e) {
-        failFile(machine_file, e.what());
-      }
+  for (int b : sweep_budgets) {
+    DesignOptions ob = o;
+    ob.points = b;
+    try {
+      sweep_rows.push_back(evaluate(fmt::format("designed ({}, {})", crit, ob.points), designPlan(machine, cs, ob).plan,
+                                    cs, runs, seed));
+    } catch (const std::invalid_argument& e) {
+      failFile(machine_file, e.what());
     }
-  writeFileAtomic(out, planToJson(d.plan).dump(1) + "\n");
+  }
+  OutputSet outputs({machine_file, contrib_file});
+  outputs.add("-o", out, planToJson(d.plan).dump(1) + "\n");
 
   std::string t = fmt::format("designed plan: {} touches in {} poses, {:.1f} min of machine time ({}-optimal over {} "
                               "candidate touches, {} exchanges, {:.1f} s) -> {}\n",
@@ -262,8 +283,9 @@ int cmdDesign(const Common& c, const std::string& machine_file, const std::strin
     Json sw = Json::array();
     for (const auto& r : sweep_rows) sw.push_back(rowJson(r));
     if (!sweep_rows.empty()) j["sweep"] = sw;
-    writeOutput(json_out, j.dump(1) + "\n");
+    outputs.add("--json", json_out, j.dump(1) + "\n");
   }
+  outputs.commit();
   sayUnlessPiped(c, t, json_out);
   return 0;
 }

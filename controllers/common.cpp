@@ -277,6 +277,10 @@ std::optional<double> clockSeconds(long yyyymmdd, long hhmmss) {
 
 ClockStamp clockStamp(double seconds) {
   if (!std::isfinite(seconds)) throw std::invalid_argument("a time stamp must be a finite number of seconds");
+  // Years 1900..9999 lie within +-2.6e11 s of the epoch: refuse anything beyond before the cast
+  // to an integer (1e300 s does not fit one) and the day arithmetic (which would overflow).
+  if (std::abs(seconds) > 4e11)
+    throw std::invalid_argument(fmt::format("time stamp {:g} s is outside the years 1900-9999", seconds));
   const long long s = static_cast<long long>(std::floor(seconds));
   const long long day = (s >= 0 ? s / 86400 : -((-s + 86399) / 86400));
   const long long sod = s - day * 86400;

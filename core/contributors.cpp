@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 
+#include "core/limits.hpp"
+
 #include "core/units.hpp"
 
 namespace rotacal {
@@ -81,6 +83,11 @@ bool ContributorSet::validate(std::string* why) const {
     if (!seen.insert(c.info->id).second) return fail("contributor '" + std::string(c.info->id) + "' is listed twice");
     if (!(c.u.minCoeff() >= 0) || !c.u.allFinite())
       return fail("contributor '" + std::string(c.info->id) + "': standard uncertainties must be finite and >= 0");
+    // Internal units: mm for lengths, else ratios (rad); 10 mm bounds both. Beyond it the
+    // linearised chain of the Monte Carlo is meaningless and its tables overflow.
+    if (c.u.maxCoeff() > kMaxContributorU * 1e-3)
+      return fail(fmt::format("contributor '{}': standard uncertainty beyond the plausible {:g} um (or {:g} mm/m)",
+                              c.info->id, kMaxContributorU, kMaxContributorU));
   }
   return linearAxisModel().validate(why);
 }
@@ -114,90 +121,96 @@ Quantity quantityOf(ContributorKind k) {
   }
 }
 
-/// {"u": number | [x, y, z], "unit": "..."} -> internal units. `key` names it in messages.
-Eigen::Vector3d readU(const JsonDoc& doc, const Json& entry, const std::string& key, Quantity q, bool vector,
+/// The largest standard uncertainty of a contributor in internal units (mm, or a ratio / rad).
+double maxContributorU(Quantity q) { return q == Quantity::Length ? kMaxContributorU * 1e-3 : kMaxContributorU * 1e-6; }
+
+/// parent[key] = {"u": number | [x, y, z], "unit": "..."} -> internal units.
+Eigen::Vector3d readU(const JsonDoc& doc, const Json& parent, const std::string& key, Quantity q, bool vector,
                       std::string* unit_out) {
+  const Json& entry = parent[key];
   if (!entry.is_object() || !entry.contains("u"))
-    doc.fail(key, fmt::format("'{}' needs {{\"u\": {}, \"unit\": ...}}", key, vector ? "[x, y, z]" : "number"));
+    doc.fail(parent, key, fmt::format("'{}' needs {{\"u\": {}, \"unit\": ...}}", key, vector ? "[x, y, z]" : "number"));
   if (!entry.contains("unit") || !entry["unit"].is_string())
-    doc.fail(key, fmt::format("'{}' lacks its unit ({})", key, q == Quantity::Length ? kLengthUnits : kRatioUnits));
+    doc.fail(parent, key, fmt::format("'{}' lacks its unit ({})", key, q == Quantity::Length ? kLengthUnits : kRatioUnits));
   const std::string unit = entry["unit"].get<std::string>();
   double f = 0;
   if (!unitFactor(q, unit, &f))
-    doc.fail(key, fmt::format("'{}': unit '{}' is not one of {}", key, unit, q == Quantity::Length ? kLengthUnits : kRatioUnits));
+    doc.fail(entry, "unit",
+             fmt::format("'{}': unit '{}' is not one of {}", key, unit, q == Quantity::Length ? kLengthUnits : kRatioUnits));
+  // Finite, non-negative and plausible: a typo of 1e308 would overflow the Monte Carlo.
+  const Limits limits = Limits::nonNegative(maxContributorU(q) / f, unit);
   Eigen::Vector3d u = Eigen::Vector3d::Zero();
   const Json& v = entry["u"];
   if (vector && v.is_array()) {
-    if (v.size() != 3) doc.fail(key, fmt::format("'{}': u must be [x, y, z] or one number", key));
+    if (v.size() != 3) doc.fail(entry, "u", fmt::format("'{}': u must be [x, y, z] or one number", key));
     for (int i = 0; i < 3; ++i) {
-      if (!v[i].is_number()) doc.fail(key, fmt::format("'{}': u must hold numbers", key));
-      u[i] = v[i].get<double>();
+      if (!v[i].is_number()) doc.fail(entry, "u", fmt::format("'{}': u must hold numbers", key));
+      u[i] = checkNumber(doc, entry, "u", v[i].get<double>(), limits);
     }
   } else if (v.is_number()) {
-    u = Eigen::Vector3d::Constant(v.get<double>());
+    u = Eigen::Vector3d::Constant(checkNumber(doc, entry, "u", v.get<double>(), limits));
     if (!vector) u.tail<2>().setZero();
   } else {
-    doc.fail(key, fmt::format("'{}': u must be {}", key, vector ? "[x, y, z] or a number" : "a number"));
+    doc.fail(entry, "u", fmt::format("'{}': u must be {}", key, vector ? "[x, y, z] or a number" : "a number"));
   }
-  if (!u.allFinite() || u.minCoeff() < 0) doc.fail(key, fmt::format("'{}': u must be finite and >= 0", key));
   if (unit_out) *unit_out = unit;
   return u * f;
 }
 
 ReferenceUncertainty readReference(const JsonDoc& doc, const Json& r) {
   ReferenceUncertainty ref;
-  ref.source = r.value("source", "");
-  auto value = [&](const Json& e, const std::string& param) {
+  ref.source = stringOr(doc, r, "source", "");
+  auto value = [&](const Json& parent, const std::string& param) {
+    const Json& e = parent[param];
     const int i = parameterIndex(Kinematics::TableAC, param) >= 0 ? parameterIndex(Kinematics::TableAC, param)
                                                                    : parameterIndex(Kinematics::TableBC, param);
-    if (i < 0) doc.fail(param, "reference: unknown location error '" + param + "'");
+    if (i < 0) doc.fail(parent, param, "reference: unknown location error '" + param + "'");
     if (!e.is_object() || !e.contains("u") || !e["u"].is_number() || !e.contains("unit"))
-      doc.fail(param, "reference: '" + param + "' needs {\"u\": number, \"unit\": \"um\" | \"mdeg\"}");
-    const std::string unit = e["unit"].get<std::string>();
-    if (unit != "um" && unit != "mdeg") doc.fail(param, "reference: unit of '" + param + "' must be um or mdeg");
-    return e["u"].get<double>();
+      doc.fail(parent, param, "reference: '" + param + "' needs {\"u\": number, \"unit\": \"um\" | \"mdeg\"}");
+    const std::string unit = stringOr(doc, e, "unit", "");
+    if (unit != "um" && unit != "mdeg") doc.fail(e, "unit", "reference: unit of '" + param + "' must be um or mdeg");
+    return requireNumber(doc, e, "u", Limits::nonNegative(kMaxContributorU, unit));
   };
   if (r.contains("combined")) {
-    if (!r["combined"].is_object()) doc.fail("combined", "reference: 'combined' must be an object");
-    for (const auto& [param, e] : r["combined"].items()) ref.combined[param] = value(e, param);
+    const Json& c = requireObject(doc, r, "combined");
+    for (const auto& [param, e] : c.items()) ref.combined[param] = value(c, param);
   }
   if (r.contains("contributors")) {
-    if (!r["contributors"].is_object()) doc.fail("contributors", "reference: 'contributors' must be an object");
-    for (const auto& [id, per] : r["contributors"].items()) {
-      if (!findContributor(id)) doc.fail(id, "reference: unknown contributor '" + id + "'");
-      if (!per.is_object()) doc.fail(id, "reference: '" + id + "' must map parameters to {\"u\", \"unit\"}");
-      for (const auto& [param, e] : per.items()) ref.contributors[id][param] = value(e, param);
+    const Json& cs = requireObject(doc, r, "contributors");
+    for (const auto& [id, per] : cs.items()) {
+      if (!findContributor(id)) doc.fail(cs, id, "reference: unknown contributor '" + id + "'");
+      if (!per.is_object()) doc.fail(cs, id, "reference: '" + id + "' must map parameters to {\"u\", \"unit\"}");
+      for (const auto& [param, e] : per.items()) ref.contributors[id][param] = value(per, param);
     }
   }
   return ref;
 }
 
-}  // namespace
-
-ContributorSet contributorsFromJson(const JsonDoc& doc) {
+ContributorSet contributorsFrom(const JsonDoc& doc) {
   const Json& j = doc.value;
-  if (!j.is_object() || j.value("format", "") != "rotacal-contributors/1")
-    doc.fail("format", "not a contributors file (expected \"format\": \"rotacal-contributors/1\")");
+  if (!j.is_object() || !j.contains("format") || j["format"] != "rotacal-contributors/1")
+    doc.fail(j, "format", "not a contributors file (expected \"format\": \"rotacal-contributors/1\")");
   ContributorSet set;
   set.file = doc.file;
-  set.description = j.value("description", "");
+  set.description = stringOr(doc, j, "description", "");
   if (j.contains("node_spacing_mm")) {
     const Json& n = j["node_spacing_mm"];
     if (!n.is_array() || n.size() != 2 || !n[0].is_number() || !n[1].is_number())
-      doc.fail("node_spacing_mm", "'node_spacing_mm' must be [min, max] (000 Eq. (22): [20, 50])");
-    set.node_spacing_min_mm = n[0].get<double>();
-    set.node_spacing_max_mm = n[1].get<double>();
-    if (!(set.node_spacing_min_mm > 0) || !(set.node_spacing_max_mm >= set.node_spacing_min_mm))
-      doc.fail("node_spacing_mm", "'node_spacing_mm' must satisfy 0 < min <= max");
+      doc.fail(j, "node_spacing_mm", "'node_spacing_mm' must be [min, max] (000 Eq. (22): [20, 50])");
+    const Limits spacing = Limits::positive(kMaxCoordinateMm, "mm");
+    set.node_spacing_min_mm = checkNumber(doc, j, "node_spacing_mm", n[0].get<double>(), spacing);
+    set.node_spacing_max_mm = checkNumber(doc, j, "node_spacing_mm", n[1].get<double>(), spacing);
+    if (!(set.node_spacing_max_mm >= set.node_spacing_min_mm))
+      doc.fail(j, "node_spacing_mm", "'node_spacing_mm' must satisfy 0 < min <= max");
   }
   if (!j.contains("contributors") || !j["contributors"].is_object() || j["contributors"].empty())
-    doc.fail("contributors", "missing object 'contributors' (ids of 000 Table 5 with {\"u\", \"unit\"})");
+    doc.fail(j, "contributors", "missing object 'contributors' (ids of 000 Table 5 with {\"u\", \"unit\"})");
   const Json& cs = j["contributors"];
   for (const auto& [id, entry] : cs.items()) {
     if (!findContributor(id)) {
       std::string known;
       for (const auto& c : contributorCatalog()) known += (known.empty() ? "" : ", ") + std::string(c.id);
-      doc.fail(id, "unknown contributor '" + id + "' (known: " + known + ")");
+      doc.fail(cs, id, "unknown contributor '" + id + "' (known: " + known + ")");
     }
   }
   for (const auto& info : contributorCatalog()) {  // catalog order, whatever the file's order
@@ -209,24 +222,27 @@ ContributorSet contributorsFromJson(const JsonDoc& doc) {
     if (e.is_object() && e.contains("note") && e["note"].is_string()) c.note = e["note"].get<std::string>();
     if (info.kind == ContributorKind::FormError) {
       if (!e.is_object() || !e.contains("offset") || !e.contains("tilt"))
-        doc.fail(id, "'form_error' needs {\"offset\": {\"u\", \"unit\"}, \"tilt\": {\"u\", \"unit\"}}");
+        doc.fail(cs, id, "'form_error' needs {\"offset\": {\"u\", \"unit\"}, \"tilt\": {\"u\", \"unit\"}}");
       std::string u1, u2;
-      c.u[0] = readU(doc, e["offset"], "offset", Quantity::Length, false, &u1)[0];
-      c.u[1] = readU(doc, e["tilt"], "tilt", Quantity::Ratio, false, &u2)[0];
+      c.u[0] = readU(doc, e, "offset", Quantity::Length, false, &u1)[0];
+      c.u[1] = readU(doc, e, "tilt", Quantity::Ratio, false, &u2)[0];
       c.unit = u1 + ", " + u2;
     } else {
       const bool vec = info.kind == ContributorKind::SetupPosition || info.kind == ContributorKind::SetupOrientation;
-      c.u = readU(doc, e, id, quantityOf(info.kind), vec, &c.unit);
+      c.u = readU(doc, cs, id, quantityOf(info.kind), vec, &c.unit);
     }
     set.items.push_back(c);
   }
-  if (j.contains("reference")) {
-    if (!j["reference"].is_object()) doc.fail("reference", "'reference' must be an object");
-    set.reference = readReference(doc, j["reference"]);
-  }
+  if (j.contains("reference")) set.reference = readReference(doc, requireObject(doc, j, "reference"));
   std::string why;
-  if (!set.validate(&why)) doc.fail("contributors", why);
+  if (!set.validate(&why)) doc.fail(j, "contributors", why);
   return set;
+}
+
+}  // namespace
+
+ContributorSet contributorsFromJson(const JsonDoc& doc) {
+  return guardJson(doc, [&] { return contributorsFrom(doc); });
 }
 
 ContributorSet loadContributors(const std::string& path) { return contributorsFromJson(readJsonFile(path)); }

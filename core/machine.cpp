@@ -2,6 +2,10 @@
 
 #include <stdexcept>
 
+#include <fmt/format.h>
+
+#include "core/limits.hpp"
+
 namespace rotacal {
 
 const RotaryAxis& MachineModel::rotaryAxis(char axis) const {
@@ -24,125 +28,123 @@ int MachineModel::controllerSign(char axis, const std::string& dialect) const {
 
 namespace {
 
-AxisRange rangeFrom(const JsonDoc& doc, const Json& obj, const std::string& key) {
-  if (!obj.contains(key) || !obj[key].is_array() || obj[key].size() != 2 || !obj[key][0].is_number() ||
-      !obj[key][1].is_number())
-    doc.fail(key, "field '" + key + "' must be [min, max] in mm");
-  AxisRange r{obj[key][0].get<double>(), obj[key][1].get<double>()};
-  if (r.min >= r.max) doc.fail(key, "stroke '" + key + "' has min >= max");
+AxisRange rangeFrom(const JsonDoc& doc, const Json& obj, const std::string& key, double max_abs, const char* unit) {
+  const Json& v = requireArray(doc, obj, key);
+  if (v.size() != 2 || !v[0].is_number() || !v[1].is_number())
+    doc.fail(obj, key, fmt::format("field '{}' must be [min, max] in {}", key, unit));
+  AxisRange r{checkNumber(doc, obj, key, v[0].get<double>(), Limits::symmetric(max_abs, unit)),
+              checkNumber(doc, obj, key, v[1].get<double>(), Limits::symmetric(max_abs, unit))};
+  if (r.min >= r.max) doc.fail(obj, key, fmt::format("stroke '{}' has min >= max ([{:g}, {:g}])", key, r.min, r.max));
   return r;
 }
 
-Eigen::Vector3d vec3From(const JsonDoc& doc, const Json& obj, const std::string& key) {
-  if (!obj.contains(key) || !obj[key].is_array() || obj[key].size() != 3)
-    doc.fail(key, "field '" + key + "' must be [x, y, z]");
+Eigen::Vector3d vec3From(const JsonDoc& doc, const Json& obj, const std::string& key, const Limits& limits) {
+  const Json& a = requireArray(doc, obj, key);
+  if (a.size() != 3) doc.fail(obj, key, "field '" + key + "' must be [x, y, z]");
   Eigen::Vector3d v;
   for (int i = 0; i < 3; ++i) {
-    if (!obj[key][i].is_number()) doc.fail(key, "field '" + key + "' must hold numbers");
-    v[i] = obj[key][i].get<double>();
+    if (!a[i].is_number()) doc.fail(obj, key, "field '" + key + "' must hold numbers");
+    v[i] = checkNumber(doc, obj, key, a[i].get<double>(), limits);
   }
   return v;
 }
 
-void requirePositive(const JsonDoc& doc, const std::string& key, double v) {
-  if (!(v > 0)) doc.fail(key, "field '" + key + "' must be positive");
+int signFrom(const JsonDoc& doc, const Json& obj, const std::string& key) {
+  const int s = intOr(doc, obj, key, 1, -1, 1);
+  if (s == 0) doc.fail(obj, key, "field '" + key + "' must be 1 or -1");
+  return s;
+}
+
+MachineModel machineFrom(const JsonDoc& doc, const Json& j) {
+  if (!j.is_object()) doc.fail(j, "", "machine description must be a JSON object");
+  MachineModel m;
+  if (j.contains("format") && j["format"] != "rotacal-machine/1")
+    doc.fail(j, "format", "unsupported machine format (expected rotacal-machine/1)");
+  m.name = requireString(doc, j, "name");
+  m.description = stringOr(doc, j, "description", "");
+  try {
+    m.kinematics = kinematicsFromName(requireString(doc, j, "kinematics"));
+  } catch (const std::invalid_argument& e) {
+    doc.fail(j, "kinematics", e.what());
+  }
+  const std::string units = stringOr(doc, j, "units", "mm");
+  if (units == "mm") m.units = LengthUnit::Millimetre;
+  else if (units == "inch") m.units = LengthUnit::Inch;
+  else doc.fail(j, "units", "units must be \"mm\" or \"inch\"");
+
+  const Json& s = requireObject(doc, j, "strokes");
+  m.x = rangeFrom(doc, s, "X", kMaxCoordinateMm, "mm");
+  m.y = rangeFrom(doc, s, "Y", kMaxCoordinateMm, "mm");
+  m.z = rangeFrom(doc, s, "Z", kMaxCoordinateMm, "mm");
+  const std::string rot = m.kinematics == Kinematics::TableAC ? "AC" : m.kinematics == Kinematics::HeadAB ? "AB" : "BC";
+  const Json& axes = requireObject(doc, j, "rotary_axes");
+  for (char axis : rot) {
+    const std::string key(1, axis);
+    if (!axes.contains(key)) doc.fail(j, "rotary_axes", "rotary_axes lacks axis " + key);
+    const Json& a = requireObject(doc, axes, key);
+    RotaryAxis r;
+    r.name = axis;
+    r.continuous = boolOr(doc, a, "continuous", false);
+    if (!r.continuous) {
+      if (!a.contains("stroke_deg")) doc.fail(axes, key, "axis " + key + " needs stroke_deg or continuous");
+      r.stroke_deg = rangeFrom(doc, a, "stroke_deg", kMaxAngleDeg, "deg");
+    }
+    r.controller_sign = signFrom(doc, a, "controller_sign");
+    if (a.contains("dialect_sign")) {
+      const Json& ds = requireObject(doc, a, "dialect_sign");
+      for (const auto& [dialect, sign] : ds.items()) {
+        (void)sign;
+        r.dialect_sign[dialect] = signFrom(doc, ds, dialect);
+      }
+    }
+    m.rotary.push_back(r);
+  }
+  m.table_diameter_mm = numberOr(doc, j, "table_diameter_mm", 500.0, Limits::positive(2 * kMaxCoordinateMm, "mm"));
+  if (!j.contains("probe")) doc.fail(j, "", "missing object 'probe'");
+  const Json& p = requireObject(doc, j, "probe");
+  const Limits probe_len = Limits::positive(kMaxProbeLengthMm, "mm");
+  m.probe.ball_diameter_mm = requireNumber(doc, p, "ball_diameter_mm", probe_len);
+  m.probe.stylus_length_mm = requireNumber(doc, p, "stylus_length_mm", probe_len);
+  m.probe.body_clearance_mm =
+      numberOr(doc, p, "body_clearance_mm", m.probe.body_clearance_mm, Limits::nonNegative(kMaxProbeLengthMm, "mm"));
+  m.probe.tool_number = intOr(doc, p, "tool_number", 0, 0, kMaxToolNumber);
+  m.probe.repeatability_um =
+      numberOr(doc, p, "repeatability_um", m.probe.repeatability_um, Limits::positive(kMaxRepeatabilityUm, "um"));
+  if (j.contains("feeds")) {
+    const Json& f = requireObject(doc, j, "feeds");
+    const Limits feed = Limits::positive(kMaxFeedPerMin, "per min");
+    m.feeds.rapid_mm_min = numberOr(doc, f, "rapid_mm_min", m.feeds.rapid_mm_min, feed);
+    m.feeds.positioning_mm_min = numberOr(doc, f, "positioning_mm_min", m.feeds.positioning_mm_min, feed);
+    m.feeds.probing_mm_min = numberOr(doc, f, "probing_mm_min", m.feeds.probing_mm_min, feed);
+    m.feeds.rotary_deg_min = numberOr(doc, f, "rotary_deg_min", m.feeds.rotary_deg_min, feed);
+    m.feeds.probing_slow_mm_min = numberOr(doc, f, "probing_slow_mm_min", 0.0, Limits::nonNegative(kMaxFeedPerMin, "per min"));
+  }
+  // Clearance 0 would rapid the ball along the artefact's top: a real machine needs room.
+  const Limits room = Limits::positive(kMaxProbeLengthMm, "mm");
+  m.clearance_mm = numberOr(doc, j, "clearance_mm", m.clearance_mm, room);
+  m.approach_mm = numberOr(doc, j, "approach_mm", m.approach_mm, room);
+  m.overtravel_mm = numberOr(doc, j, "overtravel_mm", m.overtravel_mm, room);
+  m.retract_mm = numberOr(doc, j, "retract_mm", 0.0, Limits::nonNegative(kMaxProbeLengthMm, "mm"));
+  if (m.retract_mm > 0 && !(m.feeds.probing_slow_mm_min > 0))
+    doc.fail(j, "retract_mm", "retract_mm > 0 (double touch) needs feeds.probing_slow_mm_min > 0 for the second touch");
+  if (m.retract_mm > 0 && m.retract_mm >= m.approach_mm)
+    doc.fail(j, "retract_mm", "retract_mm must be smaller than approach_mm: the back-off stays inside the approach");
+  if (j.contains("artefact")) {
+    const Json& a = requireObject(doc, j, "artefact");
+    const std::string type = requireString(doc, a, "type");
+    if (type != "square_column") doc.fail(a, "type", "artefact type must be square_column");
+    SquareColumn col;
+    col.top_centre_w = vec3From(doc, a, "top_centre_w_mm", Limits::symmetric(kMaxCoordinateMm, "mm"));
+    col.size_mm = vec3From(doc, a, "size_mm", Limits::positive(kMaxCoordinateMm, "mm"));
+    m.artefact = col;
+  }
+  return m;
 }
 
 }  // namespace
 
 MachineModel machineFromJson(const JsonDoc& doc, const Json& j) {
-  if (!j.is_object()) doc.fail("machine", "machine description must be a JSON object");
-  MachineModel m;
-  if (j.contains("format") && j["format"] != "rotacal-machine/1")
-    doc.fail("format", "unsupported machine format (expected rotacal-machine/1)");
-  m.name = requireString(doc, j, "name");
-  m.description = j.value("description", "");
-  try {
-    m.kinematics = kinematicsFromName(requireString(doc, j, "kinematics"));
-  } catch (const std::invalid_argument& e) {
-    doc.fail("kinematics", e.what());
-  }
-  const std::string units = j.value("units", "mm");
-  if (units == "mm") m.units = LengthUnit::Millimetre;
-  else if (units == "inch") m.units = LengthUnit::Inch;
-  else doc.fail("units", "units must be \"mm\" or \"inch\"");
-
-  if (!j.contains("strokes") || !j["strokes"].is_object()) doc.fail("strokes", "missing object 'strokes'");
-  const Json& s = j["strokes"];
-  m.x = rangeFrom(doc, s, "X");
-  m.y = rangeFrom(doc, s, "Y");
-  m.z = rangeFrom(doc, s, "Z");
-  const std::string rot = m.kinematics == Kinematics::TableAC ? "AC" : m.kinematics == Kinematics::HeadAB ? "AB" : "BC";
-  if (!j.contains("rotary_axes") || !j["rotary_axes"].is_object())
-    doc.fail("rotary_axes", "missing object 'rotary_axes'");
-  for (char axis : rot) {
-    const std::string key(1, axis);
-    if (!j["rotary_axes"].contains(key)) doc.fail("rotary_axes", "rotary_axes lacks axis " + key);
-    const Json& a = j["rotary_axes"][key];
-    RotaryAxis r;
-    r.name = axis;
-    r.continuous = a.value("continuous", false);
-    if (!r.continuous) {
-      if (!a.contains("stroke_deg")) doc.fail(key, "axis " + key + " needs stroke_deg or continuous");
-      r.stroke_deg = rangeFrom(doc, a, "stroke_deg");
-    }
-    r.controller_sign = static_cast<int>(numberOr(doc, a, "controller_sign", 1));
-    if (r.controller_sign != 1 && r.controller_sign != -1) doc.fail("controller_sign", "controller_sign must be 1 or -1");
-    if (a.contains("dialect_sign")) {
-      for (const auto& [dialect, sign] : a["dialect_sign"].items()) {
-        if (!sign.is_number_integer() || (sign != 1 && sign != -1))
-          doc.fail("dialect_sign", "dialect_sign values must be 1 or -1");
-        r.dialect_sign[dialect] = sign.get<int>();
-      }
-    }
-    m.rotary.push_back(r);
-  }
-  m.table_diameter_mm = numberOr(doc, j, "table_diameter_mm", 500.0);
-  if (j.contains("probe")) {
-    const Json& p = j["probe"];
-    m.probe.ball_diameter_mm = requireNumber(doc, p, "ball_diameter_mm");
-    m.probe.stylus_length_mm = requireNumber(doc, p, "stylus_length_mm");
-    m.probe.body_clearance_mm = numberOr(doc, p, "body_clearance_mm", m.probe.body_clearance_mm);
-    m.probe.tool_number = static_cast<int>(numberOr(doc, p, "tool_number", 0));
-    m.probe.repeatability_um = numberOr(doc, p, "repeatability_um", m.probe.repeatability_um);
-    requirePositive(doc, "ball_diameter_mm", m.probe.ball_diameter_mm);
-    requirePositive(doc, "stylus_length_mm", m.probe.stylus_length_mm);
-  } else {
-    doc.fail("probe", "missing object 'probe'");
-  }
-  if (j.contains("feeds")) {
-    const Json& f = j["feeds"];
-    m.feeds.rapid_mm_min = numberOr(doc, f, "rapid_mm_min", m.feeds.rapid_mm_min);
-    m.feeds.positioning_mm_min = numberOr(doc, f, "positioning_mm_min", m.feeds.positioning_mm_min);
-    m.feeds.probing_mm_min = numberOr(doc, f, "probing_mm_min", m.feeds.probing_mm_min);
-    m.feeds.rotary_deg_min = numberOr(doc, f, "rotary_deg_min", m.feeds.rotary_deg_min);
-    m.feeds.probing_slow_mm_min = numberOr(doc, f, "probing_slow_mm_min", 0.0);
-    if (m.feeds.probing_slow_mm_min < 0) doc.fail("probing_slow_mm_min", "field 'probing_slow_mm_min' must be >= 0");
-    requirePositive(doc, "probing_mm_min", m.feeds.probing_mm_min);
-    requirePositive(doc, "positioning_mm_min", m.feeds.positioning_mm_min);
-  }
-  m.clearance_mm = numberOr(doc, j, "clearance_mm", m.clearance_mm);
-  m.approach_mm = numberOr(doc, j, "approach_mm", m.approach_mm);
-  m.overtravel_mm = numberOr(doc, j, "overtravel_mm", m.overtravel_mm);
-  requirePositive(doc, "approach_mm", m.approach_mm);
-  requirePositive(doc, "overtravel_mm", m.overtravel_mm);
-  m.retract_mm = numberOr(doc, j, "retract_mm", 0.0);
-  if (m.retract_mm < 0) doc.fail("retract_mm", "field 'retract_mm' must be >= 0 (0 = single touch)");
-  if (m.retract_mm > 0 && !(m.feeds.probing_slow_mm_min > 0))
-    doc.fail("retract_mm", "retract_mm > 0 (double touch) needs feeds.probing_slow_mm_min > 0 for the second touch");
-  if (m.retract_mm > 0 && m.retract_mm >= m.approach_mm)
-    doc.fail("retract_mm", "retract_mm must be smaller than approach_mm: the back-off stays inside the approach");
-  if (j.contains("artefact")) {
-    const Json& a = j["artefact"];
-    const std::string type = requireString(doc, a, "type");
-    if (type != "square_column") doc.fail("type", "artefact type must be square_column");
-    SquareColumn col;
-    col.top_centre_w = vec3From(doc, a, "top_centre_w_mm");
-    col.size_mm = vec3From(doc, a, "size_mm");
-    if ((col.size_mm.array() <= 0).any()) doc.fail("size_mm", "artefact size must be positive");
-    m.artefact = col;
-  }
-  return m;
+  return guardJson(doc, [&] { return machineFrom(doc, j); });
 }
 
 MachineModel loadMachine(const std::string& path) {

@@ -10,6 +10,8 @@
 
 #include <fmt/format.h>
 
+#include "core/limits.hpp"
+
 #include "core/closed_form_map.hpp"
 #include "core/uncertainty.hpp"
 #include "core/units.hpp"
@@ -21,12 +23,16 @@ bool DesignOptions::validate(std::string* why) const {
     if (why) *why = w;
     return false;
   };
-  if (points < 12) return fail(fmt::format("the probe budget must be >= 12 touches (got {})", points));
+  if (points < 12 || points > kMaxPlanPoints)
+    return fail(fmt::format("the probe budget must be from 12 to {} touches (got {})", kMaxPlanPoints, points));
+  if (a_deg.size() > static_cast<size_t>(kMaxListValues) || c_deg.size() > static_cast<size_t>(kMaxListValues))
+    return fail(fmt::format("at most {} candidate angles per axis", kMaxListValues));
   if (a_deg.empty() || c_deg.empty()) return fail("at least one A and one C angle are needed");
   if (side_offsets_mm.empty() && top_offsets_mm.empty()) return fail("no target offsets given");
   for (double d : side_depths_mm)
     if (!(d > 0)) return fail("side depths must be > 0 mm below the top");
-  if (exchange_passes < 0) return fail("exchange_passes must be >= 0");
+  if (exchange_passes < 0 || exchange_passes > kMaxExchangePasses)
+    return fail(fmt::format("exchange_passes must be from 0 to {}", kMaxExchangePasses));
   return true;
 }
 

@@ -1,12 +1,16 @@
 #include "core/probe_plan.hpp"
 
 #include <cmath>
+#include <limits>
+#include <map>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
 #include <fmt/format.h>
 
 #include "core/errors.hpp"
+#include "core/limits.hpp"
 #include "core/units.hpp"
 
 namespace rotacal {
@@ -42,9 +46,23 @@ std::vector<double> parseNumberList(const std::string& key, const std::string& t
   std::vector<double> out;
   std::stringstream ss(text);
   std::string item;
-  while (std::getline(ss, item, ',')) out.push_back(parseNumber(key, item));
+  while (std::getline(ss, item, ',')) {
+    if (out.size() == static_cast<size_t>(kMaxListValues))
+      throw std::invalid_argument(
+          fmt::format("option {}: more than {} values; a list option takes at most {}", key, kMaxListValues, kMaxListValues));
+    out.push_back(parseNumber(key, item));
+  }
   if (out.empty()) throw std::invalid_argument("option " + key + ": empty list");
   return out;
+}
+
+void requirePlanSize(const std::string& options, double points, double poses) {
+  if (poses > kMaxPlanPoses)
+    throw std::invalid_argument(fmt::format("{}: the plan would have {:.0f} poses; at most {} poses are allowed in one plan",
+                                            options, poses, kMaxPlanPoses));
+  if (points > kMaxPlanPoints)
+    throw std::invalid_argument(fmt::format("{}: the plan would have {:.0f} touches; at most {} are allowed in one plan",
+                                            options, points, kMaxPlanPoints));
 }
 
 namespace {
@@ -57,25 +75,167 @@ Json poseJson(Kinematics k, const Pose& p) {
   return {{"B", p.B}, {"C", p.C}};
 }
 
-Eigen::Vector3d vecFrom(const JsonDoc& doc, const Json& obj, const char* key) {
-  if (!obj.contains(key) || !obj[key].is_array() || obj[key].size() != 3)
-    doc.fail(key, std::string("field '") + key + "' must be [x, y, z]");
+Eigen::Vector3d vecFrom(const JsonDoc& doc, const Json& obj, const char* key, const Limits& limits) {
+  const Json& a = requireArray(doc, obj, key);
+  if (a.size() != 3) doc.fail(obj, key, std::string("field '") + key + "' must be [x, y, z]");
   Eigen::Vector3d v;
   for (int i = 0; i < 3; ++i) {
-    if (!obj[key][i].is_number()) doc.fail(key, std::string("field '") + key + "' must hold numbers");
-    v[i] = obj[key][i].get<double>();
+    if (!a[i].is_number()) doc.fail(obj, key, std::string("field '") + key + "' must hold numbers");
+    v[i] = checkNumber(doc, obj, key, a[i].get<double>(), limits);
   }
   return v;
 }
 
 Pose poseFrom(const JsonDoc& doc, const Json& obj) {
-  if (!obj.contains("pose") || !obj["pose"].is_object()) doc.fail("pose", "point lacks 'pose'");
+  const Json& j = requireObject(doc, obj, "pose");
+  const Limits angle = Limits::symmetric(kMaxAngleDeg, "deg");
   Pose p;
-  const Json& j = obj["pose"];
-  p.A = numberOr(doc, j, "A", 0.0);
-  p.B = numberOr(doc, j, "B", 0.0);
-  p.C = numberOr(doc, j, "C", 0.0);
+  p.A = numberOr(doc, j, "A", 0.0, angle);
+  p.B = numberOr(doc, j, "B", 0.0, angle);
+  p.C = numberOr(doc, j, "C", 0.0, angle);
   return p;
+}
+
+// What the probe moves over between touches must stay below the heights the plan moves at:
+// each pose's safe height above what is touched at that pose (the artefact, the spheres), the
+// index height above all of it. A hand-edited height would otherwise send rapids through the
+// artefact. A cycle without probing moves, or whose artefact is not the machine's, says so in
+// its PlanRules.
+void checkHeights(const JsonDoc& doc, const Json& j, const ProbePlan& plan, const PlanRules& rules) {
+  if (!rules.heights) return;
+  const double r = plan.machine.probe.ball_radius_mm();
+  const bool artefact = plan.machine.artefact && rules.artefact_touched;
+  double highest = -std::numeric_limits<double>::infinity();
+  std::string highest_pose;
+  for (size_t k = 0; k < plan.poses.size(); ++k) {
+    const PlanPose& pp = plan.poses[k];
+    const Eigen::Isometry3d T = T_m_w_nominal(plan.machine.kinematics, pp.pose);
+    double top = -std::numeric_limits<double>::infinity();
+    if (artefact)
+      for (const auto& corner : plan.machine.artefact->corners_w()) top = std::max(top, (T * corner).z());
+    for (const auto& p : plan.points) {
+      if (p.pose_name != pp.name) continue;
+      top = std::max(top, (T * p.contact_w_mm).z());
+      if (p.sphere) top = std::max(top, (T * p.sphere->center_w_mm).z() + p.sphere->radius_mm);
+    }
+    if (!std::isfinite(top)) continue;
+    if (pp.safe_z_mm < top + r - 1e-6)
+      doc.fail(j["poses"][k], "safe_z_mm",
+               fmt::format("pose {}: safe_z_mm = {:g} mm is below what the probe moves over: the ball centre must stay "
+                           "at z >= {:.3f} mm (the top of what is touched plus the ball radius)",
+                           pp.name, pp.safe_z_mm, top + r));
+    if (top > highest) {
+      highest = top;
+      highest_pose = pp.name;
+    }
+  }
+  if (std::isfinite(highest) && plan.index_z_mm < highest + r - 1e-6)
+    doc.fail(j, "index_z_mm",
+             fmt::format("index_z_mm = {:g} mm is below the artefact: the ball centre must stay at z >= {:.3f} mm (its "
+                         "top at pose {} plus the ball radius) while the table indexes",
+                         plan.index_z_mm, highest + r, highest_pose));
+}
+
+ProbePlan planFrom(const JsonDoc& doc, const PlanRules& rules) {
+  const Json& j = doc.value;
+  if (!j.is_object() || !j.contains("format") || j["format"] != "rotacal-plan/1")
+    doc.fail(j, "format", "not a rotacal plan (expected \"format\": \"rotacal-plan/1\")");
+  ProbePlan plan;
+  plan.cycle = requireString(doc, j, "cycle");
+  if (!j.contains("machine")) doc.fail(j, "", "plan lacks 'machine'");
+  plan.machine = machineFromJson(doc, requireObject(doc, j, "machine"));
+  if (j.contains("options")) {
+    const Json& o = requireObject(doc, j, "options");
+    for (const auto& [k, v] : o.items()) plan.options[k] = v.is_string() ? v.get<std::string>() : v.dump();
+  }
+  const Limits coord = Limits::symmetric(kMaxCoordinateMm, "mm");
+  plan.index_z_mm = requireNumber(doc, j, "index_z_mm", coord);
+  const Json& poses = requireArray(doc, j, "poses");
+  if (poses.size() > static_cast<size_t>(kMaxPlanPoses))
+    doc.fail(j, "poses", fmt::format("plan has {} poses; at most {} are allowed", poses.size(), kMaxPlanPoses));
+  std::set<std::string> names;
+  for (const auto& p : poses) {
+    PlanPose pp;
+    pp.name = requireString(doc, p, "name");
+    pp.pose = poseFrom(doc, p);
+    pp.safe_z_mm = requireNumber(doc, p, "safe_z_mm", coord);
+    if (!names.insert(pp.name).second) doc.fail(p, "name", "pose name '" + pp.name + "' appears twice");
+    plan.poses.push_back(pp);
+  }
+  if (!j.contains("points") || !j["points"].is_array() || j["points"].empty())
+    doc.fail(j, "points", "plan has no points");
+  const Json& points = j["points"];
+  if (points.size() > static_cast<size_t>(kMaxPlanPoints))
+    doc.fail(j, "points", fmt::format("plan has {} points; at most {} are allowed", points.size(), kMaxPlanPoints));
+  const Limits unit_component = Limits::symmetric(1.0 + 1e-6);
+  for (const auto& q : points) {
+    ProbePoint p;
+    p.id = requireInt(doc, q, "id", 1, kMaxPlanPoints);
+    p.pose_name = stringOr(doc, q, "pose_name", "");
+    if (!names.empty() && !names.count(p.pose_name))
+      doc.fail(q, "pose_name", fmt::format("point {}: pose '{}' is not among the plan's poses", p.id, p.pose_name));
+    p.pose = poseFrom(doc, q);
+    p.target = intOr(doc, q, "target", p.id, 0, kMaxPlanPoints);
+    try {
+      p.face = faceFromName(stringOr(doc, q, "face", "top"));
+    } catch (const std::invalid_argument& e) {
+      doc.fail(q, "face", e.what());
+    }
+    p.contact_w_mm = vecFrom(doc, q, "contact_w_mm", coord);
+    p.normal_w = vecFrom(doc, q, "normal_w", unit_component);
+    p.trigger_m_mm = vecFrom(doc, q, "trigger_m_mm", coord);
+    p.approach_m = vecFrom(doc, q, "approach_m", unit_component);
+    if (std::abs(p.normal_w.norm() - 1.0) > 1e-6)
+      doc.fail(q, "normal_w", fmt::format("point {}: normal_w must be a unit vector (length {:g})", p.id, p.normal_w.norm()));
+    if (std::abs(p.approach_m.norm() - 1.0) > 1e-6)
+      doc.fail(q, "approach_m",
+               fmt::format("point {}: approach_m must be a unit vector (length {:g})", p.id, p.approach_m.norm()));
+    p.t_s = numberOr(doc, q, "t_s", 0.0, Limits::nonNegative(kMaxClockSeconds, "s"));
+    if (q.contains("sphere")) {
+      const Json& sj = requireObject(doc, q, "sphere");
+      SphereTarget st;
+      st.id = requireInt(doc, sj, "id", 1, kMaxPlanPoints);
+      st.center_w_mm = vecFrom(doc, sj, "center_w_mm", coord);
+      st.radius_mm = requireNumber(doc, sj, "radius_mm", Limits::positive(kMaxCoordinateMm, "mm"));
+      p.sphere = st;
+    }
+    if (p.id != static_cast<int>(plan.points.size()) + 1)
+      doc.fail(q, "id", fmt::format("point ids must run 1, 2, 3, ... in order (found {} at position {})", p.id,
+                                    plan.points.size() + 1));
+    plan.points.push_back(p);
+  }
+  if (rules.spheres > 0)
+    for (size_t i = 0; i < plan.points.size(); ++i)
+      if (!plan.points[i].sphere || plan.points[i].sphere->id > rules.spheres)
+        doc.fail(points[i], "sphere",
+                 fmt::format("point {}: a touch of this {} plan names a sphere 1 to {}", i + 1, plan.cycle, rules.spheres));
+  // A pose without touches has nothing to identify from (a sphere cycle fits each sphere at each
+  // pose: at least 4 touches each).
+  for (size_t k = 0; k < plan.poses.size(); ++k) {
+    std::map<int, int> per_sphere;
+    int n = 0;
+    for (const auto& p : plan.points)
+      if (p.pose_name == plan.poses[k].name) {
+        ++n;
+        if (p.sphere) ++per_sphere[p.sphere->id];
+      }
+    if (n == 0) doc.fail(j["poses"][k], "name", "pose '" + plan.poses[k].name + "' has no points");
+    for (int sphere = 1; sphere <= rules.spheres; ++sphere)
+      if (per_sphere[sphere] < 4)
+        doc.fail(j["poses"][k], "name",
+                 fmt::format("pose '{}' has {} touches of sphere {}; a {} plan needs at least 4 per sphere at every pose",
+                             plan.poses[k].name, per_sphere[sphere], sphere, plan.cycle));
+  }
+  // The options these cycles read back from the plan when simulating and analysing.
+  try {
+    if (rules.check_options) rules.check_options(plan);
+  } catch (const std::invalid_argument& e) {
+    doc.fail(j, "options", e.what());
+  } catch (const std::out_of_range& e) {
+    doc.fail(j, "options", std::string("a cycle option is missing: ") + e.what());
+  }
+  checkHeights(doc, j, plan, rules);
+  return plan;
 }
 
 }  // namespace
@@ -111,64 +271,11 @@ Json planToJson(const ProbePlan& plan) {
   return j;
 }
 
-ProbePlan planFromJson(const JsonDoc& doc) {
-  const Json& j = doc.value;
-  if (!j.is_object() || j.value("format", "") != "rotacal-plan/1")
-    doc.fail("format", "not a rotacal plan (expected \"format\": \"rotacal-plan/1\")");
-  ProbePlan plan;
-  plan.cycle = requireString(doc, j, "cycle");
-  if (!j.contains("machine")) doc.fail("machine", "plan lacks 'machine'");
-  plan.machine = machineFromJson(doc, j["machine"]);
-  if (j.contains("options") && j["options"].is_object())
-    for (const auto& [k, v] : j["options"].items()) plan.options[k] = v.is_string() ? v.get<std::string>() : v.dump();
-  plan.index_z_mm = requireNumber(doc, j, "index_z_mm");
-  if (!j.contains("poses") || !j["poses"].is_array()) doc.fail("poses", "plan lacks 'poses'");
-  for (const auto& p : j["poses"]) {
-    PlanPose pp;
-    pp.name = requireString(doc, p, "name");
-    pp.pose = poseFrom(doc, p);
-    pp.safe_z_mm = requireNumber(doc, p, "safe_z_mm");
-    plan.poses.push_back(pp);
-  }
-  if (!j.contains("points") || !j["points"].is_array() || j["points"].empty())
-    doc.fail("points", "plan has no points");
-  for (const auto& q : j["points"]) {
-    ProbePoint p;
-    p.id = static_cast<int>(requireNumber(doc, q, "id"));
-    p.pose_name = q.value("pose_name", "");
-    p.pose = poseFrom(doc, q);
-    p.target = static_cast<int>(numberOr(doc, q, "target", p.id));
-    try {
-      p.face = faceFromName(q.value("face", "top"));
-    } catch (const std::invalid_argument& e) {
-      doc.fail("face", e.what());
-    }
-    p.contact_w_mm = vecFrom(doc, q, "contact_w_mm");
-    p.normal_w = vecFrom(doc, q, "normal_w");
-    p.trigger_m_mm = vecFrom(doc, q, "trigger_m_mm");
-    p.approach_m = vecFrom(doc, q, "approach_m");
-    if (std::abs(p.approach_m.norm() - 1.0) > 1e-6 || std::abs(p.normal_w.norm() - 1.0) > 1e-6)
-      doc.fail("approach_m", fmt::format("point {}: approach_m and normal_w must be unit vectors", p.id));
-    p.t_s = numberOr(doc, q, "t_s", 0.0);
-    if (q.contains("sphere")) {
-      const Json& sj = q["sphere"];
-      if (!sj.is_object()) doc.fail("sphere", fmt::format("point {}: 'sphere' must be an object", p.id));
-      SphereTarget st;
-      st.id = static_cast<int>(requireNumber(doc, sj, "id"));
-      st.center_w_mm = vecFrom(doc, sj, "center_w_mm");
-      st.radius_mm = requireNumber(doc, sj, "radius_mm");
-      if (!(st.radius_mm > 0)) doc.fail("radius_mm", fmt::format("point {}: sphere radius must be positive", p.id));
-      p.sphere = st;
-    }
-    if (p.id != static_cast<int>(plan.points.size()) + 1)
-      doc.fail("id", fmt::format("point ids must run 1, 2, 3, ... in order (found {} at position {})", p.id,
-                                 plan.points.size() + 1));
-    plan.points.push_back(p);
-  }
-  return plan;
+ProbePlan planFromJson(const JsonDoc& doc, const PlanRules& rules) {
+  return guardJson(doc, [&] { return planFrom(doc, rules); });
 }
 
-ProbePlan loadPlan(const std::string& path) { return planFromJson(readJsonFile(path)); }
+ProbePlan loadPlan(const std::string& path, const PlanRules& rules) { return planFromJson(readJsonFile(path), rules); }
 
 std::vector<Waypoint> plannedPath(const ProbePlan& plan) {
   std::vector<Waypoint> path;

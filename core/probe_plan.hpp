@@ -4,6 +4,7 @@
 // convention; positions are ball-centre machine coordinates (origin at the rotary-axis
 // intersection), mm.
 #include <Eigen/Core>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -64,8 +65,17 @@ struct ProbePlan {
 using CycleOptions = std::map<std::string, std::string>;
 
 Json planToJson(const ProbePlan& plan);
-ProbePlan planFromJson(const JsonDoc& doc);
-ProbePlan loadPlan(const std::string& path);
+/// What a plan's cycle requires of it beyond the file format: the cycle states it
+/// (Cycle::planRules), the loader checks it and names FILE:LINE.
+struct PlanRules {
+  bool heights = true;           // safe heights clear what is touched (false: no probing moves)
+  bool artefact_touched = true;  // the machine's artefact is what the probe moves over
+  int spheres = 0;               // > 0: every touch names sphere 1..spheres, >= 4 of each per pose
+  std::function<void(const ProbePlan&)> check_options;  // the options the cycle reads back; throws
+};
+
+ProbePlan planFromJson(const JsonDoc& doc, const PlanRules& rules = {});
+ProbePlan loadPlan(const std::string& path, const PlanRules& rules = {});
 
 /// Positions the probe passes through, in order, for the whole plan (shared by the time
 /// estimate, the program writer and the stroke check).
@@ -83,8 +93,14 @@ std::vector<std::string> strokeViolations(const ProbePlan& plan);
 /// Fills t_s of every point from the path, the feeds and the rotary speed.
 void estimateTimes(ProbePlan& plan);
 
-/// Splits "a,b,c" into doubles; throws std::invalid_argument naming the option.
+/// Splits "a,b,c" into doubles; throws std::invalid_argument naming the option, also beyond
+/// kMaxListValues values (core/limits.hpp).
 std::vector<double> parseNumberList(const std::string& key, const std::string& text);
 double parseNumber(const std::string& key, const std::string& text);
+
+/// Throws std::invalid_argument naming `options` (what the user set, e.g. "option c_step_deg =
+/// 1e-06") when a plan of that many touches or poses would exceed kMaxPlanPoints or
+/// kMaxPlanPoses. Called with the predicted counts before a plan is built.
+void requirePlanSize(const std::string& options, double points, double poses);
 
 }  // namespace rotacal

@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 
+#include "core/limits.hpp"
+
 #include "core/units.hpp"
 
 namespace rotacal {
@@ -110,87 +112,105 @@ MeasurementRun simulate(const ProbePlan& plan, const Truth& truth, const Simulat
 
 namespace {
 
-Eigen::Vector3d vec3Or(const JsonDoc& doc, const Json& obj, const char* key) {
+Eigen::Vector3d vec3Or(const JsonDoc& doc, const Json& obj, const char* key, const Limits& limits) {
   if (!obj.contains(key)) return Eigen::Vector3d::Zero();
-  if (!obj[key].is_array() || obj[key].size() != 3) doc.fail(key, std::string("'") + key + "' must be [x, y, z]");
+  const Json& a = requireArray(doc, obj, key);
+  if (a.size() != 3) doc.fail(obj, key, std::string("'") + key + "' must be [x, y, z]");
   Eigen::Vector3d v;
   for (int i = 0; i < 3; ++i) {
-    if (!obj[key][i].is_number()) doc.fail(key, std::string("'") + key + "' must hold numbers");
-    v[i] = obj[key][i].get<double>();
+    if (!a[i].is_number()) doc.fail(obj, key, std::string("'") + key + "' must hold numbers");
+    v[i] = checkNumber(doc, obj, key, a[i].get<double>(), limits);
   }
   return v;
 }
 
-}  // namespace
+// The plausible size of a simulated error in each unit a truth file may use.
+Limits lengthLimits(const std::string& unit) {
+  return Limits::symmetric(unit == "mm" ? kMaxLocationErrorUm / 1000.0 : kMaxLocationErrorUm, unit);
+}
+Limits angleLimits(const std::string& unit) {
+  const double mdeg = kMaxAngleErrorMdeg;
+  if (unit == "urad") return Limits::symmetric(mdegToRad(mdeg) * 1e6, unit);
+  if (unit == "mrad") return Limits::symmetric(mdegToRad(mdeg) * 1e3, unit);
+  if (unit == "deg") return Limits::symmetric(mdeg / 1000.0, unit);
+  return Limits::symmetric(mdeg, unit);
+}
 
-Truth truthFromJson(const JsonDoc& doc, Kinematics kinematics) {
+Truth truthFrom(const JsonDoc& doc, Kinematics kinematics) {
   const Json& j = doc.value;
-  if (!j.is_object() || j.value("format", "") != "rotacal-truth/1")
-    doc.fail("format", "not a truth file (expected \"format\": \"rotacal-truth/1\")");
+  if (!j.is_object() || !j.contains("format") || j["format"] != "rotacal-truth/1")
+    doc.fail(j, "format", "not a truth file (expected \"format\": \"rotacal-truth/1\")");
   Truth t;
   t.errors.kinematics = kinematics;
   if (j.contains("location_errors")) {
-    for (const auto& [name, entry] : j["location_errors"].items()) {
+    const Json& le = requireObject(doc, j, "location_errors");
+    for (const auto& [name, entry] : le.items()) {
       const int i = parameterIndex(kinematics, name);
-      if (i < 0) doc.fail(name, "unknown location error '" + name + "' for this machine");
+      if (i < 0) doc.fail(le, name, "unknown location error '" + name + "' for this machine");
       if (!entry.is_object() || !entry.contains("value") || !entry["value"].is_number())
-        doc.fail(name, "location error '" + name + "' needs {\"value\": number, \"unit\": ...}");
-      const std::string unit = entry.value("unit", "");
-      const double v = entry["value"].get<double>();
+        doc.fail(le, name, "location error '" + name + "' needs {\"value\": number, \"unit\": ...}");
+      const std::string unit = stringOr(doc, entry, "unit", "");
       const ParamKind kind = locationParameters(kinematics)[i].kind;
       if (kind == ParamKind::Length) {
-        if (unit == "um") t.errors.values[i] = umToMm(v);
-        else if (unit == "mm") t.errors.values[i] = v;
-        else doc.fail(name, "unit of '" + name + "' must be um or mm");
+        if (unit != "um" && unit != "mm") doc.fail(entry, "unit", "unit of '" + name + "' must be um or mm");
+        const double v = requireNumber(doc, entry, "value", lengthLimits(unit));
+        t.errors.values[i] = unit == "um" ? umToMm(v) : v;
       } else {
-        if (unit == "mdeg") t.errors.values[i] = mdegToRad(v);
-        else if (unit == "urad") t.errors.values[i] = v * 1e-6;
-        else if (unit == "deg") t.errors.values[i] = degToRad(v);
-        else doc.fail(name, "unit of '" + name + "' must be mdeg, urad or deg");
+        if (unit != "mdeg" && unit != "urad" && unit != "deg")
+          doc.fail(entry, "unit", "unit of '" + name + "' must be mdeg, urad or deg");
+        const double v = requireNumber(doc, entry, "value", angleLimits(unit));
+        t.errors.values[i] = unit == "mdeg" ? mdegToRad(v) : unit == "urad" ? v * 1e-6 : degToRad(v);
       }
     }
   }
+  const Limits um = Limits::symmetric(kMaxLocationErrorUm, "um");
+  const Limits mrad = angleLimits("mrad");
+  const Limits um_per_m = Limits::symmetric(kMaxLocationErrorUm, "um/m");
   if (j.contains("setup_error")) {
-    const Json& s = j["setup_error"];
-    t.artefact.setup.translation_mm = vec3Or(doc, s, "translation_mm");
-    t.artefact.setup.rotation_rad = vec3Or(doc, s, "rotation_mrad") * 1e-3;
+    const Json& s = requireObject(doc, j, "setup_error");
+    t.artefact.setup.translation_mm = vec3Or(doc, s, "translation_mm", lengthLimits("mm"));
+    t.artefact.setup.rotation_rad = vec3Or(doc, s, "rotation_mrad", mrad) * 1e-3;
   }
   if (j.contains("form_error")) {
-    for (const auto& [face, f] : j["form_error"].items()) {
+    const Json& fe = requireObject(doc, j, "form_error");
+    for (const auto& [face, f] : fe.items()) {
       Face fc;
       try {
         fc = faceFromName(face);
       } catch (const std::invalid_argument& e) {
-        doc.fail(face, e.what());
+        doc.fail(fe, face, e.what());
       }
       FaceForm& ff = t.artefact.form[static_cast<size_t>(fc)];
-      ff.offset_mm = umToMm(numberOr(doc, f, "offset_um", 0.0));
-      ff.tilt_u_rad = numberOr(doc, f, "tilt_u_mrad", 0.0) * 1e-3;
-      ff.tilt_v_rad = numberOr(doc, f, "tilt_v_mrad", 0.0) * 1e-3;
+      ff.offset_mm = umToMm(numberOr(doc, f, "offset_um", 0.0, um));
+      ff.tilt_u_rad = numberOr(doc, f, "tilt_u_mrad", 0.0, mrad) * 1e-3;
+      ff.tilt_v_rad = numberOr(doc, f, "tilt_v_mrad", 0.0, mrad) * 1e-3;
     }
   }
   if (j.contains("drift")) {
     // Linear drift of location errors: {"dz_AY": {"rate": 6.0, "unit": "um/h"}, ...}
+    const Json& dr = requireObject(doc, j, "drift");
     ErrorVector rate = ErrorVector::Zero();  // per second, mm or rad
-    for (const auto& [name, entry] : j["drift"].items()) {
+    for (const auto& [name, entry] : dr.items()) {
       const int i = parameterIndex(kinematics, name);
-      if (i < 0) doc.fail(name, "unknown location error '" + name + "' in drift");
+      if (i < 0) doc.fail(dr, name, "unknown location error '" + name + "' in drift");
       if (!entry.is_object() || !entry.contains("rate") || !entry["rate"].is_number())
-        doc.fail(name, "drift of '" + name + "' needs {\"rate\": number, \"unit\": \"um/h\" or \"mdeg/h\"}");
-      const std::string unit = entry.value("unit", "");
+        doc.fail(dr, name, "drift of '" + name + "' needs {\"rate\": number, \"unit\": \"um/h\" or \"mdeg/h\"}");
+      const std::string unit = stringOr(doc, entry, "unit", "");
       const bool length = locationParameters(kinematics)[i].kind == ParamKind::Length;
-      if (length && unit != "um/h") doc.fail(name, "drift unit of '" + name + "' must be um/h");
-      if (!length && unit != "mdeg/h") doc.fail(name, "drift unit of '" + name + "' must be mdeg/h");
-      const double v = entry["rate"].get<double>() / 3600.0;
+      if (length && unit != "um/h") doc.fail(entry, "unit", "drift unit of '" + name + "' must be um/h");
+      if (!length && unit != "mdeg/h") doc.fail(entry, "unit", "drift unit of '" + name + "' must be mdeg/h");
+      const double v =
+          requireNumber(doc, entry, "rate",
+                        Limits::symmetric(length ? kMaxLocationErrorUm : kMaxAngleErrorMdeg, unit)) / 3600.0;
       rate[i] = length ? umToMm(v) : mdegToRad(v);
     }
     t.drift = [rate](double ts) { return ErrorVector(rate * ts); };
   }
   if (j.contains("rotary_error_motion")) {
     // Second-order radial error motion of C: {"EXC_cos2C_um": 3.0, "EYC_cos2C_um": 0.0}
-    if (kinematics != Kinematics::TableAC) doc.fail("rotary_error_motion", "rotary_error_motion needs an A/C machine");
-    const Json& r = j["rotary_error_motion"];
-    const double ex = umToMm(numberOr(doc, r, "EXC_cos2C_um", 0.0)), ey = umToMm(numberOr(doc, r, "EYC_cos2C_um", 0.0));
+    if (kinematics != Kinematics::TableAC) doc.fail(j, "rotary_error_motion", "rotary_error_motion needs an A/C machine");
+    const Json& r = requireObject(doc, j, "rotary_error_motion");
+    const double ex = umToMm(numberOr(doc, r, "EXC_cos2C_um", 0.0, um)), ey = umToMm(numberOr(doc, r, "EYC_cos2C_um", 0.0, um));
     t.pose_dependent = [ex, ey](const Pose& p) {
       ErrorVector d = ErrorVector::Zero();
       const double c2 = std::cos(2.0 * degToRad(p.C));
@@ -201,9 +221,10 @@ Truth truthFromJson(const JsonDoc& doc, Kinematics kinematics) {
   }
   if (j.contains("linear_axis_squareness")) {
     // 000 Eq. (23): {"S_xy_um_per_m": 30, "S_xz_um_per_m": 0, "S_yz_um_per_m": 30}
-    const Json& s = j["linear_axis_squareness"];
-    const double sxy = numberOr(doc, s, "S_xy_um_per_m", 0.0) * 1e-6, sxz = numberOr(doc, s, "S_xz_um_per_m", 0.0) * 1e-6,
-                 syz = numberOr(doc, s, "S_yz_um_per_m", 0.0) * 1e-6;
+    const Json& s = requireObject(doc, j, "linear_axis_squareness");
+    const double sxy = numberOr(doc, s, "S_xy_um_per_m", 0.0, um_per_m) * 1e-6,
+                 sxz = numberOr(doc, s, "S_xz_um_per_m", 0.0, um_per_m) * 1e-6,
+                 syz = numberOr(doc, s, "S_yz_um_per_m", 0.0, um_per_m) * 1e-6;
     t.linear_axis_error = [sxy, sxz, syz](const Eigen::Vector3d& c) {
       return Eigen::Vector3d(sxy * c.y() + sxz * c.z(), syz * c.z(), 0.0);
     };
@@ -211,18 +232,25 @@ Truth truthFromJson(const JsonDoc& doc, Kinematics kinematics) {
   if (j.contains("linear_axis_scale")) {
     // Scale errors of the linear axes (003's scale error): actual = read (1 + s), per axis:
     // {"X_um_per_m": 50, "Y_um_per_m": 0, "Z_um_per_m": 0}. Adds to the squareness above.
-    const Json& s = j["linear_axis_scale"];
-    const Eigen::Vector3d sc(numberOr(doc, s, "X_um_per_m", 0.0) * 1e-6, numberOr(doc, s, "Y_um_per_m", 0.0) * 1e-6,
-                             numberOr(doc, s, "Z_um_per_m", 0.0) * 1e-6);
+    const Json& s = requireObject(doc, j, "linear_axis_scale");
+    const Eigen::Vector3d sc(numberOr(doc, s, "X_um_per_m", 0.0, um_per_m) * 1e-6,
+                             numberOr(doc, s, "Y_um_per_m", 0.0, um_per_m) * 1e-6,
+                             numberOr(doc, s, "Z_um_per_m", 0.0, um_per_m) * 1e-6);
     auto before = t.linear_axis_error;
     t.linear_axis_error = [sc, before](const Eigen::Vector3d& c) {
       return Eigen::Vector3d(sc.cwiseProduct(c) + (before ? before(c) : Eigen::Vector3d::Zero()));
     };
   }
-  t.noise_um = numberOr(doc, j, "probe_noise_um", 0.0);
-  t.pretravel_um = numberOr(doc, j, "probe_pretravel_um", 0.0);
-  t.start_time_s = numberOr(doc, j, "start_time_s", 0.0);
+  t.noise_um = numberOr(doc, j, "probe_noise_um", 0.0, Limits::nonNegative(kMaxNoiseUm, "um"));
+  t.pretravel_um = numberOr(doc, j, "probe_pretravel_um", 0.0, Limits::symmetric(kMaxNoiseUm, "um"));
+  t.start_time_s = numberOr(doc, j, "start_time_s", 0.0, Limits::nonNegative(kMaxClockSeconds, "s"));
   return t;
+}
+
+}  // namespace
+
+Truth truthFromJson(const JsonDoc& doc, Kinematics kinematics) {
+  return guardJson(doc, [&] { return truthFrom(doc, kinematics); });
 }
 
 Truth loadTruth(const std::string& path, Kinematics kinematics) { return truthFromJson(readJsonFile(path), kinematics); }

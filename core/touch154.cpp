@@ -21,6 +21,11 @@ Touch154Layout Touch154Layout::fromOptions(const CycleOptions& options) {
                                   "' for cycle touch154 (known: top_offsets_mm, top_ring, side_offsets_mm, side_depth_mm)");
   }
   if (l.side_depth_mm <= 0) throw std::invalid_argument("option side_depth_mm must be positive");
+  // Seven poses, each touching up to four sides and the whole top grid: refuse before building.
+  const double top = static_cast<double>(l.top_offsets_mm.size());
+  requirePlanSize(fmt::format("options top_offsets_mm ({} values) and side_offsets_mm ({} values)",
+                              l.top_offsets_mm.size(), l.side_offsets_mm.size()),
+                  7.0 * (4.0 * static_cast<double>(l.side_offsets_mm.size()) + top * top), 7.0);
   return l;
 }
 

@@ -15,6 +15,8 @@
 
 #include <fmt/format.h>
 
+#include "core/limits.hpp"
+
 #include "core/causes.hpp"
 #include "core/closed_form.hpp"
 #include "core/closed_form_map.hpp"
@@ -60,7 +62,8 @@ bool UncertaintyOptions::validate(std::string* why) const {
     return false;
   };
   if (runs < 2) return fail(fmt::format("runs must be >= 2 (got {}): a standard deviation needs two runs", runs));
-  if (threads < 0) return fail("threads must be >= 0 (0: all cores)");
+  if (runs > kMaxMonteCarloRuns) return fail(fmt::format("runs must be <= {} (got {})", kMaxMonteCarloRuns, runs));
+  if (threads < 0 || threads > kMaxThreads) return fail(fmt::format("threads must be from 0 to {} (0: all cores)", kMaxThreads));
   if (!truth.values.allFinite()) return fail("the simulated machine's location errors must be finite");
   return true;
 }

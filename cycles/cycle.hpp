@@ -100,6 +100,8 @@ class Cycle {
 
   /// The plan of the cycle. Throws std::invalid_argument naming the option or the limit.
   virtual ProbePlan plan(const MachineModel& machine, const CycleOptions& options) const = 0;
+  /// What a PLAN.json of this cycle must satisfy beyond the format (checked with FILE:LINE).
+  virtual PlanRules planRules() const { return {}; }
 
   /// The dialect-neutral program of a plan; `dialect` selects only the controller's conventions
   /// the plan needs (rotary sign). Throws std::invalid_argument when it cannot be expressed.
@@ -129,5 +131,8 @@ const Cycle& cycleOfPlan(const ProbePlan& plan);
 /// The plan of the named cycle. Throws std::invalid_argument on an unknown cycle or option, or a
 /// plan that does not fit the machine (stroke, reach), naming what is wrong.
 ProbePlan makePlan(const std::string& cycle, const MachineModel& machine, const CycleOptions& options);
+
+/// PLAN.json read with the rules of the cycle it names (an unknown cycle: the format alone).
+ProbePlan loadCyclePlan(const std::string& path);
 
 }  // namespace rotacal

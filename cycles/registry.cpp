@@ -3,6 +3,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/limits.hpp"
 #include "cycles/cycle.hpp"
 
 #define ROTACAL_CYCLES(X) \
@@ -57,7 +58,26 @@ const Cycle& cycleOfPlan(const ProbePlan& plan) {
 }
 
 ProbePlan makePlan(const std::string& cycle, const MachineModel& machine, const CycleOptions& options) {
-  return cycleByName(cycle).plan(machine, options);
+  ProbePlan plan = cycleByName(cycle).plan(machine, options);
+  // Each cycle checks its own options before building; this holds whatever they missed to the
+  // limits the plan loader enforces, so that a plan written is a plan that loads.
+  requirePlanSize("cycle " + cycle, static_cast<double>(plan.points.size()), static_cast<double>(plan.poses.size()));
+  return plan;
+}
+
+ProbePlan loadCyclePlan(const std::string& path) {
+  const JsonDoc doc = readJsonFile(path);
+  PlanRules rules;
+  if (doc.value.is_object() && doc.value.contains("cycle") && doc.value["cycle"].is_string()) {
+    ProbePlan named;
+    named.cycle = doc.value["cycle"].get<std::string>();
+    try {
+      rules = cycleOfPlan(named).planRules();
+    } catch (const std::invalid_argument&) {
+      // unknown: the loader checks the format; the caller names the cycle it cannot find
+    }
+  }
+  return planFromJson(doc, rules);
 }
 
 }  // namespace rotacal

@@ -2,13 +2,17 @@
 
 #include <sqlite3.h>
 
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <stdexcept>
+
+#include <fmt/format.h>
 
 #include "core/errors.hpp"
 
@@ -18,6 +22,9 @@ namespace {
 
 constexpr int kSchemaVersion = 1;
 constexpr int kBusyTimeoutMs = 30000;  // concurrent adds wait for each other this long at most
+// Values and uncertainties kept in the history, in report units (um, mdeg): a report beyond
+// this is not a calibration, and a row beyond it is damage.
+constexpr double kMaxStoredValue = 1e6;
 
 const char* kSchema = R"sql(
 CREATE TABLE IF NOT EXISTS meta(key TEXT PRIMARY KEY, value TEXT NOT NULL);
@@ -62,14 +69,24 @@ std::string defaultDatabasePath() {
 }
 
 double parseIsoTime(const std::string& text) {
-  int Y = 0, M = 0, D = 0, h = 0, m = 0, s = 0;
-  char tail = 0;
-  const int n = std::sscanf(text.c_str(), "%4d-%2d-%2dT%2d:%2d:%2d%c", &Y, &M, &D, &h, &m, &s, &tail);
-  const bool date_only = n == 3 && text.size() == 10;
-  if (!date_only && !(n == 7 && tail == 'Z' && text.size() == 20))
-    throw std::invalid_argument("time '" + text + "' is not YYYY-MM-DD or YYYY-MM-DDThh:mm:ssZ (UTC)");
-  if (M < 1 || M > 12 || D < 1 || D > 31 || h > 23 || m > 59 || s > 60)
-    throw std::invalid_argument("time '" + text + "' is out of range");
+  const std::string bad = "time '" + text + "' is not YYYY-MM-DD or YYYY-MM-DDThh:mm:ssZ (UTC)";
+  // Character by character: sscanf would take signs, spaces and short fields.
+  const std::string date_form = "dddd-dd-dd", full_form = "dddd-dd-ddTdd:dd:ddZ";
+  const std::string& form = text.size() == date_form.size() ? date_form : full_form;
+  if (text.size() != form.size()) throw std::invalid_argument(bad);
+  for (size_t i = 0; i < form.size(); ++i)
+    if (form[i] == 'd' ? !std::isdigit(static_cast<unsigned char>(text[i])) : text[i] != form[i])
+      throw std::invalid_argument(bad);
+  auto field = [&](size_t at, size_t n) { return std::stoi(text.substr(at, n)); };
+  const int Y = field(0, 4), M = field(5, 2), D = field(8, 2);
+  const bool full = text.size() == full_form.size();
+  const int h = full ? field(11, 2) : 0, m = full ? field(14, 2) : 0, s = full ? field(17, 2) : 0;
+  static const int kDays[] = {31, 28, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31};
+  const bool leap = (Y % 4 == 0 && Y % 100 != 0) || Y % 400 == 0;
+  // timegm would roll 2024-02-31 over into March: a date that does not exist is refused.
+  if (Y < 1970 || M < 1 || M > 12 || D < 1 || D > kDays[M - 1] + (M == 2 && leap ? 1 : 0) || h > 23 || m > 59 ||
+      s > 59)
+    throw std::invalid_argument("time '" + text + "' is not a valid date and time (UTC, years 1970-9999)");
   std::tm tm{};
   tm.tm_year = Y - 1900;
   tm.tm_mon = M - 1;
@@ -90,34 +107,36 @@ std::string isoTime(double unix_s) {
 }
 
 Calibration calibrationFromReport(const JsonDoc& doc, const std::string& machine_id, double time_s) {
-  const Json& j = doc.value;
-  if (!j.is_object() || j.value("format", "") != "rotacal-report/1")
-    doc.fail("format", "not a rotacal report (format rotacal-report/1 expected)");
-  Calibration c;
-  c.machine_id = machine_id;
-  c.time_s = time_s;
-  c.time_utc = isoTime(time_s);
-  c.cycle = requireString(doc, j, "cycle");
-  c.method = j.value("method", "");
-  c.machine_name = j.value("machine", "");
-  c.residual_rms_um = requireNumber(doc, j, "residual_rms_um");
-  c.points_used = static_cast<int>(numberOr(doc, j, "points_used", 0));
-  c.source = doc.file;
-  Json plan = {{"cycle", c.cycle}};
-  if (j.contains("machine_model")) plan["machine"] = j["machine_model"];
-  c.plan_json = plan.dump();
-  if (!j.contains("location_errors") || !j["location_errors"].is_object() || j["location_errors"].empty())
-    doc.fail("location_errors", "no location_errors in the report");
-  for (const auto& [name, e] : j["location_errors"].items()) {
-    StoredParameter p;
-    p.name = name;
-    p.value = requireNumber(doc, e, "value");
-    p.u = requireNumber(doc, e, "u");
-    p.unit = requireString(doc, e, "unit");
-    p.iso = e.value("iso", "");
-    c.parameters.push_back(p);
-  }
-  return c;
+  return guardJson(doc, [&] {
+    const Json& j = doc.value;
+    if (!j.is_object() || !j.contains("format") || j["format"] != "rotacal-report/1")
+      doc.fail(j, "format", "not a rotacal report (format rotacal-report/1 expected)");
+    Calibration c;
+    c.machine_id = machine_id;
+    c.time_s = time_s;
+    c.time_utc = isoTime(time_s);
+    c.cycle = requireString(doc, j, "cycle");
+    c.method = stringOr(doc, j, "method", "");
+    c.machine_name = stringOr(doc, j, "machine", "");
+    c.residual_rms_um = requireNumber(doc, j, "residual_rms_um", Limits::nonNegative(kMaxStoredValue, "um"));
+    c.points_used = intOr(doc, j, "points_used", 0, 0, std::numeric_limits<int>::max());
+    c.source = doc.file;
+    Json plan = {{"cycle", c.cycle}};
+    if (j.contains("machine_model")) plan["machine"] = j["machine_model"];
+    c.plan_json = plan.dump();
+    if (!j.contains("location_errors") || !j["location_errors"].is_object() || j["location_errors"].empty())
+      doc.fail(j, "location_errors", "no location_errors in the report");
+    for (const auto& [name, e] : j["location_errors"].items()) {
+      StoredParameter p;
+      p.name = name;
+      p.value = requireNumber(doc, e, "value", Limits::symmetric(kMaxStoredValue));
+      p.u = requireNumber(doc, e, "u", Limits::nonNegative(kMaxStoredValue));
+      p.unit = requireString(doc, e, "unit");
+      p.iso = stringOr(doc, e, "iso", "");
+      c.parameters.push_back(p);
+    }
+    return c;
+  });
 }
 
 Database::Database(const std::string& path, bool create) : path_(path) {
@@ -128,14 +147,17 @@ Database::Database(const std::string& path, bool create) : path_(path) {
     fs::create_directories(fs::path(path).parent_path(), ec);
   }
   const int flags = SQLITE_OPEN_READWRITE | (create ? SQLITE_OPEN_CREATE : 0) | SQLITE_OPEN_FULLMUTEX;
-  if (sqlite3_open_v2(path.c_str(), &db_, flags, nullptr) != SQLITE_OK) fail("cannot open");
-  sqlite3_busy_timeout(db_, kBusyTimeoutMs);
+  sqlite3* handle = nullptr;
+  const int rc = sqlite3_open_v2(path.c_str(), &handle, flags, nullptr);
+  db_.reset(handle);  // sqlite hands out a handle to close even when the open fails
+  if (rc != SQLITE_OK) fail("cannot open");
+  sqlite3_busy_timeout(db_.get(), kBusyTimeoutMs);
   // Reading the schema is the first touch of the file's content: a file that is not a
   // database (or whose header is damaged) fails here with SQLITE_NOTADB.
   exec("PRAGMA foreign_keys=ON");
   {
     Stmt st;
-    if (sqlite3_prepare_v2(db_, "PRAGMA journal_mode=WAL", -1, &st.s, nullptr) != SQLITE_OK) fail("cannot read");
+    if (sqlite3_prepare_v2(db_.get(), "PRAGMA journal_mode=WAL", -1, &st.s, nullptr) != SQLITE_OK) fail("cannot read");
     if (sqlite3_step(st.s) != SQLITE_ROW) fail("cannot set WAL mode");
   }
   exec("PRAGMA synchronous=NORMAL");
@@ -144,7 +166,7 @@ Database::Database(const std::string& path, bool create) : path_(path) {
   try {
     {
       Stmt st;
-      if (sqlite3_prepare_v2(db_, "SELECT count(*) FROM sqlite_master WHERE type='table' AND name NOT IN "
+      if (sqlite3_prepare_v2(db_.get(), "SELECT count(*) FROM sqlite_master WHERE type='table' AND name NOT IN "
                                   "('meta','calibration','parameter','sqlite_sequence')",
                              -1, &st.s, nullptr) != SQLITE_OK)
         fail("cannot read the schema");
@@ -156,7 +178,7 @@ Database::Database(const std::string& path, bool create) : path_(path) {
     exec(("INSERT OR IGNORE INTO meta(key, value) VALUES('schema_version', '" + std::to_string(kSchemaVersion) + "')").c_str());
     {
       Stmt st;
-      if (sqlite3_prepare_v2(db_, "SELECT value FROM meta WHERE key='schema_version'", -1, &st.s, nullptr) != SQLITE_OK ||
+      if (sqlite3_prepare_v2(db_.get(), "SELECT value FROM meta WHERE key='schema_version'", -1, &st.s, nullptr) != SQLITE_OK ||
           sqlite3_step(st.s) != SQLITE_ROW)
         fail("cannot read the schema version");
       const std::string v = reinterpret_cast<const char*>(sqlite3_column_text(st.s, 0));
@@ -164,35 +186,37 @@ Database::Database(const std::string& path, bool create) : path_(path) {
     }
     exec("COMMIT");
   } catch (...) {
-    sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+    sqlite3_exec(db_.get(), "ROLLBACK", nullptr, nullptr, nullptr);
     throw;
   }
   // A damaged page behind a valid header shows up only when read: check the whole file.
   Stmt st;
-  if (sqlite3_prepare_v2(db_, "PRAGMA quick_check", -1, &st.s, nullptr) != SQLITE_OK) fail("cannot check");
+  if (sqlite3_prepare_v2(db_.get(), "PRAGMA quick_check", -1, &st.s, nullptr) != SQLITE_OK) fail("cannot check");
   if (sqlite3_step(st.s) != SQLITE_ROW) fail("integrity check failed");
   const std::string ok = reinterpret_cast<const char*>(sqlite3_column_text(st.s, 0));
   if (ok != "ok") fail("damaged (integrity check: " + ok + ")");
 }
 
-Database::~Database() { sqlite3_close(db_); }
+Database::~Database() = default;
+
+void Database::Close::operator()(sqlite3* db) const { sqlite3_close(db); }
 
 void Database::fail(const std::string& what) const {
   std::string msg = what;
   if (db_ != nullptr) {
-    const int code = sqlite3_errcode(db_);
+    const int code = sqlite3_errcode(db_.get());
     if (code == SQLITE_NOTADB || code == SQLITE_CORRUPT)
-      msg = "not a rotacal history database, or damaged (" + std::string(sqlite3_errmsg(db_)) +
+      msg = "not a rotacal history database, or damaged (" + std::string(sqlite3_errmsg(db_.get())) +
             "); keep it for inspection and use --db NEW_FILE";
     else if (code != SQLITE_OK && code != SQLITE_ROW && code != SQLITE_DONE)
-      msg += ": " + std::string(sqlite3_errmsg(db_));
+      msg += ": " + std::string(sqlite3_errmsg(db_.get()));
   }
   throw InputError(path_, 0, msg);
 }
 
 void Database::exec(const char* sql) const {
   char* err = nullptr;
-  if (sqlite3_exec(db_, sql, nullptr, nullptr, &err) != SQLITE_OK) {
+  if (sqlite3_exec(db_.get(), sql, nullptr, nullptr, &err) != SQLITE_OK) {
     const std::string e = err ? err : "unknown";
     sqlite3_free(err);
     fail(e);
@@ -203,7 +227,7 @@ long long Database::add(const Calibration& c) {
   exec("BEGIN IMMEDIATE");
   try {
     Stmt st;
-    if (sqlite3_prepare_v2(db_,
+    if (sqlite3_prepare_v2(db_.get(),
                            "INSERT INTO calibration(machine_id, time_s, time_utc, added_utc, cycle, method, machine_name, "
                            "source, residual_rms_um, points_used, plan_json) VALUES(?,?,?,?,?,?,?,?,?,?,?)",
                            -1, &st.s, nullptr) != SQLITE_OK)
@@ -221,9 +245,9 @@ long long Database::add(const Calibration& c) {
     sqlite3_bind_int(st.s, 10, c.points_used);
     sqlite3_bind_text(st.s, 11, c.plan_json.c_str(), -1, SQLITE_TRANSIENT);
     if (sqlite3_step(st.s) != SQLITE_DONE) fail("cannot store the calibration");
-    const long long id = sqlite3_last_insert_rowid(db_);
+    const long long id = sqlite3_last_insert_rowid(db_.get());
     Stmt ps;
-    if (sqlite3_prepare_v2(db_, "INSERT INTO parameter(calibration_id, name, iso, unit, value, u) VALUES(?,?,?,?,?,?)", -1,
+    if (sqlite3_prepare_v2(db_.get(), "INSERT INTO parameter(calibration_id, name, iso, unit, value, u) VALUES(?,?,?,?,?,?)", -1,
                            &ps.s, nullptr) != SQLITE_OK)
       fail("cannot prepare the insert");
     for (const auto& p : c.parameters) {
@@ -239,43 +263,83 @@ long long Database::add(const Calibration& c) {
     exec("COMMIT");
     return id;
   } catch (...) {
-    sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+    sqlite3_exec(db_.get(), "ROLLBACK", nullptr, nullptr, nullptr);
     throw;
   }
 }
 
+namespace {
+
+// A row read back is checked as strictly as a report is on the way in: SQLite keeps whatever a
+// column is given (text in a REAL column reads as 0.0), so a damaged or hand-edited file would
+// otherwise show zeros and NaN with a verdict of "stable".
+class RowReader {
+ public:
+  RowReader(sqlite3_stmt* st, const std::string& path, std::string row) : st_(st), path_(path), row_(std::move(row)) {}
+  double number(int col, const char* name, double lo, double hi) const {
+    const int type = sqlite3_column_type(st_, col);
+    if (type != SQLITE_FLOAT && type != SQLITE_INTEGER) fail(name, "holds " + shown(col) + ", not a number");
+    const double v = sqlite3_column_double(st_, col);
+    if (!std::isfinite(v) || v < lo || v > hi)
+      fail(name, fmt::format("holds {:g}, outside [{:g}, {:g}]", v, lo, hi));
+    return v;
+  }
+  std::string text(int col, const char* name) const {
+    if (sqlite3_column_type(st_, col) != SQLITE_TEXT) fail(name, "holds " + shown(col) + ", not text");
+    return reinterpret_cast<const char*>(sqlite3_column_text(st_, col));
+  }
+
+ private:
+  std::string shown(int col) const {
+    switch (sqlite3_column_type(st_, col)) {
+      case SQLITE_NULL: return "NULL";
+      case SQLITE_BLOB: return "a blob";
+      case SQLITE_TEXT: return "'" + std::string(reinterpret_cast<const char*>(sqlite3_column_text(st_, col))) + "'";
+      default: return fmt::format("{:g}", sqlite3_column_double(st_, col));
+    }
+  }
+  [[noreturn]] void fail(const char* name, const std::string& what) const {
+    throw InputError(path_, 0, fmt::format("damaged history: {}, column {} {}; keep the file for inspection and use --db "
+                                           "NEW_FILE",
+                                           row_, name, what));
+  }
+  sqlite3_stmt* st_;
+  const std::string& path_;
+  std::string row_;
+};
+
+}  // namespace
+
 std::vector<Calibration> Database::list(const std::string& machine_id) const {
   std::vector<Calibration> out;
   Stmt st;
-  if (sqlite3_prepare_v2(db_,
+  if (sqlite3_prepare_v2(db_.get(),
                          "SELECT id, time_s, time_utc, cycle, method, machine_name, source, residual_rms_um, points_used, "
                          "plan_json FROM calibration WHERE machine_id = ? ORDER BY time_s, id",
                          -1, &st.s, nullptr) != SQLITE_OK)
     fail("cannot read the calibrations");
   sqlite3_bind_text(st.s, 1, machine_id.c_str(), -1, SQLITE_TRANSIENT);
-  auto text = [&](int col) {
-    const unsigned char* t = sqlite3_column_text(st.s, col);
-    return t ? std::string(reinterpret_cast<const char*>(t)) : std::string();
-  };
   int rc;
   while ((rc = sqlite3_step(st.s)) == SQLITE_ROW) {
     Calibration c;
     c.id = sqlite3_column_int64(st.s, 0);
+    const RowReader row(st.s, path_, fmt::format("calibration {}", c.id));
     c.machine_id = machine_id;
-    c.time_s = sqlite3_column_double(st.s, 1);
-    c.time_utc = text(2);
-    c.cycle = text(3);
-    c.method = text(4);
-    c.machine_name = text(5);
-    c.source = text(6);
-    c.residual_rms_um = sqlite3_column_double(st.s, 7);
-    c.points_used = sqlite3_column_int(st.s, 8);
-    c.plan_json = text(9);
+    // Unix seconds of the years parseIsoTime accepts (1970-9999).
+    c.time_s = row.number(1, "time_s", 0.0, 253402300799.0);
+    c.time_utc = row.text(2, "time_utc");
+    c.cycle = row.text(3, "cycle");
+    c.method = row.text(4, "method");
+    c.machine_name = row.text(5, "machine_name");
+    c.source = row.text(6, "source");
+    c.residual_rms_um = row.number(7, "residual_rms_um", 0.0, kMaxStoredValue);
+    c.points_used = static_cast<int>(row.number(8, "points_used", 0.0, std::numeric_limits<int>::max()));
+    c.plan_json = row.text(9, "plan_json");
     out.push_back(std::move(c));
   }
   if (rc != SQLITE_DONE) fail("cannot read the calibrations");
   Stmt ps;
-  if (sqlite3_prepare_v2(db_, "SELECT name, iso, unit, value, u FROM parameter WHERE calibration_id = ? ORDER BY rowid", -1,
+  if (sqlite3_prepare_v2(db_.get(), "SELECT name, iso, unit, value, u FROM parameter WHERE calibration_id = ? ORDER BY rowid", -1,
                          &ps.s, nullptr) != SQLITE_OK)
     fail("cannot read the parameters");
   for (auto& c : out) {
@@ -283,11 +347,14 @@ std::vector<Calibration> Database::list(const std::string& machine_id) const {
     sqlite3_bind_int64(ps.s, 1, c.id);
     while ((rc = sqlite3_step(ps.s)) == SQLITE_ROW) {
       StoredParameter p;
-      p.name = reinterpret_cast<const char*>(sqlite3_column_text(ps.s, 0));
-      p.iso = reinterpret_cast<const char*>(sqlite3_column_text(ps.s, 1));
-      p.unit = reinterpret_cast<const char*>(sqlite3_column_text(ps.s, 2));
-      p.value = sqlite3_column_double(ps.s, 3);
-      p.u = sqlite3_column_double(ps.s, 4);
+      const unsigned char* raw = sqlite3_column_text(ps.s, 0);  // for the message, whatever it holds
+      const std::string label = raw ? reinterpret_cast<const char*>(raw) : "";
+      const RowReader row(ps.s, path_, fmt::format("calibration {}, parameter '{}'", c.id, label));
+      p.name = row.text(0, "name");
+      p.iso = row.text(1, "iso");
+      p.unit = row.text(2, "unit");
+      p.value = row.number(3, "value", -kMaxStoredValue, kMaxStoredValue);
+      p.u = row.number(4, "u", 0.0, kMaxStoredValue);
       c.parameters.push_back(p);
     }
     if (rc != SQLITE_DONE) fail("cannot read the parameters");
@@ -298,7 +365,7 @@ std::vector<Calibration> Database::list(const std::string& machine_id) const {
 std::vector<std::string> Database::machines() const {
   std::vector<std::string> out;
   Stmt st;
-  if (sqlite3_prepare_v2(db_, "SELECT DISTINCT machine_id FROM calibration ORDER BY machine_id", -1, &st.s, nullptr) != SQLITE_OK)
+  if (sqlite3_prepare_v2(db_.get(), "SELECT DISTINCT machine_id FROM calibration ORDER BY machine_id", -1, &st.s, nullptr) != SQLITE_OK)
     fail("cannot read the machines");
   while (sqlite3_step(st.s) == SQLITE_ROW) out.emplace_back(reinterpret_cast<const char*>(sqlite3_column_text(st.s, 0)));
   return out;

@@ -5,6 +5,7 @@
 // timeout, and each add is one IMMEDIATE transaction (all or nothing). A file that is not a
 // rotacal history (or is damaged) is refused with a clear error naming it. Schema:
 // docs/reports.md.
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -36,7 +37,8 @@ struct Calibration {
 std::string defaultDatabasePath();
 
 /// Unix seconds <-> ISO 8601 UTC ("2026-11-25T19:46:44Z"; a date alone is midnight UTC).
-/// parseIsoTime throws std::invalid_argument on anything else.
+/// parseIsoTime throws std::invalid_argument on anything else, including dates that do not
+/// exist (2024-02-30, 2023-02-29) and years outside 1970..9999.
 double parseIsoTime(const std::string& text);
 std::string isoTime(double unix_s);
 
@@ -55,14 +57,20 @@ class Database {
 
   /// Stores one calibration in one transaction; returns its id.
   long long add(const Calibration& c);
-  /// The calibrations of a machine in time order (then id order).
+  /// The calibrations of a machine in time order (then id order). Every row is checked (types,
+  /// finite values, u >= 0): a damaged row fails with InputError naming the file and the row.
   std::vector<Calibration> list(const std::string& machine_id) const;
   std::vector<std::string> machines() const;
 
  private:
   void exec(const char* sql) const;
   [[noreturn]] void fail(const std::string& what) const;
-  sqlite3* db_ = nullptr;
+  // Owned from the moment sqlite3_open_v2 hands it over, so that a constructor that throws
+  // (a damaged file) still closes it.
+  struct Close {
+    void operator()(sqlite3* db) const;
+  };
+  std::unique_ptr<sqlite3, Close> db_;
   std::string path_;
 };
 

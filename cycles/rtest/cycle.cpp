@@ -42,6 +42,12 @@ class Rtest final : public Cycle {
   ProbePlan plan(const MachineModel& machine, const CycleOptions& options) const override {
     return makeRtestPlan(machine, options);
   }
+  PlanRules planRules() const override {
+    PlanRules r;
+    r.artefact_touched = false;  // the R-test's sphere sits in its nest, not on the machine's artefact
+    r.check_options = rtestCheckPlanOptions;
+    return r;
+  }
   nc::Program program(const ProbePlan& plan, const std::string& dialect) const override {
     return rtestProgram(plan, dialect);
   }

@@ -7,6 +7,8 @@
 
 #include <fmt/format.h>
 
+#include "core/limits.hpp"
+
 #include "core/errors.hpp"
 #include "core/rng.hpp"
 #include "core/units.hpp"
@@ -36,7 +38,13 @@ Pose tiltPose(Kinematics k, double tilt, double c) {
 
 int RtestSchedule::cycles() const {
   if (!thermal) return 1;
-  return static_cast<int>(std::floor(duration_s / interval_s + 1e-9)) + 1;
+  // A plan file's options are checked here again: they may have been edited since `plan`.
+  const double n = std::floor(duration_s / interval_s + 1e-9) + 1.0;
+  if (!(n >= 1.0 && n <= kMaxRepeats))
+    throw std::invalid_argument(fmt::format("rtest plan: duration_h / interval_min give {:g} cycles; at most {} repeats "
+                                            "are allowed",
+                                            n, kMaxRepeats));
+  return static_cast<int>(n);
 }
 
 double RtestSchedule::strokeTime_s() const {
@@ -105,6 +113,9 @@ ProbePlan makeRtestPlan(const MachineModel& m, const CycleOptions& options) {
         "rtest: {} and c_list must contain 0: the sensors are reset at {} = C = 0 (002 Eq. (4))", tilt_key,
         tiltAxis(m.kinematics)));
   if (cs.size() < 3) throw std::invalid_argument("rtest: c_list needs at least 3 angles to locate the C axis at each tilt");
+  // One pose per reading: the tilt list times the C list.
+  requirePlanSize(fmt::format("rtest: options {} ({} values) and c_list ({} values)", tilt_key, tilts.size(), cs.size()),
+                  static_cast<double>(tilts.size() * cs.size()), static_cast<double>(tilts.size() * cs.size()));
   // 002 Sec. 4.1: the nest at [-0.448, -91.187, 40.567] mm in the workpiece frame.
   const Eigen::Vector3d nest = parseVec3("nest_w_mm", opt(options, "nest_w_mm", "-0.448,-91.187,40.567"));
   if (std::hypot(nest.x(), nest.y()) < 10.0)
@@ -125,6 +136,10 @@ ProbePlan makeRtestPlan(const MachineModel& m, const CycleOptions& options) {
   if (recip.size() != 2 || recip[0] == recip[1]) throw std::invalid_argument("rtest: recip_list must be two different angles");
   if (!(interval > 0) || !(duration >= 0) || !(rfeed > 0))
     throw std::invalid_argument("rtest: interval_min, recip_feed_deg_min must be > 0 and duration_h >= 0");
+  if (thermal == "1" && 60.0 * duration / interval + 1.0 > kMaxRepeats)
+    throw std::invalid_argument(fmt::format(
+        "rtest: options duration_h = {:g} and interval_min = {:g} give {:.0f} cycles; at most {} repeats are allowed",
+        duration, interval, std::floor(60.0 * duration / interval) + 1.0, kMaxRepeats));
   const double noise = parseNumber("sensor_noise_um", opt(options, "sensor_noise_um", "0.2"));
   if (!(noise > 0)) throw std::invalid_argument("rtest: sensor_noise_um must be > 0");
   const RotaryAxis& ta = m.rotaryAxis(tiltAxis(m.kinematics));
@@ -206,6 +221,17 @@ RtestSchedule rtestSchedule(const ProbePlan& plan) {
   s.recip_to_deg = r.at(1);
   s.recip_feed_deg_min = optionNumber(plan, "recip_feed_deg_min");
   return s;
+}
+
+void rtestCheckPlanOptions(const ProbePlan& plan) {
+  const RtestSchedule s = rtestSchedule(plan);
+  if (!(s.interval_s > 0) || !(s.duration_s >= 0) || !(s.recip_feed_deg_min > 0))
+    throw std::invalid_argument("rtest: interval_min, recip_feed_deg_min must be > 0 and duration_h >= 0");
+  s.cycles();
+  if (!(optionNumber(plan, "retract_mm") > plan.machine.probe.ball_radius_mm()) || !(optionNumber(plan, "dwell_s") >= 0))
+    throw std::invalid_argument("rtest: dwell_s must be >= 0 and retract_mm larger than the sphere radius");
+  if (plan.options.count("sensor_noise_um") && !(optionNumber(plan, "sensor_noise_um") > 0))
+    throw std::invalid_argument("rtest: sensor_noise_um must be > 0");
 }
 
 Eigen::Vector3d rtestNest_w(const ProbePlan& plan) { return plan.points.front().contact_w_mm; }
@@ -323,22 +349,25 @@ RtestSeries simulateRtest(const ProbePlan& plan, const Truth& truth, const Rtest
   return series;
 }
 
-void rtestTruthFromJson(const JsonDoc& doc, Kinematics k, Truth& truth, RtestTruthExtras& extras) {
+static void rtestTruthFrom(const JsonDoc& doc, Kinematics k, Truth& truth, RtestTruthExtras& extras) {
   const Json& j = doc.value;
+  const Limits um = Limits::symmetric(kMaxLocationErrorUm, "um");
   if (j.contains("rtest")) {
-    const Json& r = j["rtest"];
-    extras.sphere_offset_m_mm.z() = umToMm(numberOr(doc, r, "tool_length_error_um", 0.0));
+    const Json& r = requireObject(doc, j, "rtest");
+    extras.sphere_offset_m_mm.z() = umToMm(numberOr(doc, r, "tool_length_error_um", 0.0, um));
   }
   if (!j.contains("component_errors")) return;
-  const Json& ce = j["component_errors"];
+  const Json& ce = requireObject(doc, j, "component_errors");
   const std::string key = std::string(1, tiltAxis(k)) + "_deg";
-  if (!ce.is_object() || !ce.contains(key) || !ce[key].is_array() || ce[key].empty())
-    doc.fail("component_errors", "component_errors needs \"" + key + "\": [angles...]");
+  if (!ce.contains(key) || !ce[key].is_array() || ce[key].empty())
+    doc.fail(j, "component_errors", "component_errors needs \"" + key + "\": [angles...]");
+  if (ce[key].size() > static_cast<size_t>(kMaxListValues))
+    doc.fail(ce, key, fmt::format("{} has {} angles; at most {}", key, ce[key].size(), kMaxListValues));
   std::vector<double> grid;
   for (const auto& v : ce[key]) {
-    if (!v.is_number()) doc.fail(key, key + " must hold numbers");
-    grid.push_back(v.get<double>());
-    if (grid.size() > 1 && !(grid.back() > grid[grid.size() - 2])) doc.fail(key, key + " must increase");
+    if (!v.is_number()) doc.fail(ce, key, key + " must hold numbers");
+    grid.push_back(checkNumber(doc, ce, key, v.get<double>(), Limits::symmetric(kMaxAngleDeg, "deg")));
+    if (grid.size() > 1 && !(grid.back() > grid[grid.size() - 2])) doc.fail(ce, key, key + " must increase");
   }
   std::vector<std::vector<double>> values(kRtestParams, std::vector<double>(grid.size(), 0.0));
   for (const auto& [name, entry] : ce.items()) {
@@ -346,16 +375,19 @@ void rtestTruthFromJson(const JsonDoc& doc, Kinematics k, Truth& truth, RtestTru
     int p = -1;
     for (int q = 0; q < kRtestParams; ++q)
       if (rtestParameterName(k, q) == name) p = q;
-    if (p < 0) doc.fail(name, "component_errors: '" + name + "' is not one of the six errors of 002 Table 2 for this machine");
-    const std::string unit = entry.value("unit", "");
-    if (!entry.contains("values") || !entry["values"].is_array() || entry["values"].size() != grid.size())
-      doc.fail(name, fmt::format("component_errors.{} needs \"values\" with {} numbers", name, grid.size()));
+    if (p < 0)
+      doc.fail(ce, name, "component_errors: '" + name + "' is not one of the six errors of 002 Table 2 for this machine");
+    if (!entry.is_object() || !entry.contains("values") || !entry["values"].is_array() ||
+        entry["values"].size() != grid.size())
+      doc.fail(ce, name, fmt::format("component_errors.{} needs \"values\" with {} numbers", name, grid.size()));
+    const std::string unit = stringOr(doc, entry, "unit", "");
     const bool len = rtestParameterIsLength(p);
     if ((len && unit != "um") || (!len && unit != "mdeg"))
-      doc.fail(name, fmt::format("component_errors.{}: unit must be {}", name, len ? "um" : "mdeg"));
+      doc.fail(entry, "unit", fmt::format("component_errors.{}: unit must be {}", name, len ? "um" : "mdeg"));
+    const Limits lim = len ? um : Limits::symmetric(kMaxAngleErrorMdeg, "mdeg");
     for (size_t i = 0; i < grid.size(); ++i) {
-      if (!entry["values"][i].is_number()) doc.fail(name, "component_errors." + name + ": values must be numbers");
-      const double v = entry["values"][i].get<double>();
+      if (!entry["values"][i].is_number()) doc.fail(entry, "values", "component_errors." + name + ": values must be numbers");
+      const double v = checkNumber(doc, entry, "values", entry["values"][i].get<double>(), lim);
       values[p][i] = len ? umToMm(v) : mdegToRad(v);
     }
   }
@@ -371,6 +403,10 @@ void rtestTruthFromJson(const JsonDoc& doc, Kinematics k, Truth& truth, RtestTru
       d[idx[p]] += grid.size() == 1 ? values[p][0] : (1.0 - w) * values[p][i] + w * values[p][i + 1];
     return d;
   };
+}
+
+void rtestTruthFromJson(const JsonDoc& doc, Kinematics k, Truth& truth, RtestTruthExtras& extras) {
+  guardJson(doc, [&] { rtestTruthFrom(doc, k, truth, extras); });
 }
 
 std::string rtestResultsCsv(const ProbePlan& plan, const RtestSeries& series) {

@@ -48,6 +48,9 @@ struct RtestSchedule {
 /// thermal (0|1), interval_min, duration_h, recip_list, recip_feed_deg_min, sensor_noise_um.
 ProbePlan makeRtestPlan(const MachineModel& machine, const CycleOptions& options);
 RtestSchedule rtestSchedule(const ProbePlan& plan);
+/// The options a loaded plan's simulation and analysis read back (schedule, retract, dwell,
+/// sensor noise), checked as `plan` checks them; throws std::invalid_argument naming the option.
+void rtestCheckPlanOptions(const ProbePlan& plan);
 Eigen::Vector3d rtestNest_w(const ProbePlan& plan);          // nominal sphere centre in the nest, workpiece frame, mm
 double rtestCycleTime_s(const ProbePlan& plan);              // one measuring cycle, from its first index to its end
 int rtestReciprocations(const ProbePlan& plan);              // round trips between two cycles

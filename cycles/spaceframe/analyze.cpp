@@ -56,6 +56,11 @@ SpaceframeLayout SpaceframeLayout::fromOptions(const CycleOptions& options) {
     throw std::invalid_argument("option nominal_from must be table1 or initial, got '" + l.nominal_from + "'");
   if (!(l.min_touch_angle_deg >= 0 && l.min_touch_angle_deg < 90))
     throw std::invalid_argument("option min_touch_angle_deg must lie in [0, 90)");
+  // A pose per (theta, phi) pair, up to five touches on each of the seven spheres.
+  const double poses = static_cast<double>(l.theta_deg.size() * l.phi_deg.size());
+  requirePlanSize(fmt::format("options theta_list ({} values) and phi_list ({} values)", l.theta_deg.size(),
+                              l.phi_deg.size()),
+                  35.0 * poses, poses);
   return l;
 }
 

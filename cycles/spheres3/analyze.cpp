@@ -176,6 +176,16 @@ Spheres3Result identifySpheres3(const ProbePlan& plan, const std::vector<Measure
     r.nominal_radius_mm = p.sphere->radius_mm;
   }
   if (opt.hold_out_angle >= n_angles) throw std::invalid_argument("hold_out_angle beyond the plan's angles");
+  // Every angle must see every sphere, or stage 1 has nothing to fit (and stage 2 an angle
+  // without data): refuse the plan rather than guess.
+  for (int a = 0; a < n_angles; ++a)
+    for (int s = 0; s < 3; ++s)
+      if (group[static_cast<size_t>(a * 3 + s)].size() < 4)
+        throw std::invalid_argument(fmt::format(
+            "plan pose {} (C = {:g} deg) has {} touches of sphere {}; a spheres3 plan needs at least 4 per sphere at "
+            "every pose",
+            plan.poses[static_cast<size_t>(a)].name, r.c_deg[static_cast<size_t>(a)],
+            group[static_cast<size_t>(a * 3 + s)].size(), s + 1));
 
   // Stage 1.
   double rss_touch = 0.0;

@@ -26,6 +26,11 @@ class Spheres3 final : public Cycle {
   ProbePlan plan(const MachineModel& machine, const CycleOptions& options) const override {
     return makeSpheres3Plan(machine, options);
   }
+  PlanRules planRules() const override {
+    PlanRules r;
+    r.spheres = 3;  // 001 Fig. 2: three spheres, each fitted at every pose
+    return r;
+  }
   nc::Program program(const ProbePlan& plan, const std::string& dialect) const override {
     return probeProgram(plan, dialect);
   }

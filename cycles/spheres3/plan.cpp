@@ -61,6 +61,8 @@ Spheres3Layout Spheres3Layout::fromOptions(const MachineModel& machine, const Cy
 int Spheres3Layout::angleCount() const {
   if (!(c_step_deg > 0)) throw std::invalid_argument("option c_step_deg must be positive");
   const double n = 360.0 / c_step_deg;
+  // Before any rounding to an integer: a tiny step gives more angles than an int holds.
+  requirePlanSize(fmt::format("option c_step_deg = {:g} ({:.0f} C angles)", c_step_deg, n), 15.0 * n, n);
   const long r = std::lround(n);
   if (std::abs(n - static_cast<double>(r)) > 1e-9 || r < 4)
     throw std::invalid_argument(fmt::format(
@@ -141,7 +143,8 @@ ProbePlan makeSpheres3Plan(const MachineModel& machine, const CycleOptions& opti
     const double c = layout.c_start_deg + n * layout.c_step_deg;
     Pose pose;
     pose.C = c;
-    const std::string name = fmt::format("C{:03.0f}", c);
+    // Whole angles keep their three-digit names; others need all their digits to stay distinct.
+    const std::string name = c == std::round(c) ? fmt::format("C{:03.0f}", c) : fmt::format("C{}", c);
     plan.poses.push_back({name, pose, safe_z});
     const Eigen::Isometry3d T = T_m_w_nominal(machine.kinematics, pose);
     for (int i = 0; i < 3; ++i) {

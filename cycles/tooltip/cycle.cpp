@@ -27,6 +27,12 @@ class Tooltip final : public Cycle {
   ProbePlan plan(const MachineModel& machine, const CycleOptions& options) const override {
     return makeTooltipPlan(machine, options);
   }
+  PlanRules planRules() const override {
+    PlanRules r;
+    r.heights = false;  // no probing moves: the tool tip stays at the laser's target
+    r.check_options = [](const ProbePlan& p) { (void)tooltipOptionsFrom(p.options, p.machine); };
+    return r;
+  }
   nc::Program program(const ProbePlan& plan, const std::string& dialect) const override {
     return tooltipProgram(plan, dialect);
   }

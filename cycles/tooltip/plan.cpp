@@ -7,6 +7,8 @@
 
 #include <fmt/format.h>
 
+#include "core/limits.hpp"
+
 #include "core/errors.hpp"
 #include "core/rng.hpp"
 #include "core/units.hpp"
@@ -90,7 +92,8 @@ TooltipOptions tooltipOptionsFrom(const CycleOptions& options, const MachineMode
   }
   if (auto* v = get("sweeps")) {
     const double s = parseNumber("sweeps", *v);
-    if (s < 0 || s != std::floor(s) || s > 100) throw std::invalid_argument("tooltip: option sweeps must be 0..100");
+    if (s < 0 || s != std::floor(s) || s > kMaxRepeats)
+      throw std::invalid_argument(fmt::format("tooltip: option sweeps must be a whole number 0..{}", kMaxRepeats));
     o.sweeps = static_cast<int>(s);
   }
   if (!(o.radius_mm > 0)) throw std::invalid_argument("tooltip: option radius_mm must be positive");
@@ -99,10 +102,16 @@ TooltipOptions tooltipOptionsFrom(const CycleOptions& options, const MachineMode
   if (std::abs(n - std::round(n)) > 1e-9)
     throw std::invalid_argument(fmt::format("tooltip: end_deg {} is not a whole number of steps of {} deg", o.end_deg,
                                             o.step_deg));
-  if (n > 3600) throw std::invalid_argument("tooltip: more than 3600 steps");
   const double m = -o.start_deg / o.step_deg;
-  if (o.start_deg > 0 || std::abs(m - std::round(m)) > 1e-9 || m > 3600)
+  if (o.start_deg > 0 || std::abs(m - std::round(m)) > 1e-9)
     throw std::invalid_argument("tooltip: start_deg must be <= 0 and a whole number of steps (the reading is zeroed at 0 deg)");
+  // Readings per sweep: the static test from start_deg to end_deg; a dynamic test goes out to
+  // +end, back to -end and home again, `sweeps` times. All of it once per other_deg angle.
+  const double per_sweep = o.sweeps == 0 ? m + n + 1.0 : 1.0 + 4.0 * n * o.sweeps;
+  requirePlanSize(fmt::format("tooltip: options step_deg = {:g}, end_deg = {:g}, start_deg = {:g}, sweeps = {}, other_deg "
+                              "({} values)",
+                              o.step_deg, o.end_deg, o.start_deg, o.sweeps, o.other_deg.size()),
+                  per_sweep * static_cast<double>(o.other_deg.size()), static_cast<double>(o.other_deg.size()));
   if (o.start_deg < 0 && o.sweeps > 0) throw std::invalid_argument("tooltip: start_deg is for the static test (sweeps = 0)");
   if (!(o.move_s > 0)) throw std::invalid_argument("tooltip: option move_s must be positive");
   if (o.dwell_s < 0) throw std::invalid_argument("tooltip: option dwell_s must be >= 0");
@@ -196,31 +205,32 @@ double TooltipTruth::angularErrorMdeg(double theta_deg) const {
 }
 
 TooltipTruth tooltipTruthFrom(const JsonDoc& doc, const Json& truth) {
-  TooltipTruth t;
-  if (!truth.is_object() || truth.value("format", "") != "rotacal-truth/1")
-    doc.fail("format", "not a truth file (expected \"format\": \"rotacal-truth/1\")");
-  if (truth.contains("location_errors") && !truth["location_errors"].empty())
-    doc.fail("location_errors", "a tooltip truth has no table location errors: use the 'tooltip' object");
-  t.noise_um = numberOr(doc, truth, "probe_noise_um", 0.0);
-  if (!truth.contains("tooltip")) return t;
-  const Json& j = truth["tooltip"];
-  if (!j.is_object()) doc.fail("tooltip", "'tooltip' must be an object");
-  static const std::set<std::string> known = {"dR_um", "angular_error"};
-  for (const auto& [k, v] : j.items())
-    if (!known.count(k)) doc.fail(k, "unknown tooltip truth field '" + k + "' (expected dR_um, angular_error)");
-  t.dR_um = numberOr(doc, j, "dR_um", 0.0);
-  if (j.contains("angular_error")) {
-    const Json& e = j["angular_error"];
-    static const std::set<std::string> ek = {"offset_mdeg", "slope_mdeg_per_90deg", "sin_mdeg", "sin2_mdeg"};
-    for (const auto& [k, v] : e.items())
-      if (!ek.count(k)) doc.fail(k, "unknown angular_error term '" + k + "'");
-    t.offset_mdeg = numberOr(doc, e, "offset_mdeg", 0.0);
-    t.slope_mdeg_per_90deg = numberOr(doc, e, "slope_mdeg_per_90deg", 0.0);
-    t.sin_mdeg = numberOr(doc, e, "sin_mdeg", 0.0);
-    t.sin2_mdeg = numberOr(doc, e, "sin2_mdeg", 0.0);
-  }
-  if (t.noise_um < 0) doc.fail("probe_noise_um", "noise must be >= 0");
-  return t;
+  return guardJson(doc, [&] {
+    TooltipTruth t;
+    if (!truth.is_object() || !truth.contains("format") || truth["format"] != "rotacal-truth/1")
+      doc.fail(truth, "format", "not a truth file (expected \"format\": \"rotacal-truth/1\")");
+    if (truth.contains("location_errors") && !truth["location_errors"].empty())
+      doc.fail(truth, "location_errors", "a tooltip truth has no table location errors: use the 'tooltip' object");
+    t.noise_um = numberOr(doc, truth, "probe_noise_um", 0.0, Limits::nonNegative(kMaxNoiseUm, "um"));
+    if (!truth.contains("tooltip")) return t;
+    const Json& j = requireObject(doc, truth, "tooltip");
+    static const std::set<std::string> known = {"dR_um", "angular_error"};
+    for (const auto& [k, v] : j.items())
+      if (!known.count(k)) doc.fail(j, k, "unknown tooltip truth field '" + k + "' (expected dR_um, angular_error)");
+    t.dR_um = numberOr(doc, j, "dR_um", 0.0, Limits::symmetric(kMaxLocationErrorUm, "um"));
+    if (j.contains("angular_error")) {
+      const Json& e = requireObject(doc, j, "angular_error");
+      static const std::set<std::string> ek = {"offset_mdeg", "slope_mdeg_per_90deg", "sin_mdeg", "sin2_mdeg"};
+      for (const auto& [k, v] : e.items())
+        if (!ek.count(k)) doc.fail(e, k, "unknown angular_error term '" + k + "'");
+      const Limits mdeg = Limits::symmetric(kMaxAngleErrorMdeg, "mdeg");
+      t.offset_mdeg = numberOr(doc, e, "offset_mdeg", 0.0, mdeg);
+      t.slope_mdeg_per_90deg = numberOr(doc, e, "slope_mdeg_per_90deg", 0.0, mdeg);
+      t.sin_mdeg = numberOr(doc, e, "sin_mdeg", 0.0, mdeg);
+      t.sin2_mdeg = numberOr(doc, e, "sin2_mdeg", 0.0, mdeg);
+    }
+    return t;
+  });
 }
 
 TooltipRun simulateTooltip(const ProbePlan& plan, const TooltipTruth& truth, std::uint64_t seed) {

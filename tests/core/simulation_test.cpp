@@ -144,7 +144,9 @@ TEST(Simulation, SphereTouchFollowsTheTrueTableAndTheSphereError) {
   const Eigen::Vector3d c_m = T_m_w(nominal, p.pose) * st.center_w_mm;
   p.approach_m = -Eigen::Vector3d::UnitZ();
   p.trigger_m_mm = c_m + (r + st.radius_mm) * Eigen::Vector3d::UnitZ();
+  p.pose_name = "S";
   plan.points = {p};
+  plan.poses = {{"S", p.pose, plan.index_z_mm}};  // a plan file's points name its poses
   Truth truth;
   truth.errors = nominal;
   truth.errors.set("dx_AY", 0.010);

@@ -18,6 +18,8 @@
 
 #include <fmt/format.h>
 
+#include <sqlite3.h>
+
 #include "core/errors.hpp"
 #include "history/store.hpp"
 #include "history/trend.hpp"
@@ -269,6 +271,98 @@ TEST(HistoryCli, Table4SeriesDriftThenAStep) {
   const ShellRun piped = sh(kCli + " history show --machine-id dmg1 --db " + db + " --json -");
   ASSERT_EQ(piped.code, 0);
   EXPECT_EQ(Json::parse(piped.out)["trends"], t);
+}
+
+// ---- Issue 14: damaged rows, strict dates, the handle of a file that fails to open ----------
+
+/// Runs SQL on a history file behind the store's back (what a damaged or hand-edited file holds).
+void tamper(const std::string& path, const std::string& sql) {
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  char* err = nullptr;
+  const int rc = sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &err);
+  EXPECT_EQ(rc, SQLITE_OK) << (err ? err : "");
+  sqlite3_free(err);
+  sqlite3_close(db);
+}
+
+TEST(Store, DamagedRowsAreRefusedNamingTheFile) {
+  // Each tampering used to show as 0.000 or -nan with the verdict "stable".
+  const std::vector<std::string> damage = {
+      "UPDATE parameter SET u = -1 WHERE name = 'dx_AY'",
+      "UPDATE parameter SET value = 'abc' WHERE name = 'a_AY'",
+      "UPDATE parameter SET iso = x'00ff' WHERE name = 'a_AY'",
+      "UPDATE calibration SET residual_rms_um = 'n/a'",
+      "UPDATE calibration SET time_s = 1e300",
+  };
+  for (const auto& sql : damage) {
+    SCOPED_TRACE(sql);
+    const fs::path d = freshDir();
+    const std::string path = (d / "h.sqlite").string();
+    {
+      Database db(path);
+      for (int i = 0; i < 3; ++i) db.add(sample("m1", 1.7e9 + i * 86400.0, i));
+    }
+    tamper(path, sql);
+    try {
+      const Database db(path, false);
+      (void)db.list("m1");
+      ADD_FAILURE() << "read without complaint";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.file(), path);
+      EXPECT_NE(std::string(e.what()).find("damaged history"), std::string::npos) << e.what();
+    }
+    const ShellRun r = sh(kCli + " history show --machine-id m1 --db " + path);
+    EXPECT_EQ(r.code, 1) << r.out;
+    EXPECT_EQ(r.out.rfind("rotacal: error: " + path + ":", 0), 0u) << r.out;
+  }
+}
+
+int openDescriptors() {
+  int n = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator("/proc/self/fd")) ++n;
+  return n;
+}
+
+TEST(Store, AFileThatFailsToOpenIsClosed) {
+  // The handle used to stay open when the constructor threw (LeakSanitizer): its descriptor
+  // shows in /proc/self/fd.
+  const fs::path d = freshDir();
+  const std::string path = (d / "h.sqlite").string();
+  std::ofstream(path) << std::string(8192, 'x');
+  const int before = openDescriptors();
+  for (int i = 0; i < 20; ++i) EXPECT_THROW(Database(path, false), InputError);
+  EXPECT_EQ(openDescriptors(), before);
+}
+
+TEST(Store, DatesThatDoNotExistAreRefused) {
+  for (const char* bad : {"2024-02-31", "2023-02-29", "2024-04-31", "2024-13-01", "2024-00-10", "2024-01-00",
+                          "2024-01-01T24:00:00Z", "2024-01-01T12:60:00Z", "2024-01-01T12:00:60Z", " 2024-01-01",
+                          "2024-1-01 ", "+024-01-01", "1969-12-31", "2024-01-01T12:00:00"})
+    EXPECT_THROW(parseIsoTime(bad), std::invalid_argument) << bad;
+  // A leap day exists: one day before 1 March (the calendar's count, not timegm's).
+  EXPECT_DOUBLE_EQ(parseIsoTime("2024-02-29"), parseIsoTime("2024-03-01") - 86400.0);
+  EXPECT_DOUBLE_EQ(parseIsoTime("2000-02-29T23:59:59Z"), 951868799.0);  // 11016 days + 86399 s
+  const fs::path d = freshDir();
+  const std::string report = (d / "REPORT.json").string(), db = (d / "h.sqlite").string();
+  std::ofstream(report) << R"({"format": "rotacal-report/1", "cycle": "touch154", "residual_rms_um": 0.7,
+    "location_errors": {"dx_AY": {"value": 14.6, "unit": "um", "u": 0.3}}})";
+  const ShellRun r = sh(kCli + " history add " + report + " --machine-id m --db " + db + " --time 2024-02-31");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_FALSE(fs::exists(db));
+}
+
+TEST(Store, AReportWithANegativeUncertaintyIsNotAdded) {
+  const fs::path d = freshDir();
+  const std::string report = (d / "REPORT.json").string(), db = (d / "h.sqlite").string();
+  std::ofstream(report) << "{\"format\": \"rotacal-report/1\", \"cycle\": \"touch154\", \"residual_rms_um\": 0.7,\n"
+                           " \"location_errors\": {\n"
+                           "  \"dx_AY\": {\"value\": 14.6, \"unit\": \"um\", \"u\": 0.3},\n"
+                           "  \"dy_AY\": {\"value\": 1.0, \"unit\": \"um\", \"u\": -1}}}\n";
+  const ShellRun r = sh(kCli + " history add " + report + " --machine-id m --db " + db + " --time 2024-02-28");
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_EQ(r.out.rfind("rotacal: error: " + report + ":4: field 'u'", 0), 0u) << r.out;
+  EXPECT_FALSE(fs::exists(db));
 }
 
 }  // namespace
