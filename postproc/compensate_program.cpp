@@ -16,7 +16,11 @@ namespace rotacal {
 namespace {
 
 constexpr double kMmPerInch = 25.4;
-constexpr double kStrokeTolMm = 1e-3;  // rounding of the printed decimals, with margin
+// The rotary words are compared as printed and parsed back: only the double's own rounding.
+constexpr double kRotaryStrokeTolDeg = 1e-9;
+// Longest input line read. No control in controllers.md takes more than LinuxCNC's 255
+// characters; a line of 100 kB would overflow the stack inside std::regex (recursive matcher).
+constexpr size_t kMaxLineChars = 1024;
 
 std::string fixedText(double v, int decimals) {
   std::string s = fmt::format("{:.{}f}", v, decimals);
@@ -90,6 +94,12 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
     return syntax.comment == NcSyntax::Comment::Parentheses ? "(" + c + ")" : ";" + c;
   };
 
+  for (const auto& b : blocks)
+    if (b.raw.size() > kMaxLineChars)
+      fail(b.line, fmt::format("line of {} characters: longer than any control accepts (LinuxCNC: 255) and than the "
+                               "{} the rewrite reads",
+                               b.raw.size(), kMaxLineChars));
+
   // Header: after a leading '%' and a Fanuc-style O-number line.
   size_t header_at = 0;
   while (header_at < blocks.size() &&
@@ -117,7 +127,11 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
       if (std::regex_search(b.raw, mm, measuring)) {
         prefix = mm.str(0);
         const int line_no = b.line;
-        b = nc::readProgram(b.raw.substr(prefix.size())).front();
+        const std::vector<nc::Block> move = nc::readProgram(b.raw.substr(prefix.size()));
+        if (move.empty() || move.front().words.empty())
+          fail(line_no, fmt::format("'{}' without a move after it: a measuring prefix belongs on a motion block",
+                                    upper(std::string_view(prefix).substr(0, prefix.find_last_not_of(" \t") + 1))));
+        b = move.front();
         b.line = line_no;
         b.raw = blocks[bi].raw;
       } else if (isStatement(b.code)) {
@@ -238,6 +252,16 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
       poseAxis(q_cmd, c) = sign * parsedBack(t);
       out.max_rotary_change_deg = std::max(out.max_rotary_change_deg, std::abs(poseAxis(q_cmd, c) - poseAxis(q, c)));
     }
+    // Stroke check of the rotary words as printed: the compensation may push an angle that sits
+    // on a stroke end past it (A-110.0005 on a [-110, 20] axis).
+    for (char c : rotary_letters) {
+      const RotaryAxis& axis = machine.rotaryAxis(c);
+      const double paper = poseAxis(q_cmd, c);
+      if (!axis.continuous && !axis.stroke_deg.contains(paper, kRotaryStrokeTolDeg))
+        fail(b.line, fmt::format("the compensated {}{} (papers' convention {:.4f} deg) is outside the stroke [{}, {}] "
+                                 "deg of MACHINE.json",
+                                 c, rotary_text[c], paper, axis.stroke_deg.min, axis.stroke_deg.max));
+    }
     out.max_direction_residual_rad =
         std::max(out.max_direction_residual_rad, toolDirectionError(errors, q_cmd, q, options.pose.tool_axis_m));
     auto compensate = [&](const std::array<std::optional<double>, 3>& xyz) {
@@ -248,16 +272,19 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
     const Eigen::Vector3d x_nom(*m.xyz_mm[0], *m.xyz_mm[1], *m.xyz_mm[2]);
     const Eigen::Vector3d x_new = compensate(m.xyz_mm);
     out.max_shift_mm = std::max(out.max_shift_mm, (x_new - x_nom).norm());
-    // Stroke check of the endpoint the machine will actually be commanded to.
+    // Stroke check of the endpoint the machine will actually be commanded to. Only the printing
+    // may round it outward (half a unit of the last printed decimal): a soft limit alarms on
+    // anything more.
+    const int dec = m.inch ? syntax.length_decimals_inch : syntax.length_decimals_mm;
+    const double print_tol_mm = 0.5 * std::pow(10.0, -dec) * unit_mm + 1e-9;
     const Eigen::Vector3d x_machine = x_new + options.program_origin_m_mm;
     const std::array<const AxisRange*, 3> strokes{&machine.x, &machine.y, &machine.z};
     for (int i = 0; i < 3; ++i)
-      if (!strokes[i]->contains(x_machine[i], kStrokeTolMm))
-        fail(b.line, fmt::format("the compensated {} {:.4f} mm is outside the stroke [{}, {}] mm", "XYZ"[i],
-                                 x_machine[i], strokes[i]->min, strokes[i]->max));
+      if (!strokes[i]->contains(x_machine[i], print_tol_mm))
+        fail(b.line, fmt::format("the compensated {} {:.4f} mm is outside the stroke [{}, {}] mm of MACHINE.json",
+                                 "XYZ"[i], x_machine[i], strokes[i]->min, strokes[i]->max));
     Eigen::Vector3d words = x_new;
     if (m.incremental) words = x_new - compensate(before);
-    const int dec = m.inch ? syntax.length_decimals_inch : syntax.length_decimals_mm;
     std::string line = prefix + (b.block_delete ? "/" : "");
     bool axes_written = false;
     for (const auto& w : b.words) {

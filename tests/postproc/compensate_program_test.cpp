@@ -163,13 +163,14 @@ TEST(CompensateProgram, LinuxcncInterpreterAcceptsTheRewrittenProgram) {
 
 TEST(CompensateProgram, IncrementalLinearMovesGetTheRotatedIncrement) {
   const Fixture f;
-  const std::string prog = "%\nG20 G90\nG0 X1.0 Y-8.0 Z6.0 A-30.0 C45.0\nG91 G1 X0.5 Y0.25 Z-0.125 F10.0\nG90\n%\n";
+  // A30.0 in LinuxCNC's count is A = -30 deg in the papers' convention: inside the stroke [-110, 20].
+  const std::string prog = "%\nG20 G90\nG0 X1.0 Y-8.0 Z6.0 A30.0 C45.0\nG91 G1 X0.5 Y0.25 Z-0.125 F10.0\nG90\n%\n";
   const LocationErrors e = f.errors;
   const ProgramCompensation c = compensateProgram(prog, "inc.ngc", f.plan.machine, e, NcSyntax{"linuxcnc"}, {});
   // Independent: the two absolute points compensated by the core, differenced.
   const int sa = f.plan.machine.controllerSign('A', "linuxcnc"), sc = f.plan.machine.controllerSign('C', "linuxcnc");
   Pose q;
-  q.A = sa * -30.0;  // the program counts in the controller's sense (MACHINE.json)
+  q.A = sa * 30.0;  // the program counts in the controller's sense (MACHINE.json)
   q.C = sc * 45.0;
   const CompensatedCommand cc = compensatePose(e, q);
   Pose q_printed = cc.pose;
@@ -204,6 +205,66 @@ TEST(CompensateProgram, RefusesWhatItCannotKeepExactNamingTheLine) {
   EXPECT_NE(lineOf(head + "G1 X[#1+2] F100.0\n").find("p.ngc:3: X[#1+2] is an expression"), std::string::npos);
   EXPECT_NE(lineOf(head + "G10 L2 P1 X1.0\n").find("p.ngc:3: G10 changes an offset"), std::string::npos);
   EXPECT_NE(lineOf(head + "G0 X900.0\n").find("p.ngc:3: the compensated X"), std::string::npos);
+}
+
+TEST(CompensateProgram, RotaryWordPushedPastItsStrokeIsRefused) {
+  // A-110 sits on the bundled machine's A stroke end [-110, 20]; a_AY = -0.5 mdeg moves it.
+  const Fixture f;
+  Pose q;
+  q.A = -110.0;
+  const CompensatedCommand cc = compensatePose(f.errors, q);
+  const std::string printed = fixedOf(cc.pose.A);  // fanuc counts A as the papers do
+  ASSERT_LT(std::stod(printed), -110.0) << "the case needs the compensation to push A beyond -110";
+  auto run = [&](const std::string& a_word, const MachineModel& m) -> std::string {
+    const std::string prog = "%\nO7154\nG21 G90\nG0 X0.0 Y0.0 Z200.0 C0.0 " + a_word + "\nM30\n%\n";
+    try {
+      compensateProgram(prog, "p.nc", m, f.errors, NcSyntax{"fanuc"}, {});
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "accepted";
+  };
+  const std::string m = run("A-110.0", f.plan.machine);
+  EXPECT_EQ(m.rfind(fmt::format("p.nc:4: the compensated A{} ", printed), 0), 0u) << m;
+  EXPECT_NE(m.find("outside the stroke [-110, 20]"), std::string::npos) << m;
+  // Not refused for the angle itself: inside the stroke, or with a stroke that has room.
+  EXPECT_EQ(run("A-100.0", f.plan.machine), "accepted");
+  MachineModel wider = f.plan.machine;
+  for (auto& r : wider.rotary)
+    if (r.name == 'A') r.stroke_deg.min = -111.0;
+  EXPECT_EQ(run("A-110.0", wider), "accepted");
+}
+
+TEST(CompensateProgram, MalformedInputIsRefusedNamingTheLineNeverACrash) {
+  const Fixture f;
+  auto messageOf = [&](const std::string& prog, const std::string& dialect) -> std::string {
+    const NcSyntax syntax{dialect, 4, 5, 4,
+                          dialect == "siemens" ? NcSyntax::Comment::Semicolon : NcSyntax::Comment::Parentheses};
+    try {
+      compensateProgram(prog, "p.nc", f.plan.machine, f.errors, syntax, {});
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "accepted";
+  };
+  const std::string head = "G21 G90\nG0 X10.0 Y-200.0 Z200.0 A0.0 C0.0\n";
+  // A measuring prefix with nothing behind it (was front() of an empty vector).
+  EXPECT_EQ(messageOf(head + "MEAS=1 \nM30\n", "siemens").rfind("p.nc:3: 'MEAS=1' without a move", 0), 0u)
+      << messageOf(head + "MEAS=1 \nM30\n", "siemens");
+  EXPECT_EQ(messageOf(head + "MEAS=1 ;probe\nM30\n", "siemens").rfind("p.nc:3: 'MEAS=1' without a move", 0), 0u);
+  // 100 kB lines (std::regex recursed once per character and overflowed the stack): refused by
+  // their length before any regex sees them, whatever they hold.
+  for (const std::string& big : {std::string(100000, ' '), "G1 X1.0" + std::string(100000, '0'),
+                                 "R1=" + std::string(100000, '1')}) {
+    const std::string m = messageOf(head + big + "\nM30\n", "siemens");
+    EXPECT_EQ(m.rfind(fmt::format("p.nc:3: line of {} characters", big.size()), 0), 0u) << m.substr(0, 200);
+  }
+  // A long line within the limit still goes through the regexes (1000 leading blanks: the
+  // measuring-prefix test runs on the raw line).
+  EXPECT_EQ(messageOf(head + std::string(1000, ' ') + "G0 Z200.0\nM30\n", "siemens"), "accepted");
+  // Exponent notation: X1e2 was read as X1 and a word E2.
+  EXPECT_EQ(messageOf(head + "G1 X1e2 F100.0\n", "linuxcnc").rfind("p.nc:3: word X1e2 uses exponent notation", 0), 0u)
+      << messageOf(head + "G1 X1e2 F100.0\n", "linuxcnc");
 }
 
 TEST(CompensateProgram, FanucHeaderGoesAfterTheProgramNumber) {
