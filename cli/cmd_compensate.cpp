@@ -119,9 +119,11 @@ int cmdCompensate(const Common& c, const std::string& program_file, const std::s
   writeFileAtomic(out, r.text);
   say(c, fmt::format("compensate: {} of {} motion blocks rewritten ({} left as written: machine-coordinate moves or "
                      "before every axis was known); largest shift {:.2f} um, largest rotary change {:.2f} mdeg, tool "
-                     "direction not restorable by the rotary axes up to {:.2f} urad -> {}\n",
+                     "direction not restorable by the rotary axes up to {:.2f} urad; {} no-trigger check statements "
+                     "moved with their probing moves (up to {:.2f} um) -> {}\n",
                      r.compensated_blocks, r.motion_blocks, r.uncompensated_blocks, mmToUm(r.max_shift_mm),
-                     r.max_rotary_change_deg * 1000.0, r.max_direction_residual_rad * 1e6, out));
+                     r.max_rotary_change_deg * 1000.0, r.max_direction_residual_rad * 1e6, r.rewritten_checks,
+                     mmToUm(r.max_check_shift_mm), out));
   return 0;
 }
 

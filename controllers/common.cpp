@@ -473,6 +473,62 @@ bool isProbingBlock(const nc::Block& b) {
          b.hasWord('G', 38.5) || ctl::upper(b.code).find("MEAS") != std::string::npos;
 }
 
+std::optional<EndPointCheck> endPointCheck(std::string_view dialect) {
+  if (dialect == "fanuc" || dialect == "haas") return EndPointCheck{{"#1", "#2", "#3"}, {"#5061", "#5062", "#5063"}};
+  if (dialect == "okuma") return EndPointCheck{{"VC4", "VC5", "VC6"}, {"VC1", "VC2", "VC3"}};
+  if (dialect == "siemens") return EndPointCheck{{"R93", "R94", "R95"}, {"R90", "R91", "R92"}};
+  return std::nullopt;
+}
+
+std::string endPointCheckStatement(const EndPointCheck& form, int axis, double end, int decimals) {
+  const auto a = static_cast<size_t>(axis);
+  return fmt::format("{}={}{}{}", form.difference.at(a), form.measured[a], end < 0 ? "+" : "-",
+                     fixed(std::abs(end), decimals));
+}
+
+std::optional<EndPointCheckStatement> parseEndPointCheckStatement(const EndPointCheck& form, std::string_view code) {
+  size_t i = 0;
+  auto blanks = [&] {
+    while (i < code.size() && (code[i] == ' ' || code[i] == '\t')) ++i;
+  };
+  auto word = [&](std::string_view w) {
+    if (upper(code.substr(i, w.size())) != upper(w)) return false;
+    i += w.size();
+    return true;
+  };
+  blanks();
+  if (i < code.size() && (code[i] == 'N' || code[i] == 'n') && i + 1 < code.size() && std::isdigit(static_cast<unsigned char>(code[i + 1]))) {
+    ++i;
+    while (i < code.size() && std::isdigit(static_cast<unsigned char>(code[i]))) ++i;
+    blanks();
+  }
+  const size_t start = i;
+  for (int a = 0; a < 3; ++a) {
+    i = start;
+    const auto k = static_cast<size_t>(a);
+    if (!word(form.difference[k])) continue;
+    blanks();
+    if (!word("=")) continue;
+    blanks();
+    if (!word(form.measured[k])) continue;
+    // The next character must end the variable's name: "#50610" is another variable.
+    if (i < code.size() && std::isalnum(static_cast<unsigned char>(code[i]))) continue;
+    blanks();
+    if (i >= code.size() || (code[i] != '+' && code[i] != '-')) continue;
+    const bool plus = code[i++] == '+';
+    blanks();
+    const std::string number = trim(code.substr(i));
+    if (number.empty() || number[0] == '+' || number[0] == '-' || number.find_first_of("eE") != std::string::npos)
+      continue;
+    const auto v = parseNumber(number);
+    if (!v) continue;
+    const size_t point = number.find('.');
+    const int decimals = point == std::string::npos ? 0 : static_cast<int>(number.size() - point - 1);
+    return EndPointCheckStatement{a, plus ? -*v : *v, decimals};
+  }
+  return std::nullopt;
+}
+
 std::vector<std::string> inverseTimeProblems(const std::vector<nc::Block>& blocks, bool (*isProbe)(const nc::Block&)) {
   std::vector<std::string> out;
   bool g93 = false;

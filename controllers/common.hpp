@@ -3,6 +3,7 @@
 // line splitting, the collection of parsed points with precise errors, the plausibility limit
 // of written corrections and the stroke check of a parsed program.
 #include <Eigen/Core>
+#include <array>
 #include <map>
 #include <optional>
 #include <string>
@@ -183,5 +184,33 @@ std::vector<std::string> inverseTimeProblems(const std::vector<nc::Block>& block
                                              bool (*isProbe)(const nc::Block& block));
 /// Any dialect's probing block: G31, G38.x, MEAS=, TCH PROBE.
 bool isProbingBlock(const nc::Block& block);
+
+/// The end-point statements of the no-trigger check of the dialects whose probing move ends
+/// silently at its end point when nothing triggers (fanuc and haas G31, okuma G31, siemens
+/// MEAS=1): right after the move, one statement per axis `<difference>=<measured>-<end>` with
+/// the sign folded into the literal (`#1=#5061-51.0000`, `#2=#5062+235.0000`), then a test of
+/// the distance between the probe's stop and the end point. An untriggered move stops exactly
+/// at its end point, so the test guards only while these literals are the move's own end point:
+/// whatever moves the end point (`rotacal compensate`) must rewrite them with it.
+struct EndPointCheck {
+  std::array<std::string, 3> difference;  // variables holding stop - end, X Y Z
+  std::array<std::string, 3> measured;    // variables holding the probe's stop, X Y Z
+};
+/// The form of `dialect`; nullopt for linuxcnc (G38.2 raises an error by itself), heidenhain
+/// (cycle 0's check is written around the pre-position; its programs are never rewritten) and
+/// csv (no program).
+std::optional<EndPointCheck> endPointCheck(std::string_view dialect);
+/// The statement of `axis` (0..2) comparing with end point coordinate `end`, e.g.
+/// "#2=#5062+235.0000".
+std::string endPointCheckStatement(const EndPointCheck& form, int axis, double end, int decimals);
+/// A statement of that form as written (blanks allowed around '=' and the sign; an optional
+/// leading N word): its axis, the end point it compares with and that literal's decimals;
+/// nullopt for anything else.
+struct EndPointCheckStatement {
+  int axis = 0;
+  double end = 0.0;
+  int decimals = 0;
+};
+std::optional<EndPointCheckStatement> parseEndPointCheckStatement(const EndPointCheck& form, std::string_view code);
 
 }  // namespace rotacal::ctl

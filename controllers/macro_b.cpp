@@ -44,11 +44,6 @@ std::string safeText(std::string_view text) {
 
 std::string unitName(bool inch) { return inch ? "INCH" : "MM"; }
 
-/// "#5061-12.3456" or "#5061+12.3456": the difference between a variable and a literal.
-std::string minus(int var, double v, int decimals) {
-  return v < 0 ? fmt::format("#{}+{}", var, ctl::fixed(-v, decimals)) : fmt::format("#{}-{}", var, ctl::fixed(v, decimals));
-}
-
 }  // namespace
 
 namespace macro_b {
@@ -114,6 +109,8 @@ std::string MacroBDialect::writeProgram(const nc::Program& p) const {
   // point", i.e. no trigger: (10 um)^2 in mm, (0.001 in)^2 in inch. A triggered move stops
   // the overtravel (mm, not um) before its end; an untriggered one stops at the end exactly.
   const std::string no_trigger_sq = inch ? "0.000001" : "0.0001";
+  const auto end_check = ctl::endPointCheck(f_.name);
+  if (!end_check) throw std::invalid_argument(fmt::format("{}: no no-trigger check form", f_.name));
 
   line("%");
   line(fmt::format("O{:0{}}({})", p.number, f_.program_digits, safeText("ROTACAL " + p.cycle)));
@@ -213,9 +210,7 @@ std::string MacroBDialect::writeProgram(const nc::Program& p) const {
         const int label = kLabelBase + id;
         if (!op.text.empty()) commentLines(op.text);
         line(fmt::format("G31 X{} Y{} Z{} F{}", L(x.x()), L(x.y()), L(x.z()), F(op.feed)));
-        line(fmt::format("#1={}", minus(5061, x.x(), 4)));
-        line(fmt::format("#2={}", minus(5062, x.y(), 4)));
-        line(fmt::format("#3={}", minus(5063, x.z(), 4)));
+        for (int a = 0; a < 3; ++a) line(ctl::endPointCheckStatement(*end_check, a, x[a], 4));
         line(fmt::format("IF[[#1*#1+#2*#2+#3*#3]GT{}]GOTO{}", no_trigger_sq, label));
         line(fmt::format("#3000=1(POINT {} NOT TRIGGERED)", id));
         line(fmt::format("N{}", label));

@@ -79,10 +79,6 @@ std::vector<std::string> comments(std::string_view text) {
   return out;
 }
 
-std::string minus(const std::string& var, double v) {
-  return v < 0 ? fmt::format("{}+{}", var, ctl::fixed(-v, 4)) : fmt::format("{}-{}", var, ctl::fixed(v, 4));
-}
-
 class OkumaDialect final : public Dialect {
  public:
   std::string_view name() const override { return kDialect; }
@@ -179,9 +175,7 @@ class OkumaDialect final : public Dialect {
           line("VC1=VSKPX");
           line("VC2=VSKPY");
           line("VC3=VSKPZ");
-          line(fmt::format("VC4={}", minus("VC1", x.x())));
-          line(fmt::format("VC5={}", minus("VC2", x.y())));
-          line(fmt::format("VC6={}", minus("VC3", x.z())));
+          for (int a = 0; a < 3; ++a) line(ctl::endPointCheckStatement(*ctl::endPointCheck(kDialect), a, x[a], 4));
           line(fmt::format("IF [VC4*VC4+VC5*VC5+VC6*VC6 GT {}] N{}", no_trigger_sq, kLabelBase + id));
           put(fmt::format("NOT-TRIGGERED P{}", id));
           line("CLOSE C");

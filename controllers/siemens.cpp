@@ -82,10 +82,6 @@ std::string safeName(std::string_view name) {
   return s;
 }
 
-std::string signedDiff(const std::string& var, double v) {
-  return v < 0 ? fmt::format("{}+{}", var, ctl::fixed(-v, kDecimals)) : fmt::format("{}-{}", var, ctl::fixed(v, kDecimals));
-}
-
 class SiemensDialect final : public Dialect {
  public:
   std::string_view name() const override { return kDialect; }
@@ -193,9 +189,8 @@ class SiemensDialect final : public Dialect {
           line("R90=$AA_MW[X]");
           line("R91=$AA_MW[Y]");
           line("R92=$AA_MW[Z]");
-          line(fmt::format("R93={}", signedDiff("R90", x.x())));
-          line(fmt::format("R94={}", signedDiff("R91", x.y())));
-          line(fmt::format("R95={}", signedDiff("R92", x.z())));
+          for (int a = 0; a < 3; ++a)
+            line(ctl::endPointCheckStatement(*ctl::endPointCheck(kDialect), a, x[a], kDecimals));
           line(fmt::format("IF ($AC_MEA[1]==0) OR (R93*R93+R94*R94+R95*R95<{}) GOTOF NOHIT{}", no_trigger_sq, id));
           line(fmt::format("TXT=SPRINT(\"P{0} X%10.{1}F Y%10.{1}F Z%10.{1}F\",R90,R91,R92)", id, resultDecimals(inch)));
           line(write);

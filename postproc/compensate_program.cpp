@@ -9,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include "controllers/common.hpp"
 #include "core/errors.hpp"
 #include "gcode/reader.hpp"
 
@@ -61,6 +62,25 @@ struct Modal {
   std::map<char, std::optional<double>> rotary;  // paper-convention angles, deg
 };
 
+// A rewritten probing move whose no-trigger check (ctl::EndPointCheck) still names the old end
+// point: its three statements must be rewritten before the next move.
+struct PendingCheck {
+  int move_line = 0;
+  Eigen::Vector3d old_end;  // program units
+  Eigen::Vector3d new_end;  // program units
+  int decimals = 4;         // of the move's printed words: the check then equals them digit for digit
+  std::array<bool, 3> rewritten{false, false, false};
+};
+
+// A probing move: G31 (skip), G38.x (LinuxCNC probe) or a Siemens measuring prefix.
+bool isGuardedMove(const nc::Block& b, bool measuring_prefix) {
+  if (measuring_prefix) return true;
+  for (const auto& w : b.words)
+    if (w.letter == 'G' && w.value && ((*w.value >= 31.0 && *w.value < 32.0) || (*w.value >= 38.0 && *w.value < 39.0)))
+      return true;
+  return false;
+}
+
 }  // namespace
 
 ProgramCompensation compensateProgram(const std::string& text, const std::string& file, const MachineModel& machine,
@@ -69,6 +89,7 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
   options.pose.validate();
   if (errors.kinematics != machine.kinematics)
     throw std::invalid_argument("compensate: the location errors are for another kinematics than the machine");
+  const std::optional<ctl::EndPointCheck> end_check = ctl::endPointCheck(syntax.dialect);
   const std::vector<nc::Block> blocks = nc::readProgram(text);
   ProgramCompensation out;
   Modal m;
@@ -113,9 +134,48 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
     result += '\n';
   };
 
+  std::optional<PendingCheck> pending;
+  // Before the next move: the previous probing move's check must have been rewritten, or it
+  // would compare the probe's stop with the old end point and pass a probe that never triggered.
+  auto closePending = [&](const std::string& where) {
+    if (!pending) return;
+    for (int a = 0; a < 3; ++a)
+      if (!pending->rewritten[static_cast<size_t>(a)])
+        fail(pending->move_line,
+             fmt::format("the probing move's end point moves, but its no-trigger check ('{}' for {}) was not found "
+                         "{}: left as written it would pass a probe that never triggered; give the check right after "
+                         "the move in the form rotacal writes",
+                         ctl::endPointCheckStatement(*end_check, a, pending->old_end[a], 4), "XYZ"[a], where));
+    pending.reset();
+  };
+
   for (size_t bi = 0; bi < blocks.size(); ++bi) {
     if (bi == header_at)
       for (const auto& h : options.header) emit(comment(h));
+    if (pending) {
+      if (const auto st = ctl::parseEndPointCheckStatement(*end_check, blocks[bi].code)) {
+        const auto a = static_cast<size_t>(st->axis);
+        const double tol = 0.5 * std::pow(10.0, -st->decimals) + 1e-9;
+        if (std::abs(st->end - pending->old_end[st->axis]) > tol)
+          fail(blocks[bi].line,
+               fmt::format("this no-trigger check compares {} with {} but the probing move at line {} ends at {}: "
+                           "the rewrite cannot tell what it guards",
+                           "XYZ"[a], st->end, pending->move_line, fixedText(pending->old_end[st->axis], st->decimals)));
+        if (pending->rewritten[a])
+          fail(blocks[bi].line, fmt::format("a second {} statement in the no-trigger check of the probing move at line {}",
+                                            "XYZ"[a], pending->move_line));
+        pending->rewritten[a] = true;
+        // The leading N word, if any, stays.
+        const std::string code_upper = upper(blocks[bi].code);
+        const size_t at = code_upper.find(upper(end_check->difference[a]));
+        std::string line = blocks[bi].code.substr(0, at) +
+                           ctl::endPointCheckStatement(*end_check, st->axis, pending->new_end[st->axis], pending->decimals);
+        for (const auto& c : blocks[bi].comments) line += " " + comment(c);
+        emit(line);
+        ++out.rewritten_checks;
+        continue;
+      }
+    }
     nc::Block b = blocks[bi];
     // Statements of the richer dialects (Siemens DEF/IF/WRITE/R90=..., Okuma VC1=.../PUT/FWRITC,
     // labels) carry no motion: they pass as written. A Siemens measuring prefix (MEAS=1 G1 ...)
@@ -187,6 +247,7 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
       emit(b.raw);
       continue;
     }
+    closePending(fmt::format("before the next move at line {}", b.line));
     ++out.motion_blocks;
     const double unit_mm = m.inch ? kMmPerInch : 1.0;
     if (machine_coords || home) {
@@ -316,7 +377,17 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
     for (const auto& c : b.comments) line += " " + comment(c);
     emit(line);
     ++out.compensated_blocks;
+    if (end_check && isGuardedMove(b, !prefix.empty())) {
+      PendingCheck p;
+      p.move_line = b.line;
+      p.old_end = x_nom / unit_mm;
+      p.new_end = x_new / unit_mm;
+      p.decimals = dec;
+      out.max_check_shift_mm = std::max(out.max_check_shift_mm, (x_new - x_nom).norm());
+      pending = p;
+    }
   }
+  closePending("before the end of the program");
   if (header_at >= blocks.size())
     for (const auto& h : options.header) emit(comment(h));
   out.text = std::move(result);

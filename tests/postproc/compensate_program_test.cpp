@@ -310,3 +310,135 @@ TEST(CompensateProgram, EveryWordAddressDialectGetsTheSameGuardedEndPoints) {
 
 }  // namespace
 }  // namespace rotacal
+
+namespace rotacal {
+namespace {
+
+NcSyntax syntaxFor(const std::string& dialect) {
+  return NcSyntax{dialect, 4, 5, 4, dialect == "siemens" ? NcSyntax::Comment::Semicolon : NcSyntax::Comment::Parentheses};
+}
+
+// One guarded probing move of a program and its no-trigger check, read back from the text with
+// this test's own patterns (not the library's parser).
+struct GuardedMove {
+  int line = 0;
+  Eigen::Vector3d start = Eigen::Vector3d::Constant(NAN), end = Eigen::Vector3d::Constant(NAN);
+  Eigen::Vector3d expected = Eigen::Vector3d::Constant(NAN);  // the end point the check compares with
+  double threshold_sq = NAN;                                    // of the distance test
+  bool below_means_untriggered = false;  // Siemens: IF distance < t GOTOF NOHIT; Macro B / Okuma: IF > t skip the alarm
+  // What the check decides for a probe that stopped at `stop`: true = "not triggered" (alarm).
+  bool untriggered(const Eigen::Vector3d& stop) const {
+    const double d2 = (stop - expected).squaredNorm();
+    return below_means_untriggered ? d2 < threshold_sq : !(d2 > threshold_sq);
+  }
+};
+
+std::vector<GuardedMove> guardedMoves(const std::string& text) {
+  const std::regex move(R"(^(?:G31|MEAS=1 G1) X(-?[0-9.]+) Y(-?[0-9.]+) Z(-?[0-9.]+))");
+  const std::regex motion(R"(^(?:G0?[01]|G31|MEAS=1 G1)\b)");
+  const std::regex xyz(R"(([XYZ])(-?[0-9]+\.[0-9]+))");
+  const std::regex check(R"(^(#[123]|VC[456]|R9[345])=(#506([123])|VC([123])|R9([012]))([+-])([0-9]+\.[0-9]+)$)");
+  const std::regex gt(R"((?:GT|GT )([0-9.]+)\](?:GOTO| N))"), lt(R"(<([0-9.]+)\) GOTOF NOHIT)");
+  std::vector<GuardedMove> out;
+  Eigen::Vector3d at = Eigen::Vector3d::Constant(NAN);
+  std::istringstream in(text);
+  std::string l;
+  int n = 0;
+  while (std::getline(in, l)) {
+    ++n;
+    std::smatch m;
+    if (std::regex_search(l, m, move)) {
+      GuardedMove g;
+      g.line = n;
+      g.start = at;
+      g.end = Eigen::Vector3d(std::stod(m[1]), std::stod(m[2]), std::stod(m[3]));
+      out.push_back(g);
+    }
+    if (std::regex_search(l, motion))
+      for (auto it = std::sregex_iterator(l.begin(), l.end(), xyz); it != std::sregex_iterator(); ++it)
+        at[(*it)[1].str()[0] - 'X'] = std::stod((*it)[2]);
+    if (out.empty()) continue;
+    GuardedMove& g = out.back();
+    if (std::regex_match(l, m, check)) {
+      const std::string digit = m[3].matched ? m[3].str() : m[4].matched ? m[4].str() : m[5].str();
+      const int axis = m[5].matched ? std::stoi(digit) : std::stoi(digit) - 1;
+      const double v = std::stod(m[7]);
+      g.expected[axis] = m[6] == "-" ? v : -v;  // stop - v: compares with +v
+    } else if (std::regex_search(l, m, gt)) {
+      g.threshold_sq = std::stod(m[1]);
+    } else if (std::regex_search(l, m, lt)) {
+      g.threshold_sq = std::stod(m[1]);
+      g.below_means_untriggered = true;
+    }
+  }
+  return out;
+}
+
+// Issue 14's most dangerous defect: compensate moved every probing move's end point but left
+// the no-trigger check comparing with the old one, so an untriggered probe (a G31 that never
+// fires ends silently at its end point) passed. For every dialect with such a check, every
+// guarded move of the compensated touch154 program must be followed by a check whose end point
+// is the move's own, which catches a probe stopping exactly there and passes one stopping at the
+// nominal trigger (overtravel short of the end); the uncompensated check must miss the untriggered
+// probe (so this test can fail).
+TEST(CompensateProgram, EveryNoTriggerCheckGuardsItsCompensatedEndPoint) {
+  const ProbePlan plan = test::touch154Plan();
+  const LocationErrors e = test::table4Mean();
+  for (const char* d : {"fanuc", "haas", "okuma", "siemens"}) {
+    const std::string text = dialectByName(d).writeProgram(probeProgram(plan, d));
+    const ProgramCompensation c = compensateProgram(text, d, plan.machine, e, syntaxFor(d), {});
+    const auto before = guardedMoves(text), after = guardedMoves(c.text);
+    ASSERT_EQ(after.size(), plan.points.size()) << d;
+    ASSERT_EQ(before.size(), after.size()) << d;
+    EXPECT_EQ(c.rewritten_checks, static_cast<int>(3 * plan.points.size())) << d;
+    double shift_min = 1e9, shift_max = 0;
+    int stale_missed = 0;
+    for (size_t i = 0; i < after.size(); ++i) {
+      const GuardedMove& g = after[i];
+      ASSERT_TRUE(std::isfinite(g.threshold_sq)) << d << " line " << g.line;
+      EXPECT_EQ(g.expected, g.end) << d << " line " << g.line;  // digit for digit
+      EXPECT_TRUE(g.untriggered(g.end)) << d << " line " << g.line << ": a probe that never fired passes";
+      const Eigen::Vector3d trigger = g.end - plan.machine.overtravel_mm * (g.end - g.start).normalized();
+      EXPECT_FALSE(g.untriggered(trigger)) << d << " line " << g.line << ": a real trigger raises the alarm";
+      // The old check (before the rewrite) against the new end point.
+      GuardedMove stale = g;
+      stale.expected = before[i].expected;
+      stale_missed += !stale.untriggered(g.end);
+      const double shift = (g.end - before[i].end).norm();
+      shift_min = std::min(shift_min, shift);
+      shift_max = std::max(shift_max, shift);
+    }
+    std::printf("%s: guard end points moved %.1f .. %.1f um; the unrewritten check would pass %d of %zu untriggered probes\n",
+                d, mmToUm(shift_min), mmToUm(shift_max), stale_missed, after.size());
+    EXPECT_EQ(stale_missed, static_cast<int>(after.size())) << d << ": the case must be one the old check misses";
+    EXPECT_NEAR(mmToUm(c.max_check_shift_mm), mmToUm(shift_max), 0.1) << d;
+  }
+}
+
+TEST(CompensateProgram, ProbingMoveWithoutItsCheckOrWithAnotherEndPointIsRefused) {
+  const Fixture f;
+  auto run = [&](const std::string& body) -> std::string {
+    const std::string prog = "%\nO7154\nG21 G90\nG0 X51.0 Y-235.0 Z200.0 A0.0 C0.0\n" + body + "M30\n%\n";
+    try {
+      compensateProgram(prog, "p.nc", f.plan.machine, f.errors, syntaxFor("fanuc"), {});
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "accepted";
+  };
+  const std::string move = "G0 Z155.0\nG31 X51.0 Y-235.0 Z150.0 F100.0\n";
+  const std::string checks = "#1=#5061-51.0000\n#2=#5062+235.0000\n#3=#5063-150.0000\n";
+  EXPECT_EQ(run(move + checks + "G0 Z200.0\n"), "accepted");
+  // No check before the next move: the G31 at line 6 is named.
+  const std::string none = run(move + "G0 Z200.0\n");
+  EXPECT_EQ(none.rfind("p.nc:6: the probing move's end point moves, but its no-trigger check", 0), 0u) << none;
+  // Only X and Y: Z is missing.
+  EXPECT_NE(run(move + "#1=#5061-51.0000\n#2=#5062+235.0000\nG0 Z200.0\n").find("'#3=#5063-150.0000' for Z"),
+            std::string::npos);
+  // A check comparing with another point than its move's end: the rewrite cannot tell its meaning.
+  const std::string other = run(move + "#1=#5061-52.0000\n#2=#5062+235.0000\n#3=#5063-150.0000\nG0 Z200.0\n");
+  EXPECT_EQ(other.rfind("p.nc:7: this no-trigger check compares X with 52", 0), 0u) << other;
+}
+
+}  // namespace
+}  // namespace rotacal
