@@ -106,14 +106,14 @@ int cmdCompensate(const Common& c, const std::string& program_file, const std::s
     const auto v = parseTriple("--program-origin", origin);
     opt.program_origin_m_mm = Eigen::Vector3d(v[0], v[1], v[2]);
   }
-  opt.header.push_back(fmt::format("rotacal compensate: rewritten for the location errors of {}", report_file));
+  // The report's path is outside text: the dialect's comment form keeps only its safe characters.
+  opt.header.push_back(fmt::format("location errors of {}:", report_file));
   std::string values;
   for (int i = 0; i < kNumLocationErrors; ++i) {
     const auto& p = locationParameters(machine.kinematics)[i];
     values += fmt::format("{}{} {:.2f} {}", values.empty() ? "" : ", ", p.name, errors.reportValue(i), reportUnit(p.kind));
   }
   opt.header.push_back(values);
-  opt.header.push_back("do not compensate twice: run this program only on the uncompensated machine");
   const std::string text = readTextFile(program_file);
   const ProgramCompensation r = compensateProgram(text, program_file, machine, errors, syntax, opt);
   writeFileAtomic(out, r.text);

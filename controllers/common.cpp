@@ -56,6 +56,30 @@ std::string trim(std::string_view s) {
   return std::string(s.substr(b, e - b));
 }
 
+std::string printableLine(std::string_view text) {
+  std::string s(text);
+  for (auto& c : s)
+    if (c < 0x20 || c > 0x7e) c = ' ';
+  return s;
+}
+
+std::vector<std::string> wrap(std::string_view text, size_t width) {
+  const std::string s = trim(text);
+  std::vector<std::string> out;
+  size_t i = 0;
+  while (i < s.size()) {
+    size_t n = std::min(width, s.size() - i);
+    if (i + n < s.size()) {
+      const size_t sp = s.rfind(' ', i + n);
+      if (sp != std::string::npos && sp > i) n = sp - i;
+    }
+    out.push_back(trim(s.substr(i, n)));
+    i += n;
+    while (i < s.size() && s[i] == ' ') ++i;
+  }
+  return out;
+}
+
 std::string upper(std::string_view s) {
   std::string r(s);
   for (auto& c : r) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));

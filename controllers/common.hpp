@@ -41,6 +41,13 @@ std::vector<TextLine> splitLines(std::string_view text);
 std::vector<std::string> tokens(std::string_view line);
 
 std::string trim(std::string_view s);
+/// Outside text (file and machine names) reduced to one line of printable ASCII: every other
+/// byte (line ends, control characters, UTF-8) becomes a space, so it can never end a comment
+/// line early and put the rest of a file name on an executable line of its own.
+std::string printableLine(std::string_view text);
+/// `text` split at blanks into pieces of at most `width` characters (a longer word is cut),
+/// each trimmed; empty when `text` is blank.
+std::vector<std::string> wrap(std::string_view text, size_t width);
 std::string upper(std::string_view s);
 std::string lower(std::string_view s);
 

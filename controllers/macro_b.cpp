@@ -49,20 +49,8 @@ std::string unitName(bool inch) { return inch ? "INCH" : "MM"; }
 namespace macro_b {
 
 std::vector<std::string> comments(std::string_view text) {
-  const std::string s = safeText(text);
-  const size_t width = kMaxLineChars - 2;
   std::vector<std::string> out;
-  size_t i = 0;
-  while (i < s.size()) {
-    size_t n = std::min(width, s.size() - i);
-    if (i + n < s.size()) {
-      const size_t sp = s.rfind(' ', i + n);
-      if (sp != std::string::npos && sp > i) n = sp - i;
-    }
-    out.push_back("(" + ctl::trim(s.substr(i, n)) + ")");
-    i += n;
-    while (i < s.size() && s[i] == ' ') ++i;
-  }
+  for (const auto& piece : ctl::wrap(safeText(text), kMaxLineChars - 2)) out.push_back("(" + piece + ")");
   if (out.empty()) out.push_back("()");
   return out;
 }
@@ -80,6 +68,8 @@ std::string dprntText(std::string_view text) {
 
 using macro_b::comments;
 using macro_b::dprntText;
+
+std::vector<std::string> MacroBDialect::commentLines(std::string_view text) const { return comments(text); }
 
 std::string MacroBDialect::writeProgram(const nc::Program& p) const {
   const bool inch = p.unit == nc::Unit::Inch;

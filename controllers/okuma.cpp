@@ -62,19 +62,8 @@ std::vector<std::string> comments(std::string_view text) {
     if (d == ' ' && (s.empty() || s.back() == ' ')) continue;
     s += d;
   }
-  const size_t width = kMaxLineChars - 2;
   std::vector<std::string> out;
-  size_t i = 0;
-  while (i < s.size()) {
-    size_t n = std::min(width, s.size() - i);
-    if (i + n < s.size()) {
-      const size_t sp = s.rfind(' ', i + n);
-      if (sp != std::string::npos && sp > i) n = sp - i;
-    }
-    out.push_back("(" + ctl::trim(s.substr(i, n)) + ")");
-    i += n;
-    while (i < s.size() && s[i] == ' ') ++i;
-  }
+  for (const auto& piece : ctl::wrap(s, kMaxLineChars - 2)) out.push_back("(" + piece + ")");
   if (out.empty()) out.push_back("()");
   return out;
 }
@@ -84,6 +73,8 @@ class OkumaDialect final : public Dialect {
   std::string_view name() const override { return kDialect; }
   std::string_view programExtension() const override { return ".min"; }
   std::string_view resultsExtension() const override { return ".txt"; }
+
+  std::vector<std::string> commentLines(std::string_view text) const override { return comments(text); }
 
   std::string writeProgram(const nc::Program& p) const override {
     const bool inch = p.unit == nc::Unit::Inch;

@@ -46,28 +46,17 @@ int resultDecimals(bool inch) { return inch ? 5 : kDecimals; }
 
 std::string unitName(bool inch) { return inch ? "INCH" : "MM"; }
 
-/// Comment text for ';' comments: printable ASCII, upper-cased (the control's editor shows
-/// lower case, but some transfer tools do not keep it), at most `width` characters per line.
+/// Comment text for ';' comments: printable ASCII without '"', upper-cased (the control's
+/// editor shows lower case, but some transfer tools do not keep it), at most the line length.
 std::vector<std::string> comments(std::string_view text) {
   std::string s;
-  for (char c : ctl::upper(text)) {
-    const char d = (static_cast<unsigned char>(c) < 0x20 || c == 0x7f || c == '"') ? ' ' : c;
+  for (char c : ctl::upper(ctl::printableLine(text))) {
+    const char d = c == '"' ? ' ' : c;
     if (d == ' ' && (s.empty() || s.back() == ' ')) continue;
     s += d;
   }
-  const size_t width = kMaxLineChars - 2;
   std::vector<std::string> out;
-  size_t i = 0;
-  while (i < s.size()) {
-    size_t n = std::min(width, s.size() - i);
-    if (i + n < s.size()) {
-      const size_t sp = s.rfind(' ', i + n);
-      if (sp != std::string::npos && sp > i) n = sp - i;
-    }
-    out.push_back("; " + ctl::trim(s.substr(i, n)));
-    i += n;
-    while (i < s.size() && s[i] == ' ') ++i;
-  }
+  for (const auto& piece : ctl::wrap(s, kMaxLineChars - 2)) out.push_back("; " + piece);
   if (out.empty()) out.push_back(";");
   return out;
 }
@@ -87,6 +76,8 @@ class SiemensDialect final : public Dialect {
   std::string_view name() const override { return kDialect; }
   std::string_view programExtension() const override { return ".mpf"; }
   std::string_view resultsExtension() const override { return ".txt"; }
+
+  std::vector<std::string> commentLines(std::string_view text) const override { return comments(text); }
 
   std::string writeProgram(const nc::Program& p) const override {
     const bool inch = p.unit == nc::Unit::Inch;

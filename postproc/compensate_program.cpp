@@ -5,11 +5,13 @@
 #include <map>
 #include <optional>
 #include <regex>
+#include <set>
 #include <string_view>
 
 #include <fmt/format.h>
 
 #include "controllers/common.hpp"
+#include "controllers/dialect.hpp"
 #include "core/errors.hpp"
 #include "gcode/reader.hpp"
 
@@ -19,6 +21,8 @@ namespace {
 constexpr double kMmPerInch = 25.4;
 // The rotary words are compared as printed and parsed back: only the double's own rounding.
 constexpr double kRotaryStrokeTolDeg = 1e-9;
+// Written at the top of every compensated program, refused in an input program.
+constexpr const char* kCompensatedMarker = "ROTACAL-COMPENSATED";
 // Longest input line read. No control in controllers.md takes more than LinuxCNC's 255
 // characters; a line of 100 kB would overflow the stack inside std::regex (recursive matcher).
 constexpr size_t kMaxLineChars = 1024;
@@ -81,6 +85,16 @@ bool isGuardedMove(const nc::Block& b, bool measuring_prefix) {
   return false;
 }
 
+// "LINE: what" of a checker into its parts; line -1 when there is none.
+std::pair<int, std::string> splitProblem(const std::string& p) {
+  const size_t colon = p.find(": ");
+  if (colon != std::string::npos) {
+    const auto n = ctl::parseDigits(p.substr(0, colon));
+    if (n) return {static_cast<int>(*n), p.substr(colon + 2)};
+  }
+  return {-1, p};
+}
+
 }  // namespace
 
 ProgramCompensation compensateProgram(const std::string& text, const std::string& file, const MachineModel& machine,
@@ -89,6 +103,9 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
   options.pose.validate();
   if (errors.kinematics != machine.kinematics)
     throw std::invalid_argument("compensate: the location errors are for another kinematics than the machine");
+  if (syntax.dialect == "heidenhain" || syntax.dialect == "csv")
+    throw std::invalid_argument("compensate: '" + syntax.dialect + "' programs are not word-address G-code");
+  const Dialect& dialect = dialectByName(syntax.dialect);
   const std::optional<ctl::EndPointCheck> end_check = ctl::endPointCheck(syntax.dialect);
   const std::vector<nc::Block> blocks = nc::readProgram(text);
   ProgramCompensation out;
@@ -111,27 +128,51 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
   // Cache: the compensated pose depends only on the nominal pose.
   std::map<std::array<double, 3>, CompensatedCommand> pose_cache;
 
+  // The program's own comments, kept on a rewritten line.
   auto comment = [&](const std::string& c) {
     return syntax.comment == NcSyntax::Comment::Parentheses ? "(" + c + ")" : ";" + c;
   };
 
-  for (const auto& b : blocks)
+  for (const auto& b : blocks) {
     if (b.raw.size() > kMaxLineChars)
       fail(b.line, fmt::format("line of {} characters: longer than any control accepts (LinuxCNC: 255) and than the "
                                "{} the rewrite reads",
                                b.raw.size(), kMaxLineChars));
+    // Compensating twice applies the errors twice: the mark this function writes refuses it.
+    for (const auto& c : b.comments)
+      if (upper(c).find(kCompensatedMarker) != std::string::npos)
+        fail(b.line, fmt::format("the program is already compensated (comment {}): compensating it again would "
+                                 "apply the location errors twice; compensate the original program",
+                                 kCompensatedMarker));
+  }
 
-  // Header: after a leading '%' and a Fanuc-style O-number line.
+  // Header: after the program's identification (a leading '%', a Fanuc/Okuma O-number line, a
+  // Siemens transfer line "; %_N_NAME_MPF"), in the dialect's own comment form.
+  auto identifies = [](const nc::Block& b) {
+    if (b.percent) return true;
+    if (!b.control && !b.words.empty() && b.words.front().letter == 'O') return true;
+    return b.code.empty() && b.comments.size() == 1 && ctl::trim(b.comments[0]).rfind("%_N_", 0) == 0;
+  };
   size_t header_at = 0;
-  while (header_at < blocks.size() &&
-         (blocks[header_at].percent ||
-          (!blocks[header_at].words.empty() && blocks[header_at].words.front().letter == 'O' && !blocks[header_at].control)))
-    ++header_at;
+  while (header_at < blocks.size() && identifies(blocks[header_at])) ++header_at;
+  std::vector<std::string> header =
+      dialect.commentLines(std::string(kCompensatedMarker) +
+                           ": rewritten by rotacal compensate for the location errors below. Never compensate it "
+                           "again; run it only on the uncompensated machine");
+  for (const auto& h : options.header)
+    for (auto& l : dialect.commentLines(h)) header.push_back(std::move(l));
 
   std::string result;
+  std::vector<int> source_line;  // per output line: the input line it comes from, 0 for the header
+  int emitting_line = 0;
   auto emit = [&](const std::string& line) {
     result += line;
     result += '\n';
+    source_line.push_back(emitting_line);
+  };
+  auto emitHeader = [&] {
+    emitting_line = 0;
+    for (const auto& h : header) emit(h);
   };
 
   std::optional<PendingCheck> pending;
@@ -150,8 +191,8 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
   };
 
   for (size_t bi = 0; bi < blocks.size(); ++bi) {
-    if (bi == header_at)
-      for (const auto& h : options.header) emit(comment(h));
+    if (bi == header_at) emitHeader();
+    emitting_line = blocks[bi].line;
     if (pending) {
       if (const auto st = ctl::parseEndPointCheckStatement(*end_check, blocks[bi].code)) {
         const auto a = static_cast<size_t>(st->axis);
@@ -388,9 +429,28 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
     }
   }
   closePending("before the end of the program");
-  if (header_at >= blocks.size())
-    for (const auto& h : options.header) emit(comment(h));
+  if (header_at >= blocks.size()) emitHeader();
   out.text = std::move(result);
+
+  // The dialect's own checker, on the input and on the rewrite: the rewrite may add no problem
+  // (a rotacal program, clean before, stays clean; a foreign program keeps its own problems).
+  ProbePlan plan;
+  plan.machine = machine;
+  size_t probes = 0;
+  for (const auto& b : blocks) probes += ctl::isProbingBlock(b);
+  plan.points.resize(probes);
+  std::set<std::pair<int, std::string>> known;
+  for (const auto& p : dialect.check(text, plan)) known.insert(splitProblem(p));
+  for (const auto& p : dialect.check(out.text, plan)) {
+    auto [line, what] = splitProblem(p);
+    const bool mapped = line >= 1 && static_cast<size_t>(line) <= source_line.size();
+    const int src = mapped ? source_line[static_cast<size_t>(line) - 1] : line;
+    if (mapped && src == 0)
+      fail(header_at < blocks.size() ? blocks[header_at].line : static_cast<int>(blocks.size()) + 1,
+           fmt::format("the header comment rotacal writes here fails the {} checker: {}", syntax.dialect, what));
+    if (!known.count({src, what}))
+      fail(std::max(src, 1), fmt::format("the rewritten line fails the {} checker: {}", syntax.dialect, what));
+  }
   return out;
 }
 

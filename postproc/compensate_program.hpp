@@ -48,10 +48,12 @@ struct ProgramCompensation {
 /// Rewrites `text` (read from `file`, for messages). Throws InputError(file, line, why) on what
 /// cannot be compensated exactly: arcs, tool-centre-point control, tilted work planes, offset
 /// changes inside the program, incremental rotary moves, axis words that are expressions, a
-/// compensated linear or rotary word outside the machine's strokes, and a probing move whose
-/// no-trigger check (ctl::EndPointCheck) is not where the dialect writes it: the rewrite moves
-/// the check's end point with the move's. Lines longer than 1024 characters and exponent
-/// notation (X1e2) are refused too.
+/// compensated linear or rotary word outside the machine's strokes, a probing move whose
+/// no-trigger check (ctl::EndPointCheck) is not where the dialect writes it, a program already
+/// compensated (it carries the ROTACAL-COMPENSATED comment this function writes first), and a
+/// rewrite that the dialect's own checker finds a problem in that the input does not have.
+/// Lines longer than 1024 characters and exponent notation (X1e2) are refused too. Throws
+/// std::invalid_argument for heidenhain or csv (not word-address G-code) or an unknown dialect.
 ProgramCompensation compensateProgram(const std::string& text, const std::string& file, const MachineModel& machine,
                                       const LocationErrors& errors, const NcSyntax& syntax,
                                       const ProgramCompensationOptions& options);

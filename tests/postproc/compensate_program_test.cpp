@@ -141,7 +141,12 @@ TEST(CompensateProgram, LinuxcncInterpreterAcceptsTheRewrittenProgram) {
   const char* rs274 = "/usr/bin/rs274";
   if (!std::filesystem::exists(rs274)) GTEST_SKIP() << "rs274 (linuxcnc-uspace) not installed";
   const Fixture f;
-  std::string text = f.compensate(f.errors).text;
+  // A report path with parentheses: as written before, "(... REPORT (1).json)" nested them and
+  // rs274 refused the program.
+  ProgramCompensationOptions opt;
+  opt.header = {"location errors of out/REPORT (1).json:"};
+  std::string text = compensateProgram(f.program, "touch154.ngc", f.plan.machine, f.errors, NcSyntax{"linuxcnc"}, opt).text;
+  ASSERT_NE(text.find("REPORT [1].json"), std::string::npos);
   text = std::regex_replace(text, std::regex("#5070"), "1");  // a probe that trips (rs274's canon never does)
   const auto dir = std::filesystem::temp_directory_path() / fmt::format("rotacal_comp_{}", ::getpid());
   std::filesystem::create_directories(dir);
@@ -272,7 +277,9 @@ TEST(CompensateProgram, FanucHeaderGoesAfterTheProgramNumber) {
   const std::string prog = "%\nO7154 (TEST)\nG21 G90\nG0 X10.0 Y-200.0 Z200.0 A0.0 C0.0\nM30\n%\n";
   const ProgramCompensation c =
       compensateProgram(prog, "p.nc", f.plan.machine, f.errors, NcSyntax{"fanuc"}, {{0, 0, 0}, {}, {"HELLO"}});
-  EXPECT_EQ(c.text.rfind("%\nO7154 (TEST)\n(HELLO)\nG21 G90\n", 0), 0u) << c.text;
+  // The mark first, then the caller's lines, in Fanuc's comment form, before the first block.
+  EXPECT_EQ(c.text.rfind("%\nO7154 (TEST)\n(ROTACAL-COMPENSATED: REWRITTEN BY ROTACAL COMPENSATE", 0), 0u) << c.text;
+  EXPECT_NE(c.text.find(")\n(HELLO)\nG21 G90\n"), std::string::npos) << c.text;
 }
 
 }  // namespace
@@ -438,6 +445,85 @@ TEST(CompensateProgram, ProbingMoveWithoutItsCheckOrWithAnotherEndPointIsRefused
   // A check comparing with another point than its move's end: the rewrite cannot tell its meaning.
   const std::string other = run(move + "#1=#5061-52.0000\n#2=#5062+235.0000\n#3=#5063-150.0000\nG0 Z200.0\n");
   EXPECT_EQ(other.rfind("p.nc:7: this no-trigger check compares X with 52", 0), 0u) << other;
+}
+
+}  // namespace
+}  // namespace rotacal
+
+namespace rotacal {
+namespace {
+
+// Issue 14: compensated Fanuc/Haas/Okuma programs carried lower-case comments of up to 130
+// characters that rotacal's own checkers reject. Every dialect's compensated touch154 program,
+// mm and inch, with a long lower-case header line, passes that dialect's checker.
+TEST(CompensateProgram, EveryDialectsCompensatedProgramPassesItsOwnChecker) {
+  const LocationErrors e = test::table4Mean();
+  ProgramCompensationOptions opt;
+  opt.header = {"location errors of out/report.json:",
+                "dx_AY 14.60 um, dy_AY 23.20 um, dz_AY 27.70 um, dy_CA 3.90 um, a_AY -0.50 mdeg, b_AY -0.10 mdeg, "
+                "c_AY -0.50 mdeg, b_CA 0.20 mdeg"};
+  for (LengthUnit u : {LengthUnit::Millimetre, LengthUnit::Inch}) {
+    MachineModel m = test::acMachine();
+    m.units = u;
+    const ProbePlan plan = makePlan("touch154", m, {});
+    for (const char* d : {"linuxcnc", "fanuc", "haas", "okuma", "siemens"}) {
+      const Dialect& dialect = dialectByName(d);
+      const std::string text = dialect.writeProgram(probeProgram(plan, d));
+      ASSERT_EQ(dialect.check(text, plan), std::vector<std::string>{}) << d;
+      const std::string out = compensateProgram(text, d, plan.machine, e, syntaxFor(d), opt).text;
+      EXPECT_EQ(dialect.check(out, plan), std::vector<std::string>{}) << d;
+      // The header is there, in the dialect's form.
+      EXPECT_NE(out.find("ROTACAL-COMPENSATED"), std::string::npos) << d;
+      // LinuxCNC keeps the text; Siemens upper-cases it; Fanuc, Haas, Okuma also turn '_' into '-'.
+      const std::string values = std::string(d) == "linuxcnc"  ? "dx_AY 14.60 um"
+                                 : std::string(d) == "siemens" ? "DX_AY 14.60 UM"
+                                                               : "DX-AY 14.60 UM";
+      EXPECT_NE(out.find(values), std::string::npos) << d;
+      if (std::string(d) == "siemens") {
+        EXPECT_EQ(out.rfind("; %_N_ROTACAL_TOUCH154_MPF\n", 0), 0u) << "transfer line first";
+      }
+    }
+  }
+}
+
+TEST(CompensateProgram, ARewriteTheDialectsCheckerWouldRejectIsRefused) {
+  // A Fanuc line of 80 characters (the checker's limit) grows when its words get 4 decimals.
+  const Fixture f;
+  const std::string move = "G01 X10.0 Y-200.0 Z200.0 A0.0 C0.0 F100.0 ";
+  const std::string line = move + "(" + std::string(80 - move.size() - 2, 'P') + ")";
+  ASSERT_EQ(line.size(), 80u);
+  const std::string prog = "%\nO7154\nG21 G90\n" + line + "\nM30\n%\n";
+  std::string m;
+  try {
+    compensateProgram(prog, "p.nc", f.plan.machine, f.errors, syntaxFor("fanuc"), {});
+  } catch (const InputError& e) {
+    m = e.what();
+  }
+  EXPECT_EQ(m.rfind("p.nc:4: the rewritten line fails the fanuc checker: line has ", 0), 0u) << m;
+  // The same line without the padding is accepted: the length, not the move, is refused.
+  EXPECT_NO_THROW(compensateProgram("%\nO7154\nG21 G90\n" + move + "\nM30\n%\n", "p.nc", f.plan.machine, f.errors,
+                                    syntaxFor("fanuc"), {}));
+}
+
+TEST(CompensateProgram, ACompensatedProgramIsMarkedAndNotCompensatedAgain) {
+  const Fixture f;
+  const std::string once = f.compensate(f.errors).text;
+  std::string m;
+  try {
+    compensateProgram(once, "once.ngc", f.plan.machine, f.errors, NcSyntax{"linuxcnc"}, {});
+  } catch (const InputError& e) {
+    m = e.what();
+  }
+  // The marker is the first comment of the output, so the refusal names that line.
+  size_t marker_line = 1;
+  for (size_t p = 0; p < once.find("ROTACAL-COMPENSATED"); ++p) marker_line += once[p] == '\n';
+  EXPECT_EQ(m.rfind(fmt::format("once.ngc:{}: the program is already compensated", marker_line), 0), 0u) << m;
+  // Fanuc's upper-case form and Siemens's ';' comments carry it too.
+  for (const char* d : {"fanuc", "siemens"}) {
+    const std::string text = dialectByName(d).writeProgram(probeProgram(f.plan, d));
+    const std::string c = compensateProgram(text, d, f.plan.machine, f.errors, syntaxFor(d), {}).text;
+    EXPECT_THROW(compensateProgram(c, d, f.plan.machine, f.errors, syntaxFor(d), {}), InputError) << d;
+  }
 }
 
 }  // namespace
