@@ -163,24 +163,29 @@ MeasurementRun PointCollector::finish(int last_line) const {
   return run_;
 }
 
+std::string implausibility(Kinematics kinematics, int index, double v) {
+  const auto& p = locationParameters(kinematics).at(static_cast<size_t>(index));
+  if (!std::isfinite(v)) return fmt::format("{} is not a finite number; nothing written", p.name);
+  if (p.kind == ParamKind::Length && std::abs(v) > kMaxLengthCorrectionMm)
+    return fmt::format("{} = {:.4f} mm exceeds the plausibility limit of {} mm: check the setup and the results, or "
+                       "force it",
+                       p.name, v, kMaxLengthCorrectionMm);
+  if (p.kind == ParamKind::Angle && std::abs(radToMdeg(v)) > kMaxAngleCorrectionMdeg)
+    return fmt::format("{} = {:.1f} mdeg exceeds the plausibility limit of {} mdeg: check the setup and the results, "
+                       "or force it",
+                       p.name, radToMdeg(v), kMaxAngleCorrectionMdeg);
+  return "";
+}
+
 void requirePlausible(const OffsetRequest& r) {
   if (!r.plan) throw std::invalid_argument("offset request without a plan");
   if (r.identified.kinematics != r.plan->machine.kinematics)
     throw std::invalid_argument("identified errors are for another kinematics than the plan's machine");
-  const auto& params = locationParameters(r.identified.kinematics);
   for (int i = 0; i < kNumLocationErrors; ++i) {
     const double v = r.identified.values[i];
-    if (!std::isfinite(v))
-      throw std::invalid_argument(fmt::format("{} is not a finite number; nothing written", params[i].name));
-    if (r.force) continue;
-    if (params[i].kind == ParamKind::Length && std::abs(v) > kMaxLengthCorrectionMm)
-      throw std::invalid_argument(fmt::format(
-          "{} = {:.4f} mm exceeds the plausibility limit of {} mm: check the setup and the results, or force it",
-          params[i].name, v, kMaxLengthCorrectionMm));
-    if (params[i].kind == ParamKind::Angle && std::abs(radToMdeg(v)) > kMaxAngleCorrectionMdeg)
-      throw std::invalid_argument(fmt::format(
-          "{} = {:.1f} mdeg exceeds the plausibility limit of {} mdeg: check the setup and the results, or force it",
-          params[i].name, radToMdeg(v), kMaxAngleCorrectionMdeg));
+    if (r.force && std::isfinite(v)) continue;
+    const std::string why = implausibility(r.identified.kinematics, i, v);
+    if (!why.empty()) throw std::invalid_argument(why);
   }
 }
 

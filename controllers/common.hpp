@@ -81,6 +81,12 @@ class PointCollector {
 /// Throws rotacal::InputError(file, line, what).
 [[noreturn]] void fail(const std::string& file, int line, const std::string& what);
 
+/// Why location error `index` of `kinematics` with value `v` (mm / rad) is no plausible
+/// correction: not finite, or beyond kMaxLengthCorrectionMm / kMaxAngleCorrectionMdeg (with the
+/// parameter, its value and the limit); "" when it is plausible. The one limit of everything
+/// that writes a correction: the offsets writers and `rotacal compensate`.
+std::string implausibility(Kinematics kinematics, int index, double v);
+
 /// Throws std::invalid_argument naming the parameter, its value and the limit when any
 /// identified location error exceeds the plausibility limits and !request.force. Also throws
 /// when request.plan is null or a value is not finite.
