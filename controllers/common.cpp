@@ -497,6 +497,15 @@ void ModeGuard::apply(const nc::Op& op) {
   }
 }
 
+int programNumber(std::string_view cycle) {
+  static const std::map<std::string, int, std::less<>> kNumbers = {
+      {"touch154", 7154}, {"spheres3", 7001}, {"rtest", 7002}, {"spaceframe", 7003}, {"tooltip", 7004}};
+  const auto it = kNumbers.find(cycle);
+  if (it == kNumbers.end())
+    throw std::invalid_argument(fmt::format("cycle '{}' has no program number (controllers/common.cpp)", cycle));
+  return it->second;
+}
+
 bool isProbingBlock(const nc::Block& b) {
   return b.hasWord('G', 31) || b.hasWord('G', 38.2) || b.hasWord('G', 38.3) || b.hasWord('G', 38.4) ||
          b.hasWord('G', 38.5) || ctl::upper(b.code).find("MEAS") != std::string::npos;

@@ -195,6 +195,13 @@ class ModeGuard {
 /// carries F, and no block under G93 probes (`isProbe`).
 std::vector<std::string> inverseTimeProblems(const std::vector<nc::Block>& blocks,
                                              bool (*isProbe)(const nc::Block& block));
+/// The program number of a cycle's program (Fanuc O7154, Haas O07154, Okuma O7154): one per
+/// cycle, so that two cycles' programs never overwrite each other in the control's memory.
+/// touch154 keeps 7154; the others are 7000 + their source document: spheres3 7001 (001),
+/// rtest 7002 (002), spaceframe 7003 (003), tooltip 7004 (004) (docs/dialects.md). Throws
+/// std::invalid_argument for a cycle without a number.
+int programNumber(std::string_view cycle);
+
 /// Any dialect's probing block: G31, G38.x, MEAS=, TCH PROBE.
 bool isProbingBlock(const nc::Block& block);
 

@@ -208,7 +208,7 @@ TEST(FanucProgram, StoredVariablesRestartAtEachPose) {
 
 TEST(FanucProgram, PoseWithMoreThanSeventyPointsIsRefused) {
   nc::Program p;
-  p.cycle = "big";
+  p.cycle = "touch154";
   for (int id = 1; id <= 71; ++id) {
     nc::Op op;
     op.kind = nc::Op::Kind::Probe;

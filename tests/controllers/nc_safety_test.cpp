@@ -1,7 +1,7 @@
-// What reaches a control, across the dialects (issue 14): outside text (a report's path, a
-// machine's name) never leaving its comment; the checkers' limits kept by every writer
-// (Heidenhain's offsets lines). Every expectation is computed here from the text, not by the
-// writers' helpers.
+// What reaches a control, across the dialects (issue 14): each cycle's own program number;
+// outside text (a report's path, a machine's name) never leaving its comment; the checkers'
+// limits kept by every writer (Heidenhain's offsets lines). Every expectation is computed here
+// from the text, not by the writers' helpers.
 #include <gtest/gtest.h>
 
 #include <fmt/format.h>
@@ -19,12 +19,54 @@
 #include "gcode/reader.hpp"
 #include "postproc/compensate_program.hpp"
 #include "postproc/probe_program.hpp"
+#include "postproc/tooltip_program.hpp"
 #include "test_util.hpp"
 
 namespace rotacal {
 namespace {
 
 using test::lines;
+
+std::string firstLineStartingWithO(const std::string& text) {
+  for (const auto& l : lines(text))
+    if (!l.empty() && l[0] == 'O') return l;
+  return "";
+}
+
+// The numbers as docs/dialects.md lists them.
+const std::map<std::string, int> kDocumentedNumbers = {
+    {"touch154", 7154}, {"spheres3", 7001}, {"rtest", 7002}, {"spaceframe", 7003}, {"tooltip", 7004}};
+
+TEST(ProgramNumbers, EachCycleHasItsOwnNumberInEveryDialectThatNumbersPrograms) {
+  const MachineModel ac = test::acTestMachine();
+  const MachineModel a120 = loadMachine(test::sourcePath("examples/machines/ac_trunnion_a120.json"));
+  const MachineModel head = loadMachine(test::sourcePath("examples/machines/head_ab.json"));
+  const std::vector<ProbePlan> plans = {
+      makePlan("touch154", ac, {}), makePlan("spheres3", ac, {}),
+      makePlan("spaceframe", a120, {{"theta_list", "0,180"}, {"phi_list", "0,90"}}),
+      makePlan("tooltip", head, {{"units", "inch"}, {"radius_mm", "381"}, {"step_deg", "5"}, {"end_deg", "90"}})};
+  for (const char* d : {"fanuc", "haas", "okuma"}) {
+    std::set<int> seen;
+    for (const auto& plan : plans) {
+      if (plan.cycle == "tooltip" && std::string(d) == "okuma") continue;  // refused: G93 unverified
+      const std::string text = dialectByName(d).writeProgram(plan.cycle == "tooltip" ? tooltipProgram(plan, d)
+                                                                                     : probeProgram(plan, d));
+      std::smatch m;
+      const std::string o = firstLineStartingWithO(text);
+      ASSERT_TRUE(std::regex_search(o, m, std::regex(R"(^O(\d+))"))) << d << " " << plan.cycle << ": " << o;
+      EXPECT_EQ(std::stoi(m[1]), kDocumentedNumbers.at(plan.cycle)) << d << " " << plan.cycle;
+      if (std::string(d) == "haas") {
+        EXPECT_EQ(m[1].length(), 5u) << "Haas: O + 5 digits";
+      }
+      EXPECT_TRUE(seen.insert(std::stoi(m[1])).second) << d << ": " << plan.cycle << " shares its number";
+    }
+  }
+  // rtest is written for linuxcnc only (no O-number there), but has its number for when it is not.
+  EXPECT_EQ(ctl::programNumber("rtest"), kDocumentedNumbers.at("rtest"));
+  EXPECT_THROW(ctl::programNumber("no_such_cycle"), std::invalid_argument);
+}
+
+// ---- Outside text in comments ----
 
 // The code of a text with its comments removed, one entry per non-empty statement: what the
 // control executes. Independent of the writers: the comment syntax of each file form.
