@@ -473,6 +473,23 @@ std::string rotaryLinearWords(const nc::Op& op, nc::Unit unit, const std::string
   return s;
 }
 
+std::string inverseTimeRefusal(std::string_view dialect) {
+  const char* why = dialect == "okuma"        ? "inverse-time feed (G93) is UNVERIFIED for OSP (controllers.md Sec. 6.5)"
+                    : dialect == "heidenhain" ? "inverse-time feed is not verified for Klartext (controllers.md Sec. 5.5)"
+                                              : nullptr;
+  if (!why) return "";
+  return fmt::format("{}: {}, so the fixed-tool-tip cycle (tooltip) is refused for this dialect; use linuxcnc, fanuc, "
+                     "haas or siemens",
+                     dialect, why);
+}
+
+void requireInverseTimeAllowed(const nc::Program& program, std::string_view dialect) {
+  const std::string why = inverseTimeRefusal(dialect);
+  if (why.empty()) return;
+  for (const auto& op : program.ops)
+    if (op.kind == nc::Op::Kind::Mode && op.inverse_time) throw std::invalid_argument(why);
+}
+
 void ModeGuard::apply(const nc::Op& op) {
   switch (op.kind) {
     case nc::Op::Kind::Mode: inverse_time_ = op.inverse_time; break;

@@ -13,6 +13,7 @@
 #include "controllers/dialect.hpp"
 #include "core/measurement.hpp"
 #include "core/probe_plan.hpp"
+#include "gcode/program.hpp"
 #include "gcode/reader.hpp"
 
 namespace rotacal::ctl {
@@ -191,6 +192,17 @@ class ModeGuard {
  private:
   bool inverse_time_ = false;
 };
+/// Why `dialect` writes no inverse-time feed (G93), "" when it does. The one policy of every
+/// writer and checker: G93 is written where controllers.md names it for the control - LinuxCNC
+/// (verified with rs274), Haas ([HaasMan]), Fanuc and Siemens (only their "F on every G93 block"
+/// rule is UNVERIFIED, and rotacal writes F on every block) - and refused where G93 itself is
+/// UNVERIFIED: Okuma (Sec. 6.5) and Heidenhain (Sec. 5.5). Only the tooltip cycle moves under
+/// G93, so it is refused there, with this reason.
+std::string inverseTimeRefusal(std::string_view dialect);
+/// Throws std::invalid_argument(inverseTimeRefusal(dialect)) when `program` switches to inverse
+/// time and the dialect refuses it.
+void requireInverseTimeAllowed(const nc::Program& program, std::string_view dialect);
+
 /// ISO word-address checks of the modes: under G93 every G1/G2/G3 block with an axis word
 /// carries F, and no block under G93 probes (`isProbe`).
 std::vector<std::string> inverseTimeProblems(const std::vector<nc::Block>& blocks,

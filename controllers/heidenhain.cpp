@@ -112,11 +112,7 @@ class HeidenhainDialect final : public Dialect {
     for (const auto& op : p.ops) probes += op.kind == nc::Op::Kind::Probe;
     if (p.point_count != 0 && p.point_count != probes)
       throw std::invalid_argument(fmt::format("program has {} probing moves but point_count {}", probes, p.point_count));
-    for (const auto& op : p.ops)  // the tool-tip cycle: refuse with the reason, not the probe count
-      if (op.kind == nc::Op::Kind::Mode && (op.inverse_time || op.incremental))
-        throw std::invalid_argument(
-            "heidenhain: inverse-time feed (G93) is not verified for Klartext (controllers.md Sec. 5), so the "
-            "fixed-tool-tip cycle (tooltip) is refused for this dialect; use linuxcnc, fanuc, haas, siemens or okuma");
+    ctl::requireInverseTimeAllowed(p, kDialect);  // the tool-tip cycle: refused with the reason, not the probe count
     if (probes == 0)  // the result format files below are built per probing move
       throw std::invalid_argument("the heidenhain program records probing moves and this one has none (rtest: use linuxcnc)");
     const std::string name = safeName(p.name.empty() ? "ROTACAL" : p.name);
@@ -181,12 +177,9 @@ class HeidenhainDialect final : public Dialect {
           break;
         }
         case nc::Op::Kind::Mode:
-          // Inverse-time feed is UNVERIFIED for Klartext (../shared/reference/controllers.md
-          // Sec. 5): refuse rather than guess. Absolute, per-minute is Klartext's default.
-          if (op.inverse_time || op.incremental)
-            throw std::invalid_argument(
-                "heidenhain: inverse-time feed (G93) is not verified for Klartext (controllers.md Sec. 5), so the "
-                "fixed-tool-tip cycle (tooltip) is refused for this dialect; use linuxcnc, fanuc, haas, siemens or okuma");
+          // Absolute, per-minute is Klartext's default; inverse time was refused above.
+          if (op.incremental)
+            throw std::invalid_argument("heidenhain: incremental (G91) moves are not written for Klartext");
           break;
         case nc::Op::Kind::RotaryLinear:
           throw std::invalid_argument("heidenhain: simultaneous rotary-linear moves with inverse-time feed are refused "
@@ -496,7 +489,7 @@ class HeidenhainDialect final : public Dialect {
     }
     if (static_cast<size_t>(probes) != ctl::expectedProbes(plan))
       problem(ls.empty() ? 1 : ls.back().number, fmt::format("{} TCH PROBE 0 cycles, the plan has {} points", probes, ctl::expectedProbes(plan)));
-    if (plan.cycle == "tooltip") problem(1, "heidenhain: the tooltip cycle needs inverse-time feed, not verified for Klartext");
+    if (plan.cycle == "tooltip") problem(1, ctl::inverseTimeRefusal(kDialect));
     for (auto& s : ctl::strokeProblems(ctl::motionBlocks(moves, inch), plan, kDialect)) out.push_back(std::move(s));
     return out;
   }

@@ -3,6 +3,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -22,6 +23,12 @@ constexpr int kMaxLabel = 99999;
 // by up to 1.27 um per coordinate, which moves the identified errors by up to 3.1 um
 // (docs/dialects.md, digits bound); the fifth inch decimal brings that to 0.31 um (a control that
 // holds #5061 only to 0.0001 in prints a trailing 0). a + b = 8 suits older Haas controls.
+// DPRNT #v[ab] with a + b <= 8: "older controls: w + f must be 1-8" (controllers.md Sec. 3.4,
+// Haas 96-8000); Fanuc shares the format and no source gives it more, so both keep to 8 - the
+// checker flags a wider field and the parser a wider value. T (#3001 in ms) is [80]: 27.7 h.
+constexpr int kMaxDprntDigits = 8;
+constexpr int kTimeDigits = 8;
+constexpr double kMaxTimerMs = 99999999.0;  // kTimeDigits nines
 constexpr int kIntDigits = 4, kDecimals = 4;
 constexpr int kIntDigitsInch = 3, kDecimalsInch = 5;
 int xyzIntDigits(bool inch) { return inch ? kIntDigitsInch : kIntDigits; }
@@ -138,7 +145,7 @@ std::string MacroBDialect::writeProgram(const nc::Program& p) const {
       const int b = f_.store_base + 4 * static_cast<int>(j);
       const int a = xyzIntDigits(inch), d = xyzDecimals(inch);
       line(fmt::format("DPRNT[P{}*X#{}[{}{}]*Y#{}[{}{}]*Z#{}[{}{}]*T#{}[{}0]]", pose_points[j], b, a, d, b + 1, a, d,
-                       b + 2, a, d, b + 3, f_.time_digits));
+                       b + 2, a, d, b + 3, kTimeDigits));
     }
     pose_points.clear();
   };
@@ -174,8 +181,8 @@ std::string MacroBDialect::writeProgram(const nc::Program& p) const {
         break;
       case nc::Op::Kind::RotaryLinear: line(ctl::rotaryLinearWords(op, p.unit, "")); break;
       case nc::Op::Kind::Pause:
-        // G04 X: seconds with a decimal point (Fanuc and Haas; P would be milliseconds).
-        if (op.dwell_s > 0) line(fmt::format("G04 X{}", ctl::trimmed(op.dwell_s, 3)));
+        // Seconds with a decimal point: Fanuc X2. (P would be integer ms), Haas P2. [HaasMan].
+        if (op.dwell_s > 0) line(fmt::format("G04 {}{}", f_.dwell_word, ctl::trimmed(op.dwell_s, 3)));
         else line("M00");
         break;
       case nc::Op::Kind::Dwell:
@@ -245,9 +252,14 @@ std::string MacroBDialect::writeResults(const ProbePlan& plan, const Measurement
     if (!plan.findPoint(t.point_id)) throw std::invalid_argument(fmt::format("run point {} is not in the plan", t.point_id));
     const Eigen::Vector3d x = t.position_m_mm * k;
     const int a = xyzIntDigits(inch), d = xyzDecimals(inch);
+    const double ms = std::round((t.t_s - t0) * 1000.0);
+    if (ms > kMaxTimerMs)
+      throw std::invalid_argument(fmt::format("point {} is {:.0f} ms after the first: the {} program prints #3001 as "
+                                              "[{}0], at most {:.0f} ms",
+                                              t.point_id, ms, f_.name, kTimeDigits, kMaxTimerMs));
     out += fmt::format("P{} X{} Y{} Z{} T{}\r\n", t.point_id, fanucDprntNumber(x.x(), a, d),
                        fanucDprntNumber(x.y(), a, d), fanucDprntNumber(x.z(), a, d),
-                       fanucDprntNumber(std::round((t.t_s - t0) * 1000.0), f_.time_digits, 0));
+                       fanucDprntNumber(ms, kTimeDigits, 0));
   }
   out += "END\r\n";
   return out;
@@ -330,6 +342,14 @@ MeasurementRun MacroBDialect::parseResults(const std::string& raw, const std::st
       v[i] = *value;
     }
     if (v[3] < 0) ctl::fail(file, l.number, fmt::format("T {} of point {} is negative: #3001 counts up from 0", v[3], f.id));
+    {
+      const std::string& t_text = f.fields[3];
+      const auto digits = std::count_if(t_text.begin(), t_text.end(), [](char c) { return c >= '0' && c <= '9'; });
+      if (digits > kTimeDigits)
+        ctl::fail(file, l.number,
+                  fmt::format("T '{}' of point {} has {} digits: the program prints #3001 as [{}0], at most {}", t_text,
+                              f.id, digits, kTimeDigits, kTimeDigits));
+    }
     points.add(l.number, static_cast<int>(f.id), Eigen::Vector3d(v[0], v[1], v[2]) * k, clock0 + v[3] / 1000.0);
   }
   if (!header) ctl::fail(file, 1, fmt::format("empty results file: expected the header '{}'", expected_header));
@@ -393,9 +413,9 @@ std::vector<std::string> MacroBDialect::check(const std::string& text, const Pro
               if (k < body.size() && body[k] == '[') {
                 const size_t e = body.find(']', k);
                 if (e == std::string::npos || e - k != 3) problem(b.line, "DPRNT format must be #v[ab]");
-                else if (f_.max_dprnt_digits > 0 && (body[k + 1] - '0') + (body[k + 2] - '0') > f_.max_dprnt_digits)
+                else if ((body[k + 1] - '0') + (body[k + 2] - '0') > kMaxDprntDigits)
                   problem(b.line, fmt::format("DPRNT format [ab] with a + b > {} (older {} controls refuse it)",
-                                              f_.max_dprnt_digits, f_.tag));
+                                              kMaxDprntDigits, f_.tag));
                 k = e == std::string::npos ? body.size() : e;
               } else {
                 --k;

@@ -20,7 +20,8 @@
 //   with 4 decimals; VCn,5 on an inch machine) into the line buffer, WRITE C (write the buffer
 //   as one line), CLOSE C. The
 //   parser reads exactly that text and tolerates spaces, '+' signs and leading zeros in numbers.
-// - Line length: 80 characters. G93: only in the tooltip cycle (004), F on every block.
+// - Line length: 80 characters. G93 itself is UNVERIFIED for OSP: never written, so the
+//   tooltip cycle (004) is refused (ctl::inverseTimeRefusal).
 // - VC1-VC7 free for this program (standard: VC1-VC200).
 #include <fmt/format.h>
 
@@ -80,6 +81,7 @@ class OkumaDialect final : public Dialect {
     const bool inch = p.unit == nc::Unit::Inch;
     auto L = [](double v) { return ctl::fixed(v, 4); };
     auto F = [&](double v) { return ctl::fixed(v, inch ? 3 : 1); };
+    ctl::requireInverseTimeAllowed(p, kDialect);
     int probes = 0;
     for (const auto& op : p.ops) probes += op.kind == nc::Op::Kind::Probe;
     if (p.point_count != 0 && p.point_count != probes)
@@ -137,9 +139,8 @@ class OkumaDialect final : public Dialect {
           line(s);
           break;
         }
-        case nc::Op::Kind::Mode:
-          // G93 on OSP: UNVERIFIED in controllers.md; F on every block is the safe form.
-          line(fmt::format("{} {}", op.incremental ? "G91" : "G90", op.inverse_time ? "G01 G93" : "G94"));
+        case nc::Op::Kind::Mode:  // never G93: refused above (ctl::inverseTimeRefusal)
+          line(fmt::format("{} G94", op.incremental ? "G91" : "G90"));
           break;
         case nc::Op::Kind::RotaryLinear: line(ctl::rotaryLinearWords(op, p.unit, " ")); break;
         case nc::Op::Kind::Pause:
@@ -296,7 +297,9 @@ class OkumaDialect final : public Dialect {
       // The CLOSE C of a no-trigger branch (followed by the alarm) does not end the main output.
       if (s == "CLOSE C" && !(nextCode(i) < ls.size() && code[nextCode(i)].rfind("VUACM", 0) == 0)) open = false;
       static const std::regex g93(R"(\bG93\b)");
-      if (plan.cycle != "tooltip" && std::regex_search(s, g93)) problem(n, "G93 inverse time: rotacal probes and positions under G94 only");
+      if (std::regex_search(s, g93))
+        problem(n, plan.cycle == "tooltip" ? ctl::inverseTimeRefusal(kDialect)
+                                           : "G93 inverse time: rotacal probes and positions under G94 only");
       const bool is_motion = s.rfind("G00 ", 0) == 0 || s.rfind("G01 ", 0) == 0 || s.rfind("G31 ", 0) == 0;
       if (is_motion && !std::regex_match(s, motion))
         problem(n, fmt::format("motion block '{}' is not of the generated form (decimal point on every word)", s));

@@ -1,7 +1,7 @@
 // What reaches a control, across the dialects (issue 14): each cycle's own program number;
 // outside text (a report's path, a machine's name) never leaving its comment; the checkers'
-// limits kept by every writer (Heidenhain's offsets lines). Every expectation is computed here
-// from the text, not by the writers' helpers.
+// limits kept by every writer (Heidenhain's offsets lines, DPRNT field widths); each control's
+// dwell word. Every expectation is computed here from the text, not by the writers' helpers.
 #include <gtest/gtest.h>
 
 #include <fmt/format.h>
@@ -208,6 +208,52 @@ TEST(HeidenhainOffsets, EveryLineWithinEightyAndTheProvenanceWhole) {
   }
   // Wrapped at blanks only: the path comes back whole when the pieces are joined.
   EXPECT_NE(comments.find(r.report_file), std::string::npos) << comments;
+}
+
+// ---- DPRNT field widths and the dwell word ----
+
+TEST(MacroB, EveryDprntFieldKeepsEightDigitsAndTheParserAgrees) {
+  const ProbePlan plan = test::acPlan();
+  for (const char* d : {"fanuc", "haas"}) {
+    const std::string text = dialectByName(d).writeProgram(probeProgram(plan, d));
+    const std::regex field(R"(#\d+\[(\d)(\d)\])");
+    int fields = 0;
+    for (auto it = std::sregex_iterator(text.begin(), text.end(), field); it != std::sregex_iterator(); ++it, ++fields)
+      EXPECT_LE(std::stoi((*it)[1]) + std::stoi((*it)[2]), 8) << d << ": " << (*it)[0];
+    EXPECT_GT(fields, 4 * 154) << d;
+    // The checker flags a [90] time field, the parser a 9-digit time.
+    const std::string wide = std::regex_replace(text, std::regex(R"(\[80\]\])"), "[90]]");
+    ASSERT_NE(wide, text) << d;
+    EXPECT_TRUE(test::hasProblem(dialectByName(d).check(wide, plan), "a + b > 8")) << d;
+    auto ls = lines(dialectByName(d).writeResults(plan, test::displacedRun(plan)));
+    ls[2] = std::regex_replace(ls[2], std::regex(R"(T *\d+$)"), "T123456789");
+    const std::string e = test::parseError(dialectByName(d), test::join(ls, "\r\n"), plan);
+    EXPECT_NE(e.find("res.txt:3: T '123456789' of point 1 has 9 digits"), std::string::npos) << d << ": " << e;
+    ls[2] = std::regex_replace(ls[2], std::regex(R"(T\d+$)"), "T00012345");  // 8 digits with leading zeros: fine
+    EXPECT_EQ(test::parseError(dialectByName(d), test::join(ls, "\r\n"), plan), "") << d;
+    // A run longer than [80] can count: the simulated results refuse it rather than print 9 digits.
+    MeasurementRun run = test::displacedRun(plan);
+    run.points.back().t_s = run.points.front().t_s + 1e5 + 1.0;  // 27.8 h
+    EXPECT_THROW(dialectByName(d).writeResults(plan, run), std::invalid_argument) << d;
+  }
+}
+
+TEST(MacroB, DwellIsSecondsInEachControlsOwnWord) {
+  const MachineModel head = loadMachine(test::sourcePath("examples/machines/head_ab.json"));
+  const ProbePlan plan = makePlan(
+      "tooltip", head, {{"units", "inch"}, {"radius_mm", "381"}, {"step_deg", "5"}, {"end_deg", "90"}, {"dwell_s", "2.5"}});
+  // Haas: G04 P2.5 ([HaasMan]: P with a point = seconds); Fanuc: G04 X2.5 (P would be integer ms).
+  for (const auto& [d, word] : {std::pair<const char*, const char*>{"haas", "P"}, {"fanuc", "X"}}) {
+    const std::string text = dialectByName(d).writeProgram(tooltipProgram(plan, d));
+    const std::regex dwell(R"(\nG04 ([A-Z])([0-9.]+)\n)");
+    int n = 0;
+    for (auto it = std::sregex_iterator(text.begin(), text.end(), dwell); it != std::sregex_iterator(); ++it, ++n) {
+      EXPECT_EQ((*it)[1], word) << d;
+      EXPECT_EQ(std::stod((*it)[2]), 2.5) << d;
+    }
+    EXPECT_EQ(n, 18) << d << ": one dwell per reading (004 Table 1's 18 steps)";
+    EXPECT_EQ(dialectByName(d).check(text, plan), std::vector<std::string>{}) << d;
+  }
 }
 
 }  // namespace
