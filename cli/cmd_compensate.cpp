@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "cli/command.hpp"
+#include "controllers/common.hpp"
 #include "core/errors.hpp"
 #include "core/json_io.hpp"
 #include "core/machine.hpp"
@@ -35,13 +36,20 @@ NcSyntax syntaxOf(const std::string& dialect) {
                                           "siemens, okuma)");
 }
 
-// The identified location errors of a REPORT.json (contract.md), in mm / rad.
-LocationErrors errorsFromReport(const JsonDoc& doc, Kinematics k) {
+// The identified location errors of a REPORT.json (contract.md), in mm / rad. All eight must
+// be there (a missing one would be compensated as 0 under a header that claims the report's
+// errors), and each must be plausible as a correction unless `force`.
+LocationErrors errorsFromReport(const JsonDoc& doc, Kinematics k, bool force) {
   const Json& j = doc.value;
   if (!j.is_object() || j.value("format", "") != "rotacal-report/1")
     doc.fail("format", "not a rotacal report (expected \"format\": \"rotacal-report/1\")");
   if (!j.contains("location_errors") || !j["location_errors"].is_object())
     doc.fail("location_errors", "the report has no 'location_errors'");
+  for (const auto& p : locationParameters(k))
+    if (!j["location_errors"].contains(std::string(p.name)))
+      doc.fail("location_errors", fmt::format("'location_errors' lacks {}: compensate needs all {} location errors of "
+                                              "the machine's kinematics (a missing one is not zero)",
+                                              p.name, kNumLocationErrors));
   LocationErrors e;
   e.kinematics = k;
   for (const auto& [name, entry] : j["location_errors"].items()) {
@@ -62,6 +70,8 @@ LocationErrors errorsFromReport(const JsonDoc& doc, Kinematics k) {
       else if (unit == "rad") e.values[i] = v;
       else doc.fail(name, "unit of '" + name + "' must be mdeg, urad or rad");
     }
+    const std::string why = ctl::implausibility(k, i, e.values[i]);
+    if (!why.empty() && !force) doc.fail(name, why + " (--force)");
   }
   return e;
 }
@@ -88,7 +98,7 @@ std::vector<double> parseTriple(const std::string& opt, const std::string& text)
 
 int cmdCompensate(const Common& c, const std::string& program_file, const std::string& report_file,
                   const std::string& machine_file, const std::string& dialect, const std::string& origin,
-                  const std::string& out) {
+                  const std::string& out, bool force) {
   const NcSyntax syntax = syntaxOf(dialect);
   const JsonDoc report = readJsonFile(report_file);
   MachineModel machine;
@@ -100,28 +110,30 @@ int cmdCompensate(const Common& c, const std::string& program_file, const std::s
     failFile(report_file, "the report does not carry its machine ('machine_model', written by analyze since this "
                           "version): give --machine MACHINE.json");
   }
-  const LocationErrors errors = errorsFromReport(report, machine.kinematics);
+  const LocationErrors errors = errorsFromReport(report, machine.kinematics, force);
   ProgramCompensationOptions opt;
   if (!origin.empty()) {
     const auto v = parseTriple("--program-origin", origin);
     opt.program_origin_m_mm = Eigen::Vector3d(v[0], v[1], v[2]);
   }
-  opt.header.push_back(fmt::format("rotacal compensate: rewritten for the location errors of {}", report_file));
+  // The report's path is outside text: the dialect's comment form keeps only its safe characters.
+  opt.header.push_back(fmt::format("location errors of {}:", report_file));
   std::string values;
   for (int i = 0; i < kNumLocationErrors; ++i) {
     const auto& p = locationParameters(machine.kinematics)[i];
     values += fmt::format("{}{} {:.2f} {}", values.empty() ? "" : ", ", p.name, errors.reportValue(i), reportUnit(p.kind));
   }
   opt.header.push_back(values);
-  opt.header.push_back("do not compensate twice: run this program only on the uncompensated machine");
   const std::string text = readTextFile(program_file);
   const ProgramCompensation r = compensateProgram(text, program_file, machine, errors, syntax, opt);
   writeFileAtomic(out, r.text);
   say(c, fmt::format("compensate: {} of {} motion blocks rewritten ({} left as written: machine-coordinate moves or "
                      "before every axis was known); largest shift {:.2f} um, largest rotary change {:.2f} mdeg, tool "
-                     "direction not restorable by the rotary axes up to {:.2f} urad -> {}\n",
+                     "direction not restorable by the rotary axes up to {:.2f} urad; {} no-trigger check statements "
+                     "moved with their probing moves (up to {:.2f} um) -> {}\n",
                      r.compensated_blocks, r.motion_blocks, r.uncompensated_blocks, mmToUm(r.max_shift_mm),
-                     r.max_rotary_change_deg * 1000.0, r.max_direction_residual_rad * 1e6, out));
+                     r.max_rotary_change_deg * 1000.0, r.max_direction_residual_rad * 1e6, r.rewritten_checks,
+                     mmToUm(r.max_check_shift_mm), out));
   return 0;
 }
 
@@ -130,6 +142,7 @@ int cmdCompensate(const Common& c, const std::string& program_file, const std::s
 std::vector<Command> compensateCommands(CLI::App& app, const Common& common) {
   struct Args {
     std::string program, report, machine, dialect, origin, out;
+    bool force = false;
   };
   auto a = std::make_shared<Args>();
   auto* cmd = app.add_subcommand("compensate", "rewrite an NC program to cancel the identified location errors");
@@ -141,8 +154,10 @@ std::vector<Command> compensateCommands(CLI::App& app, const Common& common) {
                   "X,Y,Z (mm): machine position of the program zero relative to the rotary-axis intersection (default "
                   "0,0,0)");
   cmd->add_option("-o,--output", a->out, "OUT: the rewritten program")->required();
+  cmd->add_flag("--force", a->force,
+                "compensate location errors beyond the plausibility limit of the offsets writers (0.5 mm, 100 mdeg)");
   return {{cmd, [a, &common] {
-             return cmdCompensate(common, a->program, a->report, a->machine, a->dialect, a->origin, a->out);
+             return cmdCompensate(common, a->program, a->report, a->machine, a->dialect, a->origin, a->out, a->force);
            }}};
 }
 

@@ -56,6 +56,30 @@ std::string trim(std::string_view s) {
   return std::string(s.substr(b, e - b));
 }
 
+std::string printableLine(std::string_view text) {
+  std::string s(text);
+  for (auto& c : s)
+    if (c < 0x20 || c > 0x7e) c = ' ';
+  return s;
+}
+
+std::vector<std::string> wrap(std::string_view text, size_t width) {
+  const std::string s = trim(text);
+  std::vector<std::string> out;
+  size_t i = 0;
+  while (i < s.size()) {
+    size_t n = std::min(width, s.size() - i);
+    if (i + n < s.size()) {
+      const size_t sp = s.rfind(' ', i + n);
+      if (sp != std::string::npos && sp > i) n = sp - i;
+    }
+    out.push_back(trim(s.substr(i, n)));
+    i += n;
+    while (i < s.size() && s[i] == ' ') ++i;
+  }
+  return out;
+}
+
 std::string upper(std::string_view s) {
   std::string r(s);
   for (auto& c : r) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
@@ -139,24 +163,29 @@ MeasurementRun PointCollector::finish(int last_line) const {
   return run_;
 }
 
+std::string implausibility(Kinematics kinematics, int index, double v) {
+  const auto& p = locationParameters(kinematics).at(static_cast<size_t>(index));
+  if (!std::isfinite(v)) return fmt::format("{} is not a finite number; nothing written", p.name);
+  if (p.kind == ParamKind::Length && std::abs(v) > kMaxLengthCorrectionMm)
+    return fmt::format("{} = {:.4f} mm exceeds the plausibility limit of {} mm: check the setup and the results, or "
+                       "force it",
+                       p.name, v, kMaxLengthCorrectionMm);
+  if (p.kind == ParamKind::Angle && std::abs(radToMdeg(v)) > kMaxAngleCorrectionMdeg)
+    return fmt::format("{} = {:.1f} mdeg exceeds the plausibility limit of {} mdeg: check the setup and the results, "
+                       "or force it",
+                       p.name, radToMdeg(v), kMaxAngleCorrectionMdeg);
+  return "";
+}
+
 void requirePlausible(const OffsetRequest& r) {
   if (!r.plan) throw std::invalid_argument("offset request without a plan");
   if (r.identified.kinematics != r.plan->machine.kinematics)
     throw std::invalid_argument("identified errors are for another kinematics than the plan's machine");
-  const auto& params = locationParameters(r.identified.kinematics);
   for (int i = 0; i < kNumLocationErrors; ++i) {
     const double v = r.identified.values[i];
-    if (!std::isfinite(v))
-      throw std::invalid_argument(fmt::format("{} is not a finite number; nothing written", params[i].name));
-    if (r.force) continue;
-    if (params[i].kind == ParamKind::Length && std::abs(v) > kMaxLengthCorrectionMm)
-      throw std::invalid_argument(fmt::format(
-          "{} = {:.4f} mm exceeds the plausibility limit of {} mm: check the setup and the results, or force it",
-          params[i].name, v, kMaxLengthCorrectionMm));
-    if (params[i].kind == ParamKind::Angle && std::abs(radToMdeg(v)) > kMaxAngleCorrectionMdeg)
-      throw std::invalid_argument(fmt::format(
-          "{} = {:.1f} mdeg exceeds the plausibility limit of {} mdeg: check the setup and the results, or force it",
-          params[i].name, radToMdeg(v), kMaxAngleCorrectionMdeg));
+    if (r.force && std::isfinite(v)) continue;
+    const std::string why = implausibility(r.identified.kinematics, i, v);
+    if (!why.empty()) throw std::invalid_argument(why);
   }
 }
 
@@ -448,6 +477,23 @@ std::string rotaryLinearWords(const nc::Op& op, nc::Unit unit, const std::string
   return s;
 }
 
+std::string inverseTimeRefusal(std::string_view dialect) {
+  const char* why = dialect == "okuma"        ? "inverse-time feed (G93) is UNVERIFIED for OSP (controllers.md Sec. 6.5)"
+                    : dialect == "heidenhain" ? "inverse-time feed is not verified for Klartext (controllers.md Sec. 5.5)"
+                                              : nullptr;
+  if (!why) return "";
+  return fmt::format("{}: {}, so the fixed-tool-tip cycle (tooltip) is refused for this dialect; use linuxcnc, fanuc, "
+                     "haas or siemens",
+                     dialect, why);
+}
+
+void requireInverseTimeAllowed(const nc::Program& program, std::string_view dialect) {
+  const std::string why = inverseTimeRefusal(dialect);
+  if (why.empty()) return;
+  for (const auto& op : program.ops)
+    if (op.kind == nc::Op::Kind::Mode && op.inverse_time) throw std::invalid_argument(why);
+}
+
 void ModeGuard::apply(const nc::Op& op) {
   switch (op.kind) {
     case nc::Op::Kind::Mode: inverse_time_ = op.inverse_time; break;
@@ -472,9 +518,74 @@ void ModeGuard::apply(const nc::Op& op) {
   }
 }
 
+int programNumber(std::string_view cycle) {
+  static const std::map<std::string, int, std::less<>> kNumbers = {
+      {"touch154", 7154}, {"spheres3", 7001}, {"rtest", 7002}, {"spaceframe", 7003}, {"tooltip", 7004}};
+  const auto it = kNumbers.find(cycle);
+  if (it == kNumbers.end())
+    throw std::invalid_argument(fmt::format("cycle '{}' has no program number (controllers/common.cpp)", cycle));
+  return it->second;
+}
+
 bool isProbingBlock(const nc::Block& b) {
   return b.hasWord('G', 31) || b.hasWord('G', 38.2) || b.hasWord('G', 38.3) || b.hasWord('G', 38.4) ||
          b.hasWord('G', 38.5) || ctl::upper(b.code).find("MEAS") != std::string::npos;
+}
+
+std::optional<EndPointCheck> endPointCheck(std::string_view dialect) {
+  if (dialect == "fanuc" || dialect == "haas") return EndPointCheck{{"#1", "#2", "#3"}, {"#5061", "#5062", "#5063"}};
+  if (dialect == "okuma") return EndPointCheck{{"VC4", "VC5", "VC6"}, {"VC1", "VC2", "VC3"}};
+  if (dialect == "siemens") return EndPointCheck{{"R93", "R94", "R95"}, {"R90", "R91", "R92"}};
+  return std::nullopt;
+}
+
+std::string endPointCheckStatement(const EndPointCheck& form, int axis, double end, int decimals) {
+  const auto a = static_cast<size_t>(axis);
+  return fmt::format("{}={}{}{}", form.difference.at(a), form.measured[a], end < 0 ? "+" : "-",
+                     fixed(std::abs(end), decimals));
+}
+
+std::optional<EndPointCheckStatement> parseEndPointCheckStatement(const EndPointCheck& form, std::string_view code) {
+  size_t i = 0;
+  auto blanks = [&] {
+    while (i < code.size() && (code[i] == ' ' || code[i] == '\t')) ++i;
+  };
+  auto word = [&](std::string_view w) {
+    if (upper(code.substr(i, w.size())) != upper(w)) return false;
+    i += w.size();
+    return true;
+  };
+  blanks();
+  if (i < code.size() && (code[i] == 'N' || code[i] == 'n') && i + 1 < code.size() && std::isdigit(static_cast<unsigned char>(code[i + 1]))) {
+    ++i;
+    while (i < code.size() && std::isdigit(static_cast<unsigned char>(code[i]))) ++i;
+    blanks();
+  }
+  const size_t start = i;
+  for (int a = 0; a < 3; ++a) {
+    i = start;
+    const auto k = static_cast<size_t>(a);
+    if (!word(form.difference[k])) continue;
+    blanks();
+    if (!word("=")) continue;
+    blanks();
+    if (!word(form.measured[k])) continue;
+    // The next character must end the variable's name: "#50610" is another variable.
+    if (i < code.size() && std::isalnum(static_cast<unsigned char>(code[i]))) continue;
+    blanks();
+    if (i >= code.size() || (code[i] != '+' && code[i] != '-')) continue;
+    const bool plus = code[i++] == '+';
+    blanks();
+    const std::string number = trim(code.substr(i));
+    if (number.empty() || number[0] == '+' || number[0] == '-' || number.find_first_of("eE") != std::string::npos)
+      continue;
+    const auto v = parseNumber(number);
+    if (!v) continue;
+    const size_t point = number.find('.');
+    const int decimals = point == std::string::npos ? 0 : static_cast<int>(number.size() - point - 1);
+    return EndPointCheckStatement{a, plus ? -*v : *v, decimals};
+  }
+  return std::nullopt;
 }
 
 std::vector<std::string> inverseTimeProblems(const std::vector<nc::Block>& blocks, bool (*isProbe)(const nc::Block&)) {

@@ -3,6 +3,7 @@
 // line splitting, the collection of parsed points with precise errors, the plausibility limit
 // of written corrections and the stroke check of a parsed program.
 #include <Eigen/Core>
+#include <array>
 #include <map>
 #include <optional>
 #include <string>
@@ -12,6 +13,7 @@
 #include "controllers/dialect.hpp"
 #include "core/measurement.hpp"
 #include "core/probe_plan.hpp"
+#include "gcode/program.hpp"
 #include "gcode/reader.hpp"
 
 namespace rotacal::ctl {
@@ -40,6 +42,13 @@ std::vector<TextLine> splitLines(std::string_view text);
 std::vector<std::string> tokens(std::string_view line);
 
 std::string trim(std::string_view s);
+/// Outside text (file and machine names) reduced to one line of printable ASCII: every other
+/// byte (line ends, control characters, UTF-8) becomes a space, so it can never end a comment
+/// line early and put the rest of a file name on an executable line of its own.
+std::string printableLine(std::string_view text);
+/// `text` split at blanks into pieces of at most `width` characters (a longer word is cut),
+/// each trimmed; empty when `text` is blank.
+std::vector<std::string> wrap(std::string_view text, size_t width);
 std::string upper(std::string_view s);
 std::string lower(std::string_view s);
 
@@ -72,6 +81,12 @@ class PointCollector {
 
 /// Throws rotacal::InputError(file, line, what).
 [[noreturn]] void fail(const std::string& file, int line, const std::string& what);
+
+/// Why location error `index` of `kinematics` with value `v` (mm / rad) is no plausible
+/// correction: not finite, or beyond kMaxLengthCorrectionMm / kMaxAngleCorrectionMdeg (with the
+/// parameter, its value and the limit); "" when it is plausible. The one limit of everything
+/// that writes a correction: the offsets writers and `rotacal compensate`.
+std::string implausibility(Kinematics kinematics, int index, double v);
 
 /// Throws std::invalid_argument naming the parameter, its value and the limit when any
 /// identified location error exceeds the plausibility limits and !request.force. Also throws
@@ -177,11 +192,57 @@ class ModeGuard {
  private:
   bool inverse_time_ = false;
 };
+/// Why `dialect` writes no inverse-time feed (G93), "" when it does. The one policy of every
+/// writer and checker: G93 is written where controllers.md names it for the control - LinuxCNC
+/// (verified with rs274), Haas ([HaasMan]), Fanuc and Siemens (only their "F on every G93 block"
+/// rule is UNVERIFIED, and rotacal writes F on every block) - and refused where G93 itself is
+/// UNVERIFIED: Okuma (Sec. 6.5) and Heidenhain (Sec. 5.5). Only the tooltip cycle moves under
+/// G93, so it is refused there, with this reason.
+std::string inverseTimeRefusal(std::string_view dialect);
+/// Throws std::invalid_argument(inverseTimeRefusal(dialect)) when `program` switches to inverse
+/// time and the dialect refuses it.
+void requireInverseTimeAllowed(const nc::Program& program, std::string_view dialect);
+
 /// ISO word-address checks of the modes: under G93 every G1/G2/G3 block with an axis word
 /// carries F, and no block under G93 probes (`isProbe`).
 std::vector<std::string> inverseTimeProblems(const std::vector<nc::Block>& blocks,
                                              bool (*isProbe)(const nc::Block& block));
+/// The program number of a cycle's program (Fanuc O7154, Haas O07154, Okuma O7154): one per
+/// cycle, so that two cycles' programs never overwrite each other in the control's memory.
+/// touch154 keeps 7154; the others are 7000 + their source document: spheres3 7001 (001),
+/// rtest 7002 (002), spaceframe 7003 (003), tooltip 7004 (004) (docs/dialects.md). Throws
+/// std::invalid_argument for a cycle without a number.
+int programNumber(std::string_view cycle);
+
 /// Any dialect's probing block: G31, G38.x, MEAS=, TCH PROBE.
 bool isProbingBlock(const nc::Block& block);
+
+/// The end-point statements of the no-trigger check of the dialects whose probing move ends
+/// silently at its end point when nothing triggers (fanuc and haas G31, okuma G31, siemens
+/// MEAS=1): right after the move, one statement per axis `<difference>=<measured>-<end>` with
+/// the sign folded into the literal (`#1=#5061-51.0000`, `#2=#5062+235.0000`), then a test of
+/// the distance between the probe's stop and the end point. An untriggered move stops exactly
+/// at its end point, so the test guards only while these literals are the move's own end point:
+/// whatever moves the end point (`rotacal compensate`) must rewrite them with it.
+struct EndPointCheck {
+  std::array<std::string, 3> difference;  // variables holding stop - end, X Y Z
+  std::array<std::string, 3> measured;    // variables holding the probe's stop, X Y Z
+};
+/// The form of `dialect`; nullopt for linuxcnc (G38.2 raises an error by itself), heidenhain
+/// (cycle 0's check is written around the pre-position; its programs are never rewritten) and
+/// csv (no program).
+std::optional<EndPointCheck> endPointCheck(std::string_view dialect);
+/// The statement of `axis` (0..2) comparing with end point coordinate `end`, e.g.
+/// "#2=#5062+235.0000".
+std::string endPointCheckStatement(const EndPointCheck& form, int axis, double end, int decimals);
+/// A statement of that form as written (blanks allowed around '=' and the sign; an optional
+/// leading N word): its axis, the end point it compares with and that literal's decimals;
+/// nullopt for anything else.
+struct EndPointCheckStatement {
+  int axis = 0;
+  double end = 0.0;
+  int decimals = 0;
+};
+std::optional<EndPointCheckStatement> parseEndPointCheckStatement(const EndPointCheck& form, std::string_view code);
 
 }  // namespace rotacal::ctl

@@ -34,6 +34,10 @@ class CsvDialect final : public Dialect {
   std::string_view programExtension() const override { return ".csv"; }
   std::string_view resultsExtension() const override { return ".csv"; }
 
+  std::vector<std::string> commentLines(std::string_view) const override {
+    throw std::invalid_argument("csv: no NC program, so no comments");
+  }
+
   std::string writeProgram(const nc::Program&) const override {
     throw std::invalid_argument("the csv dialect has no NC program; choose linuxcnc or fanuc");
   }

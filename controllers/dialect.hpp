@@ -47,6 +47,13 @@ class Dialect {
   /// limit and !request.force.
   virtual std::string writeOffsets(const OffsetRequest& request) const = 0;
 
+  /// `text` as comment lines of this dialect's programs. Outside text (a report's path, a
+  /// machine's name) goes through here: only the dialect's safe characters survive, so no line
+  /// end, comment delimiter or nested parenthesis reaches the control, and the lines obey the
+  /// dialect's checker (upper case, line length). Heidenhain lines come without their block
+  /// number. Throws std::invalid_argument for a dialect without programs (csv).
+  virtual std::vector<std::string> commentLines(std::string_view text) const = 0;
+
   /// Strict checks of a generated program against the dialect's rules and the plan; returns
   /// "LINE: problem" strings, empty when clean.
   virtual std::vector<std::string> check(const std::string& program_text, const ProbePlan& plan) const = 0;

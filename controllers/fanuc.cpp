@@ -7,10 +7,10 @@
 // Results, as the program's DPRNTs print them (rotacal's rendering, see fanucDprntNumber):
 //   ROTACAL-RESULTS DIALECT FANUC CYCLE TOUCH154 POINTS 154 UNIT MM
 //   DATE 20261122 TIME  14119
-//   P17 X 123.4560 Y-200.0000 Z 173.0000 T    12345
+//   P17 X 123.4560 Y-200.0000 Z 173.0000 T   12345
 //   END
 // X Y Z = skip position #5061-#5063 in the work coordinates (G54 = rotary-axis intersection),
-// program units, [44] = 4 integer + 4 decimal digits; T = ms timer #3001 ([90]), zeroed right
+// program units, [44] = 4 integer + 4 decimal digits; T = ms timer #3001 ([80]), zeroed right
 // after DATE/TIME were read; t_s = seconds of DATE TIME since 2000-01-01 + T / 1000.
 #include <fmt/format.h>
 
@@ -36,7 +36,7 @@ MacroBFlavor fanucFlavor() {
   f.program_digits = 4;
   f.store_base = 700;            // retained #700.. (#500-#999 survive power-off)
   f.max_points_per_pose = 70;    // #700 + 4 * 70 - 1 = #979 <= #999
-  f.time_digits = 9;             // [90]: up to 11 days of ms
+  f.dwell_word = 'X';            // G04 X2. = 2 s (P would be integer ms); G04 is not in controllers.md: UNVERIFIED
   f.notes = {"RESULTS: POPEN AND DPRNT TO THE DEVICE OF PARAMETER 20 - UNVERIFIED PER MACHINE"};
   return f;
 }

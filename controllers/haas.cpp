@@ -41,9 +41,8 @@ MacroBFlavor haasFlavor() {
   f.program_digits = 5;          // O + 5 digits [HaasMan]
   f.store_base = 10700;          // retained globals #10000-#10999 [HaasMan]
   f.max_points_per_pose = 70;    // #10700 + 4 * 70 - 1 = #10979 <= #10999
-  f.time_digits = 8;             // [80]: older controls need a + b <= 8; 8 digits of ms = 27 h
   f.lookahead_g103 = true;       // DPRNT runs at look-ahead time [HaasMan]
-  f.max_dprnt_digits = 8;        // older controls: w + f must be 1-8
+  f.dwell_word = 'P';            // G04 P2. = 2 s [HaasMan]
   f.notes = {"RESULTS: DPRNT TO THE DESTINATION OF SETTINGS 261-263 (FILE OR TCP PORT); POPEN AND PCLOS "
              "ARE KEPT FOR OLDER CONTROLS - THEIR EFFECT ON NGC IS UNVERIFIED",
              "SETTING 162 MAY BE OFF: EVERY AXIS AND FEED WORD HAS A DECIMAL POINT"};

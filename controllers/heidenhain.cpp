@@ -82,6 +82,18 @@ std::string commentText(std::string_view text) {
   return ctl::trim(s);
 }
 
+/// "; text" comment lines, printable ASCII only, of at most `width` characters of text: with
+/// "NNNN ; " in front (block numbers up to 4 digits) they stay within kMaxLineChars. A line that
+/// fits keeps its blanks (aligned tables).
+std::vector<std::string> commentLinesOf(std::string_view text, size_t width = kMaxLineChars - 7) {
+  std::string s = ctl::printableLine(text);
+  while (!s.empty() && s.back() == ' ') s.pop_back();
+  if (s.size() <= width) return {"; " + s};
+  std::vector<std::string> out;
+  for (const auto& piece : ctl::wrap(s, width)) out.push_back("; " + piece);
+  return out;
+}
+
 std::string headerText(const std::string& cycle, int points) {
   return fmt::format("ROTACAL HEIDENHAIN CYCLE {} POINTS {} UNIT MM", safeName(cycle), points);
 }
@@ -92,17 +104,15 @@ class HeidenhainDialect final : public Dialect {
   std::string_view programExtension() const override { return ".h"; }
   std::string_view resultsExtension() const override { return ".txt"; }
 
+  std::vector<std::string> commentLines(std::string_view text) const override { return commentLinesOf(text); }
+
   std::string writeProgram(const nc::Program& p) const override {
     const double k = p.unit == nc::Unit::Inch ? kMmPerInch : 1.0;  // always MM programs
     int probes = 0;
     for (const auto& op : p.ops) probes += op.kind == nc::Op::Kind::Probe;
     if (p.point_count != 0 && p.point_count != probes)
       throw std::invalid_argument(fmt::format("program has {} probing moves but point_count {}", probes, p.point_count));
-    for (const auto& op : p.ops)  // the tool-tip cycle: refuse with the reason, not the probe count
-      if (op.kind == nc::Op::Kind::Mode && (op.inverse_time || op.incremental))
-        throw std::invalid_argument(
-            "heidenhain: inverse-time feed (G93) is not verified for Klartext (controllers.md Sec. 5), so the "
-            "fixed-tool-tip cycle (tooltip) is refused for this dialect; use linuxcnc, fanuc, haas, siemens or okuma");
+    ctl::requireInverseTimeAllowed(p, kDialect);  // the tool-tip cycle: refused with the reason, not the probe count
     if (probes == 0)  // the result format files below are built per probing move
       throw std::invalid_argument("the heidenhain program records probing moves and this one has none (rtest: use linuxcnc)");
     const std::string name = safeName(p.name.empty() ? "ROTACAL" : p.name);
@@ -116,18 +126,8 @@ class HeidenhainDialect final : public Dialect {
     auto line = [&](const std::string& s) { body.push_back(s); };
     auto commentLines = [&](std::string_view text) {
       const std::string s = commentText(text);
-      const size_t width = kMaxLineChars - 8;  // block number, space, "; "
-      size_t i = 0;
-      while (i < s.size()) {
-        size_t n = std::min(width, s.size() - i);
-        if (i + n < s.size()) {
-          const size_t sp = s.rfind(' ', i + n);
-          if (sp != std::string::npos && sp > i) n = sp - i;
-        }
-        line("; " + ctl::trim(s.substr(i, n)));
-        i += n;
-        while (i < s.size() && s[i] == ' ') ++i;
-      }
+      if (s.empty()) return;
+      for (const auto& l : commentLinesOf(s, kMaxLineChars - 8)) line(l);  // up to 5-digit block numbers
     };
     auto print = [&](const std::string& format_file) { line(fmt::format("FN 16: F-PRINT {}{} / {}", kDir, format_file, results)); };
 
@@ -177,12 +177,9 @@ class HeidenhainDialect final : public Dialect {
           break;
         }
         case nc::Op::Kind::Mode:
-          // Inverse-time feed is UNVERIFIED for Klartext (../shared/reference/controllers.md
-          // Sec. 5): refuse rather than guess. Absolute, per-minute is Klartext's default.
-          if (op.inverse_time || op.incremental)
-            throw std::invalid_argument(
-                "heidenhain: inverse-time feed (G93) is not verified for Klartext (controllers.md Sec. 5), so the "
-                "fixed-tool-tip cycle (tooltip) is refused for this dialect; use linuxcnc, fanuc, haas, siemens or okuma");
+          // Absolute, per-minute is Klartext's default; inverse time was refused above.
+          if (op.incremental)
+            throw std::invalid_argument("heidenhain: incremental (G91) moves are not written for Klartext");
           break;
         case nc::Op::Kind::RotaryLinear:
           throw std::invalid_argument("heidenhain: simultaneous rotary-linear moves with inverse-time feed are refused "
@@ -367,7 +364,10 @@ class HeidenhainDialect final : public Dialect {
     const double zero_deg = (m.hasRotary(tilt) ? m.controllerSign(tilt, kDialect) : 1) *
                             radToDeg(e.get(ac ? "a_AY" : "b_BY"));
     std::vector<std::string> body;
-    auto c = [&](const std::string& s) { body.push_back("; " + s); };
+    auto c = [&](const std::string& s) {
+      // Block numbers up to 2 digits (a few dozen lines): "NN ; " leaves 75 characters of text.
+      for (auto& l : commentLinesOf(s, kMaxLineChars - 5)) body.push_back(std::move(l));
+    };
     c(fmt::format("rotacal kinematics / preset correction, table {}/C, TNC 640", tilt));
     c(fmt::format("provenance: {}; cycle {}, machine {}", r.report_file.empty() ? "(no report)" : r.report_file,
                   plan.cycle, m.name));
@@ -385,7 +385,12 @@ class HeidenhainDialect final : public Dialect {
     c(ac ? "reported only (axis directions): b_AY, c_AY, b_CA" : "reported only (axis directions): a_BY, c_BY, a_CB");
     std::string out = "0 BEGIN PGM ROTACAL_KIN MM\n";
     int n = 1;
-    for (const auto& s : body) out += fmt::format("{} {}\n", n++, s);
+    for (const auto& s : body) {
+      const std::string l = fmt::format("{} {}", n++, s);
+      if (l.size() > kMaxLineChars)
+        throw std::invalid_argument(fmt::format("line longer than {} characters: {}", kMaxLineChars, l));
+      out += l + "\n";
+    }
     out += fmt::format("{} END PGM ROTACAL_KIN MM\n", n);
     return out;
   }
@@ -484,7 +489,7 @@ class HeidenhainDialect final : public Dialect {
     }
     if (static_cast<size_t>(probes) != ctl::expectedProbes(plan))
       problem(ls.empty() ? 1 : ls.back().number, fmt::format("{} TCH PROBE 0 cycles, the plan has {} points", probes, ctl::expectedProbes(plan)));
-    if (plan.cycle == "tooltip") problem(1, "heidenhain: the tooltip cycle needs inverse-time feed, not verified for Klartext");
+    if (plan.cycle == "tooltip") problem(1, ctl::inverseTimeRefusal(kDialect));
     for (auto& s : ctl::strokeProblems(ctl::motionBlocks(moves, inch), plan, kDialect)) out.push_back(std::move(s));
     return out;
   }

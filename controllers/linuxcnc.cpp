@@ -36,6 +36,7 @@ constexpr double kRotaryLogTolDeg = 1e-3;
 /// LinuxCNC rejects a line of 253 characters or more ("Command too long"; LINELEN 255 in
 /// src/emc/linuxcnc.h, verified with rs274: 252 accepted, 253 rejected).
 constexpr size_t kMaxLineChars = 252;
+constexpr size_t kMaxCommentChars = 200;  // a comment's text, with room for a "- " guard and code before it
 constexpr int kOwordBase = 1000;
 /// The second touch's check of a double touch: its own o-number (o-words label one if/endif).
 constexpr int kSecondTouchOwordBase = 500000;
@@ -51,10 +52,9 @@ int parameterOf(char axis) { return axis == 'A' ? 5064 : axis == 'B' ? 5065 : 50
 /// comment keyword (MSG, DEBUG, LOG, ...) by accident.
 std::string comment(std::string_view text) {
   std::string s;
-  for (char c : text) {
+  for (char c : ctl::printableLine(text)) {
     if (c == '(') s += '[';
     else if (c == ')') s += ']';
-    else if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) s += ' ';
     else s += c;
   }
   const std::string u = ctl::upper(ctl::trim(s));
@@ -65,7 +65,7 @@ std::string comment(std::string_view text) {
       break;
     }
   }
-  if (s.size() > 200) s.resize(200);
+  if (s.size() > kMaxCommentChars) s.resize(kMaxCommentChars);
   return "(" + s + ")";
 }
 
@@ -76,6 +76,14 @@ class LinuxCncDialect final : public Dialect {
   std::string_view name() const override { return kDialect; }
   std::string_view programExtension() const override { return ".ngc"; }
   std::string_view resultsExtension() const override { return ".txt"; }
+
+  std::vector<std::string> commentLines(std::string_view text) const override {
+    std::vector<std::string> out;
+    // 2 characters spare for the "- " guard of comment().
+    for (const auto& piece : ctl::wrap(ctl::printableLine(text), kMaxCommentChars - 2)) out.push_back(comment(piece));
+    if (out.empty()) out.push_back("()");
+    return out;
+  }
 
   std::string writeProgram(const nc::Program& p) const override {
     const bool inch = p.unit == nc::Unit::Inch;
@@ -353,8 +361,9 @@ class LinuxCncDialect final : public Dialect {
          " pivot used by the");
     line(fmt::format("#   {} kinematics in TCP mode. Replace the same setp lines of your HAL file (or load this", comp));
     line("#   file after the kinematics module) and restart LinuxCNC. Values in mm, machine coordinates.");
-    line(fmt::format("# Provenance: {}; cycle {}, machine {}.", r.report_file.empty() ? "(no report)" : r.report_file,
-                     plan.cycle, m.name));
+    // A '#' comment ends at the line end: outside names must not carry one.
+    line(ctl::printableLine(fmt::format("# Provenance: {}; cycle {}, machine {}.",
+                                        r.report_file.empty() ? "(no report)" : r.report_file, plan.cycle, m.name)));
     line("# Identified location errors (papers' convention), value +- standard uncertainty (k = 1):");
     for (const auto& s : ctl::identifiedLines(r)) line("#   " + s);
     if (ac) {

@@ -8,12 +8,13 @@
 // Results, as the program's DPRNTs print them (rotacal's rendering, see fanucDprntNumber):
 //   ROTACAL-RESULTS DIALECT FANUC CYCLE TOUCH154 POINTS 154 UNIT MM
 //   DATE 20261122 TIME  14119
-//   P17 X 123.4560 Y-200.0000 Z 173.0000 T    12345
+//   P17 X 123.4560 Y-200.0000 Z 173.0000 T   12345
 //   END
 // DATE/TIME = #3011 (YYYYMMDD) and #3012 (HHMMSS) read at the start, where the ms timer #3001 is
 // zeroed; T = #3001 at the trigger. t_s = seconds of (DATE, TIME) since 2000-01-01 + T / 1000:
 // a clock common to all repeats (the header's second is truncated, so every t_s of a run is
-// early by the same fraction of a second, < 1 s; drift analysis works on hours).
+// early by the same fraction of a second, < 1 s; drift analysis works on hours). Every DPRNT
+// field [ab] keeps a + b <= 8 (kMaxDprntDigits in macro_b.cpp), T included: [80], 27.7 h of ms.
 #include <string>
 #include <vector>
 
@@ -28,9 +29,8 @@ struct MacroBFlavor {
   int program_digits = 4;           // O1234 (Fanuc), O01234 (Haas: O + 5 digits)
   int store_base = 700;             // retained variables of the current pose, 4 per point
   int max_points_per_pose = 70;     // store_base + 4 n - 1 must stay retained
-  int time_digits = 9;              // DPRNT [t0] of the ms timer
   bool lookahead_g103 = false;      // Haas: DPRNT runs at look-ahead time -> G103 P1
-  int max_dprnt_digits = 0;         // > 0: DPRNT [ab] needs a + b <= this (older Haas: 8)
+  char dwell_word = 'X';            // G04 X2. (Fanuc: seconds with a decimal point) or G04 P2. (Haas)
   std::vector<std::string> notes;   // extra operator comments at the top
 };
 
@@ -43,6 +43,7 @@ class MacroBDialect : public Dialect {
   std::string writeProgram(const nc::Program& program) const override;
   std::string writeResults(const ProbePlan& plan, const MeasurementRun& run) const override;
   MeasurementRun parseResults(const std::string& text, const std::string& file, const ProbePlan& plan) const override;
+  std::vector<std::string> commentLines(std::string_view text) const override;
   std::vector<std::string> check(const std::string& program_text, const ProbePlan& plan) const override;
 
  protected:

@@ -46,28 +46,17 @@ int resultDecimals(bool inch) { return inch ? 5 : kDecimals; }
 
 std::string unitName(bool inch) { return inch ? "INCH" : "MM"; }
 
-/// Comment text for ';' comments: printable ASCII, upper-cased (the control's editor shows
-/// lower case, but some transfer tools do not keep it), at most `width` characters per line.
+/// Comment text for ';' comments: printable ASCII without '"', upper-cased (the control's
+/// editor shows lower case, but some transfer tools do not keep it), at most the line length.
 std::vector<std::string> comments(std::string_view text) {
   std::string s;
-  for (char c : ctl::upper(text)) {
-    const char d = (static_cast<unsigned char>(c) < 0x20 || c == 0x7f || c == '"') ? ' ' : c;
+  for (char c : ctl::upper(ctl::printableLine(text))) {
+    const char d = c == '"' ? ' ' : c;
     if (d == ' ' && (s.empty() || s.back() == ' ')) continue;
     s += d;
   }
-  const size_t width = kMaxLineChars - 2;
   std::vector<std::string> out;
-  size_t i = 0;
-  while (i < s.size()) {
-    size_t n = std::min(width, s.size() - i);
-    if (i + n < s.size()) {
-      const size_t sp = s.rfind(' ', i + n);
-      if (sp != std::string::npos && sp > i) n = sp - i;
-    }
-    out.push_back("; " + ctl::trim(s.substr(i, n)));
-    i += n;
-    while (i < s.size() && s[i] == ' ') ++i;
-  }
+  for (const auto& piece : ctl::wrap(s, kMaxLineChars - 2)) out.push_back("; " + piece);
   if (out.empty()) out.push_back(";");
   return out;
 }
@@ -82,15 +71,13 @@ std::string safeName(std::string_view name) {
   return s;
 }
 
-std::string signedDiff(const std::string& var, double v) {
-  return v < 0 ? fmt::format("{}+{}", var, ctl::fixed(-v, kDecimals)) : fmt::format("{}-{}", var, ctl::fixed(v, kDecimals));
-}
-
 class SiemensDialect final : public Dialect {
  public:
   std::string_view name() const override { return kDialect; }
   std::string_view programExtension() const override { return ".mpf"; }
   std::string_view resultsExtension() const override { return ".txt"; }
+
+  std::vector<std::string> commentLines(std::string_view text) const override { return comments(text); }
 
   std::string writeProgram(const nc::Program& p) const override {
     const bool inch = p.unit == nc::Unit::Inch;
@@ -193,9 +180,8 @@ class SiemensDialect final : public Dialect {
           line("R90=$AA_MW[X]");
           line("R91=$AA_MW[Y]");
           line("R92=$AA_MW[Z]");
-          line(fmt::format("R93={}", signedDiff("R90", x.x())));
-          line(fmt::format("R94={}", signedDiff("R91", x.y())));
-          line(fmt::format("R95={}", signedDiff("R92", x.z())));
+          for (int a = 0; a < 3; ++a)
+            line(ctl::endPointCheckStatement(*ctl::endPointCheck(kDialect), a, x[a], kDecimals));
           line(fmt::format("IF ($AC_MEA[1]==0) OR (R93*R93+R94*R94+R95*R95<{}) GOTOF NOHIT{}", no_trigger_sq, id));
           line(fmt::format("TXT=SPRINT(\"P{0} X%10.{1}F Y%10.{1}F Z%10.{1}F\",R90,R91,R92)", id, resultDecimals(inch)));
           line(write);

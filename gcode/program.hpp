@@ -58,7 +58,6 @@ inline int rotaryLinearDecimals(Unit unit) { return unit == Unit::Inch ? 4 : 3; 
 
 struct Program {
   std::string name;                  // e.g. "ROTACAL_TOUCH154"
-  int number = 7154;                 // O-number for the controls that need one
   std::string cycle;
   Unit unit = Unit::Millimetre;
   std::vector<std::string> header;   // comment lines for the operator

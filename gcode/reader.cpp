@@ -133,6 +133,7 @@ void readWords(std::string_view s, Block& b) {
       continue;
     }
     Word w;
+    bool exponent = false;
     w.letter = up(s[i++]);
     while (i < s.size() && isSpace(s[i])) ++i;
     const size_t begin = i;
@@ -150,11 +151,25 @@ void readWords(std::string_view s, Block& b) {
       }
     } else {
       while (i < s.size() && (isDigit(s[i]) || s[i] == '.' || s[i] == '+' || s[i] == '-')) ++i;
+      // "X1e2" would otherwise read as X1 and a word E2: no control accepts exponent notation,
+      // so it is kept as one word and reported. M66E0 (LinuxCNC's compact input wait) is an M
+      // code followed by a real E word.
+      size_t k = i + 1;
+      if (k < s.size() && (s[k] == '+' || s[k] == '-')) ++k;
+      if (i > begin && w.letter != 'M' && i < s.size() && (s[i] == 'e' || s[i] == 'E') && k < s.size() &&
+          isDigit(s[k])) {
+        while (k < s.size() && isDigit(s[k])) ++k;
+        i = k;
+        exponent = true;
+      }
     }
     w.text = std::string(s.substr(begin, i - begin));
     w.has_decimal_point = w.text.find('.') != std::string::npos;
     if (w.text.empty()) {
       b.issues.push_back(std::string("word ") + w.letter + " has no value");
+    } else if (exponent) {
+      b.issues.push_back(std::string("word ") + w.letter + w.text +
+                         " uses exponent notation, which NC controls do not accept: write the plain number");
     } else if (w.text[0] != '[' && w.text[0] != '#') {
       w.value = literal(w.text);
       if (!w.value) b.issues.push_back(std::string("word ") + w.letter + w.text + " is not a number");

@@ -5,10 +5,13 @@
 #include <map>
 #include <optional>
 #include <regex>
+#include <set>
 #include <string_view>
 
 #include <fmt/format.h>
 
+#include "controllers/common.hpp"
+#include "controllers/dialect.hpp"
 #include "core/errors.hpp"
 #include "gcode/reader.hpp"
 
@@ -16,7 +19,13 @@ namespace rotacal {
 namespace {
 
 constexpr double kMmPerInch = 25.4;
-constexpr double kStrokeTolMm = 1e-3;  // rounding of the printed decimals, with margin
+// The rotary words are compared as printed and parsed back: only the double's own rounding.
+constexpr double kRotaryStrokeTolDeg = 1e-9;
+// Written at the top of every compensated program, refused in an input program.
+constexpr const char* kCompensatedMarker = "ROTACAL-COMPENSATED";
+// Longest input line read. No control in controllers.md takes more than LinuxCNC's 255
+// characters; a line of 100 kB would overflow the stack inside std::regex (recursive matcher).
+constexpr size_t kMaxLineChars = 1024;
 
 std::string fixedText(double v, int decimals) {
   std::string s = fmt::format("{:.{}f}", v, decimals);
@@ -57,6 +66,35 @@ struct Modal {
   std::map<char, std::optional<double>> rotary;  // paper-convention angles, deg
 };
 
+// A rewritten probing move whose no-trigger check (ctl::EndPointCheck) still names the old end
+// point: its three statements must be rewritten before the next move.
+struct PendingCheck {
+  int move_line = 0;
+  Eigen::Vector3d old_end;  // program units
+  Eigen::Vector3d new_end;  // program units
+  int decimals = 4;         // of the move's printed words: the check then equals them digit for digit
+  std::array<bool, 3> rewritten{false, false, false};
+};
+
+// A probing move: G31 (skip), G38.x (LinuxCNC probe) or a Siemens measuring prefix.
+bool isGuardedMove(const nc::Block& b, bool measuring_prefix) {
+  if (measuring_prefix) return true;
+  for (const auto& w : b.words)
+    if (w.letter == 'G' && w.value && ((*w.value >= 31.0 && *w.value < 32.0) || (*w.value >= 38.0 && *w.value < 39.0)))
+      return true;
+  return false;
+}
+
+// "LINE: what" of a checker into its parts; line -1 when there is none.
+std::pair<int, std::string> splitProblem(const std::string& p) {
+  const size_t colon = p.find(": ");
+  if (colon != std::string::npos) {
+    const auto n = ctl::parseDigits(p.substr(0, colon));
+    if (n) return {static_cast<int>(*n), p.substr(colon + 2)};
+  }
+  return {-1, p};
+}
+
 }  // namespace
 
 ProgramCompensation compensateProgram(const std::string& text, const std::string& file, const MachineModel& machine,
@@ -65,6 +103,10 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
   options.pose.validate();
   if (errors.kinematics != machine.kinematics)
     throw std::invalid_argument("compensate: the location errors are for another kinematics than the machine");
+  if (syntax.dialect == "heidenhain" || syntax.dialect == "csv")
+    throw std::invalid_argument("compensate: '" + syntax.dialect + "' programs are not word-address G-code");
+  const Dialect& dialect = dialectByName(syntax.dialect);
+  const std::optional<ctl::EndPointCheck> end_check = ctl::endPointCheck(syntax.dialect);
   const std::vector<nc::Block> blocks = nc::readProgram(text);
   ProgramCompensation out;
   Modal m;
@@ -86,26 +128,95 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
   // Cache: the compensated pose depends only on the nominal pose.
   std::map<std::array<double, 3>, CompensatedCommand> pose_cache;
 
+  // The program's own comments, kept on a rewritten line.
   auto comment = [&](const std::string& c) {
     return syntax.comment == NcSyntax::Comment::Parentheses ? "(" + c + ")" : ";" + c;
   };
 
-  // Header: after a leading '%' and a Fanuc-style O-number line.
+  for (const auto& b : blocks) {
+    if (b.raw.size() > kMaxLineChars)
+      fail(b.line, fmt::format("line of {} characters: longer than any control accepts (LinuxCNC: 255) and than the "
+                               "{} the rewrite reads",
+                               b.raw.size(), kMaxLineChars));
+    // Compensating twice applies the errors twice: the mark this function writes refuses it.
+    for (const auto& c : b.comments)
+      if (upper(c).find(kCompensatedMarker) != std::string::npos)
+        fail(b.line, fmt::format("the program is already compensated (comment {}): compensating it again would "
+                                 "apply the location errors twice; compensate the original program",
+                                 kCompensatedMarker));
+  }
+
+  // Header: after the program's identification (a leading '%', a Fanuc/Okuma O-number line, a
+  // Siemens transfer line "; %_N_NAME_MPF"), in the dialect's own comment form.
+  auto identifies = [](const nc::Block& b) {
+    if (b.percent) return true;
+    if (!b.control && !b.words.empty() && b.words.front().letter == 'O') return true;
+    return b.code.empty() && b.comments.size() == 1 && ctl::trim(b.comments[0]).rfind("%_N_", 0) == 0;
+  };
   size_t header_at = 0;
-  while (header_at < blocks.size() &&
-         (blocks[header_at].percent ||
-          (!blocks[header_at].words.empty() && blocks[header_at].words.front().letter == 'O' && !blocks[header_at].control)))
-    ++header_at;
+  while (header_at < blocks.size() && identifies(blocks[header_at])) ++header_at;
+  std::vector<std::string> header =
+      dialect.commentLines(std::string(kCompensatedMarker) +
+                           ": rewritten by rotacal compensate for the location errors below. Never compensate it "
+                           "again; run it only on the uncompensated machine");
+  for (const auto& h : options.header)
+    for (auto& l : dialect.commentLines(h)) header.push_back(std::move(l));
 
   std::string result;
+  std::vector<int> source_line;  // per output line: the input line it comes from, 0 for the header
+  int emitting_line = 0;
   auto emit = [&](const std::string& line) {
     result += line;
     result += '\n';
+    source_line.push_back(emitting_line);
+  };
+  auto emitHeader = [&] {
+    emitting_line = 0;
+    for (const auto& h : header) emit(h);
+  };
+
+  std::optional<PendingCheck> pending;
+  // Before the next move: the previous probing move's check must have been rewritten, or it
+  // would compare the probe's stop with the old end point and pass a probe that never triggered.
+  auto closePending = [&](const std::string& where) {
+    if (!pending) return;
+    for (int a = 0; a < 3; ++a)
+      if (!pending->rewritten[static_cast<size_t>(a)])
+        fail(pending->move_line,
+             fmt::format("the probing move's end point moves, but its no-trigger check ('{}' for {}) was not found "
+                         "{}: left as written it would pass a probe that never triggered; give the check right after "
+                         "the move in the form rotacal writes",
+                         ctl::endPointCheckStatement(*end_check, a, pending->old_end[a], 4), "XYZ"[a], where));
+    pending.reset();
   };
 
   for (size_t bi = 0; bi < blocks.size(); ++bi) {
-    if (bi == header_at)
-      for (const auto& h : options.header) emit(comment(h));
+    if (bi == header_at) emitHeader();
+    emitting_line = blocks[bi].line;
+    if (pending) {
+      if (const auto st = ctl::parseEndPointCheckStatement(*end_check, blocks[bi].code)) {
+        const auto a = static_cast<size_t>(st->axis);
+        const double tol = 0.5 * std::pow(10.0, -st->decimals) + 1e-9;
+        if (std::abs(st->end - pending->old_end[st->axis]) > tol)
+          fail(blocks[bi].line,
+               fmt::format("this no-trigger check compares {} with {} but the probing move at line {} ends at {}: "
+                           "the rewrite cannot tell what it guards",
+                           "XYZ"[a], st->end, pending->move_line, fixedText(pending->old_end[st->axis], st->decimals)));
+        if (pending->rewritten[a])
+          fail(blocks[bi].line, fmt::format("a second {} statement in the no-trigger check of the probing move at line {}",
+                                            "XYZ"[a], pending->move_line));
+        pending->rewritten[a] = true;
+        // The leading N word, if any, stays.
+        const std::string code_upper = upper(blocks[bi].code);
+        const size_t at = code_upper.find(upper(end_check->difference[a]));
+        std::string line = blocks[bi].code.substr(0, at) +
+                           ctl::endPointCheckStatement(*end_check, st->axis, pending->new_end[st->axis], pending->decimals);
+        for (const auto& c : blocks[bi].comments) line += " " + comment(c);
+        emit(line);
+        ++out.rewritten_checks;
+        continue;
+      }
+    }
     nc::Block b = blocks[bi];
     // Statements of the richer dialects (Siemens DEF/IF/WRITE/R90=..., Okuma VC1=.../PUT/FWRITC,
     // labels) carry no motion: they pass as written. A Siemens measuring prefix (MEAS=1 G1 ...)
@@ -117,7 +228,11 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
       if (std::regex_search(b.raw, mm, measuring)) {
         prefix = mm.str(0);
         const int line_no = b.line;
-        b = nc::readProgram(b.raw.substr(prefix.size())).front();
+        const std::vector<nc::Block> move = nc::readProgram(b.raw.substr(prefix.size()));
+        if (move.empty() || move.front().words.empty())
+          fail(line_no, fmt::format("'{}' without a move after it: a measuring prefix belongs on a motion block",
+                                    upper(std::string_view(prefix).substr(0, prefix.find_last_not_of(" \t") + 1))));
+        b = move.front();
         b.line = line_no;
         b.raw = blocks[bi].raw;
       } else if (isStatement(b.code)) {
@@ -173,6 +288,7 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
       emit(b.raw);
       continue;
     }
+    closePending(fmt::format("before the next move at line {}", b.line));
     ++out.motion_blocks;
     const double unit_mm = m.inch ? kMmPerInch : 1.0;
     if (machine_coords || home) {
@@ -238,6 +354,16 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
       poseAxis(q_cmd, c) = sign * parsedBack(t);
       out.max_rotary_change_deg = std::max(out.max_rotary_change_deg, std::abs(poseAxis(q_cmd, c) - poseAxis(q, c)));
     }
+    // Stroke check of the rotary words as printed: the compensation may push an angle that sits
+    // on a stroke end past it (A-110.0005 on a [-110, 20] axis).
+    for (char c : rotary_letters) {
+      const RotaryAxis& axis = machine.rotaryAxis(c);
+      const double paper = poseAxis(q_cmd, c);
+      if (!axis.continuous && !axis.stroke_deg.contains(paper, kRotaryStrokeTolDeg))
+        fail(b.line, fmt::format("the compensated {}{} (papers' convention {:.4f} deg) is outside the stroke [{}, {}] "
+                                 "deg of MACHINE.json",
+                                 c, rotary_text[c], paper, axis.stroke_deg.min, axis.stroke_deg.max));
+    }
     out.max_direction_residual_rad =
         std::max(out.max_direction_residual_rad, toolDirectionError(errors, q_cmd, q, options.pose.tool_axis_m));
     auto compensate = [&](const std::array<std::optional<double>, 3>& xyz) {
@@ -248,16 +374,19 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
     const Eigen::Vector3d x_nom(*m.xyz_mm[0], *m.xyz_mm[1], *m.xyz_mm[2]);
     const Eigen::Vector3d x_new = compensate(m.xyz_mm);
     out.max_shift_mm = std::max(out.max_shift_mm, (x_new - x_nom).norm());
-    // Stroke check of the endpoint the machine will actually be commanded to.
+    // Stroke check of the endpoint the machine will actually be commanded to. Only the printing
+    // may round it outward (half a unit of the last printed decimal): a soft limit alarms on
+    // anything more.
+    const int dec = m.inch ? syntax.length_decimals_inch : syntax.length_decimals_mm;
+    const double print_tol_mm = 0.5 * std::pow(10.0, -dec) * unit_mm + 1e-9;
     const Eigen::Vector3d x_machine = x_new + options.program_origin_m_mm;
     const std::array<const AxisRange*, 3> strokes{&machine.x, &machine.y, &machine.z};
     for (int i = 0; i < 3; ++i)
-      if (!strokes[i]->contains(x_machine[i], kStrokeTolMm))
-        fail(b.line, fmt::format("the compensated {} {:.4f} mm is outside the stroke [{}, {}] mm", "XYZ"[i],
-                                 x_machine[i], strokes[i]->min, strokes[i]->max));
+      if (!strokes[i]->contains(x_machine[i], print_tol_mm))
+        fail(b.line, fmt::format("the compensated {} {:.4f} mm is outside the stroke [{}, {}] mm of MACHINE.json",
+                                 "XYZ"[i], x_machine[i], strokes[i]->min, strokes[i]->max));
     Eigen::Vector3d words = x_new;
     if (m.incremental) words = x_new - compensate(before);
-    const int dec = m.inch ? syntax.length_decimals_inch : syntax.length_decimals_mm;
     std::string line = prefix + (b.block_delete ? "/" : "");
     bool axes_written = false;
     for (const auto& w : b.words) {
@@ -289,10 +418,39 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
     for (const auto& c : b.comments) line += " " + comment(c);
     emit(line);
     ++out.compensated_blocks;
+    if (end_check && isGuardedMove(b, !prefix.empty())) {
+      PendingCheck p;
+      p.move_line = b.line;
+      p.old_end = x_nom / unit_mm;
+      p.new_end = x_new / unit_mm;
+      p.decimals = dec;
+      out.max_check_shift_mm = std::max(out.max_check_shift_mm, (x_new - x_nom).norm());
+      pending = p;
+    }
   }
-  if (header_at >= blocks.size())
-    for (const auto& h : options.header) emit(comment(h));
+  closePending("before the end of the program");
+  if (header_at >= blocks.size()) emitHeader();
   out.text = std::move(result);
+
+  // The dialect's own checker, on the input and on the rewrite: the rewrite may add no problem
+  // (a rotacal program, clean before, stays clean; a foreign program keeps its own problems).
+  ProbePlan plan;
+  plan.machine = machine;
+  size_t probes = 0;
+  for (const auto& b : blocks) probes += ctl::isProbingBlock(b);
+  plan.points.resize(probes);
+  std::set<std::pair<int, std::string>> known;
+  for (const auto& p : dialect.check(text, plan)) known.insert(splitProblem(p));
+  for (const auto& p : dialect.check(out.text, plan)) {
+    auto [line, what] = splitProblem(p);
+    const bool mapped = line >= 1 && static_cast<size_t>(line) <= source_line.size();
+    const int src = mapped ? source_line[static_cast<size_t>(line) - 1] : line;
+    if (mapped && src == 0)
+      fail(header_at < blocks.size() ? blocks[header_at].line : static_cast<int>(blocks.size()) + 1,
+           fmt::format("the header comment rotacal writes here fails the {} checker: {}", syntax.dialect, what));
+    if (!known.count({src, what}))
+      fail(std::max(src, 1), fmt::format("the rewritten line fails the {} checker: {}", syntax.dialect, what));
+  }
   return out;
 }
 

@@ -41,12 +41,19 @@ struct ProgramCompensation {
   double max_shift_mm = 0.0;             // largest change of a linear endpoint
   double max_rotary_change_deg = 0.0;    // largest change of a rotary word
   double max_direction_residual_rad = 0.0;  // tool direction the rotary axes could not restore
+  int rewritten_checks = 0;              // no-trigger check statements given the new end point
+  double max_check_shift_mm = 0.0;       // largest move of a probing move's end point (and its check)
 };
 
 /// Rewrites `text` (read from `file`, for messages). Throws InputError(file, line, why) on what
 /// cannot be compensated exactly: arcs, tool-centre-point control, tilted work planes, offset
-/// changes inside the program, incremental rotary moves, axis words that are expressions, and a
-/// compensated endpoint outside the machine's strokes.
+/// changes inside the program, incremental rotary moves, axis words that are expressions, a
+/// compensated linear or rotary word outside the machine's strokes, a probing move whose
+/// no-trigger check (ctl::EndPointCheck) is not where the dialect writes it, a program already
+/// compensated (it carries the ROTACAL-COMPENSATED comment this function writes first), and a
+/// rewrite that the dialect's own checker finds a problem in that the input does not have.
+/// Lines longer than 1024 characters and exponent notation (X1e2) are refused too. Throws
+/// std::invalid_argument for heidenhain or csv (not word-address G-code) or an unknown dialect.
 ProgramCompensation compensateProgram(const std::string& text, const std::string& file, const MachineModel& machine,
                                       const LocationErrors& errors, const NcSyntax& syntax,
                                       const ProgramCompensationOptions& options);

@@ -16,7 +16,6 @@ nc::Program rtestProgram(const ProbePlan& plan, const std::string& dialect) {
   nc::Program prog;
   prog.cycle = plan.cycle;
   prog.name = "ROTACAL_RTEST";
-  prog.number = 7002;
   prog.unit = m.units == LengthUnit::Inch ? nc::Unit::Inch : nc::Unit::Millimetre;
   const double k = m.units == LengthUnit::Inch ? 1.0 / kMmPerInch : 1.0;
   prog.probe_tool = m.probe.tool_number;

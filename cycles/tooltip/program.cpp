@@ -25,7 +25,6 @@ nc::Program tooltipProgram(const ProbePlan& plan, const std::string& dialect) {
   nc::Program prog;
   prog.cycle = "tooltip";
   prog.name = "ROTACAL_TOOLTIP";
-  prog.number = 7004;
   prog.unit = o.inch ? nc::Unit::Inch : nc::Unit::Millimetre;
   const double k = o.inch ? 1.0 / kMmPerInch : 1.0;
   const int dec = nc::rotaryLinearDecimals(prog.unit);

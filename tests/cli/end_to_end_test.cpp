@@ -3,6 +3,7 @@
 // expected values are the injected truth (an independent path), never the program's own output.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <filesystem>
@@ -12,6 +13,7 @@
 #include <sstream>
 #include <string>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "core/compensation.hpp"
@@ -180,7 +182,9 @@ TEST_F(Cli, CompensateRewritesTheProgramForTheReportsErrors) {
                     p("tc.nc"));
   ASSERT_EQ(r.code, 0) << r.out;
   const std::string out = slurp(p("tc.nc"));
-  EXPECT_NE(out.find("(dx_AY 14.60 um, dy_AY 23.20 um, dz_AY 27.70 um"), std::string::npos) << out.substr(0, 600);
+  // The header in Fanuc's comment form (upper case, '_' as '-'), first the mark against a second pass.
+  EXPECT_NE(out.find("\n(ROTACAL-COMPENSATED"), std::string::npos) << out.substr(0, 600);
+  EXPECT_NE(out.find("(DX-AY 14.60 UM, DY-AY 23.20 UM, DZ-AY 27.70 UM"), std::string::npos) << out.substr(0, 600);
   // The first guarded move moves by what the core computes for the identified errors.
   const std::regex g31(R"(G31 X(-?[0-9.]+) Y(-?[0-9.]+) Z(-?[0-9.]+))");
   std::smatch a, b;
@@ -214,6 +218,93 @@ TEST_F(Cli, CompensateRewritesTheProgramForTheReportsErrors) {
   EXPECT_EQ(bad.code, 1);
   EXPECT_NE(bad.out.find("bad.json"), std::string::npos) << bad.out;
   EXPECT_FALSE(fs::exists(p("x.nc")));
+}
+
+}  // namespace
+}  // namespace rotacal
+
+namespace rotacal {
+namespace {
+
+int lineOf(const std::string& text, const std::string& what) {
+  const size_t at = text.find(what);
+  return at == std::string::npos ? -1 : 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(at), '\n'));
+}
+
+// Issue 14: what compensate must refuse - one line "rotacal: error: FILE:LINE: why", exit 1,
+// no output file - and what it must keep out of the program.
+TEST_F(Cli, CompensateRefusesUnsafeInputAndWritesNothing) {
+  analyzeThrough("csv", "lsq_per_point", ".csv");
+  ASSERT_EQ(sh("generate --plan " + p("plan.json") + " --dialect fanuc -o " + p("t.nc")).code, 0);
+  const nlohmann::json report = nlohmann::json::parse(slurp(p("report.json")));
+  auto writeReport = [&](const std::string& name, const nlohmann::json& j) {
+    std::ofstream(p(name)) << j.dump(2) << "\n";
+    return p(name);
+  };
+  auto compensate = [&](const std::string& program, const std::string& rep, const std::string& out,
+                        const std::string& extra = "") {
+    return sh("compensate --program '" + program + "' --report '" + rep + "' --dialect fanuc -o '" + out + "'" + extra);
+  };
+  auto expectRefused = [&](const test::CliRun& r, const std::string& file, int line, const std::string& what,
+                           const std::string& out) {
+    EXPECT_EQ(r.code, 1) << r.out;
+    EXPECT_EQ(r.out.rfind(fmt::format("rotacal: error: {}:{}: {}", file, line, what), 0), 0u) << r.out;
+    EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << "one line: " << r.out;
+    EXPECT_FALSE(fs::exists(out)) << out;
+  };
+
+  // a_AY = 10 deg (69 mm shifts on this program): beyond the offsets writers' 100 mdeg.
+  nlohmann::json j = report;
+  j["location_errors"]["a_AY"]["value"] = 10000.0;
+  std::string f = writeReport("a10deg.json", j);
+  expectRefused(compensate(p("t.nc"), f, p("x.nc")), f, lineOf(slurp(f), "\"a_AY\""),
+                "a_AY = 10000.0 mdeg exceeds the plausibility limit of 100 mdeg", p("x.nc"));
+  // 200 mdeg: refused, and written with --force.
+  j["location_errors"]["a_AY"]["value"] = 200.0;
+  f = writeReport("a200mdeg.json", j);
+  expectRefused(compensate(p("t.nc"), f, p("x.nc")), f, lineOf(slurp(f), "\"a_AY\""), "a_AY = 200.0 mdeg exceeds",
+                p("x.nc"));
+  const test::CliRun forced = compensate(p("t.nc"), f, p("forced.nc"), " --force");
+  EXPECT_EQ(forced.code, 0) << forced.out;
+  EXPECT_TRUE(fs::exists(p("forced.nc")));
+
+  // Empty or incomplete location errors: not zeros under a header that claims compensation.
+  j = report;
+  j["location_errors"] = nlohmann::json::object();
+  f = writeReport("empty.json", j);
+  expectRefused(compensate(p("t.nc"), f, p("x.nc")), f, lineOf(slurp(f), "\"location_errors\""),
+                "'location_errors' lacks dx_AY", p("x.nc"));
+  j = report;
+  j["location_errors"].erase("b_CA");
+  f = writeReport("seven.json", j);
+  expectRefused(compensate(p("t.nc"), f, p("x.nc")), f, lineOf(slurp(f), "\"location_errors\""),
+                "'location_errors' lacks b_CA", p("x.nc"));
+
+  // Compensated once, then again: the second pass would double the errors.
+  ASSERT_EQ(compensate(p("t.nc"), p("report.json"), p("once.nc")).code, 0);
+  const std::string once = slurp(p("once.nc"));
+  expectRefused(compensate(p("once.nc"), p("report.json"), p("twice.nc")), p("once.nc"),
+                lineOf(once, "ROTACAL-COMPENSATED"), "the program is already compensated", p("twice.nc"));
+
+  // A-110 on the stroke end [-110, 20]: a_AY = -0.5 mdeg would command A-110.0005.
+  std::ofstream(p("a110.nc")) << "%\nO7154\nG21 G90\nG0 X0.0 Y0.0 Z200.0 A-110.0 C0.0\nM30\n%\n";
+  expectRefused(compensate(p("a110.nc"), p("report.json"), p("x.nc")), p("a110.nc"), 4, "the compensated A-110.0005",
+                p("x.nc"));
+
+  // A report named with parentheses and a line end: the program gets a comment, never code.
+  const std::string hostile = p("REPORT (1)\nG0 Z-100.json");
+  fs::copy_file(p("report.json"), hostile);
+  const test::CliRun h = compensate(p("t.nc"), hostile, p("h.nc"));
+  ASSERT_EQ(h.code, 0) << h.out;
+  std::istringstream lines(slurp(p("h.nc")));
+  int naming = 0;
+  for (std::string l; std::getline(lines, l);) {
+    EXPECT_EQ(l.find("REPORT (1)"), std::string::npos) << "nested parentheses: " << l;
+    if (l.find("Z-100") == std::string::npos) continue;
+    ++naming;  // the name stays for provenance, inside one comment
+    EXPECT_TRUE(l.front() == '(' && l.back() == ')' && l.find_first_of("()", 1) == l.size() - 1) << l;
+  }
+  EXPECT_GE(naming, 1);
 }
 
 }  // namespace

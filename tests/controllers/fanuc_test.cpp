@@ -66,7 +66,7 @@ TEST(FanucResults, ParserAcceptsTheFormsDprntMayPrint) {
   auto ls = lines(fc().writeResults(plan, test::displacedRun(plan)));
   ls[1] = "DATE 20261122 TIME 014119";  // leading zero (parameter 6001) instead of a space
   ls[2] = "P1 X0051.0010 Y-0235.0000 Z  150.0000 T 12345.";
-  ls[3] = "P2 X51.0010 Y  -215.0000 Z150.0000 T0000012346";
+  ls[3] = "P2 X51.0010 Y  -215.0000 Z150.0000 T00012346";  // [80] with leading zeros
   ls[4] = "  P3   X 51.0010   Y-185.0000   Z 150.0000   T    12347  ";
   std::string text = "\x12%\r\n";  // DC2 of POPEN and a tape mark
   for (size_t i = 0; i < ls.size(); ++i) text += ls[i] + (i % 2 ? "\r" : "\r\n");
@@ -173,7 +173,7 @@ TEST(FanucProgram, GeneratedProgramPassesTheChecker) {
   EXPECT_EQ(ls[g + 6], "N1001");
   EXPECT_EQ(ls[g + 7], "#700=#5061");
   EXPECT_EQ(ls[g + 10], "#703=#3001");
-  EXPECT_NE(text.find("\nDPRNT[P1*X#700[44]*Y#701[44]*Z#702[44]*T#703[90]]\n"), std::string::npos);
+  EXPECT_NE(text.find("\nDPRNT[P1*X#700[44]*Y#701[44]*Z#702[44]*T#703[80]]\n"), std::string::npos);
   EXPECT_NE(text.find("\nDPRNT[END]\nPCLOS\nM30\n%\n"), std::string::npos);
 }
 
@@ -182,7 +182,7 @@ TEST(FanucProgram, InchProgramUsesG20AndPassesTheChecker) {
   const std::string text = fc().writeProgram(probeProgram(plan, "fanuc"));
   EXPECT_NE(text.find("\nG20\n"), std::string::npos);
   EXPECT_NE(text.find("]GT0.000001]GOTO1001\n"), std::string::npos) << "(0.001 in)^2 no-trigger threshold";
-  EXPECT_NE(text.find("\nDPRNT[P1*X#700[35]*Y#701[35]*Z#702[35]*T#703[90]]\n"), std::string::npos) << "5 inch decimals";
+  EXPECT_NE(text.find("\nDPRNT[P1*X#700[35]*Y#701[35]*Z#702[35]*T#703[80]]\n"), std::string::npos) << "5 inch decimals";
   EXPECT_EQ(fc().check(text, plan), std::vector<std::string>{});
 }
 
@@ -208,7 +208,7 @@ TEST(FanucProgram, StoredVariablesRestartAtEachPose) {
 
 TEST(FanucProgram, PoseWithMoreThanSeventyPointsIsRefused) {
   nc::Program p;
-  p.cycle = "big";
+  p.cycle = "touch154";
   for (int id = 1; id <= 71; ++id) {
     nc::Op op;
     op.kind = nc::Op::Kind::Probe;

@@ -137,6 +137,28 @@ TEST(GcodeReader, NotANumberAndMissingValueAreIssues) {
   EXPECT_FALSE(b[0].find('X')->value.has_value());
 }
 
+TEST(GcodeReader, ExponentNotationIsOneWordWithAnIssueNotTwoWords) {
+  // "X1e2" must not become X1 and E2 (a control reads neither 100 nor 1).
+  for (const char* text : {"G0 X1e2", "G0 X1.5E+2", "G0 X-2e-3"}) {
+    const auto b = readProgram(text);
+    ASSERT_EQ(b.size(), 1u);
+    ASSERT_EQ(b[0].words.size(), 2u) << text;
+    EXPECT_EQ(b[0].words[1].letter, 'X');
+    EXPECT_FALSE(b[0].words[1].value.has_value()) << text;
+    ASSERT_EQ(b[0].issues.size(), 1u) << text;
+    EXPECT_NE(b[0].issues[0].find("exponent notation"), std::string::npos) << b[0].issues[0];
+  }
+  // A real E word after a space, and LinuxCNC's compact M66E0, stay words.
+  const auto spaced = readProgram("G1 X1 E2");
+  ASSERT_EQ(spaced[0].words.size(), 3u);
+  EXPECT_EQ(*spaced[0].words[1].value, 1.0);
+  EXPECT_EQ(spaced[0].words[2].letter, 'E');
+  EXPECT_TRUE(spaced[0].issues.empty());
+  const auto m66 = readProgram("M66E0L0");
+  ASSERT_EQ(m66[0].words.size(), 3u);
+  EXPECT_TRUE(m66[0].issues.empty());
+}
+
 TEST(GcodeReader, ArbitraryBytesNeverThrow) {
   std::mt19937 rng(7);
   std::uniform_int_distribution<int> byte(0, 255);

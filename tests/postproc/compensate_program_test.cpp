@@ -141,7 +141,12 @@ TEST(CompensateProgram, LinuxcncInterpreterAcceptsTheRewrittenProgram) {
   const char* rs274 = "/usr/bin/rs274";
   if (!std::filesystem::exists(rs274)) GTEST_SKIP() << "rs274 (linuxcnc-uspace) not installed";
   const Fixture f;
-  std::string text = f.compensate(f.errors).text;
+  // A report path with parentheses: as written before, "(... REPORT (1).json)" nested them and
+  // rs274 refused the program.
+  ProgramCompensationOptions opt;
+  opt.header = {"location errors of out/REPORT (1).json:"};
+  std::string text = compensateProgram(f.program, "touch154.ngc", f.plan.machine, f.errors, NcSyntax{"linuxcnc"}, opt).text;
+  ASSERT_NE(text.find("REPORT [1].json"), std::string::npos);
   text = std::regex_replace(text, std::regex("#5070"), "1");  // a probe that trips (rs274's canon never does)
   const auto dir = std::filesystem::temp_directory_path() / fmt::format("rotacal_comp_{}", ::getpid());
   std::filesystem::create_directories(dir);
@@ -163,13 +168,14 @@ TEST(CompensateProgram, LinuxcncInterpreterAcceptsTheRewrittenProgram) {
 
 TEST(CompensateProgram, IncrementalLinearMovesGetTheRotatedIncrement) {
   const Fixture f;
-  const std::string prog = "%\nG20 G90\nG0 X1.0 Y-8.0 Z6.0 A-30.0 C45.0\nG91 G1 X0.5 Y0.25 Z-0.125 F10.0\nG90\n%\n";
+  // A30.0 in LinuxCNC's count is A = -30 deg in the papers' convention: inside the stroke [-110, 20].
+  const std::string prog = "%\nG20 G90\nG0 X1.0 Y-8.0 Z6.0 A30.0 C45.0\nG91 G1 X0.5 Y0.25 Z-0.125 F10.0\nG90\n%\n";
   const LocationErrors e = f.errors;
   const ProgramCompensation c = compensateProgram(prog, "inc.ngc", f.plan.machine, e, NcSyntax{"linuxcnc"}, {});
   // Independent: the two absolute points compensated by the core, differenced.
   const int sa = f.plan.machine.controllerSign('A', "linuxcnc"), sc = f.plan.machine.controllerSign('C', "linuxcnc");
   Pose q;
-  q.A = sa * -30.0;  // the program counts in the controller's sense (MACHINE.json)
+  q.A = sa * 30.0;  // the program counts in the controller's sense (MACHINE.json)
   q.C = sc * 45.0;
   const CompensatedCommand cc = compensatePose(e, q);
   Pose q_printed = cc.pose;
@@ -206,12 +212,74 @@ TEST(CompensateProgram, RefusesWhatItCannotKeepExactNamingTheLine) {
   EXPECT_NE(lineOf(head + "G0 X900.0\n").find("p.ngc:3: the compensated X"), std::string::npos);
 }
 
+TEST(CompensateProgram, RotaryWordPushedPastItsStrokeIsRefused) {
+  // A-110 sits on the bundled machine's A stroke end [-110, 20]; a_AY = -0.5 mdeg moves it.
+  const Fixture f;
+  Pose q;
+  q.A = -110.0;
+  const CompensatedCommand cc = compensatePose(f.errors, q);
+  const std::string printed = fixedOf(cc.pose.A);  // fanuc counts A as the papers do
+  ASSERT_LT(std::stod(printed), -110.0) << "the case needs the compensation to push A beyond -110";
+  auto run = [&](const std::string& a_word, const MachineModel& m) -> std::string {
+    const std::string prog = "%\nO7154\nG21 G90\nG0 X0.0 Y0.0 Z200.0 C0.0 " + a_word + "\nM30\n%\n";
+    try {
+      compensateProgram(prog, "p.nc", m, f.errors, NcSyntax{"fanuc"}, {});
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "accepted";
+  };
+  const std::string m = run("A-110.0", f.plan.machine);
+  EXPECT_EQ(m.rfind(fmt::format("p.nc:4: the compensated A{} ", printed), 0), 0u) << m;
+  EXPECT_NE(m.find("outside the stroke [-110, 20]"), std::string::npos) << m;
+  // Not refused for the angle itself: inside the stroke, or with a stroke that has room.
+  EXPECT_EQ(run("A-100.0", f.plan.machine), "accepted");
+  MachineModel wider = f.plan.machine;
+  for (auto& r : wider.rotary)
+    if (r.name == 'A') r.stroke_deg.min = -111.0;
+  EXPECT_EQ(run("A-110.0", wider), "accepted");
+}
+
+TEST(CompensateProgram, MalformedInputIsRefusedNamingTheLineNeverACrash) {
+  const Fixture f;
+  auto messageOf = [&](const std::string& prog, const std::string& dialect) -> std::string {
+    const NcSyntax syntax{dialect, 4, 5, 4,
+                          dialect == "siemens" ? NcSyntax::Comment::Semicolon : NcSyntax::Comment::Parentheses};
+    try {
+      compensateProgram(prog, "p.nc", f.plan.machine, f.errors, syntax, {});
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "accepted";
+  };
+  const std::string head = "G21 G90\nG0 X10.0 Y-200.0 Z200.0 A0.0 C0.0\n";
+  // A measuring prefix with nothing behind it (was front() of an empty vector).
+  EXPECT_EQ(messageOf(head + "MEAS=1 \nM30\n", "siemens").rfind("p.nc:3: 'MEAS=1' without a move", 0), 0u)
+      << messageOf(head + "MEAS=1 \nM30\n", "siemens");
+  EXPECT_EQ(messageOf(head + "MEAS=1 ;probe\nM30\n", "siemens").rfind("p.nc:3: 'MEAS=1' without a move", 0), 0u);
+  // 100 kB lines (std::regex recursed once per character and overflowed the stack): refused by
+  // their length before any regex sees them, whatever they hold.
+  for (const std::string& big : {std::string(100000, ' '), "G1 X1.0" + std::string(100000, '0'),
+                                 "R1=" + std::string(100000, '1')}) {
+    const std::string m = messageOf(head + big + "\nM30\n", "siemens");
+    EXPECT_EQ(m.rfind(fmt::format("p.nc:3: line of {} characters", big.size()), 0), 0u) << m.substr(0, 200);
+  }
+  // A long line within the limit still goes through the regexes (1000 leading blanks: the
+  // measuring-prefix test runs on the raw line).
+  EXPECT_EQ(messageOf(head + std::string(1000, ' ') + "G0 Z200.0\nM30\n", "siemens"), "accepted");
+  // Exponent notation: X1e2 was read as X1 and a word E2.
+  EXPECT_EQ(messageOf(head + "G1 X1e2 F100.0\n", "linuxcnc").rfind("p.nc:3: word X1e2 uses exponent notation", 0), 0u)
+      << messageOf(head + "G1 X1e2 F100.0\n", "linuxcnc");
+}
+
 TEST(CompensateProgram, FanucHeaderGoesAfterTheProgramNumber) {
   const Fixture f;
   const std::string prog = "%\nO7154 (TEST)\nG21 G90\nG0 X10.0 Y-200.0 Z200.0 A0.0 C0.0\nM30\n%\n";
   const ProgramCompensation c =
       compensateProgram(prog, "p.nc", f.plan.machine, f.errors, NcSyntax{"fanuc"}, {{0, 0, 0}, {}, {"HELLO"}});
-  EXPECT_EQ(c.text.rfind("%\nO7154 (TEST)\n(HELLO)\nG21 G90\n", 0), 0u) << c.text;
+  // The mark first, then the caller's lines, in Fanuc's comment form, before the first block.
+  EXPECT_EQ(c.text.rfind("%\nO7154 (TEST)\n(ROTACAL-COMPENSATED: REWRITTEN BY ROTACAL COMPENSATE", 0), 0u) << c.text;
+  EXPECT_NE(c.text.find(")\n(HELLO)\nG21 G90\n"), std::string::npos) << c.text;
 }
 
 }  // namespace
@@ -244,6 +312,217 @@ TEST(CompensateProgram, EveryWordAddressDialectGetsTheSameGuardedEndPoints) {
     const auto v = endpoints(d);
     ASSERT_EQ(v.size(), ref.size()) << d;
     for (size_t i = 0; i < v.size(); ++i) EXPECT_LT((v[i] - ref[i]).norm(), 1e-9) << d << " point " << i + 1;
+  }
+}
+
+}  // namespace
+}  // namespace rotacal
+
+namespace rotacal {
+namespace {
+
+NcSyntax syntaxFor(const std::string& dialect) {
+  return NcSyntax{dialect, 4, 5, 4, dialect == "siemens" ? NcSyntax::Comment::Semicolon : NcSyntax::Comment::Parentheses};
+}
+
+// One guarded probing move of a program and its no-trigger check, read back from the text with
+// this test's own patterns (not the library's parser).
+struct GuardedMove {
+  int line = 0;
+  Eigen::Vector3d start = Eigen::Vector3d::Constant(NAN), end = Eigen::Vector3d::Constant(NAN);
+  Eigen::Vector3d expected = Eigen::Vector3d::Constant(NAN);  // the end point the check compares with
+  double threshold_sq = NAN;                                    // of the distance test
+  bool below_means_untriggered = false;  // Siemens: IF distance < t GOTOF NOHIT; Macro B / Okuma: IF > t skip the alarm
+  // What the check decides for a probe that stopped at `stop`: true = "not triggered" (alarm).
+  bool untriggered(const Eigen::Vector3d& stop) const {
+    const double d2 = (stop - expected).squaredNorm();
+    return below_means_untriggered ? d2 < threshold_sq : !(d2 > threshold_sq);
+  }
+};
+
+std::vector<GuardedMove> guardedMoves(const std::string& text) {
+  const std::regex move(R"(^(?:G31|MEAS=1 G1) X(-?[0-9.]+) Y(-?[0-9.]+) Z(-?[0-9.]+))");
+  const std::regex motion(R"(^(?:G0?[01]|G31|MEAS=1 G1)\b)");
+  const std::regex xyz(R"(([XYZ])(-?[0-9]+\.[0-9]+))");
+  const std::regex check(R"(^(#[123]|VC[456]|R9[345])=(#506([123])|VC([123])|R9([012]))([+-])([0-9]+\.[0-9]+)$)");
+  const std::regex gt(R"((?:GT|GT )([0-9.]+)\](?:GOTO| N))"), lt(R"(<([0-9.]+)\) GOTOF NOHIT)");
+  std::vector<GuardedMove> out;
+  Eigen::Vector3d at = Eigen::Vector3d::Constant(NAN);
+  std::istringstream in(text);
+  std::string l;
+  int n = 0;
+  while (std::getline(in, l)) {
+    ++n;
+    std::smatch m;
+    if (std::regex_search(l, m, move)) {
+      GuardedMove g;
+      g.line = n;
+      g.start = at;
+      g.end = Eigen::Vector3d(std::stod(m[1]), std::stod(m[2]), std::stod(m[3]));
+      out.push_back(g);
+    }
+    if (std::regex_search(l, motion))
+      for (auto it = std::sregex_iterator(l.begin(), l.end(), xyz); it != std::sregex_iterator(); ++it)
+        at[(*it)[1].str()[0] - 'X'] = std::stod((*it)[2]);
+    if (out.empty()) continue;
+    GuardedMove& g = out.back();
+    if (std::regex_match(l, m, check)) {
+      const std::string digit = m[3].matched ? m[3].str() : m[4].matched ? m[4].str() : m[5].str();
+      const int axis = m[5].matched ? std::stoi(digit) : std::stoi(digit) - 1;
+      const double v = std::stod(m[7]);
+      g.expected[axis] = m[6] == "-" ? v : -v;  // stop - v: compares with +v
+    } else if (std::regex_search(l, m, gt)) {
+      g.threshold_sq = std::stod(m[1]);
+    } else if (std::regex_search(l, m, lt)) {
+      g.threshold_sq = std::stod(m[1]);
+      g.below_means_untriggered = true;
+    }
+  }
+  return out;
+}
+
+// Issue 14's most dangerous defect: compensate moved every probing move's end point but left
+// the no-trigger check comparing with the old one, so an untriggered probe (a G31 that never
+// fires ends silently at its end point) passed. For every dialect with such a check, every
+// guarded move of the compensated touch154 program must be followed by a check whose end point
+// is the move's own, which catches a probe stopping exactly there and passes one stopping at the
+// nominal trigger (overtravel short of the end); the uncompensated check must miss the untriggered
+// probe (so this test can fail).
+TEST(CompensateProgram, EveryNoTriggerCheckGuardsItsCompensatedEndPoint) {
+  const ProbePlan plan = test::touch154Plan();
+  const LocationErrors e = test::table4Mean();
+  for (const char* d : {"fanuc", "haas", "okuma", "siemens"}) {
+    const std::string text = dialectByName(d).writeProgram(probeProgram(plan, d));
+    const ProgramCompensation c = compensateProgram(text, d, plan.machine, e, syntaxFor(d), {});
+    const auto before = guardedMoves(text), after = guardedMoves(c.text);
+    ASSERT_EQ(after.size(), plan.points.size()) << d;
+    ASSERT_EQ(before.size(), after.size()) << d;
+    EXPECT_EQ(c.rewritten_checks, static_cast<int>(3 * plan.points.size())) << d;
+    double shift_min = 1e9, shift_max = 0;
+    int stale_missed = 0;
+    for (size_t i = 0; i < after.size(); ++i) {
+      const GuardedMove& g = after[i];
+      ASSERT_TRUE(std::isfinite(g.threshold_sq)) << d << " line " << g.line;
+      EXPECT_EQ(g.expected, g.end) << d << " line " << g.line;  // digit for digit
+      EXPECT_TRUE(g.untriggered(g.end)) << d << " line " << g.line << ": a probe that never fired passes";
+      const Eigen::Vector3d trigger = g.end - plan.machine.overtravel_mm * (g.end - g.start).normalized();
+      EXPECT_FALSE(g.untriggered(trigger)) << d << " line " << g.line << ": a real trigger raises the alarm";
+      // The old check (before the rewrite) against the new end point.
+      GuardedMove stale = g;
+      stale.expected = before[i].expected;
+      stale_missed += !stale.untriggered(g.end);
+      const double shift = (g.end - before[i].end).norm();
+      shift_min = std::min(shift_min, shift);
+      shift_max = std::max(shift_max, shift);
+    }
+    std::printf("%s: guard end points moved %.1f .. %.1f um; the unrewritten check would pass %d of %zu untriggered probes\n",
+                d, mmToUm(shift_min), mmToUm(shift_max), stale_missed, after.size());
+    EXPECT_EQ(stale_missed, static_cast<int>(after.size())) << d << ": the case must be one the old check misses";
+    EXPECT_NEAR(mmToUm(c.max_check_shift_mm), mmToUm(shift_max), 0.1) << d;
+  }
+}
+
+TEST(CompensateProgram, ProbingMoveWithoutItsCheckOrWithAnotherEndPointIsRefused) {
+  const Fixture f;
+  auto run = [&](const std::string& body) -> std::string {
+    const std::string prog = "%\nO7154\nG21 G90\nG0 X51.0 Y-235.0 Z200.0 A0.0 C0.0\n" + body + "M30\n%\n";
+    try {
+      compensateProgram(prog, "p.nc", f.plan.machine, f.errors, syntaxFor("fanuc"), {});
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "accepted";
+  };
+  const std::string move = "G0 Z155.0\nG31 X51.0 Y-235.0 Z150.0 F100.0\n";
+  const std::string checks = "#1=#5061-51.0000\n#2=#5062+235.0000\n#3=#5063-150.0000\n";
+  EXPECT_EQ(run(move + checks + "G0 Z200.0\n"), "accepted");
+  // No check before the next move: the G31 at line 6 is named.
+  const std::string none = run(move + "G0 Z200.0\n");
+  EXPECT_EQ(none.rfind("p.nc:6: the probing move's end point moves, but its no-trigger check", 0), 0u) << none;
+  // Only X and Y: Z is missing.
+  EXPECT_NE(run(move + "#1=#5061-51.0000\n#2=#5062+235.0000\nG0 Z200.0\n").find("'#3=#5063-150.0000' for Z"),
+            std::string::npos);
+  // A check comparing with another point than its move's end: the rewrite cannot tell its meaning.
+  const std::string other = run(move + "#1=#5061-52.0000\n#2=#5062+235.0000\n#3=#5063-150.0000\nG0 Z200.0\n");
+  EXPECT_EQ(other.rfind("p.nc:7: this no-trigger check compares X with 52", 0), 0u) << other;
+}
+
+}  // namespace
+}  // namespace rotacal
+
+namespace rotacal {
+namespace {
+
+// Issue 14: compensated Fanuc/Haas/Okuma programs carried lower-case comments of up to 130
+// characters that rotacal's own checkers reject. Every dialect's compensated touch154 program,
+// mm and inch, with a long lower-case header line, passes that dialect's checker.
+TEST(CompensateProgram, EveryDialectsCompensatedProgramPassesItsOwnChecker) {
+  const LocationErrors e = test::table4Mean();
+  ProgramCompensationOptions opt;
+  opt.header = {"location errors of out/report.json:",
+                "dx_AY 14.60 um, dy_AY 23.20 um, dz_AY 27.70 um, dy_CA 3.90 um, a_AY -0.50 mdeg, b_AY -0.10 mdeg, "
+                "c_AY -0.50 mdeg, b_CA 0.20 mdeg"};
+  for (LengthUnit u : {LengthUnit::Millimetre, LengthUnit::Inch}) {
+    MachineModel m = test::acMachine();
+    m.units = u;
+    const ProbePlan plan = makePlan("touch154", m, {});
+    for (const char* d : {"linuxcnc", "fanuc", "haas", "okuma", "siemens"}) {
+      const Dialect& dialect = dialectByName(d);
+      const std::string text = dialect.writeProgram(probeProgram(plan, d));
+      ASSERT_EQ(dialect.check(text, plan), std::vector<std::string>{}) << d;
+      const std::string out = compensateProgram(text, d, plan.machine, e, syntaxFor(d), opt).text;
+      EXPECT_EQ(dialect.check(out, plan), std::vector<std::string>{}) << d;
+      // The header is there, in the dialect's form.
+      EXPECT_NE(out.find("ROTACAL-COMPENSATED"), std::string::npos) << d;
+      // LinuxCNC keeps the text; Siemens upper-cases it; Fanuc, Haas, Okuma also turn '_' into '-'.
+      const std::string values = std::string(d) == "linuxcnc"  ? "dx_AY 14.60 um"
+                                 : std::string(d) == "siemens" ? "DX_AY 14.60 UM"
+                                                               : "DX-AY 14.60 UM";
+      EXPECT_NE(out.find(values), std::string::npos) << d;
+      if (std::string(d) == "siemens") {
+        EXPECT_EQ(out.rfind("; %_N_ROTACAL_TOUCH154_MPF\n", 0), 0u) << "transfer line first";
+      }
+    }
+  }
+}
+
+TEST(CompensateProgram, ARewriteTheDialectsCheckerWouldRejectIsRefused) {
+  // A Fanuc line of 80 characters (the checker's limit) grows when its words get 4 decimals.
+  const Fixture f;
+  const std::string move = "G01 X10.0 Y-200.0 Z200.0 A0.0 C0.0 F100.0 ";
+  const std::string line = move + "(" + std::string(80 - move.size() - 2, 'P') + ")";
+  ASSERT_EQ(line.size(), 80u);
+  const std::string prog = "%\nO7154\nG21 G90\n" + line + "\nM30\n%\n";
+  std::string m;
+  try {
+    compensateProgram(prog, "p.nc", f.plan.machine, f.errors, syntaxFor("fanuc"), {});
+  } catch (const InputError& e) {
+    m = e.what();
+  }
+  EXPECT_EQ(m.rfind("p.nc:4: the rewritten line fails the fanuc checker: line has ", 0), 0u) << m;
+  // The same line without the padding is accepted: the length, not the move, is refused.
+  EXPECT_NO_THROW(compensateProgram("%\nO7154\nG21 G90\n" + move + "\nM30\n%\n", "p.nc", f.plan.machine, f.errors,
+                                    syntaxFor("fanuc"), {}));
+}
+
+TEST(CompensateProgram, ACompensatedProgramIsMarkedAndNotCompensatedAgain) {
+  const Fixture f;
+  const std::string once = f.compensate(f.errors).text;
+  std::string m;
+  try {
+    compensateProgram(once, "once.ngc", f.plan.machine, f.errors, NcSyntax{"linuxcnc"}, {});
+  } catch (const InputError& e) {
+    m = e.what();
+  }
+  // The marker is the first comment of the output, so the refusal names that line.
+  size_t marker_line = 1;
+  for (size_t p = 0; p < once.find("ROTACAL-COMPENSATED"); ++p) marker_line += once[p] == '\n';
+  EXPECT_EQ(m.rfind(fmt::format("once.ngc:{}: the program is already compensated", marker_line), 0), 0u) << m;
+  // Fanuc's upper-case form and Siemens's ';' comments carry it too.
+  for (const char* d : {"fanuc", "siemens"}) {
+    const std::string text = dialectByName(d).writeProgram(probeProgram(f.plan, d));
+    const std::string c = compensateProgram(text, d, f.plan.machine, f.errors, syntaxFor(d), {}).text;
+    EXPECT_THROW(compensateProgram(c, d, f.plan.machine, f.errors, syntaxFor(d), {}), InputError) << d;
   }
 }
 

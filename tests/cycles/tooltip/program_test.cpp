@@ -64,7 +64,7 @@ std::vector<std::string> motionLines(const std::string& program) {
 
 TEST(TooltipProgram, ReproducesTable1DigitForDigitInEveryIsoDialect) {
   const ProbePlan plan = table1Plan();
-  for (const char* d : {"linuxcnc", "fanuc", "haas", "siemens", "okuma"}) {
+  for (const char* d : {"linuxcnc", "fanuc", "haas", "siemens"}) {
     const Dialect& dialect = dialectByName(d);
     const std::string text = dialect.writeProgram(tooltipProgram(plan, d));
     const auto lines = motionLines(text);
@@ -103,14 +103,26 @@ TEST(TooltipProgram, CheckerFlagsMissingFeedAndProbingUnderG93) {
   EXPECT_THROW(lc.writeProgram(prog), std::invalid_argument);
 }
 
-TEST(TooltipProgram, HeidenhainRefusesInverseTime) {
+TEST(TooltipProgram, DialectsWhereG93IsUnverifiedRefuseInverseTimeWithTheReason) {
+  // controllers.md marks G93 itself UNVERIFIED for Okuma (Sec. 6.5) and Heidenhain (Sec. 5.5):
+  // both refuse the only cycle that needs it, naming the section, and write no G93.
   const ProbePlan plan = table1Plan();
-  try {
-    dialectByName("heidenhain").writeProgram(tooltipProgram(plan, "heidenhain"));
-    FAIL() << "heidenhain accepted inverse time";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("inverse-time"), std::string::npos) << e.what();
+  for (const auto& [d, section] : {std::pair<const char*, const char*>{"heidenhain", "Sec. 5.5"}, {"okuma", "Sec. 6.5"}}) {
+    try {
+      const std::string text = dialectByName(d).writeProgram(tooltipProgram(plan, d));
+      ADD_FAILURE() << d << " accepted inverse time:\n" << text;
+    } catch (const std::invalid_argument& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find("inverse-time"), std::string::npos) << m;
+      EXPECT_NE(m.find(section), std::string::npos) << m;
+      EXPECT_NE(m.find("tooltip"), std::string::npos) << m;
+    }
   }
+  // Their checkers flag a G93 in a tooltip program with the same reason.
+  const std::string fanuc = dialectByName("fanuc").writeProgram(tooltipProgram(plan, "fanuc"));
+  bool flagged = false;
+  for (const auto& p : dialectByName("okuma").check(fanuc, plan)) flagged |= p.find("Sec. 6.5") != std::string::npos;
+  EXPECT_TRUE(flagged);
 }
 
 struct Rs274Run {
