@@ -100,6 +100,9 @@ std::pair<std::string, int> mutate(const std::string& base, const Mutation& m) {
   return {t, lineAt(t, pos)};
 }
 
+// The plan loader with the format's rules alone (a cycle's own rules: tests/cycles/).
+ProbePlan loadPlanDoc(const JsonDoc& doc) { return planFromJson(doc); }
+
 template <class Load>
 void expectRefusedAt(const std::string& text, int line, const std::string& says, const std::string& file, Load load) {
   try {
@@ -190,13 +193,13 @@ TEST(PlanValidation, ABadValueDeepInThePlanIsReportedAtItsOwnLine) {
   const size_t open = text.find('[', at), close = text.find(']', at);
   text.replace(open, close - open + 1, "[0, 0.6, 0.6]");
   ASSERT_GT(lineAt(text, at), lineAt(text, base.find("\"normal_w\"")) + 1000);
-  expectRefusedAt(text, lineAt(text, at), "point 100: normal_w must be a unit vector", "plan.json", planFromJson);
+  expectRefusedAt(text, lineAt(text, at), "point 100: normal_w must be a unit vector", "plan.json", loadPlanDoc);
 }
 
 TEST(PlanValidation, TheEmbeddedMachineIsCheckedInThePlanFile) {
   const std::string base = touch154PlanText();
   const auto [text, line] = mutate(base, {"\"repeatability_um\": 0.7", 0, "\"repeatability_um\": 0", ""});
-  expectRefusedAt(text, line, "repeatability_um", "plan.json", planFromJson);
+  expectRefusedAt(text, line, "repeatability_um", "plan.json", loadPlanDoc);
 }
 
 TEST(PlanValidation, HeightsBelowTheArtefactAreRefused) {
@@ -205,7 +208,7 @@ TEST(PlanValidation, HeightsBelowTheArtefactAreRefused) {
   {
     const std::string from = fmt::format("\"index_z_mm\": {}", Json(plan.index_z_mm).dump());
     const auto [text, line] = mutate(base, {from, 0, "\"index_z_mm\": -100.0", ""});
-    expectRefusedAt(text, line, "index_z_mm = -100 mm is below the artefact", "plan.json", planFromJson);
+    expectRefusedAt(text, line, "index_z_mm = -100 mm is below the artefact", "plan.json", loadPlanDoc);
   }
   {
     // Pose V (A = -90, C = 90): the column's side x = +50 mm faces up, so the ball centre must
@@ -215,7 +218,7 @@ TEST(PlanValidation, HeightsBelowTheArtefactAreRefused) {
     const auto [text, line] = mutate(base, {from, 0, "\"safe_z_mm\": 40.0", ""});
     ASSERT_EQ(line, lineAt(base, nth(base, "\"safe_z_mm\"", 4)));
     expectRefusedAt(text, line, "pose V: safe_z_mm = 40 mm is below what the probe moves over: the ball centre must stay "
-                    "at z >= 53.000 mm", "plan.json", planFromJson);
+                    "at z >= 53.000 mm", "plan.json", loadPlanDoc);
   }
 }
 
@@ -257,7 +260,7 @@ TEST(PlanValidation, AHandEditedSpheres3PoseWithoutTouchesIsRefusedByTheLoader) 
   for (size_t i = 0; i < kept.size(); ++i) kept[i]["id"] = i + 1;
   j["points"] = kept;
   try {
-    planFromJson(parseJsonText(j.dump(1), "s.json"));
+    planFromJson(parseJsonText(j.dump(1), "s.json"), cycleByName("spheres3").planRules());
     FAIL();
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("has 0 touches of sphere 2"), std::string::npos) << e.what();

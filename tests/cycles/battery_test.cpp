@@ -39,7 +39,7 @@ TEST_P(CycleBattery, PlanCarriesTheCycleAndFitsTheMachine) {
   EXPECT_EQ(&cycleOfPlan(p), &cycle());
   ASSERT_FALSE(p.points.empty());
   // The plan survives its own file format.
-  const ProbePlan back = planFromJson(parseJsonText(planToJson(p).dump(1), "plan.json"));
+  const ProbePlan back = planFromJson(parseJsonText(planToJson(p).dump(1), "plan.json"), cycle().planRules());
   EXPECT_EQ(back.cycle, p.cycle);
   EXPECT_EQ(back.points.size(), p.points.size());
 }
