@@ -3,6 +3,8 @@
 #include <stdexcept>
 #include <string>
 
+#include <fmt/format.h>
+
 #include "core/limits.hpp"
 #include "cycles/cycle.hpp"
 
@@ -62,6 +64,13 @@ ProbePlan makePlan(const std::string& cycle, const MachineModel& machine, const 
   // Each cycle checks its own options before building; this holds whatever they missed to the
   // limits the plan loader enforces, so that a plan written is a plan that loads.
   requirePlanSize("cycle " + cycle, static_cast<double>(plan.points.size()), static_cast<double>(plan.poses.size()));
+  // Likewise the planned times (dwells and move times are options): the loader takes t_s up to
+  // the controllers' clock.
+  for (const auto& p : plan.points)
+    if (!(p.t_s >= 0 && p.t_s <= kMaxClockSeconds))
+      throw std::invalid_argument(fmt::format("cycle {}: point {} would be reached after {:g} s; a plan may last at most "
+                                              "{:g} s (check the time options: dwell_s, move_s, ...)",
+                                              cycle, p.id, p.t_s, kMaxClockSeconds));
   return plan;
 }
 

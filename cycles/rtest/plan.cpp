@@ -136,6 +136,8 @@ ProbePlan makeRtestPlan(const MachineModel& m, const CycleOptions& options) {
   if (recip.size() != 2 || recip[0] == recip[1]) throw std::invalid_argument("rtest: recip_list must be two different angles");
   if (!(interval > 0) || !(duration >= 0) || !(rfeed > 0))
     throw std::invalid_argument("rtest: interval_min, recip_feed_deg_min must be > 0 and duration_h >= 0");
+  if (60.0 * interval > kMaxClockSeconds || 3600.0 * duration > kMaxClockSeconds)
+    throw std::invalid_argument(fmt::format("rtest: interval_min and duration_h must stay within {:g} s", kMaxClockSeconds));
   if (thermal == "1" && 60.0 * duration / interval + 1.0 > kMaxRepeats)
     throw std::invalid_argument(fmt::format(
         "rtest: options duration_h = {:g} and interval_min = {:g} give {:.0f} cycles; at most {} repeats are allowed",
@@ -227,6 +229,8 @@ void rtestCheckPlanOptions(const ProbePlan& plan) {
   const RtestSchedule s = rtestSchedule(plan);
   if (!(s.interval_s > 0) || !(s.duration_s >= 0) || !(s.recip_feed_deg_min > 0))
     throw std::invalid_argument("rtest: interval_min, recip_feed_deg_min must be > 0 and duration_h >= 0");
+  if (s.interval_s > kMaxClockSeconds || s.duration_s > kMaxClockSeconds)
+    throw std::invalid_argument(fmt::format("rtest: interval_min and duration_h must stay within {:g} s", kMaxClockSeconds));
   s.cycles();
   if (!(optionNumber(plan, "retract_mm") > plan.machine.probe.ball_radius_mm()) || !(optionNumber(plan, "dwell_s") >= 0))
     throw std::invalid_argument("rtest: dwell_s must be >= 0 and retract_mm larger than the sphere radius");

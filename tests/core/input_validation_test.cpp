@@ -335,6 +335,17 @@ TEST(Caps, EveryCountAUserSetsIsCappedWithTheOptionNamed) {
   }
 }
 
+TEST(Caps, APlanThatWouldOutlastTheClockIsRefused) {
+  // Not a count, but what makes a written plan fail to load: its times.
+  const MachineModel bc = loadMachine(test::sourcePath("examples/machines/bc_trunnion.json"));
+  for (const auto& [key, value] : std::vector<std::pair<std::string, std::string>>{
+           {"dwell_s", "1e12"}, {"interval_min", "1e300"}, {"duration_h", "1e300"}}) {
+    EXPECT_THROW(makePlan("rtest", bc, {{key, value}}), std::invalid_argument) << key;
+  }
+  const MachineModel head = loadMachine(test::sourcePath("examples/machines/head_ab.json"));
+  EXPECT_THROW(makePlan("tooltip", head, {{"move_s", "1e12"}}), std::invalid_argument);
+}
+
 TEST(Caps, APlanAtTheCapsIsBuiltWrittenAndLoaded) {
   // spheres3 at 1 deg: kMaxPlanPoses poses of 15 touches each.
   const ProbePlan plan = makePlan("spheres3", test::acMachine(), {{"c_step_deg", "1"}});
