@@ -20,14 +20,14 @@
 #include "cycles/cycle.hpp"
 #include "controllers/dialect.hpp"
 #include "core/causes.hpp"
-#include "core/closed_form.hpp"
+#include "cycles/touch154/closed_form.hpp"
 #include "core/contributors.hpp"
 #include "core/identification.hpp"
 #include "core/machine.hpp"
-#include "core/plan_design.hpp"
+#include "cycles/touch154/design.hpp"
 #include "core/probe_plan.hpp"
 #include "core/simulation.hpp"
-#include "core/uncertainty.hpp"
+#include "cycles/touch154/uncertainty.hpp"
 #include "postproc/probe_program.hpp"
 
 #ifndef ROTACAL_SOURCE_DIR

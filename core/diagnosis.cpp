@@ -9,7 +9,7 @@
 #include <fmt/format.h>
 
 #include "core/causes.hpp"
-#include "core/report.hpp"
+#include "core/report_envelope.hpp"
 #include "core/units.hpp"
 
 namespace rotacal {

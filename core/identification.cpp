@@ -11,7 +11,6 @@
 
 #include <fmt/format.h>
 
-#include "core/closed_form.hpp"
 #include "core/simulation.hpp"
 #include "core/units.hpp"
 
@@ -399,49 +398,6 @@ IdentificationResult leastSquares(const ProbePlan& plan, const std::vector<Obser
   return out;
 }
 
-IdentificationResult closedForm(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
-                                const IdentificationOptions& options) {
-  IdentificationResult out;
-  out.method = Method::ClosedForm;
-  out.estimate.kinematics = plan.machine.kinematics;
-  try {
-    ErrorVector sum = ErrorVector::Zero();
-    ErrorVector var = ErrorVector::Zero();
-    for (const auto& run : runs) {
-      const auto eqs = touch154Patterns(plan, run);
-      const LocationErrors e = solvePatterns(eqs);
-      sum += e.values;
-      // The closed form is linear in the measured coordinates: propagate the probe's
-      // repeatability through it by unit perturbations of each trigger along its approach.
-      const double h = 1e-3;
-      MeasurementRun pert = run;
-      for (size_t i = 0; i < run.points.size(); ++i) {
-        const ProbePoint* p = plan.findPoint(run.points[i].point_id);
-        if (!p) continue;
-        pert.points[i].position_m_mm += h * p->approach_m;
-        const ErrorVector d = (solvePatterns(touch154Patterns(plan, pert)).values - e.values) / h;
-        var += d.cwiseAbs2();
-        pert.points[i].position_m_mm = run.points[i].position_m_mm;
-      }
-      out.summary.observations += static_cast<int>(run.points.size());
-    }
-    const double nr = static_cast<double>(runs.size());
-    out.estimate.values = sum / nr;
-    const double sigma = umToMm(options.prior_sigma_um);
-    out.u = (var / (nr * nr)).cwiseSqrt() * sigma;
-    out.covariance = out.u.cwiseAbs2().asDiagonal();
-    out.summary.termination = Termination::Converged;
-    out.summary.parameters = kNumLocationErrors;
-    out.summary.rank = kNumLocationErrors;
-    out.summary.sigma_um = options.prior_sigma_um;
-    out.summary.message = "closed form (000 Eqs. (14)-(19), corrected); u from the probe repeatability";
-  } catch (const std::invalid_argument& e) {
-    out.summary.termination = Termination::InvalidInput;
-    out.summary.message = e.what();
-  }
-  return out;
-}
-
 }  // namespace
 
 IdentificationResult identify(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
@@ -462,7 +418,12 @@ IdentificationResult identify(const ProbePlan& plan, const std::vector<Measureme
     bad.summary.message = "the plan has no artefact";
     return bad;
   }
-  if (options.method == Method::ClosedForm) return closedForm(plan, runs, options);
+  if (options.method == Method::ClosedForm) {
+    // The closed form is one cycle's own estimator (its equations hold for its plan alone): the
+    // cycle runs it and hands everything else to this engine.
+    bad.summary.message = "closed_form is not a least-squares method: the cycle whose plan it solves runs it";
+    return bad;
+  }
   const auto obs = collect(plan, runs, options, &why);
   if (obs.empty()) {
     bad.summary.message = why.empty() ? "no observations" : why;

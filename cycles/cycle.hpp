@@ -7,10 +7,13 @@
 #include <cstdint>
 #include <functional>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
+#include "core/contributors.hpp"
 #include "core/error_model.hpp"
 #include "core/json_io.hpp"
 #include "core/measurement.hpp"
@@ -61,6 +64,50 @@ struct DiagnoseRequest {
   const DialectIO* dialect = nullptr;
   double alpha = 1e-3;             // false-alarm rate of the tests, validated by the CLI
   std::function<void(int done, int all)> progress;  // may be empty
+};
+
+/// A cycle's refusal of one command-line option's value: the CLI reports it as a usage error
+/// (exit 2) naming the option, as it does for the options it checks itself.
+struct OptionError : std::invalid_argument {
+  OptionError(std::string option_name, const std::string& what) : std::invalid_argument(what), option(std::move(option_name)) {}
+  std::string option;
+};
+
+/// `rotacal uncertainty`: the Monte Carlo of a cycle's calibration chain (000 Sec. 5) for its
+/// plan and the declared contributors.
+struct UncertaintyRequest {
+  const ProbePlan* plan = nullptr;
+  std::string plan_file;                 // named in the document
+  const ContributorSet* contributors = nullptr;
+  int runs = 1000;
+  std::uint64_t seed = 1;
+  bool combined_only = false;
+  bool exact = false;
+  int threads = 0;                       // 0: all cores
+  std::string methods;                   // comma-separated estimator names; "" = all that apply
+  std::optional<LocationErrors> truth;   // the simulated machine's location errors (default: none)
+  std::function<void(int done, int all)> progress;
+};
+
+/// `rotacal design`: a plan for a probe budget, compared with the cycle's full plan.
+struct DesignRequest {
+  const MachineModel* machine = nullptr;
+  const ContributorSet* contributors = nullptr;
+  int points = 77;
+  std::string criterion = "A";
+  std::vector<double> a_deg, c_deg;      // candidate rotary angles; empty = the cycle's defaults
+  int exchange_passes = 2;
+  std::vector<double> sweep;             // further budgets to design and compare
+  int runs = 1000;                       // Monte Carlo runs of the comparison
+  std::uint64_t seed = 1;
+  std::string plan_file;                 // where the CLI writes the plan (named in the documents)
+  std::function<void(int done, int all)> progress;
+};
+
+struct DesignedPlan {
+  ProbePlan plan;
+  Json doc;          // DESIGN.json
+  std::string text;  // the summary and the comparison table
 };
 
 /// Corrections an analysis hands to the dialect's offsets writer (000 Sec. 4.5).
@@ -118,6 +165,12 @@ class Cycle {
   /// Empty when analyze returns corrections for `--offsets`; otherwise why the cycle writes none.
   virtual std::string_view noOffsetsReason() const { return {}; }
   virtual CycleDocuments diagnose(const DiagnoseRequest& request) const = 0;
+
+  /// Whether `uncertainty` and `design` are offered; the defaults refuse, naming the cycle.
+  virtual bool hasUncertainty() const { return false; }
+  virtual CycleDocuments uncertainty(const UncertaintyRequest& request) const;
+  virtual bool hasDesign() const { return false; }
+  virtual DesignedPlan design(const DesignRequest& request) const;
 };
 
 /// Every cycle, in the registry's order.

@@ -59,6 +59,14 @@ const Cycle& cycleOfPlan(const ProbePlan& plan) {
   throw std::invalid_argument("the plan's cycle '" + plan.cycle + "' is not one rotacal knows (" + namesList() + ")");
 }
 
+CycleDocuments Cycle::uncertainty(const UncertaintyRequest&) const {
+  throw std::invalid_argument(fmt::format("cycle {} has no Monte Carlo of its calibration chain", name()));
+}
+
+DesignedPlan Cycle::design(const DesignRequest&) const {
+  throw std::invalid_argument(fmt::format("cycle {} designs no plans", name()));
+}
+
 ProbePlan makePlan(const std::string& cycle, const MachineModel& machine, const CycleOptions& options) {
   ProbePlan plan = cycleByName(cycle).plan(machine, options);
   // Each cycle checks its own options before building; this holds whatever they missed to the

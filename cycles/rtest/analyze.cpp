@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "core/units.hpp"
+#include "core/report_envelope.hpp"
 
 namespace rotacal {
 
@@ -211,12 +212,8 @@ Json rtestReportJson(const ProbePlan& plan, const std::vector<RtestCycle>& cycle
   const Kinematics k = a.kinematics;
   const char ax = tiltAxis(k);
   const int nt = static_cast<int>(a.tilt_deg.size());
-  Json j;
-  j["format"] = "rotacal-report/1";
-  j["cycle"] = "rtest";
-  j["machine"] = plan.machine.name;
+  Json j = documentEnvelope("rotacal-report/1", plan, files);
   j["kinematics"] = std::string(kinematicsName(k));
-  j["results"] = files;
   j["method"] = "002 Eq. (6): linearised least squares at every tilt angle, per cycle";
   j["tilt_axis"] = std::string(1, ax);
   j["tilt_deg"] = a.tilt_deg;

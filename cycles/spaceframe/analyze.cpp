@@ -7,7 +7,7 @@
 
 #include <fmt/format.h>
 
-#include "core/report.hpp"
+#include "core/report_envelope.hpp"
 #include "core/transforms.hpp"
 #include "core/units.hpp"
 
@@ -410,7 +410,6 @@ SpaceframeAnalysis analyzeSpaceframe(const ProbePlan& plan, const std::vector<Me
 
 namespace {
 
-double round6(double v) { return std::round(v * 1e6) / 1e6; }
 
 Json figuresJson(const SpaceframeAnalysis& a) {
   // 003 Fig. 6 (dL against L with the band) as the envelope of dL per 5 mm of L, and 003 Fig. 5
@@ -474,13 +473,8 @@ Json figuresJson(const SpaceframeAnalysis& a) {
 }  // namespace
 
 Json spaceframeReportJson(const SpaceframeAnalysis& a, const ProbePlan& plan, const std::vector<std::string>& files) {
-  Json j;
-  j["format"] = "rotacal-report/1";
-  j["cycle"] = "spaceframe";
-  j["machine"] = plan.machine.name;
-  j["machine_model"] = machineToJson(plan.machine);
+  Json j = documentEnvelope("rotacal-report/1", plan, files);
   j["method"] = "lsq_frame_centres";
-  j["results"] = files;
   ErrorVector ue = a.u.head<kNumLocationErrors>();
   j["location_errors"] = locationErrorsJson(a.model.errors, ue);
   const char* ax[3] = {"X", "Y", "Z"};

@@ -7,7 +7,7 @@
 
 #include <fmt/format.h>
 
-#include "core/report.hpp"
+#include "core/report_envelope.hpp"
 #include "core/units.hpp"
 
 namespace rotacal {
@@ -234,7 +234,6 @@ SpaceframeDiagnosis diagnoseSpaceframe(const ProbePlan& plan, const std::vector<
 
 namespace {
 
-double round6(double v) { return std::round(v * 1e6) / 1e6; }
 
 Json fitJson(const SpaceframeFit& f) {
   Json j;

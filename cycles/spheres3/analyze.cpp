@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "core/transforms.hpp"
+#include "core/report_envelope.hpp"
 #include "core/units.hpp"
 
 namespace rotacal {
@@ -363,7 +364,6 @@ Spheres3Result identifySpheres3(const ProbePlan& plan, const std::vector<Measure
 
 namespace {
 
-double round6(double v) { return std::round(v * 1e6) / 1e6; }
 
 Json numbers(const Eigen::VectorXd& v) {
   Json a = Json::array();
@@ -374,11 +374,7 @@ Json numbers(const Eigen::VectorXd& v) {
 }  // namespace
 
 Json spheres3ReportJson(const ProbePlan& plan, const Spheres3Result& r, const std::vector<std::string>& files) {
-  Json j;
-  j["format"] = "rotacal-report/1";
-  j["cycle"] = "spheres3";
-  j["machine"] = plan.machine.name;
-  j["results"] = files;
+  Json j = documentEnvelope("rotacal-report/1", plan, files);
   j["method"] = "spheres3_lsq";
   Json le = Json::object();
   for (int i = 0; i < 4; ++i) {

@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "core/units.hpp"
+#include "core/report_envelope.hpp"
 
 namespace rotacal {
 namespace {
@@ -312,11 +313,7 @@ TooltipAnalysis analyzeTooltip(const ProbePlan& plan, const std::vector<TooltipR
 Json tooltipReportJson(const ProbePlan& plan, const std::vector<TooltipRun>& runs, const TooltipAnalysis& a) {
   const TooltipOptions o = tooltipOptionsFrom(plan.options, plan.machine);
   const std::string t = o.axis == 'A' ? "dy" : "dx";
-  Json j;
-  j["format"] = "rotacal-report/1";
-  j["cycle"] = "tooltip";
-  j["machine"] = plan.machine.name;
-  j["results"] = a.result_files;
+  Json j = documentEnvelope("rotacal-report/1", plan, a.result_files);
   j["axis"] = std::string(1, o.axis);
   j["radius_mm"] = o.radius_mm;
   j["model"] = a.joint.model;

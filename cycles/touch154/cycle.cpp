@@ -1,5 +1,6 @@
 // touch154 (000): the 8 location errors of an A/C table from 154 touches on a square column.
 // Plans written by `rotacal design` (cycle "touch_designed") are analyzed the same way.
+#include <optional>
 #include <stdexcept>
 
 #include "core/diagnosis.hpp"
@@ -7,8 +8,10 @@
 #include "core/errors.hpp"
 #include "core/identification.hpp"
 #include "core/point_deviations.hpp"
-#include "core/report.hpp"
-#include "core/touch154.hpp"
+#include "cycles/touch154/closed_form.hpp"
+#include "cycles/touch154/commands.hpp"
+#include "cycles/touch154/report.hpp"
+#include "cycles/touch154/plan.hpp"
 #include "cycles/cycle.hpp"
 #include "cycles/probing.hpp"
 #include "postproc/probe_program.hpp"
@@ -46,16 +49,16 @@ class Touch154 final : public Cycle {
     Analysis a;
     a.plan = &plan;
     for (const auto& f : r.results) a.result_files.push_back(f.path);
-    a.main = identify(plan, runs, opt);
+    a.main = identifyTouch154(plan, runs, opt);
     if (a.main.summary.termination == Termination::RankDeficient || a.main.summary.termination == Termination::InvalidInput)
       throw InputError(r.results.front().path, 0, a.main.summary.message);
     if (runs.size() > 1)
-      for (const auto& run : runs) a.per_run.push_back(identify(plan, {run}, opt));
+      for (const auto& run : runs) a.per_run.push_back(identifyTouch154(plan, {run}, opt));
     for (Method other : {Method::LeastSquaresPerPoint, Method::LeastSquaresRigidSetup, Method::ClosedForm}) {
       if (other == method) continue;
       IdentificationOptions o = opt;
       o.method = other;
-      a.other_methods.push_back(identify(plan, runs, o));
+      a.other_methods.push_back(identifyTouch154(plan, runs, o));
     }
     if (plan.cycle == name()) {
       try {
@@ -94,6 +97,20 @@ class Touch154 final : public Cycle {
     out.doc = diagnosisToJson(dg);
     out.doc["figures"] = diagnosisFigures(dg, plan);  // drawn by the HTML report
     return out;
+  }
+
+  bool hasUncertainty() const override { return true; }
+  CycleDocuments uncertainty(const UncertaintyRequest& r) const override { return touch154Uncertainty(r); }
+
+  bool hasDesign() const override { return true; }
+  DesignedPlan design(const DesignRequest& r) const override {
+    std::optional<ProbePlan> full;
+    try {
+      full = plan(*r.machine, {});
+    } catch (const std::invalid_argument&) {
+      // no full plan on this machine: the design is compared with nothing
+    }
+    return touch154Design(r, full ? &*full : nullptr);
   }
 };
 

@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "core/identification.hpp"
 #include "core/error_model.hpp"
 #include "core/measurement.hpp"
 #include "core/probe_plan.hpp"
@@ -39,5 +40,14 @@ std::vector<PatternEquation> touch154Patterns(const ProbePlan& plan, const Measu
 
 /// Solves the pattern equations (000 Eqs. (14)-(19), corrected) for the eight errors.
 LocationErrors solvePatterns(const std::vector<PatternEquation>& patterns);
+
+/// 000's estimator over repeats: the closed form of each run, averaged; u propagates the
+/// probe's repeatability (um, k = 1) through the (linear) closed form. Never throws: the
+/// summary says why when the plan lacks a pattern.
+IdentificationResult identifyClosedForm(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
+                                        double prior_sigma_um);
+/// identify() for this cycle's plans: the closed form when asked, else the shared least squares.
+IdentificationResult identifyTouch154(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
+                                      const IdentificationOptions& options);
 
 }  // namespace rotacal

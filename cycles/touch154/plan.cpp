@@ -1,4 +1,4 @@
-#include "core/touch154.hpp"
+#include "cycles/touch154/plan.hpp"
 
 #include <cmath>
 #include <stdexcept>

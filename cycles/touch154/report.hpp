@@ -3,9 +3,10 @@
 #include <string>
 #include <vector>
 
-#include "core/closed_form.hpp"
+#include "cycles/touch154/closed_form.hpp"
 #include "core/identification.hpp"
 #include "core/json_io.hpp"
+#include "core/report_envelope.hpp"
 #include "core/probe_plan.hpp"
 
 namespace rotacal {
@@ -19,7 +20,6 @@ struct Analysis {
   std::vector<PatternEquation> patterns;      // closed form, first run (000's plan)
 };
 
-Json locationErrorsJson(const LocationErrors& estimate, const ErrorVector& u);
 Json analysisToJson(const Analysis& analysis);
 std::string analysisText(const Analysis& analysis);
 

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/identification.hpp"
+#include "cycles/touch154/closed_form.hpp"
 #include "test_util.hpp"
 
 namespace rotacal {
@@ -12,7 +13,7 @@ namespace {
 IdentificationResult run(const ProbePlan& plan, const std::vector<MeasurementRun>& runs, Method m) {
   IdentificationOptions o;
   o.method = m;
-  return identify(plan, runs, o);
+  return identifyTouch154(plan, runs, o);
 }
 
 void expectRecovered(const IdentificationResult& r, const LocationErrors& truth, double tol_um, double tol_mdeg,

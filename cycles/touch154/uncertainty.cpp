@@ -1,4 +1,4 @@
-#include "core/uncertainty.hpp"
+#include "cycles/touch154/uncertainty.hpp"
 
 #include <Eigen/Dense>
 #include <Eigen/SVD>
@@ -18,8 +18,8 @@
 #include "core/limits.hpp"
 
 #include "core/causes.hpp"
-#include "core/closed_form.hpp"
-#include "core/closed_form_map.hpp"
+#include "cycles/touch154/closed_form.hpp"
+#include "cycles/touch154/closed_form_map.hpp"
 #include "core/identification.hpp"
 #include "core/units.hpp"
 
@@ -227,7 +227,7 @@ LinearChain lineariseChain(const ProbePlan& plan, const LocationErrors& truth) {
   c.bias[lp].setZero();  // the model is the exact simulator: with no contributor, no deviation
   c.bias[ls].setZero();
 
-  // Closed forms: linear in the measured coordinates (core/closed_form_map.hpp).
+  // Closed forms: linear in the measured coordinates (cycles/touch154/closed_form_map.hpp).
   const auto cf = static_cast<size_t>(UncertaintyMethod::ClosedForm);
   const auto cp = static_cast<size_t>(UncertaintyMethod::ClosedFormPooled);
   Eigen::VectorXd s0(n);
@@ -514,7 +514,7 @@ std::array<ErrorVector, kNumUncertaintyMethods> exactDeviation(const ProbePlan& 
   if (ok) *ok = true;
   const auto cf = static_cast<size_t>(UncertaintyMethod::ClosedForm);
   const auto cp = static_cast<size_t>(UncertaintyMethod::ClosedFormPooled);
-  // 000's closed form is exactly this linear map of the triggers (core/closed_form_map.hpp).
+  // 000's closed form is exactly this linear map of the triggers (cycles/touch154/closed_form_map.hpp).
   if (active[cf]) out[cf] = chain.G[cf] * s - truth.values;
   if (active[cp]) out[cp] = solvePatterns(touch154Patterns(plan, run)).values - truth.values;
   for (auto m : {UncertaintyMethod::LeastSquares, UncertaintyMethod::LsqPerPoint}) {

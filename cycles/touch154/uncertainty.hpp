@@ -8,7 +8,7 @@
 //
 // Estimators (UncertaintyMethod), all fed by the same runs:
 //  closed_form         000 Eqs. (14)-(19), corrected, with 000's pose pairs for Patterns 3
-//                      (III -> VI; core/closed_form_map.hpp): the reproduction of 000 Table 6
+//                      (III -> VI; cycles/touch154/closed_form_map.hpp): the reproduction of 000 Table 6
 //  closed_form_pooled  `analyze --method closed_form` (Patterns 3 pooled over three pose pairs)
 //  least_squares       all points, one surface offset per target (form-immune) and the
 //                      squareness S_xy S_xz S_yz of the linear axes fitted alongside:

@@ -1,7 +1,7 @@
 #pragma once
 // Plan design: given a probe budget (a number of touches), choose the poses and the points of a
 // touch cycle on the square-column piece that minimise the uncertainty of the location errors
-// identified by the least squares (`least_squares` of core/uncertainty.hpp: one surface offset
+// identified by the least squares (`least_squares` of cycles/touch154/uncertainty.hpp: one surface offset
 // per target, the squareness of the linear axes fitted alongside).
 //
 // The criterion is not the textbook white-noise one: the uncertainty that matters comes mostly
@@ -22,7 +22,7 @@
 //
 // Candidates: the poses A x C of the options (A/C table) that fit the strokes, and on each face
 // of the piece a grid of targets; a target is a candidate at a pose when a vertical stylus
-// reaches it by the rule of the touch154 plan (core/touch154.hpp: no face pointing down; on a
+// reaches it by the rule of the touch154 plan (cycles/touch154/plan.hpp: no face pointing down; on a
 // face not facing up the probe body, stylus_length above the ball, clears the piece's top by
 // body_clearance) and its probing moves stay within the strokes.
 #include <functional>

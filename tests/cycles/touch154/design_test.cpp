@@ -1,4 +1,4 @@
-// Plan design (core/plan_design.hpp): candidates that a machine can probe, a design whose
+// Plan design (cycles/touch154/design.hpp): candidates that a machine can probe, a design whose
 // predicted uncertainty the Monte Carlo confirms, and the target: at most 77 touches
 // reach 000 Table 6.
 #include <gtest/gtest.h>
@@ -9,9 +9,9 @@
 
 #include "core/contributors.hpp"
 #include "core/identification.hpp"
-#include "core/plan_design.hpp"
+#include "cycles/touch154/design.hpp"
 #include "core/rng.hpp"
-#include "core/uncertainty.hpp"
+#include "cycles/touch154/uncertainty.hpp"
 #include "test_util.hpp"
 
 namespace rotacal {

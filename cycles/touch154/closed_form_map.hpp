@@ -1,5 +1,5 @@
 #pragma once
-// The closed form of 000 (core/closed_form.hpp) as what it is: a fixed linear map of the
+// The closed form of 000 (cycles/touch154/closed_form.hpp) as what it is: a fixed linear map of the
 // triggers. Every pattern value is a mean of relative displacements (000 Eq. (21)), linear in the
 // measured coordinates and zero at the nominal triggers, and the eight pattern equations are
 // solved with constant (nominal, first-order) coefficients, so

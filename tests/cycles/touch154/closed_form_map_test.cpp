@@ -1,11 +1,11 @@
-// The closed form as a linear map (core/closed_form_map.hpp), against the closed form itself
+// The closed form as a linear map (cycles/touch154/closed_form_map.hpp), against the closed form itself
 // (core/closed_form.cpp) and against the exact simulator.
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "core/closed_form.hpp"
-#include "core/closed_form_map.hpp"
+#include "cycles/touch154/closed_form.hpp"
+#include "cycles/touch154/closed_form_map.hpp"
 #include "core/identification.hpp"
 #include "core/rng.hpp"
 #include "test_util.hpp"

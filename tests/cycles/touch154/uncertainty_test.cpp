@@ -1,4 +1,4 @@
-// The Monte Carlo of the calibration chain (core/uncertainty.hpp), each figure checked against a
+// The Monte Carlo of the calibration chain (cycles/touch154/uncertainty.hpp), each figure checked against a
 // value obtained another way:
 //  - the linearised chain against the exact chain (exact simulator + the estimators), run by run
 //    on the same random numbers: the residual of the linearisation;
@@ -12,11 +12,11 @@
 #include <cmath>
 #include <map>
 
-#include "core/closed_form.hpp"
+#include "cycles/touch154/closed_form.hpp"
 #include "core/contributors.hpp"
 #include "core/identification.hpp"
 #include "core/rng.hpp"
-#include "core/uncertainty.hpp"
+#include "cycles/touch154/uncertainty.hpp"
 #include "test_util.hpp"
 
 namespace rotacal {

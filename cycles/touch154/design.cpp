@@ -1,4 +1,4 @@
-#include "core/plan_design.hpp"
+#include "cycles/touch154/design.hpp"
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -12,8 +12,8 @@
 
 #include "core/limits.hpp"
 
-#include "core/closed_form_map.hpp"
-#include "core/uncertainty.hpp"
+#include "cycles/touch154/closed_form_map.hpp"
+#include "cycles/touch154/uncertainty.hpp"
 #include "core/units.hpp"
 
 namespace rotacal {

@@ -3,7 +3,7 @@
 // the linear solve, the Eq. (17) correction, and recovery of Table 4.
 #include <gtest/gtest.h>
 
-#include "core/closed_form.hpp"
+#include "cycles/touch154/closed_form.hpp"
 #include "core/identification.hpp"
 #include "test_util.hpp"
 
@@ -103,7 +103,7 @@ TEST(ClosedForm, RecoversTable4WithinFirstOrderBias) {
   const LocationErrors truth = test::table4Mean();
   IdentificationOptions o;
   o.method = Method::ClosedForm;
-  const auto r = identify(plan, {simulate(plan, test::truthWith(truth), {})}, o);
+  const auto r = identifyTouch154(plan, {simulate(plan, test::truthWith(truth), {})}, o);
   ASSERT_EQ(r.summary.termination, Termination::Converged) << r.summary.message;
   const auto& params = locationParameters(Kinematics::TableAC);
   for (int i = 0; i < kNumLocationErrors; ++i) {

@@ -1,4 +1,4 @@
-#include "core/report.hpp"
+#include "cycles/touch154/report.hpp"
 
 #include <cmath>
 
@@ -9,8 +9,6 @@
 namespace rotacal {
 
 namespace {
-
-double round6(double v) { return std::round(v * 1e6) / 1e6; }
 
 double uReport(const LocationErrors& e, const ErrorVector& u, int i) {
   return locationParameters(e.kinematics)[i].kind == ParamKind::Length ? mmToUm(u[i]) : radToMdeg(u[i]);
@@ -31,27 +29,10 @@ Json summaryJson(const IdentificationSummary& s) {
 
 }  // namespace
 
-Json locationErrorsJson(const LocationErrors& e, const ErrorVector& u) {
-  Json j = Json::object();
-  const auto& params = locationParameters(e.kinematics);
-  for (int i = 0; i < kNumLocationErrors; ++i) {
-    j[std::string(params[i].name)] = {{"value", e.reportValue(i)},
-                                      {"unit", std::string(reportUnit(params[i].kind))},
-                                      {"u", uReport(e, u, i)},
-                                      {"iso", std::string(params[i].iso)}};
-  }
-  return j;
-}
-
 Json analysisToJson(const Analysis& a) {
   const IdentificationResult& m = a.main;
-  Json j;
-  j["format"] = "rotacal-report/1";
-  j["cycle"] = a.plan->cycle;
-  j["machine"] = a.plan->machine.name;
-  j["machine_model"] = machineToJson(a.plan->machine);  // for `compensate` and the history
+  Json j = documentEnvelope("rotacal-report/1", *a.plan, a.result_files);
   j["method"] = std::string(methodName(m.method));
-  j["results"] = a.result_files;
   j["location_errors"] = locationErrorsJson(m.estimate, m.u);
   j["residual_rms_um"] = round6(m.summary.residual_rms_um);
   j["points_used"] = m.summary.observations;

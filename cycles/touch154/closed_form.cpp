@@ -1,4 +1,4 @@
-#include "core/closed_form.hpp"
+#include "cycles/touch154/closed_form.hpp"
 
 #include <Eigen/Dense>
 #include <cmath>
@@ -6,6 +6,8 @@
 #include <stdexcept>
 
 #include <fmt/format.h>
+
+#include "core/units.hpp"
 
 namespace rotacal {
 
@@ -244,6 +246,62 @@ LocationErrors solvePatterns(const std::vector<PatternEquation>& patterns) {
   e.kinematics = Kinematics::TableAC;
   e.values = A.colPivHouseholderQr().solve(m);
   return e;
+}
+
+IdentificationResult identifyClosedForm(const ProbePlan& plan, const std::vector<MeasurementRun>& runs, double prior_sigma_um) {
+  IdentificationResult out;
+  out.method = Method::ClosedForm;
+  out.estimate.kinematics = plan.machine.kinematics;
+  try {
+    ErrorVector sum = ErrorVector::Zero();
+    ErrorVector var = ErrorVector::Zero();
+    for (const auto& run : runs) {
+      const auto eqs = touch154Patterns(plan, run);
+      const LocationErrors e = solvePatterns(eqs);
+      sum += e.values;
+      // The closed form is linear in the measured coordinates: propagate the probe's
+      // repeatability through it by unit perturbations of each trigger along its approach.
+      const double h = 1e-3;
+      MeasurementRun pert = run;
+      for (size_t i = 0; i < run.points.size(); ++i) {
+        const ProbePoint* p = plan.findPoint(run.points[i].point_id);
+        if (!p) continue;
+        pert.points[i].position_m_mm += h * p->approach_m;
+        const ErrorVector d = (solvePatterns(touch154Patterns(plan, pert)).values - e.values) / h;
+        var += d.cwiseAbs2();
+        pert.points[i].position_m_mm = run.points[i].position_m_mm;
+      }
+      out.summary.observations += static_cast<int>(run.points.size());
+    }
+    const double nr = static_cast<double>(runs.size());
+    out.estimate.values = sum / nr;
+    const double sigma = umToMm(prior_sigma_um);
+    out.u = (var / (nr * nr)).cwiseSqrt() * sigma;
+    out.covariance = out.u.cwiseAbs2().asDiagonal();
+    out.summary.termination = Termination::Converged;
+    out.summary.parameters = kNumLocationErrors;
+    out.summary.rank = kNumLocationErrors;
+    out.summary.sigma_um = prior_sigma_um;
+    out.summary.message = "closed form (000 Eqs. (14)-(19), corrected); u from the probe repeatability";
+  } catch (const std::invalid_argument& e) {
+    out.summary.termination = Termination::InvalidInput;
+    out.summary.message = e.what();
+  }
+  return out;
+}
+
+IdentificationResult identifyTouch154(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
+                                      const IdentificationOptions& options) {
+  if (options.method != Method::ClosedForm) return identify(plan, runs, options);
+  IdentificationResult bad;
+  bad.method = Method::ClosedForm;
+  bad.estimate.kinematics = plan.machine.kinematics;
+  std::string why;
+  if (!options.validate(&why)) bad.summary.message = "invalid options: " + why;
+  else if (runs.empty()) bad.summary.message = "no results to identify from";
+  else if (!plan.machine.artefact) bad.summary.message = "the plan has no artefact";
+  else return identifyClosedForm(plan, runs, options.prior_sigma_um);
+  return bad;
 }
 
 }  // namespace rotacal

@@ -1,11 +1,11 @@
-#include "core/closed_form_map.hpp"
+#include "cycles/touch154/closed_form_map.hpp"
 
 #include <Eigen/Dense>
 #include <cmath>
 #include <map>
 #include <stdexcept>
 
-#include "core/closed_form.hpp"
+#include "cycles/touch154/closed_form.hpp"
 #include "core/identification.hpp"
 #include "core/simulation.hpp"
 
