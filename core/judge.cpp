@@ -22,7 +22,7 @@ constexpr double kPi = 3.14159265358979323846;
 // fraction of the largest are zero. Far below any exact-confounding angle worth stating
 // (0.1 deg is 1.7e-3): it only removes columns that are copies of others to rounding.
 constexpr double kRankRtol = 1e-9;
-// A fold whose I - H_SS has an eigenvalue below this leaves a parameter without data.
+// An eigenvalue of I - H_SS below this is a direction only the held-out group has data for.
 constexpr double kFoldTol = 1e-9;
 // Fewer folds than this give no standard error worth the name for the held-out gain.
 constexpr int kMinFolds = 3;
@@ -131,7 +131,7 @@ Principal principal(const Eigen::MatrixXd& Qx, const Eigen::MatrixXd& Qc, double
 struct Holdout {
   std::vector<double> ss;      // per group: whitened sum of squares
   std::vector<double> ss_raw;  // per group: in y's unit squared
-  std::vector<int> count;
+  std::vector<int> count;     // per group: predictable dimensions
   std::vector<char> valid;
 };
 
@@ -155,11 +155,22 @@ Holdout holdout(const Eigen::MatrixXd& Q, const Eigen::VectorXd& yw, const Eigen
     }
     const Eigen::MatrixXd C = Eigen::MatrixXd::Identity(m, m) - QS * QS.transpose();
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(C);
-    if (es.eigenvalues().minCoeff() < kFoldTol) continue;
-    const Eigen::VectorXd e = es.eigenvectors() *
-                              (es.eigenvalues().cwiseInverse().asDiagonal() * (es.eigenvectors().transpose() * rS));
+    // Eigenvalue 0 of C: a direction the model can produce on S alone (a parameter only this
+    // group has data for, such as one angular error per commanded angle). It cannot be
+    // predicted from the other groups; it is refitted on S itself and the group's prediction
+    // error lives in the rest (the full residual r_S is orthogonal to those directions, as
+    // r is to the model's span). The pseudo-inverse on the other eigenvalues does both.
+    Eigen::VectorXd inv = Eigen::VectorXd::Zero(m);
+    int dims = 0;
+    for (Eigen::Index i = 0; i < m; ++i)
+      if (es.eigenvalues()[i] > kFoldTol) {
+        inv[i] = 1.0 / es.eigenvalues()[i];
+        ++dims;
+      }
+    if (dims == 0) continue;
+    const Eigen::VectorXd e = es.eigenvectors() * (inv.asDiagonal() * (es.eigenvectors().transpose() * rS));
     h.valid[g] = 1;
-    h.count[g] = static_cast<int>(m);
+    h.count[g] = dims;
     h.ss[g] = e.squaredNorm();
     for (Eigen::Index i = 0; i < m; ++i) {
       const double s = sigma[S[static_cast<size_t>(i)]];
@@ -641,6 +652,10 @@ JudgeSummary judge(const JudgeProblem& pb, const JudgeOptions& o) {
         else if (ev[c].c.reason == "passes")
           ev[c].c.reason = "confounded with the model";
       }
+    // Partial confounding with the model: what the cause is partly read as.
+    for (size_t c : live)
+      if (ev[c].eligible && ev[c].c.k_eff > 0 && ev[c].pr.angle.minCoeff() < cx.partial_rad)
+        for (const auto& t : modelConfounded(cx, model, ev[c], c).with_terms) ev[c].c.overlaps.push_back(t.name);
     // Between causes, with the model projected out.
     for (size_t i = 0; i < live.size(); ++i)
       for (size_t j = i + 1; j < live.size(); ++j) {
@@ -649,6 +664,8 @@ JudgeSummary judge(const JudgeProblem& pb, const JudgeOptions& o) {
         const double sn = std::sin(p.angle);
         if (ev[b].passes()) ev[a].c.separability = std::min(ev[a].c.separability, sn);
         if (ev[a].passes()) ev[b].c.separability = std::min(ev[b].c.separability, sn);
+        if (p.angle < cx.partial_rad && ev[b].passes()) ev[a].c.overlaps.push_back(pb.causes[b].name);
+        if (p.angle < cx.partial_rad && ev[a].passes()) ev[b].c.overlaps.push_back(pb.causes[a].name);
         if (p.angle >= cx.exact_rad) continue;
         JudgeConfounded e = pairConfounded(cx, ev[a], a, ev[b], b, p);
         e.signal = ev[a].passes() && ev[b].passes();
@@ -718,11 +735,14 @@ JudgeSummary judge(const JudgeProblem& pb, const JudgeOptions& o) {
     f.gain = t.gain;
     f.gain_se = t.gain_se;
     f.separability = t.separability;
+    f.overlaps = t.overlaps;
     const double partial_sin = std::sin(cx.partial_rad);
     f.confidence = f.separability < partial_sin
-                       ? fmt::format("lowered: partly confounded (separability {:.2f}, below sin {:.0f} deg = {:.2f}); "
-                                     "its u is inflated up to {:.1f}x by the overlap and a bias there is read as this cause",
-                                     f.separability, o.partial_angle_deg, partial_sin, 1.0 / f.separability)
+                       ? fmt::format("lowered: partly confounded with {} (separability {:.2f}, below sin {:g} deg = "
+                                     "{:.2f}); its u is inflated up to {:.1f}x by the overlap, and an error of those is "
+                                     "partly read as this cause",
+                                     fmt::join(f.overlaps, ", "), f.separability, o.partial_angle_deg, partial_sin,
+                                     1.0 / f.separability)
                        : "full";
     if (birge > 1.0)
       f.confidence += fmt::format("; u scaled by the Birge ratio {:.2f} (the final model misfits)", birge);
@@ -827,6 +847,7 @@ Json judgeToJson(const JudgeSummary& s) {
                  {"gain", x.gain},
                  {"gain_se", x.gain_se},
                  {"separability", x.separability},
+                 {"overlaps", x.overlaps},
                  {"confidence", x.confidence}});
   j["findings"] = f;
   Json c = Json::array();
@@ -839,7 +860,8 @@ Json judgeToJson(const JudgeSummary& s) {
                  {"folds", x.folds},           {"holdout_rms_model", x.holdout_rms_model},
                  {"holdout_rms_cause", x.holdout_rms_cause}, {"gain", x.gain},
                  {"gain_se", x.gain_se},       {"angle_deg", x.angle_deg},
-                 {"separability", x.separability}, {"accepted", x.accepted},
+                 {"separability", x.separability}, {"overlaps", x.overlaps},
+                 {"accepted", x.accepted},
                  {"reason", x.reason}});
   j["candidates"] = c;
   Json cf = Json::array();

@@ -27,8 +27,10 @@
 //  - Held-out gain: leave one group out (groups given per observation: pose, repeat, cycle...),
 //    exact for a linear model through the hat matrix, e_S = (I - H_SS)^-1 r_S, no refits. The
 //    per-fold gains d_g = sum_S e_base^2 - sum_S e_cause^2 (whitened) give the mean gain and its
-//    standard error sd(d)/sqrt(G); the cause passes when mean > margin x SE. Folds that leave a
-//    parameter of either model without data (I - H_SS singular) are left out of that pair.
+//    standard error sd(d)/sqrt(G); the cause passes when mean > margin x SE. A parameter only
+//    the held-out group has data for (I - H_SS singular: one angular error per commanded angle)
+//    is refitted on the group itself and the prediction error measured in the rest of it (the
+//    pseudo-inverse of I - H_SS); a group with nothing left to predict is no fold.
 //  - Confounding from the Jacobians only: principal angles (whitened) between a cause's columns
 //    and the current model's span, and between two causes once the model is projected out.
 //    Below the exact angle: a `JudgeConfounded` entry naming the combination that absorbs it;
@@ -159,6 +161,7 @@ struct JudgeCandidate {
   bool holdout_passes = false;
   double angle_deg = 90.0;  // smallest principal angle to the current model
   double separability = 1.0;  // sin of the smallest angle to the model or a passing cause
+  std::vector<std::string> overlaps;  // what it is partly read as (angle below the partial one)
   bool accepted = false;
   std::string reason;  // "accepted", or why not
 };
@@ -171,6 +174,7 @@ struct JudgeFinding {
   double delta_chi2 = 0.0, p_value = 1.0;
   double holdout_rms_model = 0.0, holdout_rms_cause = 0.0, gain = 0.0, gain_se = 0.0;
   double separability = 1.0;
+  std::vector<std::string> overlaps;
   std::string confidence;  // "full", or why lowered
 };
 
