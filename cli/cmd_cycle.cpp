@@ -112,12 +112,15 @@ int cmdGenerate(const Common& c, const std::string& plan_file, const std::string
   const Cycle& cycle = cycleOfPlanFile(plan, plan_file);
   const Dialect& d = dialectOrFail(dialect_name);
   std::string text;
+  nc::Shape shape;
   try {
-    text = d.writeProgram(cycle.program(plan, dialect_name));
+    const nc::Program program = cycle.program(plan, dialect_name);
+    shape = nc::shapeOf(program);
+    text = d.writeProgram(program);
   } catch (const std::invalid_argument& e) {
     failFile(plan_file, e.what());
   }
-  const auto problems = d.check(text, plan);
+  const auto problems = d.check(text, plan, shape);
   if (!problems.empty())
     failFile(out, "generated program fails the " + std::string(d.name()) + " checker: " + problems.front());
   outputs.add("-o", out, text);

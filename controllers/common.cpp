@@ -451,8 +451,6 @@ MeasurementRun parseTaggedResults(const std::string& text, const std::string& fi
   return points.finish(last);
 }
 
-size_t expectedProbes(const ProbePlan& plan) { return plan.cycle == "tooltip" ? 0 : plan.points.size(); }
-
 std::string trimmed(double v, int decimals) {
   std::string s = fixed(v, decimals);
   if (s.find('.') != std::string::npos)
@@ -482,8 +480,8 @@ std::string inverseTimeRefusal(std::string_view dialect) {
                     : dialect == "heidenhain" ? "inverse-time feed is not verified for Klartext (controllers.md Sec. 5.5)"
                                               : nullptr;
   if (!why) return "";
-  return fmt::format("{}: {}, so the fixed-tool-tip cycle (tooltip) is refused for this dialect; use linuxcnc, fanuc, "
-                     "haas or siemens",
+  return fmt::format("{}: {}, so a program that moves under inverse time is refused for this dialect; use linuxcnc, "
+                     "fanuc, haas or siemens",
                      dialect, why);
 }
 
@@ -518,13 +516,12 @@ void ModeGuard::apply(const nc::Op& op) {
   }
 }
 
-int programNumber(std::string_view cycle) {
-  static const std::map<std::string, int, std::less<>> kNumbers = {
-      {"touch154", 7154}, {"spheres3", 7001}, {"rtest", 7002}, {"spaceframe", 7003}, {"tooltip", 7004}};
-  const auto it = kNumbers.find(cycle);
-  if (it == kNumbers.end())
-    throw std::invalid_argument(fmt::format("cycle '{}' has no program number (controllers/common.cpp)", cycle));
-  return it->second;
+int programNumber(const nc::Program& program) {
+  // Fanuc and Okuma take O1-O9999; Haas writes the same number in five digits.
+  if (program.number < 1 || program.number > 9999)
+    throw std::invalid_argument(fmt::format("program '{}' has no program number from 1 to 9999 (got {})", program.name,
+                                            program.number));
+  return program.number;
 }
 
 bool isProbingBlock(const nc::Block& b) {

@@ -174,9 +174,6 @@ MeasurementRun parseTaggedResults(const std::string& text, const std::string& fi
                                   std::string_view tag, std::string_view cycle_token, std::string_view second_header_why);
 
 /// The fixed-tool-tip ops (nc::Op Mode, RotaryLinear, Pause; 004 Table 1).
-/// Probing moves a plan's program holds: 0 for the tooltip cycle (the laser reads), else one
-/// per plan point.
-size_t expectedProbes(const ProbePlan& plan);
 /// `v` with at most `decimals` digits, trailing zeros dropped, the point kept: 5 -> "5.",
 /// 2.5 -> "2.5" (004 Table 1's "A5.", "F2.").
 std::string trimmed(double v, int decimals);
@@ -196,8 +193,8 @@ class ModeGuard {
 /// writer and checker: G93 is written where controllers.md names it for the control - LinuxCNC
 /// (verified with rs274), Haas ([HaasMan]), Fanuc and Siemens (only their "F on every G93 block"
 /// rule is UNVERIFIED, and rotacal writes F on every block) - and refused where G93 itself is
-/// UNVERIFIED: Okuma (Sec. 6.5) and Heidenhain (Sec. 5.5). Only the tooltip cycle moves under
-/// G93, so it is refused there, with this reason.
+/// UNVERIFIED: Okuma (Sec. 6.5) and Heidenhain (Sec. 5.5): a program that moves under G93 is
+/// refused there, with this reason.
 std::string inverseTimeRefusal(std::string_view dialect);
 /// Throws std::invalid_argument(inverseTimeRefusal(dialect)) when `program` switches to inverse
 /// time and the dialect refuses it.
@@ -207,12 +204,9 @@ void requireInverseTimeAllowed(const nc::Program& program, std::string_view dial
 /// carries F, and no block under G93 probes (`isProbe`).
 std::vector<std::string> inverseTimeProblems(const std::vector<nc::Block>& blocks,
                                              bool (*isProbe)(const nc::Block& block));
-/// The program number of a cycle's program (Fanuc O7154, Haas O07154, Okuma O7154): one per
-/// cycle, so that two cycles' programs never overwrite each other in the control's memory.
-/// touch154 keeps 7154; the others are 7000 + their source document: spheres3 7001 (001),
-/// rtest 7002 (002), spaceframe 7003 (003), tooltip 7004 (004) (docs/dialects.md). Throws
-/// std::invalid_argument for a cycle without a number.
-int programNumber(std::string_view cycle);
+/// The program number a program carries (nc::Program::number, stated by the cycle that wrote
+/// it: docs/dialects.md lists them). Throws std::invalid_argument outside 1-9999.
+int programNumber(const nc::Program& program);
 
 /// Any dialect's probing block: G31, G38.x, MEAS=, TCH PROBE.
 bool isProbingBlock(const nc::Block& block);

@@ -106,7 +106,7 @@ class CsvDialect final : public Dialect {
     return out;
   }
 
-  std::vector<std::string> check(const std::string&, const ProbePlan&) const override {
+  std::vector<std::string> check(const std::string&, const ProbePlan&, const nc::Shape&) const override {
     return {"csv has no program"};
   }
 };

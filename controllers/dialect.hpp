@@ -54,9 +54,11 @@ class Dialect {
   /// number. Throws std::invalid_argument for a dialect without programs (csv).
   virtual std::vector<std::string> commentLines(std::string_view text) const = 0;
 
-  /// Strict checks of a generated program against the dialect's rules and the plan; returns
-  /// "LINE: problem" strings, empty when clean.
-  virtual std::vector<std::string> check(const std::string& program_text, const ProbePlan& plan) const = 0;
+  /// Strict checks of a program's text against the dialect's rules, the plan and what the
+  /// neutral program it was written from shows (nc::shapeOf: its probing moves, readings,
+  /// inverse-time feed, number); returns "LINE: problem" strings, empty when clean.
+  virtual std::vector<std::string> check(const std::string& program_text, const ProbePlan& plan,
+                                         const nc::Shape& shape) const = 0;
 };
 
 /// The dialect by name: csv, linuxcnc, fanuc. Throws std::invalid_argument for others.

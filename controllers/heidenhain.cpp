@@ -114,7 +114,7 @@ class HeidenhainDialect final : public Dialect {
       throw std::invalid_argument(fmt::format("program has {} probing moves but point_count {}", probes, p.point_count));
     ctl::requireInverseTimeAllowed(p, kDialect);  // the tool-tip cycle: refused with the reason, not the probe count
     if (probes == 0)  // the result format files below are built per probing move
-      throw std::invalid_argument("the heidenhain program records probing moves and this one has none (rtest: use linuxcnc)");
+      throw std::invalid_argument("the heidenhain program records probing moves and this one has none (use linuxcnc)");
     const std::string name = safeName(p.name.empty() ? "ROTACAL" : p.name);
     const std::string results = std::string(kDir) + safeName(p.results_file.empty() ? "ROTACAL" : p.results_file) + ".TXT";
     double safe_z = -std::numeric_limits<double>::infinity();
@@ -198,7 +198,7 @@ class HeidenhainDialect final : public Dialect {
         case nc::Op::Kind::RepeatEnd:
           // The R-test program (002): dwell, logger trigger and loops are spelled for linuxcnc only so far.
           throw std::invalid_argument(fmt::format("the {} program cannot express an R-test dwell, logger trigger or loop "
-                                                  "in this version: generate the rtest program for linuxcnc", "heidenhain"));
+                                                  "in this version: generate this program for linuxcnc", "heidenhain"));
         case nc::Op::Kind::Probe: {
           const int id = op.point_id;
           if (id <= 0 || kLabelBase + id > 65535) throw std::invalid_argument(fmt::format("point id {} out of range", id));
@@ -395,7 +395,7 @@ class HeidenhainDialect final : public Dialect {
     return out;
   }
 
-  std::vector<std::string> check(const std::string& text, const ProbePlan& plan) const override {
+  std::vector<std::string> check(const std::string& text, const ProbePlan& plan, const nc::Shape& shape) const override {
     std::vector<std::string> out;
     auto problem = [&](int line, const std::string& what) { out.push_back(fmt::format("{}: {}", line, what)); };
     const auto ls = ctl::splitLines(text);
@@ -487,9 +487,9 @@ class HeidenhainDialect final : public Dialect {
       if (g != std::string::npos && !labels.count(code[i].substr(g + 9)))
         problem(ls[i].number, fmt::format("jump to the undefined label {}", code[i].substr(g + 9)));
     }
-    if (static_cast<size_t>(probes) != ctl::expectedProbes(plan))
-      problem(ls.empty() ? 1 : ls.back().number, fmt::format("{} TCH PROBE 0 cycles, the plan has {} points", probes, ctl::expectedProbes(plan)));
-    if (plan.cycle == "tooltip") problem(1, ctl::inverseTimeRefusal(kDialect));
+    if (static_cast<size_t>(probes) != shape.probes)
+      problem(ls.empty() ? 1 : ls.back().number, fmt::format("{} TCH PROBE 0 cycles, the plan has {} points", probes, shape.probes));
+    if (shape.inverse_time) problem(1, ctl::inverseTimeRefusal(kDialect));
     for (auto& s : ctl::strokeProblems(ctl::motionBlocks(moves, inch), plan, kDialect)) out.push_back(std::move(s));
     return out;
   }

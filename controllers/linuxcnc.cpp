@@ -484,7 +484,7 @@ class LinuxCncDialect final : public Dialect {
     return out;
   }
 
-  std::vector<std::string> check(const std::string& text, const ProbePlan& plan) const override {
+  std::vector<std::string> check(const std::string& text, const ProbePlan& plan, const nc::Shape& shape) const override {
     const auto blocks = nc::readProgram(text);
     std::vector<std::string> out = ctl::readerIssues(blocks);
     auto problem = [&](int line, const std::string& what) { out.push_back(fmt::format("{}: {}", line, what)); };
@@ -554,8 +554,8 @@ class LinuxCncDialect final : public Dialect {
       if (!checked) problem(b.line, g + " is not followed by 'o<n> if [#5070 NE 1]' with an (ABORT, ...)");
     }
     const int last_line = blocks.empty() ? 1 : blocks.back().line;
-    if (plan.cycle == "rtest") {
-      // R-test: every logger trigger (M64 P0) after a dwell, each cycle's poses all read.
+    if (shape.reads > 0) {
+      // External readings (an R-test logger): every trigger (M64 P0) after a dwell, each cycle's poses all read.
       size_t reads = 0;
       const nc::Block* prev = nullptr;
       for (const auto& b : blocks) {
@@ -569,10 +569,10 @@ class LinuxCncDialect final : public Dialect {
       if (reads == 0 || reads % plan.points.size() != 0)
         problem(last_line, fmt::format("{} R-test readings [M64 P{}], not a multiple of the plan's {} poses", reads,
                                        kReadOutput, plan.points.size()));
-    } else if (static_cast<size_t>(probes) != ctl::expectedProbes(plan))
+    } else if (static_cast<size_t>(probes) != shape.probes)
       problem(last_line, fmt::format("{} recorded touches [G38.2/G38.3 moves whose position is LOGged], the plan "
                                      "has {} points",
-                                     probes, ctl::expectedProbes(plan)));
+                                     probes, shape.probes));
     for (auto& s : ctl::inverseTimeProblems(blocks, ctl::isProbingBlock)) out.push_back(std::move(s));
     for (auto& s : ctl::strokeProblems(blocks, plan, kDialect)) out.push_back(std::move(s));
     // The end: M2 or M30 as the last block with code; a leading '%' needs a closing one, after

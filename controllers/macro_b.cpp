@@ -83,7 +83,7 @@ std::string MacroBDialect::writeProgram(const nc::Program& p) const {
   auto L = [](double v) { return ctl::fixed(v, 4); };  // mm and inch: 4 decimals, always a point
   auto Ang = [](double v) { return ctl::fixed(v, 4); };
   auto F = [&](double v) { return ctl::fixed(v, inch ? 3 : 1); };
-  const int number = ctl::programNumber(p.cycle);
+  const int number = ctl::programNumber(p);
   const int max_number = f_.program_digits == 5 ? 99999 : 9999;
   if (number < 1 || number > max_number)
     throw std::invalid_argument(fmt::format("{} program number O{} must be 1..{}", f_.tag, number, max_number));
@@ -191,7 +191,7 @@ std::string MacroBDialect::writeProgram(const nc::Program& p) const {
       case nc::Op::Kind::RepeatEnd:
         // The R-test program (002): dwell, logger trigger and loops are spelled for linuxcnc only so far.
         throw std::invalid_argument(fmt::format("the {} program cannot express an R-test dwell, logger trigger or loop "
-                                                "in this version: generate the rtest program for linuxcnc", f_.name));
+                                                "in this version: generate this program for linuxcnc", f_.name));
       case nc::Op::Kind::Probe: {
         const int id = op.point_id;
         if (id <= 0 || kLabelBase + id > kMaxLabel)
@@ -364,7 +364,7 @@ MeasurementRun MacroBDialect::parseResults(const std::string& raw, const std::st
   return points.finish(last);
 }
 
-std::vector<std::string> MacroBDialect::check(const std::string& text, const ProbePlan& plan) const {
+std::vector<std::string> MacroBDialect::check(const std::string& text, const ProbePlan& plan, const nc::Shape& shape) const {
   const auto blocks = nc::readProgram(text);
   std::vector<std::string> out = ctl::readerIssues(blocks);
   auto problem = [&](int line, const std::string& what) { out.push_back(fmt::format("{}: {}", line, what)); };
@@ -441,7 +441,7 @@ std::vector<std::string> MacroBDialect::check(const std::string& text, const Pro
       if (needs_point && w.value && !w.has_decimal_point)
         problem(b.line, fmt::format("{}{} has no decimal point (read in least input increments)", w.letter, w.text));
     }
-    if (b.hasWord('G', 93) && plan.cycle != "tooltip") problem(b.line, "G93 inverse time: rotacal probes and positions under G94 only");
+    if (b.hasWord('G', 93) && !shape.inverse_time) problem(b.line, "G93 inverse time: rotacal probes and positions under G94 only");
     if (!b.hasWord('G', 31)) continue;
     ++probes;
     if (!b.find('X') && !b.find('Y') && !b.find('Z')) problem(b.line, "G31 without an axis word");
@@ -472,8 +472,8 @@ std::vector<std::string> MacroBDialect::check(const std::string& text, const Pro
                       "#3000 alarm, N n)");
   }
   const int last_line = blocks.empty() ? 1 : blocks.back().line;
-  if (static_cast<size_t>(probes) != ctl::expectedProbes(plan))
-    problem(last_line, fmt::format("{} G31 moves, the plan has {} points", probes, ctl::expectedProbes(plan)));
+  if (static_cast<size_t>(probes) != shape.probes)
+    problem(last_line, fmt::format("{} G31 moves, the plan has {} points", probes, shape.probes));
   for (auto& s : ctl::inverseTimeProblems(blocks, ctl::isProbingBlock)) out.push_back(std::move(s));
   for (auto& s : ctl::strokeProblems(blocks, plan, f_.name)) out.push_back(std::move(s));
   // Starts with '%', ends with M30 then '%'.

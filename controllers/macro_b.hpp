@@ -44,7 +44,7 @@ class MacroBDialect : public Dialect {
   std::string writeResults(const ProbePlan& plan, const MeasurementRun& run) const override;
   MeasurementRun parseResults(const std::string& text, const std::string& file, const ProbePlan& plan) const override;
   std::vector<std::string> commentLines(std::string_view text) const override;
-  std::vector<std::string> check(const std::string& program_text, const ProbePlan& plan) const override;
+  std::vector<std::string> check(const std::string& program_text, const ProbePlan& plan, const nc::Shape& shape) const override;
 
  protected:
   const MacroBFlavor& flavor() const { return f_; }

@@ -16,7 +16,7 @@ namespace rotacal::ctl {
 /// latches the axes of that move, so the only deviation is the servo's following error (a few
 /// um across the move, far less along a single-axis move) and the printed rounding (<= 2.5 um
 /// at 4 inch decimals); 0.1 mm is 20x that and still 50x smaller than the 5 mm that separates
-/// the closest targets of touch154, so a misplaced value cannot pass.
+/// the closest targets of the 154-point plan (000), so a misplaced value cannot pass.
 constexpr double kTriggerOffMoveTolMm = 0.1;
 
 /// Throws InputError(file, line, ...) at the first byte that is neither printable ASCII

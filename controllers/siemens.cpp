@@ -21,7 +21,7 @@
 // - WRITE error codes: ERR <> 0 is treated as a failure that stops the program.
 // - Number form of SPRINT "%10.4F" (inch: "%10.5F"): read as C's %10.4f; the parser accepts any
 //   spacing and sign.
-// - G93: only in the tooltip cycle (004), F on every block; probing and positioning run under G94.
+// - G93: only where the neutral program switches to inverse time (004), F on every block; probing and positioning run under G94.
 #include <fmt/format.h>
 
 #include <cmath>
@@ -164,7 +164,7 @@ class SiemensDialect final : public Dialect {
         case nc::Op::Kind::RepeatEnd:
           // The R-test program (002): dwell, logger trigger and loops are spelled for linuxcnc only so far.
           throw std::invalid_argument(fmt::format("the {} program cannot express an R-test dwell, logger trigger or loop "
-                                                  "in this version: generate the rtest program for linuxcnc", "siemens"));
+                                                  "in this version: generate this program for linuxcnc", "siemens"));
         case nc::Op::Kind::Probe: {
           const int id = op.point_id;
           if (id <= 0) throw std::invalid_argument("probing move without a point id");
@@ -265,7 +265,7 @@ class SiemensDialect final : public Dialect {
     return out;
   }
 
-  std::vector<std::string> check(const std::string& text, const ProbePlan& plan) const override {
+  std::vector<std::string> check(const std::string& text, const ProbePlan& plan, const nc::Shape& shape) const override {
     std::vector<std::string> out;
     auto problem = [&](int line, const std::string& what) { out.push_back(fmt::format("{}: {}", line, what)); };
     const auto ls = ctl::splitLines(text);
@@ -311,7 +311,7 @@ class SiemensDialect final : public Dialect {
         statements = true;
       }
       static const std::regex g93(R"(\bG93\b)");
-      if (plan.cycle != "tooltip" && std::regex_search(s, g93)) problem(n, "G93 inverse time: rotacal probes and positions under G94 only");
+      if (!shape.inverse_time && std::regex_search(s, g93)) problem(n, "G93 inverse time: rotacal probes and positions under G94 only");
       for (const std::string kw : {"GOTOF ", "GOTOB "}) {
         const size_t g = s.find(kw);
         if (g != std::string::npos && !labels.count(ctl::trim(s.substr(g + kw.size()))))
@@ -356,9 +356,9 @@ class SiemensDialect final : public Dialect {
         problem(n, "MEAS=1 is not followed by STOPRE, the $AA_MW reads and the no-trigger check "
                    "(IF ($AC_MEA[1]==0) OR (distance) GOTOF label, label: ... M0)");
     }
-    if (static_cast<size_t>(probes) != ctl::expectedProbes(plan))
+    if (static_cast<size_t>(probes) != shape.probes)
       problem(ls.empty() ? 1 : ls.back().number,
-              fmt::format("{} MEAS=1 moves, the plan has {} points", probes, ctl::expectedProbes(plan)));
+              fmt::format("{} MEAS=1 moves, the plan has {} points", probes, shape.probes));
     for (auto& s : ctl::inverseTimeProblems(nc::readProgram(text), ctl::isProbingBlock)) out.push_back(std::move(s));
     const auto blocks = nc::readProgram((inch ? "G20" : "G21") + std::string(";\n").substr(1) + motion_text);
     // The unit line above shifted the numbering by one: renumber.

@@ -150,9 +150,13 @@ class Cycle {
   /// What a PLAN.json of this cycle must satisfy beyond the format (checked with FILE:LINE).
   virtual PlanRules planRules() const { return {}; }
 
-  /// The dialect-neutral program of a plan; `dialect` selects only the controller's conventions
-  /// the plan needs (rotary sign). Throws std::invalid_argument when it cannot be expressed.
-  virtual nc::Program program(const ProbePlan& plan, const std::string& dialect) const = 0;
+  /// The dialect-neutral program of a plan, carrying the cycle's program number; `dialect`
+  /// selects only the controller's conventions the plan needs (rotary sign). Throws
+  /// std::invalid_argument when it cannot be expressed.
+  nc::Program program(const ProbePlan& plan, const std::string& dialect) const;
+  /// The number of the cycle's programs in the control's memory (O-word): one per cycle, 1-9999
+  /// (docs/dialects.md), so that two cycles' programs never overwrite each other.
+  virtual int programNumber() const = 0;
   /// What one plan point is in a program, for the terminal ("probing moves").
   virtual std::string_view pointNoun() const { return "probing moves"; }
 
@@ -171,6 +175,10 @@ class Cycle {
   virtual CycleDocuments uncertainty(const UncertaintyRequest& request) const;
   virtual bool hasDesign() const { return false; }
   virtual DesignedPlan design(const DesignRequest& request) const;
+
+ protected:
+  /// The program's operations; program() adds what every cycle's program carries.
+  virtual nc::Program buildProgram(const ProbePlan& plan, const std::string& dialect) const = 0;
 };
 
 /// Every cycle, in the registry's order.

@@ -59,6 +59,12 @@ const Cycle& cycleOfPlan(const ProbePlan& plan) {
   throw std::invalid_argument("the plan's cycle '" + plan.cycle + "' is not one rotacal knows (" + namesList() + ")");
 }
 
+nc::Program Cycle::program(const ProbePlan& plan, const std::string& dialect) const {
+  nc::Program p = buildProgram(plan, dialect);
+  p.number = programNumber();
+  return p;
+}
+
 CycleDocuments Cycle::uncertainty(const UncertaintyRequest&) const {
   throw std::invalid_argument(fmt::format("cycle {} has no Monte Carlo of its calibration chain", name()));
 }

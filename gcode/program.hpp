@@ -65,7 +65,21 @@ struct Program {
   int probe_tool = 0;                // 0: no tool change / length compensation
   std::string results_file;          // base name of the file the program writes
   int point_count = 0;
+  /// The program number in the control's memory (the O-word of Fanuc, Haas and Okuma). Each
+  /// cycle states its own, so that two cycles' programs never overwrite each other; 0 = none
+  /// (a dialect that needs one refuses the program).
+  int number = 0;
   std::vector<Op> ops;
 };
+
+/// What a program's text must show, as its neutral program states it: the dialect checkers
+/// hold the text to this and never ask which cycle wrote it.
+struct Shape {
+  size_t probes = 0;          // Probe ops, as written (a repeated block counts once)
+  size_t reads = 0;           // Read ops (external device readings), as written
+  bool inverse_time = false;  // some Mode op switches to inverse-time feed (G93)
+  int number = 0;             // Program::number
+};
+Shape shapeOf(const Program& program);
 
 }  // namespace rotacal::nc

@@ -434,14 +434,18 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
 
   // The dialect's own checker, on the input and on the rewrite: the rewrite may add no problem
   // (a rotacal program, clean before, stays clean; a foreign program keeps its own problems).
+  // What the input shows stands in for its neutral program: the rewrite must show the same.
   ProbePlan plan;
   plan.machine = machine;
-  size_t probes = 0;
-  for (const auto& b : blocks) probes += ctl::isProbingBlock(b);
-  plan.points.resize(probes);
+  nc::Shape shape;
+  for (const auto& b : blocks) {
+    shape.probes += ctl::isProbingBlock(b);
+    shape.inverse_time = shape.inverse_time || b.hasWord('G', 93);
+  }
+  plan.points.resize(shape.probes);
   std::set<std::pair<int, std::string>> known;
-  for (const auto& p : dialect.check(text, plan)) known.insert(splitProblem(p));
-  for (const auto& p : dialect.check(out.text, plan)) {
+  for (const auto& p : dialect.check(text, plan, shape)) known.insert(splitProblem(p));
+  for (const auto& p : dialect.check(out.text, plan, shape)) {
     auto [line, what] = splitProblem(p);
     const bool mapped = line >= 1 && static_cast<size_t>(line) <= source_line.size();
     const int src = mapped ? source_line[static_cast<size_t>(line) - 1] : line;

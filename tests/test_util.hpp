@@ -18,6 +18,15 @@ inline std::string sourcePath(const std::string& rel) { return std::string(ROTAC
 inline MachineModel acMachine() { return loadMachine(sourcePath("examples/machines/ac_trunnion.json")); }
 inline ProbePlan touch154Plan() { return makePlan("touch154", acMachine(), {}); }
 
+/// A plan's program as `generate` builds it: by the plan's cycle, with its program number.
+inline nc::Program cycleProgram(const ProbePlan& plan, const std::string& dialect) {
+  return cycleOfPlan(plan).program(plan, dialect);
+}
+/// What the checkers hold a text written from that program to.
+inline nc::Shape shapeOf(const ProbePlan& plan, const std::string& dialect) {
+  return nc::shapeOf(cycleProgram(plan, dialect));
+}
+
 /// 000 Table 4, mean column: um and mdeg.
 inline LocationErrors table4Mean() {
   LocationErrors e;

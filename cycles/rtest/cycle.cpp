@@ -48,7 +48,8 @@ class Rtest final : public Cycle {
     r.check_options = rtestCheckPlanOptions;
     return r;
   }
-  nc::Program program(const ProbePlan& plan, const std::string& dialect) const override {
+  int programNumber() const override { return 7002; }  // 7000 + its source document (002).
+  nc::Program buildProgram(const ProbePlan& plan, const std::string& dialect) const override {
     return rtestProgram(plan, dialect);
   }
   std::string_view pointNoun() const override { return "R-test poses"; }

@@ -20,7 +20,8 @@ class Spaceframe final : public Cycle {
   ProbePlan plan(const MachineModel& machine, const CycleOptions& options) const override {
     return makeSpaceframePlan(machine, options);
   }
-  nc::Program program(const ProbePlan& plan, const std::string& dialect) const override {
+  int programNumber() const override { return 7003; }  // 7000 + its source document (003).
+  nc::Program buildProgram(const ProbePlan& plan, const std::string& dialect) const override {
     return probeProgram(plan, dialect);
   }
   Simulated simulate(const SimulateRequest& request) const override { return simulateProbing(request); }

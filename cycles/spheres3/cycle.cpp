@@ -31,7 +31,8 @@ class Spheres3 final : public Cycle {
     r.spheres = 3;  // 001 Fig. 2: three spheres, each fitted at every pose
     return r;
   }
-  nc::Program program(const ProbePlan& plan, const std::string& dialect) const override {
+  int programNumber() const override { return 7001; }  // 7000 + its source document (001).
+  nc::Program buildProgram(const ProbePlan& plan, const std::string& dialect) const override {
     return probeProgram(plan, dialect);
   }
   Simulated simulate(const SimulateRequest& request) const override { return simulateProbing(request); }

@@ -33,7 +33,8 @@ class Tooltip final : public Cycle {
     r.check_options = [](const ProbePlan& p) { (void)tooltipOptionsFrom(p.options, p.machine); };
     return r;
   }
-  nc::Program program(const ProbePlan& plan, const std::string& dialect) const override {
+  int programNumber() const override { return 7004; }  // 7000 + its source document (004).
+  nc::Program buildProgram(const ProbePlan& plan, const std::string& dialect) const override {
     return tooltipProgram(plan, dialect);
   }
   std::string_view pointNoun() const override { return "tool-tip poses"; }

@@ -29,7 +29,8 @@ class Touch154 final : public Cycle {
   ProbePlan plan(const MachineModel& machine, const CycleOptions& options) const override {
     return makeTouch154Plan(machine, options);
   }
-  nc::Program program(const ProbePlan& plan, const std::string& dialect) const override {
+  int programNumber() const override { return 7154; }  // 7154: the 154 touches of 000; the others are 7000 + their source document.
+  nc::Program buildProgram(const ProbePlan& plan, const std::string& dialect) const override {
     return probeProgram(plan, dialect);
   }
   Simulated simulate(const SimulateRequest& request) const override { return simulateProbing(request); }

@@ -94,7 +94,7 @@ TEST(CsvDialect, HasNoProgram) {
   const ProbePlan plan = test::acPlan();
   const Dialect& d = dialectByName("csv");
   EXPECT_THROW(d.writeProgram(nc::Program{}), std::invalid_argument);
-  EXPECT_EQ(d.check("G0 X0", plan), std::vector<std::string>{"csv has no program"});
+  EXPECT_EQ(d.check("G0 X0", plan, nc::Shape{}), std::vector<std::string>{"csv has no program"});
 }
 
 TEST(CsvDialect, OffsetsTableListsAllEightInReportUnits) {

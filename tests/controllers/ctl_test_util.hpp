@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "cycles/cycle.hpp"
+#include "test_util.hpp"
 #include "controllers/dialect.hpp"
 #include "core/json_io.hpp"
 #include "core/machine.hpp"

@@ -86,8 +86,8 @@ inline void expectRecovery(const Dialect& d, const ProbePlan& plan) {
 inline void expectCleanPrograms(const Dialect& d) {
   for (LengthUnit u : {LengthUnit::Millimetre, LengthUnit::Inch}) {
     const ProbePlan plan = acPlan(u);
-    const std::string text = d.writeProgram(probeProgram(plan, std::string(d.name())));
-    EXPECT_EQ(d.check(text, plan), std::vector<std::string>{}) << d.name();
+    const std::string text = d.writeProgram(test::cycleProgram(plan, std::string(d.name())));
+    EXPECT_EQ(d.check(text, plan, test::shapeOf(plan, std::string(d.name()))), std::vector<std::string>{}) << d.name();
     EXPECT_EQ(text.find("-0.0000"), std::string::npos);
   }
 }

@@ -153,8 +153,8 @@ TEST_F(FanucRejects, TextAfterEnd) {
 
 TEST(FanucProgram, GeneratedProgramPassesTheChecker) {
   const ProbePlan plan = test::acPlan();
-  const std::string text = fc().writeProgram(probeProgram(plan, "fanuc"));
-  EXPECT_EQ(fc().check(text, plan), std::vector<std::string>{});
+  const std::string text = fc().writeProgram(test::cycleProgram(plan, "fanuc"));
+  EXPECT_EQ(fc().check(text, plan, test::shapeOf(plan, "fanuc")), std::vector<std::string>{});
   const auto ls = lines(text);
   EXPECT_EQ(ls[0], "%");
   EXPECT_EQ(ls[1], "O7154(ROTACAL TOUCH154)");
@@ -179,16 +179,16 @@ TEST(FanucProgram, GeneratedProgramPassesTheChecker) {
 
 TEST(FanucProgram, InchProgramUsesG20AndPassesTheChecker) {
   const ProbePlan plan = test::acPlan(LengthUnit::Inch);
-  const std::string text = fc().writeProgram(probeProgram(plan, "fanuc"));
+  const std::string text = fc().writeProgram(test::cycleProgram(plan, "fanuc"));
   EXPECT_NE(text.find("\nG20\n"), std::string::npos);
   EXPECT_NE(text.find("]GT0.000001]GOTO1001\n"), std::string::npos) << "(0.001 in)^2 no-trigger threshold";
   EXPECT_NE(text.find("\nDPRNT[P1*X#700[35]*Y#701[35]*Z#702[35]*T#703[80]]\n"), std::string::npos) << "5 inch decimals";
-  EXPECT_EQ(fc().check(text, plan), std::vector<std::string>{});
+  EXPECT_EQ(fc().check(text, plan, test::shapeOf(plan, "fanuc")), std::vector<std::string>{});
 }
 
 TEST(FanucProgram, StoredVariablesRestartAtEachPose) {
   const ProbePlan plan = test::acPlan();
-  const std::string text = fc().writeProgram(probeProgram(plan, "fanuc"));
+  const std::string text = fc().writeProgram(test::cycleProgram(plan, "fanuc"));
   // The first point of every pose is stored at #700 and printed before the next index move.
   int first_of_pose = 0;
   for (size_t i = 0; i < plan.points.size(); ++i)
@@ -209,6 +209,7 @@ TEST(FanucProgram, StoredVariablesRestartAtEachPose) {
 TEST(FanucProgram, PoseWithMoreThanSeventyPointsIsRefused) {
   nc::Program p;
   p.cycle = "touch154";
+  p.number = cycleByName("touch154").programNumber();
   for (int id = 1; id <= 71; ++id) {
     nc::Op op;
     op.kind = nc::Op::Kind::Probe;
@@ -224,12 +225,12 @@ TEST(FanucProgram, PoseWithMoreThanSeventyPointsIsRefused) {
 class FanucCheck : public ::testing::Test {
  protected:
   ProbePlan plan = test::acPlan();
-  std::vector<std::string> ls = lines(fc().writeProgram(probeProgram(plan, "fanuc")));
+  std::vector<std::string> ls = lines(fc().writeProgram(test::cycleProgram(plan, "fanuc")));
   size_t g = test::lineStarting(ls, "G31");
   std::vector<std::string> problemsWith(const std::function<void(std::vector<std::string>&)>& edit) {
     auto v = ls;
     edit(v);
-    return fc().check(test::join(v), plan);
+    return fc().check(test::join(v), plan, test::shapeOf(plan, "fanuc"));
   }
   static bool has(const std::vector<std::string>& ps, const std::string& what) {
     for (const auto& p : ps)
@@ -329,7 +330,7 @@ TEST_F(FanucRejects, ClockLineMissingOrInvalid) {
 
 TEST(FanucProgram, ReadsTheClockBeforeZeroingTheTimer) {
   const ProbePlan plan = test::acPlan();
-  const std::string text = fc().writeProgram(probeProgram(plan, "fanuc"));
+  const std::string text = fc().writeProgram(test::cycleProgram(plan, "fanuc"));
   EXPECT_NE(text.find("\nPOPEN\n#1=#3011\n#2=#3012\n#3001=0\n"
                       "DPRNT[ROTACAL-RESULTS*DIALECT*FANUC*CYCLE*TOUCH154*POINTS*154*UNIT*MM]\n"
                       "DPRNT[DATE*#1[80]*TIME*#2[60]]\n"),
@@ -338,7 +339,7 @@ TEST(FanucProgram, ReadsTheClockBeforeZeroingTheTimer) {
 
 TEST(FanucProgram, DoubleTouchIsRefusedNotIgnored) {
   const ProbePlan plan = test::acPlan();
-  nc::Program p = probeProgram(plan, "fanuc");
+  nc::Program p = test::cycleProgram(plan, "fanuc");
   for (auto& op : p.ops)
     if (op.kind == nc::Op::Kind::Probe) op.retract_mm = 1.0;
   EXPECT_THROW(fc().writeProgram(p), std::invalid_argument);

@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include "test_util.hpp"
 #include "dialect_battery.hpp"
 
 namespace rotacal {
@@ -55,7 +56,7 @@ TEST(HaasResults, RejectsWithTheLine) {
 
 TEST(HaasProgram, HaasFrameAndStorage) {
   const ProbePlan plan = test::acPlan();
-  const std::string text = hs().writeProgram(probeProgram(plan, "haas"));
+  const std::string text = hs().writeProgram(test::cycleProgram(plan, "haas"));
   const auto ls = lines(text);
   EXPECT_EQ(ls[1], "O07154(ROTACAL TOUCH154)");
   EXPECT_NE(text.find("\nG54\nG103 P1\nPOPEN\n"), std::string::npos);
@@ -72,12 +73,12 @@ TEST(HaasProgram, GeneratedProgramsPassTheChecker) { test::expectCleanPrograms(h
 class HaasCheck : public ::testing::Test {
  protected:
   ProbePlan plan = test::acPlan();
-  std::vector<std::string> ls = lines(hs().writeProgram(probeProgram(plan, "haas")));
+  std::vector<std::string> ls = lines(hs().writeProgram(test::cycleProgram(plan, "haas")));
   size_t g = test::lineStarting(ls, "G31");
   std::vector<std::string> with(const std::function<void(std::vector<std::string>&)>& edit) {
     auto v = ls;
     edit(v);
-    return hs().check(test::join(v), plan);
+    return hs().check(test::join(v), plan, test::shapeOf(plan, "haas"));
   }
 };
 

@@ -8,6 +8,7 @@
 
 #include <regex>
 
+#include "test_util.hpp"
 #include "dialect_battery.hpp"
 
 namespace rotacal {
@@ -74,7 +75,7 @@ TEST(HeidenhainResults, RejectsWithTheLine) {
 
 TEST(HeidenhainProgram, KlartextFrameAndCycle0) {
   const ProbePlan plan = test::acPlan();
-  nc::Program prog = probeProgram(plan, "heidenhain");
+  nc::Program prog = test::cycleProgram(plan, "heidenhain");
   const std::string text = hh().writeProgram(prog);
   const auto ls = lines(text);
   EXPECT_EQ(ls[0], "0 BEGIN PGM ROTACAL_TOUCH154 MM");
@@ -106,7 +107,7 @@ TEST(HeidenhainProgram, GeneratedProgramsPassTheChecker) { test::expectCleanProg
 
 TEST(HeidenhainProgram, RefusesWhatCycle0CannotDo) {
   const ProbePlan plan = test::acPlan();
-  nc::Program p = probeProgram(plan, "heidenhain");
+  nc::Program p = test::cycleProgram(plan, "heidenhain");
   for (auto& op : p.ops)
     if (op.kind == nc::Op::Kind::Probe) {
       op.xyz.y() += 1.0;  // no longer along one axis
@@ -118,7 +119,7 @@ TEST(HeidenhainProgram, RefusesWhatCycle0CannotDo) {
 class HeidenhainCheck : public ::testing::Test {
  protected:
   ProbePlan plan = test::acPlan();
-  std::vector<std::string> ls = lines(hh().writeProgram(probeProgram(plan, "heidenhain")));
+  std::vector<std::string> ls = lines(hh().writeProgram(test::cycleProgram(plan, "heidenhain")));
   size_t g = [this] {
     for (size_t i = 0; i < ls.size(); ++i)
       if (ls[i].find("TCH PROBE 0.0") != std::string::npos) return i;
@@ -127,7 +128,7 @@ class HeidenhainCheck : public ::testing::Test {
   std::vector<std::string> with(const std::function<void(std::vector<std::string>&)>& edit) {
     auto v = ls;
     edit(v);
-    return hh().check(test::join(v), plan);
+    return hh().check(test::join(v), plan, test::shapeOf(plan, "heidenhain"));
   }
   std::string at(size_t i, const std::string& body) const { return fmt::format("{} {}", i, body); }
 };

@@ -145,8 +145,8 @@ TEST_F(LinuxCncRejects, WrongFieldCount) {
 
 TEST(LinuxCncProgram, GeneratedProgramPassesTheChecker) {
   const ProbePlan plan = test::acPlan();
-  const std::string text = lc().writeProgram(probeProgram(plan, "linuxcnc"));
-  EXPECT_EQ(lc().check(text, plan), std::vector<std::string>{});
+  const std::string text = lc().writeProgram(test::cycleProgram(plan, "linuxcnc"));
+  EXPECT_EQ(lc().check(text, plan, test::shapeOf(plan, "linuxcnc")), std::vector<std::string>{});
   EXPECT_EQ(text.find("-0.0000"), std::string::npos);
   const auto ls = lines(text);
   EXPECT_EQ(ls.front(), "%");
@@ -164,10 +164,10 @@ TEST(LinuxCncProgram, GeneratedProgramPassesTheChecker) {
 
 TEST(LinuxCncProgram, InchProgramUsesG20AndFiveDecimals) {
   const ProbePlan plan = test::acPlan(LengthUnit::Inch);
-  const std::string text = lc().writeProgram(probeProgram(plan, "linuxcnc"));
+  const std::string text = lc().writeProgram(test::cycleProgram(plan, "linuxcnc"));
   EXPECT_NE(text.find("\nG20\n"), std::string::npos);
   EXPECT_TRUE(std::regex_search(text, std::regex(R"(\nG38\.2 X-?\d+\.\d{5} Y-?\d+\.\d{5} Z-?\d+\.\d{5} F)")));
-  EXPECT_EQ(lc().check(text, plan), std::vector<std::string>{});
+  EXPECT_EQ(lc().check(text, plan, test::shapeOf(plan, "linuxcnc")), std::vector<std::string>{});
 }
 
 TEST(LinuxCncProgram, BcMachineLogsTheBAxisParameter) {
@@ -185,20 +185,20 @@ TEST(LinuxCncProgram, BcMachineLogsTheBAxisParameter) {
 
 TEST(LinuxCncCheck, CatchesARemovedAbort) {
   const ProbePlan plan = test::acPlan();
-  auto ls = lines(lc().writeProgram(probeProgram(plan, "linuxcnc")));
+  auto ls = lines(lc().writeProgram(test::cycleProgram(plan, "linuxcnc")));
   const size_t g = test::lineStarting(ls, "G38.2");
   ls.erase(ls.begin() + static_cast<long>(g) + 2);  // the (ABORT, ...) of point 1
-  const auto problems = lc().check(test::join(ls), plan);
+  const auto problems = lc().check(test::join(ls), plan, test::shapeOf(plan, "linuxcnc"));
   ASSERT_EQ(problems.size(), 1u);
   EXPECT_EQ(problems[0].rfind(fmt::format("{}: G38.2 is not followed", g + 1), 0), 0u) << problems[0];
 }
 
 TEST(LinuxCncCheck, CatchesAPointOutsideTheStrokes) {
   const ProbePlan plan = test::acPlan();
-  auto ls = lines(lc().writeProgram(probeProgram(plan, "linuxcnc")));
+  auto ls = lines(lc().writeProgram(test::cycleProgram(plan, "linuxcnc")));
   const size_t g = test::lineStarting(ls, "G38.2");
   ls[g] = "G38.2 X700.0000 Y-235.0000 Z150.0000 F100.0";
-  const auto problems = lc().check(test::join(ls), plan);
+  const auto problems = lc().check(test::join(ls), plan, test::shapeOf(plan, "linuxcnc"));
   ASSERT_EQ(problems.size(), 1u);
   EXPECT_NE(problems[0].find(fmt::format("{}: X = 700.0000 mm is outside the stroke", g + 1)), std::string::npos)
       << problems[0];
@@ -206,21 +206,21 @@ TEST(LinuxCncCheck, CatchesAPointOutsideTheStrokes) {
 
 TEST(LinuxCncCheck, CatchesARotaryAngleOutsideItsStrokeInThePapersConvention) {
   const ProbePlan plan = test::acPlan();
-  auto ls = lines(lc().writeProgram(probeProgram(plan, "linuxcnc")));
+  auto ls = lines(lc().writeProgram(test::cycleProgram(plan, "linuxcnc")));
   const size_t g = test::lineStarting(ls, "G0 A");
   ls[g] = "G0 A-30.0000 C0.0000";  // LinuxCNC A-30 = paper A* +30 > +20
-  const auto problems = lc().check(test::join(ls), plan);
+  const auto problems = lc().check(test::join(ls), plan, test::shapeOf(plan, "linuxcnc"));
   ASSERT_EQ(problems.size(), 1u);
   EXPECT_NE(problems[0].find("papers' convention 30.0000"), std::string::npos) << problems[0];
 }
 
 TEST(LinuxCncCheck, CatchesLineSyntaxAndStructureFaults) {
   const ProbePlan plan = test::acPlan();
-  const auto ls = lines(lc().writeProgram(probeProgram(plan, "linuxcnc")));
+  const auto ls = lines(lc().writeProgram(test::cycleProgram(plan, "linuxcnc")));
   auto problemsWith = [&](const std::function<void(std::vector<std::string>&)>& edit) {
     auto v = ls;
     edit(v);
-    return lc().check(test::join(v), plan);
+    return lc().check(test::join(v), plan, test::shapeOf(plan, "linuxcnc"));
   };
   auto has = [](const std::vector<std::string>& ps, const std::string& what) {
     for (const auto& p : ps)
@@ -262,16 +262,16 @@ TEST(LinuxCncDoubleTouch, ZeroFieldsInTheMachineFileGiveTheSingleTouchProgram) {
   json.insert(json.rfind('}'), R"(, "retract_mm": 0, "feeds": {"probing_slow_mm_min": 0})");
   const JsonDoc doc = parseJsonText(json, "zero_fields.json");
   const ProbePlan zero = makePlan("touch154", machineFromJson(doc, doc.value), {});
-  const std::string single = lc().writeProgram(probeProgram(plan, "linuxcnc"));
-  EXPECT_EQ(lc().writeProgram(probeProgram(zero, "linuxcnc")), single);
+  const std::string single = lc().writeProgram(test::cycleProgram(plan, "linuxcnc"));
+  EXPECT_EQ(lc().writeProgram(test::cycleProgram(zero, "linuxcnc")), single);
   EXPECT_EQ(single.find("G38.3"), std::string::npos);
   EXPECT_EQ(single.find("G91"), std::string::npos);
 }
 
 TEST(LinuxCncDoubleTouch, FastTouchBackOffAlongTheApproachThenSlowRecordedTouch) {
   const ProbePlan plan = doubleTouchPlan();
-  const std::string text = lc().writeProgram(probeProgram(plan, "linuxcnc"));
-  EXPECT_EQ(lc().check(text, plan), std::vector<std::string>{});
+  const std::string text = lc().writeProgram(test::cycleProgram(plan, "linuxcnc"));
+  EXPECT_EQ(lc().check(text, plan, test::shapeOf(plan, "linuxcnc")), std::vector<std::string>{});
   const auto ls = lines(text);
   const ProbePoint& p1 = *plan.findPoint(1);
   // the end of the probing line: overtravel past the nominal trigger along the approach
@@ -300,16 +300,16 @@ TEST(LinuxCncDoubleTouch, FastTouchBackOffAlongTheApproachThenSlowRecordedTouch)
 
 TEST(LinuxCncDoubleTouch, CheckerCountsRecordedTouchesAndWantsTheFirstTouchChecked) {
   const ProbePlan plan = doubleTouchPlan();
-  const auto ls = lines(lc().writeProgram(probeProgram(plan, "linuxcnc")));
+  const auto ls = lines(lc().writeProgram(test::cycleProgram(plan, "linuxcnc")));
   auto v = ls;
   v.erase(v.begin() + static_cast<long>(test::lineStarting(v, "(LOG,P1 ")));
-  auto problems = lc().check(test::join(v), plan);
+  auto problems = lc().check(test::join(v), plan, test::shapeOf(plan, "linuxcnc"));
   ASSERT_EQ(problems.size(), 1u);
   EXPECT_NE(problems[0].find("153 recorded touches"), std::string::npos) << problems[0];
   v = ls;
   const size_t g = test::lineStarting(v, "G38.3");
   v.erase(v.begin() + static_cast<long>(g) + 2);  // the first touch's (ABORT, ...)
-  problems = lc().check(test::join(v), plan);
+  problems = lc().check(test::join(v), plan, test::shapeOf(plan, "linuxcnc"));
   ASSERT_EQ(problems.size(), 1u);
   EXPECT_EQ(problems[0].rfind(fmt::format("{}: G38.3 is not followed", g + 1), 0), 0u) << problems[0];
 }

@@ -49,8 +49,7 @@ TEST(ProgramNumbers, EachCycleHasItsOwnNumberInEveryDialectThatNumbersPrograms) 
     std::set<int> seen;
     for (const auto& plan : plans) {
       if (plan.cycle == "tooltip" && std::string(d) == "okuma") continue;  // refused: G93 unverified
-      const std::string text = dialectByName(d).writeProgram(plan.cycle == "tooltip" ? tooltipProgram(plan, d)
-                                                                                     : probeProgram(plan, d));
+      const std::string text = dialectByName(d).writeProgram(test::cycleProgram(plan, d));
       std::smatch m;
       const std::string o = firstLineStartingWithO(text);
       ASSERT_TRUE(std::regex_search(o, m, std::regex(R"(^O(\d+))"))) << d << " " << plan.cycle << ": " << o;
@@ -62,8 +61,9 @@ TEST(ProgramNumbers, EachCycleHasItsOwnNumberInEveryDialectThatNumbersPrograms) 
     }
   }
   // rtest is written for linuxcnc only (no O-number there), but has its number for when it is not.
-  EXPECT_EQ(ctl::programNumber("rtest"), kDocumentedNumbers.at("rtest"));
-  EXPECT_THROW(ctl::programNumber("no_such_cycle"), std::invalid_argument);
+  EXPECT_EQ(cycleByName("rtest").programNumber(), kDocumentedNumbers.at("rtest"));
+  nc::Program none;
+  EXPECT_THROW(ctl::programNumber(none), std::invalid_argument);
 }
 
 // ---- Outside text in comments ----
@@ -133,11 +133,11 @@ TEST(OutsideText, MachineNameInProgramsNeverBecomesCode) {
   for (const char* d : {"linuxcnc", "fanuc", "haas", "siemens", "heidenhain", "okuma"}) {
     ProbePlan plan = test::acPlan();
     plan.machine.name = "MACHINE";
-    const std::string benign = dialectByName(d).writeProgram(probeProgram(plan, d));
+    const std::string benign = dialectByName(d).writeProgram(test::cycleProgram(plan, d));
     plan.machine.name = kHostileMachine;
-    const std::string text = dialectByName(d).writeProgram(probeProgram(plan, d));
+    const std::string text = dialectByName(d).writeProgram(test::cycleProgram(plan, d));
     EXPECT_EQ(codeOf(d, text), codeOf(d, benign)) << d;
-    EXPECT_EQ(dialectByName(d).check(text, plan), std::vector<std::string>{}) << d;
+    EXPECT_EQ(dialectByName(d).check(text, plan, test::shapeOf(plan, d)), std::vector<std::string>{}) << d;
   }
 }
 
@@ -145,7 +145,7 @@ TEST(OutsideText, ReportPathInACompensatedProgramNeverBecomesCode) {
   const ProbePlan plan = test::acPlan();
   const LocationErrors e = test::table4();
   for (const char* d : {"linuxcnc", "fanuc", "haas", "siemens", "okuma"}) {
-    const std::string text = dialectByName(d).writeProgram(probeProgram(plan, d));
+    const std::string text = dialectByName(d).writeProgram(test::cycleProgram(plan, d));
     const NcSyntax syntax{d, 4, 5, 4, std::string(d) == "siemens" ? NcSyntax::Comment::Semicolon
                                                                    : NcSyntax::Comment::Parentheses};
     auto compensated = [&](const std::string& report) {
@@ -157,7 +157,7 @@ TEST(OutsideText, ReportPathInACompensatedProgramNeverBecomesCode) {
     for (const auto& h : kHostile) {
       const std::string out = compensated(h);
       EXPECT_EQ(codeOf(d, out), codeOf(d, benign)) << d << " " << h;
-      EXPECT_EQ(dialectByName(d).check(out, plan), std::vector<std::string>{}) << d;
+      EXPECT_EQ(dialectByName(d).check(out, plan, test::shapeOf(plan, d)), std::vector<std::string>{}) << d;
     }
   }
 }
@@ -215,7 +215,7 @@ TEST(HeidenhainOffsets, EveryLineWithinEightyAndTheProvenanceWhole) {
 TEST(MacroB, EveryDprntFieldKeepsEightDigitsAndTheParserAgrees) {
   const ProbePlan plan = test::acPlan();
   for (const char* d : {"fanuc", "haas"}) {
-    const std::string text = dialectByName(d).writeProgram(probeProgram(plan, d));
+    const std::string text = dialectByName(d).writeProgram(test::cycleProgram(plan, d));
     const std::regex field(R"(#\d+\[(\d)(\d)\])");
     int fields = 0;
     for (auto it = std::sregex_iterator(text.begin(), text.end(), field); it != std::sregex_iterator(); ++it, ++fields)
@@ -224,7 +224,7 @@ TEST(MacroB, EveryDprntFieldKeepsEightDigitsAndTheParserAgrees) {
     // The checker flags a [90] time field, the parser a 9-digit time.
     const std::string wide = std::regex_replace(text, std::regex(R"(\[80\]\])"), "[90]]");
     ASSERT_NE(wide, text) << d;
-    EXPECT_TRUE(test::hasProblem(dialectByName(d).check(wide, plan), "a + b > 8")) << d;
+    EXPECT_TRUE(test::hasProblem(dialectByName(d).check(wide, plan, test::shapeOf(plan, d)), "a + b > 8")) << d;
     auto ls = lines(dialectByName(d).writeResults(plan, test::displacedRun(plan)));
     ls[2] = std::regex_replace(ls[2], std::regex(R"(T *\d+$)"), "T123456789");
     const std::string e = test::parseError(dialectByName(d), test::join(ls, "\r\n"), plan);
@@ -244,7 +244,7 @@ TEST(MacroB, DwellIsSecondsInEachControlsOwnWord) {
       "tooltip", head, {{"units", "inch"}, {"radius_mm", "381"}, {"step_deg", "5"}, {"end_deg", "90"}, {"dwell_s", "2.5"}});
   // Haas: G04 P2.5 ([HaasMan]: P with a point = seconds); Fanuc: G04 X2.5 (P would be integer ms).
   for (const auto& [d, word] : {std::pair<const char*, const char*>{"haas", "P"}, {"fanuc", "X"}}) {
-    const std::string text = dialectByName(d).writeProgram(tooltipProgram(plan, d));
+    const std::string text = dialectByName(d).writeProgram(test::cycleProgram(plan, d));
     const std::regex dwell(R"(\nG04 ([A-Z])([0-9.]+)\n)");
     int n = 0;
     for (auto it = std::sregex_iterator(text.begin(), text.end(), dwell); it != std::sregex_iterator(); ++it, ++n) {
@@ -252,7 +252,7 @@ TEST(MacroB, DwellIsSecondsInEachControlsOwnWord) {
       EXPECT_EQ(std::stod((*it)[2]), 2.5) << d;
     }
     EXPECT_EQ(n, 18) << d << ": one dwell per reading (004 Table 1's 18 steps)";
-    EXPECT_EQ(dialectByName(d).check(text, plan), std::vector<std::string>{}) << d;
+    EXPECT_EQ(dialectByName(d).check(text, plan, test::shapeOf(plan, d)), std::vector<std::string>{}) << d;
   }
 }
 

@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include "test_util.hpp"
 #include "dialect_battery.hpp"
 
 namespace rotacal {
@@ -54,7 +55,7 @@ TEST(OkumaResults, RejectsWithTheLine) {
 
 TEST(OkumaProgram, ProbeBlockCheckAndOutput) {
   const ProbePlan plan = test::acPlan();
-  const std::string text = ok().writeProgram(probeProgram(plan, "okuma"));
+  const std::string text = ok().writeProgram(test::cycleProgram(plan, "okuma"));
   const auto ls = lines(text);
   EXPECT_EQ(ls[0], "O7154 (ROTACAL)");
   EXPECT_NE(text.find("\nFWRITC MD1:ROTACAL-TOUCH154.TXT;A\n"
@@ -80,12 +81,12 @@ TEST(OkumaProgram, GeneratedProgramsPassTheChecker) { test::expectCleanPrograms(
 class OkumaCheck : public ::testing::Test {
  protected:
   ProbePlan plan = test::acPlan();
-  std::vector<std::string> ls = lines(ok().writeProgram(probeProgram(plan, "okuma")));
+  std::vector<std::string> ls = lines(ok().writeProgram(test::cycleProgram(plan, "okuma")));
   size_t g = test::lineStarting(ls, "G31");
   std::vector<std::string> with(const std::function<void(std::vector<std::string>&)>& edit) {
     auto v = ls;
     edit(v);
-    return ok().check(test::join(v), plan);
+    return ok().check(test::join(v), plan, test::shapeOf(plan, "okuma"));
   }
 };
 

@@ -79,7 +79,7 @@ class Rs274 : public ::testing::Test {
     if (!fs::exists(kRs274)) GTEST_SKIP() << kRs274 << " not found: install linuxcnc-uspace to run this test";
   }
   ProbePlan plan = test::acPlan();
-  std::string program = dialectByName("linuxcnc").writeProgram(probeProgram(plan, "linuxcnc"));
+  std::string program = dialectByName("linuxcnc").writeProgram(test::cycleProgram(plan, "linuxcnc"));
 };
 
 TEST_F(Rs274, UntrippedProbeStopsAtTheFirstPointWithOurAbort) {
@@ -120,7 +120,7 @@ TEST_F(Rs274, TrippingProbeRunsToTheEndAndLogsAParsableResultsFile) {
 TEST(Rs274Spheres3, TrippingProbeRunsToTheEnd) {
   if (!fs::exists(kRs274)) GTEST_SKIP() << kRs274 << " not found: install linuxcnc-uspace to run this test";
   const ProbePlan plan = makePlan("spheres3", test::acTestMachine(), {});
-  const std::string program = dialectByName("linuxcnc").writeProgram(probeProgram(plan, "linuxcnc"));
+  const std::string program = dialectByName("linuxcnc").writeProgram(test::cycleProgram(plan, "linuxcnc"));
   const Rs274Run r = runRs274(std::regex_replace(program, std::regex("#5070"), "1"), "spheres3");
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(std::regex_replace(r.err, std::regex(R"(executing|\s)"), ""), "") << r.err;

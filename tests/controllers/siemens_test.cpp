@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "test_util.hpp"
 #include "dialect_battery.hpp"
 
 namespace rotacal {
@@ -57,7 +58,7 @@ TEST(SiemensResults, RejectsWithTheLine) {
 
 TEST(SiemensProgram, ProbeBlockAndCheck) {
   const ProbePlan plan = test::acPlan();
-  const std::string text = sm().writeProgram(probeProgram(plan, "siemens"));
+  const std::string text = sm().writeProgram(test::cycleProgram(plan, "siemens"));
   const auto ls = lines(text);
   EXPECT_EQ(ls[0], "; %_N_ROTACAL_TOUCH154_MPF");
   const size_t g = test::lineStarting(ls, "MEAS=1");
@@ -81,12 +82,12 @@ TEST(SiemensProgram, GeneratedProgramsPassTheChecker) { test::expectCleanProgram
 class SiemensCheck : public ::testing::Test {
  protected:
   ProbePlan plan = test::acPlan();
-  std::vector<std::string> ls = lines(sm().writeProgram(probeProgram(plan, "siemens")));
+  std::vector<std::string> ls = lines(sm().writeProgram(test::cycleProgram(plan, "siemens")));
   size_t g = test::lineStarting(ls, "MEAS=1");
   std::vector<std::string> with(const std::function<void(std::vector<std::string>&)>& edit) {
     auto v = ls;
     edit(v);
-    return sm().check(test::join(v), plan);
+    return sm().check(test::join(v), plan, test::shapeOf(plan, "siemens"));
   }
 };
 

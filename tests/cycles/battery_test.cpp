@@ -3,6 +3,7 @@
 // and a malformed results file rejected naming the file. A new cycle is tested by being listed.
 #include <gtest/gtest.h>
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -51,13 +52,17 @@ TEST_P(CycleBattery, ProgramInEveryDialectPassesItsCheckerOrIsRefusedWithAReason
     if (name == "csv") continue;
     const Dialect& d = dialectByName(name);
     std::string text;
+    nc::Shape shape;
     try {
-      text = d.writeProgram(cycle().program(p, name));
+      const nc::Program program = cycle().program(p, name);
+      shape = nc::shapeOf(program);
+      EXPECT_EQ(program.number, cycle().programNumber()) << name;
+      text = d.writeProgram(program);
     } catch (const std::invalid_argument& e) {
       EXPECT_GT(std::string(e.what()).size(), 20u) << name << ": a refusal must say why";
       continue;
     }
-    const auto problems = d.check(text, p);
+    const auto problems = d.check(text, p, shape);
     EXPECT_TRUE(problems.empty()) << name << ": " << (problems.empty() ? "" : problems.front());
     ++written;
   }
@@ -125,6 +130,19 @@ TEST_P(CycleBattery, MalformedResultsAreRejectedNamingTheFile) {
 
 INSTANTIATE_TEST_SUITE_P(EveryCycle, CycleBattery, ::testing::ValuesIn(cycleNames()),
                          [](const ::testing::TestParamInfo<std::string>& i) { return i.param; });
+
+
+TEST(CycleBattery, EveryCycleHasItsOwnProgramNumber) {
+  // Two cycles' programs must never overwrite each other in the control's memory.
+  std::map<int, std::string> seen;
+  for (const Cycle* c : cycles()) {
+    const int n = c->programNumber();
+    EXPECT_GE(n, 1) << c->name();
+    EXPECT_LE(n, 9999) << c->name();
+    const auto [it, fresh] = seen.emplace(n, std::string(c->name()));
+    EXPECT_TRUE(fresh) << c->name() << " shares program number " << n << " with " << it->second;
+  }
+}
 
 }  // namespace
 }  // namespace rotacal

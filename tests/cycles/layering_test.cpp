@@ -73,31 +73,12 @@ TEST(Layering, RegistryListsFiveCyclesWithDistinctNames) {
   EXPECT_THROW(cycleByName("no_such_cycle"), std::invalid_argument);
 }
 
-// Files that still name a cycle while their move into cycles/<name>/ is pending (issue 15's
-// remaining steps). The list may only shrink: a listed file that no longer names a cycle fails
-// the test too, so that it is struck off.
-const std::vector<std::string> kPendingMoves = {
-    "controllers/common.cpp", "controllers/common.hpp", "controllers/heidenhain.cpp",
-    "controllers/linuxcnc.cpp", "controllers/macro_b.cpp", "controllers/okuma.cpp", "controllers/siemens.cpp",
-    "controllers/result_checks.hpp",
-};
-
 TEST(Layering, NoCycleIsNamedOutsideItsFolderAndTheRegistry) {
   std::vector<std::string> found;
-  std::vector<std::string> struck_off;
   for (const std::string layer : {"core", "gcode", "controllers", "postproc", "report", "history", "cli"})
-    for (const auto& f : sources(layer)) {
-      const std::string rel = fs::relative(f, fs::path(ROTACAL_SOURCE_DIR)).string();
-      const bool pending = std::find(kPendingMoves.begin(), kPendingMoves.end(), rel) != kPendingMoves.end();
-      bool named = false;
+    for (const auto& f : sources(layer))
       for (const auto& n : everyCycleName())
-        for (const auto& m : mentions(f, n)) {
-          named = true;
-          if (!pending) found.push_back(m);
-        }
-      if (pending && !named) struck_off.push_back(rel);
-    }
-  for (const auto& s : struck_off) ADD_FAILURE() << s << " names no cycle any more: strike it off kPendingMoves";
+        for (const auto& m : mentions(f, n)) found.push_back(m);
   // Inside cycles/: only a cycle's own folder and registry.cpp name it... and the shared
   // files of cycles/ (probing.cpp, cycle.hpp) none.
   for (const auto& f : sources("cycles")) {

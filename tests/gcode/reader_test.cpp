@@ -5,6 +5,7 @@
 
 #include <random>
 
+#include "test_util.hpp"
 #include "cycles/cycle.hpp"
 #include "controllers/dialect.hpp"
 #include "core/json_io.hpp"
@@ -179,7 +180,7 @@ TEST(GcodeReader, GeneratedProgramsTokenizeCleanly) {
   const JsonDoc doc = parseJsonText(machine, "m.json");
   const ProbePlan plan = makePlan("touch154", machineFromJson(doc, doc.value), {});
   for (const auto& [dialect, probe_g] : {std::pair<std::string, double>{"linuxcnc", 38.2}, {"fanuc", 31.0}}) {
-    const auto blocks = readProgram(dialectByName(dialect).writeProgram(probeProgram(plan, dialect)));
+    const auto blocks = readProgram(dialectByName(dialect).writeProgram(test::cycleProgram(plan, dialect)));
     size_t probes = 0;
     for (const auto& b : blocks) {
       EXPECT_TRUE(b.issues.empty()) << dialect << " line " << b.line << ": " << b.raw;

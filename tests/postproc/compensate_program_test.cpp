@@ -80,7 +80,7 @@ struct Fixture {
   Fixture() {
     piece = loadTruth(test::sourcePath("examples/truth/table4_mean.json"), Kinematics::TableAC);
     piece.errors = LocationErrors{};
-    program = dialectByName("linuxcnc").writeProgram(probeProgram(plan, "linuxcnc"));
+    program = dialectByName("linuxcnc").writeProgram(test::cycleProgram(plan, "linuxcnc"));
   }
   ProgramCompensation compensate(const LocationErrors& e) const {
     return compensateProgram(program, "touch154.ngc", plan.machine, e, NcSyntax{"linuxcnc"}, {});
@@ -296,7 +296,7 @@ TEST(CompensateProgram, EveryWordAddressDialectGetsTheSameGuardedEndPoints) {
   const ProbePlan plan = test::touch154Plan();
   const LocationErrors e = test::table4Mean();
   auto endpoints = [&](const std::string& dialect) {
-    const std::string text = dialectByName(dialect).writeProgram(probeProgram(plan, dialect));
+    const std::string text = dialectByName(dialect).writeProgram(test::cycleProgram(plan, dialect));
     const NcSyntax syntax{dialect, 4, 5, 4,
                           dialect == "siemens" ? NcSyntax::Comment::Semicolon : NcSyntax::Comment::Parentheses};
     const std::string out = compensateProgram(text, dialect, plan.machine, e, syntax, {}).text;
@@ -392,7 +392,7 @@ TEST(CompensateProgram, EveryNoTriggerCheckGuardsItsCompensatedEndPoint) {
   const ProbePlan plan = test::touch154Plan();
   const LocationErrors e = test::table4Mean();
   for (const char* d : {"fanuc", "haas", "okuma", "siemens"}) {
-    const std::string text = dialectByName(d).writeProgram(probeProgram(plan, d));
+    const std::string text = dialectByName(d).writeProgram(test::cycleProgram(plan, d));
     const ProgramCompensation c = compensateProgram(text, d, plan.machine, e, syntaxFor(d), {});
     const auto before = guardedMoves(text), after = guardedMoves(c.text);
     ASSERT_EQ(after.size(), plan.points.size()) << d;
@@ -468,10 +468,10 @@ TEST(CompensateProgram, EveryDialectsCompensatedProgramPassesItsOwnChecker) {
     const ProbePlan plan = makePlan("touch154", m, {});
     for (const char* d : {"linuxcnc", "fanuc", "haas", "okuma", "siemens"}) {
       const Dialect& dialect = dialectByName(d);
-      const std::string text = dialect.writeProgram(probeProgram(plan, d));
-      ASSERT_EQ(dialect.check(text, plan), std::vector<std::string>{}) << d;
+      const std::string text = dialect.writeProgram(test::cycleProgram(plan, d));
+      ASSERT_EQ(dialect.check(text, plan, test::shapeOf(plan, d)), std::vector<std::string>{}) << d;
       const std::string out = compensateProgram(text, d, plan.machine, e, syntaxFor(d), opt).text;
-      EXPECT_EQ(dialect.check(out, plan), std::vector<std::string>{}) << d;
+      EXPECT_EQ(dialect.check(out, plan, test::shapeOf(plan, d)), std::vector<std::string>{}) << d;
       // The header is there, in the dialect's form.
       EXPECT_NE(out.find("ROTACAL-COMPENSATED"), std::string::npos) << d;
       // LinuxCNC keeps the text; Siemens upper-cases it; Fanuc, Haas, Okuma also turn '_' into '-'.
@@ -520,7 +520,7 @@ TEST(CompensateProgram, ACompensatedProgramIsMarkedAndNotCompensatedAgain) {
   EXPECT_EQ(m.rfind(fmt::format("once.ngc:{}: the program is already compensated", marker_line), 0), 0u) << m;
   // Fanuc's upper-case form and Siemens's ';' comments carry it too.
   for (const char* d : {"fanuc", "siemens"}) {
-    const std::string text = dialectByName(d).writeProgram(probeProgram(f.plan, d));
+    const std::string text = dialectByName(d).writeProgram(test::cycleProgram(f.plan, d));
     const std::string c = compensateProgram(text, d, f.plan.machine, f.errors, syntaxFor(d), {}).text;
     EXPECT_THROW(compensateProgram(c, d, f.plan.machine, f.errors, syntaxFor(d), {}), InputError) << d;
   }

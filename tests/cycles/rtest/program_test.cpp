@@ -13,6 +13,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "test_util.hpp"
 #include "cycles/cycle.hpp"
 #include "controllers/dialect.hpp"
 #include "core/machine.hpp"
@@ -63,8 +64,8 @@ TEST(RtestProgram, LinuxCncPassesCheckerAndRs274WithTheThermalLoops) {
   const int recips = rtestReciprocations(p);
   ASSERT_GT(recips, 0);
   const Dialect& d = dialectByName("linuxcnc");
-  const std::string text = d.writeProgram(rtestProgram(p, "linuxcnc"));
-  const auto problems = d.check(text, p);
+  const std::string text = d.writeProgram(test::cycleProgram(p, "linuxcnc"));
+  const auto problems = d.check(text, p, test::shapeOf(p, "linuxcnc"));
   EXPECT_TRUE(problems.empty()) << problems.front();
   EXPECT_EQ(count(text, "M64 P0"), 50u);  // the first cycle and the loop body's cycle, 25 readings each
   if (!fs::exists(kRs274)) GTEST_SKIP() << "rs274 not installed";
@@ -88,21 +89,21 @@ TEST(RtestProgram, LinuxCncPassesCheckerAndRs274WithTheThermalLoops) {
 TEST(RtestProgram, CheckerRejectsAReadingWithoutDwellAndTheWrongCount) {
   const ProbePlan p = plan({});
   const Dialect& d = dialectByName("linuxcnc");
-  std::string text = d.writeProgram(rtestProgram(p, "linuxcnc"));
-  ASSERT_TRUE(d.check(text, p).empty());
+  std::string text = d.writeProgram(test::cycleProgram(p, "linuxcnc"));
+  ASSERT_TRUE(d.check(text, p, test::shapeOf(p, "linuxcnc")).empty());
   std::string no_dwell = text;
   no_dwell.replace(no_dwell.find("G4 P2.000"), 9, "G0 Z263.2670");
-  EXPECT_FALSE(d.check(no_dwell, p).empty());
+  EXPECT_FALSE(d.check(no_dwell, p, test::shapeOf(p, "linuxcnc")).empty());
   std::string missing = text;
   const size_t at = missing.find("M64 P0\n");
   missing.erase(at, 7);
-  EXPECT_FALSE(d.check(missing, p).empty());
+  EXPECT_FALSE(d.check(missing, p, test::shapeOf(p, "linuxcnc")).empty());
 }
 
 TEST(RtestProgram, DialectsWithoutLoopsRefuse) {
   const ProbePlan p = plan({});
   for (const char* name : {"fanuc", "haas", "siemens", "heidenhain", "okuma"})
-    EXPECT_THROW(dialectByName(name).writeProgram(rtestProgram(p, name)), std::invalid_argument) << name;
+    EXPECT_THROW(dialectByName(name).writeProgram(test::cycleProgram(p, name)), std::invalid_argument) << name;
 }
 
 }  // namespace

@@ -40,8 +40,8 @@ TEST(SpaceframeDialects, EveryProgramPassesItsCheckerAndResultsRoundTrip) {
   for (const char* name : {"csv", "linuxcnc", "fanuc", "haas", "siemens", "heidenhain", "okuma"}) {
     const Dialect& d = dialectByName(name);
     if (std::string(name) != "csv") {
-      const std::string text = d.writeProgram(probeProgram(plan, name));
-      const auto problems = d.check(text, plan);
+      const std::string text = d.writeProgram(test::cycleProgram(plan, name));
+      const auto problems = d.check(text, plan, test::shapeOf(plan, std::string(d.name())));
       EXPECT_TRUE(problems.empty()) << name << ": " << (problems.empty() ? "" : problems.front());
     }
     const MeasurementRun back = d.parseResults(d.writeResults(plan, run), "results", plan);
@@ -63,7 +63,7 @@ TEST(SpaceframeRs274, TheFullMapRunsInLinuxCncsInterpreter) {
   if (!fs::exists(kRs274)) GTEST_SKIP() << kRs274 << " not found";
   const ProbePlan plan = spaceframePlan();
   const std::string program = std::regex_replace(
-      dialectByName("linuxcnc").writeProgram(probeProgram(plan, "linuxcnc")), std::regex("#5070"), "1");  // probe trips
+      dialectByName("linuxcnc").writeProgram(test::cycleProgram(plan, "linuxcnc")), std::regex("#5070"), "1");  // probe trips
   const fs::path dir = fs::temp_directory_path() / fmt::format("rotacal_rs274_spaceframe_{}", ::getpid());
   fs::create_directories(dir);
   std::ofstream(dir / "probe.ngc", std::ios::binary) << program;

@@ -66,11 +66,11 @@ TEST(TooltipProgram, ReproducesTable1DigitForDigitInEveryIsoDialect) {
   const ProbePlan plan = table1Plan();
   for (const char* d : {"linuxcnc", "fanuc", "haas", "siemens"}) {
     const Dialect& dialect = dialectByName(d);
-    const std::string text = dialect.writeProgram(tooltipProgram(plan, d));
+    const std::string text = dialect.writeProgram(test::cycleProgram(plan, d));
     const auto lines = motionLines(text);
     ASSERT_EQ(lines.size(), 18u) << d << "\n" << text;
     for (int k = 0; k < 18; ++k) EXPECT_EQ(lines[k], kTable1[k]) << d << " line " << k + 1;
-    const auto problems = dialect.check(text, plan);
+    const auto problems = dialect.check(text, plan, test::shapeOf(plan, d));
     for (const auto& pr : problems) ADD_FAILURE() << d << ": " << pr;
   }
 }
@@ -78,18 +78,18 @@ TEST(TooltipProgram, ReproducesTable1DigitForDigitInEveryIsoDialect) {
 TEST(TooltipProgram, CheckerFlagsMissingFeedAndProbingUnderG93) {
   const ProbePlan plan = table1Plan();
   const Dialect& lc = dialectByName("linuxcnc");
-  const std::string text = lc.writeProgram(tooltipProgram(plan, "linuxcnc"));
+  const std::string text = lc.writeProgram(test::cycleProgram(plan, "linuxcnc"));
   const std::string no_f = std::regex_replace(text, std::regex("A5\\.F2\\."), "A5.", std::regex_constants::format_first_only);
   ASSERT_NE(no_f, text);
-  const auto p = lc.check(no_f, plan);
+  const auto p = lc.check(no_f, plan, test::shapeOf(plan, "linuxcnc"));
   ASSERT_FALSE(p.empty());
   EXPECT_NE(p.front().find("without an F word"), std::string::npos) << p.front();
   const std::string probe = std::regex_replace(text, std::regex("G91 G01 G93 F2\\."), "G91 G01 G93 F2.\nG38.2 Z-1 F2.");
   bool flagged = false;
-  for (const auto& s : lc.check(probe, plan)) flagged |= s.find("probing under inverse-time") != std::string::npos;
+  for (const auto& s : lc.check(probe, plan, test::shapeOf(plan, "linuxcnc"))) flagged |= s.find("probing under inverse-time") != std::string::npos;
   EXPECT_TRUE(flagged);
   // and the writer refuses a probing op under G93
-  nc::Program prog = tooltipProgram(plan, "linuxcnc");
+  nc::Program prog = test::cycleProgram(plan, "linuxcnc");
   nc::Op bad;
   bad.kind = nc::Op::Kind::Probe;
   bad.point_id = 1;
@@ -109,7 +109,7 @@ TEST(TooltipProgram, DialectsWhereG93IsUnverifiedRefuseInverseTimeWithTheReason)
   const ProbePlan plan = table1Plan();
   for (const auto& [d, section] : {std::pair<const char*, const char*>{"heidenhain", "Sec. 5.5"}, {"okuma", "Sec. 6.5"}}) {
     try {
-      const std::string text = dialectByName(d).writeProgram(tooltipProgram(plan, d));
+      const std::string text = dialectByName(d).writeProgram(test::cycleProgram(plan, d));
       ADD_FAILURE() << d << " accepted inverse time:\n" << text;
     } catch (const std::invalid_argument& e) {
       const std::string m = e.what();
@@ -119,9 +119,9 @@ TEST(TooltipProgram, DialectsWhereG93IsUnverifiedRefuseInverseTimeWithTheReason)
     }
   }
   // Their checkers flag a G93 in a tooltip program with the same reason.
-  const std::string fanuc = dialectByName("fanuc").writeProgram(tooltipProgram(plan, "fanuc"));
+  const std::string fanuc = dialectByName("fanuc").writeProgram(test::cycleProgram(plan, "fanuc"));
   bool flagged = false;
-  for (const auto& p : dialectByName("okuma").check(fanuc, plan)) flagged |= p.find("Sec. 6.5") != std::string::npos;
+  for (const auto& p : dialectByName("okuma").check(fanuc, plan, test::shapeOf(plan, "fanuc"))) flagged |= p.find("Sec. 6.5") != std::string::npos;
   EXPECT_TRUE(flagged);
 }
 
@@ -153,7 +153,7 @@ Rs274Run runRs274(const std::string& program) {
 /// rs274 accepts the program, and the absolute end points of its STRAIGHT_FEED moves keep the
 /// tool tip fixed: |pivot + Rx(A) Ry(B) (0,0,-R) - tip0| within the program's rounding.
 void expectRs274KeepsTipFixed(const ProbePlan& plan, size_t expected_feeds) {
-  const std::string text = dialectByName("linuxcnc").writeProgram(tooltipProgram(plan, "linuxcnc"));
+  const std::string text = dialectByName("linuxcnc").writeProgram(test::cycleProgram(plan, "linuxcnc"));
   const Rs274Run r = runRs274(text);
   ASSERT_EQ(r.exit_code, 0) << r.err << "\n" << text;
   EXPECT_EQ(std::regex_replace(r.err, std::regex(R"(executing|\s)"), ""), "") << r.err;
@@ -186,7 +186,7 @@ TEST(TooltipRs274, DynamicTestRunsAtEveryAngleOfTheOtherAxis) {
   // B axis sweeping at A = 0, 30 and 60 deg (004 Sec. VI), 2 sweeps of 15 deg steps; mm program.
   const ProbePlan plan = table1Plan({{"axis", "B"}, {"sweeps", "2"}, {"other_deg", "0,30,60"}, {"step_deg", "15"},
                                      {"units", "inch"}});
-  const std::string text = dialectByName("linuxcnc").writeProgram(tooltipProgram(plan, "linuxcnc"));
+  const std::string text = dialectByName("linuxcnc").writeProgram(test::cycleProgram(plan, "linuxcnc"));
   const Rs274Run r = runRs274(text);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   size_t feeds = 0;
