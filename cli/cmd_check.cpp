@@ -26,8 +26,9 @@
 namespace rotacal {
 
 ProgramCheckResult verifyProgram(const std::string& text, const std::string& dialect, const MachineModel& machine,
-                                 const ProbePlan* plan, bool rotacal_number) {
+                                 const ProbePlan* plan, bool rotacal_number, const LocationErrors* errors) {
   ProgramCheckSetup s;
+  if (errors) s.errors = *errors;
   s.machine = &machine;
   s.dialect = dialect;
   s.plan = plan;
@@ -51,8 +52,9 @@ ProgramCheckResult verifyProgram(const std::string& text, const std::string& dia
 }
 
 void requireSafeProgram(const std::string& text, const std::string& file, const std::string& dialect,
-                        const MachineModel& machine, const ProbePlan* plan, bool rotacal_number) {
-  const ProgramCheckResult r = verifyProgram(text, dialect, machine, plan, rotacal_number);
+                        const MachineModel& machine, const ProbePlan* plan, bool rotacal_number,
+                        const LocationErrors* errors) {
+  const ProgramCheckResult r = verifyProgram(text, dialect, machine, plan, rotacal_number, errors);
   if (r.violations.empty()) return;
   const ProgramViolation& v = r.violations.front();
   throw InputError(file, v.line,

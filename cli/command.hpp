@@ -51,12 +51,14 @@ inline const Dialect& dialectOrFail(const std::string& name) {
 /// (may be null) gives the cycle's program number and the spheres it touches; without it and with
 /// `rotacal_number`, a program number must be one of rotacal's cycles' (compensate, which also
 /// rewrites programs rotacal did not write, keeps the number it was given and asks for none).
+/// `errors` (may be null): simulate on the machine with these location errors (compensate's).
 ProgramCheckResult verifyProgram(const std::string& text, const std::string& dialect, const MachineModel& machine,
-                                 const ProbePlan* plan, bool rotacal_number);
+                                 const ProbePlan* plan, bool rotacal_number, const LocationErrors* errors = nullptr);
 /// Throws InputError(file, line, ...) with the first violation of verifyProgram and their count:
 /// `generate` and `compensate` call it before they write, so an unsafe program is never written.
 void requireSafeProgram(const std::string& text, const std::string& file, const std::string& dialect,
-                        const MachineModel& machine, const ProbePlan* plan, bool rotacal_number);
+                        const MachineModel& machine, const ProbePlan* plan, bool rotacal_number,
+                        const LocationErrors* errors = nullptr);
 /// The one line `check` prints for a clean program.
 std::string checkSummary(const std::string& file, const std::string& text, const ProgramCheckResult& result);
 

@@ -112,8 +112,15 @@ struct Gap {
 
 class Simulator {
  public:
-  Simulator(const MachineModel& m, std::vector<Obstacle> obstacles)
-      : m_(m), obstacles_(std::move(obstacles)), r_(m.probe.ball_radius_mm()), len_(m.probe.stylus_length_mm) {}
+  Simulator(const MachineModel& m, std::vector<Obstacle> obstacles, std::optional<LocationErrors> errors)
+      : m_(m), obstacles_(std::move(obstacles)), errors_(std::move(errors)), r_(m.probe.ball_radius_mm()),
+        len_(m.probe.stylus_length_mm) {}
+
+  // The workpiece frame in the machine frame: nominal, or on the machine with its location errors
+  // (a compensated program is written for that machine).
+  Eigen::Isometry3d T(const Pose& pose) const {
+    return errors_ ? T_m_w(*errors_, pose) : T_m_w_nominal(m_.kinematics, pose);
+  }
 
   bool empty() const { return obstacles_.empty(); }
   size_t size() const { return obstacles_.size(); }
@@ -123,7 +130,7 @@ class Simulator {
   Gap gap(const Eigen::Vector3d& ball_m, const Pose& pose) const {
     Gap best;
     if (obstacles_.empty()) return best;
-    const Eigen::Isometry3d Tinv = T_m_w_nominal(m_.kinematics, pose).inverse();
+    const Eigen::Isometry3d Tinv = T(pose).inverse();
     const Eigen::Vector3d a = Tinv * ball_m;
     const Eigen::Vector3d u = Tinv.linear() * Eigen::Vector3d::UnitZ();
     for (const auto& o : obstacles_) {
@@ -151,7 +158,7 @@ class Simulator {
     for (int i = 0; i <= n; ++i) {
       const double s = n == 0 ? 0.0 : static_cast<double>(i) / n;
       const Pose p{(1 - s) * a->A + s * b->A, (1 - s) * a->B + s * b->B, (1 - s) * a->C + s * b->C};
-      for (const auto& o : obstacles_) top = std::max(top, o.top(T_m_w_nominal(m_.kinematics, p)));
+      for (const auto& o : obstacles_) top = std::max(top, o.top(T(p)));
     }
     return ball_z - r_ - top - (n > 0 ? kSweepResolutionMm : 0.0);
   }
@@ -161,6 +168,7 @@ class Simulator {
  private:
   const MachineModel& m_;
   std::vector<Obstacle> obstacles_;
+  std::optional<LocationErrors> errors_;
   double r_, len_;
 };
 
@@ -241,7 +249,8 @@ ProgramCheckResult checkProgram(const std::vector<nc::Motion>& motions, const Pr
   if (!setup.machine) throw std::invalid_argument("checkProgram: no machine");
   const MachineModel& m = *setup.machine;
   ProgramCheckResult res;
-  const Simulator sim(m, obstaclesOf(setup));
+  const Simulator sim(m, obstaclesOf(setup),
+                      setup.errors && m.kinematics != Kinematics::HeadAB ? setup.errors : std::nullopt);
   res.obstacles = static_cast<int>(sim.size());
   const double planned = std::min(m.clearance_mm, m.approach_mm);
   res.required_gap_mm = planned - std::min(kCompensationAllowanceMm, 0.5 * planned);
@@ -271,7 +280,9 @@ ProgramCheckResult checkProgram(const std::vector<nc::Motion>& motions, const Pr
     const Eigen::Vector3d p0 = a.p(), p1 = b.p();
     double rot_rad = 0.0;
     for (const auto& [ax, v] : a.rot) rot_rad += std::abs(*b.rot.at(ax) - *v) * kDegToRad;
-    const double rho = std::max(p0.norm(), p1.norm()) + sim.stylus();
+    // Distance from the rotary axes; with location errors the axes are off the origin by their
+    // offsets (at most the plausibility limit, 0.5 mm, unless forced): 10 mm covers them.
+    const double rho = std::max(p0.norm(), p1.norm()) + sim.stylus() + (setup.errors ? 10.0 : 0.0);
     const double D = (p1 - p0).norm() + rot_rad * rho;  // mm per unit s, for any point of the probe
     auto at = [&](double s) {
       Config c = a;

@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "core/error_model.hpp"
 #include "core/machine.hpp"
 #include "core/probe_plan.hpp"
 #include "gcode/motion.hpp"
@@ -46,6 +47,9 @@ struct ProgramCheckSetup {
   bool numbered = false;                   // the dialect gives programs a number (O word)
   std::optional<int> program_number;       // the number this program must carry (its cycle's)
   std::vector<int> rotacal_numbers;        // without a known cycle: the number must be one of these
+  /// The machine's identified location errors: the program is simulated on that machine (a
+  /// compensated program is written for it, and keeps its planned gaps there). Unset: nominal.
+  std::optional<LocationErrors> errors;
 };
 
 struct ProgramViolation {

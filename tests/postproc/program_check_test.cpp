@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <regex>
 #include <string>
 #include <vector>
@@ -26,8 +27,9 @@ namespace {
 // The setup `rotacal check --plan` builds (cli/cmd_check.cpp): the plan's cycle gives the
 // number and whether the machine's artefact is on the table.
 ProgramCheckResult verify(const std::string& text, const std::string& dialect, const MachineModel& machine,
-                          const ProbePlan* plan) {
+                          const ProbePlan* plan, const LocationErrors* errors = nullptr) {
   ProgramCheckSetup s;
+  if (errors) s.errors = *errors;
   s.machine = &machine;
   s.dialect = dialect;
   s.plan = plan;
@@ -202,6 +204,15 @@ TEST(ProgramCheck, PassesEveryCompensatedProgram) {
                                                     syntaxOf(w.dialect), o);
     const ProgramCheckResult r = verify(c.text, w.dialect, w.plan.machine, &w.plan);
     EXPECT_TRUE(r.violations.empty()) << w.cycle << " " << w.dialect << " compensated:\n" << describe(r);
+    // On the machine with the errors it is compensated for, the rewrite keeps the planned gaps
+    // (what compensate checks before writing).
+    const LocationErrors e = table4Like(w.plan.machine.kinematics);
+    const ProgramCheckResult on_machine = verify(c.text, w.dialect, w.plan.machine, &w.plan, &e);
+    EXPECT_TRUE(on_machine.violations.empty()) << w.cycle << " " << w.dialect << " on its machine:\n" << describe(on_machine);
+    if (w.cycle == "touch154") {
+      EXPECT_NEAR(on_machine.min_clearance_mm, w.plan.machine.approach_mm, 1e-3) << w.dialect;
+      EXPECT_GT(std::abs(r.min_clearance_mm - w.plan.machine.approach_mm), 5e-3) << w.dialect << ": nominally shifted";
+    }
     if (ctl::endPointCheck(w.dialect) && ctl::expectedProbes(w.plan) > 0) {
       EXPECT_GT(c.rewritten_checks, 0) << w.cycle << " " << w.dialect;
     }
