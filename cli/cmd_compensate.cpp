@@ -126,6 +126,10 @@ int cmdCompensate(const Common& c, const std::string& program_file, const std::s
   opt.header.push_back(values);
   const std::string text = readTextFile(program_file);
   const ProgramCompensation r = compensateProgram(text, program_file, machine, errors, syntax, opt);
+  // The program verifier (`rotacal check`) on the rewrite, before it is written: the guards follow
+  // their moves, strokes, clearances on the machine's set-up - the machine with the errors it is
+  // compensated for, where it keeps its planned gaps. The input's program number is kept.
+  requireSafeProgram(r.text, out, dialect, machine, nullptr, false, &errors);
   writeFileAtomic(out, r.text);
   say(c, fmt::format("compensate: {} of {} motion blocks rewritten ({} left as written: machine-coordinate moves or "
                      "before every axis was known); largest shift {:.2f} um, largest rotary change {:.2f} mdeg, tool "

@@ -123,6 +123,8 @@ int cmdGenerate(const Common& c, const std::string& plan_file, const std::string
   const auto problems = d.check(text, plan, shape);
   if (!problems.empty())
     failFile(out, "generated program fails the " + std::string(d.name()) + " checker: " + problems.front());
+  // The program verifier (`rotacal check`): clearances, guards, strokes, feeds, number.
+  requireSafeProgram(text, out, dialect_name, plan.machine, &plan, true);
   outputs.add("-o", out, text);
   outputs.commit();
   if (out != "-") say(c, fmt::format("{} program: {} {} -> {}\n", d.name(), plan.points.size(), cycle.pointNoun(), out));

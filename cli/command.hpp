@@ -10,6 +10,9 @@
 
 #include "controllers/dialect.hpp"
 #include "core/errors.hpp"
+#include "core/machine.hpp"
+#include "core/probe_plan.hpp"
+#include "postproc/program_check.hpp"
 
 namespace rotacal {
 
@@ -27,6 +30,7 @@ std::vector<Command> uncertaintyCommands(CLI::App& app, const Common& common);
 std::vector<Command> compensateCommands(CLI::App& app, const Common& common);
 std::vector<Command> reportCommands(CLI::App& app, const Common& common);
 std::vector<Command> historyCommands(CLI::App& app, const Common& common);
+std::vector<Command> checkCommands(CLI::App& app, const Common& common);  // check (cmd_check.cpp)
 
 /// A failure tied to a file given on the command line, when the core cannot name a line.
 [[noreturn]] inline void failFile(const std::string& file, const std::string& what) { throw InputError(file, 0, what); }
@@ -42,5 +46,20 @@ inline const Dialect& dialectOrFail(const std::string& name) {
     throw CLI::ValidationError("--dialect", e.what());
   }
 }
+
+/// The program verifier (cmd_check.cpp) on a program's text in `dialect` for `machine`; `plan`
+/// (may be null) gives the cycle's program number and the spheres it touches; without it and with
+/// `rotacal_number`, a program number must be one of rotacal's cycles' (compensate, which also
+/// rewrites programs rotacal did not write, keeps the number it was given and asks for none).
+/// `errors` (may be null): simulate on the machine with these location errors (compensate's).
+ProgramCheckResult verifyProgram(const std::string& text, const std::string& dialect, const MachineModel& machine,
+                                 const ProbePlan* plan, bool rotacal_number, const LocationErrors* errors = nullptr);
+/// Throws InputError(file, line, ...) with the first violation of verifyProgram and their count:
+/// `generate` and `compensate` call it before they write, so an unsafe program is never written.
+void requireSafeProgram(const std::string& text, const std::string& file, const std::string& dialect,
+                        const MachineModel& machine, const ProbePlan* plan, bool rotacal_number,
+                        const LocationErrors* errors = nullptr);
+/// The one line `check` prints for a clean program.
+std::string checkSummary(const std::string& file, const std::string& text, const ProgramCheckResult& result);
 
 }  // namespace rotacal

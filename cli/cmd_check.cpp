@@ -1,0 +1,122 @@
+// `rotacal check PROGRAM --dialect D --machine MACHINE.json [--plan PLAN.json]`: the program
+// verifier (postproc/program_check.hpp) on a program file, and the same check that `generate`
+// and `compensate` run on what they are about to write (requireSafeProgram): a program that
+// fails it is never written.
+#include <algorithm>
+#include <cmath>
+#include <optional>
+#include <cstdio>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "cli/command.hpp"
+#include "controllers/common.hpp"
+#include "controllers/motion_reader.hpp"
+#include "core/errors.hpp"
+#include "core/json_io.hpp"
+#include "core/machine.hpp"
+#include "core/probe_plan.hpp"
+#include "cycles/cycle.hpp"
+#include "postproc/program_check.hpp"
+
+namespace rotacal {
+
+ProgramCheckResult verifyProgram(const std::string& text, const std::string& dialect, const MachineModel& machine,
+                                 const ProbePlan* plan, bool rotacal_number, const LocationErrors* errors) {
+  ProgramCheckSetup s;
+  if (errors) s.errors = *errors;
+  s.machine = &machine;
+  s.dialect = dialect;
+  s.plan = plan;
+  s.numbered = ctl::numbersPrograms(dialect);
+  if (plan) {
+    // The plan names its cycle: its number, and whether the machine's artefact stands on the
+    // table while it runs (a cycle whose artefact is another, e.g. a sensor nest, says not).
+    const Cycle& cycle = cycleOfPlan(*plan);
+    s.artefact_on_table = cycle.planRules().artefact_touched;
+    if (s.numbered) s.program_number = ctl::programNumber(cycle.name());
+  } else if (rotacal_number) {
+    for (const auto& n : cycleNames()) {
+      try {
+        s.rotacal_numbers.push_back(ctl::programNumber(n));
+      } catch (const std::invalid_argument&) {
+        // a cycle without a program number writes no numbered program
+      }
+    }
+  }
+  return checkProgram(ctl::readMotions(dialect, text), s);
+}
+
+void requireSafeProgram(const std::string& text, const std::string& file, const std::string& dialect,
+                        const MachineModel& machine, const ProbePlan* plan, bool rotacal_number,
+                        const LocationErrors* errors) {
+  const ProgramCheckResult r = verifyProgram(text, dialect, machine, plan, rotacal_number, errors);
+  if (r.violations.empty()) return;
+  const ProgramViolation& v = r.violations.front();
+  throw InputError(file, v.line,
+                   fmt::format("the program fails rotacal check ({} violation{}; nothing written): {}", r.violations.size(),
+                               r.violations.size() == 1 ? "" : "s", v.problem));
+}
+
+std::string checkSummary(const std::string& file, const std::string& text, const ProgramCheckResult& r) {
+  const auto lines = std::count(text.begin(), text.end(), '\n') + (!text.empty() && text.back() != '\n' ? 1 : 0);
+  return fmt::format("{}: ok: {} lines, {} motion blocks, {} probing moves, minimum clearance {} ({} obstacles modelled, "
+                     "{} positions swept)\n",
+                     file, lines, r.motion_blocks, r.probing_moves,
+                     r.obstacles == 0 || !std::isfinite(r.min_clearance_mm)
+                         ? std::string("not modelled")
+                         : fmt::format("{:.3f} mm (required {:.3f} mm)", r.min_clearance_mm, r.required_gap_mm),
+                     r.obstacles, r.swept_samples);
+}
+
+namespace {
+
+int cmdCheck(const Common& c, const std::string& program_file, const std::string& dialect,
+             const std::string& machine_file, const std::string& plan_file) {
+  const Dialect& d = dialectOrFail(dialect);
+  if (d.name() == "csv") throw CLI::ValidationError("--dialect", "csv has no NC programs to check");
+  const MachineModel machine = loadMachine(machine_file);
+  std::optional<ProbePlan> plan;
+  if (!plan_file.empty()) {
+    plan = loadCyclePlan(plan_file);
+    try {
+      cycleOfPlan(*plan);
+    } catch (const std::invalid_argument& e) {
+      failFile(plan_file, e.what());
+    }
+  }
+  const std::string text = readTextFile(program_file);
+  const ProgramCheckResult r = verifyProgram(text, dialect, machine, plan ? &*plan : nullptr, true);
+  if (!r.violations.empty()) {
+    for (const auto& v : r.violations) std::printf("%s:%d: %s\n", program_file.c_str(), v.line, v.problem.c_str());
+    std::fflush(stdout);
+    std::fprintf(stderr, "rotacal: error: %s: %zu violation%s\n", program_file.c_str(), r.violations.size(),
+                 r.violations.size() == 1 ? "" : "s");
+    return 1;
+  }
+  say(c, checkSummary(program_file, text, r));
+  return 0;
+}
+
+}  // namespace
+
+std::vector<Command> checkCommands(CLI::App& app, const Common& common) {
+  struct Args {
+    std::string program, dialect, machine, plan;
+  };
+  auto a = std::make_shared<Args>();
+  auto* cmd = app.add_subcommand("check", "verify an NC program on the machine: clearances swept along every move, "
+                                          "guarded probing moves with their checks, strokes, feeds, program number");
+  cmd->add_option("program", a->program, "PROGRAM: the NC program")->required();
+  cmd->add_option("--dialect", a->dialect, "linuxcnc | fanuc | haas | siemens | heidenhain | okuma")->required();
+  cmd->add_option("--machine", a->machine, "MACHINE.json")->required();
+  cmd->add_option("--plan", a->plan, "PLAN.json: the cycle's number, the spheres it touches; every probing move must "
+                                     "reach a surface");
+  return {{cmd, [a, &common] { return cmdCheck(common, a->program, a->dialect, a->machine, a->plan); }}};
+}
+
+}  // namespace rotacal

@@ -1,0 +1,25 @@
+#pragma once
+// Reads a generated (or compensated) program back into neutral motions (gcode/motion.hpp) for
+// the program verifier: one reader for the word-address dialects (linuxcnc, fanuc, haas, okuma,
+// siemens: gcode/reader.hpp's blocks plus each dialect's probing words and no-trigger checks) and
+// one for Heidenhain Klartext. A free function keyed on the dialect's name rather than a new
+// virtual of Dialect: it adds to controllers/ without touching the dialect classes, and the
+// word-address dialects share one implementation.
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "gcode/motion.hpp"
+
+namespace rotacal::ctl {
+
+/// The motions of `text` in the order the control meets them, up to and including the end of
+/// the main program. Blocks the reader cannot follow come back as Motion::Kind::Unreadable with
+/// their line and why (they are violations for the checker). Throws std::invalid_argument for a
+/// dialect without programs (csv) or an unknown one.
+std::vector<nc::Motion> readMotions(std::string_view dialect, const std::string& text);
+
+/// Whether the dialect's programs carry a program number (O word): fanuc, haas, okuma.
+bool numbersPrograms(std::string_view dialect);
+
+}  // namespace rotacal::ctl

@@ -1,0 +1,414 @@
+// The program verifier (issue 14, `rotacal check`): every program rotacal writes passes it - all
+// cycles x all dialects that write them, and every compensated program - and each kind of fault
+// it exists for is caught, one test each, by injecting it into a real program. Each fault test
+// asserts the violation the verifier names (line and kind) and, where the fault is built from a
+// clean program, that the clean one has none: removing the verifier fails them.
+#include <gtest/gtest.h>
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <regex>
+#include <string>
+#include <vector>
+
+#include "controllers/common.hpp"
+#include "controllers/dialect.hpp"
+#include "controllers/motion_reader.hpp"
+#include "core/machine.hpp"
+#include "cycles/cycle.hpp"
+#include "postproc/compensate_program.hpp"
+#include "postproc/program_check.hpp"
+#include "test_util.hpp"
+
+namespace rotacal {
+namespace {
+
+// The setup `rotacal check --plan` builds (cli/cmd_check.cpp): the plan's cycle gives the
+// number and whether the machine's artefact is on the table.
+ProgramCheckResult verify(const std::string& text, const std::string& dialect, const MachineModel& machine,
+                          const ProbePlan* plan, const LocationErrors* errors = nullptr) {
+  ProgramCheckSetup s;
+  if (errors) s.errors = *errors;
+  s.machine = &machine;
+  s.dialect = dialect;
+  s.plan = plan;
+  s.numbered = ctl::numbersPrograms(dialect);
+  if (plan) {
+    const Cycle& c = cycleOfPlan(*plan);
+    s.artefact_on_table = c.planRules().artefact_touched;
+    if (s.numbered) s.program_number = ctl::programNumber(c.name());
+  } else {
+    for (const auto& n : cycleNames()) {
+      try {
+        s.rotacal_numbers.push_back(ctl::programNumber(n));
+      } catch (const std::invalid_argument&) {
+      }
+    }
+  }
+  return checkProgram(ctl::readMotions(dialect, text), s);
+}
+
+nc::Program programOf(const ProbePlan& plan, const std::string& dialect) {
+  return cycleOfPlan(plan).program(plan, dialect);
+}
+
+std::string describe(const ProgramCheckResult& r) {
+  std::string s;
+  for (const auto& v : r.violations) s += fmt::format("  line {}: {}\n", v.line, v.problem);
+  return s;
+}
+
+// The first violation containing `what`, or nullptr.
+const ProgramViolation* find(const ProgramCheckResult& r, const std::string& what) {
+  for (const auto& v : r.violations)
+    if (v.problem.find(what) != std::string::npos) return &v;
+  return nullptr;
+}
+
+std::vector<std::string> split(const std::string& text) {
+  std::vector<std::string> out;
+  size_t start = 0;
+  while (start < text.size()) {
+    const size_t nl = text.find('\n', start);
+    out.push_back(text.substr(start, nl == std::string::npos ? std::string::npos : nl - start));
+    if (nl == std::string::npos) break;
+    start = nl + 1;
+  }
+  return out;
+}
+
+std::string joined(const std::vector<std::string>& ls) {
+  std::string s;
+  for (const auto& l : ls) s += l + "\n";
+  return s;
+}
+
+// Index of the first line that starts with `prefix` at or after `from`.
+size_t lineStarting(const std::vector<std::string>& ls, const std::string& prefix, size_t from = 0) {
+  for (size_t i = from; i < ls.size(); ++i)
+    if (ls[i].rfind(prefix, 0) == 0) return i;
+  ADD_FAILURE() << "no line starting with " << prefix;
+  return ls.size();
+}
+
+// 000 Table 4's location errors (um / mdeg) on any table kinematics: what compensate applies.
+LocationErrors table4Like(Kinematics k) {
+  const double v[8] = {14.6, 23.2, 27.7, 3.9, -0.5, -0.1, -0.5, 0.2};
+  LocationErrors e;
+  e.kinematics = k;
+  for (int i = 0; i < 8; ++i) e.setReportValue(i, v[i]);
+  return e;
+}
+
+NcSyntax syntaxOf(const std::string& d) {
+  return NcSyntax{d, 4, 5, 4, d == "siemens" ? NcSyntax::Comment::Semicolon : NcSyntax::Comment::Parentheses};
+}
+
+const std::vector<std::string> kProgramDialects = {"linuxcnc", "fanuc", "haas", "siemens", "heidenhain", "okuma"};
+
+struct Written {
+  std::string cycle, dialect, text;
+  ProbePlan plan;
+};
+
+// Every program rotacal writes for every cycle's example, in every dialect that writes it.
+std::vector<Written> everyProgram() {
+  std::vector<Written> out;
+  for (const auto& name : cycleNames()) {
+    const Cycle& c = cycleByName(name);
+    const CycleExample ex = c.example();
+    const ProbePlan plan = makePlan(name, loadMachine(test::sourcePath(ex.machine)), ex.options);
+    for (const auto& d : kProgramDialects) {
+      std::string text;
+      try {
+        text = dialectByName(d).writeProgram(c.program(plan, d));
+      } catch (const std::invalid_argument&) {
+        continue;  // the dialect refuses this cycle (docs/dialects.md)
+      }
+      out.push_back({name, d, text, plan});
+    }
+  }
+  return out;
+}
+
+// Found by the verifier and left to the space-frame planner (reported with this branch): at the
+// poses with A = -90 deg two spheres of the frame stand one above the other in machine Z, and the
+// vertical descent from the safe height to a touch of the lower sphere passes through the upper
+// one (up to 11.6 mm inside it on the example plan), or by it nearer than the required gap.
+// `generate` refuses these programs; this test fails when the planner is fixed, so that the
+// space frame joins the battery below.
+bool knownUnsafe(const std::string& cycle) { return cycle == "spaceframe"; }
+
+TEST(ProgramCheck, SpaceFrameDescentsThroughTheUpperSphereAreCaught) {
+  int flagged = 0;
+  for (const auto& w : everyProgram()) {
+    if (!knownUnsafe(w.cycle)) continue;
+    const ProgramCheckResult r = verify(w.text, w.dialect, w.plan.machine, &w.plan);
+    ASSERT_FALSE(r.violations.empty()) << w.dialect;
+    bool penetrates = false;
+    for (const auto& v : r.violations) {
+      EXPECT_NE(v.problem.find("this move comes within"), std::string::npos) << w.dialect << ": " << v.problem;
+      EXPECT_NE(v.problem.find(" of sphere "), std::string::npos) << w.dialect << ": " << v.problem;
+      penetrates = penetrates || v.problem.find("within -") != std::string::npos;
+    }
+    EXPECT_TRUE(penetrates) << w.dialect << "\n" << describe(r);
+    ++flagged;
+  }
+  EXPECT_EQ(flagged, 6);
+}
+
+TEST(ProgramCheck, PassesEveryProgramOfEveryCycleAndDialect) {
+  int programs = 0, probes = 0;
+  for (const auto& w : everyProgram()) {
+    if (knownUnsafe(w.cycle)) continue;
+    const ProgramCheckResult r = verify(w.text, w.dialect, w.plan.machine, &w.plan);
+    EXPECT_TRUE(r.violations.empty()) << w.cycle << " " << w.dialect << ":\n" << describe(r);
+    EXPECT_GT(r.motion_blocks, 0) << w.cycle << " " << w.dialect;
+    // Every touch of the plan is a probing move the simulation saw reach its surface.
+    size_t probes_in_program = 0;
+    for (const auto& op : programOf(w.plan, w.dialect).ops) probes_in_program += op.kind == nc::Op::Kind::Probe;
+    EXPECT_EQ(static_cast<size_t>(r.probing_moves), probes_in_program) << w.cycle << " " << w.dialect;
+    // Without the plan (rotacal check PROGRAM --machine M): the machine's artefact alone.
+    const ProgramCheckResult bare = verify(w.text, w.dialect, w.plan.machine, nullptr);
+    EXPECT_TRUE(bare.violations.empty()) << w.cycle << " " << w.dialect << " without the plan:\n" << describe(bare);
+    ++programs;
+    probes += r.probing_moves;
+  }
+  // touch154 and spheres3 in 6 dialects, tooltip in 4 (okuma and heidenhain refuse G93), rtest in
+  // linuxcnc only (spaceframe: above).
+  EXPECT_EQ(programs, 2 * 6 + 4 + 1);
+  RecordProperty("programs", programs);
+  RecordProperty("probing_moves", probes);
+}
+
+TEST(ProgramCheck, TheTouchProgramsKeepTheirPlannedGaps) {
+  const ProbePlan plan = test::touch154Plan();
+  const std::string text = dialectByName("fanuc").writeProgram(programOf(plan, "fanuc"));
+  const ProgramCheckResult r = verify(text, "fanuc", plan.machine, &plan);
+  ASSERT_TRUE(r.violations.empty()) << describe(r);
+  EXPECT_EQ(r.obstacles, 2);  // the column and the table
+  // The probe starts approach_mm = 5 mm from each face: the smallest gap between touches.
+  EXPECT_NEAR(r.min_clearance_mm, plan.machine.approach_mm, 1e-3);
+  EXPECT_NEAR(r.required_gap_mm, 4.5, 1e-12);
+}
+
+TEST(ProgramCheck, PassesEveryCompensatedProgram) {
+  int compensated = 0;
+  for (const auto& w : everyProgram()) {
+    if (w.dialect == "heidenhain" || w.plan.machine.kinematics == Kinematics::HeadAB) continue;  // not rewritten
+    if (knownUnsafe(w.cycle)) continue;
+    ProgramCompensationOptions o;
+    o.header = {"location errors of report.json:"};
+    const ProgramCompensation c = compensateProgram(w.text, "p", w.plan.machine, table4Like(w.plan.machine.kinematics),
+                                                    syntaxOf(w.dialect), o);
+    const ProgramCheckResult r = verify(c.text, w.dialect, w.plan.machine, &w.plan);
+    EXPECT_TRUE(r.violations.empty()) << w.cycle << " " << w.dialect << " compensated:\n" << describe(r);
+    // On the machine with the errors it is compensated for, the rewrite keeps the planned gaps
+    // (what compensate checks before writing).
+    const LocationErrors e = table4Like(w.plan.machine.kinematics);
+    const ProgramCheckResult on_machine = verify(c.text, w.dialect, w.plan.machine, &w.plan, &e);
+    EXPECT_TRUE(on_machine.violations.empty()) << w.cycle << " " << w.dialect << " on its machine:\n" << describe(on_machine);
+    if (w.cycle == "touch154") {
+      EXPECT_NEAR(on_machine.min_clearance_mm, w.plan.machine.approach_mm, 1e-3) << w.dialect;
+      EXPECT_GT(std::abs(r.min_clearance_mm - w.plan.machine.approach_mm), 5e-3) << w.dialect << ": nominally shifted";
+    }
+    if (ctl::endPointCheck(w.dialect) && ctl::expectedProbes(w.plan) > 0) {
+      EXPECT_GT(c.rewritten_checks, 0) << w.cycle << " " << w.dialect;
+    }
+    ++compensated;
+  }
+  EXPECT_EQ(compensated, 2 * 5 + 1);  // touch154, spheres3 x 5 word-address dialects; rtest
+  RecordProperty("compensated_programs", compensated);
+}
+
+// ---- Injected faults, one each ----
+
+struct Fanuc154 {
+  ProbePlan plan = test::touch154Plan();
+  std::string text = dialectByName("fanuc").writeProgram(programOf(plan, "fanuc"));
+  std::vector<std::string> ls = split(text);
+};
+
+TEST(ProgramCheckFault, RapidThroughTheArtefact) {
+  Fanuc154 f;
+  ASSERT_TRUE(verify(f.text, "fanuc", f.plan.machine, &f.plan).violations.empty());
+  // After the first touch's retract (at X58 Y-235 Z150, beside the +X face), a rapid straight
+  // across the column to the -X side and back.
+  const size_t retract = lineStarting(f.ls, "G01 X58.0000 Y-235.0000 Z150.0000 F2000.0", lineStarting(f.ls, "G31"));
+  auto ls = f.ls;
+  ls.insert(ls.begin() + static_cast<long>(retract) + 1, {"G00 X-58.0000 Y-235.0000 Z150.0000", "G00 X58.0000 Y-235.0000 Z150.0000"});
+  const ProgramCheckResult r = verify(joined(ls), "fanuc", f.plan.machine, &f.plan);
+  const ProgramViolation* v = find(r, "of the artefact");
+  ASSERT_NE(v, nullptr) << describe(r);
+  EXPECT_EQ(v->line, static_cast<int>(retract) + 2);
+  EXPECT_NE(v->problem.find("must be a guarded probing move"), std::string::npos) << v->problem;
+}
+
+// A/C table at A = -90: the column lies on its side, its top toward machine -Y; at C = 180 deg
+// it hangs above the rotary centre, its body at machine Z 150..250, Y -170..-20, X -50..50. The
+// probe stands at X0 Y-95 Z130: the ball 17 mm below the column, its 50 mm stylus reaching up into
+// the column's place. Turning C from 120 to 240 deg there sweeps the column through the stylus,
+// while both end poses are clear (the column then stands 173 mm to either side): only the sweep
+// shows it.
+const char* kStylusProgram = R"(%
+O7154(ROTACAL TEST)
+G21
+G17 G40 G49 G80 G90 G94
+G00 Z319.4311
+G00 A-90.0000 C120.0000
+G00 X0.0000 Y-95.0000 Z319.4311
+G00 X0.0000 Y-95.0000 Z130.0000
+{}
+M30
+%
+)";
+
+TEST(ProgramCheckFault, StylusSweptThroughTheArtefactOnARotaryMove) {
+  const MachineModel m = test::acMachine();
+  // The end poses are clear: the probe reaches the same place at C = -60 (above) and at C = +60.
+  const std::string at_end = fmt::format(kStylusProgram, "G00 Z319.4311\nG00 C240.0000\nG00 X0.0000 Y-95.0000 Z130.0000");
+  const ProgramCheckResult clear = verify(at_end, "fanuc", m, nullptr);
+  EXPECT_TRUE(clear.violations.empty()) << describe(clear);
+  // Turning there: caught on the rotary line.
+  const std::string swept = fmt::format(kStylusProgram, "G00 C240.0000");
+  const ProgramCheckResult r = verify(swept, "fanuc", m, nullptr);
+  const ProgramViolation* v = find(r, "of the artefact");
+  ASSERT_NE(v, nullptr) << describe(r);
+  EXPECT_EQ(v->line, 9);
+  EXPECT_EQ(r.violations.size(), 1u) << describe(r);
+  // The stylus, not the ball: 30 mm of it inside the column (and the ball's radius).
+  EXPECT_NE(v->problem.find("within -33.000 mm"), std::string::npos) << v->problem;
+}
+
+TEST(ProgramCheckFault, MissingTriggerCheck) {
+  Fanuc154 f;
+  // The first G31's three end-point statements and its test, removed.
+  const size_t g31 = lineStarting(f.ls, "G31");
+  auto ls = f.ls;
+  ASSERT_EQ(ls[g31 + 4].rfind("IF[", 0), 0u) << ls[g31 + 4];
+  ls.erase(ls.begin() + static_cast<long>(g31) + 1, ls.begin() + static_cast<long>(g31) + 6);
+  const ProgramCheckResult r = verify(joined(ls), "fanuc", f.plan.machine, &f.plan);
+  const ProgramViolation* v = find(r, "without its no-trigger check");
+  ASSERT_NE(v, nullptr) << describe(r);
+  EXPECT_EQ(v->line, static_cast<int>(g31) + 1);
+  EXPECT_EQ(r.violations.size(), 1u) << describe(r);
+}
+
+TEST(ProgramCheckFault, StaleCheckEndPointInACompensatedProgram) {
+  for (const char* d : {"fanuc", "haas", "okuma", "siemens"}) {
+    const ProbePlan plan = test::touch154Plan();
+    const std::string text = dialectByName(d).writeProgram(programOf(plan, d));
+    ProgramCompensationOptions o;
+    const std::string comp =
+        compensateProgram(text, "p", plan.machine, table4Like(Kinematics::TableAC), syntaxOf(d), o).text;
+    ASSERT_TRUE(verify(comp, d, plan.machine, &plan).violations.empty()) << d;
+    // The defect compensate once had: the moves rewritten, the checks left with the old end point.
+    const ctl::EndPointCheck form = *ctl::endPointCheck(d);
+    auto old_ls = split(text);
+    auto ls = split(comp);
+    size_t first_old = 0, first_new = 0;
+    for (; first_old < old_ls.size(); ++first_old)
+      if (ctl::parseEndPointCheckStatement(form, old_ls[first_old])) break;
+    for (; first_new < ls.size(); ++first_new)
+      if (ctl::parseEndPointCheckStatement(form, ls[first_new])) break;
+    ASSERT_LT(first_new, ls.size()) << d;
+    ASSERT_NE(ls[first_new], old_ls[first_old]) << d << ": compensation moves the first end point";
+    ls[first_new] = old_ls[first_old];
+    const ProgramCheckResult r = verify(joined(ls), d, plan.machine, &plan);
+    const ProgramViolation* v = find(r, "a stale check");
+    ASSERT_NE(v, nullptr) << d << "\n" << describe(r);
+    EXPECT_EQ(v->line, static_cast<int>(first_new) + 1) << d;
+    EXPECT_EQ(r.violations.size(), 1u) << d << "\n" << describe(r);
+  }
+}
+
+TEST(ProgramCheckFault, StaleHeidenhainCheck) {
+  const ProbePlan plan = test::touch154Plan();
+  const std::string text = dialectByName("heidenhain").writeProgram(programOf(plan, "heidenhain"));
+  ASSERT_TRUE(verify(text, "heidenhain", plan.machine, &plan).violations.empty());
+  // The first FN 12 test moved 40 um: it no longer guards the travel the header asks for.
+  const std::string stale = std::regex_replace(text, std::regex(R"(IF \+Q10 LT \+51\.0100)"), "IF +Q10 LT +51.0500",
+                                               std::regex_constants::format_first_only);
+  ASSERT_NE(stale, text);
+  const ProgramCheckResult r = verify(stale, "heidenhain", plan.machine, &plan);
+  ASSERT_NE(find(r, "a stale check"), nullptr) << describe(r);
+}
+
+TEST(ProgramCheckFault, PoseOutOfStroke) {
+  Fanuc154 f;
+  // The first index, written 0.5 mdeg past A's stroke [-110, 20] (what compensate once wrote).
+  const size_t index = lineStarting(f.ls, "G00 A0.0000 C0.0000");
+  auto ls = f.ls;
+  ls[index] = "G00 A-110.0005 C0.0000";
+  const ProgramCheckResult r = verify(joined(ls), "fanuc", f.plan.machine, &f.plan);
+  const ProgramViolation* v = find(r, "A = -110.0005 deg (papers' convention) is outside the A stroke [-110, 20]");
+  ASSERT_NE(v, nullptr) << describe(r);
+  EXPECT_EQ(v->line, static_cast<int>(index) + 1);
+  // And a linear word: Z past its stroke [-140, 400].
+  ls = f.ls;
+  const size_t climb = lineStarting(f.ls, "G00 Z319.4311");
+  ls[climb] = "G00 Z400.5000";
+  const ProgramCheckResult z = verify(joined(ls), "fanuc", f.plan.machine, &f.plan);
+  const ProgramViolation* vz = find(z, "Z = 400.5000 mm is outside the Z stroke");
+  ASSERT_NE(vz, nullptr) << describe(z);
+  EXPECT_EQ(vz->line, static_cast<int>(climb) + 1);
+}
+
+TEST(ProgramCheckFault, InverseTimeBlockWithoutF) {
+  const Cycle& tooltip = cycleByName("tooltip");
+  const CycleExample ex = tooltip.example();
+  const ProbePlan plan = makePlan("tooltip", loadMachine(test::sourcePath(ex.machine)), ex.options);
+  for (const char* d : {"linuxcnc", "fanuc"}) {
+    const std::string text = dialectByName(d).writeProgram(tooltip.program(plan, d));
+    ASSERT_TRUE(verify(text, d, plan.machine, &plan).violations.empty()) << d;
+    // The second move under G93 loses its F (004's sample writes F once; controls want it on every block).
+    auto ls = split(text);
+    const size_t g93 = lineStarting(ls, std::string(d) == "linuxcnc" ? "G91 G01 G93" : "G91 G01 G93");
+    size_t moves = 0, at = g93 + 1;
+    for (; at < ls.size(); ++at)
+      if (ls[at].find('F') != std::string::npos && (ls[at][0] == 'Y' || ls[at][0] == 'X' || ls[at][0] == 'Z' || ls[at][0] == 'A' || ls[at][0] == 'B'))
+        if (++moves == 2) break;
+    ASSERT_LT(at, ls.size()) << d << ": no second G93 move";
+    ls[at] = std::regex_replace(ls[at], std::regex(R"(F[0-9.]+)"), "");
+    const ProgramCheckResult r = verify(joined(ls), d, plan.machine, &plan);
+    const ProgramViolation* v = find(r, "inverse-time (G93) move without F");
+    ASSERT_NE(v, nullptr) << d << "\n" << describe(r);
+    EXPECT_EQ(v->line, static_cast<int>(at) + 1) << d;
+    EXPECT_EQ(r.violations.size(), 1u) << d << "\n" << describe(r);
+  }
+}
+
+TEST(ProgramCheckFault, WrongOrDuplicateProgramNumber) {
+  const MachineModel m = test::acMachine();
+  const ProbePlan plan = makePlan("spheres3", m, {});
+  const std::string text = dialectByName("fanuc").writeProgram(programOf(plan, "fanuc"));
+  ASSERT_TRUE(verify(text, "fanuc", m, &plan).violations.empty());
+  // spheres3 numbered like touch154: the two would overwrite each other in the control.
+  const std::string dup = std::regex_replace(text, std::regex("\nO7001"), "\nO7154", std::regex_constants::format_first_only);
+  ASSERT_NE(dup, text);
+  const ProgramCheckResult r = verify(dup, "fanuc", m, &plan);
+  const ProgramViolation* v = find(r, "program number 7154 is not this cycle's (7001)");
+  ASSERT_NE(v, nullptr) << describe(r);
+  EXPECT_EQ(v->line, 2);
+  // Without the plan: a number none of rotacal's cycles has, and a second number.
+  const std::string foreign = std::regex_replace(text, std::regex("\nO7001"), "\nO1234", std::regex_constants::format_first_only);
+  ASSERT_NE(find(verify(foreign, "fanuc", m, nullptr), "none of rotacal's cycle numbers"), nullptr);
+  const std::string two = std::regex_replace(text, std::regex("\nG21\n"), "\nO7002\nG21\n", std::regex_constants::format_first_only);
+  ASSERT_NE(find(verify(two, "fanuc", m, &plan), "a second program number"), nullptr);
+}
+
+TEST(ProgramCheckFault, FeedMoveBeforeAnyFeed) {
+  const MachineModel m = test::acMachine();
+  const std::string p = "%\nO7154(T)\nG21\nG90 G94\nG00 Z319.4311\nG00 A0.0000 C0.0000\nG00 X0.0000 Y0.0000 Z319.4311\n"
+                        "G01 X10.0000 Y0.0000 Z319.4311\nM30\n%\n";
+  const ProgramCheckResult r = verify(p, "fanuc", m, nullptr);
+  const ProgramViolation* v = find(r, "feed move before any feed is set");
+  ASSERT_NE(v, nullptr) << describe(r);
+  EXPECT_EQ(v->line, 8);
+  const std::string with_f = std::regex_replace(p, std::regex("Z319.4311\nM30"), "Z319.4311 F500.\nM30");
+  EXPECT_TRUE(verify(with_f, "fanuc", m, nullptr).violations.empty()) << describe(verify(with_f, "fanuc", m, nullptr));
+}
+
+}  // namespace
+}  // namespace rotacal
