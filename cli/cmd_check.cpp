@@ -38,15 +38,9 @@ ProgramCheckResult verifyProgram(const std::string& text, const std::string& dia
     // table while it runs (a cycle whose artefact is another, e.g. a sensor nest, says not).
     const Cycle& cycle = cycleOfPlan(*plan);
     s.artefact_on_table = cycle.planRules().artefact_touched;
-    if (s.numbered) s.program_number = ctl::programNumber(cycle.name());
+    if (s.numbered) s.program_number = cycle.programNumber();
   } else if (rotacal_number) {
-    for (const auto& n : cycleNames()) {
-      try {
-        s.rotacal_numbers.push_back(ctl::programNumber(n));
-      } catch (const std::invalid_argument&) {
-        // a cycle without a program number writes no numbered program
-      }
-    }
+    for (const Cycle* c : cycles()) s.rotacal_numbers.push_back(c->programNumber());
   }
   return checkProgram(ctl::readMotions(dialect, text), s);
 }

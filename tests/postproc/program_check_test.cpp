@@ -37,14 +37,9 @@ ProgramCheckResult verify(const std::string& text, const std::string& dialect, c
   if (plan) {
     const Cycle& c = cycleOfPlan(*plan);
     s.artefact_on_table = c.planRules().artefact_touched;
-    if (s.numbered) s.program_number = ctl::programNumber(c.name());
+    if (s.numbered) s.program_number = c.programNumber();
   } else {
-    for (const auto& n : cycleNames()) {
-      try {
-        s.rotacal_numbers.push_back(ctl::programNumber(n));
-      } catch (const std::invalid_argument&) {
-      }
-    }
+    for (const Cycle* c : cycles()) s.rotacal_numbers.push_back(c->programNumber());
   }
   return checkProgram(ctl::readMotions(dialect, text), s);
 }
@@ -213,7 +208,7 @@ TEST(ProgramCheck, PassesEveryCompensatedProgram) {
       EXPECT_NEAR(on_machine.min_clearance_mm, w.plan.machine.approach_mm, 1e-3) << w.dialect;
       EXPECT_GT(std::abs(r.min_clearance_mm - w.plan.machine.approach_mm), 5e-3) << w.dialect << ": nominally shifted";
     }
-    if (ctl::endPointCheck(w.dialect) && ctl::expectedProbes(w.plan) > 0) {
+    if (ctl::endPointCheck(w.dialect) && test::shapeOf(w.plan, w.dialect).probes > 0) {
       EXPECT_GT(c.rewritten_checks, 0) << w.cycle << " " << w.dialect;
     }
     ++compensated;

@@ -115,7 +115,7 @@ TEST(TooltipProgram, DialectsWhereG93IsUnverifiedRefuseInverseTimeWithTheReason)
       const std::string m = e.what();
       EXPECT_NE(m.find("inverse-time"), std::string::npos) << m;
       EXPECT_NE(m.find(section), std::string::npos) << m;
-      EXPECT_NE(m.find("tooltip"), std::string::npos) << m;
+      EXPECT_NE(m.find("moves under inverse time"), std::string::npos) << m;
     }
   }
   // Their checkers flag a G93 in a tooltip program with the same reason.
