@@ -151,14 +151,16 @@ TEST(SpaceframeDiagnosis, FrameTemperatureIsConfoundedWithScaleFromTheJacobians)
   SpaceframeDiagnosisOptions o = optionsFor(plan);
   const SpaceframeDiagnosis d = diagnoseSpaceframe(plan, runs, o);
   EXPECT_TRUE(confounded(d.judged, "frame_temperature", "linear_axis_scale")) << spaceframeDiagnosisText(d);
-  // Closed form: a uniform expansion e of the frame about its origin moves each centre as an
-  // isotropic machine scale s = e does, less a setup translation: the columns agree up to J0.
+  // Closed form: the axes read a centre at actual / (1 + s), so an isotropic scale s moves every
+  // read centre by -s x_m; a uniform expansion e of the frame about its origin moves it by
+  // +e (x_m - the rotated origin), and the origin term is a setup translation: iso + e lies in
+  // the baseline's span.
   const auto& causes = d.problem.causes;
   ASSERT_EQ(causes[0].name, "linear_axis_scale");
   ASSERT_EQ(causes[3].name, "frame_temperature");
   const Eigen::VectorXd iso = causes[0].J.rowwise().sum(), e = causes[3].J.col(0);
   const Eigen::MatrixXd X = d.problem.J0;
-  const Eigen::VectorXd diff = iso - e;
+  const Eigen::VectorXd diff = iso + e;
   const Eigen::VectorXd rest = diff - X * X.completeOrthogonalDecomposition().solve(diff);
   EXPECT_LT(rest.norm(), 1e-3 * e.norm());
   // Without the scale candidate the entry goes: frame_temperature is not in the baseline's span.
