@@ -19,7 +19,7 @@
 
 #include "cycles/cycle.hpp"
 #include "controllers/dialect.hpp"
-#include "core/causes.hpp"
+#include "cycles/touch154/causes.hpp"
 #include "cycles/touch154/closed_form.hpp"
 #include "core/contributors.hpp"
 #include "core/identification.hpp"

@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <Eigen/SVD>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -287,7 +288,7 @@ class LsqModel {
 };
 
 IdentificationResult leastSquares(const ProbePlan& plan, const std::vector<Observation>& all_obs,
-                                  const IdentificationOptions& options) {
+                                  const IdentificationOptions& options, Eigen::VectorXd* theta_out = nullptr) {
   IdentificationResult out;
   out.method = options.method;
   out.estimate.kinematics = plan.machine.kinematics;
@@ -391,6 +392,7 @@ IdentificationResult leastSquares(const ProbePlan& plan, const std::vector<Obser
     ++out.holdout_points;
   }
   out.holdout_rms_um = out.holdout_points ? std::sqrt(held_ss / out.holdout_points) : 0.0;
+  if (theta_out) *theta_out = theta;
   if (out.summary.termination == Termination::Converged)
     out.summary.message = fmt::format("converged in {} iterations", out.summary.iterations);
   else
@@ -399,6 +401,63 @@ IdentificationResult leastSquares(const ProbePlan& plan, const std::vector<Obser
 }
 
 }  // namespace
+
+Linearisation lineariseAtBaseline(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
+                                  const IdentificationOptions& options, const std::vector<ExtensionPtr>& candidates) {
+  Linearisation lin;
+  IdentificationOptions base = options;
+  base.extensions.clear();
+  base.hold_out = nullptr;
+  lin.baseline = identify(plan, runs, base);
+  if (lin.baseline.summary.termination != Termination::Converged) return lin;
+  std::string why;
+  const auto obs = collect(plan, runs, base, &why);
+  Eigen::VectorXd theta0;
+  leastSquares(plan, obs, base, &theta0);  // deterministic: the same solution as lin.baseline
+  LsqModel model(plan, obs, base.method, candidates);
+  const int p0 = static_cast<int>(theta0.size());
+  const int nuis = p0 - kNumLocationErrors;
+  Eigen::VectorXd theta = Eigen::VectorXd::Zero(model.size());
+  theta.head<kNumLocationErrors>() = theta0.head<kNumLocationErrors>();
+  theta.tail(nuis) = theta0.tail(nuis);
+  model.updateNormals(theta);
+  Eigen::VectorXd res;
+  Eigen::MatrixXd J;
+  model.evaluate(theta, &res, &J);
+  lin.residual_um = mmToUm(1.0) * res;
+  const auto& params = locationParameters(plan.machine.kinematics);
+  lin.J0.resize(J.rows(), p0);
+  for (int j = 0; j < kNumLocationErrors; ++j) {
+    const bool angle = params[static_cast<size_t>(j)].kind == ParamKind::Angle;
+    // um of trigger per report unit: mm -> um (x1000) per um (x1e-3), or per mdeg.
+    const double per_report = angle ? mmToUm(1.0) * degToRad(1e-3) : 1.0;
+    lin.J0.col(j) = J.col(j) * per_report;
+    lin.J0_names.emplace_back(params[static_cast<size_t>(j)].name);
+    lin.J0_units.emplace_back(reportUnit(params[static_cast<size_t>(j)].kind));
+  }
+  lin.J0.rightCols(nuis) = J.rightCols(nuis);  // mm per mm = um per um
+  // The per-point offsets in LsqModel's order (first appearance of each target), named by target.
+  std::vector<int> targets;
+  for (const auto& o : obs)
+    if (std::find(targets.begin(), targets.end(), o.point->target) == targets.end()) targets.push_back(o.point->target);
+  for (int k = 0; k < nuis; ++k) {
+    lin.J0_names.push_back(k < static_cast<int>(targets.size()) ? fmt::format("offset_target{}", targets[static_cast<size_t>(k)])
+                                                                : fmt::format("nuisance_{}", k + 1));
+    lin.J0_units.emplace_back("um");
+  }
+  int col = kNumLocationErrors;
+  for (const auto& x : candidates) {
+    const auto ps = x->parameters();
+    Eigen::MatrixXd Jx(J.rows(), static_cast<Eigen::Index>(ps.size()));
+    for (size_t k = 0; k < ps.size(); ++k)
+      Jx.col(static_cast<Eigen::Index>(k)) = J.col(col + static_cast<int>(k)) * mmToUm(1.0) / ps[k].to_report;
+    col += static_cast<int>(ps.size());
+    lin.extension_J.push_back(Jx);
+  }
+  for (const auto& o : obs) lin.observations.push_back({o.run, o.point, o.t_h});
+  lin.ok = true;
+  return lin;
+}
 
 IdentificationResult identify(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
                               const IdentificationOptions& options) {

@@ -94,6 +94,33 @@ struct IdentificationResult {
 IdentificationResult identify(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
                               const IdentificationOptions& options);
 
+/// The least-squares problem linearised at the baseline's solution (issue 16: the judge works on
+/// it). The baseline (location errors + nuisance, no extension) is fitted to convergence; then
+/// the model with the candidate extensions, all at zero, is differentiated there: the baseline's
+/// columns analytically, the extensions' by central differences of the exact model (the same
+/// columns the identification itself uses when it fits them).
+struct Linearisation {
+  IdentificationResult baseline;                  // the converged baseline fit
+  struct Observation {
+    int run = 0;
+    const ProbePoint* point = nullptr;
+    double t_h = 0.0;                             // relative to the data's mean time
+  };
+  std::vector<Observation> observations;          // fitted ones, in the residuals' order
+  Eigen::VectorXd residual_um;                    // measured - baseline model
+  /// d(model, um) / d(parameter, report unit): location errors (um, mdeg) then nuisance (mm of
+  /// surface offset per target: um).
+  Eigen::MatrixXd J0;
+  std::vector<std::string> J0_names, J0_units;
+  std::vector<Eigen::MatrixXd> extension_J;       // per extension: um per its report unit
+  bool ok = false;                                // false: the baseline did not converge
+};
+
+/// Linearises the least-squares problem (options.method must be a least-squares method; its
+/// `extensions` are ignored: `candidates` are differentiated, not fitted).
+Linearisation lineariseAtBaseline(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
+                                  const IdentificationOptions& options, const std::vector<ExtensionPtr>& candidates);
+
 /// Observation time (s) of a trigger: its own clock when the controller has one, else the
 /// plan's t_s plus one cycle duration (plus one minute) per earlier repeat.
 double observationTime_s(const ProbePlan& plan, int run, const ProbePoint& point, const TriggerPoint& trigger);

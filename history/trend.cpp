@@ -5,7 +5,7 @@
 
 #include <Eigen/Dense>
 
-#include "core/diagnosis.hpp"  // chiSquareSurvival
+#include "core/statistics.hpp"  // chiSquareSurvival
 
 namespace rotacal::history {
 

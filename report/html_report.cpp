@@ -381,9 +381,14 @@ std::string analyzeBody(const Json& doc) {
 
 std::string diagnoseBody(const Json& doc) {
   std::string s;
-  const bool found = str(doc, "verdict") == "effect_found";
-  s += fmt::format("<p class=\"verdict {}\">{}</p>\n", found ? "found" : "none",
-                   found ? "The model misses an effect: see the findings." : "No significant effect beyond the location errors.");
+  // The judge's three verdicts (issue 16); its message says why, in words true for each.
+  const std::string verdict = str(doc, "verdict");
+  const bool found = verdict == "effect_found", inadequate = verdict == "model_inadequate";
+  s += fmt::format("<p class=\"verdict {}\">{}</p>\n", found || inadequate ? "found" : "none",
+                   found        ? "The model misses an effect: see the findings."
+                   : inadequate ? "The model does not explain the data within the declared noise, and no catalogued cause does."
+                                : "No significant effect beyond the location errors.");
+  if (doc.contains("message")) s += "<p>" + escape(str(doc, "message")) + "</p>\n";
   const Json base = doc.value("baseline", Json::object());
   s += "<h2>Disagreement of the baseline model</h2><table>";
   s += row({"model", escape(str(base, "model"))});

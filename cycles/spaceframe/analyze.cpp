@@ -235,13 +235,13 @@ SphereFitOptions fitOptions(const ProbePlan& plan, const ProbePoint& touch) {
 
 Eigen::Vector3d FrameModel::fittedCentre_m(const ProbePlan& plan, const FramePoint& p, const Eigen::Vector3d& origin_w) const {
   const Eigen::Vector3d x = actualCentre_m(p, origin_w);
-  const Eigen::Vector3d k = Eigen::Vector3d::Ones() + scale;  // actual = diag(k) read
+  const Eigen::Matrix3d K = Eigen::Matrix3d((Eigen::Vector3d::Ones() + scale).asDiagonal()) + shear;  // actual = K read
   std::vector<Eigen::Vector3d> t;
   for (int id : p.point_ids) {
     const ProbePoint& q = *plan.findPoint(id);
     const double rho = q.sphere->radius_mm + plan.machine.probe.ball_radius_mm();
-    // The reading moves as c0 + s u, the ball as diag(k) (c0 + s u): |a + s b| = rho.
-    const Eigen::Vector3d a = k.cwiseProduct(q.trigger_m_mm) - x, b = k.cwiseProduct(q.approach_m);
+    // The reading moves as c0 + s u, the ball as K (c0 + s u): |a + s b| = rho.
+    const Eigen::Vector3d a = K * q.trigger_m_mm - x, b = K * q.approach_m;
     const double bb = b.squaredNorm(), ab = a.dot(b);
     const double disc = ab * ab - bb * (a.squaredNorm() - rho * rho);
     if (disc < 0) throw std::invalid_argument(fmt::format("point {}: the model's probe misses the sphere", id));

@@ -69,6 +69,9 @@ struct FrameModel {
                                                       Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
                                                       Eigen::Vector3d::Zero()};  // Eigen does not zero by itself
 
+  /// Off-diagonal part of the linear axes' map (actual = (diag(1 + scale) + shear) read):
+  /// squareness, which only the diagnosis adds (not a fitted parameter of the analysis).
+  Eigen::Matrix3d shear = Eigen::Matrix3d::Zero();
   static constexpr int kRigidSize = kNumLocationErrors + 9;  // errors, scale, setup
   static constexpr int kSize = kRigidSize + 21;                // + sphere offsets
   Eigen::Matrix<double, kSize, 1> toVector() const;  // mm, rad, 1

@@ -1,5 +1,4 @@
 // spaceframe (003): length errors of a 7-sphere frame against U = +-(A + K L), and what explains them.
-#include "core/diagnosis.hpp"
 #include "core/errors.hpp"
 #include "cycles/spaceframe/analyze.hpp"
 #include "cycles/spaceframe/diagnose.hpp"
@@ -44,11 +43,11 @@ class Spaceframe final : public Cycle {
 
   CycleDocuments diagnose(const DiagnoseRequest& r) const override {
     const ProbePlan& plan = *r.plan;
-    DiagnosisOptions o;
-    o.alpha = r.alpha;
-    o.prior_sigma_um = plan.machine.probe.repeatability_um;
+    SpaceframeDiagnosisOptions o;
+    o.judge.alpha = r.alpha;
+    o.sigma_um = plan.machine.probe.repeatability_um;  // declared, never the fits' own
     const SpaceframeDiagnosis d = diagnoseSpaceframe(plan, readProbeRuns(plan, r.results, *r.dialect), o);
-    if (!d.baseline.converged || !d.candidate.converged)
+    if (!d.baseline.converged)
       throw InputError(r.results.front().path, 0, "spaceframe diagnosis: a model fit did not converge");
     CycleDocuments out;
     out.text = spaceframeDiagnosisText(d);

@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <algorithm>
 #include <map>
 #include <stdexcept>
 
@@ -32,12 +33,28 @@ struct Problem {
 
   int n() const { return static_cast<int>(points.size()); }
   // Whitened residual (um per unit touch sigma), and the plain one (um), of every centre.
+  std::vector<double> t_h;  // each centre's mean touch time, hours from the data's mean
   void residuals(const ModelVector& x, Eigen::VectorXd* w, Eigen::VectorXd* plain) const {
-    const FrameModel fm = FrameModel::fromVector(kin, x);
+    residuals(x, Causes{}, w, plain);
+  }
+  // The same with the causes' parameters (internal units: mm/mm, mm/h, 1).
+  struct Causes {
+    Eigen::Vector3d squareness = Eigen::Vector3d::Zero();  // S_xy, S_xz, S_yz
+    Eigen::Vector3d drift = Eigen::Vector3d::Zero();       // first three location errors per hour
+    double frame_expansion = 0.0;
+  };
+  void residuals(const ModelVector& x, const Causes& c, Eigen::VectorXd* w, Eigen::VectorXd* plain) const {
+    FrameModel fm = FrameModel::fromVector(kin, x);
+    fm.shear << 0.0, c.squareness[0], c.squareness[1], 0.0, 0.0, c.squareness[2], 0.0, 0.0, 0.0;
+    const ErrorVector e0 = fm.errors.values;
     w->resize(3 * n());
     if (plain) plain->resize(3 * n());
     for (int i = 0; i < n(); ++i) {
-      const Eigen::Vector3d r = mmToUm(1.0) * (measured_m_mm[i] - fm.fittedCentre_m(*plan, points[i], origin_w_mm));
+      FramePoint p = points[i];
+      p.center_w_mm *= 1.0 + c.frame_expansion;
+      fm.errors.values = e0;
+      fm.errors.values.head<3>() += c.drift * t_h[static_cast<size_t>(i)];
+      const Eigen::Vector3d r = mmToUm(1.0) * (measured_m_mm[i] - fm.fittedCentre_m(*plan, p, origin_w_mm));
       w->segment<3>(3 * i) = W[i] * r;
       if (plain) plain->segment<3>(3 * i) = r;
     }
@@ -59,18 +76,6 @@ struct Problem {
     return J;
   }
 };
-
-Eigen::VectorXd rowsOf(const Eigen::VectorXd& v, const std::vector<int>& rows) {
-  Eigen::VectorXd out(3 * static_cast<Eigen::Index>(rows.size()));
-  for (size_t k = 0; k < rows.size(); ++k) out.segment<3>(3 * static_cast<Eigen::Index>(k)) = v.segment<3>(3 * rows[k]);
-  return out;
-}
-Eigen::MatrixXd rowsOf(const Eigen::MatrixXd& J, const std::vector<int>& rows) {
-  Eigen::MatrixXd out(3 * static_cast<Eigen::Index>(rows.size()), J.cols());
-  for (size_t k = 0; k < rows.size(); ++k)
-    out.middleRows<3>(3 * static_cast<Eigen::Index>(k)) = J.middleRows<3>(3 * rows[k]);
-  return out;
-}
 
 // Weighted Gauss-Newton on every centre, from zero. Returns the Jacobian of the last iterate for
 // the held-out refits.
@@ -116,42 +121,17 @@ SpaceframeFit fitAll(const Problem& pb, const std::vector<int>& active, double s
   return f;
 }
 
-// Leave one orientation out: refit on the rest (chord Newton from the full-data solution with its
-// Jacobian, the exact residual each step), predict the left-out centres exactly. Plain um rms.
-std::pair<double, int> leaveOneOrientationOut(const Problem& pb, const SpaceframeFit& full, const Eigen::MatrixXd& J,
-                                              const std::vector<int>& group, int groups) {
-  double ss = 0.0;
-  int count = 0;
-  const ModelVector x_full = full.model.toVector();
-  for (int g = 0; g < groups; ++g) {
-    std::vector<int> train, test;
-    for (int i = 0; i < pb.n(); ++i) (group[static_cast<size_t>(i)] == g ? test : train).push_back(i);
-    if (test.empty()) continue;
-    const Eigen::MatrixXd Jt = rowsOf(J, train);
-    Eigen::JacobiSVD<Eigen::MatrixXd> svd(Jt, Eigen::ComputeThinU | Eigen::ComputeThinV);
-    svd.setThreshold(1e-10);
-    ModelVector x = x_full;
-    Eigen::VectorXd w, plain;
-    for (int it = 0; it < 3; ++it) {
-      pb.residuals(x, &w, nullptr);
-      const Eigen::VectorXd step = svd.solve(rowsOf(w, train));
-      for (size_t k = 0; k < full.active.size(); ++k)
-        x[full.active[k]] += step[static_cast<Eigen::Index>(k)] / pb.unit[full.active[k]];
-    }
-    pb.residuals(x, &w, &plain);
-    const Eigen::VectorXd r = rowsOf(plain, test);
-    ss += r.squaredNorm();
-    count += static_cast<int>(r.size());
-  }
-  return {count ? std::sqrt(ss / count) : 0.0, count};
-}
-
 }  // namespace
 
+std::vector<std::string> spaceframeCatalog() {
+  return {"linear_axis_scale", "linear_axis_squareness", "thermal_drift", "frame_temperature"};
+}
+
 SpaceframeDiagnosis diagnoseSpaceframe(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
-                                       const DiagnosisOptions& options) {
+                                       const SpaceframeDiagnosisOptions& options) {
   std::string why;
-  if (!options.validate(&why)) throw std::invalid_argument("diagnosis options: " + why);
+  if (!options.judge.validate(&why)) throw std::invalid_argument("diagnosis options: " + why);
+  if (!(options.sigma_um > 0)) throw std::invalid_argument("diagnosis options: the declared probe noise must be > 0 um");
   // The sphere fits and measured centres of the analysis (its own identification is not used).
   SpaceframeOptions so;
   so.max_iterations = 1;
@@ -174,61 +154,119 @@ SpaceframeDiagnosis diagnoseSpaceframe(const ProbePlan& plan, const std::vector<
     ss_fit += fit.residual_rms_um * fit.residual_rms_um * fit.triggers;
     dof_fit += fit.dof;
   }
+  // Each centre's time: the mean of its touches' planned times (repeats shift every centre alike).
+  double t_mean = 0.0;
+  for (const auto& f : pb.points) {
+    double t = 0.0;
+    for (int id : f.point_ids) t += plan.findPoint(id)->t_s;
+    pb.t_h.push_back(t / static_cast<double>(std::max<size_t>(1, f.point_ids.size())) / 3600.0);
+    t_mean += pb.t_h.back();
+  }
+  t_mean /= std::max(1, pb.n());
+  for (auto& t : pb.t_h) t -= t_mean;
+
   SpaceframeDiagnosis d;
   d.centres = pb.n();
   d.fit_noise_um = dof_fit > 0 ? std::sqrt(ss_fit / dof_fit) : 0.0;
-  d.sigma_um = std::max(options.prior_sigma_um, d.fit_noise_um);
+  d.sigma_um = options.sigma_um;
 
+  JudgeProblem& jp = d.problem;
   // One orientation: the pose's A and C modulo 360 (theta = 0 and 360 are the same table pose).
   std::map<std::pair<long, long>, int> ids;
-  std::vector<int> group;
-  for (const auto& f : pb.points) {
-    const long c = std::lround(std::fmod(std::fmod(f.pose.C, 360.0) + 360.0, 360.0) * 1e6);
-    const auto key = std::make_pair(std::lround(f.pose.A * 1e6), c);
-    const auto it = ids.emplace(key, static_cast<int>(ids.size())).first;
-    group.push_back(it->second);
+  JudgeFactor sphere{"sphere", {}, {}, ""}, c_angle{"C", {}, {}, ""}, a_angle{"A", {}, {}, ""}, time{"time", {}, {}, "h"};
+  JudgeFactor xyz[3] = {{"X", {}, {}, "mm"}, {"Y", {}, {}, "mm"}, {"Z", {}, {}, "mm"}};
+  for (int i = 0; i < pb.n(); ++i) {
+    const FramePoint& f = pb.points[static_cast<size_t>(i)];
+    const double c360 = std::fmod(std::fmod(f.pose.C, 360.0) + 360.0, 360.0);
+    const auto key = std::make_pair(std::lround(f.pose.A * 1e6), std::lround(c360 * 1e6));
+    const int g = ids.emplace(key, static_cast<int>(ids.size())).first->second;
+    for (int k = 0; k < 3; ++k) {  // three coordinates per centre, one group
+      jp.groups.push_back(g);
+      sphere.levels.push_back(std::to_string(f.sphere));
+      c_angle.levels.push_back(fmt::format("{:g}", c360));
+      a_angle.levels.push_back(fmt::format("{:g}", f.pose.A));
+      time.values.push_back(pb.t_h[static_cast<size_t>(i)]);
+      for (int ax = 0; ax < 3; ++ax) xyz[ax].values.push_back(f.nominal_m_mm[ax]);
+    }
   }
   d.holdout_groups = static_cast<int>(ids.size());
+  jp.group_name = "orientation";
+  jp.factors = {sphere, c_angle, a_angle, time, xyz[0], xyz[1], xyz[2]};
 
+  // Baseline: location errors and the frame, never the scale.
   const std::vector<int> full = activeParameters(layout.nominal_from == "initial");
   std::vector<int> base;
   for (int i : full)
     if (!isScale(i)) base.push_back(i);
-  Eigen::MatrixXd Jb, Jc;
+  Eigen::MatrixXd Jb;
   d.baseline = fitAll(pb, base, d.sigma_um, &Jb);
-  d.candidate = fitAll(pb, full, d.sigma_um, &Jc);
-  d.baseline_p_value = chiSquareSurvival(d.baseline.chi2, d.baseline.dof);
-  const auto [hb, nb] = leaveOneOrientationOut(pb, d.baseline, Jb, group, d.holdout_groups);
-  const auto [hc, nc] = leaveOneOrientationOut(pb, d.candidate, Jc, group, d.holdout_groups);
-  (void)nc;
-  d.baseline_holdout_rms_um = hb;
-  d.candidate_holdout_rms_um = hc;
-  d.holdout_coordinates = nb;
-
-  CandidateScore sc;
-  sc.cause = "linear_axis_scale";
-  sc.variant = layout.nominal_from == "initial" ? "xy_relative_to_z" : "xyz";
-  sc.parameters = d.candidate.rank - d.baseline.rank;
-  sc.residual_rms_um = d.candidate.residual_rms_um;
-  sc.holdout_rms_um = hc;
-  sc.chi2 = d.baseline.chi2 - d.candidate.chi2;  // same sigma: the drop in units of it
-  sc.p_value = chiSquareSurvival(sc.chi2, std::max(1, sc.parameters));
-  const double m = 3.0 * d.centres;
-  const double rss = d.candidate.chi2 * d.sigma_um * d.sigma_um;
-  sc.bic = m * std::log(std::max(rss, 1e-300) / m) + d.candidate.rank * std::log(m);
-  const double p_thr = options.alpha;  // one candidate
-  d.needed_gain = std::max(options.min_holdout_gain, options.holdout_sigmas / std::sqrt(2.0 * std::max(1, nb)));
-  const double gain = hb > 0 ? 1.0 - hc / hb : 0.0;
-  if (d.baseline_p_value >= p_thr)
-    sc.verdict = fmt::format("baseline fits within the touch noise (chi2 {:.1f} on {} dof, p {:.2g} >= {:.2g})",
-                             d.baseline.chi2, d.baseline.dof, d.baseline_p_value, p_thr);
-  else if (gain < d.needed_gain)
-    sc.verdict = fmt::format("held-out gain {:.1f} % below the {:.1f} % the noise allows", 100 * gain, 100 * d.needed_gain);
-  else
-    sc.verdict = "accepted";
-  d.candidates.push_back(sc);
-  d.found = sc.verdict == "accepted";
-  d.gain_pct = 100.0 * gain;
+  const ModelVector xb = d.baseline.model.toVector();
+  // The judge's y: whitened um (unit variance per touch sigma) and sigma the declared noise.
+  Eigen::VectorXd w;
+  pb.residuals(xb, &w, nullptr);
+  jp.y = w;
+  jp.sigma = Eigen::VectorXd::Constant(w.size(), d.sigma_um);
+  jp.unit = "um (whitened by each centre's sphere-fit covariance)";
+  jp.J0 = pb.jacobian(xb, base);
+  const auto& lp = locationParameters(pb.kin);
+  for (int i : base) {
+    std::string name, unit;
+    if (i < kNumLocationErrors) {
+      name = std::string(lp[static_cast<size_t>(i)].name);
+      unit = std::string(reportUnit(lp[static_cast<size_t>(i)].kind));
+    } else if (i < FrameModel::kRigidSize) {
+      const int k = i - kNumLocationErrors - 3;
+      name = fmt::format("setup_{}_{}", k < 3 ? "translation" : "rotation", "XYZ"[k % 3]);
+      unit = k < 3 ? "um" : "mdeg";
+    } else {
+      const int k = i - FrameModel::kRigidSize;
+      name = fmt::format("sphere{}_offset_{}", k / 3 + 1, "XYZ"[k % 3]);
+      unit = "um";
+    }
+    jp.baseline_parameters.push_back({name, unit});
+  }
+  // Causes: central differences of the exact centre model at the baseline (whitened um per
+  // report unit; steps of 1e-3 report units, as the baseline's own Jacobian).
+  auto causeColumns = [&](int k, auto set) {
+    Eigen::MatrixXd J(w.size(), k);
+    Eigen::VectorXd wp, wm;
+    for (int j = 0; j < k; ++j) {
+      Problem::Causes cp, cm;
+      set(&cp, j, 1e-3);
+      set(&cm, j, -1e-3);
+      pb.residuals(xb, cp, &wp, nullptr);
+      pb.residuals(xb, cm, &wm, nullptr);
+      J.col(j) = -(wp - wm) / 2e-3;
+    }
+    return J;
+  };
+  const std::vector<std::string> wanted = options.candidates.empty() ? spaceframeCatalog() : options.candidates;
+  for (const auto& name : wanted) {
+    JudgeCause c;
+    c.name = name;
+    if (name == "linear_axis_scale") {
+      c.description = "the linear axes position with a scale error: actual = read (1 + s)";
+      c.J = pb.jacobian(xb, {kNumLocationErrors, kNumLocationErrors + 1, kNumLocationErrors + 2});
+      c.parameters = {{"s_x", "um/m"}, {"s_y", "um/m"}, {"s_z", "um/m"}};
+    } else if (name == "linear_axis_squareness") {
+      c.description = "the linear axes are not square (000 Eq. (23)): E_xy = S_xy y, E_xz = S_xz z, E_yz = S_yz z";
+      c.J = causeColumns(3, [](Problem::Causes* p, int j, double h) { p->squareness[j] = h * 1e-6; });
+      c.parameters = {{"S_xy", "um/m"}, {"S_xz", "um/m"}, {"S_yz", "um/m"}};
+    } else if (name == "thermal_drift") {
+      c.description = "the table moves against the spindle at a constant rate (dx, dy, dz of the first rotary axis)";
+      c.J = causeColumns(3, [](Problem::Causes* p, int j, double h) { p->drift[j] = h * 1e-3; });
+      c.parameters = {{std::string(lp[0].name) + "/h", "um/h"}, {std::string(lp[1].name) + "/h", "um/h"},
+                      {std::string(lp[2].name) + "/h", "um/h"}};
+    } else if (name == "frame_temperature") {
+      c.description = "the frame grows with its temperature about its origin (expansion e, um/m)";
+      c.J = causeColumns(1, [](Problem::Causes* p, int, double h) { p->frame_expansion = h * 1e-6; });
+      c.parameters = {{"e", "um/m"}};
+    } else {
+      throw std::invalid_argument("spaceframe diagnosis: unknown cause '" + name + "'");
+    }
+    jp.causes.push_back(c);
+  }
+  d.judged = judge(jp, options.judge);
   return d;
 }
 
@@ -282,75 +320,70 @@ Json fitJson(const SpaceframeFit& f) {
 }  // namespace
 
 Json spaceframeDiagnosisJson(const SpaceframeDiagnosis& d, const ProbePlan& plan) {
-  Json j;
+  const JudgeSummary& s = d.judged;
+  Json j = judgeToJson(s);
   j["format"] = "rotacal-diagnosis/1";
   j["cycle"] = "spaceframe";
   j["machine"] = plan.machine.name;
+  // The contract's fields beside the judge's own.
   Json b = fitJson(d.baseline);
-  b["model"] = "rotary-axis location errors and the frame (its setup on the table; every sphere when it self-calibrates), no linear-axis scale errors";
-  b["holdout_rms_um"] = round6(d.baseline_holdout_rms_um);
-  b["p_value"] = d.baseline_p_value;
-  j["baseline"] = b;
+  for (auto& [k, v] : b.items()) j["baseline"][k] = v;
+  j["baseline"]["model"] =
+      "rotary-axis location errors and the frame (its setup on the table; every sphere when it self-calibrates), no "
+      "linear-axis errors";
+  j["baseline"]["holdout_rms_um"] = s.baseline_holdout_rms;
+  j["baseline"]["p_value"] = s.baseline.p_value;
   j["holdout_scheme"] = fmt::format("leave one orientation out ({} orientations, {} centres)", d.holdout_groups, d.centres);
   j["sigma_um"] = round6(d.sigma_um);
   j["fit_noise_um"] = round6(d.fit_noise_um);
-  j["needed_gain_pct"] = round6(100 * d.needed_gain);
-  j["verdict"] = d.found ? "effect_found" : "no_significant_effect";
-  Json cands = Json::array();
-  for (const auto& c : d.candidates)
-    cands.push_back({{"cause", c.cause},
-                     {"variant", c.variant},
-                     {"parameters", c.parameters},
-                     {"residual_rms_um", round6(c.residual_rms_um)},
-                     {"holdout_rms_um", round6(c.holdout_rms_um)},
-                     {"chi2", round6(c.chi2)},
-                     {"p_value", c.p_value},
-                     {"bic", round6(c.bic)},
-                     {"gain_pct", round6(d.gain_pct)},
-                     {"verdict", c.verdict}});
-  j["candidates"] = cands;
-  Json findings = Json::array();
-  if (d.found) {
-    Json e = fitJson(d.candidate);
-    const Eigen::Vector3d s = d.candidate.model.scale * 1e6;
-    int big = 0;
-    for (int i = 1; i < 3; ++i)
-      if (std::abs(s[i]) > std::abs(s[big])) big = i;
-    e["cause"] = "linear_axis_scale";
-    e["variant"] = d.candidates.front().variant;
-    e["summary"] = fmt::format("the linear axes' scales are off: X {:+.1f} um/m, Y {:+.1f} um/m, Z {:+.1f} um/m (largest on "
-                               "{}: {:+.1f} um over 100 mm); recalibrate the axis (laser interferometer) or compensate its "
-                               "pitch",
-                               s.x(), s.y(), s.z(), "XYZ"[big], s[big] * 0.1);
-    Json params = Json::object();  // the contract's parameters: the cause's own terms
-    for (int i = 0; i < 3; ++i)
-      params[std::string("scale_") + "XYZ"[i]] = {{"value", round6(s[i])}, {"unit", "um/m"},
-                                                   {"u", round6(d.candidate.u[kNumLocationErrors + i] * 1e6)}};
-    e["parameters"] = params;
-    e["holdout_rms_um"] = round6(d.candidate_holdout_rms_um);
-    e["gain_pct"] = round6(d.gain_pct);
-    findings.push_back(e);
+  const auto& lp = locationParameters(plan.machine.kinematics);
+  for (size_t k = 0; k < s.findings.size(); ++k) {
+    Json& f = j["findings"][k];
+    const JudgeFinding& jf = s.findings[k];
+    std::string params;
+    for (const auto& p : jf.parameters)
+      params += (params.empty() ? "" : ", ") + fmt::format("{} = {:.3g} +- {:.2g} {}", p.name, p.value, p.u, p.unit);
+    const double gain = s.baseline_holdout_rms > 0 ? 100.0 * (1.0 - jf.holdout_rms_cause / s.baseline_holdout_rms) : 0.0;
+    f["summary"] = jf.description + ": " + params;
+    // Location errors with the causes: the baseline's plus the judge's linear step.
+    Json le = Json::object();
+    for (int i = 0; i < kNumLocationErrors; ++i) {
+      const std::string name(lp[static_cast<size_t>(i)].name);
+      double delta = 0.0, u = 0.0;
+      for (const auto& e : s.final_estimates)
+        if (e.name == name) {
+          delta = e.value;
+          u = e.u;
+        }
+      const double base = d.baseline.model.errors.reportValue(i);
+      le[name] = {{"value", round6(base + delta)}, {"unit", std::string(reportUnit(lp[static_cast<size_t>(i)].kind))},
+                  {"u", round6(u)}};
+    }
+    f["location_errors"] = le;
+    f["residual_rms_um"] = s.final_model.rms_residual;
+    f["holdout_rms_um"] = jf.holdout_rms_cause;
+    f["gain_pct"] = gain;
   }
-  j["findings"] = findings;
-  j["confounded"] = Json::array();
+  for (auto& c : j["confounded"]) {
+    std::vector<std::string> causes{c["cause"].get<std::string>()};
+    for (const auto& w : c["with"]) causes.push_back(w.get<std::string>());
+    c["causes"] = causes;
+    const bool frame = std::find(causes.begin(), causes.end(), "frame_temperature") != causes.end();
+    c["separate_with"] = frame ? "a frame whose length is known at its temperature (a calibrated step gauge, or the "
+                                 "frame's measured temperature and expansion coefficient) separates its expansion "
+                                 "from the linear axes' scale"
+                               : "add orientations or spheres where the Jacobian columns of " + causes.front() +
+                                     " and what it is read as differ";
+  }
   return j;
 }
 
 std::string spaceframeDiagnosisText(const SpaceframeDiagnosis& d) {
   std::string s = fmt::format(
-      "spaceframe diagnosis: baseline (location errors + frame) residual {:.3f} um rms, held-out {:.3f} um rms "
-      "(leave one of {} orientations out); chi2 {:.1f} on {} dof at sigma {:.3f} um (p {:.2g})\n",
-      d.baseline.residual_rms_um, d.baseline_holdout_rms_um, d.holdout_groups, d.baseline.chi2, d.baseline.dof, d.sigma_um,
-      d.baseline_p_value);
-  for (const auto& c : d.candidates)
-    s += fmt::format("  {}/{}: residual {:.3f} um, held-out {:.3f} um (gain {:.1f} %, needed {:.1f} %): {}\n", c.cause,
-                     c.variant, c.residual_rms_um, c.holdout_rms_um, d.gain_pct, 100 * d.needed_gain, c.verdict);
-  const Eigen::Vector3d sc = d.candidate.model.scale * 1e6, u = d.candidate.u.segment<3>(kNumLocationErrors) * 1e6;
-  s += fmt::format("  scale estimate X {:+.2f} +- {:.2f}, Y {:+.2f} +- {:.2f}, Z {:+.2f} +- {:.2f} um/m\n", sc.x(), u.x(),
-                   sc.y(), u.y(), sc.z(), u.z());
-  s += d.found ? fmt::format("verdict: effect found (linear_axis_scale), held-out gain {:.0f} %\n", d.gain_pct)
-               : "verdict: no significant effect\n";
-  return s;
+      "spaceframe diagnosis: baseline (location errors + frame) residual {:.3f} um rms over {} centres; declared probe "
+      "noise {:.3f} um (the sphere fits' own: {:.3f} um)\n",
+      d.baseline.residual_rms_um, d.centres, d.sigma_um, d.fit_noise_um);
+  return s + judgeText(d.judged);
 }
 
 }  // namespace rotacal

@@ -1,23 +1,25 @@
 #pragma once
-// Diagnosis (issue 6) for the space-frame cycle (003): do the linear axes have scale errors that
-// the calibration engineer's model (rotary-axis location errors + the frame's setup on the
-// table) leaves in the centres?
+// Diagnosis (issues 6 and 16) for the space-frame cycle (003), decided by the one judge
+// (core/judge.hpp; rules in docs/diagnosis.md "The judge").
 //
 // Baseline: the eight location errors and the frame's setup (translation, rotation; or, when the
-// frame self-calibrates, nominal_from=initial, every sphere's offset). Candidate cause
-// `linear_axis_scale` (variant xyz): the scale errors s_x, s_y, s_z of the linear axes (actual =
-// read (1 + s); self-calibration: s_x, s_y relative to s_z). Both fits are weighted by each
-// centre's covariance from its sphere fit, sigma^2 C_i / runs, so the whitened residual is
-// chi-square with m - rank dof when the model is complete. The cause is reported only when
-// (a) the baseline's whitened residual fails that chi-square test at alpha, sigma = max(probe
-// repeatability, the sphere fits' pooled touch noise, which no machine model can change), and
-// (b) the extended model predicts held-out orientations (leave one orientation out; theta and
-// theta + 360 are one orientation) better by at least max(2 %, 2 standard errors of the held-out
-// rms).
+// frame self-calibrates, nominal_from=initial, every sphere's offset), fitted by weighted
+// Gauss-Newton to the measured centres. Each centre is whitened by its sphere fit's covariance
+// per unit touch noise, C_i / runs (W_i = L_i^-1), so the judge's observations are W_i r_i with
+// the DECLARED probe noise (MACHINE.json) as sigma: chi-square with m - rank dof when the model
+// is complete. The judge gets the baseline's Jacobian and, at the baseline's solution, each
+// cause's columns by central differences of the same exact centre model (sphere fit of the
+// touches through the linear axes' map):
+//   linear_axis_scale       s_x, s_y, s_z (actual = read (1 + s)), um/m
+//   linear_axis_squareness  S_xy, S_xz, S_yz (000 Eq. (23): actual = read + E(read)), um/m
+//   thermal_drift           dx, dy, dz of the first rotary axis change linearly with time, um/h
+//   frame_temperature       the frame grows about its origin by e (um/m): exactly an isotropic
+//                           scale to this plan, which the judge reports from the Jacobians.
+// Groups: orientations (theta and theta + 360 are one). Factors: sphere, C, A, time, X/Y/Z.
 #include <string>
 #include <vector>
 
-#include "core/diagnosis.hpp"
+#include "core/judge.hpp"
 #include "cycles/spaceframe/analyze.hpp"
 
 namespace rotacal {
@@ -35,25 +37,28 @@ struct SpaceframeFit {
   bool converged = false;
 };
 
-struct SpaceframeDiagnosis {
-  double sigma_um = 0.0;            // touch noise used by the chi-square test
-  double fit_noise_um = 0.0;        // the sphere fits' pooled touch noise
-  int centres = 0;
-  int holdout_groups = 0;
-  int holdout_coordinates = 0;
-  SpaceframeFit baseline;
-  double baseline_p_value = 1.0;    // chi-square test of the baseline against sigma
-  double baseline_holdout_rms_um = 0.0;
-  SpaceframeFit candidate;          // baseline + linear_axis_scale, always fitted
-  double candidate_holdout_rms_um = 0.0;
-  double needed_gain = 0.0;         // fraction
-  std::vector<CandidateScore> candidates;
-  bool found = false;
-  double gain_pct = 0.0;            // held-out rms, baseline -> extended
+struct SpaceframeDiagnosisOptions {
+  JudgeOptions judge;     // alpha from the CLI's --alpha
+  double sigma_um = 0.7;  // declared probe noise (MACHINE.json), k = 1
+  /// Candidate causes by name; empty: the whole catalog above.
+  std::vector<std::string> candidates;
 };
 
+struct SpaceframeDiagnosis {
+  double sigma_um = 0.0;            // declared touch noise
+  double fit_noise_um = 0.0;        // the sphere fits' pooled touch noise (reported, not used)
+  int centres = 0;
+  int holdout_groups = 0;
+  SpaceframeFit baseline;
+  JudgeProblem problem;             // what the judge was given (tests read its Jacobians)
+  JudgeSummary judged;
+};
+
+/// The catalog's names, in order.
+std::vector<std::string> spaceframeCatalog();
+
 SpaceframeDiagnosis diagnoseSpaceframe(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
-                                       const DiagnosisOptions& options);
+                                       const SpaceframeDiagnosisOptions& options);
 
 Json spaceframeDiagnosisJson(const SpaceframeDiagnosis& d, const ProbePlan& plan);
 std::string spaceframeDiagnosisText(const SpaceframeDiagnosis& d);

@@ -1,5 +1,4 @@
 // spheres3 (001): the 4 location and 6 component errors of the C axis from three spheres.
-#include "core/diagnosis.hpp"
 #include "cycles/spheres3/plan.hpp"
 #include "cycles/spheres3/diagnose.hpp"
 #include "cycles/spheres3/analyze.hpp"

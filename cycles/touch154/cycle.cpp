@@ -3,13 +3,13 @@
 #include <optional>
 #include <stdexcept>
 
-#include "core/diagnosis.hpp"
-#include "core/diagnosis_figures.hpp"
 #include "core/errors.hpp"
 #include "core/identification.hpp"
 #include "core/point_deviations.hpp"
 #include "cycles/touch154/closed_form.hpp"
 #include "cycles/touch154/commands.hpp"
+#include "cycles/touch154/diagnose.hpp"
+#include "cycles/touch154/figures.hpp"
 #include "cycles/touch154/report.hpp"
 #include "cycles/touch154/plan.hpp"
 #include "cycles/cycle.hpp"
@@ -84,19 +84,20 @@ class Touch154 final : public Cycle {
   CycleDocuments diagnose(const DiagnoseRequest& r) const override {
     const ProbePlan& plan = *r.plan;
     const std::vector<MeasurementRun> runs = readProbeRuns(plan, r.results, *r.dialect);
-    DiagnosisOptions o;
-    o.alpha = r.alpha;
-    o.prior_sigma_um = plan.machine.probe.repeatability_um;
-    o.progress = r.progress;
+    Touch154DiagnosisOptions o;
+    o.judge.alpha = r.alpha;
+    o.sigma_um = plan.machine.probe.repeatability_um;  // declared, never the fit's own
     std::string why;
     if (!o.validate(&why)) throw std::invalid_argument(why);
-    const Diagnosis dg = rotacal::diagnose(plan, runs, o);
-    if (dg.baseline.summary.termination != Termination::Converged)
-      throw InputError(r.results.front().path, 0, "baseline fit failed: " + dg.baseline.summary.message);
+    if (r.progress) r.progress(0, 1);
+    const Touch154Diagnosis dg = diagnoseTouch154(plan, runs, o);
+    if (r.progress) r.progress(1, 1);
+    if (!dg.lin.ok)
+      throw InputError(r.results.front().path, 0, "baseline fit failed: " + dg.lin.baseline.summary.message);
     CycleDocuments out;
-    out.text = diagnosisText(dg);
-    out.doc = diagnosisToJson(dg);
-    out.doc["figures"] = diagnosisFigures(dg, plan);  // drawn by the HTML report
+    out.text = touch154DiagnosisText(dg);
+    out.doc = touch154DiagnosisJson(dg, plan);
+    out.doc["figures"] = touch154DiagnosisFigures(dg, plan);  // drawn by the HTML report
     return out;
   }
 

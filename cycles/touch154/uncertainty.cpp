@@ -17,7 +17,7 @@
 
 #include "core/limits.hpp"
 
-#include "core/causes.hpp"
+#include "cycles/touch154/causes.hpp"
 #include "cycles/touch154/closed_form.hpp"
 #include "cycles/touch154/closed_form_map.hpp"
 #include "core/identification.hpp"

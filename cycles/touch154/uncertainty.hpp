@@ -13,7 +13,7 @@
 //  least_squares       all points, one surface offset per target (form-immune) and the
 //                      squareness S_xy S_xz S_yz of the linear axes fitted alongside:
 //                      identify(LeastSquaresPerPoint) with the linear_axis_squareness extension
-//                      (core/causes.hpp), as `diagnose` re-estimates them
+//                      (cycles/touch154/causes.hpp), as `diagnose` re-estimates them
 //  lsq_per_point       `analyze`'s default: identify(LeastSquaresPerPoint), no extension
 // The closed forms need the poses of 000's 154-point plan; they are left out for other plans.
 //

@@ -1,10 +1,11 @@
-// Issue 6's hidden-effect test for the space-frame cycle: a 20 um/m scale error of the X axis,
-// hidden in exact simulated data with probe noise, is named with its size within 3 u, the
-// location errors come back closer to the truth than the baseline's, and the held-out gain is
-// large; clean data (20 seeds, noise 0.5-1.0 um, varied location errors and setup) gives no finding.
+// The space-frame cycle's diagnosis through the one judge (issue 16): effects hidden in exact
+// simulated data (truth the judge never sees) are never "no significant effect" while the
+// baseline fails its chi-square against the declared noise; clean data stays quiet; the frame's
+// temperature is reported as confounded with the linear axes' scale because their Jacobians say
+// so (remove the scale candidate or self-calibrate the frame and the entry changes).
 #include <gtest/gtest.h>
 
-#include <chrono>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -54,86 +55,119 @@ Truth truthOf(const ProbePlan& plan, const Case& c, const Eigen::Vector3d& scale
   return t;
 }
 
-DiagnosisOptions optionsFor(const ProbePlan& plan) {
-  DiagnosisOptions o;
-  o.prior_sigma_um = plan.machine.probe.repeatability_um;  // 0.7 um
+SpaceframeDiagnosisOptions optionsFor(const ProbePlan& plan) {
+  SpaceframeDiagnosisOptions o;
+  o.judge.alpha = 0.01;
+  o.sigma_um = plan.machine.probe.repeatability_um;  // 0.7 um, declared
   return o;
 }
 
-// Distance of a location-error estimate from the truth, each parameter in units of the extended
-// fit's u (one yardstick for both fits: the baseline's own u is inflated by the scale it misses).
-double locationMiss(const SpaceframeFit& f, const SpaceframeFit& yardstick, const LocationErrors& truth) {
-  double s = 0.0;
-  for (int i = 0; i < kNumLocationErrors; ++i) {
-    const double d = (f.model.errors.values[i] - truth.values[i]) / yardstick.u[i];
-    s += d * d;
+bool confounded(const JudgeSummary& s, const std::string& a, const std::string& b) {
+  for (const auto& c : s.confounded) {
+    const bool has_a = c.cause == a || std::find(c.with.begin(), c.with.end(), a) != c.with.end();
+    const bool has_b = c.cause == b || std::find(c.with.begin(), c.with.end(), b) != c.with.end();
+    if (has_a && has_b) return true;
   }
-  return std::sqrt(s);
+  return false;
 }
 
-TEST(SpaceframeDiagnosis, HiddenXScaleIsFoundWithItsSize) {
+const JudgeFinding* findingOf(const JudgeSummary& s, const std::string& cause) {
+  for (const auto& f : s.findings)
+    if (f.cause == cause) return &f;
+  return nullptr;
+}
+
+TEST(SpaceframeDiagnosis, HiddenXScaleIsNeverNoSignificantEffect) {
   const ProbePlan plan = framePlan();
-  const Case c = variedCase(101);
   const double s_x = 20e-6;  // 20 um/m: 2 um over 100 mm, a typical uncompensated ball screw
-  const auto t0 = std::chrono::steady_clock::now();
-  const SpaceframeDiagnosis d =
-      diagnoseSpaceframe(plan, {simulate(plan, truthOf(plan, c, Eigen::Vector3d(s_x, 0, 0), 0.7), {3})}, optionsFor(plan));
-  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  ASSERT_TRUE(d.baseline.converged);
-  ASSERT_TRUE(d.candidate.converged);
-  // The linearised steps are exact to far below the noise (um, whitened).
-  EXPECT_LT(d.candidate.linearisation_um, 1e-3);
-  EXPECT_TRUE(d.found) << spaceframeDiagnosisText(d);
-  EXPECT_LT(d.baseline_p_value, 1e-3);
-  const Eigen::Vector3d s = d.candidate.model.scale, u = d.candidate.u.segment<3>(kNumLocationErrors);
-  EXPECT_NEAR(s.x(), s_x, 3 * u.x());
-  EXPECT_NEAR(s.y(), 0.0, 3 * u.y());
-  EXPECT_NEAR(s.z(), 0.0, 3 * u.z());
-  EXPECT_LT(u.x(), 0.25 * s_x);  // the size is really measured, not just within a wide band
-  // The baseline absorbs the scale into the location errors; the extended model does not.
-  const double miss_b = locationMiss(d.baseline, d.candidate, c.errors), miss_e = locationMiss(d.candidate, d.candidate, c.errors);
-  EXPECT_LT(miss_e, miss_b);
-  EXPECT_LT(miss_e, 3.0 * std::sqrt(static_cast<double>(kNumLocationErrors)));  // about sqrt(8) u expected
-  // The held-out orientations are predicted at least 25 % better (the touch noise alone leaves
-  // about 0.5 um per coordinate, the scale error about 1 um more in the baseline).
-  EXPECT_GT(d.gain_pct, 25.0);
-  std::printf("%s  location miss (in u, 8 parameters): baseline %.1f, extended %.1f; %.1f s\n",
-              spaceframeDiagnosisText(d).c_str(), miss_b, miss_e, secs);
-  // DIAGNOSIS.json: the finding with the scale and both estimates side by side.
+  const SpaceframeDiagnosis d = diagnoseSpaceframe(
+      plan, {simulate(plan, truthOf(plan, variedCase(101), Eigen::Vector3d(s_x, 0, 0), 0.7), {3})}, optionsFor(plan));
+  const std::string text = spaceframeDiagnosisText(d);
+  EXPECT_FALSE(d.judged.baseline.passes) << text;
+  ASSERT_NE(d.judged.verdict, JudgeVerdict::NoSignificantEffect) << text;
+  // An X scale has an isotropic part, which the frame's temperature explains as well.
+  if (d.judged.verdict == JudgeVerdict::ModelInadequate)
+    EXPECT_TRUE(confounded(d.judged, "frame_temperature", "linear_axis_scale")) << text;
+  else
+    EXPECT_NE(findingOf(d.judged, "linear_axis_scale"), nullptr) << text;
   const Json j = spaceframeDiagnosisJson(d, plan);
-  EXPECT_EQ(j["verdict"], "effect_found");
-  ASSERT_EQ(j["findings"].size(), 1u);
-  EXPECT_EQ(j["findings"][0]["cause"], "linear_axis_scale");
-  EXPECT_NEAR(j["findings"][0]["linear_axis_scale"]["X"]["value"].get<double>(), s.x() * 1e6, 1e-5);
-  EXPECT_NEAR(j["findings"][0]["parameters"]["scale_X"]["value"].get<double>(), s.x() * 1e6, 1e-5);
-  EXPECT_NEAR(j["findings"][0]["location_errors"]["dx_AY"]["value"].get<double>(), mmToUm(d.candidate.model.errors.values[0]), 1e-6);
+  EXPECT_EQ(j["format"], "rotacal-diagnosis/1");
+  EXPECT_EQ(j["verdict"], judgeVerdictName(d.judged.verdict));
   EXPECT_TRUE(j["baseline"].contains("location_errors"));
-  EXPECT_FALSE(j["baseline"].contains("linear_axis_scale"));
+  EXPECT_TRUE(j["baseline"].contains("holdout_rms_um"));
 }
 
-TEST(SpaceframeDiagnosis, NoFalseAlarmOnCleanData) {
+TEST(SpaceframeDiagnosis, HiddenSquarenessIsFoundWithItsParametersWithin3u) {
+  // issue 16: squareness gave chi-square 3316 on 553 dof and still "no significant effect".
   const ProbePlan plan = framePlan();
-  int alarms = 0, baseline_failed = 0;
-  double worst_gain = -1e9;
-  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
-    const double noise = 0.5 + 0.5 * static_cast<double>(seed - 1) / 19.0;  // 0.5 .. 1.0 um
-    const SpaceframeDiagnosis d =
-        diagnoseSpaceframe(plan, {simulate(plan, truthOf(plan, variedCase(seed), Eigen::Vector3d::Zero(), noise), {seed})},
-                           optionsFor(plan));
-    alarms += d.found ? 1 : 0;
-    baseline_failed += d.baseline_p_value < 1e-3 ? 1 : 0;
-    worst_gain = std::max(worst_gain, d.gain_pct);
-    EXPECT_FALSE(d.found) << "seed " << seed << ": " << spaceframeDiagnosisText(d);
-    // Test (a) alone is calibrated where the noise is within the probe's stated repeatability
-    // (0.7 um); beyond it the fits' pooled noise (about 190 dof, +-5 %) only partly catches up
-    // and test (b), the held-out gain, is what keeps the verdict clean.
-    if (noise <= plan.machine.probe.repeatability_um) {
-      EXPECT_GE(d.baseline_p_value, 1e-3) << "seed " << seed;
+  Truth t = truthOf(plan, variedCase(7), Eigen::Vector3d::Zero(), 0.7);
+  t.linear_axis_error = [](const Eigen::Vector3d& c) { return Eigen::Vector3d(30e-6 * c.y(), 0.0, 0.0); };
+  const SpaceframeDiagnosis d = diagnoseSpaceframe(plan, {simulate(plan, t, {8})}, optionsFor(plan));
+  const std::string text = spaceframeDiagnosisText(d);
+  EXPECT_FALSE(d.judged.baseline.passes) << text;
+  ASSERT_EQ(d.judged.verdict, JudgeVerdict::EffectFound) << text;
+  const JudgeFinding* f = findingOf(d.judged, "linear_axis_squareness");
+  ASSERT_NE(f, nullptr) << text;
+  EXPECT_NEAR(f->parameters[0].value, 30.0, 3 * f->parameters[0].u) << text;
+  EXPECT_NEAR(f->parameters[1].value, 0.0, 3 * f->parameters[1].u) << text;
+  EXPECT_NEAR(f->parameters[2].value, 0.0, 3 * f->parameters[2].u) << text;
+}
+
+TEST(SpaceframeDiagnosis, HiddenDriftIsThermalDrift) {
+  // issue 16: a 4 um/h drift failed the baseline's chi-square (p 4e-6) and was no candidate.
+  const ProbePlan plan = framePlan();
+  Truth t = truthOf(plan, variedCase(9), Eigen::Vector3d::Zero(), 0.7);
+  t.drift = [](double ts) {
+    ErrorVector e = ErrorVector::Zero();
+    e[2] = umToMm(4.0) * ts / 3600.0;
+    return e;
+  };
+  const SpaceframeDiagnosis d = diagnoseSpaceframe(plan, {simulate(plan, t, {10})}, optionsFor(plan));
+  const std::string text = spaceframeDiagnosisText(d);
+  ASSERT_NE(d.judged.verdict, JudgeVerdict::NoSignificantEffect) << text;
+  const JudgeFinding* f = findingOf(d.judged, "thermal_drift");
+  ASSERT_NE(f, nullptr) << text;
+  EXPECT_NEAR(f->parameters[2].value, 4.0, 3 * f->parameters[2].u) << text;
+}
+
+TEST(SpaceframeDiagnosis, CleanDataRaisesAtMostTheAlphaShareOfAlarms) {
+  // 8 seeds at alpha = 1 %: two or more alarms has probability 0.3 % under a correct judge.
+  const ProbePlan plan = framePlan();
+  int alarms = 0;
+  for (std::uint64_t seed = 1; seed <= 8; ++seed) {
+    const SpaceframeDiagnosis d = diagnoseSpaceframe(
+        plan, {simulate(plan, truthOf(plan, variedCase(seed), Eigen::Vector3d::Zero(), 0.7), {seed})}, optionsFor(plan));
+    if (d.judged.verdict != JudgeVerdict::NoSignificantEffect) {
+      ++alarms;
+      std::printf("seed %d: %s\n", static_cast<int>(seed), spaceframeDiagnosisText(d).c_str());
     }
-    EXPECT_LT(d.gain_pct, 100 * d.needed_gain) << "seed " << seed;
   }
-  std::printf("20 clean seeds: %d alarms, baseline chi-square failed %d times, largest held-out gain %.1f %%\n", alarms,
-              baseline_failed, worst_gain);
+  EXPECT_LE(alarms, 1);
+}
+
+TEST(SpaceframeDiagnosis, FrameTemperatureIsConfoundedWithScaleFromTheJacobians) {
+  const ProbePlan plan = framePlan();
+  const std::vector<MeasurementRun> runs = {simulate(plan, truthOf(plan, variedCase(3), Eigen::Vector3d::Zero(), 0.7), {4})};
+  SpaceframeDiagnosisOptions o = optionsFor(plan);
+  const SpaceframeDiagnosis d = diagnoseSpaceframe(plan, runs, o);
+  EXPECT_TRUE(confounded(d.judged, "frame_temperature", "linear_axis_scale")) << spaceframeDiagnosisText(d);
+  // Closed form: the axes read a centre at actual / (1 + s), so an isotropic scale s moves every
+  // read centre by -s x_m; a uniform expansion e of the frame about its origin moves it by
+  // +e (x_m - the rotated origin), and the origin term is a setup translation: iso + e lies in
+  // the baseline's span.
+  const auto& causes = d.problem.causes;
+  ASSERT_EQ(causes[0].name, "linear_axis_scale");
+  ASSERT_EQ(causes[3].name, "frame_temperature");
+  const Eigen::VectorXd iso = causes[0].J.rowwise().sum(), e = causes[3].J.col(0);
+  const Eigen::MatrixXd X = d.problem.J0;
+  const Eigen::VectorXd diff = iso + e;
+  const Eigen::VectorXd rest = diff - X * X.completeOrthogonalDecomposition().solve(diff);
+  EXPECT_LT(rest.norm(), 1e-3 * e.norm());
+  // Without the scale candidate the entry goes: frame_temperature is not in the baseline's span.
+  o.candidates = {"linear_axis_squareness", "thermal_drift", "frame_temperature"};
+  const SpaceframeDiagnosis no_scale = diagnoseSpaceframe(plan, runs, o);
+  EXPECT_FALSE(confounded(no_scale.judged, "frame_temperature", "linear_axis_scale"));
+  for (const auto& c : no_scale.judged.confounded) EXPECT_NE(c.cause, "frame_temperature") << c.why;
 }
 
 }  // namespace

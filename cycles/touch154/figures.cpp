@@ -1,4 +1,4 @@
-#include "core/diagnosis_figures.hpp"
+#include "cycles/touch154/figures.hpp"
 
 #include <cmath>
 #include <string>
@@ -26,12 +26,12 @@ Json series(const std::string& name, const IdentificationResult& fit, const Prob
 
 }  // namespace
 
-Json diagnosisFigures(const Diagnosis& d, const ProbePlan& plan) {
+Json touch154DiagnosisFigures(const Touch154Diagnosis& d, const ProbePlan& plan) {
   Json figs = Json::array();
   for (bool vs_time : {true, false}) {
     Json s = Json::array();
-    s.push_back(series("baseline (location errors only)", d.baseline, plan, vs_time));
-    for (const auto& f : d.findings) s.push_back(series("+ " + f.cause, f.fit, plan, vs_time));
+    s.push_back(series("baseline (location errors only)", d.lin.baseline, plan, vs_time));
+    for (const auto& f : d.findings) s.push_back(series("+ " + f.extension->cause(), f.fit, plan, vs_time));
     if (s[0]["x"].empty()) continue;
     Json fig = {{"id", vs_time ? "diagnose_residual_vs_time" : "diagnose_residual_vs_c"},
                 {"title", vs_time ? "Residuals against time, before and after the named cause"

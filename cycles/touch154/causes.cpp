@@ -1,4 +1,4 @@
-#include "core/causes.hpp"
+#include "cycles/touch154/causes.hpp"
 
 #include <cmath>
 
@@ -99,6 +99,22 @@ class Squareness : public ModelExtension {
   }
 };
 
+class Scale : public ModelExtension {
+ public:
+  std::string cause() const override { return "linear_axis_scale"; }
+  std::string variant() const override { return "xyz"; }
+  std::string describe() const override {
+    return "the linear axes position with a scale error (000 Eq. (22)): E_xx = s_x x, E_yy = s_y y, E_zz = s_z z";
+  }
+  std::vector<ExtensionParameter> parameters() const override {
+    return {{"s_x", "um/m", 1e6, 1e-7}, {"s_y", "um/m", 1e6, 1e-7}, {"s_z", "um/m", 1e6, 1e-7}};
+  }
+  bool hasPositionError() const override { return true; }
+  Eigen::Vector3d positionError(const Eigen::VectorXd& p, const Eigen::Vector3d& c) const override {
+    return Eigen::Vector3d(p[0] * c.x(), p[1] * c.y(), p[2] * c.z());
+  }
+};
+
 class ProbeLength : public ModelExtension {
  public:
   std::string cause() const override { return "probe_length"; }
@@ -141,6 +157,7 @@ ExtensionPtr thermalDriftLinear() { return std::make_shared<DriftLinear>(); }
 ExtensionPtr thermalDriftPerRepeat(int runs) { return std::make_shared<DriftPerRepeat>(runs); }
 ExtensionPtr probePretravel() { return std::make_shared<Pretravel>(); }
 ExtensionPtr linearAxisSquareness() { return std::make_shared<Squareness>(); }
+ExtensionPtr linearAxisScale() { return std::make_shared<Scale>(); }
 ExtensionPtr probeLength() { return std::make_shared<ProbeLength>(); }
 
 std::vector<ExtensionPtr> catalogFor(const ProbePlan& plan, int runs) {
@@ -148,6 +165,7 @@ std::vector<ExtensionPtr> catalogFor(const ProbePlan& plan, int runs) {
   if (runs >= 3) c.push_back(thermalDriftPerRepeat(runs));
   c.push_back(probePretravel());
   c.push_back(linearAxisSquareness());
+  c.push_back(linearAxisScale());
   c.push_back(probeLength());
   if (plan.machine.kinematics == Kinematics::TableAC) c.push_back(rotaryErrorMotionC2());
   return c;
@@ -164,6 +182,10 @@ std::string separationHint(const std::string& cause, const std::vector<std::stri
     return "squareness of the linear axes acts like " + list +
            " on a piece that stays near one place: probe the piece at a second location (another X/Y/Z position) or "
            "calibrate the linear axes separately (000 Sec. 2.2)";
+  if (cause == "linear_axis_scale")
+    return "a scale error of the linear axes acts like " + list +
+           " when the probed points span little of the axes' travel: probe the piece at a second location, or "
+           "calibrate the axes with a laser interferometer or a step gauge";
   if (cause == "probe_pretravel")
     return "direction-dependent pretravel of 000's 154-point plan shifts the same points as " + list +
            ": calibrate the probe on a reference sphere or ring gauge first (ISO 230-10), or probe each target from "

@@ -1,6 +1,8 @@
 #pragma once
-// The catalog of physical causes rotacal can add to its model (issue 6), for the touch cycles.
-// Each is a ModelExtension; `catalogFor` lists the ones that apply to a plan and its data.
+// The catalog of physical causes touch154 (and touch_designed plans) can add to its model
+// (issues 6 and 16). Each is a ModelExtension of the identification engine; `catalogFor` lists
+// the ones that apply to a plan and its data. Which of them this plan can tell apart is never
+// written here: the judge (core/judge.hpp) computes it from their Jacobian columns.
 //  thermal_drift/linear      the table moves against the spindle at a constant rate:
 //                            dx_AY, dy_AY, dz_AY change linearly with time (um/h)
 //  thermal_drift/per_repeat  the same translation, free per repeat (heating / cooling phases)
@@ -8,6 +10,8 @@
 //                            relative to the -Z approach (a uniform pretravel is absorbed by the
 //                            per-point offsets and is harmless)
 //  linear_axis_squareness    S_xy, S_xz, S_yz of 000 Eq. (23) (um/m)
+//  linear_axis_scale         E_xx,lin E_yy,lin E_zz,lin of 000 Eq. (22): positioning error
+//                            proportional to the read position (um/m)
 //  probe_length              the ball centre sits dL below where the controller thinks (um)
 //  rotary_error_motion       the C axis's centre moves with C: second-order radial error motion
 //  pivot_length              fixed-tool-tip cycle (004) only, not a touch-cycle extension: the tool tip
@@ -23,6 +27,7 @@ ExtensionPtr thermalDriftLinear();
 ExtensionPtr thermalDriftPerRepeat(int runs);
 ExtensionPtr probePretravel();
 ExtensionPtr linearAxisSquareness();
+ExtensionPtr linearAxisScale();
 ExtensionPtr probeLength();
 /// rotary_error_motion: second-order radial error motion of the C axis, EXC = r_x cos 2C,
 /// EYC = r_y cos 2C (um). Its first order is a location error, and with C at 0/90/180/270 deg
