@@ -100,8 +100,8 @@ class Rtest final : public Cycle {
     const ProbePlan& plan = *r.plan;
     const std::vector<RtestCycle> cycles = readCycles(plan, r.results);
     RtestDiagnosisOptions o;
-    o.alpha = r.alpha;
-    o.sensor_sigma_um = sensorSigma(plan);
+    o.judge.alpha = r.alpha;
+    o.sensor_sigma_um = sensorSigma(plan);  // the declared noise (plan option, default 002's 0.2 um)
     o.validate();
     const RtestDiagnosis d = diagnoseRtest(plan, cycles, o);
     CycleDocuments out;

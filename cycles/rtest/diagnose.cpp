@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <stdexcept>
 
@@ -12,70 +13,140 @@
 namespace rotacal {
 
 void RtestDiagnosisOptions::validate() const {
-  if (!(alpha > 0 && alpha < 0.5)) throw std::invalid_argument("alpha must be in (0, 0.5)");
-  if (!(min_holdout_gain >= 0 && min_holdout_gain < 1)) throw std::invalid_argument("min_holdout_gain must be in [0, 1)");
-  if (!(sensor_sigma_um > 0)) throw std::invalid_argument("sensor_sigma_um must be > 0");
+  std::string why;
+  if (!judge.validate(&why)) throw std::invalid_argument(why);
+  if (!(sensor_sigma_um > 0) || !std::isfinite(sensor_sigma_um)) throw std::invalid_argument("sensor_sigma_um must be > 0");
 }
 
 namespace {
 
-/// 002 Eq. (6) over several cycles at once: readings = (J_j - J_ref) omega [+ J_j tau omega_dot],
-/// tau = hours since the reset; dz and c at tilt 0 held at 0 (first-cycle convention).
-struct JointModel {
-  const ProbePlan* plan;
-  std::vector<Eigen::Matrix<double, 3, kRtestParams>> J;
-  std::vector<int> tilt_of;
-  int ref = 0, ref_tilt = 0, nt = 0;
-  double t_ref_s = 0.0;
-  bool drift = false;
-  std::vector<int> cols;
+// Report units: lengths in um, angles in mdeg. A Jacobian column of J_wq_omega is mm per mm or
+// mm per rad; per report unit it is (um per um) = the same number, (um per mdeg) = x 1e3 / kMdegPerRad.
+double perReportUnit(int p) { return rtestParameterIsLength(p) ? 1.0 : mmToUm(1.0) * mdegToRad(1.0); }
+double rep(int p, double v) { return rtestParameterIsLength(p) ? mmToUm(v) : radToMdeg(v); }
+std::string unitOf(int p) { return rtestParameterIsLength(p) ? "um" : "mdeg"; }
 
-  int fullCols() const { return kRtestParams * nt * (drift ? 2 : 1); }
-  void rows(const RtestCycle& c, Eigen::MatrixXd& A, Eigen::VectorXd& y, int at) const {
-    const int nb = kRtestParams * nt;
-    for (size_t j = 0; j < c.readings.size(); ++j) {
-      const int r = at + 3 * static_cast<int>(j);
-      const int ti = tilt_of[j];
-      const double tau = (c.readings[j].t_s - t_ref_s) / 3600.0;
-      A.block(r, kRtestParams * ti, 3, kRtestParams) += J[j];
-      A.block(r, kRtestParams * ref_tilt, 3, kRtestParams) -= J[ref];
-      if (drift) A.block(r, nb + kRtestParams * ti, 3, kRtestParams) += tau * J[j];
-      y.segment<3>(r) = c.readings[j].dq_w_mm;
-    }
-  }
-  /// Fit on the cycles except `skip` (-1: none); returns the full parameter vector.
-  Eigen::VectorXd fit(const std::vector<RtestCycle>& cycles, int skip) const {
-    const int per = 3 * static_cast<int>(plan->points.size());
-    const int m = per * (static_cast<int>(cycles.size()) - (skip >= 0 ? 1 : 0));
-    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(m, fullCols());
-    Eigen::VectorXd y(m);
-    int at = 0;
-    for (int k = 0; k < static_cast<int>(cycles.size()); ++k) {
-      if (k == skip) continue;
-      rows(cycles[k], A, y, at);
-      at += per;
-    }
-    Eigen::MatrixXd Au(m, cols.size());
-    Eigen::VectorXd scale(cols.size());
-    for (size_t q = 0; q < cols.size(); ++q) {
-      Au.col(q) = A.col(cols[q]);
-      scale[q] = std::max(Au.col(q).norm(), 1e-300);
-    }
-    const Eigen::VectorXd xs = (Au * scale.cwiseInverse().asDiagonal()).colPivHouseholderQr().solve(y);
-    Eigen::VectorXd x = Eigen::VectorXd::Zero(fullCols());
-    for (size_t q = 0; q < cols.size(); ++q) x[cols[q]] = xs[q] / scale[q];
-    return x;
-  }
-  double rss(const RtestCycle& c, const Eigen::VectorXd& x) const {
-    const int per = 3 * static_cast<int>(plan->points.size());
-    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(per, fullCols());
-    Eigen::VectorXd y(per);
-    rows(c, A, y, 0);
-    return (y - A * x).squaredNorm();
-  }
-};
+constexpr const char* kSpindle = "spindle_growth";
+constexpr const char* kLinear = "linear_axis_drift";
+constexpr const char* kDrift = "thermal_drift";
+constexpr const char* kStepPrefix = "sensor_step_cycle_";
+
+bool isStep(const std::string& cause) { return cause.rfind(kStepPrefix, 0) == 0; }
+
+/// A candidate passes by the judge's one rule at the main judgement's per-test level.
+bool passes(const JudgeCandidate& c, double per_test_alpha) {
+  return c.k_eff > 0 && c.p_value < per_test_alpha && c.holdout_passes;
+}
+
+const JudgeCandidate* stepZero(const JudgeSummary& s, const std::string& cause) {
+  for (const auto& c : s.candidate_tests)
+    if (c.step == 0 && c.cause == cause) return &c;
+  return nullptr;
+}
+
+std::string tiltLabel(Kinematics k, double tilt) { return fmt::format("{}={:g}", tiltAxis(k), tilt); }
 
 }  // namespace
+
+RtestJudgeSetup rtestJudgeSetup(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, double sigma_um) {
+  if (cycles.empty()) throw std::invalid_argument("rtest: no cycles to diagnose");
+  const Kinematics k = plan.machine.kinematics;
+  const Eigen::Vector3d nest = rtestNest_w(plan);
+  std::vector<double> tilts;
+  std::vector<int> tilt_of;
+  for (const auto& p : plan.points) {
+    const double t = tiltOf(k, p.pose);
+    auto it = std::find(tilts.begin(), tilts.end(), t);
+    if (it == tilts.end()) it = tilts.insert(tilts.end(), t);
+    tilt_of.push_back(static_cast<int>(it - tilts.begin()));
+  }
+  const int nt = static_cast<int>(tilts.size());
+  const int ref = rtestReferencePoint(plan) - 1;
+  const int ref_tilt = tilt_of[static_cast<size_t>(ref)];
+  std::vector<Eigen::Matrix<double, 3, kRtestParams>> J;
+  std::vector<Eigen::Matrix3d> Rt;  // d wq / d rq = R^T: a sphere offset in the machine frame
+  for (const auto& p : plan.points) {
+    J.push_back(J_wq_omega(k, p.pose, nest));
+    Rt.push_back(T_m_w_nominal(k, p.pose).linear().transpose());
+  }
+  // Columns of the baseline: every error at every tilt but dz and c at the reset's tilt (not
+  // observable against the reset: the tool length and the C zero, docs/rtest.md).
+  std::vector<int> cols;
+  for (int q = 0; q < kRtestParams * nt; ++q)
+    if (q != kRtestParams * ref_tilt + 2 && q != kRtestParams * ref_tilt + 5) cols.push_back(q);
+
+  const int per = 3 * static_cast<int>(plan.points.size());
+  const int nc = static_cast<int>(cycles.size());
+  const int n = per * nc;
+  RtestJudgeSetup s;
+  JudgeProblem& pb = s.problem;
+  pb.unit = "um";
+  pb.y.resize(n);
+  pb.sigma = Eigen::VectorXd::Constant(n, sigma_um);
+  pb.J0 = Eigen::MatrixXd::Zero(n, static_cast<Eigen::Index>(cols.size()));
+  JudgeCause drift{kDrift, "the errors between the spindle's sphere and the table change linearly with time",
+                   Eigen::MatrixXd::Zero(n, kRtestParams * nt), {}};
+  JudgeCause spindle{kSpindle, "the spindle grows along Z (the sphere rises) linearly with time", Eigen::MatrixXd::Zero(n, 1),
+                     {{"dZ/h", "um/h"}}};
+  JudgeCause linear{kLinear, "the linear axes drift (the sphere moves in X, Y, Z) linearly with time",
+                    Eigen::MatrixXd::Zero(n, 3), {{"dX/h", "um/h"}, {"dY/h", "um/h"}, {"dZ/h", "um/h"}}};
+  for (int i = 0; i < nt; ++i)
+    for (int p = 0; p < kRtestParams; ++p)
+      drift.parameters.push_back(
+          {fmt::format("{}({})/h", rtestParameterName(k, p), tiltLabel(k, tilts[static_cast<size_t>(i)])), unitOf(p) + "/h"});
+  for (int q : cols) {
+    const int i = q / kRtestParams, p = q % kRtestParams;
+    pb.baseline_parameters.push_back({fmt::format("{}({})", rtestParameterName(k, p), tiltLabel(k, tilts[static_cast<size_t>(i)])), unitOf(p)});
+  }
+  std::vector<JudgeCause> steps;
+  for (int K = 1; K < nc; ++K) {
+    JudgeCause st{fmt::format("{}{}", kStepPrefix, K + 1),
+                  fmt::format("the sensors' zero stepped between cycles {} and {}", K, K + 1), Eigen::MatrixXd::Zero(n, 3),
+                  {{"dx", "um"}, {"dy", "um"}, {"dz", "um"}}};
+    steps.push_back(std::move(st));
+  }
+  const double t0 = cycles.front().readings.at(static_cast<size_t>(ref)).t_s;
+  JudgeFactor f_time{"time", {}, {}, "h"}, f_tilt{"tilt", {}, {}, ""}, f_c{"C", {}, {}, ""}, f_dir{"direction", {}, {}, ""},
+      f_cycle{"cycle", {}, {}, ""};
+  for (int c = 0; c < nc; ++c) {
+    const auto& cyc = cycles[static_cast<size_t>(c)];
+    if (cyc.readings.size() != plan.points.size()) throw std::invalid_argument("rtest: cycle with missing readings");
+    for (size_t j = 0; j < plan.points.size(); ++j) {
+      const int r = per * c + 3 * static_cast<int>(j);
+      const double tau = (cyc.readings[j].t_s - t0) / 3600.0;
+      const int ti = tilt_of[j];
+      // 002 Eq. (6): reading = J_j omega(tilt_j) - J_ref omega(tilt_ref), the reset at t0.
+      Eigen::Matrix<double, 3, Eigen::Dynamic> full = Eigen::MatrixXd::Zero(3, kRtestParams * nt);
+      full.middleCols(kRtestParams * ti, kRtestParams) += J[j];
+      full.middleCols(kRtestParams * ref_tilt, kRtestParams) -= J[static_cast<size_t>(ref)];
+      for (size_t q = 0; q < cols.size(); ++q)
+        pb.J0.block(r, static_cast<Eigen::Index>(q), 3, 1) = full.col(cols[q]) * perReportUnit(cols[q] % kRtestParams);
+      for (int p = 0; p < kRtestParams; ++p)
+        drift.J.block(r, kRtestParams * ti + p, 3, 1) = tau * J[j].col(p) * perReportUnit(p);
+      spindle.J.block(r, 0, 3, 1) = tau * Rt[j].col(2);
+      linear.J.block(r, 0, 3, 3) = tau * Rt[j];
+      for (int K = 1; K < nc; ++K)
+        if (c >= K) steps[static_cast<size_t>(K - 1)].J.block(r, 0, 3, 3).setIdentity();
+      pb.y.segment<3>(r) = mmToUm(1.0) * cyc.readings[j].dq_w_mm;
+      for (int d = 0; d < 3; ++d) {
+        pb.groups.push_back(c);
+        s.t_h.push_back(tau);
+        s.cycle.push_back(c);
+        f_time.values.push_back(tau);
+        f_tilt.levels.push_back(fmt::format("{:g}", tilts[static_cast<size_t>(ti)]));
+        f_c.levels.push_back(fmt::format("{:g}", plan.points[j].pose.C));
+        f_dir.levels.push_back(std::string(1, "xyz"[d]));
+        f_cycle.levels.push_back(std::to_string(c + 1));
+      }
+    }
+  }
+  pb.group_name = "cycle";
+  pb.factors = {f_time, f_tilt, f_c, f_dir, f_cycle};
+  pb.causes.push_back(std::move(drift));
+  for (auto& st : steps) pb.causes.push_back(std::move(st));
+  s.confounds = {std::move(spindle), std::move(linear)};
+  return s;
+}
 
 RtestDiagnosis diagnoseRtest(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, const RtestDiagnosisOptions& o) {
   o.validate();
@@ -84,170 +155,219 @@ RtestDiagnosis diagnoseRtest(const ProbePlan& plan, const std::vector<RtestCycle
   fo.sensor_sigma_um = o.sensor_sigma_um;
   d.analysis = analyzeRtest(plan, cycles, fo);
   d.cycles = static_cast<int>(cycles.size());
-  const Kinematics k = plan.machine.kinematics;
-  const int nt = static_cast<int>(d.analysis.tilt_deg.size());
+  const RtestJudgeSetup setup = rtestJudgeSetup(plan, cycles, o.sensor_sigma_um);
+  d.summary = judge(setup.problem, o.judge);
+  const double level = d.summary.per_test_alpha;
+  const JudgeCause& drift = setup.problem.causes.front();
 
-  JointModel base;
-  base.plan = &plan;
-  for (const auto& p : plan.points) {
-    base.J.push_back(J_wq_omega(k, p.pose, rtestNest_w(plan)));
-    const double t = tiltOf(k, p.pose);
-    base.tilt_of.push_back(static_cast<int>(std::find(d.analysis.tilt_deg.begin(), d.analysis.tilt_deg.end(), t) -
-                                            d.analysis.tilt_deg.begin()));
+  // How each confound is read as table drift: the judge with the drift in the model.
+  JudgeProblem with_drift = setup.problem;
+  with_drift.J0.conservativeResize(Eigen::NoChange, setup.problem.J0.cols() + drift.J.cols());
+  with_drift.J0.rightCols(drift.J.cols()) = drift.J;
+  for (const auto& p : drift.parameters) with_drift.baseline_parameters.push_back({std::string(kDrift) + "." + p.name, p.unit});
+  with_drift.causes = setup.confounds;
+  const JudgeSummary read_as = judge(with_drift, o.judge);
+
+  for (const auto& cf : setup.confounds) {
+    RtestConfound rc;
+    for (const auto& e : read_as.confounded)
+      if (e.cause == cf.name && e.with_model) rc.entry = e;
+    if (rc.entry.cause.empty()) continue;  // not exactly confounded on this plan: nothing to state
+    // Does it alone explain the signal? Its own test against the baseline, and the table
+    // drift's test with it in the model.
+    JudgeProblem alone = setup.problem;
+    alone.causes = {cf};
+    const JudgeSummary sa = judge(alone, o.judge);
+    JudgeProblem beyond = setup.problem;
+    beyond.J0.conservativeResize(Eigen::NoChange, setup.problem.J0.cols() + cf.J.cols());
+    beyond.J0.rightCols(cf.J.cols()) = cf.J;
+    for (const auto& p : cf.parameters) beyond.baseline_parameters.push_back({cf.name + "." + p.name, p.unit});
+    beyond.causes = {drift};
+    const JudgeSummary sb = judge(beyond, o.judge);
+    rc.alone = *stepZero(sa, cf.name);
+    rc.drift_beyond = *stepZero(sb, kDrift);
+    rc.explains = passes(rc.alone, level) && !passes(rc.drift_beyond, level);
+    // Restate the entry as the pair it is (the confound against the table drift family).
+    rc.entry.with = {kDrift};
+    rc.entry.with_model = false;
+    for (auto& t : rc.entry.with_terms)
+      if (t.name.rfind(std::string(kDrift) + ".", 0) == 0) t.name = t.name.substr(std::string(kDrift).size() + 1);
+    rc.entry.signal = passes(rc.alone, level);
+    rc.entry.why = fmt::format(
+        "the R-test sees the sphere against the nest only (002 Sec. 4.3): on this plan {} moves the readings exactly as "
+        "a drift of the table's errors does (principal angle {:.2g} deg): {} is read as {}",
+        cf.name, rc.entry.angle_deg,
+        rc.entry.cause_terms.empty() ? std::string("it")
+                                     : fmt::format("{} = {:.4g} {}", rc.entry.cause_terms[0].name,
+                                                   rc.entry.cause_terms[0].coefficient, rc.entry.cause_terms[0].unit),
+        [&] {
+          std::string s;
+          for (const auto& t : rc.entry.with_terms) s += (s.empty() ? "" : ", ") + fmt::format("{} = {:.4g} {}", t.name, t.coefficient, t.unit);
+          return s;
+        }());
+    d.summary.confounded.push_back(rc.entry);
+    d.confounds.push_back(std::move(rc));
   }
-  base.ref = rtestReferencePoint(plan) - 1;
-  base.ref_tilt = base.tilt_of[base.ref];
-  base.nt = nt;
-  base.t_ref_s = cycles.front().readings[base.ref].t_s;
-  JointModel drift = base;
-  drift.drift = true;
-  const int fixed_dz = kRtestParams * base.ref_tilt + 2, fixed_c = kRtestParams * base.ref_tilt + 5;
-  for (int q = 0; q < base.fullCols(); ++q)
-    if (q != fixed_dz && q != fixed_c) base.cols.push_back(q);
-  for (int q = 0; q < drift.fullCols(); ++q)
-    if (q != fixed_dz && q != fixed_c) drift.cols.push_back(q);
-
-  const double n_read = 3.0 * static_cast<double>(plan.points.size()) * d.cycles;
-  auto rmsAll = [&](const JointModel& jm) {
-    const Eigen::VectorXd x = jm.fit(cycles, -1);
-    double s = 0;
-    for (const auto& c : cycles) s += jm.rss(c, x);
-    return mmToUm(std::sqrt(s / n_read));
-  };
-  auto holdout = [&](const JointModel& jm) {
-    double s = 0;
-    for (int kk = 0; kk < d.cycles; ++kk) s += jm.rss(cycles[kk], jm.fit(cycles, kk));
-    return mmToUm(std::sqrt(s / n_read));
-  };
-  d.baseline_rms_um = rmsAll(base);
-  if (d.cycles < 4) {
-    d.reason = fmt::format("{} cycle(s): a drift needs at least 4 to be told from scatter", d.cycles);
-    d.baseline_holdout_rms_um = d.cycles > 1 ? holdout(base) : 0.0;
-    return d;
-  }
-  d.baseline_holdout_rms_um = holdout(base);
-  d.drift_rms_um = rmsAll(drift);
-  d.drift_holdout_rms_um = holdout(drift);
-  d.gain_pct = 100.0 * (1.0 - d.drift_holdout_rms_um / d.baseline_holdout_rms_um);
-
-  // Slope tests: the per-cycle estimates' trend (rate_u already widened by the scatter).
-  const double nu = static_cast<double>(d.cycles) - 2.0;
-  const int n_tests = kRtestParams * nt;
-  int significant = 0;
-  for (int i = 0; i < nt; ++i)
-    for (int p = 0; p < kRtestParams; ++p) {
-      RtestDriftTest t;
-      t.param = p;
-      t.tilt = i;
-      t.rate = d.analysis.rate(p, i);
-      t.u = d.analysis.rate_u(p, i);
-      if (!(t.u > 0)) continue;
-      t.t = t.rate / t.u;
-      t.p_value = studentTwoSided(t.t, nu);
-      t.significant = t.p_value < o.alpha / n_tests;
-      significant += t.significant;
-      d.tests.push_back(t);
-    }
-  const bool gain = d.gain_pct >= 100.0 * o.min_holdout_gain;
-  d.drift_found = significant > 0 && gain;
-  if (!d.drift_found)
-    d.reason = significant == 0 ? fmt::format("no slope passes the t test at alpha = {:g} (Bonferroni over {})", o.alpha,
-                                              n_tests)
-                                : fmt::format("slopes pass the t test but the held-out gain is {:.1f} %", d.gain_pct);
   return d;
 }
 
+std::string rtestFindingSummary(const ProbePlan& plan, const RtestDiagnosis& d, const JudgeFinding& f) {
+  const Kinematics k = plan.machine.kinematics;
+  if (isStep(f.cause)) {
+    const JudgeEstimate* top = &f.parameters.front();
+    for (const auto& p : f.parameters)
+      if (std::abs(p.value / p.u) > std::abs(top->value / top->u)) top = &p;
+    return fmt::format("the sensors' readings stepped by {:.2f} um in {} ({}) from cycle {} on: a knock, a lost count or "
+                       "a sensor slipping in the nest, not the machine",
+                       top->value, top->name.substr(1), fmt::format("u {:.2f} um", top->u), f.cause.substr(std::string(kStepPrefix).size()));
+  }
+  // thermal_drift: the slope that stands out most, and who can have caused it.
+  const JudgeEstimate* top = &f.parameters.front();
+  for (const auto& p : f.parameters)
+    if (p.identifiable && std::abs(p.value / p.u) > std::abs(top->value / top->u)) top = &p;
+  std::vector<std::string> by;
+  for (const auto& c : d.confounds)
+    if (c.explains) by.push_back(c.entry.cause == kSpindle ? "a growth of the spindle along Z" : "a drift of the linear axes");
+  const std::string what = fmt::format("{} moves {:+.2f} {} (u {:.2f})", top->name.substr(0, top->name.size() - 2), top->value,
+                                       top->unit, top->u);
+  (void)k;
+  if (!by.empty())
+    return fmt::format("the sphere-to-table position changes with time ({}); {} explains the same signal, which the R-test "
+                       "cannot tell from a drift of the rotary table's errors (002 Sec. 4.3)",
+                       what, fmt::join(by, " or "));
+  return fmt::format("the rotary table's errors change with time ({}), in a pattern that neither a spindle growth nor a "
+                     "drift of the linear axes alone explains",
+                     what);
+}
+
 namespace {
-double rep(int p, double v) { return p < 3 ? mmToUm(v) : radToMdeg(v); }
-std::string unit(int p) { return p < 3 ? "um" : "mdeg"; }
+
+Json paramsJson(const std::vector<JudgeEstimate>& ps) {
+  Json j = Json::object();
+  for (const auto& p : ps)
+    j[p.name] = {{"value", p.value}, {"unit", p.unit}, {"u", p.identifiable ? Json(p.u) : Json(nullptr)}};
+  return j;
+}
+
+std::vector<std::string> termNames(const std::vector<JudgeTerm>& t) {
+  std::vector<std::string> v;
+  for (const auto& x : t) v.push_back(x.name);
+  return v;
+}
+
+Json termsJson(const std::vector<JudgeTerm>& t) {
+  Json j = Json::array();
+  for (const auto& x : t) j.push_back({{"parameter", x.name}, {"coefficient", x.coefficient}, {"unit", x.unit}});
+  return j;
+}
+
+std::string separateWith(const std::string& cause) {
+  if (cause == kSpindle)
+    return "a second series with a longer or shorter sphere holder, or a spindle-growth sensor: the table's drift does "
+           "not follow the sphere";
+  if (cause == kLinear)
+    return "the linear axes' drift measured on their own during the same warm-up (laser or ballbar at a fixed table "
+           "angle), or a second nest position";
+  return "a plan on which their Jacobians differ";
+}
+
 }  // namespace
 
 Json rtestDiagnosisJson(const ProbePlan& plan, const RtestDiagnosis& d) {
   const Kinematics k = plan.machine.kinematics;
   const char ax = tiltAxis(k);
+  const JudgeSummary& s = d.summary;
   Json j;
   j["format"] = "rotacal-diagnosis/1";
   j["cycle"] = "rtest";
   j["cycles"] = d.cycles;
+  j["declared_sigma_um"] = s.declared_sigma_rms;
   j["baseline"] = {{"model", "002 Table 2 errors at each tilt, constant over the series (Eq. (6) over all cycles)"},
-                   {"residual_rms_um", d.baseline_rms_um},
-                   {"holdout_rms_um", d.baseline_holdout_rms_um}};
+                   {"residual_rms_um", s.baseline.rms_residual},
+                   {"holdout_rms_um", s.baseline_holdout_rms},
+                   {"chi2", s.baseline.chi2},
+                   {"dof", s.baseline.dof},
+                   {"p_value", s.baseline.p_value},
+                   {"within_declared_noise", s.baseline.passes}};
   j["holdout_scheme"] = "leave one cycle out";
-  j["verdict"] = d.drift_found ? "effect_found" : "no_significant_effect";
-  if (!d.drift_found) j["reason"] = d.reason;
-  Json tests = Json::array();
-  for (const auto& t : d.tests)
-    tests.push_back({{"parameter", fmt::format("{}({}={:g})", rtestParameterName(k, t.param), ax, d.analysis.tilt_deg[t.tilt])},
-                     {"rate", rep(t.param, t.rate) * 3600.0},
-                     {"u", rep(t.param, t.u) * 3600.0},
-                     {"unit", unit(t.param) + "/h"},
-                     {"t", t.t},
-                     {"p_value", t.p_value},
-                     {"significant", t.significant}});
-  j["drift_tests"] = tests;
+  j["verdict"] = judgeVerdictName(s.verdict);
+  j["message"] = s.message;
+  j["explains_data"] = s.explainsData();
   Json findings = Json::array();
-  if (d.drift_found) {
-    Json params = Json::object();
-    const RtestDriftTest* top = nullptr;
-    for (const auto& t : d.tests) {
-      if (!t.significant) continue;
-      params[fmt::format("{}({}={:g})/h", rtestParameterName(k, t.param), ax, d.analysis.tilt_deg[t.tilt])] = {
-          {"value", rep(t.param, t.rate) * 3600.0}, {"unit", unit(t.param) + "/h"}, {"u", rep(t.param, t.u) * 3600.0}};
-      if (!top || std::abs(t.t) > std::abs(top->t)) top = &t;
-    }
-    // The errors re-estimated at each cycle's time are the per-cycle estimates of analyze.
-    Json le = Json::object();
-    const auto& last = d.analysis.cycles.back();
-    for (int p = 0; p < kRtestParams; ++p) {
-      std::vector<double> v, u;
-      for (size_t i = 0; i < d.analysis.tilt_deg.size(); ++i) {
-        v.push_back(rep(p, last.value(p, static_cast<int>(i))));
-        u.push_back(rep(p, last.u(p, static_cast<int>(i))));
+  for (const auto& f : s.findings) {
+    Json e = {{"cause", isStep(f.cause) ? std::string("sensor_step") : f.cause},
+              {"variant", isStep(f.cause) ? fmt::format("from cycle {}", f.cause.substr(std::string(kStepPrefix).size()))
+                                          : std::string("linear")},
+              {"summary", rtestFindingSummary(plan, d, f)},
+              {"parameters", paramsJson(f.parameters)},
+              {"residual_rms_um", s.final_model.rms_residual},
+              {"holdout_rms_um", f.holdout_rms_cause},
+              {"gain_pct", f.holdout_rms_model > 0 ? 100.0 * (1.0 - f.holdout_rms_cause / f.holdout_rms_model) : 0.0},
+              {"separability", f.separability},
+              {"confidence", f.confidence}};
+    if (f.cause == kDrift) {
+      // The errors re-estimated at the last cycle's time: the per-cycle estimates of analyze.
+      Json le = Json::object();
+      const auto& last = d.analysis.cycles.back();
+      for (int p = 0; p < kRtestParams; ++p) {
+        std::vector<double> v, u;
+        for (size_t i = 0; i < d.analysis.tilt_deg.size(); ++i) {
+          v.push_back(rep(p, last.value(p, static_cast<int>(i))));
+          u.push_back(rep(p, last.u(p, static_cast<int>(i))));
+        }
+        le[rtestParameterName(k, p)] = {{"unit", unitOf(p)}, {"values", v}, {"u", u},
+                                        {"note", fmt::format("at the last cycle, t = {:.2f} h, per {} angle", last.t_s / 3600.0, ax)}};
       }
-      le[rtestParameterName(k, p)] = {{"unit", unit(p)}, {"values", v}, {"u", u},
-                                      {"note", fmt::format("at the last cycle, t = {:.2f} h, per {} angle", last.t_s / 3600.0, ax)}};
+      e["location_errors"] = le;
     }
-    findings.push_back(
-        {{"cause", "thermal_drift"},
-         {"variant", "linear"},
-         {"summary", fmt::format("the rotary table's errors change with time: {} at {} = {:g} deg moves {:.2f} {}/h "
-                                 "(t = {:.1f}); over the series {:.2f} {}",
-                                 rtestParameterName(k, top->param), ax, d.analysis.tilt_deg[top->tilt],
-                                 rep(top->param, top->rate) * 3600.0, unit(top->param), top->t,
-                                 rep(top->param, d.analysis.change(top->param, top->tilt)), unit(top->param))},
-         {"parameters", params},
-         {"location_errors", le},
-         {"residual_rms_um", d.drift_rms_um},
-         {"holdout_rms_um", d.drift_holdout_rms_um},
-         {"gain_pct", d.gain_pct}});
+    findings.push_back(e);
   }
   j["findings"] = findings;
-  j["confounded"] = Json::array(
-      {{{"causes", {"thermal_drift", "spindle_thermal_growth"}},
-        {"why", fmt::format("the R-test sees the sphere against the nest only (002 Sec. 4.3): an axial growth of the "
-                            "spindle moves the sphere like a uniform -{} drift of the table at every tilt",
-                            rtestParameterName(k, 2))},
-        {"separate_with", "a second R-test series with a longer or shorter sphere holder, or a spindle-growth sensor: "
-                          "a spindle growth scales with neither"}}});
-  if (d.cycles >= 4) {
+  Json conf = Json::array();
+  for (const auto& c : s.confounded) {
+    std::vector<std::string> causes = {c.cause};
+    for (const auto& w : (c.with_model ? termNames(c.with_terms) : c.with)) causes.push_back(w);
+    conf.push_back({{"causes", causes},
+                    {"why", c.why},
+                    {"separate_with", separateWith(c.cause)},
+                    {"cause", c.cause},
+                    {"with", c.with},
+                    {"with_model", c.with_model},
+                    {"angle_deg", c.angle_deg},
+                    {"cause_terms", termsJson(c.cause_terms)},
+                    {"with_terms", termsJson(c.with_terms)},
+                    {"signal", c.signal}});
+  }
+  j["confounded"] = conf;
+  Json cj = Json::array();
+  for (const auto& c : d.confounds)
+    cj.push_back({{"cause", c.entry.cause},
+                  {"alone_p_value", c.alone.p_value},
+                  {"alone_passes", passes(c.alone, s.per_test_alpha)},
+                  {"table_drift_beyond_p_value", c.drift_beyond.p_value},
+                  {"table_drift_beyond_passes", passes(c.drift_beyond, s.per_test_alpha)},
+                  {"explains_the_drift", c.explains}});
+  j["drift_confounds"] = cj;
+  j["judge"] = judgeToJson(s);
+  if (d.cycles >= 3) {
     Json figs = Json::array();
     for (int p = 0; p < kRtestParams; ++p) {
-      Json s = Json::array();
+      Json series = Json::array();
       std::vector<double> x, y, u;
       for (size_t i = 0; i < d.analysis.tilt_deg.size(); ++i) {
         x.push_back(d.analysis.tilt_deg[i]);
         y.push_back(rep(p, d.analysis.rate(p, static_cast<int>(i))) * 3600.0);
         u.push_back(rep(p, d.analysis.rate_u(p, static_cast<int>(i))) * 3600.0);
       }
-      s.push_back({{"name", rtestParameterName(k, p) + "/h"}, {"style", "points"}, {"x", x}, {"y", y}, {"u", u}});
+      series.push_back({{"name", rtestParameterName(k, p) + "/h"}, {"style", "points"}, {"x", x}, {"y", y}, {"u", u}});
       std::string id = "rtest_drift_rate_" + rtestParameterName(k, p);
       for (auto& ch : id) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
       figs.push_back({{"id", id},
-                      {"title", fmt::format("Drift rate of {} at each {} angle", rtestParameterName(k, p), ax)},
+                      {"title", fmt::format("Drift rate of {} at each {} angle (per-cycle estimates)", rtestParameterName(k, p), ax)},
                       {"x", {{"label", std::string(1, ax)}, {"unit", "deg"}}},
-                      {"y", {{"label", "rate"}, {"unit", unit(p) + "/h"}}},
-                      {"series", s},
-                      {"note", "zero within the error bars: no drift of this error"}});
+                      {"y", {{"label", "rate"}, {"unit", unitOf(p) + "/h"}}},
+                      {"series", series},
+                      {"note", "the straight line through each cycle's own estimates; the verdict is the judge's joint test"}});
     }
     j["figures"] = figs;
   }
@@ -255,20 +375,15 @@ Json rtestDiagnosisJson(const ProbePlan& plan, const RtestDiagnosis& d) {
 }
 
 std::string rtestDiagnosisText(const ProbePlan& plan, const RtestDiagnosis& d) {
-  const Kinematics k = plan.machine.kinematics;
-  std::string s = fmt::format("rotacal diagnose rtest: {} cycles\n", d.cycles);
-  s += fmt::format("baseline (constant errors): residual {:.3f} um rms, held-out {:.3f} um rms\n", d.baseline_rms_um,
-                   d.baseline_holdout_rms_um);
-  if (d.cycles >= 4)
-    s += fmt::format("with linear drift: residual {:.3f} um rms, held-out {:.3f} um rms, gain {:.1f} %\n", d.drift_rms_um,
-                     d.drift_holdout_rms_um, d.gain_pct);
-  if (!d.drift_found) return s + "verdict: no significant effect (" + d.reason + ")\n";
-  s += "verdict: thermal_drift\n";
-  for (const auto& t : d.tests)
-    if (t.significant)
-      s += fmt::format("  {}({}={:g}): {:.3f} +- {:.3f} {}/h (t = {:.1f})\n", rtestParameterName(k, t.param), tiltAxis(k),
-                       d.analysis.tilt_deg[t.tilt], rep(t.param, t.rate) * 3600.0, rep(t.param, t.u) * 3600.0,
-                       unit(t.param), t.t);
+  std::string s = fmt::format("rotacal diagnose rtest: {} cycles, declared sensor noise {:.3g} um\n", d.cycles,
+                              d.summary.declared_sigma_rms);
+  s += judgeText(d.summary);
+  for (const auto& f : d.summary.findings) s += fmt::format("finding {}: {}\n", f.cause, rtestFindingSummary(plan, d, f));
+  for (const auto& c : d.confounds)
+    s += fmt::format("{} alone: p {:.2g}, {}; the table drift beyond it: p {:.2g}, {}{}\n", c.entry.cause, c.alone.p_value,
+                     passes(c.alone, d.summary.per_test_alpha) ? "passes" : "does not pass", c.drift_beyond.p_value,
+                     passes(c.drift_beyond, d.summary.per_test_alpha) ? "passes" : "does not pass",
+                     c.explains ? ": it explains the drift signal as well as the table's errors do" : "");
   return s;
 }
 

@@ -1,53 +1,75 @@
 #pragma once
-// The thermal_drift cause (issue 6) on R-test series (002): do the position-dependent errors of
-// 002 Table 2 change with time across the measuring cycles?
-//  - per error and tilt, the slope of the per-cycle estimates over time against its standard
-//    uncertainty, widened by the scatter of the cycles about the line (so that slow chatter,
-//    e.g. a quantised spindle growth, counts as scatter, not as drift); a Student t test with
-//    the cycles' degrees of freedom, Bonferroni over the 6 x (tilts) slopes;
-//  - the gain measured on held-out data: leave one cycle out, fit the constant model and the
-//    drift model (errors + rates, 002 Eq. (6) over all cycles) to the others, predict the
-//    readings of the left-out cycle.
-// A drift is reported only when a slope passes the test and the held-out residual drops.
+// rotacal diagnose for R-test series (002), through the one judge (core/judge.hpp, issue 16).
+//
+// The problem handed to the judge:
+//  - y: every sensor reading (um, workpiece frame, 3 per pose and cycle). The baseline is 002
+//    Eq. (6) over all cycles: the six errors of 002 Table 2 at each tilt, constant over the
+//    series, read against the first cycle's reset (dz and c at tilt 0 fixed to 0, the
+//    convention of analyze). It is linear in the errors, so the judge's baseline residual is the
+//    per-reading residual of that fit.
+//  - sigma: the DECLARED sensor noise, the plan's `sensor_noise_um` (default 0.2 um: 002's
+//    stated system accuracy), never the fit's own scatter.
+//  - groups: cycles (leave one cycle out); factors: time, tilt, C, sensor direction, cycle.
+// The catalog (candidates the judge tests, each a family of columns tested jointly):
+//  - thermal_drift: every one of the 6 x (tilts) errors changes linearly with the hours since
+//    the reset (the columns tau J_j, not referenced: the reset happened once, at t0);
+//  - sensor_step_cycle_K (K = 2..cycles): from cycle K on the sensors read a constant offset
+//    (dx, dy, dz in the workpiece frame, where the nest's sensors sit).
+// Confounds of the table drift (002 Sec. 4.3: the R-test sees the sphere against the nest only):
+//  - spindle_growth: the sphere rises along machine Z linearly with time;
+//  - linear_axis_drift: the sphere drifts along machine X, Y, Z linearly with time.
+// They are not candidates beside thermal_drift (their columns lie in its span: as candidates
+// they would withhold every drift finding as ambiguous). Instead the judge, run with the table
+// drift in the model, reports how each is read as table drift (the `confounded` entry, from the
+// Jacobians), and two nested judgements say whether one alone explains the drift signal
+// (it passes against the baseline and the table drift adds nothing significant beyond it); the
+// finding's wording then names the spindle or the linear axes instead of the table.
 #include <string>
 #include <vector>
 
+#include "core/judge.hpp"
 #include "core/json_io.hpp"
 #include "core/probe_plan.hpp"
-#include "cycles/rtest/plan.hpp"
 #include "cycles/rtest/analyze.hpp"
-#include "core/statistics.hpp"  // studentTwoSided
+#include "cycles/rtest/plan.hpp"
 
 namespace rotacal {
 
 struct RtestDiagnosisOptions {
-  double alpha = 1e-3;             // family-wise false-alarm rate of the slope tests
-  double min_holdout_gain = 0.02;  // held-out rms must drop by at least this fraction
-  double sensor_sigma_um = 0.2;
-  void validate() const;  // throws std::invalid_argument
+  JudgeOptions judge;             // alpha and the rules (docs/diagnosis.md)
+  double sensor_sigma_um = 0.2;   // the declared sensor noise
+  void validate() const;          // throws std::invalid_argument
 };
 
-struct RtestDriftTest {
-  int param = 0, tilt = 0;
-  double rate = 0.0, u = 0.0;  // per second, mm or rad
-  double t = 0.0;              // rate / u
-  double p_value = 1.0;        // two-sided, Student t with cycles - 2 dof
-  bool significant = false;
+/// The judge's problem for a series, with the confounds' columns beside it (same rows).
+struct RtestJudgeSetup {
+  JudgeProblem problem;           // baseline + candidates (thermal_drift first, then the steps)
+  std::vector<JudgeCause> confounds;  // spindle_growth, linear_axis_drift
+  std::vector<double> t_h;        // hours since the reset, per observation
+  std::vector<int> cycle;         // 0-based cycle, per observation
+};
+RtestJudgeSetup rtestJudgeSetup(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, double sensor_sigma_um);
+
+/// What the nested judgements say about one confound of the table drift.
+struct RtestConfound {
+  JudgeConfounded entry;        // from the judge with thermal_drift in the model: how it is read
+  JudgeCandidate alone;         // its test against the baseline
+  JudgeCandidate drift_beyond;  // thermal_drift's test with the confound in the model
+  bool explains = false;        // alone passes and the table drift adds nothing beyond it
 };
 
 struct RtestDiagnosis {
   RtestAnalysis analysis;
   int cycles = 0;
-  double baseline_rms_um = 0.0, baseline_holdout_rms_um = 0.0;
-  double drift_rms_um = 0.0, drift_holdout_rms_um = 0.0;
-  double gain_pct = 0.0;
-  std::vector<RtestDriftTest> tests;
-  bool drift_found = false;
-  std::string reason;  // why not, when not
+  JudgeSummary summary;
+  std::vector<RtestConfound> confounds;
 };
 
 RtestDiagnosis diagnoseRtest(const ProbePlan& plan, const std::vector<RtestCycle>& cycles,
                              const RtestDiagnosisOptions& options);
+/// The finding's one sentence (contract `summary`); names the spindle or the linear axes when
+/// one of them explains the same signal.
+std::string rtestFindingSummary(const ProbePlan& plan, const RtestDiagnosis& d, const JudgeFinding& f);
 Json rtestDiagnosisJson(const ProbePlan& plan, const RtestDiagnosis& d);
 std::string rtestDiagnosisText(const ProbePlan& plan, const RtestDiagnosis& d);
 

@@ -223,14 +223,6 @@ bool TooltipFitOptions::validate(std::string* why) const {
   return true;
 }
 
-bool TooltipDiagnosisOptions::validate(std::string* why) const {
-  if (!(alpha > 0 && alpha < 1) || min_holdout_gain < 0 || sigma_floor_um < 0) {
-    if (why) *why = "alpha must be in (0, 1), min_holdout_gain and sigma_floor_um >= 0";
-    return false;
-  }
-  return true;
-}
-
 TooltipFit fitTooltip(const ProbePlan& plan, const std::vector<TooltipRun>& runs, const TooltipFitOptions& options) {
   std::string why;
   if (!options.validate(&why)) throw std::invalid_argument(why);
@@ -389,85 +381,6 @@ std::string tooltipReportText(const ProbePlan& plan, const TooltipAnalysis& a) {
   for (size_t k = 0; k < a.joint.angles_deg.size(); ++k)
     s += fmt::format("{:9.3f} {:7.3f} {:7.3f} {:9.3f}\n", a.joint.angles_deg[k], a.joint.e_mdeg[k], a.joint.u_e_mdeg[k],
                      a.angular.e_mdeg[k]);
-  return s;
-}
-
-TooltipDiagnosis diagnoseTooltip(const ProbePlan& plan, const std::vector<TooltipRun>& runs,
-                                 const TooltipDiagnosisOptions& options) {
-  std::string why;
-  if (!options.validate(&why)) throw std::invalid_argument(why);
-  TooltipDiagnosis d;
-  TooltipFitOptions fo;
-  fo.sigma_floor_um = options.sigma_floor_um;
-  fo.fit_pivot_length = false;
-  d.baseline = fitTooltip(plan, runs, fo);
-  d.baseline_holdout_rms_um = tooltipHoldoutRms(plan, runs, fo);
-  fo.fit_pivot_length = true;
-  d.extended = fitTooltip(plan, runs, fo);
-  d.extended_holdout_rms_um = tooltipHoldoutRms(plan, runs, fo);
-  const double s2 = std::pow(d.extended.sigma_um, 2);
-  d.f_statistic = s2 > 0 ? std::max(0.0, d.baseline.rss_um2 - d.extended.rss_um2) / s2 : 0.0;
-  d.p_value = d.extended.dof > 0 ? fSurvival(d.f_statistic, 1, d.extended.dof) : 1.0;
-  const double gain = d.baseline_holdout_rms_um > 0 ? 1.0 - d.extended_holdout_rms_um / d.baseline_holdout_rms_um : 0.0;
-  if (!(d.p_value < options.alpha))
-    d.verdict_reason = fmt::format("F test p = {:.3g} >= alpha = {}", d.p_value, options.alpha);
-  else if (!(gain >= options.min_holdout_gain))
-    d.verdict_reason = fmt::format("held-out gain {:.1f} % below {:.1f} %", 100 * gain, 100 * options.min_holdout_gain);
-  else
-    d.found = true;
-  if (d.found) d.verdict_reason = "accepted";
-  return d;
-}
-
-Json tooltipDiagnosisJson(const TooltipDiagnosis& d) {
-  Json j;
-  j["format"] = "rotacal-diagnosis/1";
-  j["cycle"] = "tooltip";
-  j["baseline"] = {{"model", "angular (004: one angular error per angle, pivot length as programmed)"},
-                   {"residual_rms_um", r6(d.baseline.residual_rms_um)},
-                   {"holdout_rms_um", r6(d.baseline_holdout_rms_um)},
-                   {"holdout", "leave one commanded angle out"}};
-  j["verdict"] = d.found ? "effect_found" : "no_significant_effect";
-  const double gain = d.baseline_holdout_rms_um > 0 ? 100.0 * (1.0 - d.extended_holdout_rms_um / d.baseline_holdout_rms_um) : 0.0;
-  Json cand = {{"cause", "pivot_length"},
-               {"parameters", {{"dR", {{"value", r6(d.extended.dR_um)}, {"unit", "um"}, {"u", r6(d.extended.u_dR_um)}}}}},
-               {"residual_rms_um", r6(d.extended.residual_rms_um)},
-               {"holdout_rms_um", r6(d.extended_holdout_rms_um)},
-               {"gain_pct", r6(gain)},
-               {"f_statistic", r6(d.f_statistic)},
-               {"p_value", d.p_value},
-               {"verdict", d.verdict_reason}};
-  j["candidates"] = Json::array({cand});
-  Json findings = Json::array();
-  if (d.found) {
-    Json f = cand;
-    f.erase("verdict");
-    f["summary"] = fmt::format(
-        "The tool tip sits {:.1f} um (u {:.1f} um) {} from the pivot than the program assumes; 004's formula reads this "
-        "as an angular error growing with tan A.",
-        std::abs(d.extended.dR_um), d.extended.u_dR_um, d.extended.dR_um > 0 ? "farther" : "closer");
-    Json ang = Json::array();
-    for (size_t k = 0; k < d.extended.angles_deg.size(); ++k)
-      ang.push_back({{"angle_deg", d.extended.angles_deg[k]},
-                     {"value", num(d.extended.e_mdeg[k])},
-                     {"u", num(d.extended.u_e_mdeg[k])},
-                     {"unit", "mdeg"}});
-    f["angular_error"] = ang;
-    f["location_errors"] = {{"dR", {{"value", r6(d.extended.dR_um)}, {"unit", "um"}, {"u", r6(d.extended.u_dR_um)}}}};
-    findings.push_back(f);
-  }
-  j["findings"] = findings;
-  j["confounded"] = Json::array();
-  return j;
-}
-
-std::string tooltipDiagnosisText(const TooltipDiagnosis& d) {
-  std::string s = fmt::format("baseline (004 angular model): residual {:.3f} um, held-out {:.3f} um\n",
-                              d.baseline.residual_rms_um, d.baseline_holdout_rms_um);
-  s += fmt::format("pivot_length: dR = {:.2f} um (u {:.2f} um), residual {:.3f} um, held-out {:.3f} um, F = {:.3g}, p = {:.3g}\n",
-                   d.extended.dR_um, d.extended.u_dR_um, d.extended.residual_rms_um, d.extended_holdout_rms_um,
-                   d.f_statistic, d.p_value);
-  s += d.found ? "verdict: effect found (pivot_length)\n" : "verdict: no significant effect (" + d.verdict_reason + ")\n";
   return s;
 }
 

@@ -76,25 +76,4 @@ TooltipAnalysis analyzeTooltip(const ProbePlan& plan, const std::vector<TooltipR
 Json tooltipReportJson(const ProbePlan& plan, const std::vector<TooltipRun>& runs, const TooltipAnalysis& a);
 std::string tooltipReportText(const ProbePlan& plan, const TooltipAnalysis& a);
 
-/// Issue 6, cause `pivot_length`: baseline = 004's model; the extension adds dR. Reported only
-/// when (1) the F test of the residual drop has p < alpha and (2) the held-out residual drops by
-/// at least min_holdout_gain. DIAGNOSIS.json as in contract.md.
-struct TooltipDiagnosisOptions {
-  double alpha = 1e-3;
-  double min_holdout_gain = 0.05;
-  double sigma_floor_um = 0.0;
-  bool validate(std::string* why) const;
-};
-struct TooltipDiagnosis {
-  TooltipFit baseline, extended;
-  double baseline_holdout_rms_um = 0.0, extended_holdout_rms_um = 0.0;
-  double f_statistic = 0.0, p_value = 1.0;
-  bool found = false;
-  std::string verdict_reason;
-};
-TooltipDiagnosis diagnoseTooltip(const ProbePlan& plan, const std::vector<TooltipRun>& runs,
-                                 const TooltipDiagnosisOptions& options);
-Json tooltipDiagnosisJson(const TooltipDiagnosis& d);
-std::string tooltipDiagnosisText(const TooltipDiagnosis& d);
-
 }  // namespace rotacal

@@ -5,6 +5,7 @@
 #include "core/errors.hpp"
 #include "cycles/tooltip/plan.hpp"
 #include "cycles/tooltip/analyze.hpp"
+#include "cycles/tooltip/diagnose.hpp"
 #include "cycles/cycle.hpp"
 #include "cycles/tooltip/program.hpp"
 
@@ -77,10 +78,9 @@ class Tooltip final : public Cycle {
     const ProbePlan& plan = *r.plan;
     const std::vector<TooltipRun> runs = readRuns(plan, r.results);
     TooltipDiagnosisOptions o;
-    o.alpha = r.alpha;
-    std::string why;
-    if (!o.validate(&why)) throw std::invalid_argument(why);
-    const TooltipDiagnosis d = diagnoseTooltip(plan, runs, o);
+    o.judge.alpha = r.alpha;  // the declared noise: the plan's laser_noise_um
+    o.validate();
+    const TooltipDiagnosis d = diagnoseTooltip({{&plan, runs}}, o);
     CycleDocuments out;
     out.text = tooltipDiagnosisText(d);
     out.doc = tooltipDiagnosisJson(d);

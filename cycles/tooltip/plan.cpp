@@ -17,7 +17,8 @@ namespace rotacal {
 namespace {
 
 const std::set<std::string> kKnownOptions = {"axis",  "radius_mm", "step_deg", "start_deg", "end_deg", "other_deg",
-                                             "units", "move_s",    "dwell_s",  "sweeps"};
+                                             "units", "move_s",    "dwell_s",  "sweeps",
+                                             "laser_noise_um"};
 
 Eigen::Matrix3d rx(double a) {
   Eigen::Matrix3d m;
@@ -65,7 +66,7 @@ TooltipOptions tooltipOptionsFrom(const CycleOptions& options, const MachineMode
     if (!kKnownOptions.count(k))
       throw std::invalid_argument("tooltip: unknown option '" + k +
                                   "' (expected axis, radius_mm, step_deg, end_deg, other_deg, units, move_s, dwell_s, "
-                                  "sweeps)");
+                                  "sweeps, laser_noise_um)");
   if (machine.kinematics != Kinematics::HeadAB)
     throw std::invalid_argument("tooltip: the fixed-tool-tip cycle needs a spindle-head machine (kinematics head_ab, "
                                 "e.g. examples/machines/head_ab.json)");
@@ -86,6 +87,7 @@ TooltipOptions tooltipOptionsFrom(const CycleOptions& options, const MachineMode
   if (auto* v = get("other_deg")) o.other_deg = parseNumberList("other_deg", *v);
   if (auto* v = get("move_s")) o.move_s = parseNumber("move_s", *v);
   if (auto* v = get("dwell_s")) o.dwell_s = parseNumber("dwell_s", *v);
+  if (auto* v = get("laser_noise_um")) o.noise_um = parseNumber("laser_noise_um", *v);
   if (auto* v = get("units")) {
     if (*v != "inch" && *v != "mm") throw std::invalid_argument("tooltip: option units must be inch or mm, got '" + *v + "'");
     o.inch = *v == "inch";
@@ -115,6 +117,8 @@ TooltipOptions tooltipOptionsFrom(const CycleOptions& options, const MachineMode
   if (o.start_deg < 0 && o.sweeps > 0) throw std::invalid_argument("tooltip: start_deg is for the static test (sweeps = 0)");
   if (!(o.move_s > 0)) throw std::invalid_argument("tooltip: option move_s must be positive");
   if (o.dwell_s < 0) throw std::invalid_argument("tooltip: option dwell_s must be >= 0");
+  if (!(o.noise_um > 0) || !std::isfinite(o.noise_um))
+    throw std::invalid_argument("tooltip: option laser_noise_um (the declared laser noise) must be > 0");
   return o;
 }
 
@@ -214,10 +218,13 @@ TooltipTruth tooltipTruthFrom(const JsonDoc& doc, const Json& truth) {
     t.noise_um = numberOr(doc, truth, "probe_noise_um", 0.0, Limits::nonNegative(kMaxNoiseUm, "um"));
     if (!truth.contains("tooltip")) return t;
     const Json& j = requireObject(doc, truth, "tooltip");
-    static const std::set<std::string> known = {"dR_um", "angular_error"};
+    static const std::set<std::string> known = {"dR_um", "angular_error", "scale_um_m"};
     for (const auto& [k, v] : j.items())
-      if (!known.count(k)) doc.fail(j, k, "unknown tooltip truth field '" + k + "' (expected dR_um, angular_error)");
+      if (!known.count(k))
+        doc.fail(j, k, "unknown tooltip truth field '" + k + "' (expected dR_um, angular_error, scale_um_m)");
     t.dR_um = numberOr(doc, j, "dR_um", 0.0, Limits::symmetric(kMaxLocationErrorUm, "um"));
+    // An isotropic scale error of the two linear axes in the read plane (issue 16).
+    t.scale_t_um_m = t.scale_z_um_m = numberOr(doc, j, "scale_um_m", 0.0, Limits::symmetric(1000.0, "um/m"));
     if (j.contains("angular_error")) {
       const Json& e = requireObject(doc, j, "angular_error");
       static const std::set<std::string> ek = {"offset_mdeg", "slope_mdeg_per_90deg", "sin_mdeg", "sin2_mdeg"};
@@ -246,7 +253,13 @@ TooltipRun simulateTooltip(const ProbePlan& plan, const TooltipTruth& truth, std
     Pose actual = pt.pose;
     double& th = o.axis == 'A' ? actual.A : actual.B;
     th += truth.angularErrorMdeg(th) / 1000.0;  // mdeg -> deg
-    const Eigen::Vector3d tip = pt.trigger_m_mm + tipOffset_m(degToRad(actual.A), degToRad(actual.B), r_true);
+    // The linear axes put the pivot at (1 + s) x its command in the read plane.
+    Eigen::Vector3d pivot = pt.trigger_m_mm;
+    pivot[ti] *= 1.0 + 1e-6 * truth.scale_t_um_m;
+    pivot.z() *= 1.0 + 1e-6 * truth.scale_z_um_m;
+    Eigen::Vector3d tip = pivot + tipOffset_m(degToRad(actual.A), degToRad(actual.B), r_true);
+    tip[ti] += umToMm(truth.drift_t_um_h * pt.t_s / 3600.0);
+    tip.z() += umToMm(truth.drift_z_um_h * pt.t_s / 3600.0);
     devs.push_back(tip - pt.contact_w_mm);
   }
   const std::vector<int> refs = tooltipReferences(plan);

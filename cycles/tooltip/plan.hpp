@@ -31,6 +31,8 @@ struct TooltipOptions {
   double dwell_s = 2.0;             // static test: dwell after each step for the reading (0: none)
   int sweeps = 0;                   // 0: static 0..end; n > 0: dynamic test of 004 Sec. VI,
                                     // 0 -> +end -> -end -> 0, n times, no dwell
+  double noise_um = 0.254;          // laser_noise_um: the DECLARED noise of a reading component;
+                                    // default 004 Sec. VII's laser system error, 0.000010 in
 
   char otherAxis() const { return axis == 'A' ? 'B' : 'A'; }
 };
@@ -54,10 +56,16 @@ struct TooltipTruth {
   double sin_mdeg = 0.0;
   double sin2_mdeg = 0.0;
   double noise_um = 0.0;  // laser reading, standard deviation per component
+  // Linear axes in the read plane positioning with a scale error (the transverse axis: Y for A,
+  // X for B; and Z), about the machine origin: the pivot goes to (1 + s) x its command.
+  double scale_t_um_m = 0.0, scale_z_um_m = 0.0;
+  // The tip drifting in the read plane with time (um/h), from the plan's reading times.
+  double drift_t_um_h = 0.0, drift_z_um_h = 0.0;
 
   double angularErrorMdeg(double theta_deg) const;
 };
-/// The "tooltip" object of TRUTH.json; missing fields are zero.
+/// The "tooltip" object of TRUTH.json (dR_um, angular_error, scale_um_m: both read-plane axes);
+/// missing fields are zero.
 TooltipTruth tooltipTruthFrom(const JsonDoc& doc, const Json& truth);
 
 /// One reading: the commanded angle and the deviation of the tip (actual - nominal, machine

@@ -1,84 +1,298 @@
-// thermal_drift on R-test series (issue 6): hidden drifts found, clean series and the real
-// spindle curve's quantisation chatter not reported, the real heating curve measured.
+// rtest diagnose through the judge (issue 16) on simulated R-test series whose truth the judge
+// never sees: the problem's columns against the exact simulator, 002's drift (11 cycles, -2 um/h
+// dy_CB at every tilt, 0.3 um) found jointly and read as the linear axes it equally is, a
+// spindle growth named with the closed-form combination it is read as, a 1 um sensor step,
+// clean series within alpha. Seed loops of bench size are in bench/cycle_judge_bench.cpp.
 #include <gtest/gtest.h>
 
+#include <Eigen/Dense>
 #include <cmath>
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 
-#include "cycles/cycle.hpp"
+#include <fmt/format.h>
+
 #include "core/machine.hpp"
-#include "cycles/rtest/plan.hpp"
-#include "cycles/rtest/diagnose.hpp"
+#include "core/statistics.hpp"
 #include "core/units.hpp"
+#include "cycles/cycle.hpp"
+#include "cycles/rtest/diagnose.hpp"
+#include "cycles/rtest/plan.hpp"
 #include "test_util.hpp"
 
 namespace rotacal {
 namespace {
 
-ProbePlan thermalPlan() {
-  return makePlan("rtest", loadMachine(test::sourcePath("examples/machines/bc_trunnion.json")), {{"thermal", "1"}});
+// 002 Sec. 4.3: 11 measuring cycles over 3 h (every 18 min), 0.3 um sensor noise declared.
+ProbePlan plan002(double noise_um) {
+  const CycleOptions o = {{"thermal", "1"}, {"interval_min", "18"}, {"sensor_noise_um", fmt::format("{:g}", noise_um)}};
+  return makePlan("rtest", loadMachine(test::sourcePath("examples/machines/bc_trunnion.json")), o);
 }
 
-/// 002-like position-dependent errors (um / mdeg at B = -60..60), scaled.
-Truth baseTruth(double scale, int shape) {
+/// 002-like position-dependent errors (um / mdeg at B = -60..60), varied by `shape`.
+Truth baseTruth(int shape) {
   Truth t;
   t.errors.kinematics = Kinematics::TableBC;
-  t.pose_dependent = [scale, shape](const Pose& p) {
+  t.pose_dependent = [shape](const Pose& p) {
     const double s = p.B / 60.0;
     ErrorVector d = ErrorVector::Zero();
-    d[0] = umToMm(scale * (3.0 + 2.0 * s));
-    d[1] = umToMm(scale * (-4.0 + (shape % 2 ? 1.5 : -1.0) * s * s));
-    d[2] = umToMm(scale * 5.0 * s);
-    d[3] = mdegToRad(scale * (2.0 - s));
-    d[4] = mdegToRad(scale * (-1.5 + 2.5 * s));
-    d[5] = mdegToRad(scale * (shape % 3) * 0.5 * s * s);
+    d[0] = umToMm(3.0 + 2.0 * s);
+    d[1] = umToMm(-4.0 + (shape % 2 ? 1.5 : -1.0) * s * s);
+    d[2] = umToMm(5.0 * s);
+    d[3] = mdegToRad(2.0 - s);
+    d[4] = mdegToRad(-1.5 + 2.5 * s);
+    d[5] = mdegToRad((shape % 3) * 0.5 * s * s);
     return d;
   };
   return t;
 }
 
-RtestDiagnosis run(const ProbePlan& plan, const Truth& truth, const RtestTruthExtras& x, std::uint64_t seed, double noise) {
+std::vector<RtestCycle> series(const ProbePlan& plan, const Truth& truth, const RtestTruthExtras& x, std::uint64_t seed,
+                               double noise) {
   RtestSimOptions o;
   o.seed = seed;
   o.noise_um = noise;
-  RtestDiagnosisOptions d;
-  d.sensor_sigma_um = noise;
-  return diagnoseRtest(plan, simulateRtest(plan, truth, x, o).cycles, d);
+  return simulateRtest(plan, truth, x, o).cycles;
 }
 
-TEST(RtestDiagnosis, HiddenDriftOf002IsFoundAndMeasured) {
-  // 002 Sec. 4.4: about -2 um X, -6 um Y, -2 um Z over 3 h; sizes and seeds varied.
-  const ProbePlan plan = thermalPlan();
-  for (double size : {0.5, 1.0, 1.5})
-    for (std::uint64_t seed : {3u, 11u}) {
-      Truth t = baseTruth(1.0, static_cast<int>(seed));
-      const double ry = -2.0 * size, rx = -0.667 * size;  // um/h
-      t.drift = [rx, ry](double s) {
-        ErrorVector d = ErrorVector::Zero();
-        d[0] = umToMm(rx * s / 3600.0);
-        d[1] = umToMm(ry * s / 3600.0);
-        return d;
-      };
-      const RtestDiagnosis d = run(plan, t, {}, seed, 0.2);
-      ASSERT_TRUE(d.drift_found) << "size " << size << " seed " << seed << ": " << d.reason;
-      EXPECT_GT(d.gain_pct, 10.0);
-      for (int i = 0; i < 5; ++i) {  // dy_CB's rate at every B, within its uncertainty
-        EXPECT_NEAR(mmToUm(d.analysis.rate(1, i)) * 3600, ry, 4.0 * mmToUm(d.analysis.rate_u(1, i)) * 3600);
-        EXPECT_NEAR(mmToUm(d.analysis.rate(0, i)) * 3600, rx, 4.0 * mmToUm(d.analysis.rate_u(0, i)) * 3600);
+RtestDiagnosis diagnose(const ProbePlan& plan, const std::vector<RtestCycle>& c, double declared) {
+  RtestDiagnosisOptions o;
+  o.sensor_sigma_um = declared;
+  return diagnoseRtest(plan, c, o);
+}
+
+const JudgeEstimate* param(const JudgeFinding& f, const std::string& name) {
+  for (const auto& p : f.parameters)
+    if (p.name == name) return &p;
+  return nullptr;
+}
+
+const RtestConfound* confound(const RtestDiagnosis& d, const std::string& cause) {
+  for (const auto& c : d.confounds)
+    if (c.entry.cause == cause) return &c;
+  return nullptr;
+}
+
+Truth driftDyCB(int shape, double rate_um_h) {
+  Truth t = baseTruth(shape);
+  t.drift = [rate_um_h](double s) {
+    ErrorVector d = ErrorVector::Zero();
+    d[1] = umToMm(rate_um_h * s / 3600.0);
+    return d;
+  };
+  return t;
+}
+
+// The judge's columns against the exact simulator (nonlinear, 002 Eq. (1)-(3)) with no noise:
+// a static error set, a table drift, a spindle growth and a linear-axis drift each give readings
+// equal to their columns times the injected values, to the linearisation (< 1e-4 um here).
+TEST(RtestDiagnosis, ColumnsMatchTheExactSimulator) {
+  const ProbePlan plan = plan002(0.3);
+  const auto clean = series(plan, Truth{}, {}, 1, 0.0);
+  const RtestJudgeSetup s = rtestJudgeSetup(plan, clean, 0.3);
+  EXPECT_LT(s.problem.y.cwiseAbs().maxCoeff(), 1e-9);
+  // Table drift from the reset on (t0: the first cycle's reading at B = C = 0): dy_CB -2 um/h
+  // and c_BY +0.3 mdeg/h at every tilt.
+  const double t0 = plan.points[static_cast<size_t>(rtestReferencePoint(plan) - 1)].t_s;
+  {
+    Truth t;
+    t.errors.kinematics = Kinematics::TableBC;
+    t.drift = [t0](double sec) {
+      ErrorVector d = ErrorVector::Zero();
+      d[1] = umToMm(-2.0 * (sec - t0) / 3600.0);
+      d[5] = mdegToRad(0.3 * (sec - t0) / 3600.0);
+      return d;
+    };
+    const RtestJudgeSetup g = rtestJudgeSetup(plan, series(plan, t, {}, 1, 0.0), 0.3);
+    Eigen::VectorXd slope = Eigen::VectorXd::Zero(g.problem.causes[0].J.cols());
+    for (int i = 0; i < 5; ++i) {
+      slope[6 * i + 1] = -2.0;
+      slope[6 * i + 5] = 0.3;
+    }
+    EXPECT_LT((g.problem.y - g.problem.causes[0].J * slope).cwiseAbs().maxCoeff(), 1e-4);
+  }
+  // Spindle growth 1.3 um/h and a linear-axis drift (0.5, -1, 0.8) um/h of the sphere.
+  for (const Eigen::Vector3d& v : {Eigen::Vector3d(0, 0, 1.3), Eigen::Vector3d(0.5, -1.0, 0.8)}) {
+    RtestTruthExtras x;
+    x.sphere_drift_m_mm = [v, t0](double sec) { return Eigen::Vector3d(umToMm(1.0) * v * (sec - t0) / 3600.0); };
+    const RtestJudgeSetup g = rtestJudgeSetup(plan, series(plan, Truth{}, x, 1, 0.0), 0.3);
+    const Eigen::VectorXd model = v.x() == 0 ? Eigen::VectorXd(g.confounds[0].J * v.z()) : Eigen::VectorXd(g.confounds[1].J * v);
+    EXPECT_LT((g.problem.y - model).cwiseAbs().maxCoeff(), 1e-4);
+  }
+  // The baseline: a static error set of 002's size is J0 times its values (dz, c at B = 0 are
+  // not columns: the reset's convention, so the truth holds them at 0 there).
+  {
+    const Truth t = baseTruth(2);
+    const RtestJudgeSetup g = rtestJudgeSetup(plan, series(plan, t, {}, 1, 0.0), 0.3);
+    Eigen::VectorXd beta(g.problem.J0.cols());
+    int q = 0;
+    for (double b : {-60.0, -30.0, 0.0, 30.0, 60.0}) {
+      const ErrorVector e = t.pose_dependent(tiltPose(Kinematics::TableBC, b, 0.0));
+      for (int p = 0; p < 6; ++p) {
+        if (b == 0.0 && (p == 2 || p == 5)) continue;
+        beta[q++] = p < 3 ? mmToUm(e[p]) : radToMdeg(e[p]);
       }
     }
-}
-
-TEST(RtestDiagnosis, NoFalseAlarmOnTwentyCleanSeeds) {
-  const ProbePlan plan = thermalPlan();
-  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
-    const double noise = 0.1 + 0.05 * static_cast<double>(seed % 5);  // 0.1 .. 0.3 um
-    const RtestDiagnosis d = run(plan, baseTruth(0.5 + 0.1 * static_cast<double>(seed % 7), static_cast<int>(seed)), {},
-                                 seed, noise);
-    EXPECT_FALSE(d.drift_found) << "seed " << seed;
+    EXPECT_LT((g.problem.y - g.problem.J0 * beta).cwiseAbs().maxCoeff(), 1e-3);
   }
 }
+
+// Issue 16's reproduction: 002's drift, each dy_CB slope alone weak against 30 Bonferroni'd t
+// tests, is found jointly; its slopes within 3 u; the linear-axis drift explains the same signal
+// (a uniform dy_CB drift at every B is a Y drift of the sphere), so the finding does not claim
+// the rotary table.
+TEST(RtestDiagnosis, Reproduction002DriftIsThermalDrift) {
+  const ProbePlan plan = plan002(0.3);
+  ASSERT_EQ(rtestSchedule(plan).cycles(), 11);
+  for (int seed = 1; seed <= 4; ++seed) {
+    const RtestDiagnosis d = diagnose(plan, series(plan, driftDyCB(seed, -2.0), {}, static_cast<std::uint64_t>(seed), 0.3), 0.3);
+    if (seed == 1) std::printf("%s", rtestDiagnosisText(plan, d).c_str());
+    ASSERT_EQ(d.summary.verdict, JudgeVerdict::EffectFound) << rtestDiagnosisText(plan, d);
+    ASSERT_EQ(d.summary.findings.size(), 1u);
+    const JudgeFinding& f = d.summary.findings[0];
+    EXPECT_EQ(f.cause, "thermal_drift");
+    for (double b : {-60, -30, 0, 30, 60}) {
+      const JudgeEstimate* e = param(f, fmt::format("dy_CB(B={:g})/h", b));
+      ASSERT_NE(e, nullptr);
+      EXPECT_LE(std::abs(e->value + 2.0), 3.0 * e->u) << b;
+    }
+    const RtestConfound* lin = confound(d, "linear_axis_drift");
+    ASSERT_NE(lin, nullptr);
+    EXPECT_TRUE(lin->explains);
+    EXPECT_LT(lin->entry.angle_deg, 1e-3);
+    const std::string summary = rtestFindingSummary(plan, d, f);
+    EXPECT_EQ(summary.find("the rotary table's errors change with time"), std::string::npos) << summary;
+    EXPECT_NE(summary.find("linear axes"), std::string::npos) << summary;
+    const Json j = rtestDiagnosisJson(plan, d);
+    EXPECT_EQ(j["verdict"], "effect_found");
+    EXPECT_EQ(j["findings"][0]["cause"], "thermal_drift");
+    EXPECT_EQ(j["judge"]["verdict"], "effect_found");
+  }
+}
+
+// A spindle growing 1.3 um/h (the SJTU spindle's first 3 h, 0 -> 3.9 um) on a clean table:
+// found as thermal_drift, worded as the spindle. The confounded entry comes from the Jacobians:
+// the principal angle between the growth column and the baseline + drift span, computed here by
+// QR, is 0; and the combination it names is the closed form: the sphere rising by L reads as
+// dz_BY sinking by L at every B (dz_BY is along machine Z at every B: the B axis turns about Y).
+TEST(RtestDiagnosis, SpindleGrowthConfoundedWithTableDriftFromTheJacobians) {
+  const ProbePlan plan = plan002(0.3);
+  RtestTruthExtras x;
+  const double t0 = plan.points[static_cast<size_t>(rtestReferencePoint(plan) - 1)].t_s;
+  x.sphere_drift_m_mm = [t0](double sec) { return Eigen::Vector3d(0, 0, umToMm(1.3 * (sec - t0) / 3600.0)); };
+  const auto cyc = series(plan, baseTruth(1), x, 7, 0.3);
+  const RtestDiagnosis d = diagnose(plan, cyc, 0.3);
+  ASSERT_EQ(d.summary.verdict, JudgeVerdict::EffectFound) << rtestDiagnosisText(plan, d);
+  EXPECT_EQ(d.summary.findings[0].cause, "thermal_drift");
+  const RtestConfound* sp = confound(d, "spindle_growth");
+  ASSERT_NE(sp, nullptr);
+  EXPECT_TRUE(sp->explains);
+  const std::string summary = rtestFindingSummary(plan, d, d.summary.findings[0]);
+  EXPECT_NE(summary.find("spindle"), std::string::npos) << summary;
+  EXPECT_EQ(summary.find("the rotary table's errors change with time"), std::string::npos) << summary;
+  // Independent: QR of [J0 | drift], the growth column's part outside it.
+  const RtestJudgeSetup s = rtestJudgeSetup(plan, cyc, 0.3);
+  Eigen::MatrixXd M(s.problem.J0.rows(), s.problem.J0.cols() + s.problem.causes[0].J.cols());
+  M << s.problem.J0, s.problem.causes[0].J;
+  const Eigen::VectorXd g = s.confounds[0].J.col(0);
+  const Eigen::VectorXd coef = M.colPivHouseholderQr().solve(g);
+  const double sin_angle = (g - M * coef).norm() / g.norm();
+  EXPECT_LT(sin_angle, 1e-8);
+  EXPECT_NEAR(sp->entry.angle_deg, std::asin(sin_angle) * 180 / 3.14159265358979, 1e-3);
+  // Closed form: dZ/h = 1 is read as dz_BY(B=b)/h = -1 at every b, nothing else.
+  ASSERT_EQ(sp->entry.with_terms.size(), 5u);
+  for (const auto& t : sp->entry.with_terms) {
+    EXPECT_EQ(t.name.rfind("dz_BY(B=", 0), 0u) << t.name;
+    EXPECT_NEAR(t.coefficient, -1.0, 1e-6) << t.name;
+  }
+  for (int b = 0; b < 5; ++b) EXPECT_NEAR(coef[s.problem.J0.cols() + 6 * b + 2], -1.0, 1e-6);
+}
+
+// A 1 um step of the sensors' x reading from cycle 7 of 11 on: flagged as sensor_step_cycle_7,
+// dx within 3 u of 1 um, dy and dz within 3 u of 0; thermal_drift not accepted.
+TEST(RtestDiagnosis, SensorStepMidSeriesIsFlagged) {
+  const ProbePlan plan = plan002(0.3);
+  for (int seed = 1; seed <= 4; ++seed) {
+    auto cyc = series(plan, baseTruth(seed), {}, static_cast<std::uint64_t>(100 + seed), 0.3);
+    for (size_t c = 6; c < cyc.size(); ++c)
+      for (auto& r : cyc[c].readings) r.dq_w_mm.x() += umToMm(1.0);
+    const RtestDiagnosis d = diagnose(plan, cyc, 0.3);
+    ASSERT_EQ(d.summary.verdict, JudgeVerdict::EffectFound) << rtestDiagnosisText(plan, d);
+    ASSERT_EQ(d.summary.findings.size(), 1u) << rtestDiagnosisText(plan, d);
+    const JudgeFinding& f = d.summary.findings[0];
+    EXPECT_EQ(f.cause, "sensor_step_cycle_7");
+    EXPECT_LE(std::abs(param(f, "dx")->value - 1.0), 3.0 * param(f, "dx")->u);
+    EXPECT_LE(std::abs(param(f, "dy")->value), 3.0 * param(f, "dy")->u);
+    EXPECT_LE(std::abs(param(f, "dz")->value), 3.0 * param(f, "dz")->u);
+    const Json j = rtestDiagnosisJson(plan, d);
+    EXPECT_EQ(j["findings"][0]["cause"], "sensor_step");
+  }
+}
+
+// Clean series (static errors only, noise as declared): any verdict but no_significant_effect is
+// a false alarm. 12 seeds at alpha 0.01: 3 or more has binomial probability 2.0e-4 (the
+// benchmark runs 200).
+TEST(RtestDiagnosis, CleanSeriesFalseAlarmsWithinAlpha) {
+  const ProbePlan plan = plan002(0.3);
+  int alarms = 0;
+  for (std::uint64_t seed = 1; seed <= 12; ++seed) {
+    const RtestDiagnosis d = diagnose(plan, series(plan, baseTruth(static_cast<int>(seed)), {}, 500 + seed, 0.3), 0.3);
+    alarms += d.summary.verdict != JudgeVerdict::NoSignificantEffect;
+    if (d.summary.verdict == JudgeVerdict::NoSignificantEffect) {
+      EXPECT_TRUE(d.summary.explainsData());
+    }
+    EXPECT_NE(d.summary.message.find("within the declared noise"), std::string::npos);
+  }
+  std::printf("rtest clean: %d false alarms in 12 seeds\n", alarms);
+  EXPECT_LE(alarms, 2);
+}
+
+// 002's drifts at a realistic size (the truth file examples/truth/rtest_002.json: -0.667 / -2 /
+// -0.667 um/h in dx_BY / dy_CB / dz_BY and 0.3 mdeg/h in c_BY, every tilt), half of it, 0.2 um
+// declared and drawn: found in at least 90 % of 10 seeds with the family within its 3-sigma
+// ellipsoid: (b - b_true)^T C^-1 (b - b_true) below the chi2(30) quantile at 0.27 %, C computed
+// here from the columns (the drift's whitened columns with the baseline projected out).
+TEST(RtestDiagnosis, HiddenDriftFoundWithParametersWithin3u) {
+  const ProbePlan plan = plan002(0.2);
+  const Eigen::VectorXd truth_rate = [] {
+    Eigen::VectorXd r = Eigen::VectorXd::Zero(30);
+    for (int i = 0; i < 5; ++i) {
+      r[6 * i + 0] = -0.333;
+      r[6 * i + 1] = -1.0;
+      r[6 * i + 2] = -0.333;
+      r[6 * i + 5] = 0.15;
+    }
+    return r;
+  }();
+  const double q = chiSquareUpperQuantile(0.0027, 30);
+  int found = 0;
+  for (int seed = 1; seed <= 10; ++seed) {
+    Truth t = baseTruth(seed);
+    t.drift = [&truth_rate](double sec) {
+      ErrorVector d = ErrorVector::Zero();
+      d[0] = umToMm(truth_rate[0] * sec / 3600.0);
+      d[1] = umToMm(truth_rate[1] * sec / 3600.0);
+      d[2] = umToMm(truth_rate[2] * sec / 3600.0);
+      d[5] = mdegToRad(truth_rate[5] * sec / 3600.0);
+      return d;
+    };
+    const auto cyc = series(plan, t, {}, static_cast<std::uint64_t>(seed), 0.2);
+    const RtestDiagnosis d = diagnose(plan, cyc, 0.2);
+    if (d.summary.verdict != JudgeVerdict::EffectFound || d.summary.findings[0].cause != "thermal_drift") continue;
+    const RtestJudgeSetup s = rtestJudgeSetup(plan, cyc, 0.2);
+    const Eigen::MatrixXd W = s.problem.J0 / 0.2, D = s.problem.causes[0].J / 0.2;
+    const Eigen::MatrixXd B = D - W * W.colPivHouseholderQr().solve(D);
+    Eigen::VectorXd est(30);
+    for (int k = 0; k < 30; ++k) est[k] = d.summary.findings[0].parameters[static_cast<size_t>(k)].value;
+    const Eigen::VectorXd e = est - truth_rate;
+    const double d2 = e.dot((B.transpose() * B) * e);
+    found += d2 < q;
+  }
+  std::printf("rtest hidden drift (half 002): %d / 10 found within the 3-sigma ellipsoid\n", found);
+  EXPECT_GE(found, 9);
+}
+
 
 std::vector<double> sjtuDriftUm() {
   std::vector<double> v;
@@ -93,70 +307,48 @@ std::vector<double> sjtuDriftUm() {
   return v;
 }
 
-/// The real axial growth (1-min samples) from row `start` as a spindle (sphere) Z drift.
-RtestTruthExtras spindleGrowth(const std::vector<double>& dl, size_t start) {
-  RtestTruthExtras x;
-  x.sphere_drift_m_mm = [dl, start](double t_s) {
-    const double m = t_s / 60.0;
-    const size_t i = std::min(dl.size() - 2, start + static_cast<size_t>(m));
-    const double w = std::min(1.0, m - std::floor(m));
-    return Eigen::Vector3d(0, 0, umToMm((1 - w) * dl[i] + w * dl[i + 1] - dl[start]));
-  };
-  return x;
-}
-
-TEST(RtestDiagnosis, RealSpindleHeatingFoundAsUniformZDrift) {
+// Real data (shared/data/sjtu-spindle-thermal): the first 3 h of the SJTU spindle's axial growth
+// (1-min samples, 0 -> 3.9 um, quantised in 0.265 um steps) as the sphere's Z drift on 002's
+// series. Found as thermal_drift and worded as the spindle; the judge's dz_BY slopes against the
+// injected curve's least-squares slope at the cycles' mean times (computed here), within 3 u
+// plus the curve's bend (its residual about the line, taken as a bound).
+TEST(RtestDiagnosis, RealSpindleHeatingIsWordedAsTheSpindle) {
   const std::vector<double> dl = sjtuDriftUm();
   if (dl.size() < 1000) GTEST_SKIP() << "shared/data/sjtu-spindle-thermal not found beside the project";
-  const ProbePlan plan = thermalPlan();
-  const RtestTruthExtras x = spindleGrowth(dl, 0);  // the first 3 h: 0 -> 3.9 um
-  const RtestDiagnosis d = run(plan, baseTruth(1.0, 1), x, 5, 0.2);
-  ASSERT_TRUE(d.drift_found) << d.reason;
-  // Independent path: the least-squares slope of the injected curve at the cycles' times. The
-  // sphere rising by L reads as the table sinking: dz_BY drifts by -L at every B.
+  const ProbePlan plan = plan002(0.3);
+  RtestTruthExtras x;
+  x.sphere_drift_m_mm = [dl](double t_s) {
+    const double m = t_s / 60.0;
+    const size_t i = std::min(dl.size() - 2, static_cast<size_t>(m));
+    const double w = std::min(1.0, m - std::floor(m));
+    return Eigen::Vector3d(0, 0, umToMm((1 - w) * dl[i] + w * dl[i + 1] - dl[0]));
+  };
+  const auto cyc = series(plan, baseTruth(1), x, 5, 0.3);
+  const RtestDiagnosis d = diagnose(plan, cyc, 0.3);
+  std::printf("%s", rtestDiagnosisText(plan, d).c_str());
+  ASSERT_FALSE(d.summary.findings.empty()) << rtestDiagnosisText(plan, d);
+  const JudgeFinding& f = d.summary.findings[0];
+  ASSERT_EQ(f.cause, "thermal_drift");
+  const std::string summary = rtestFindingSummary(plan, d, f);
+  EXPECT_NE(summary.find("spindle"), std::string::npos) << summary;
   double st = 0, sy = 0, stt = 0, sty = 0;
-  const double n = static_cast<double>(d.analysis.cycles.size());
-  for (const auto& c : d.analysis.cycles) {
-    const double t = c.t_s / 3600.0, y = -mmToUm(x.sphere_drift_m_mm(c.t_s).z());
+  std::vector<double> ts, ys;
+  for (const auto& c : cyc) {
+    const double t = c.t_s() / 3600.0, y = -mmToUm(x.sphere_drift_m_mm(c.t_s()).z());
+    ts.push_back(t), ys.push_back(y);
     st += t, sy += y, stt += t * t, sty += t * y;
   }
-  const double slope = (n * sty - st * sy) / (n * stt - st * st);
-  std::printf("SJTU rows 0-180 as spindle growth: injected slope %.3f um/h; dz_BY rates", slope);
-  for (int i = 0; i < 5; ++i)
-    std::printf(" %.3f+-%.3f", mmToUm(d.analysis.rate(2, i)) * 3600, mmToUm(d.analysis.rate_u(2, i)) * 3600);
-  std::printf(" um/h; held-out gain %.1f %%\n", d.gain_pct);
-  for (int i = 0; i < 5; ++i) {
-    if (!(d.analysis.rate_u(2, i) > 0)) continue;
-    // the curve bends (its scatter about a line is in rate_u); 0.05 um/h for the tilts' minute offsets
-    EXPECT_NEAR(mmToUm(d.analysis.rate(2, i)) * 3600, slope, 4.0 * mmToUm(d.analysis.rate_u(2, i)) * 3600 + 0.05) << i;
+  const double n = static_cast<double>(cyc.size());
+  const double slope = (n * sty - st * sy) / (n * stt - st * st), b0 = (sy - slope * st) / n;
+  double bend = 0;
+  for (size_t k = 0; k < ts.size(); ++k) bend = std::max(bend, std::abs(ys[k] - b0 - slope * ts[k]));
+  const double bend_rate = bend / 3.0;  // the largest departure from the line over the 3 h, per hour
+  std::printf("SJTU first 3 h: injected slope %.3f um/h, bend %.3f um\n", slope, bend);
+  for (double b : {-60, -30, 0, 30, 60}) {
+    const JudgeEstimate* e = param(f, fmt::format("dz_BY(B={:g})/h", b));
+    ASSERT_NE(e, nullptr);
+    EXPECT_LE(std::abs(e->value - slope), 3.0 * e->u + bend_rate) << b;
   }
-}
-
-TEST(RtestDiagnosis, RealQuantisationChatterIsNotAnEffect) {
-  const std::vector<double> dl = sjtuDriftUm();
-  if (dl.size() < 1000) GTEST_SKIP() << "shared/data/sjtu-spindle-thermal not found beside the project";
-  const ProbePlan plan = thermalPlan();
-  // Every 3-h window of the real curve's plateau (after row 1200) in which it only chatters:
-  // max - min within two quantisation steps (0.53 um).
-  int windows = 0;
-  for (size_t start = 1200; start + 200 < dl.size(); start += 120) {
-    const auto [lo, hi] = std::minmax_element(dl.begin() + static_cast<long>(start), dl.begin() + static_cast<long>(start) + 190);
-    if (*hi - *lo > 0.53) continue;
-    ++windows;
-    const RtestDiagnosis d = run(plan, baseTruth(1.0, static_cast<int>(start)), spindleGrowth(dl, start), start, 0.2);
-    EXPECT_FALSE(d.drift_found) << "window from row " << start << ": chatter reported as drift";
-    double tmax = 0;
-    for (const auto& t : d.tests) tmax = std::max(tmax, std::abs(t.t));
-    std::printf("chatter window from row %zu: max |t| %.2f, held-out gain %.1f %%\n", start, tmax, d.gain_pct);
-  }
-  EXPECT_GE(windows, 5);
-}
-
-TEST(RtestDiagnosis, StudentTail) {
-  // Closed forms: nu = 1 is Cauchy, P(|T| > 1) = 0.5; nu = 2: P(|T| > t) = 1 - t / sqrt(2 + t^2).
-  EXPECT_NEAR(studentTwoSided(1.0, 1.0), 0.5, 1e-9);
-  EXPECT_NEAR(studentTwoSided(3.0, 2.0), 1.0 - 3.0 / std::sqrt(11.0), 1e-9);
-  EXPECT_NEAR(studentTwoSided(0.0, 11.0), 1.0, 1e-12);
 }
 
 }  // namespace

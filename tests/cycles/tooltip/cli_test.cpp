@@ -1,8 +1,9 @@
 // The tooltip cycle through the rotacal command: plan -> generate (every dialect; Heidenhain and
 // Okuma refuse) -> simulate with a known pivot-length and angular error -> analyze (REPORT.json with
-// the injected dR, figures) -> diagnose (pivot_length found); and the contract's error form.
+// the injected dR, figures) -> diagnose (pivot_length confounded with the scale: one tool); and the contract's error form.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <filesystem>
@@ -70,8 +71,15 @@ TEST(TooltipCli, PlanGenerateSimulateAnalyzeDiagnose) {
   r = sh("diagnose --plan " + d + "/plan.json --results " + d + "/r.csv --dialect csv --json " + d + "/DIAG.json");
   ASSERT_EQ(r.code, 0) << r.out;
   const auto dg = readJson(d + "/DIAG.json");
-  EXPECT_EQ(dg["verdict"], "effect_found");
-  EXPECT_EQ(dg["findings"][0]["cause"], "pivot_length");
+  // One tool: a 40 um pivot error moves the tip exactly as an isotropic scale of -1000 x 40 / 381
+  // um/m would (issue 16): never "effect found: pivot_length", a confounded pair with a signal.
+  EXPECT_EQ(dg["verdict"], "model_inadequate");
+  EXPECT_TRUE(dg["findings"].empty());
+  ASSERT_FALSE(dg["confounded"].empty());
+  EXPECT_EQ(dg["confounded"][0]["signal"], true);
+  const auto causes = dg["confounded"][0]["causes"].get<std::vector<std::string>>();
+  EXPECT_NE(std::find(causes.begin(), causes.end(), "pivot_length"), causes.end());
+  EXPECT_NE(std::find(causes.begin(), causes.end(), "linear_axis_scale"), causes.end());
 
   // Bad input: FILE:LINE, exit 1, nothing written.
   std::ofstream(d + "/bad.csv") << "angle_deg,dy_um,dz_um\n0,0,0\n5,1.0,oops\n";
