@@ -17,6 +17,7 @@
 #include "controllers/dialect.hpp"
 #include "core/errors.hpp"
 #include "core/json_io.hpp"
+#include "core/judge.hpp"
 #include "core/limits.hpp"
 #include "core/machine.hpp"
 #include "core/probe_plan.hpp"
@@ -257,7 +258,7 @@ std::vector<Command> cycleCommands(CLI::App& app, const Common& common) {
     std::string cycle, machine_file, plan_file, dialect, out, truth_file, method, json_out, text_out, offsets_out,
         html_out;
     std::vector<std::string> sets, results;
-    double noise_um = 0.0, start_s = 0.0, alpha = 1e-3;
+    double noise_um = 0.0, start_s = 0.0, alpha = JudgeOptions{}.alpha;
     std::uint64_t seed = 1;
     bool force = false;
   };
@@ -321,7 +322,7 @@ std::vector<Command> cycleCommands(CLI::App& app, const Common& common) {
   dia->add_option("--json", a->json_out, "DIAGNOSIS.json (- for stdout)")->required();
   dia->add_option("--html", a->html_out, "DIAGNOSIS.html: the report to look at, self-contained");
   dia->add_option("--text", a->text_out, "the readable summary, also printed on stdout");
-  dia->add_option("--alpha", a->alpha, "false-alarm rate of the tests (default 0.001)");
+  dia->add_option("--alpha", a->alpha, "family-wise false-alarm rate of the judge (default 0.01, docs/diagnosis.md)");
   cmds.push_back({dia, [a, &common] {
                     return cmdDiagnose(common, a->plan_file, a->results, a->dialect, a->alpha, a->json_out,
                                        a->text_out, a->html_out);

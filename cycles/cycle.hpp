@@ -16,6 +16,7 @@
 #include "core/contributors.hpp"
 #include "core/error_model.hpp"
 #include "core/json_io.hpp"
+#include "core/judge.hpp"
 #include "core/measurement.hpp"
 #include "core/probe_plan.hpp"
 #include "gcode/program.hpp"
@@ -62,7 +63,7 @@ struct DiagnoseRequest {
   const ProbePlan* plan = nullptr;
   std::vector<InputFile> results;
   const DialectIO* dialect = nullptr;
-  double alpha = 1e-3;             // false-alarm rate of the tests, validated by the CLI
+  double alpha = JudgeOptions{}.alpha;  // family-wise false-alarm rate (docs/diagnosis.md), validated by the CLI
   std::function<void(int done, int all)> progress;  // may be empty
 };
 
