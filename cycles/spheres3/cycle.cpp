@@ -54,9 +54,9 @@ class Spheres3 final : public Cycle {
 
   CycleDocuments diagnose(const DiagnoseRequest& r) const override {
     const ProbePlan& plan = *r.plan;
-    DiagnosisOptions o;
-    o.alpha = r.alpha;
-    o.prior_sigma_um = plan.machine.probe.repeatability_um;
+    Spheres3DiagnosisOptions o;
+    o.judge.alpha = r.alpha;
+    o.sigma_um = plan.machine.probe.repeatability_um;  // the declared noise, never the fit's own
     const Spheres3Diagnosis d = diagnoseSpheres3(plan, readProbeRuns(plan, r.results, *r.dialect), o);
     CycleDocuments out;
     out.text = spheres3DiagnosisText(d);

@@ -1,9 +1,11 @@
-// Issue 6's hidden-effect test for the three-sphere cycle: a 3 um second-order radial error
-// motion of C, hidden in exact simulated data with probe noise, must be named with its amplitude
-// within its uncertainty, and must improve the location errors; clean data (20 seeds, varied
-// location errors) must give no finding.
+// Issue 16 for the three-sphere cycle: the diagnosis through the one judge. Every check compares
+// with the simulation's truth, which the judge never sees. Sizes (stated once here and in
+// docs/diagnosis.md): 001's C axis shows volumetric errors up to 11.97 um from its component
+// errors (2.31 um after compensation), so a 3 um second-order radial error motion (issue 6's
+// oval bearing) is a realistic hidden cause; squareness 30 um/m is 000 Table 5's size.
 #include <gtest/gtest.h>
 
+#include <Eigen/Dense>
 #include <cmath>
 #include <random>
 
@@ -16,71 +18,162 @@ namespace {
 
 ProbePlan spheresPlan() { return makePlan("spheres3", test::acMachine(), {}); }
 
-// Location errors of Table 4's size, varied per seed so that thresholds are not tuned to one case.
-LocationErrors variedErrors(std::uint64_t seed) {
+// Location errors of 001's size (Oxc -1.9 um, Syc 2.2 arcsec), varied per seed.
+Eigen::Vector4d variedLocation(std::uint64_t seed) {
   std::mt19937_64 g(seed * 7919);
   std::normal_distribution<double> n(0.0, 1.0);
-  LocationErrors e = test::table4Mean();
-  for (int i = 0; i < kNumLocationErrors; ++i) e.values[i] *= 1.0 + 0.5 * n(g);
-  return e;
+  return {umToMm(-2.0 + 5.0 * n(g)), umToMm(3.0 * n(g)), mdegToRad(0.6 * n(g)), mdegToRad(0.6 + 0.6 * n(g))};
 }
 
-// The hidden effect as the truth file's rotary_error_motion enters it: EXC = r_x cos 2C and
-// EYC = r_y cos 2C added to dx_AY and dy_CA (the C axis's centre in the A frame).
-Truth withRadial2(const LocationErrors& e, double rx_um, double ry_um, double noise_um) {
-  Truth t = test::truthWith(e);
+// The truth as the spheres3 model's own exact transform (T_L T_E(C) Dc(-C)), with a component
+// error function of C and a drift of the table's position (mm/s).
+Truth truthWith(const Eigen::Vector4d& L, std::function<ComponentVector(double)> E, double noise_um,
+                Eigen::Vector3d drift_mm_per_s = Eigen::Vector3d::Zero()) {
+  Truth t = test::truthWith(test::table4Mean());
   t.noise_um = noise_um;
-  t.pose_dependent = [rx_um, ry_um](const Pose& p) {
-    ErrorVector d = ErrorVector::Zero();
-    const double c2 = std::cos(2.0 * degToRad(p.C));
-    d[0] = umToMm(rx_um) * c2;
-    d[3] = umToMm(ry_um) * c2;
-    return d;
+  t.table_transform = [L, E, drift_mm_per_s](const Pose& p, double ts) {
+    const double c = degToRad(p.C);
+    Eigen::Isometry3d T = spheres3Table_m_w(L, E ? E(c) : ComponentVector::Zero(), c);
+    T.pretranslate(drift_mm_per_s * ts);
+    return T;
   };
   return t;
 }
 
+const Spheres3DiagnosisOptions& opts() {
+  static const Spheres3DiagnosisOptions o = [] {
+    Spheres3DiagnosisOptions x;
+    x.sigma_um = 0.7;
+    return x;
+  }();
+  return o;
+}
+
+const JudgeEstimate& param(const JudgeFinding& f, const std::string& name) {
+  for (const auto& p : f.parameters)
+    if (p.name == name) return p;
+  throw std::runtime_error("no parameter " + name);
+}
+
+TEST(Spheres3Diagnosis, CleanSeedsRaiseAtMostOneAlarmInTen) {
+  // alpha = 0.01 per data set: 2 or more alarms in 10 has probability < 0.5 %.
+  const ProbePlan plan = spheresPlan();
+  int alarms = 0;
+  for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+    const Truth t = truthWith(variedLocation(seed), nullptr, 0.7);
+    const Spheres3Diagnosis d = diagnoseSpheres3(plan, {simulate(plan, t, {seed})}, opts());
+    if (d.judged.verdict != JudgeVerdict::NoSignificantEffect) ++alarms;
+    else EXPECT_TRUE(d.judged.explainsData());
+  }
+  EXPECT_LE(alarms, 1);
+}
+
 TEST(Spheres3Diagnosis, FindsAHidden3umSecondOrderRadialErrorMotion) {
   const ProbePlan plan = spheresPlan();
-  DiagnosisOptions o;
-  o.prior_sigma_um = plan.machine.probe.repeatability_um;
-  // Sizes and directions vary: 3 um in X, 3 um in Y, 2.5 + 2 um mixed.
   const double cases[3][2] = {{3.0, 0.0}, {0.0, 3.0}, {2.5, -2.0}};
   for (int k = 0; k < 3; ++k) {
+    const double ax = cases[k][0], ay = cases[k][1];
     const std::uint64_t seed = 100 + static_cast<std::uint64_t>(k);
-    const LocationErrors e = variedErrors(seed);
-    const Truth truth = withRadial2(e, cases[k][0], cases[k][1], 0.7);
-    const MeasurementRun run = simulate(plan, truth, {seed});
-    const Spheres3Diagnosis d = diagnoseSpheres3(plan, {run}, o);
-    ASSERT_TRUE(d.found) << "case " << k << ": " << d.candidates.front().verdict;
-    const Spheres3Result& x = d.extended;
-    ASSERT_EQ(x.terms.size(), 4u);
-    // Terms: EXC cos2C, EXC sin2C, EYC cos2C, EYC sin2C (mm); within 3 of their uncertainty.
-    const double want[4] = {umToMm(cases[k][0]), 0.0, umToMm(cases[k][1]), 0.0};
-    for (int t = 0; t < 4; ++t) EXPECT_LT(std::abs(x.h[t] - want[t]), 3.0 * x.h_u[t]) << x.terms[static_cast<size_t>(t)].name();
-    // The extended model recovers the location errors better than the baseline.
-    const Eigen::Vector4d loc(e.get("dx_AY"), e.get("dy_AY") + e.get("dy_CA"), e.get("a_AY"), e.get("b_AY") + e.get("b_CA"));
-    const double err_base = mmToUm((d.baseline.location.head<2>() - loc.head<2>()).norm());
-    const double err_ext = mmToUm((x.location.head<2>() - loc.head<2>()).norm());
-    EXPECT_LE(err_ext, err_base + 0.05) << "case " << k;
-    EXPECT_GT(d.gain_pct, 20.0);
+    const Truth t = truthWith(variedLocation(seed), [ax, ay](double c) {
+      ComponentVector e = ComponentVector::Zero();
+      e[0] = umToMm(ax) * std::cos(2 * c);
+      e[1] = umToMm(ay) * std::cos(2 * c);
+      return e;
+    }, 0.7);
+    const Spheres3Diagnosis d = diagnoseSpheres3(plan, {simulate(plan, t, {seed})}, opts());
+    ASSERT_EQ(d.judged.verdict, JudgeVerdict::EffectFound) << judgeText(d.judged);
+    const JudgeFinding& f = d.judged.findings.front();
+    EXPECT_EQ(f.cause, kSpheres3Radial);
+    for (const auto& [name, want] : {std::pair<std::string, double>{"EXC_cos2C", ax}, {"EYC_cos2C", ay},
+                                     {"EXC_sin2C", 0.0}, {"EYC_sin2C", 0.0}}) {
+      const JudgeEstimate& e = param(f, name);
+      EXPECT_LT(std::abs(e.value - want), 3.0 * e.u) << name << " case " << k;
+    }
+    EXPECT_TRUE(d.judged.explainsData());
   }
 }
 
-TEST(Spheres3Diagnosis, NoFalseAlarmOnTwentyCleanSeeds) {
+TEST(Spheres3Diagnosis, FindsASquarenessErrorOfTable5Size) {
   const ProbePlan plan = spheresPlan();
-  DiagnosisOptions o;
-  o.prior_sigma_um = plan.machine.probe.repeatability_um;
-  int alarms = 0;
-  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
-    // Noise from 0.3 to 1.0 um: below and above the stated repeatability.
-    const double noise = 0.3 + 0.7 * static_cast<double>(seed - 1) / 19.0;
-    const Truth truth = withRadial2(variedErrors(seed), 0.0, 0.0, noise);
-    const Spheres3Diagnosis d = diagnoseSpheres3(plan, {simulate(plan, truth, {seed})}, o);
-    if (d.found) ++alarms;
-    EXPECT_FALSE(d.found) << "seed " << seed << ": " << d.candidates.front().verdict;
+  for (std::uint64_t seed : {201u, 202u}) {
+    Truth t = truthWith(variedLocation(seed), nullptr, 0.7);
+    const double sxy = 30e-6;  // 30 um/m
+    t.linear_axis_error = [sxy](const Eigen::Vector3d& c) { return Eigen::Vector3d(sxy * c.y(), 0.0, 0.0); };
+    const Spheres3Diagnosis d = diagnoseSpheres3(plan, {simulate(plan, t, {seed})}, opts());
+    ASSERT_EQ(d.judged.verdict, JudgeVerdict::EffectFound) << judgeText(d.judged);
+    const JudgeFinding& f = d.judged.findings.front();
+    ASSERT_EQ(f.cause, kSpheres3Squareness) << judgeText(d.judged);
+    const JudgeEstimate& e = param(f, "S_xy");
+    EXPECT_LT(std::abs(e.value - 30.0), 3.0 * e.u);
   }
-  EXPECT_EQ(alarms, 0);
+}
+
+TEST(Spheres3Diagnosis, FindsThermalDriftOverFourRepeats) {
+  const ProbePlan plan = spheresPlan();
+  // 3 um/h in X, repeats every 30 min: 001 averages five consecutive runs, 000 Table 4 sees
+  // location errors move by 15 um while warming up.
+  const double rate_um_h = 3.0;
+  Truth t = truthWith(variedLocation(300), nullptr, 0.7, Eigen::Vector3d(umToMm(rate_um_h) / 3600.0, 0, 0));
+  std::vector<MeasurementRun> runs;
+  for (int r = 0; r < 4; ++r) {
+    t.start_time_s = 1800.0 * r;
+    runs.push_back(simulate(plan, t, {300u + static_cast<std::uint64_t>(r)}));
+  }
+  const Spheres3Diagnosis d = diagnoseSpheres3(plan, runs, opts());
+  ASSERT_EQ(d.judged.verdict, JudgeVerdict::EffectFound) << judgeText(d.judged);
+  const JudgeFinding& f = d.judged.findings.front();
+  ASSERT_EQ(f.cause, kSpheres3Drift);
+  const JudgeEstimate& e = param(f, "X/h");
+  EXPECT_LT(std::abs(e.value - rate_um_h), 3.0 * e.u);
+}
+
+TEST(Spheres3Diagnosis, AFifthOrderRadialErrorMotionIsOutsideTheCatalog) {
+  // The catalog's harmonics stop at 3C; a 3 um 5C radial waviness must read model_inadequate.
+  const ProbePlan plan = spheresPlan();
+  for (std::uint64_t seed : {401u, 402u}) {
+    const Truth t = truthWith(variedLocation(seed), [](double c) {
+      ComponentVector e = ComponentVector::Zero();
+      e[0] = umToMm(3.0) * std::cos(5 * c);
+      return e;
+    }, 0.7);
+    const Spheres3Diagnosis d = diagnoseSpheres3(plan, {simulate(plan, t, {seed})}, opts());
+    EXPECT_EQ(d.judged.verdict, JudgeVerdict::ModelInadequate) << judgeText(d.judged);
+    EXPECT_FALSE(d.judged.explainsData());
+  }
+}
+
+TEST(Spheres3Diagnosis, ZScaleIsConfoundedWithTheSpherePositionsFromTheJacobians) {
+  // With the tilt axis at 0 every sphere keeps its height: a Z scale s moves sphere i by the
+  // constant -s z_i, which is exactly a sphere position. Closed form (never seen by the judge):
+  // the Z-scale column equals sum_i (-1e-3 z_i) * (sphere i's z column).
+  const ProbePlan plan = spheresPlan();
+  const Truth t = truthWith(variedLocation(500), nullptr, 0.7);
+  const std::vector<MeasurementRun> runs{simulate(plan, t, {500u})};
+  const Spheres3Diagnosis d = diagnoseSpheres3(plan, runs, opts());
+  const JudgeCause* scale = nullptr;
+  for (const auto& c : d.problem.causes)
+    if (c.name == kSpheres3Scale) scale = &c;
+  ASSERT_NE(scale, nullptr);
+  Eigen::VectorXd closed = Eigen::VectorXd::Zero(d.problem.y.size());
+  for (int i = 0; i < 3; ++i) closed += -1e-3 * d.baseline.sphere_w_mm[static_cast<size_t>(i)].z() * d.problem.J0.col(4 + 3 * i + 2);
+  // Equal to the tilt of the axis (Sxc, Syc ~ 1e-5 rad: a sphere's height varies by ~r 1e-5
+  // over the turn), hence 1e-4 relative.
+  EXPECT_LT((scale->J.col(2) - closed).norm(), 1e-4 * closed.norm());
+  // The judge finds it from the columns alone: a confounded entry for the scale, with the model.
+  bool named = false;
+  for (const auto& c : d.judged.confounded)
+    if (c.cause == kSpheres3Scale && c.with_model) named = true;
+  EXPECT_TRUE(named) << judgeText(d.judged);
+  // Without the Z column (and the isotropic XY part the sphere radii absorb the same way) the
+  // rest of the scale, X - Y, is a separable 2C pattern: no confounded entry for it.
+  JudgeProblem p = d.problem;
+  for (auto& c : p.causes)
+    if (c.name == kSpheres3Scale) {
+      c.J = (scale->J.col(0) - scale->J.col(1)).eval();
+      c.parameters = {{"X_minus_Y_scale", "um/m"}};
+    }
+  const JudgeSummary s = judge(p, opts().judge);
+  for (const auto& c : s.confounded) EXPECT_NE(c.cause, kSpheres3Scale) << judgeText(s);
 }
 
 }  // namespace
