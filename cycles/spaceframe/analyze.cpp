@@ -1,6 +1,7 @@
 #include "cycles/spaceframe/analyze.hpp"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <stdexcept>
@@ -108,6 +109,32 @@ ProbePlan makeSpaceframePlan(const MachineModel& machine, const CycleOptions& op
                                                      Eigen::Vector3d::UnitY(), -Eigen::Vector3d::UnitY(),
                                                      -Eigen::Vector3d::UnitZ()};
   const double cos_limit = std::cos(degToRad(l.min_touch_angle_deg));
+  // A touch is kept only when its whole access is clear of the other spheres: the descent from
+  // the pose's safe height to the start point, the probing move to its end (overtravel), and the
+  // stylus above the ball all along (a capsule of the ball's radius up to the probe body). At
+  // A = -90 deg two spheres can stand one above the other; a vertical descent onto the lower one
+  // would pass through the upper one (found by rotacal check). Required gap: the machine's
+  // clearance, what `rotacal check` holds every non-probing move to.
+  const double stylus = machine.probe.stylus_length_mm;
+  const double keep_out = rho + machine.clearance_mm;
+  const auto capsuleClear = [&](const Eigen::Vector3d& ball, const Eigen::Vector3d& centre) {
+    // Distance from the centre to the vertical segment [ball, ball + stylus z].
+    const double h = std::clamp(centre.z() - ball.z(), 0.0, stylus);
+    return (centre - (ball + h * Eigen::Vector3d::UnitZ())).norm() >= keep_out;
+  };
+  const auto accessClear = [&](const Eigen::Vector3d& start, const Eigen::Vector3d& end, double safe_z,
+                               const std::vector<Eigen::Vector3d>& others) {
+    for (const auto& c : others) {
+      // The descent: the ball from the safe height down to the start, the stylus above it.
+      const double h = std::clamp(c.z() - start.z(), 0.0, safe_z - start.z() + stylus);
+      if ((c - (start + h * Eigen::Vector3d::UnitZ())).norm() < keep_out) return false;
+      // The probing move, sampled finely enough that a 0.05 mm dip cannot pass unseen.
+      const int steps = std::max(1, static_cast<int>(std::ceil((end - start).norm() / 0.05)));
+      for (int k = 0; k <= steps; ++k)
+        if (!capsuleClear(start + (end - start) * (static_cast<double>(k) / steps), c)) return false;
+    }
+    return true;
+  };
   int id = 1;
   for (double phi : l.phi_deg) {
     for (double theta : l.theta_deg) {
@@ -117,13 +144,23 @@ ProbePlan makeSpaceframePlan(const MachineModel& machine, const CycleOptions& op
       const Eigen::Vector3d stem_m = T.linear() * -Eigen::Vector3d::UnitZ();
       double top = -1e300;
       for (const auto& c : table1) top = std::max(top, (T * (l.origin_w_mm + c)).z());
-      plan.poses.push_back({name, pose, top + rho + machine.clearance_mm});
+      const double safe_z = top + rho + machine.clearance_mm;
+      plan.poses.push_back({name, pose, safe_z});
       for (int s = 1; s <= 7; ++s) {
         const Eigen::Vector3d c_w = l.origin_w_mm + table1[s - 1];
         const Eigen::Vector3d c_m = T * c_w;
-        int touches = 0;
+        int touches = 0, blocked = 0;
+        std::vector<Eigen::Vector3d> others;
+        for (int o = 1; o <= 7; ++o)
+          if (o != s) others.push_back(T * (l.origin_w_mm + table1[o - 1]));
         for (const auto& u : approaches) {
           if ((-u).dot(stem_m) > cos_limit) continue;
+          const Eigen::Vector3d trigger = c_m - rho * u;
+          if (!accessClear(trigger - machine.approach_mm * u, trigger + machine.overtravel_mm * u,
+                           std::max(safe_z, trigger.z() - machine.approach_mm * u.z()), others)) {
+            ++blocked;
+            continue;
+          }
           ProbePoint p;
           p.id = id++;
           p.pose_name = name;
@@ -137,6 +174,13 @@ ProbePlan makeSpaceframePlan(const MachineModel& machine, const CycleOptions& op
           p.sphere = SphereTarget{s, c_w, R};
           plan.points.push_back(p);
           ++touches;
+        }
+        if (touches < 4 && touches + blocked >= 4) {
+          // Another sphere stands in the way at this pose: this sphere is left out here (its
+          // centre is not measured at this pose; the lengths and the fit use the others).
+          plan.points.resize(plan.points.size() - static_cast<size_t>(touches));
+          id -= touches;
+          continue;
         }
         if (touches < 4)
           throw std::invalid_argument(fmt::format("pose {}: sphere {} has only {} reachable touches (4 needed); lower "
