@@ -814,6 +814,25 @@ Json termsJson(const std::vector<JudgeTerm>& t) {
 
 }  // namespace
 
+Json confoundedJson(const JudgeSummary& s, const std::function<std::string(const JudgeConfounded&)>& separate_with) {
+  Json out = Json::array();
+  for (const auto& c : s.confounded) {
+    std::vector<std::string> causes = {c.cause};
+    causes.insert(causes.end(), c.with.begin(), c.with.end());
+    out.push_back({{"causes", causes},
+                   {"why", c.why},
+                   {"separate_with", separate_with ? separate_with(c) : std::string()},
+                   {"cause", c.cause},
+                   {"with", c.with},
+                   {"with_model", c.with_model},
+                   {"angle_deg", c.angle_deg},
+                   {"cause_terms", termsJson(c.cause_terms)},
+                   {"with_terms", termsJson(c.with_terms)},
+                   {"signal", c.signal}});
+  }
+  return out;
+}
+
 Json judgeToJson(const JudgeSummary& s) {
   Json j;
   j["verdict"] = judgeVerdictName(s.verdict);

@@ -56,6 +56,7 @@
 // factor's levels, a quadratic in a continuous one) on the residual, so a factor's chi2 share
 // never counts what the model already absorbs.
 #include <Eigen/Core>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -223,6 +224,11 @@ struct JudgeSummary {
 /// sigma <= 0 or a non-finite entry ("expected N, got M").
 JudgeSummary judge(const JudgeProblem& problem, const JudgeOptions& options = {});
 
+/// The contract's `confounded` entries (contract.md: `causes`, `why`, `separate_with`) with the
+/// judge's own fields of each entry: one form for every cycle. `causes` is the cause followed by
+/// what absorbs it (baseline parameters, accepted causes or another cause); `separate_with` is
+/// the cycle's advice for the entry: what plan or instrument tells them apart.
+Json confoundedJson(const JudgeSummary& summary, const std::function<std::string(const JudgeConfounded&)>& separate_with);
 Json judgeToJson(const JudgeSummary& s);
 std::string judgeText(const JudgeSummary& s);
 

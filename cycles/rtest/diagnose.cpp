@@ -249,18 +249,6 @@ Json paramsJson(const std::vector<JudgeEstimate>& ps) {
   return j;
 }
 
-std::vector<std::string> termNames(const std::vector<JudgeTerm>& t) {
-  std::vector<std::string> v;
-  for (const auto& x : t) v.push_back(x.name);
-  return v;
-}
-
-Json termsJson(const std::vector<JudgeTerm>& t) {
-  Json j = Json::array();
-  for (const auto& x : t) j.push_back({{"parameter", x.name}, {"coefficient", x.coefficient}, {"unit", x.unit}});
-  return j;
-}
-
 std::string separateWith(const std::string& cause) {
   if (cause == kSpindle)
     return "a second series with a longer or shorter sphere holder, or a spindle-growth sensor: the table's drift does "
@@ -323,22 +311,7 @@ Json rtestDiagnosisJson(const ProbePlan& plan, const RtestDiagnosis& d) {
     findings.push_back(e);
   }
   j["findings"] = findings;
-  Json conf = Json::array();
-  for (const auto& c : s.confounded) {
-    std::vector<std::string> causes = {c.cause};
-    for (const auto& w : (c.with_model ? termNames(c.with_terms) : c.with)) causes.push_back(w);
-    conf.push_back({{"causes", causes},
-                    {"why", c.why},
-                    {"separate_with", separateWith(c.cause)},
-                    {"cause", c.cause},
-                    {"with", c.with},
-                    {"with_model", c.with_model},
-                    {"angle_deg", c.angle_deg},
-                    {"cause_terms", termsJson(c.cause_terms)},
-                    {"with_terms", termsJson(c.with_terms)},
-                    {"signal", c.signal}});
-  }
-  j["confounded"] = conf;
+  j["confounded"] = confoundedJson(s, [](const JudgeConfounded& c) { return separateWith(c.cause); });
   Json cj = Json::array();
   for (const auto& c : d.confounds)
     cj.push_back({{"cause", c.entry.cause},

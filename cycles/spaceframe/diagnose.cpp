@@ -364,17 +364,15 @@ Json spaceframeDiagnosisJson(const SpaceframeDiagnosis& d, const ProbePlan& plan
     f["holdout_rms_um"] = jf.holdout_rms_cause;
     f["gain_pct"] = gain;
   }
-  for (auto& c : j["confounded"]) {
-    std::vector<std::string> causes{c["cause"].get<std::string>()};
-    for (const auto& w : c["with"]) causes.push_back(w.get<std::string>());
-    c["causes"] = causes;
-    const bool frame = std::find(causes.begin(), causes.end(), "frame_temperature") != causes.end();
-    c["separate_with"] = frame ? "a frame whose length is known at its temperature (a calibrated step gauge, or the "
-                                 "frame's measured temperature and expansion coefficient) separates its expansion "
-                                 "from the linear axes' scale"
-                               : "add orientations or spheres where the Jacobian columns of " + causes.front() +
-                                     " and what it is read as differ";
-  }
+  j["confounded"] = confoundedJson(s, [](const JudgeConfounded& c) {
+    const bool frame = c.cause == "frame_temperature" ||
+                       std::find(c.with.begin(), c.with.end(), "frame_temperature") != c.with.end();
+    return frame ? std::string("a frame whose length is known at its temperature (a calibrated step gauge, or the "
+                               "frame's measured temperature and expansion coefficient) separates its expansion "
+                               "from the linear axes' scale")
+                 : "add orientations or spheres where the Jacobian columns of " + c.cause +
+                       " and what it is read as differ";
+  });
   return j;
 }
 

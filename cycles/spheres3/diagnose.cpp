@@ -269,12 +269,11 @@ Json spheres3DiagnosisJson(const Spheres3Diagnosis& d) {
     f["holdout_rms_um"] = jf.holdout_rms_cause;
     f["gain_pct"] = gain;
   }
-  for (auto& c : j["confounded"]) {
-    std::vector<std::string> causes{c["cause"].get<std::string>()};
-    for (const auto& w : c["with"]) causes.push_back(w.get<std::string>());
-    c["causes"] = causes;
-    c["separate_with"] = separationHint(causes);
-  }
+  j["confounded"] = confoundedJson(s, [](const JudgeConfounded& c) {
+    std::vector<std::string> causes = {c.cause};
+    causes.insert(causes.end(), c.with.begin(), c.with.end());
+    return separationHint(causes);
+  });
   return j;
 }
 

@@ -223,12 +223,6 @@ Json paramsJson(const std::vector<JudgeEstimate>& ps) {
   return j;
 }
 
-Json termsJson(const std::vector<JudgeTerm>& t) {
-  Json j = Json::array();
-  for (const auto& x : t) j.push_back({{"parameter", x.name}, {"coefficient", x.coefficient}, {"unit", x.unit}});
-  return j;
-}
-
 }  // namespace
 
 Json tooltipDiagnosisJson(const TooltipDiagnosis& d) {
@@ -265,25 +259,7 @@ Json tooltipDiagnosisJson(const TooltipDiagnosis& d) {
     findings.push_back(e);
   }
   j["findings"] = findings;
-  Json conf = Json::array();
-  for (const auto& c : s.confounded) {
-    std::vector<std::string> causes = {c.cause};
-    if (c.with_model)
-      for (const auto& t : c.with_terms) causes.push_back(t.name);
-    else
-      causes.insert(causes.end(), c.with.begin(), c.with.end());
-    conf.push_back({{"causes", causes},
-                    {"why", c.why},
-                    {"separate_with", separateWith(c)},
-                    {"cause", c.cause},
-                    {"with", c.with},
-                    {"with_model", c.with_model},
-                    {"angle_deg", c.angle_deg},
-                    {"cause_terms", termsJson(c.cause_terms)},
-                    {"with_terms", termsJson(c.with_terms)},
-                    {"signal", c.signal}});
-  }
-  j["confounded"] = conf;
+  j["confounded"] = confoundedJson(s, separateWith);
   j["judge"] = judgeToJson(s);
   return j;
 }

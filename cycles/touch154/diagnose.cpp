@@ -149,14 +149,12 @@ Json touch154DiagnosisJson(const Touch154Diagnosis& d, const ProbePlan& plan) {
     f["holdout_rms_um"] = jf.holdout_rms_cause;
     f["gain_pct"] = gain;
   }
-  for (auto& c : j["confounded"]) {
-    std::vector<std::string> causes{c["cause"].get<std::string>()};
-    for (const auto& w : c["with"]) causes.push_back(w.get<std::string>());
-    c["causes"] = causes;
-    const auto it = std::find(d.judge_names.begin(), d.judge_names.end(), causes.front());
-    const std::string cause = it == d.judge_names.end() ? causes.front() : d.candidates[static_cast<size_t>(it - d.judge_names.begin())]->cause();
-    c["separate_with"] = separationHint(cause, std::vector<std::string>(causes.begin() + 1, causes.end()));
-  }
+  j["confounded"] = confoundedJson(s, [&d](const JudgeConfounded& c) {
+    const auto it = std::find(d.judge_names.begin(), d.judge_names.end(), c.cause);
+    const std::string cause =
+        it == d.judge_names.end() ? c.cause : d.candidates[static_cast<size_t>(it - d.judge_names.begin())]->cause();
+    return separationHint(cause, c.with);
+  });
   return j;
 }
 
