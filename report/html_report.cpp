@@ -396,6 +396,33 @@ std::string diagnoseBody(const Json& doc) {
   s += row({"held-out rms", numCell(dbl(base, "holdout_rms_um"), 3) + " um (" + escape(str(doc, "holdout")) + ")"});
   s += row({"noise used by the tests", numCell(dbl(doc, "sigma_um"), 3) + " um"});
   s += "</table>\n";
+  // Where the judge finds the baseline's misfit (every cycle's DIAGNOSIS.json carries it): each
+  // factor's share of the residual's chi-square, with the level of its test.
+  // (under "judge", or the judge's fields at the top of the document)
+  const Json& judged = doc.contains("judge") ? doc["judge"] : doc;
+  const Json factors = judged.contains("baseline") && judged["baseline"].is_object() &&
+                               judged["baseline"].contains("adequacy")
+                           ? judged["baseline"]["adequacy"].value("factors", Json::array())
+                           : Json::array();
+  if (!factors.empty()) {
+    Figure where{"diagnose_misfit_factors", "Where the baseline's misfit sits: share of its chi-square by factor", "",
+                 {"factor", "-", {}}, {"share of chi2", "%", {}}, {}, {}};
+    PlotSeries share{"share of the baseline's chi2", "points", {}, {}, {}};
+    s += "<table>" + row({"factor", "chi2", "dof", "p", "share", "where"}, true);
+    for (const auto& f : factors) {
+      share.x.push_back(static_cast<double>(where.x.categories.size()));
+      share.y.push_back(100.0 * dbl(f, "share", 0));
+      where.x.categories.push_back(str(f, "factor"));
+      s += row({escape(str(f, "factor")), numCell(dbl(f, "chi2"), 1), escape(str(f, "dof")),
+                fmt::format("{:.3g}", dbl(f, "p_value", 1)), num(100.0 * dbl(f, "share", 0), 1) + " %",
+                escape(str(f, "detail"))});
+    }
+    s += "</table>\n";
+    where.series = {share};
+    where.note = "A factor's share is the chi-square its own columns take from the baseline's residual (a nested test "
+                 "on the residual), so factors overlap and shares need not add to 100 %.";
+    s += figureBlock(where);
+  }
   if (doc.contains("residual_analysis")) {
     s += "<h3>Residual structure by factor (chi-square against the noise)</h3><table>";
     s += row({"factor", "detail", "chi2", "dof", "p", "structured"}, true);
