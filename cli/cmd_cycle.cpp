@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -170,9 +171,12 @@ int cmdSimulate(const Common& c, const std::string& plan_file, const std::string
 
 int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<std::string>& results,
                const std::string& dialect_name, const std::string& method, const std::string& json_out,
-               const std::string& text_out, const std::string& offsets_out, bool force, const std::string& html_out) {
+               const std::string& text_out, const std::string& offsets_out, bool force, const std::string& html_out,
+               const std::string& contributors_file, int mc_runs, std::uint64_t mc_seed) {
   std::vector<std::string> inputs = results;
   inputs.push_back(plan_file);
+  if (!contributors_file.empty()) inputs.push_back(contributors_file);
+  if (mc_runs < 100 || mc_runs > 1000000) throw CLI::ValidationError("--mc-runs", "must be in [100, 1000000]");
   checkOutputs({{"--json", json_out}, {"--text", text_out}, {"--html", html_out}, {"--offsets", offsets_out}}, inputs);
   const ProbePlan plan = loadCyclePlan(plan_file);
   const Cycle& cycle = cycleOfPlanFile(plan, plan_file);
@@ -193,6 +197,12 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
   r.results = readInputs(results);
   r.dialect = &io;
   r.method = method;
+  std::optional<ContributorSet> declared;
+  if (!contributors_file.empty()) declared = loadContributors(contributors_file);
+  else declared = plan.machine.contributors;
+  r.contributors = declared ? &*declared : nullptr;
+  r.mc_runs = mc_runs;
+  r.mc_seed = mc_seed;
   const CycleDocuments docs = onResults(results, [&] { return cycle.analyze(r); });
   OutputSet outputs(inputs);
   outputs.add("--json", json_out, docs.doc.dump(1) + "\n");
@@ -256,7 +266,9 @@ int cmdDiagnose(const Common& c, const std::string& plan_file, const std::vector
 std::vector<Command> cycleCommands(CLI::App& app, const Common& common) {
   struct Args {
     std::string cycle, machine_file, plan_file, dialect, out, truth_file, method, json_out, text_out, offsets_out,
-        html_out;
+        html_out, contributors_file;
+    int mc_runs = 2000;
+    std::uint64_t mc_seed = 1;
     std::vector<std::string> sets, results;
     double noise_um = 0.0, start_s = 0.0, alpha = JudgeOptions{}.alpha;
     std::uint64_t seed = 1;
@@ -310,9 +322,14 @@ std::vector<Command> cycleCommands(CLI::App& app, const Common& common) {
   ana->add_option("--text", a->text_out, "the readable summary, also printed on stdout");
   ana->add_option("--offsets", a->offsets_out, "compensation in the dialect's own form");
   ana->add_flag("--force", a->force, "write offsets beyond the plausibility limit");
+  ana->add_option("--contributors", a->contributors_file,
+                  "CONTRIB.json: the Type B contributors (default: the machine's `contributors`; docs/uncertainty.md)");
+  ana->add_option("--mc-runs", a->mc_runs, "Monte Carlo runs of the Type B uncertainty (default 2000)");
+  ana->add_option("--mc-seed", a->mc_seed, "seed of that Monte Carlo (default 1)");
   cmds.push_back({ana, [a, &common] {
                     return cmdAnalyze(common, a->plan_file, a->results, a->dialect, a->method, a->json_out, a->text_out,
-                                      a->offsets_out, a->force, a->html_out);
+                                      a->offsets_out, a->force, a->html_out, a->contributors_file, a->mc_runs,
+                                      a->mc_seed);
                   }});
 
   auto* dia = app.add_subcommand("diagnose", "find what the model misses, name the cause, extend the model, measure the gain");

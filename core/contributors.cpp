@@ -186,8 +186,7 @@ ReferenceUncertainty readReference(const JsonDoc& doc, const Json& r) {
   return ref;
 }
 
-ContributorSet contributorsFrom(const JsonDoc& doc) {
-  const Json& j = doc.value;
+ContributorSet contributorsFrom(const JsonDoc& doc, const Json& j) {
   if (!j.is_object() || !j.contains("format") || j["format"] != "rotacal-contributors/1")
     doc.fail(j, "format", "not a contributors file (expected \"format\": \"rotacal-contributors/1\")");
   ContributorSet set;
@@ -242,7 +241,11 @@ ContributorSet contributorsFrom(const JsonDoc& doc) {
 }  // namespace
 
 ContributorSet contributorsFromJson(const JsonDoc& doc) {
-  return guardJson(doc, [&] { return contributorsFrom(doc); });
+  return guardJson(doc, [&] { return contributorsFrom(doc, doc.value); });
+}
+
+ContributorSet contributorsFromJsonValue(const JsonDoc& doc, const Json& value) {
+  return guardJson(doc, [&] { return contributorsFrom(doc, value); });
 }
 
 ContributorSet loadContributors(const std::string& path) { return contributorsFromJson(readJsonFile(path)); }

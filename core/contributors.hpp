@@ -96,6 +96,8 @@ enum class Quantity { Length, Ratio };
 bool unitFactor(Quantity quantity, std::string_view unit, double* factor);
 
 ContributorSet contributorsFromJson(const JsonDoc& doc);
+/// The same from an object inside another document (MACHINE.json's inline `contributors`).
+ContributorSet contributorsFromJsonValue(const JsonDoc& doc, const Json& value);
 ContributorSet loadContributors(const std::string& path);
 Json contributorsToJson(const ContributorSet& set);
 

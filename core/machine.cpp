@@ -1,9 +1,11 @@
 #include "core/machine.hpp"
 
+#include <filesystem>
 #include <stdexcept>
 
 #include <fmt/format.h>
 
+#include "core/errors.hpp"
 #include "core/limits.hpp"
 
 namespace rotacal {
@@ -138,6 +140,24 @@ MachineModel machineFrom(const JsonDoc& doc, const Json& j) {
     col.size_mm = vec3From(doc, a, "size_mm", Limits::positive(kMaxCoordinateMm, "mm"));
     m.artefact = col;
   }
+  if (j.contains("contributors")) {
+    const Json& c = j["contributors"];
+    if (c.is_string()) {
+      std::string path = c.get<std::string>();
+      if (path.empty()) doc.fail(j, "contributors", "'contributors' names no file");
+      const std::filesystem::path base = std::filesystem::path(doc.file).parent_path();
+      if (std::filesystem::path(path).is_relative() && !base.empty()) path = (base / path).string();
+      try {
+        m.contributors = loadContributors(path);
+      } catch (const InputError& e) {
+        doc.fail(j, "contributors", std::string("its contributors file: ") + e.what());
+      }
+    } else if (c.is_object()) {
+      m.contributors = contributorsFromJsonValue(doc, c);
+    } else {
+      doc.fail(j, "contributors", "'contributors' must be a contributors file's path or its object (rotacal-contributors/1)");
+    }
+  }
   return m;
 }
 
@@ -191,6 +211,7 @@ Json machineToJson(const MachineModel& m) {
                      {"top_centre_w_mm", {m.artefact->top_centre_w.x(), m.artefact->top_centre_w.y(), m.artefact->top_centre_w.z()}},
                      {"size_mm", {m.artefact->size_mm.x(), m.artefact->size_mm.y(), m.artefact->size_mm.z()}}};
   }
+  if (m.contributors) j["contributors"] = contributorsToJson(*m.contributors);
   return j;
 }
 

@@ -8,6 +8,7 @@
 
 #include "core/artefact.hpp"
 #include "core/error_model.hpp"
+#include "core/contributors.hpp"
 #include "core/json_io.hpp"
 
 namespace rotacal {
@@ -66,6 +67,9 @@ struct MachineModel {
   double overtravel_mm = 2.0;            // end of a probing move, past the nominal trigger
   double retract_mm = 0.0;               // double touch: back-off after the first touch (0 = single touch)
   std::optional<SquareColumn> artefact;
+  /// The Type B contributors the owner declares (issue 17): inline, or a contributors file named
+  /// relative to MACHINE.json. Plans carry them inline. Absent: reports say u_B was not evaluated.
+  std::optional<ContributorSet> contributors;
 
   const RotaryAxis& rotaryAxis(char name) const;  // throws std::invalid_argument
   bool hasRotary(char name) const;

@@ -16,10 +16,14 @@ out=$(realpath -m "${2:-$root/examples/programs}")
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 # Relative names inside a scratch directory: the files name their inputs, never a local path.
-cp "$root/examples/machines/ac_trunnion.json" "$root/examples/truth/table4_mean.json" "$work/"
+# The machine names its contributors relative to itself (../contributors/): the same layout here.
+mkdir "$work/machines" "$work/contributors"
+cp "$root/examples/machines/ac_trunnion.json" "$work/machines/"
+cp "$root/examples/contributors/table5.json" "$work/contributors/"
+cp "$root/examples/truth/table4_mean.json" "$work/"
 cd "$work"
 mkdir gen
-"$rotacal" plan --cycle touch154 --machine ac_trunnion.json -o gen/plan.json >/dev/null
+"$rotacal" plan --cycle touch154 --machine machines/ac_trunnion.json -o gen/plan.json >/dev/null
 for d in csv linuxcnc fanuc haas siemens heidenhain okuma; do
   case $d in
     csv) prog="" res=.csv off=.csv ;;

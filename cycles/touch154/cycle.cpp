@@ -6,6 +6,8 @@
 #include "core/errors.hpp"
 #include "core/identification.hpp"
 #include "core/point_deviations.hpp"
+#include "core/units.hpp"
+#include "cycles/touch154/budget.hpp"
 #include "cycles/touch154/closed_form.hpp"
 #include "cycles/touch154/commands.hpp"
 #include "cycles/touch154/diagnose.hpp"
@@ -68,6 +70,10 @@ class Touch154 final : public Cycle {
         // a reduced plan has no complete pattern set; the least squares still runs
       }
     }
+    Touch154BudgetOptions bo;
+    bo.runs = r.mc_runs;
+    bo.seed = r.mc_seed;
+    a.budget = touch154Budget(plan, a.main, a.per_run, r.contributors, bo);
     CycleDocuments out;
     out.text = analysisText(a);
     out.doc = analysisToJson(a);
@@ -76,7 +82,13 @@ class Touch154 final : public Cycle {
       out.doc["figure_titles"] = {{"fig7", "Probed positions at A = 0 (000 Fig. 7)"},
                                   {"fig8", "Relative displacements at A = 0 (000 Fig. 8, Eq. (21))"},
                                   {"fig9", "Relative displacements at A = -90 deg (000 Fig. 9)"}};
-    out.offsets = LocationCorrection{a.main.estimate, a.main.u};
+    // The offsets carry the combined uncertainty: what the report signs, not the data's scatter alone.
+    ErrorVector u_c;
+    const Eigen::VectorXd uc = a.budget.uC();
+    const auto& params = locationParameters(plan.machine.kinematics);
+    for (int i = 0; i < kNumLocationErrors; ++i)
+      u_c[i] = params[i].kind == ParamKind::Length ? umToMm(uc[i]) : mdegToRad(uc[i]);
+    out.offsets = LocationCorrection{a.main.estimate, u_c};
     if (a.main.summary.termination != Termination::Converged) out.warnings.push_back(a.main.summary.message);
     return out;
   }

@@ -34,6 +34,8 @@ Json analysisToJson(const Analysis& a) {
   Json j = documentEnvelope("rotacal-report/1", *a.plan, a.result_files);
   j["method"] = std::string(methodName(m.method));
   j["location_errors"] = locationErrorsJson(m.estimate, m.u);
+  addBudgetFields(&j["location_errors"], a.budget);
+  j["uncertainty"] = budgetJson(a.budget);
   j["residual_rms_um"] = round6(m.summary.residual_rms_um);
   j["points_used"] = m.summary.observations;
   j["summary"] = summaryJson(m.summary);
@@ -95,6 +97,11 @@ std::string analysisText(const Analysis& a) {
     s += fmt::format("\nresidual rms {:.3f} um, noise estimate {:.3f} um ({} dof), rank {}/{}, condition {:.3g}\n",
                      m.summary.residual_rms_um, m.summary.sigma_um, m.summary.dof, m.summary.rank,
                      m.summary.parameters, m.summary.condition);
+  s += "\n" + budgetText(a.budget, [&] {
+    Eigen::VectorXd v(kNumLocationErrors);
+    for (int i = 0; i < kNumLocationErrors; ++i) v[i] = m.estimate.reportValue(i);
+    return v;
+  }());
   if (a.per_run.size() > 1) {
     s += "\nper run (000 Table 4 layout):\n";
     s += fmt::format("{:<8}", "error");

@@ -7,6 +7,7 @@
 #include "core/identification.hpp"
 #include "core/json_io.hpp"
 #include "core/report_envelope.hpp"
+#include "core/uncertainty_budget.hpp"
 #include "core/probe_plan.hpp"
 
 namespace rotacal {
@@ -18,6 +19,7 @@ struct Analysis {
   std::vector<IdentificationResult> per_run;  // each repeat alone (000 Table 4 columns)
   std::vector<IdentificationResult> other_methods;  // the same data by the other estimators
   std::vector<PatternEquation> patterns;      // closed form, first run (000's plan)
+  UncertaintyBudget budget;                   // what the report signs (cycles/touch154/budget.hpp)
 };
 
 Json analysisToJson(const Analysis& analysis);

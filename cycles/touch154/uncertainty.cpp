@@ -102,7 +102,7 @@ Eigen::VectorXd sensitivity(const ProbePlan& plan, const Truth& base, double h, 
 /// pseudo-inverse of the model's Jacobian [J_s_e, per-target offsets, extra columns] at the truth.
 /// `extra` holds the trigger sensitivities of fitted nuisance parameters (e.g. squareness).
 IdentificationMap leastSquaresMap(const ProbePlan& plan, const LocationErrors& truth, const Eigen::MatrixXd& J_e,
-                                  const Eigen::MatrixXd& extra) {
+                                  const Eigen::MatrixXd& extra, Eigen::MatrixXd* range = nullptr) {
   const long n = static_cast<long>(plan.points.size());
   const auto& params = locationParameters(plan.machine.kinematics);
   std::map<int, int> target_index;
@@ -139,6 +139,7 @@ IdentificationMap leastSquaresMap(const ProbePlan& plan, const LocationErrors& t
                                             names.empty() ? fmt::format("rank {} of {}", rank, p)
                                                           : list + " move no trigger independently"));
   }
+  if (range) *range = svd.matrixU();
   const Eigen::MatrixXd pinv =
       scale.asDiagonal() * svd.matrixV() * sv.cwiseInverse().asDiagonal() * svd.matrixU().transpose();
   return pinv.topRows<kNumLocationErrors>();
@@ -215,7 +216,7 @@ LinearChain lineariseChain(const ProbePlan& plan, const LocationErrors& truth) {
   const Eigen::MatrixXd J_e = J_s_e(plan, truth);
   const auto ls = static_cast<size_t>(UncertaintyMethod::LeastSquares);
   const auto lp = static_cast<size_t>(UncertaintyMethod::LsqPerPoint);
-  c.G[lp] = leastSquaresMap(plan, truth, J_e, Eigen::MatrixXd(n, 0));  // throws: nothing to do without it
+  c.G[lp] = leastSquaresMap(plan, truth, J_e, Eigen::MatrixXd(n, 0), &c.range_lp);  // throws: nothing to do without it
   c.has[lp] = true;
   c.G[ls].setZero(kNumLocationErrors, n);
   try {

@@ -95,6 +95,9 @@ struct LinearChain {
   Eigen::MatrixXd S;                                  // points x fixed_var::kCount
   std::array<Eigen::Matrix<double, kNumLocationErrors, fixed_var::kCount>, kNumUncertaintyMethods> GS;
   Eigen::Vector3d lo = Eigen::Vector3d::Zero(), hi = Eigen::Vector3d::Zero();  // coordinate span
+  /// Orthonormal basis of the lsq_per_point model's column space (points x parameters): the
+  /// residual of a trigger change s is s - range_lp range_lp^T s.
+  Eigen::MatrixXd range_lp;
 };
 
 /// Builds the linear chain from the exact simulator and the estimators. Throws

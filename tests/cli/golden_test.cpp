@@ -194,6 +194,10 @@ TEST(CliInch, EveryDialectRoundTripsOnAnInchCopyOfTheMachine) {
   const size_t at = machine.find("\"units\": \"mm\"");
   ASSERT_NE(at, std::string::npos);
   machine.replace(at, 13, "\"units\": \"inch\"");
+  const std::string contributors = "\"../contributors/table5.json\"";  // relative to the original
+  const size_t c = machine.find(contributors);
+  ASSERT_NE(c, std::string::npos);
+  machine.replace(c, contributors.size(), "\"" + test::sourcePath("examples/contributors/table5.json") + "\"");
   std::ofstream(dir / "ac_inch.json") << machine;
   const std::string plan = (dir / "plan.json").string();
   const std::string cli = ROTACAL_CLI;
