@@ -24,6 +24,13 @@ Eigen::Matrix<double, 3, kRtestParams> J_wq_omega(Kinematics k, const Pose& pose
   return out;
 }
 
+Eigen::Matrix<double, 3, kNumLocationErrors> J_wq_e(Kinematics k, const Pose& pose, const Eigen::Vector3d& nest_w) {
+  LocationErrors zero;
+  zero.kinematics = k;
+  const Eigen::Matrix3d R = T_m_w_nominal(k, pose).linear();
+  return -R.transpose() * J_pm_e(zero, pose, nest_w);
+}
+
 void RtestFitOptions::validate() const {
   if (!(sensor_sigma_um > 0)) throw std::invalid_argument("rtest fit: sensor_sigma_um must be > 0");
 }
@@ -61,6 +68,43 @@ Eigen::Vector3d exactW(const ProbePlan& plan, const Eigen::MatrixXd& value, int 
   const auto& idx = rtestParameterIndices(plan.machine.kinematics);
   for (int p = 0; p < kRtestParams; ++p) t.errors.values[idx[p]] = value(p, tilt);
   return rtestSphere_w(plan, t, {}, pose, 0.0);
+}
+
+/// The eight location errors from the first cycle's readings y (referred to the reset at tilt
+/// 0, C 0): rows J_wq_e(pose_j) - J_wq_e(reset pose), 002 Eq. (6) with constant errors.
+RtestLocationFit fitLocation(const ProbePlan& plan, const Layout& L, const Eigen::VectorXd& y, double sensor_sigma_um) {
+  const Kinematics k = plan.machine.kinematics;
+  const Eigen::Vector3d nest = rtestNest_w(plan);
+  const int m = static_cast<int>(y.size());
+  const auto Jref = J_wq_e(k, plan.points[static_cast<size_t>(L.ref_point)].pose, nest);
+  Eigen::MatrixXd A(m, kNumLocationErrors);
+  for (size_t j = 0; j < plan.points.size(); ++j)
+    A.middleRows(3 * static_cast<Eigen::Index>(j), 3) = J_wq_e(k, plan.points[j].pose, nest) - Jref;
+  RtestLocationFit f;
+  Eigen::VectorXd scale(kNumLocationErrors);
+  for (int q = 0; q < kNumLocationErrors; ++q) scale[q] = std::max(A.col(q).norm(), 1e-300);
+  const Eigen::MatrixXd As = A * scale.cwiseInverse().asDiagonal();
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(As, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  const auto& sv = svd.singularValues();
+  if (!(sv[sv.size() - 1] > 1e-8 * sv[0])) {
+    f.why = fmt::format("the plan's tilts ({} = {}) do not separate the eight location errors (condition {:.3g}); "
+                        "the per-tilt errors are reported alone",
+                        tiltAxis(k), fmt::join(L.tilts, ", "), sv[0] / std::max(sv[sv.size() - 1], 1e-300));
+    return f;
+  }
+  f.identifiable = true;
+  const Eigen::VectorXd x = scale.cwiseInverse().asDiagonal() * svd.solve(y);
+  const Eigen::VectorXd r = y - A * x;
+  const int dof = m - kNumLocationErrors - 3;  // the reset's own rows are 0 = 0
+  const double s_res = dof > 0 ? mmToUm(std::sqrt(r.squaredNorm() / dof)) : 0.0;
+  f.residual_rms_um = mmToUm(std::sqrt(r.squaredNorm() / std::max(1, m - 3)));
+  f.sigma_um = std::max(sensor_sigma_um, s_res);
+  const Eigen::MatrixXd Ns_inv = svd.matrixV() * sv.cwiseInverse().cwiseAbs2().asDiagonal() * svd.matrixV().transpose();
+  for (int q = 0; q < kNumLocationErrors; ++q) {
+    f.value[q] = x[q];
+    f.u[q] = umToMm(f.sigma_um) * std::sqrt(std::max(0.0, Ns_inv(q, q))) / scale[q];
+  }
+  return f;
 }
 
 double toReport(int p, double v) { return rtestParameterIsLength(p) ? mmToUm(v) : radToMdeg(v); }
@@ -160,6 +204,7 @@ RtestAnalysis analyzeRtest(const ProbePlan& plan, const std::vector<RtestCycle>&
       f.linearisation_um = std::max(f.linearisation_um, mmToUm((ex - li).cwiseAbs().maxCoeff()));
     }
     if (first) {
+      out.location = fitLocation(plan, L, y, opt.sensor_sigma_um);
       const Eigen::VectorXd x_ref = x.segment<kRtestParams>(kRtestParams * L.ref_tilt);
       ref_dev = Jref * x_ref;
       ref_cov = Jref * f.cov.block<kRtestParams, kRtestParams>(kRtestParams * L.ref_tilt, kRtestParams * L.ref_tilt) *
@@ -254,17 +299,55 @@ Json rtestReportJson(const ProbePlan& plan, const std::vector<RtestCycle>& cycle
   j["cycles"] = cj;
   j["points_used"] = used;
   j["residual_rms_um"] = std::sqrt(rss / std::max<size_t>(1, 3 * used));
-  // ISO 230-7 location errors as the mean over the tilt angles of the first cycle (the axis
-  // average line); angles in mdeg, lengths in um.
+  // What the R-test measures: the six errors of the table at each tilt (the first cycle), under
+  // 002 Table 2's names and their ISO 230-7 component-error counterparts of the tilt axis.
+  {
+    Json pt = Json::object();
+    for (int p = 0; p < kRtestParams; ++p) {
+      std::vector<double> v, u;
+      for (int i = 0; i < nt; ++i) {
+        v.push_back(toReport(p, a.cycles.front().value(p, i)));
+        u.push_back(toReport(p, a.cycles.front().u(p, i)));
+      }
+      pt[rtestParameterName(k, p)] = {{"iso", fmt::format("E{}{}({})", "XYZABC"[p], ax, ax)}, {"unit", unitOf(p)},
+                                      {"values", v}, {"u", u}};
+    }
+    j["per_tilt_errors"] = {
+        {"tilt_axis", std::string(1, ax)},
+        {"tilt_deg", a.tilt_deg},
+        {"cycle", 1},
+        {"errors", pt},
+        {"note", fmt::format("the table's (C axis average line's) position and orientation at each {} angle, first "
+                             "cycle (002 Table 2): the {} axis's errors with the C axis's offsets from it turned by {}",
+                             ax, ax, ax)}};
+  }
+  // ISO 230-7 location errors of both axes, separated by the constant-error fit (issue 17: no
+  // longer the mean of the per-tilt errors, which read X0C - X0B = 10 um as X0B = 7.46 um).
   Json le = Json::object();
-  for (int p = 0; p < kRtestParams; ++p) {
-    const double mean = a.cycles.front().value.row(p).mean();
-    const double u = std::sqrt(a.cycles.front().u.row(p).cwiseAbs2().sum()) / nt;
-    const auto& info = locationParameters(k)[rtestParameterIndices(k)[p]];
-    le[rtestParameterName(k, p)] = {{"value", toReport(p, mean)}, {"unit", unitOf(p)}, {"u", toReport(p, u)},
-                                    {"iso", std::string(info.iso)}, {"note", "mean over the tilt angles, first cycle"}};
+  const auto& info = locationParameters(k);
+  const auto& idx = rtestParameterIndices(k);
+  for (int q = 0; q < kNumLocationErrors; ++q) {
+    const bool len = info[static_cast<size_t>(q)].kind == ParamKind::Length;
+    const double v = len ? mmToUm(a.location.value[q]) : radToMdeg(a.location.value[q]);
+    const double u = len ? mmToUm(a.location.u[q]) : radToMdeg(a.location.u[q]);
+    std::string note = "constant location error, fitted to the first cycle's readings (002 Eq. (6))";
+    if (len && std::find(idx.begin(), idx.end(), q) != idx.end())
+      note += "; relative to the sphere's actual position (a sphere offset, e.g. a tool-length error, reads as minus "
+              "this error)";
+    if (!a.location.identifiable) continue;  // location_errors_fit says why
+    le[std::string(info[static_cast<size_t>(q)].name)] = {{"value", v}, {"unit", len ? "um" : "mdeg"}, {"u", u},
+                                                          {"iso", std::string(info[static_cast<size_t>(q)].iso)},
+                                                          {"note", note}};
   }
   j["location_errors"] = le;
+  j["location_errors_fit"] = {{"identifiable", a.location.identifiable},
+                              {"residual_rms_um", a.location.residual_rms_um},
+                              {"sigma_um", a.location.sigma_um},
+                              {"model", "the eight location errors constant over the tilt, first cycle"},
+                              {"note", a.location.identifiable
+                                           ? std::string("a residual well above the sensor noise means the errors "
+                                                         "depend on the tilt (per_tilt_errors; 002)")
+                                           : a.location.why}};
   if (a.cycles.size() >= 3) {
     Json d = Json::object();
     for (int p = 0; p < kRtestParams; ++p) {
@@ -360,6 +443,19 @@ std::string rtestReportText(const ProbePlan& plan, const RtestAnalysis& a) {
                          toReport(p, f.u(p, static_cast<int>(i))));
       s += "\n";
     }
+  }
+  if (a.location.identifiable) {
+    s += fmt::format("location errors (ISO 230-7, constant over the tilt, first cycle; fit residual {:.3f} um rms):\n",
+                     a.location.residual_rms_um);
+    const auto& info = locationParameters(k);
+    for (int q = 0; q < kNumLocationErrors; ++q) {
+      const bool len = info[static_cast<size_t>(q)].kind == ParamKind::Length;
+      s += fmt::format("  {:<8} {:>8} {:>9.3f} +-{:<6.3f} {}\n", info[static_cast<size_t>(q)].name,
+                       info[static_cast<size_t>(q)].iso, len ? mmToUm(a.location.value[q]) : radToMdeg(a.location.value[q]),
+                       len ? mmToUm(a.location.u[q]) : radToMdeg(a.location.u[q]), len ? "um" : "mdeg");
+    }
+  } else {
+    s += "location errors: " + a.location.why + "\n";
   }
   if (a.cycles.size() >= 3) {
     s += "drift (straight line across cycles), per hour:\n";

@@ -47,8 +47,28 @@ struct RtestCycleFit {
   std::vector<Eigen::Vector3d> residual_w_mm;  // per reading
 };
 
+/// J_wq_e: the same for the eight ISO 230-7 location errors of both axes (locationParameters:
+/// B/C X0B Y0C Z0B A0B B0B C0B, A0C-A0B, X0C-X0B), constant over the tilt.
+Eigen::Matrix<double, 3, kNumLocationErrors> J_wq_e(Kinematics kinematics, const Pose& pose, const Eigen::Vector3d& nest_w);
+
+/// The location errors of both axes separated (issue 17): 002 Eq. (6) with omega_0 = the eight
+/// constant location errors, fitted to the first cycle's readings. The per-tilt errors are what
+/// the R-test measures; on a B/C table a constant X0C - X0B enters them as dx_BY(B) = (X0C-X0B)
+/// cos B and dz_BY(B) = (X0C-X0B) sin B, A0C - A0B as a_BY(B) = (A0C-A0B) cos B and c_BY(B) =
+/// (A0C-A0B) sin B (docs/rtest.md), so they are separated where the plan has a tilt besides 0.
+/// The lengths are relative to the sphere's actual position (a sphere offset s reads as -s).
+struct RtestLocationFit {
+  bool identifiable = false;
+  std::string why;                       // when not identifiable
+  ErrorVector value = ErrorVector::Zero();  // mm / rad, order of locationParameters
+  ErrorVector u = ErrorVector::Zero();
+  double residual_rms_um = 0.0;  // first cycle's readings minus the eight-error model
+  double sigma_um = 0.0;         // noise used for u: max(sensor_sigma, residual estimate)
+};
+
 struct RtestAnalysis {
   Kinematics kinematics = Kinematics::TableBC;
+  RtestLocationFit location;  // the eight location errors, first cycle
   std::vector<double> tilt_deg;
   std::vector<RtestCycleFit> cycles;
   // Linear trend across cycles (weighted by u): per second, mm/s or rad/s; zero with one cycle.

@@ -164,6 +164,102 @@ TEST(Rtest, ToolLengthErrorAppearsAsTheResetPattern) {
   }
 }
 
+// Issue 17: REPORT.json's location_errors used to be the mean of the per-tilt errors labelled
+// X0B / A0B, so a machine with X0C - X0B = 10 um and A0C - A0B = 5 mdeg (nothing else) read
+// X0B = 7.46 um, A0B = 3.73 mdeg (the mean of cos B over -60..60 by 30 is 0.746).
+TEST(Rtest, LocationErrorsAreSeparatedNotAveraged) {
+  const MachineModel m = bcMachine();
+  const ProbePlan plan = makePlan("rtest", m, {});
+  Truth truth;
+  truth.errors.kinematics = m.kinematics;
+  truth.errors.values[7] = umToMm(10.0);   // dx_CB = X0C - X0B
+  truth.errors.values[6] = mdegToRad(5.0);  // a_CB = A0C - A0B
+  const RtestSeries s = simulateRtest(plan, truth, {}, {});
+  const RtestAnalysis a = analyzeRtest(plan, s.cycles, {});
+  const Json j = rtestReportJson(plan, s.cycles, a, {"r.csv"});
+  const Json& le = j.at("location_errors");
+  ASSERT_EQ(le.size(), 8u);
+  EXPECT_EQ(le.at("dx_CB").at("iso"), "X0C-X0B");
+  EXPECT_EQ(le.at("a_CB").at("iso"), "A0C-A0B");
+  EXPECT_EQ(le.at("dx_BY").at("iso"), "X0B");
+  EXPECT_NEAR(le.at("dx_CB").at("value").get<double>(), 10.0, 1e-3);
+  EXPECT_NEAR(le.at("a_CB").at("value").get<double>(), 5.0, 1e-3);
+  for (const char* zero : {"dx_BY", "dy_CB", "dz_BY", "a_BY", "b_BY", "c_BY"})
+    EXPECT_NEAR(le.at(zero).at("value").get<double>(), 0.0, 1e-3) << zero;  // was 7.46 um / 3.73 mdeg
+  // What the R-test measures at each tilt (docs/rtest.md): the C axis's offsets turned by B.
+  const Json& pt = j.at("per_tilt_errors").at("errors");
+  EXPECT_EQ(pt.at("dx_BY").at("iso"), "EXB(B)");
+  for (size_t i = 0; i < a.tilt_deg.size(); ++i) {
+    const double b = degToRad(a.tilt_deg[i]);
+    EXPECT_NEAR(pt.at("dx_BY").at("values")[i].get<double>(), 10.0 * std::cos(b), 2e-3) << a.tilt_deg[i];
+    EXPECT_NEAR(pt.at("dz_BY").at("values")[i].get<double>(), 10.0 * std::sin(b), 2e-3) << a.tilt_deg[i];
+    EXPECT_NEAR(pt.at("a_BY").at("values")[i].get<double>(), 5.0 * std::cos(b), 2e-3) << a.tilt_deg[i];
+    EXPECT_NEAR(pt.at("c_BY").at("values")[i].get<double>(), 5.0 * std::sin(b), 2e-3) << a.tilt_deg[i];
+  }
+}
+
+TEST(Rtest, AllEightLocationErrorsRecoveredOnBothTables) {
+  // Every location error at once, noise-free; then with a sphere offset, which the lengths
+  // carry with a minus sign (the R-test sees the table against the sphere only).
+  for (const MachineModel& m : {bcMachine(), acMachine()}) {
+    const ProbePlan plan = makePlan("rtest", m, {});
+    Truth truth;
+    truth.errors.kinematics = m.kinematics;
+    const auto& info = locationParameters(m.kinematics);
+    const double want[8] = {6.0, -4.0, 3.0, 2.5, -1.5, 2.0, 3.5, -7.0};
+    for (int q = 0; q < 8; ++q)
+      truth.errors.values[q] = info[static_cast<size_t>(q)].kind == ParamKind::Length ? umToMm(want[q]) : mdegToRad(want[q]);
+    RtestTruthExtras x;
+    x.sphere_offset_m_mm = Eigen::Vector3d(umToMm(1.0), umToMm(-2.0), umToMm(3.0));
+    for (bool offset : {false, true}) {
+      const RtestAnalysis a = analyzeRtest(plan, simulateRtest(plan, truth, offset ? x : RtestTruthExtras{}, {}).cycles, {});
+      ASSERT_TRUE(a.location.identifiable) << m.name << " " << a.location.why;
+      EXPECT_LT(a.location.residual_rms_um, 2e-3) << m.name;
+      const auto& idx = rtestParameterIndices(m.kinematics);
+      for (int q = 0; q < 8; ++q) {
+        const bool len = info[static_cast<size_t>(q)].kind == ParamKind::Length;
+        double w = want[q];
+        // the first three per-tilt translations are the tilt axis's X, Y, Z location
+        for (int p = 0; p < 3 && offset; ++p)
+          if (idx[p] == q) w -= mmToUm(x.sphere_offset_m_mm[p]);
+        const double got = len ? mmToUm(a.location.value[q]) : radToMdeg(a.location.value[q]);
+        EXPECT_NEAR(got, w, 5e-3) << m.name << " " << info[static_cast<size_t>(q)].name << " offset " << offset;
+      }
+    }
+  }
+  // One tilt only: nothing separates the axes; the report says so and lists no location error.
+  const ProbePlan flat = makePlan("rtest", bcMachine(), {{"b_list", "0"}});
+  const RtestSeries s = simulateRtest(flat, Truth{}, {}, {});
+  const RtestAnalysis a = analyzeRtest(flat, s.cycles, {});
+  EXPECT_FALSE(a.location.identifiable);
+  const Json j = rtestReportJson(flat, s.cycles, a, {"r.csv"});
+  EXPECT_TRUE(j.at("location_errors").empty());
+  EXPECT_FALSE(j.at("location_errors_fit").at("identifiable").get<bool>());
+}
+
+TEST(Rtest, NoisyLocationErrorsWithinTheirUncertainty) {
+  const MachineModel m = bcMachine();
+  const ProbePlan plan = makePlan("rtest", m, {});
+  Truth truth;
+  truth.errors.kinematics = m.kinematics;
+  truth.errors.values[7] = umToMm(10.0);
+  truth.errors.values[6] = mdegToRad(5.0);
+  truth.errors.values[0] = umToMm(-3.0);
+  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+    RtestSimOptions o;
+    o.seed = seed;
+    o.noise_um = 0.3;
+    RtestFitOptions fo;
+    fo.sensor_sigma_um = 0.3;
+    const RtestAnalysis a = analyzeRtest(plan, simulateRtest(plan, truth, {}, o).cycles, fo);
+    ASSERT_TRUE(a.location.identifiable);
+    for (int q = 0; q < 8; ++q) {
+      EXPECT_GT(a.location.u[q], 0.0);
+      EXPECT_LT(std::abs(a.location.value[q] - truth.errors.values[q]), 4.5 * a.location.u[q]) << "seed " << seed << " q" << q;
+    }
+  }
+}
+
 TEST(Rtest, NoisyRecoveryWithinReportedUncertainty) {
   const MachineModel m = bcMachine();
   const ProbePlan plan = makePlan("rtest", m, {});
