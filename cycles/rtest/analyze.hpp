@@ -31,6 +31,7 @@ Eigen::Matrix<double, 3, kRtestParams> J_wq_omega(Kinematics kinematics, const P
 
 struct RtestFitOptions {
   double sensor_sigma_um = 0.2;  // the sensors' repeatability: a floor for the noise estimate
+  double reset_alpha = 0.01;     // false-alarm rate of the re-read check over the whole series
   void validate() const;         // throws std::invalid_argument
 };
 
@@ -43,7 +44,14 @@ struct RtestCycleFit {
   double residual_rms_um = 0.0;     // readings minus the linear model
   double linearisation_um = 0.0;    // max |exact model - linear model| at the estimate
   double sigma_um = 0.0;            // noise used for u: max(sensor_sigma, residual estimate)
-  bool dz_reference_fixed = false;  // first cycle: dz and c at tilt 0 fixed to 0
+  bool dz_reference_fixed = false;  // referred to its own reset (first cycle, or every cycle with reset reads): dz and c at tilt 0 fixed to 0
+  bool own_reset = false;           // the cycle's readings are referred to its own reset reading
+  // The re-read check: the reset pose read again at the end of the cycle against its reading
+  // before the first pose; chi2 = |d|^2 / (2 sigma^2) with the declared sensor noise, 3 dof.
+  bool reset_checked = false;
+  Eigen::Vector3d reread_minus_reset_mm = Eigen::Vector3d::Zero();
+  double reset_chi2 = 0.0, reset_p = 1.0;
+  bool sensor_step = false;  // reset_p below reset_alpha / (cycles checked)
   std::vector<Eigen::Vector3d> residual_w_mm;  // per reading
 };
 
@@ -74,6 +82,8 @@ struct RtestAnalysis {
   // Linear trend across cycles (weighted by u): per second, mm/s or rad/s; zero with one cycle.
   Eigen::MatrixXd rate, rate_u;
   Eigen::MatrixXd change;  // last cycle minus first, mm or rad
+  int reset_checks = 0;         // cycles whose re-read was checked
+  double reset_level = 0.0;     // the per-cycle level of the check: reset_alpha / reset_checks
 };
 
 RtestAnalysis analyzeRtest(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, const RtestFitOptions& options);
