@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <string>
 
 #include <fmt/format.h>
@@ -69,14 +70,14 @@ bool driftWithin3u(const ProbePlan& plan, const std::vector<RtestCycle>& c, cons
   return e.dot(B.transpose() * B * e) < chiSquareUpperQuantile(0.0027, static_cast<double>(truth.size()));
 }
 
-void rtestBench() {
+void rtestBench(bool steps_only) {
   const ProbePlan plan = rtestPlan();
   const double t0 = rtestReadTimes(plan).front();  // the sensors' zero: the first cycle's reset reading
   std::printf("rtest (002 Sec. 4.3 series: %zu poses x 11 cycles over 3 h, 0.3 um sensor noise declared and drawn, alpha 0.01)\n",
               plan.points.size());
   const auto start = std::chrono::steady_clock::now();
   int alarms = 0, inadequate = 0, step_alarms = 0, reread_alarms = 0;
-  for (std::uint64_t seed = 1; seed <= 200; ++seed) {
+  for (std::uint64_t seed = 1; seed <= (steps_only ? 0u : 200u); ++seed) {
     const auto c = rtestSeries(plan, rtestBase(static_cast<int>(seed)), {}, 10000 + seed);
     const RtestDiagnosis d = rtestDiag(plan, c);
     alarms += d.summary.verdict != JudgeVerdict::NoSignificantEffect;
@@ -88,7 +89,7 @@ void rtestBench() {
     reread_alarms += reread;
   }
   const double per = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / 200.0;
-  std::printf("  clean, 200 seeds: %d false alarms (%d model_inadequate, %d with a sensor_step finding); analyze's re-read "
+  if (!steps_only) std::printf("  clean, 200 seeds: %d false alarms (%d model_inadequate, %d with a sensor_step finding); analyze's re-read "
               "check: %d series flagged; %.2f s per diagnosis (5 judge calls)\n",
               alarms, inadequate, step_alarms, reread_alarms, per);
   // Table drifts: 002's dy_CB -2 um/h at every tilt; half of 002 Sec. 4.4's drifts in every error.
@@ -99,7 +100,7 @@ void rtestBench() {
   Eigen::Matrix<double, 6, 1> r002, rhalf;
   r002 << 0, -2.0, 0, 0, 0, 0;
   rhalf << -0.333, -1.0, -0.333, 0, 0, 0.15;
-  for (const DriftCase& dc : {DriftCase{"002 reproduction: dy_CB -2 um/h at every B", r002},
+  for (const DriftCase& dc : steps_only ? std::vector<DriftCase>{} : std::vector<DriftCase>{DriftCase{"002 reproduction: dy_CB -2 um/h at every B", r002},
                               DriftCase{"half of 002 Sec. 4.4: dx -0.33, dy -1, dz -0.33 um/h, c 0.15 mdeg/h", rhalf}}) {
     Eigen::VectorXd truth(30);
     for (int i = 0; i < 5; ++i) truth.segment<6>(6 * i) = dc.rate;
@@ -123,7 +124,7 @@ void rtestBench() {
                 "explaining it %d / 50\n",
                 dc.name, found, within, linear_named);
   }
-  {
+  if (!steps_only) {
     int found = 0, named = 0;
     for (int seed = 1; seed <= 50; ++seed) {
       RtestTruthExtras x;
@@ -154,12 +155,15 @@ void rtestBench() {
         StepCase{"inside cycle 7, after its last pose, before its re-read", 1.0,
                  6 * interval + 0.5 * (plan.points.back().t_s + reads.back()), "sensor_step_in_cycle_7"}}) {
     int flagged = 0, exact = 0, within = 0, effect = 0, reread = 0;
+    std::map<std::string, int> first_cause;  // what the judge named first, over the seeds
     for (int seed = 1; seed <= 50; ++seed) {
       RtestTruthExtras x;
       x.sensor_steps.push_back({sc.at_s, Eigen::Vector3d(umToMm(sc.size_um), 0, 0)});
       const auto c = rtestSeries(plan, rtestBase(seed), x, 40000 + static_cast<std::uint64_t>(seed));
       const RtestDiagnosis d = rtestDiag(plan, c);
       reread += d.analysis.cycles[6].sensor_step;
+      ++first_cause[d.summary.findings.empty() ? std::string(judgeVerdictName(d.summary.verdict))
+                                                : d.summary.findings[0].cause];
       if (d.summary.findings.empty()) continue;
       const JudgeFinding& f = d.summary.findings[0];
       if (f.cause != "sensor_step_cycle_7" && f.cause != "sensor_step_in_cycle_7") continue;
@@ -174,6 +178,9 @@ void rtestBench() {
     std::printf("  sensor step %.1f um in x %s: a sensor_step finding in cycle 7 in %d / 50 (effect_found %d), %s %d / 50, "
                 "dx dy dz within 3 u %d / 50; analyze's re-read check flags cycle 7 in %d / 50\n",
                 sc.size_um, sc.name, flagged, effect, *sc.cause ? sc.cause : "either form", exact, within, reread);
+    std::string named;
+    for (const auto& [cause, k] : first_cause) named += fmt::format(" {} {},", cause, k);
+    std::printf("    first finding over the 50 seeds:%s\n", named.c_str());
   }
 }
 
@@ -263,9 +270,10 @@ void tooltipBench() {
 }  // namespace rotacal
 
 int main(int argc, char** argv) {
-  // `rotacal_cycle_judge_bench [rtest|tooltip]`: one cycle only; none: both.
+  // `rotacal_cycle_judge_bench [rtest|rtest-steps|tooltip]`: one cycle (rtest-steps: its sensor
+  // step cases only); none: both.
   const std::string only = argc > 1 ? argv[1] : "";
   if (only.empty() || only == "tooltip") rotacal::tooltipBench();
-  if (only.empty() || only == "rtest") rotacal::rtestBench();
+  if (only.empty() || only == "rtest" || only == "rtest-steps") rotacal::rtestBench(only == "rtest-steps");
   return 0;
 }
