@@ -105,8 +105,8 @@ TEST(RtestProgram, CheckerRejectsAReadingWithoutDwellAndTheWrongCount) {
   const size_t at = missing.find("M64 P0\n");
   missing.erase(at, 7);
   EXPECT_FALSE(d.check(missing, p, test::shapeOf(p, "linuxcnc")).empty());
-  // The re-read removed: 25 + 1 readings would pass a "multiple of the poses" rule with 26
-  // poses; the count is the neutral program's.
+  // The re-read removed: the count is the neutral program's (27 per written cycle; the old
+  // "multiple of the plan's poses" rule would refuse every program with reset reads).
   std::string no_reread = text;
   const size_t rr = no_reread.find("M64 P0\n", no_reread.find("R-test re-read of the reset"));
   no_reread.erase(rr, 7);
