@@ -338,8 +338,12 @@ Json rtestReportJson(const ProbePlan& plan, const std::vector<RtestCycle>& cycle
                                   "tilts; changes with time are free of it",
                                   rtestParameterName(k, 2), ax)},
       {"c_zero", fmt::format("{} at {} = 0 (a rotation about the C axis) is the C zero, defined by the reset at C = 0: "
-                             "set to 0 in the first cycle, its change with time is observed",
-                             rtestParameterName(k, 5), ax)},
+                             "{}",
+                             rtestParameterName(k, 5), ax,
+                             a.reset_checks > 0 ? "set to 0 in every cycle (each is referred to its own reset): its "
+                                                  "change with time is not observed, and the other tilts' rotations "
+                                                  "carry minus that change about their C axis"
+                                                : "set to 0 in the first cycle, its change with time is observed")},
       {"u", "standard uncertainty (k = 1) from max(sensor repeatability, residual), later cycles include the first "
             "cycle's reference"}};
   size_t used = 0;
