@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <string>
 
 #include <fmt/format.h>
@@ -69,21 +70,28 @@ bool driftWithin3u(const ProbePlan& plan, const std::vector<RtestCycle>& c, cons
   return e.dot(B.transpose() * B * e) < chiSquareUpperQuantile(0.0027, static_cast<double>(truth.size()));
 }
 
-void rtestBench() {
+void rtestBench(bool steps_only) {
   const ProbePlan plan = rtestPlan();
-  const double t0 = plan.points[static_cast<size_t>(rtestReferencePoint(plan) - 1)].t_s;
+  const double t0 = rtestReadTimes(plan).front();  // the sensors' zero: the first cycle's reset reading
   std::printf("rtest (002 Sec. 4.3 series: %zu poses x 11 cycles over 3 h, 0.3 um sensor noise declared and drawn, alpha 0.01)\n",
               plan.points.size());
   const auto start = std::chrono::steady_clock::now();
-  int alarms = 0, inadequate = 0;
-  for (std::uint64_t seed = 1; seed <= 200; ++seed) {
-    const RtestDiagnosis d = rtestDiag(plan, rtestSeries(plan, rtestBase(static_cast<int>(seed)), {}, 10000 + seed));
+  int alarms = 0, inadequate = 0, step_alarms = 0, reread_alarms = 0;
+  for (std::uint64_t seed = 1; seed <= (steps_only ? 0u : 200u); ++seed) {
+    const auto c = rtestSeries(plan, rtestBase(static_cast<int>(seed)), {}, 10000 + seed);
+    const RtestDiagnosis d = rtestDiag(plan, c);
     alarms += d.summary.verdict != JudgeVerdict::NoSignificantEffect;
     inadequate += d.summary.verdict == JudgeVerdict::ModelInadequate;
+    bool step = false, reread = false;
+    for (const auto& f : d.summary.findings) step = step || f.cause.rfind("sensor_step", 0) == 0;
+    for (const auto& f : d.analysis.cycles) reread = reread || f.sensor_step;
+    step_alarms += step;
+    reread_alarms += reread;
   }
   const double per = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / 200.0;
-  std::printf("  clean, 200 seeds: %d false alarms (%d model_inadequate); %.2f s per diagnosis (5 judge calls)\n", alarms,
-              inadequate, per);
+  if (!steps_only) std::printf("  clean, 200 seeds: %d false alarms (%d model_inadequate, %d with a sensor_step finding); analyze's re-read "
+              "check: %d series flagged; %.2f s per diagnosis (5 judge calls)\n",
+              alarms, inadequate, step_alarms, reread_alarms, per);
   // Table drifts: 002's dy_CB -2 um/h at every tilt; half of 002 Sec. 4.4's drifts in every error.
   struct DriftCase {
     const char* name;
@@ -92,7 +100,7 @@ void rtestBench() {
   Eigen::Matrix<double, 6, 1> r002, rhalf;
   r002 << 0, -2.0, 0, 0, 0, 0;
   rhalf << -0.333, -1.0, -0.333, 0, 0, 0.15;
-  for (const DriftCase& dc : {DriftCase{"002 reproduction: dy_CB -2 um/h at every B", r002},
+  for (const DriftCase& dc : steps_only ? std::vector<DriftCase>{} : std::vector<DriftCase>{DriftCase{"002 reproduction: dy_CB -2 um/h at every B", r002},
                               DriftCase{"half of 002 Sec. 4.4: dx -0.33, dy -1, dz -0.33 um/h, c 0.15 mdeg/h", rhalf}}) {
     Eigen::VectorXd truth(30);
     for (int i = 0; i < 5; ++i) truth.segment<6>(6 * i) = dc.rate;
@@ -116,7 +124,7 @@ void rtestBench() {
                 "explaining it %d / 50\n",
                 dc.name, found, within, linear_named);
   }
-  {
+  if (!steps_only) {
     int found = 0, named = 0;
     for (int seed = 1; seed <= 50; ++seed) {
       RtestTruthExtras x;
@@ -130,20 +138,49 @@ void rtestBench() {
     std::printf("  spindle growth 1.3 um/h (SJTU's first 3 h): thermal_drift in %d / 50, worded as the spindle in %d / 50\n",
                 found, named);
   }
-  for (double step : {1.0, 0.5}) {
-    int found = 0, within = 0;
+  // Sensor steps hidden with the simulator's sensor_steps (TRUTH.json rtest.sensor_steps): the
+  // counts keep the step from its time on, reset and re-read rows included.
+  const double interval = rtestSchedule(plan).interval_s;
+  const std::vector<double> reads = rtestReadTimes(plan);
+  struct StepCase {
+    const char* name;
+    double size_um, at_s;
+    const char* cause;  // the exact candidate, or "" when either form of cycle 7 is right
+  };
+  for (const StepCase& sc :
+       {StepCase{"between cycles 6 and 7", 1.0, 6 * interval - 60.0, "sensor_step_cycle_7"},
+        StepCase{"between cycles 6 and 7", 0.5, 6 * interval - 60.0, "sensor_step_cycle_7"},
+        StepCase{"mid-series, inside cycle 7 (between poses 12 and 13)", 1.0,
+                 6 * interval + 0.5 * (plan.points[11].t_s + plan.points[12].t_s), ""},
+        StepCase{"inside cycle 7, after its last pose, before its re-read", 1.0,
+                 6 * interval + 0.5 * (plan.points.back().t_s + reads.back()), "sensor_step_in_cycle_7"}}) {
+    int flagged = 0, exact = 0, within = 0, effect = 0, reread = 0;
+    std::map<std::string, int> first_cause;  // what the judge named first, over the seeds
     for (int seed = 1; seed <= 50; ++seed) {
-      auto c = rtestSeries(plan, rtestBase(seed), {}, 40000 + static_cast<std::uint64_t>(seed));
-      for (size_t k = 6; k < c.size(); ++k)
-        for (auto& r : c[k].readings) r.dq_w_mm.x() += umToMm(step);
+      RtestTruthExtras x;
+      x.sensor_steps.push_back({sc.at_s, Eigen::Vector3d(umToMm(sc.size_um), 0, 0)});
+      const auto c = rtestSeries(plan, rtestBase(seed), x, 40000 + static_cast<std::uint64_t>(seed));
       const RtestDiagnosis d = rtestDiag(plan, c);
-      if (d.summary.verdict != JudgeVerdict::EffectFound || d.summary.findings[0].cause != "sensor_step_cycle_7") continue;
-      ++found;
-      const auto& p = d.summary.findings[0].parameters;
-      within += std::abs(p[0].value - step) <= 3 * p[0].u && std::abs(p[1].value) <= 3 * p[1].u && std::abs(p[2].value) <= 3 * p[2].u;
+      reread += d.analysis.cycles[6].sensor_step;
+      ++first_cause[d.summary.findings.empty() ? std::string(judgeVerdictName(d.summary.verdict))
+                                                : d.summary.findings[0].cause];
+      if (d.summary.findings.empty()) continue;
+      const JudgeFinding& f = d.summary.findings[0];
+      if (f.cause != "sensor_step_cycle_7" && f.cause != "sensor_step_in_cycle_7") continue;
+      ++flagged;
+      effect += d.summary.verdict == JudgeVerdict::EffectFound;
+      if (*sc.cause && f.cause != sc.cause) continue;
+      ++exact;
+      const auto& p = f.parameters;
+      within += std::abs(p[0].value - sc.size_um) <= 3 * p[0].u && std::abs(p[1].value) <= 3 * p[1].u &&
+                std::abs(p[2].value) <= 3 * p[2].u;
     }
-    std::printf("  sensor step %.1f um in x from cycle 7: sensor_step_cycle_7 in %d / 50, dx dy dz within 3 u %d / 50\n", step,
-                found, within);
+    std::printf("  sensor step %.1f um in x %s: a sensor_step finding in cycle 7 in %d / 50 (effect_found %d), %s %d / 50, "
+                "dx dy dz within 3 u %d / 50; analyze's re-read check flags cycle 7 in %d / 50\n",
+                sc.size_um, sc.name, flagged, effect, *sc.cause ? sc.cause : "either form", exact, within, reread);
+    std::string named;
+    for (const auto& [cause, k] : first_cause) named += fmt::format(" {} {},", cause, k);
+    std::printf("    first finding over the 50 seeds:%s\n", named.c_str());
   }
 }
 
@@ -232,8 +269,11 @@ void tooltipBench() {
 }  // namespace
 }  // namespace rotacal
 
-int main() {
-  rotacal::tooltipBench();
-  rotacal::rtestBench();
+int main(int argc, char** argv) {
+  // `rotacal_cycle_judge_bench [rtest|rtest-steps|tooltip]`: one cycle (rtest-steps: its sensor
+  // step cases only); none: both.
+  const std::string only = argc > 1 ? argv[1] : "";
+  if (only.empty() || only == "tooltip") rotacal::tooltipBench();
+  if (only.empty() || only == "rtest" || only == "rtest-steps") rotacal::rtestBench(only == "rtest-steps");
   return 0;
 }

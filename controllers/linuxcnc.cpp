@@ -566,9 +566,10 @@ class LinuxCncDialect final : public Dialect {
         }
         prev = &b;
       }
-      if (reads == 0 || reads % plan.points.size() != 0)
-        problem(last_line, fmt::format("{} R-test readings [M64 P{}], not a multiple of the plan's {} poses", reads,
-                                       kReadOutput, plan.points.size()));
+      if (reads != shape.reads)
+        problem(last_line, fmt::format("{} R-test readings [M64 P{}] written, the program has {} (each cycle: the plan's "
+                                       "{} poses, and the reset before and after them when the plan reads it)",
+                                       reads, kReadOutput, shape.reads, plan.points.size()));
     } else if (static_cast<size_t>(probes) != shape.probes)
       problem(last_line, fmt::format("{} recorded touches [G38.2/G38.3 moves whose position is LOGged], the plan "
                                      "has {} points",

@@ -7,8 +7,9 @@
 
 #include <fmt/format.h>
 
-#include "core/units.hpp"
 #include "core/report_envelope.hpp"
+#include "core/statistics.hpp"
+#include "core/units.hpp"
 
 namespace rotacal {
 
@@ -24,8 +25,16 @@ Eigen::Matrix<double, 3, kRtestParams> J_wq_omega(Kinematics k, const Pose& pose
   return out;
 }
 
+Eigen::Matrix<double, 3, kNumLocationErrors> J_wq_e(Kinematics k, const Pose& pose, const Eigen::Vector3d& nest_w) {
+  LocationErrors zero;
+  zero.kinematics = k;
+  const Eigen::Matrix3d R = T_m_w_nominal(k, pose).linear();
+  return -R.transpose() * J_pm_e(zero, pose, nest_w);
+}
+
 void RtestFitOptions::validate() const {
   if (!(sensor_sigma_um > 0)) throw std::invalid_argument("rtest fit: sensor_sigma_um must be > 0");
+  if (!(reset_alpha > 0 && reset_alpha < 1)) throw std::invalid_argument("rtest fit: reset_alpha must be in (0, 1)");
 }
 
 namespace {
@@ -63,6 +72,62 @@ Eigen::Vector3d exactW(const ProbePlan& plan, const Eigen::MatrixXd& value, int 
   return rtestSphere_w(plan, t, {}, pose, 0.0);
 }
 
+/// The eight location errors from the first cycle's readings (referred to the reset at tilt 0,
+/// C 0): rows J_wq_e(pose_j) - J_wq_e(reset pose), 002 Eq. (6) with constant errors; with reset
+/// reads the cycle's zero is a free offset observed by the reset and re-read rows, as in the
+/// per-tilt fit.
+RtestLocationFit fitLocation(const ProbePlan& plan, const Layout& L, const RtestCycle& cyc, double sensor_sigma_um) {
+  const Kinematics k = plan.machine.kinematics;
+  const Eigen::Vector3d nest = rtestNest_w(plan);
+  const bool own = cyc.reset.has_value() && cyc.reread.has_value();
+  const int m = 3 * static_cast<int>(plan.points.size());
+  const int rows = m + (own ? 6 : 0), ncol = kNumLocationErrors + (own ? 3 : 0);
+  const auto Jref = J_wq_e(k, plan.points[static_cast<size_t>(L.ref_point)].pose, nest);
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(rows, ncol);
+  Eigen::VectorXd y(rows);
+  for (size_t j = 0; j < plan.points.size(); ++j) {
+    const auto r = 3 * static_cast<Eigen::Index>(j);
+    A.block(r, 0, 3, kNumLocationErrors) = J_wq_e(k, plan.points[j].pose, nest);
+    if (own) A.block(r, kNumLocationErrors, 3, 3).setIdentity();
+    else A.block(r, 0, 3, kNumLocationErrors) -= Jref;
+    y.segment<3>(r) = cyc.readings[j].dq_w_mm;
+  }
+  if (own) {
+    for (int k2 = 0; k2 < 2; ++k2) {
+      A.block(m + 3 * k2, 0, 3, kNumLocationErrors) = Jref;
+      A.block(m + 3 * k2, kNumLocationErrors, 3, 3).setIdentity();
+    }
+    y.segment<3>(m) = cyc.reset->dq_w_mm;
+    y.segment<3>(m + 3) = cyc.reread->dq_w_mm;
+  }
+  RtestLocationFit f;
+  Eigen::VectorXd scale(ncol);
+  for (int q = 0; q < ncol; ++q) scale[q] = std::max(A.col(q).norm(), 1e-300);
+  const Eigen::MatrixXd As = A * scale.cwiseInverse().asDiagonal();
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(As, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  const auto& sv = svd.singularValues();
+  if (!(sv[sv.size() - 1] > 1e-8 * sv[0])) {
+    f.why = fmt::format("the plan's tilts ({} = {}) do not separate the eight location errors (condition {:.3g}); "
+                        "the per-tilt errors are reported alone",
+                        tiltAxis(k), fmt::join(L.tilts, ", "), sv[0] / std::max(sv[sv.size() - 1], 1e-300));
+    return f;
+  }
+  f.identifiable = true;
+  const Eigen::VectorXd x = scale.cwiseInverse().asDiagonal() * svd.solve(y);
+  const Eigen::VectorXd r = y - A * x;
+  const int zero_rows = own ? 0 : 3;  // without a reset reading the reset pose's own rows are 0 = 0
+  const int dof = rows - ncol - zero_rows;
+  const double s_res = dof > 0 ? mmToUm(std::sqrt(r.squaredNorm() / dof)) : 0.0;
+  f.residual_rms_um = mmToUm(std::sqrt(r.squaredNorm() / std::max(1, rows - zero_rows)));
+  f.sigma_um = std::max(sensor_sigma_um, s_res);
+  const Eigen::MatrixXd Ns_inv = svd.matrixV() * sv.cwiseInverse().cwiseAbs2().asDiagonal() * svd.matrixV().transpose();
+  for (int q = 0; q < kNumLocationErrors; ++q) {
+    f.value[q] = x[q];
+    f.u[q] = umToMm(f.sigma_um) * std::sqrt(std::max(0.0, Ns_inv(q, q))) / scale[q];
+  }
+  return f;
+}
+
 double toReport(int p, double v) { return rtestParameterIsLength(p) ? mmToUm(v) : radToMdeg(v); }
 std::string unitOf(int p) { return rtestParameterIsLength(p) ? "um" : "mdeg"; }
 
@@ -94,19 +159,38 @@ RtestAnalysis analyzeRtest(const ProbePlan& plan, const std::vector<RtestCycle>&
     const auto& cyc = cycles[c];
     if (cyc.readings.size() != plan.points.size()) throw std::invalid_argument("rtest: cycle with missing readings");
     const bool first = c == 0;
-    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(m, n);
-    Eigen::VectorXd y(m);
+    // With reset reads every cycle is referred to its own reset (002 Eq. (4) per cycle): the
+    // sensors' zero of the cycle is a free offset o (3 columns), observed by the reset and
+    // re-read rows (model J_ref omega + o) with the poses (J_j omega + o), so that every row
+    // keeps its own independent noise. Results without them: the first cycle against its reset
+    // pose (Eq. (6) as written), later ones against the first cycle's reference.
+    const bool own = cyc.reset.has_value() && cyc.reread.has_value();
+    const bool referred = first || own;
+    const int rows = m + (own ? 6 : 0);
+    const int ncol = n + (own ? 3 : 0);
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(rows, ncol);
+    Eigen::VectorXd y(rows);
     for (size_t j = 0; j < plan.points.size(); ++j) {
       const int ti = L.tilt_of_point[j];
       A.block(3 * j, kRtestParams * ti, 3, kRtestParams) += J[j];
-      if (first) A.block(3 * j, kRtestParams * L.ref_tilt, 3, kRtestParams) -= Jref;  // 002 Eq. (6)
-      y.segment<3>(3 * j) = cyc.readings[j].dq_w_mm + (first ? Eigen::Vector3d::Zero() : ref_dev);
+      if (own) A.block(3 * j, n, 3, 3).setIdentity();
+      else if (first) A.block(3 * j, kRtestParams * L.ref_tilt, 3, kRtestParams) -= Jref;  // 002 Eq. (6)
+      y.segment<3>(3 * j) = cyc.readings[j].dq_w_mm + (referred ? Eigen::Vector3d::Zero() : ref_dev);
     }
-    // Columns used: all but dz and c at tilt 0 in the first cycle.
+    if (own) {
+      for (int k2 = 0; k2 < 2; ++k2) {
+        A.block(m + 3 * k2, kRtestParams * L.ref_tilt, 3, kRtestParams) = Jref;
+        A.block(m + 3 * k2, n, 3, 3).setIdentity();
+      }
+      y.segment<3>(m) = cyc.reset->dq_w_mm;
+      y.segment<3>(m + 3) = cyc.reread->dq_w_mm;
+    }
+    // Columns used: all but dz and c at tilt 0 when the cycle is referred to a reset (they move
+    // every reading at tilt 0 alike: the reset, or the offset, takes them).
     std::vector<int> cols;
-    for (int q = 0; q < n; ++q)
-      if (!(first && (q == dz_ref_col || q == c_ref_col))) cols.push_back(q);
-    Eigen::MatrixXd Au(m, cols.size());
+    for (int q = 0; q < ncol; ++q)
+      if (!(referred && (q == dz_ref_col || q == c_ref_col))) cols.push_back(q);
+    Eigen::MatrixXd Au(rows, cols.size());
     for (size_t q = 0; q < cols.size(); ++q) Au.col(q) = A.col(cols[q]);
     // Scale columns (mm and rad differ by 1e2) before the rank test.
     Eigen::VectorXd scale(cols.size());
@@ -124,49 +208,71 @@ RtestAnalysis analyzeRtest(const ProbePlan& plan, const std::vector<RtestCycle>&
     const Eigen::MatrixXd Ns_inv = svd.matrixV() * sv.cwiseInverse().cwiseAbs2().asDiagonal() * svd.matrixV().transpose();
     const Eigen::MatrixXd N_inv = scale.cwiseInverse().asDiagonal() * Ns_inv * scale.cwiseInverse().asDiagonal();
     const Eigen::VectorXd r = y - Au * xu;
-    const int dof = m - static_cast<int>(cols.size()) - (first ? 3 : 0);  // the reset rows are 0 = 0 in cycle 1
+    // Without a reset reading of its own the first cycle's reset pose defines the zero: 0 = 0.
+    const int zero_rows = first && !own ? 3 : 0;
+    const int dof = rows - static_cast<int>(cols.size()) - zero_rows;
     const double s_res = dof > 0 ? mmToUm(std::sqrt(r.squaredNorm() / dof)) : 0.0;
     RtestCycleFit f;
     f.t_s = cyc.t_s();
     f.sigma_um = std::max(opt.sensor_sigma_um, s_res);
-    f.residual_rms_um = mmToUm(std::sqrt(r.squaredNorm() / (m - (first ? 3 : 0))));
-    f.dz_reference_fixed = first;
+    f.residual_rms_um = mmToUm(std::sqrt(r.squaredNorm() / (rows - zero_rows)));
+    f.dz_reference_fixed = referred;
+    f.own_reset = own;
+    if (own) {
+      f.reset_checked = true;
+      f.reread_minus_reset_mm = cyc.reread->dq_w_mm - cyc.reset->dq_w_mm;
+      const double s_um = opt.sensor_sigma_um;
+      f.reset_chi2 = mmToUm(mmToUm(f.reread_minus_reset_mm.squaredNorm())) / (2.0 * s_um * s_um);
+      f.reset_p = chiSquareSurvival(f.reset_chi2, 3.0);
+    }
     Eigen::MatrixXd cov_u = umToMm(f.sigma_um) * umToMm(f.sigma_um) * N_inv;
-    if (!first) {
+    if (!referred) {
       // The reference term J_ref omega_0 carries the first cycle's uncertainty into every row.
-      Eigen::MatrixXd S(m, 3);
-      for (int j = 0; j < m / 3; ++j) S.block<3, 3>(3 * j, 0).setIdentity();
+      Eigen::MatrixXd S(rows, 3);
+      for (int j = 0; j < rows / 3; ++j) S.block<3, 3>(3 * j, 0).setIdentity();
       const Eigen::MatrixXd G = N_inv * Au.transpose() * S;
       cov_u += G * ref_cov * G.transpose();
     }
-    Eigen::VectorXd x = Eigen::VectorXd::Zero(n);
-    f.cov = Eigen::MatrixXd::Zero(n, n);
+    Eigen::VectorXd x = Eigen::VectorXd::Zero(ncol);
+    Eigen::MatrixXd cov_full = Eigen::MatrixXd::Zero(ncol, ncol);
     for (size_t a = 0; a < cols.size(); ++a) {
       x[cols[a]] = xu[a];
-      for (size_t b = 0; b < cols.size(); ++b) f.cov(cols[a], cols[b]) = cov_u(a, b);
+      for (size_t b = 0; b < cols.size(); ++b) cov_full(cols[a], cols[b]) = cov_u(a, b);
     }
+    f.cov = cov_full.topLeftCorner(n, n);
     f.value = Eigen::Map<const Eigen::MatrixXd>(x.data(), kRtestParams, nt);
     f.u = Eigen::MatrixXd(kRtestParams, nt);
     for (int i = 0; i < nt; ++i)
       for (int p = 0; p < kRtestParams; ++p) f.u(p, i) = std::sqrt(std::max(0.0, f.cov(kRtestParams * i + p, kRtestParams * i + p)));
     for (size_t j = 0; j < plan.points.size(); ++j) f.residual_w_mm.push_back(r.segment<3>(3 * j));
-    // Linearisation: the exact model at the estimate against the linear one.
+    // Linearisation: the exact model at the estimate against the linear one, both referred to
+    // the reset pose.
     const Eigen::VectorXd lin = A * x;
+    const Eigen::Vector3d lin_ref = own ? Eigen::Vector3d(lin.segment<3>(m)) : Eigen::Vector3d::Zero();
     const Eigen::Vector3d ref_exact =
-        first ? Eigen::Vector3d(exactW(plan, f.value, L.ref_tilt, plan.points[L.ref_point].pose) - nest) : ref_dev;
+        referred ? Eigen::Vector3d(exactW(plan, f.value, L.ref_tilt, plan.points[L.ref_point].pose) - nest) : ref_dev;
     for (size_t j = 0; j < plan.points.size(); ++j) {
       const Eigen::Vector3d ex = exactW(plan, f.value, L.tilt_of_point[j], plan.points[j].pose) - nest - ref_exact;
-      const Eigen::Vector3d li = lin.segment<3>(3 * j) - (first ? Eigen::Vector3d::Zero() : ref_dev);
+      const Eigen::Vector3d li = lin.segment<3>(3 * j) - lin_ref - (referred ? Eigen::Vector3d::Zero() : ref_dev);
       f.linearisation_um = std::max(f.linearisation_um, mmToUm((ex - li).cwiseAbs().maxCoeff()));
     }
     if (first) {
+      out.location = fitLocation(plan, L, cyc, opt.sensor_sigma_um);
       const Eigen::VectorXd x_ref = x.segment<kRtestParams>(kRtestParams * L.ref_tilt);
       ref_dev = Jref * x_ref;
       ref_cov = Jref * f.cov.block<kRtestParams, kRtestParams>(kRtestParams * L.ref_tilt, kRtestParams * L.ref_tilt) *
                 Jref.transpose();
+      if (own) {
+        // Later cycles without a reset of their own read against this cycle's zero: the offset.
+        ref_dev = -x.segment<3>(n);
+        ref_cov = cov_full.block<3, 3>(n, n);
+      }
     }
     out.cycles.push_back(std::move(f));
   }
+  for (const auto& f : out.cycles) out.reset_checks += f.reset_checked ? 1 : 0;
+  out.reset_level = out.reset_checks > 0 ? opt.reset_alpha / out.reset_checks : 0.0;
+  for (auto& f : out.cycles) f.sensor_step = f.reset_checked && f.reset_p < out.reset_level;
   // Trend across cycles: weighted straight line per parameter and tilt (002 Fig. 10).
   out.rate = Eigen::MatrixXd::Zero(kRtestParams, nt);
   out.rate_u = Eigen::MatrixXd::Zero(kRtestParams, nt);
@@ -218,14 +324,26 @@ Json rtestReportJson(const ProbePlan& plan, const std::vector<RtestCycle>& cycle
   j["tilt_axis"] = std::string(1, ax);
   j["tilt_deg"] = a.tilt_deg;
   j["conventions"] = {
-      {"reset", fmt::format("002 Eq. (4): sensors zeroed once at {} = C = 0 before the first cycle", ax)},
+      {"reset", a.reset_checks > 0
+                    ? fmt::format("002 Eq. (4): the reset pose {} = C = 0 is read before the first pose of every cycle and "
+                                  "each cycle's readings are referred to it (dz and c at {} = 0 are fixed to 0 in every "
+                                  "cycle: their drift is not observed); it is re-read at the end of the cycle and "
+                                  "compared with the declared sensor noise (reset_checks)",
+                                  ax, ax)
+                    : fmt::format("002 Eq. (4): sensors zeroed once at {} = C = 0 in the first cycle; the results have no "
+                                  "reset / re-read rows, so the reset could not be checked",
+                                  ax)},
       {"tool_length", fmt::format("002 Sec. 4.3: {} at {} = 0 is not observable in the first cycle and is set to 0; a "
                                   "tool-length error appears as a fixed pattern in the translations at the other "
                                   "tilts; changes with time are free of it",
                                   rtestParameterName(k, 2), ax)},
       {"c_zero", fmt::format("{} at {} = 0 (a rotation about the C axis) is the C zero, defined by the reset at C = 0: "
-                             "set to 0 in the first cycle, its change with time is observed",
-                             rtestParameterName(k, 5), ax)},
+                             "{}",
+                             rtestParameterName(k, 5), ax,
+                             a.reset_checks > 0 ? "set to 0 in every cycle (each is referred to its own reset): its "
+                                                  "change with time is not observed, and the other tilts' rotations "
+                                                  "carry minus that change about their C axis"
+                                                : "set to 0 in the first cycle, its change with time is observed")},
       {"u", "standard uncertainty (k = 1) from max(sensor repeatability, residual), later cycles include the first "
             "cycle's reference"}};
   size_t used = 0;
@@ -242,29 +360,107 @@ Json rtestReportJson(const ProbePlan& plan, const std::vector<RtestCycle>& cycle
       }
       e[rtestParameterName(k, p)] = {{"unit", unitOf(p)}, {"values", v}, {"u", u}};
     }
+    Json rc = {{"checked", f.reset_checked}};
+    if (f.reset_checked) {
+      const Eigen::Vector3d d = f.reread_minus_reset_mm * 1000.0;
+      rc["reread_minus_reset_um"] = {d.x(), d.y(), d.z()};
+      rc["chi2"] = f.reset_chi2;
+      rc["dof"] = 3;
+      rc["p_value"] = f.reset_p;
+      rc["sensor_step"] = f.sensor_step;
+    }
     cj.push_back({{"index", c + 1},
                   {"t_h", f.t_s / 3600.0},
                   {"residual_rms_um", f.residual_rms_um},
                   {"linearisation_um", f.linearisation_um},
                   {"sigma_um", f.sigma_um},
+                  {"own_reset", f.own_reset},
+                  {"reset_check", rc},
                   {"errors", e}});
     for (const auto& r : f.residual_w_mm) rss += mmToUm(mmToUm(r.squaredNorm()));
     used += f.residual_w_mm.size();
   }
   j["cycles"] = cj;
+  // The re-read check (issue 16/17): a difference beyond what the declared noise allows is a
+  // sensor step (a knock, a lost count) inside that cycle.
+  Json flagged = Json::array(), findings = Json::array();
+  for (size_t c = 0; c < a.cycles.size(); ++c) {
+    const auto& f = a.cycles[c];
+    if (!f.sensor_step) continue;
+    flagged.push_back(c + 1);
+    const Eigen::Vector3d d = f.reread_minus_reset_mm * 1000.0;
+    const double u = std::sqrt(2.0) * a.cycles[c].sigma_um;
+    findings.push_back(
+        {{"cause", "sensor_step"},
+         {"cycle", c + 1},
+         {"summary", fmt::format("cycle {}: the reset pose read {:.2f} um ({:.2f}, {:.2f}, {:.2f}) off at the end of the "
+                                 "cycle (p = {:.2g}, the declared noise allows {:.2f} um per axis): the sensors stepped "
+                                 "or lost a count during the cycle; its readings after the step are off, repeat it",
+                                 c + 1, d.norm(), d.x(), d.y(), d.z(), f.reset_p, u)},
+         {"parameters", {{"dx", {{"value", d.x()}, {"unit", "um"}, {"u", u}}},
+                         {"dy", {{"value", d.y()}, {"unit", "um"}, {"u", u}}},
+                         {"dz", {{"value", d.z()}, {"unit", "um"}, {"u", u}}}}}});
+  }
+  j["reset_checks"] = {{"cycles_checked", a.reset_checks},
+                       {"cycles", a.cycles.size()},
+                       {"level_per_cycle", a.reset_level},
+                       {"sensor_step_cycles", flagged},
+                       {"note", a.reset_checks > 0
+                                    ? "re-read minus reset against the declared sensor noise, chi-square with 3 dof; the "
+                                      "level is alpha over the cycles checked"
+                                    : "the reset could not be checked: the results have no reset / re-read rows (pose 0)"}};
+  j["findings"] = findings;
   j["points_used"] = used;
   j["residual_rms_um"] = std::sqrt(rss / std::max<size_t>(1, 3 * used));
-  // ISO 230-7 location errors as the mean over the tilt angles of the first cycle (the axis
-  // average line); angles in mdeg, lengths in um.
+  // What the R-test measures: the six errors of the table at each tilt (the first cycle), under
+  // 002 Table 2's names and their ISO 230-7 component-error counterparts of the tilt axis.
+  {
+    Json pt = Json::object();
+    for (int p = 0; p < kRtestParams; ++p) {
+      std::vector<double> v, u;
+      for (int i = 0; i < nt; ++i) {
+        v.push_back(toReport(p, a.cycles.front().value(p, i)));
+        u.push_back(toReport(p, a.cycles.front().u(p, i)));
+      }
+      pt[rtestParameterName(k, p)] = {{"iso", fmt::format("E{}{}({})", "XYZABC"[p], ax, ax)}, {"unit", unitOf(p)},
+                                      {"values", v}, {"u", u}};
+    }
+    j["per_tilt_errors"] = {
+        {"tilt_axis", std::string(1, ax)},
+        {"tilt_deg", a.tilt_deg},
+        {"cycle", 1},
+        {"errors", pt},
+        {"note", fmt::format("the table's (C axis average line's) position and orientation at each {} angle, first "
+                             "cycle (002 Table 2): the {} axis's errors with the C axis's offsets from it turned by {}",
+                             ax, ax, ax)}};
+  }
+  // ISO 230-7 location errors of both axes, separated by the constant-error fit (issue 17: no
+  // longer the mean of the per-tilt errors, which read X0C - X0B = 10 um as X0B = 7.46 um).
   Json le = Json::object();
-  for (int p = 0; p < kRtestParams; ++p) {
-    const double mean = a.cycles.front().value.row(p).mean();
-    const double u = std::sqrt(a.cycles.front().u.row(p).cwiseAbs2().sum()) / nt;
-    const auto& info = locationParameters(k)[rtestParameterIndices(k)[p]];
-    le[rtestParameterName(k, p)] = {{"value", toReport(p, mean)}, {"unit", unitOf(p)}, {"u", toReport(p, u)},
-                                    {"iso", std::string(info.iso)}, {"note", "mean over the tilt angles, first cycle"}};
+  const auto& info = locationParameters(k);
+  const auto& idx = rtestParameterIndices(k);
+  for (int q = 0; q < kNumLocationErrors; ++q) {
+    const bool len = info[static_cast<size_t>(q)].kind == ParamKind::Length;
+    const double v = len ? mmToUm(a.location.value[q]) : radToMdeg(a.location.value[q]);
+    const double u = len ? mmToUm(a.location.u[q]) : radToMdeg(a.location.u[q]);
+    std::string note = "constant location error, fitted to the first cycle's readings (002 Eq. (6))";
+    if (len && std::find(idx.begin(), idx.end(), q) != idx.end())
+      note += "; relative to the sphere's actual position (a sphere offset, e.g. a tool-length error, reads as minus "
+              "this error)";
+    if (!a.location.identifiable) continue;  // location_errors_fit says why
+    le[std::string(info[static_cast<size_t>(q)].name)] = {{"value", v}, {"unit", len ? "um" : "mdeg"}, {"u", u},
+                                                          {"iso", std::string(info[static_cast<size_t>(q)].iso)},
+                                                          {"note", note}};
   }
   j["location_errors"] = le;
+  j["location_errors_fit"] = {{"identifiable", a.location.identifiable},
+                              {"residual_rms_um", a.location.residual_rms_um},
+                              {"sigma_um", a.location.sigma_um},
+                              {"model", "the eight location errors constant over the tilt, first cycle"},
+                              {"note", a.location.identifiable
+                                           ? std::string("a residual well above the sensor noise means the errors "
+                                                         "depend on the tilt (per_tilt_errors; 002)")
+                                           : a.location.why}};
   if (a.cycles.size() >= 3) {
     Json d = Json::object();
     for (int p = 0; p < kRtestParams; ++p) {
@@ -345,10 +541,18 @@ std::string rtestReportText(const ProbePlan& plan, const RtestAnalysis& a) {
   const char ax = tiltAxis(k);
   std::string s = fmt::format("rotacal rtest (002): {} poses, {} cycle(s), machine {}\n", plan.points.size(),
                               a.cycles.size(), plan.machine.name);
+  s += a.reset_checks > 0
+           ? fmt::format("reset re-read checked in {} of {} cycle(s): {} sensor step(s)\n", a.reset_checks, a.cycles.size(),
+                         std::count_if(a.cycles.begin(), a.cycles.end(), [](const RtestCycleFit& f) { return f.sensor_step; }))
+           : std::string("the reset could not be checked (no reset / re-read rows in the results)\n");
   for (size_t c = 0; c < a.cycles.size(); ++c) {
     const auto& f = a.cycles[c];
     s += fmt::format("cycle {} at t = {:.2f} h: residual {:.3f} um rms, linearisation {:.2g} um, sigma {:.3f} um\n",
                      c + 1, f.t_s / 3600.0, f.residual_rms_um, f.linearisation_um, f.sigma_um);
+    if (f.sensor_step)
+      s += fmt::format("  SENSOR STEP: the reset pose re-read {:.2f} um off its reading before the first pose (p = {:.2g}): "
+                       "repeat this cycle\n",
+                       mmToUm(f.reread_minus_reset_mm.norm()), f.reset_p);
     if (c != 0 && c + 1 != a.cycles.size()) continue;
     s += fmt::format("  {:>8}", std::string(1, ax) + " deg");
     for (int p = 0; p < kRtestParams; ++p) s += fmt::format(" {:>16}", rtestParameterName(k, p) + " " + unitOf(p));
@@ -360,6 +564,19 @@ std::string rtestReportText(const ProbePlan& plan, const RtestAnalysis& a) {
                          toReport(p, f.u(p, static_cast<int>(i))));
       s += "\n";
     }
+  }
+  if (a.location.identifiable) {
+    s += fmt::format("location errors (ISO 230-7, constant over the tilt, first cycle; fit residual {:.3f} um rms):\n",
+                     a.location.residual_rms_um);
+    const auto& info = locationParameters(k);
+    for (int q = 0; q < kNumLocationErrors; ++q) {
+      const bool len = info[static_cast<size_t>(q)].kind == ParamKind::Length;
+      s += fmt::format("  {:<8} {:>8} {:>9.3f} +-{:<6.3f} {}\n", info[static_cast<size_t>(q)].name,
+                       info[static_cast<size_t>(q)].iso, len ? mmToUm(a.location.value[q]) : radToMdeg(a.location.value[q]),
+                       len ? mmToUm(a.location.u[q]) : radToMdeg(a.location.u[q]), len ? "um" : "mdeg");
+    }
+  } else {
+    s += "location errors: " + a.location.why + "\n";
   }
   if (a.cycles.size() >= 3) {
     s += "drift (straight line across cycles), per hour:\n";

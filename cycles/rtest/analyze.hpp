@@ -31,6 +31,7 @@ Eigen::Matrix<double, 3, kRtestParams> J_wq_omega(Kinematics kinematics, const P
 
 struct RtestFitOptions {
   double sensor_sigma_um = 0.2;  // the sensors' repeatability: a floor for the noise estimate
+  double reset_alpha = 0.01;     // false-alarm rate of the re-read check over the whole series
   void validate() const;         // throws std::invalid_argument
 };
 
@@ -43,17 +44,46 @@ struct RtestCycleFit {
   double residual_rms_um = 0.0;     // readings minus the linear model
   double linearisation_um = 0.0;    // max |exact model - linear model| at the estimate
   double sigma_um = 0.0;            // noise used for u: max(sensor_sigma, residual estimate)
-  bool dz_reference_fixed = false;  // first cycle: dz and c at tilt 0 fixed to 0
+  bool dz_reference_fixed = false;  // referred to its own reset (first cycle, or every cycle with reset reads): dz and c at tilt 0 fixed to 0
+  bool own_reset = false;           // the cycle's readings are referred to its own reset reading
+  // The re-read check: the reset pose read again at the end of the cycle against its reading
+  // before the first pose; chi2 = |d|^2 / (2 sigma^2) with the declared sensor noise, 3 dof.
+  bool reset_checked = false;
+  Eigen::Vector3d reread_minus_reset_mm = Eigen::Vector3d::Zero();
+  double reset_chi2 = 0.0, reset_p = 1.0;
+  bool sensor_step = false;  // reset_p below reset_alpha / (cycles checked)
   std::vector<Eigen::Vector3d> residual_w_mm;  // per reading
+};
+
+/// J_wq_e: the same for the eight ISO 230-7 location errors of both axes (locationParameters:
+/// B/C X0B Y0C Z0B A0B B0B C0B, A0C-A0B, X0C-X0B), constant over the tilt.
+Eigen::Matrix<double, 3, kNumLocationErrors> J_wq_e(Kinematics kinematics, const Pose& pose, const Eigen::Vector3d& nest_w);
+
+/// The location errors of both axes separated (issue 17): 002 Eq. (6) with omega_0 = the eight
+/// constant location errors, fitted to the first cycle's readings. The per-tilt errors are what
+/// the R-test measures; on a B/C table a constant X0C - X0B enters them as dx_BY(B) = (X0C-X0B)
+/// cos B and dz_BY(B) = (X0C-X0B) sin B, A0C - A0B as a_BY(B) = (A0C-A0B) cos B and c_BY(B) =
+/// (A0C-A0B) sin B (docs/rtest.md), so they are separated where the plan has a tilt besides 0.
+/// The lengths are relative to the sphere's actual position (a sphere offset s reads as -s).
+struct RtestLocationFit {
+  bool identifiable = false;
+  std::string why;                       // when not identifiable
+  ErrorVector value = ErrorVector::Zero();  // mm / rad, order of locationParameters
+  ErrorVector u = ErrorVector::Zero();
+  double residual_rms_um = 0.0;  // first cycle's readings minus the eight-error model
+  double sigma_um = 0.0;         // noise used for u: max(sensor_sigma, residual estimate)
 };
 
 struct RtestAnalysis {
   Kinematics kinematics = Kinematics::TableBC;
+  RtestLocationFit location;  // the eight location errors, first cycle
   std::vector<double> tilt_deg;
   std::vector<RtestCycleFit> cycles;
   // Linear trend across cycles (weighted by u): per second, mm/s or rad/s; zero with one cycle.
   Eigen::MatrixXd rate, rate_u;
   Eigen::MatrixXd change;  // last cycle minus first, mm or rad
+  int reset_checks = 0;         // cycles whose re-read was checked
+  double reset_level = 0.0;     // the per-cycle level of the check: reset_alpha / reset_checks
 };
 
 RtestAnalysis analyzeRtest(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, const RtestFitOptions& options);

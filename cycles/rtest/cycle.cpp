@@ -14,10 +14,18 @@
 namespace rotacal {
 namespace {
 
-std::vector<RtestCycle> readCycles(const ProbePlan& plan, const std::vector<InputFile>& results) {
+std::vector<RtestCycle> readCycles(const ProbePlan& plan, const std::vector<InputFile>& results,
+                                   std::vector<std::string>* warnings = nullptr) {
   std::vector<RtestCycle> cycles;
   for (const auto& f : results) {
     const RtestSeries s = parseRtestResults(f.text, f.path, plan);
+    size_t unchecked = 0;
+    for (const auto& cy : s.cycles) unchecked += cy.reset ? 0 : 1;
+    if (warnings && unchecked > 0)
+      warnings->push_back(fmt::format("{}: {} of {} cycle(s) have no reset / re-read rows (pose 0, written before the "
+                                      "reset was read in every cycle): the reset could not be checked for a sensor step "
+                                      "or a lost count, and those cycles are read against the first cycle's reset",
+                                      f.path, unchecked, s.cycles.size()));
     for (const auto& cy : s.cycles) {
       if (!cycles.empty() && cy.readings.front().t_s < cycles.back().readings.back().t_s)
         throw InputError(f.path, 0, "cycles must be in time order across the results files");
@@ -83,28 +91,36 @@ class Rtest final : public Cycle {
 
   CycleDocuments analyze(const AnalyzeRequest& r) const override {
     const ProbePlan& plan = *r.plan;
-    const std::vector<RtestCycle> cycles = readCycles(plan, r.results);
+    CycleDocuments out;
+    const std::vector<RtestCycle> cycles = readCycles(plan, r.results, &out.warnings);
     RtestFitOptions o;
     o.sensor_sigma_um = sensorSigma(plan);
     const RtestAnalysis a = analyzeRtest(plan, cycles, o);
     std::vector<std::string> files;
     for (const auto& f : r.results) files.push_back(f.path);
-    CycleDocuments out;
     out.text = rtestReportText(plan, a);
     out.doc = rtestReportJson(plan, cycles, a, files);
-    out.doc["errors_heading"] = "Identified errors";  // the first cycle's position-dependent errors at B = 0, not location errors in ISO 230-7's sense
+    out.doc["warnings"] = out.warnings;
+    for (size_t c = 0; c < a.cycles.size(); ++c)
+      if (a.cycles[c].sensor_step)
+        out.warnings.push_back(fmt::format("cycle {}: the reset pose re-read differs from its reading before the first "
+                                           "pose beyond the declared sensor noise (p = {:.2g}): a sensor step",
+                                           c + 1, a.cycles[c].reset_p));
+    // The eight ISO 230-7 location errors separated by the constant-error fit (issue 17); what
+    // the R-test measures at each tilt is per_tilt_errors.
+    out.doc["errors_heading"] = "ISO 230-7 location errors (constant over the tilt, first cycle)";
     return out;
   }
 
   CycleDocuments diagnose(const DiagnoseRequest& r) const override {
     const ProbePlan& plan = *r.plan;
-    const std::vector<RtestCycle> cycles = readCycles(plan, r.results);
+    CycleDocuments out;
+    const std::vector<RtestCycle> cycles = readCycles(plan, r.results, &out.warnings);
     RtestDiagnosisOptions o;
     o.judge.alpha = r.alpha;
     o.sensor_sigma_um = sensorSigma(plan);  // the declared noise (plan option, default 002's 0.2 um)
     o.validate();
     const RtestDiagnosis d = diagnoseRtest(plan, cycles, o);
-    CycleDocuments out;
     out.text = rtestDiagnosisText(plan, d);
     out.doc = rtestDiagnosisJson(plan, d);
     return out;

@@ -30,8 +30,13 @@ constexpr const char* kSpindle = "spindle_growth";
 constexpr const char* kLinear = "linear_axis_drift";
 constexpr const char* kDrift = "thermal_drift";
 constexpr const char* kStepPrefix = "sensor_step_cycle_";
+constexpr const char* kInStepPrefix = "sensor_step_in_cycle_";
 
-bool isStep(const std::string& cause) { return cause.rfind(kStepPrefix, 0) == 0; }
+bool isInStep(const std::string& cause) { return cause.rfind(kInStepPrefix, 0) == 0; }
+bool isStep(const std::string& cause) { return cause.rfind(kStepPrefix, 0) == 0 || isInStep(cause); }
+std::string stepCycle(const std::string& cause) {
+  return cause.substr(std::string(isInStep(cause) ? kInStepPrefix : kStepPrefix).size());
+}
 
 /// A candidate passes by the judge's one rule at the main judgement's per-test level.
 bool passes(const JudgeCandidate& c, double per_test_alpha) {
@@ -75,9 +80,19 @@ RtestJudgeSetup rtestJudgeSetup(const ProbePlan& plan, const std::vector<RtestCy
   for (int q = 0; q < kRtestParams * nt; ++q)
     if (q != kRtestParams * ref_tilt + 2 && q != kRtestParams * ref_tilt + 5) cols.push_back(q);
 
-  const int per = 3 * static_cast<int>(plan.points.size());
+  // Rows: per cycle the reset (when read), the poses, the re-read; every value the sensors'
+  // count since the zero at the first cycle's reset (a step persists in the counts).
+  const int np = static_cast<int>(plan.points.size());
   const int nc = static_cast<int>(cycles.size());
-  const int n = per * nc;
+  std::vector<int> first_row(static_cast<size_t>(nc) + 1, 0), reread_row(static_cast<size_t>(nc), -1);
+  for (int c = 0; c < nc; ++c) {
+    const auto& cyc = cycles[static_cast<size_t>(c)];
+    if (cyc.readings.size() != plan.points.size()) throw std::invalid_argument("rtest: cycle with missing readings");
+    const int rows = 3 * (np + (cyc.reset ? 1 : 0) + (cyc.reread ? 1 : 0));
+    first_row[static_cast<size_t>(c) + 1] = first_row[static_cast<size_t>(c)] + rows;
+    if (cyc.reread) reread_row[static_cast<size_t>(c)] = first_row[static_cast<size_t>(c) + 1] - 3;
+  }
+  const int n = first_row.back();
   RtestJudgeSetup s;
   JudgeProblem& pb = s.problem;
   pb.unit = "um";
@@ -98,24 +113,46 @@ RtestJudgeSetup rtestJudgeSetup(const ProbePlan& plan, const std::vector<RtestCy
     const int i = q / kRtestParams, p = q % kRtestParams;
     pb.baseline_parameters.push_back({fmt::format("{}({})", rtestParameterName(k, p), tiltLabel(k, tilts[static_cast<size_t>(i)])), unitOf(p)});
   }
+  // Sensor steps (the sensors' zero jumps: a knock, a lost count; it stays in the counts):
+  // between cycles K-1 and K (from K's first reading on), and, where the cycle was re-read,
+  // inside cycle K (from its re-read on: the re-read is what tells the two apart; the poses of
+  // cycle K read after the step are left to the adequacy test).
   std::vector<JudgeCause> steps;
-  for (int K = 1; K < nc; ++K) {
-    JudgeCause st{fmt::format("{}{}", kStepPrefix, K + 1),
-                  fmt::format("the sensors' zero stepped between cycles {} and {}", K, K + 1), Eigen::MatrixXd::Zero(n, 3),
-                  {{"dx", "um"}, {"dy", "um"}, {"dz", "um"}}};
-    steps.push_back(std::move(st));
+  const std::vector<JudgeParameter> dxyz = {{"dx", "um"}, {"dy", "um"}, {"dz", "um"}};
+  for (int K = 1; K <= nc; ++K) {
+    if (K >= 2) {
+      JudgeCause st{fmt::format("{}{}", kStepPrefix, K), fmt::format("the sensors' zero stepped between cycles {} and {}", K - 1, K),
+                    Eigen::MatrixXd::Zero(n, 3), dxyz};
+      for (int r = first_row[static_cast<size_t>(K) - 1]; r < n; r += 3) st.J.block(r, 0, 3, 3).setIdentity();
+      steps.push_back(std::move(st));
+    }
+    const int rr = reread_row[static_cast<size_t>(K) - 1];
+    if (rr >= 0) {
+      JudgeCause st{fmt::format("{}{}", kInStepPrefix, K),
+                    fmt::format("the sensors' zero stepped during cycle {} (between its reset and its re-read)", K),
+                    Eigen::MatrixXd::Zero(n, 3), dxyz};
+      for (int r = rr; r < n; r += 3) st.J.block(r, 0, 3, 3).setIdentity();
+      steps.push_back(std::move(st));
+    }
   }
-  const double t0 = cycles.front().readings.at(static_cast<size_t>(ref)).t_s;
+  // The sensors' zero: the first cycle's reset reading (or, without one, its reset pose).
+  const double t0 = cycles.front().reset ? cycles.front().reset->t_s : cycles.front().readings.at(static_cast<size_t>(ref)).t_s;
   JudgeFactor f_time{"time", {}, {}, "h"}, f_tilt{"tilt", {}, {}, ""}, f_c{"C", {}, {}, ""}, f_dir{"direction", {}, {}, ""},
-      f_cycle{"cycle", {}, {}, ""};
+      f_cycle{"cycle", {}, {}, ""}, f_read{"reading", {}, {}, ""};
   for (int c = 0; c < nc; ++c) {
     const auto& cyc = cycles[static_cast<size_t>(c)];
-    if (cyc.readings.size() != plan.points.size()) throw std::invalid_argument("rtest: cycle with missing readings");
-    for (size_t j = 0; j < plan.points.size(); ++j) {
-      const int r = per * c + 3 * static_cast<int>(j);
-      const double tau = (cyc.readings[j].t_s - t0) / 3600.0;
+    std::vector<std::pair<const RtestReading*, int>> rows;  // reading, plan point index (the reset: ref)
+    if (cyc.reset) rows.emplace_back(&*cyc.reset, ref);
+    for (size_t j = 0; j < plan.points.size(); ++j) rows.emplace_back(&cyc.readings[j], static_cast<int>(j));
+    if (cyc.reread) rows.emplace_back(&*cyc.reread, ref);
+    int r = first_row[static_cast<size_t>(c)];
+    for (size_t w = 0; w < rows.size(); ++w, r += 3) {
+      const RtestReading& rd = *rows[w].first;
+      const size_t j = static_cast<size_t>(rows[w].second);
+      const bool is_reset = rd.pose_id == 0;
+      const double tau = (rd.t_s - t0) / 3600.0;
       const int ti = tilt_of[j];
-      // 002 Eq. (6): reading = J_j omega(tilt_j) - J_ref omega(tilt_ref), the reset at t0.
+      // 002 Eq. (6): reading = J_j omega(tilt_j) - J_ref omega(tilt_ref), the zero at t0.
       Eigen::Matrix<double, 3, Eigen::Dynamic> full = Eigen::MatrixXd::Zero(3, kRtestParams * nt);
       full.middleCols(kRtestParams * ti, kRtestParams) += J[j];
       full.middleCols(kRtestParams * ref_tilt, kRtestParams) -= J[static_cast<size_t>(ref)];
@@ -125,9 +162,7 @@ RtestJudgeSetup rtestJudgeSetup(const ProbePlan& plan, const std::vector<RtestCy
         drift.J.block(r, kRtestParams * ti + p, 3, 1) = tau * J[j].col(p) * perReportUnit(p);
       spindle.J.block(r, 0, 3, 1) = tau * Rt[j].col(2);
       linear.J.block(r, 0, 3, 3) = tau * Rt[j];
-      for (int K = 1; K < nc; ++K)
-        if (c >= K) steps[static_cast<size_t>(K - 1)].J.block(r, 0, 3, 3).setIdentity();
-      pb.y.segment<3>(r) = mmToUm(1.0) * cyc.readings[j].dq_w_mm;
+      pb.y.segment<3>(r) = mmToUm(1.0) * rd.dq_w_mm;
       for (int d = 0; d < 3; ++d) {
         pb.groups.push_back(c);
         s.t_h.push_back(tau);
@@ -137,11 +172,13 @@ RtestJudgeSetup rtestJudgeSetup(const ProbePlan& plan, const std::vector<RtestCy
         f_c.levels.push_back(fmt::format("{:g}", plan.points[j].pose.C));
         f_dir.levels.push_back(std::string(1, "xyz"[d]));
         f_cycle.levels.push_back(std::to_string(c + 1));
+        f_read.levels.push_back(!is_reset ? "pose" : (w == 0 ? "reset" : "re-read"));
       }
     }
   }
   pb.group_name = "cycle";
   pb.factors = {f_time, f_tilt, f_c, f_dir, f_cycle};
+  if (cycles.front().reset) pb.factors.push_back(f_read);
   pb.causes.push_back(std::move(drift));
   for (auto& st : steps) pb.causes.push_back(std::move(st));
   s.confounds = {std::move(spindle), std::move(linear)};
@@ -217,9 +254,16 @@ std::string rtestFindingSummary(const ProbePlan& plan, const RtestDiagnosis& d, 
     const JudgeEstimate* top = &f.parameters.front();
     for (const auto& p : f.parameters)
       if (std::abs(p.value / p.u) > std::abs(top->value / top->u)) top = &p;
+    if (isInStep(f.cause))
+      return fmt::format("the sensors' readings stepped by {:.2f} um in {} ({}) during cycle {}: its re-read of the reset "
+                         "pose differs from its reset reading and the later cycles keep the offset; a knock, a lost "
+                         "count or a sensor slipping in the nest, not the machine; cycle {}'s readings after the step "
+                         "are off (analyze refers every cycle to its own reset: repeat that cycle)",
+                         top->value, top->name.substr(1), fmt::format("u {:.2f} um", top->u), stepCycle(f.cause),
+                         stepCycle(f.cause));
     return fmt::format("the sensors' readings stepped by {:.2f} um in {} ({}) from cycle {} on: a knock, a lost count or "
                        "a sensor slipping in the nest, not the machine",
-                       top->value, top->name.substr(1), fmt::format("u {:.2f} um", top->u), f.cause.substr(std::string(kStepPrefix).size()));
+                       top->value, top->name.substr(1), fmt::format("u {:.2f} um", top->u), stepCycle(f.cause));
   }
   // thermal_drift: the slope that stands out most, and who can have caused it.
   const JudgeEstimate* top = &f.parameters.front();
@@ -284,7 +328,8 @@ Json rtestDiagnosisJson(const ProbePlan& plan, const RtestDiagnosis& d) {
   Json findings = Json::array();
   for (const auto& f : s.findings) {
     Json e = {{"cause", isStep(f.cause) ? std::string("sensor_step") : f.cause},
-              {"variant", isStep(f.cause) ? fmt::format("from cycle {}", f.cause.substr(std::string(kStepPrefix).size()))
+              {"variant", isStep(f.cause) ? fmt::format(isInStep(f.cause) ? "during cycle {}" : "from cycle {}",
+                                                        stepCycle(f.cause))
                                           : std::string("linear")},
               {"summary", rtestFindingSummary(plan, d, f)},
               {"parameters", paramsJson(f.parameters)},

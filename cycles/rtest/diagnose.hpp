@@ -2,19 +2,24 @@
 // rotacal diagnose for R-test series (002), through the one judge (core/judge.hpp, issue 16).
 //
 // The problem handed to the judge:
-//  - y: every sensor reading (um, workpiece frame, 3 per pose and cycle). The baseline is 002
-//    Eq. (6) over all cycles: the six errors of 002 Table 2 at each tilt, constant over the
-//    series, read against the first cycle's reset (dz and c at tilt 0 fixed to 0, the
-//    convention of analyze). It is linear in the errors, so the judge's baseline residual is the
-//    per-reading residual of that fit.
+//  - y: every sensor reading (um, workpiece frame, 3 per pose and cycle, and per reset and
+//    re-read of the reset pose where the results have them), as the sensors' counts since the
+//    zero at the first cycle's reset. The baseline is 002 Eq. (6) over all cycles: the six errors
+//    of 002 Table 2 at each tilt, constant over the series, read against that zero (dz and c at
+//    tilt 0 fixed to 0, the convention of analyze; a reset row's model is 0). It is linear in the
+//    errors, so the judge's baseline residual is the per-reading residual of that fit.
 //  - sigma: the DECLARED sensor noise, the plan's `sensor_noise_um` (default 0.2 um: 002's
 //    stated system accuracy), never the fit's own scatter.
 //  - groups: cycles (leave one cycle out); factors: time, tilt, C, sensor direction, cycle.
 // The catalog (candidates the judge tests, each a family of columns tested jointly):
 //  - thermal_drift: every one of the 6 x (tilts) errors changes linearly with the hours since
 //    the reset (the columns tau J_j, not referenced: the reset happened once, at t0);
-//  - sensor_step_cycle_K (K = 2..cycles): from cycle K on the sensors read a constant offset
-//    (dx, dy, dz in the workpiece frame, where the nest's sensors sit).
+//  - sensor_step_cycle_K (K = 2..cycles): from cycle K's first reading on the sensors read a
+//    constant offset (dx, dy, dz in the workpiece frame, where the nest's sensors sit): a step
+//    between cycles K-1 and K;
+//  - sensor_step_in_cycle_K (K = 1..cycles, cycles with a re-read): the offset from cycle K's
+//    re-read on: a step during cycle K (issue 16 item 5; the poses of cycle K read after the step
+//    are not modelled). Both are the contract's `sensor_step`.
 // Confounds of the table drift (002 Sec. 4.3: the R-test sees the sphere against the nest only):
 //  - spindle_growth: the sphere rises along machine Z linearly with time;
 //  - linear_axis_drift: the sphere drifts along machine X, Y, Z linearly with time.
@@ -46,7 +51,7 @@ struct RtestJudgeSetup {
   JudgeProblem problem;           // baseline + candidates (thermal_drift first, then the steps)
   std::vector<JudgeCause> confounds;  // spindle_growth, linear_axis_drift
   std::vector<double> t_h;        // hours since the reset, per observation
-  std::vector<int> cycle;         // 0-based cycle, per observation
+  std::vector<int> cycle;         // 0-based cycle, per observation (reset and re-read rows included)
 };
 RtestJudgeSetup rtestJudgeSetup(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, double sensor_sigma_um);
 

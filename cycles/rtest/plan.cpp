@@ -86,14 +86,15 @@ Eigen::Vector3d nestAxis_m(Kinematics k, const Pose& pose) {
 ProbePlan makeRtestPlan(const MachineModel& m, const CycleOptions& options) {
   const std::string tilt_key = m.kinematics == Kinematics::TableBC ? "b_list" : "a_list";
   static const char* known[] = {"b_list", "a_list", "c_list", "nest_w_mm", "dwell_s", "retract_mm", "thermal",
-                                "interval_min", "duration_h", "recip_list", "recip_feed_deg_min", "sensor_noise_um"};
+                                "interval_min", "duration_h", "recip_list", "recip_feed_deg_min", "sensor_noise_um",
+                                "reset_reads"};
   for (const auto& [k, v] : options) {
     bool ok = false;
     for (const char* n : known) ok = ok || k == n;
     if (!ok || (k == "a_list" && tilt_key != "a_list") || (k == "b_list" && tilt_key != "b_list"))
       throw std::invalid_argument(fmt::format(
           "rtest: unknown option '{}' (expected {}, c_list, nest_w_mm, dwell_s, retract_mm, thermal, interval_min, "
-          "duration_h, recip_list, recip_feed_deg_min, sensor_noise_um)",
+          "duration_h, recip_list, recip_feed_deg_min, sensor_noise_um, reset_reads)",
           k, tilt_key));
   }
   if (!m.hasRotary(tiltAxis(m.kinematics)) || !m.hasRotary('C'))
@@ -142,6 +143,8 @@ ProbePlan makeRtestPlan(const MachineModel& m, const CycleOptions& options) {
     throw std::invalid_argument(fmt::format(
         "rtest: options duration_h = {:g} and interval_min = {:g} give {:.0f} cycles; at most {} repeats are allowed",
         duration, interval, std::floor(60.0 * duration / interval) + 1.0, kMaxRepeats));
+  const std::string reset_reads = opt(options, "reset_reads", "1");
+  if (reset_reads != "0" && reset_reads != "1") throw std::invalid_argument("rtest: reset_reads must be 0 or 1");
   const double noise = parseNumber("sensor_noise_um", opt(options, "sensor_noise_um", "0.2"));
   if (!(noise > 0)) throw std::invalid_argument("rtest: sensor_noise_um must be > 0");
   const RotaryAxis& ta = m.rotaryAxis(tiltAxis(m.kinematics));
@@ -162,7 +165,8 @@ ProbePlan makeRtestPlan(const MachineModel& m, const CycleOptions& options) {
                   {"duration_h", fmt::format("{:g}", duration)},
                   {"recip_list", joinNumbers(recip)},
                   {"recip_feed_deg_min", fmt::format("{:g}", rfeed)},
-                  {"sensor_noise_um", fmt::format("{:g}", noise)}};
+                  {"sensor_noise_um", fmt::format("{:g}", noise)},
+                  {"reset_reads", reset_reads}};
   double top = -1e9;
   int id = 0;
   for (double t : tilts)
@@ -188,26 +192,9 @@ ProbePlan makeRtestPlan(const MachineModel& m, const CycleOptions& options) {
                     m.probe.ball_radius_mm();
   for (const auto& p : plan.points) plan.poses.push_back({p.pose_name, p.pose, plan.index_z_mm});
   // Planned time of each reading: the end of its dwell.
-  double t = 0.0;
-  Eigen::Vector3d cur(0, 0, plan.index_z_mm);
-  Pose pose = plan.points.front().pose;
-  for (const auto& mv : rtestCycleMoves(plan)) {
-    const double d = (mv.position_m - cur).norm();
-    switch (mv.kind) {
-      case RtestMove::Kind::ClimbZ:
-      case RtestMove::Kind::Rapid: t += 60.0 * d / m.feeds.rapid_mm_min; break;
-      case RtestMove::Kind::Linear: t += 60.0 * d / m.feeds.positioning_mm_min; break;
-      case RtestMove::Kind::Index: {
-        const double da = std::max({std::abs(mv.pose.A - pose.A), std::abs(mv.pose.B - pose.B), std::abs(mv.pose.C - pose.C)});
-        t += 60.0 * da / m.feeds.rotary_deg_min;
-        pose = mv.pose;
-        break;
-      }
-      case RtestMove::Kind::Dwell: t += mv.seconds; break;
-      case RtestMove::Kind::Read: plan.points[mv.point_id - 1].t_s = std::round(t * 1000.0) / 1000.0; break;
-    }
-    cur = mv.position_m;
-  }
+  const std::vector<double> times = rtestReadTimes(plan);
+  const size_t first = rtestResetReads(plan) ? 1 : 0;
+  for (size_t i = 0; i < plan.points.size(); ++i) plan.points[i].t_s = times[first + i];
   const auto v = rtestStrokeViolations(plan);
   if (!v.empty()) throw std::invalid_argument("rtest plan does not fit the machine: " + v.front());
   return plan;
@@ -243,10 +230,19 @@ Eigen::Vector3d rtestNest_w(const ProbePlan& plan) { return plan.points.front().
 std::vector<RtestMove> rtestCycleMoves(const ProbePlan& plan) {
   const double retract = optionNumber(plan, "retract_mm");
   const double dwell = optionNumber(plan, "dwell_s");
+  // The visits of one cycle: with reset reads the reset pose first and last (read as pose 0:
+  // 002 Eq. (4)'s reference before the first pose, and its re-read to catch a sensor step).
+  std::vector<std::pair<const ProbePoint*, int>> visits;
+  const bool reset = rtestResetReads(plan);
+  const ProbePoint* ref = reset ? &plan.points.at(static_cast<size_t>(rtestReferencePoint(plan) - 1)) : nullptr;
+  if (reset) visits.emplace_back(ref, 0);
+  for (const auto& p : plan.points) visits.emplace_back(&p, p.id);
+  if (reset) visits.emplace_back(ref, 0);
   std::vector<RtestMove> out;
   bool first = true;
   Eigen::Vector3d cur = Eigen::Vector3d::Zero();
-  for (const auto& p : plan.points) {
+  for (const auto& [pp, id] : visits) {
+    const ProbePoint& p = *pp;
     const Eigen::Vector3d entry = p.trigger_m_mm - retract * p.approach_m;
     if (first) out.push_back({RtestMove::Kind::ClimbZ, Eigen::Vector3d(entry.x(), entry.y(), plan.index_z_mm), p.pose});
     else out.push_back({RtestMove::Kind::Rapid, Eigen::Vector3d(cur.x(), cur.y(), plan.index_z_mm), out.back().pose});
@@ -254,14 +250,46 @@ std::vector<RtestMove> rtestCycleMoves(const ProbePlan& plan) {
     out.push_back({RtestMove::Kind::Rapid, Eigen::Vector3d(entry.x(), entry.y(), plan.index_z_mm), p.pose});
     out.push_back({RtestMove::Kind::Rapid, entry, p.pose});
     out.push_back({RtestMove::Kind::Linear, p.trigger_m_mm, p.pose});
-    out.push_back({RtestMove::Kind::Dwell, p.trigger_m_mm, p.pose, p.id, dwell});
-    out.push_back({RtestMove::Kind::Read, p.trigger_m_mm, p.pose, p.id});
+    out.push_back({RtestMove::Kind::Dwell, p.trigger_m_mm, p.pose, id, dwell});
+    out.push_back({RtestMove::Kind::Read, p.trigger_m_mm, p.pose, id});
     out.push_back({RtestMove::Kind::Linear, entry, p.pose});
     cur = entry;
     first = false;
   }
   out.push_back({RtestMove::Kind::Rapid, Eigen::Vector3d(cur.x(), cur.y(), plan.index_z_mm), out.back().pose});
   return out;
+}
+
+std::vector<double> rtestReadTimes(const ProbePlan& plan) {
+  const MachineModel& m = plan.machine;
+  std::vector<double> out;
+  double t = 0.0;
+  Eigen::Vector3d cur(0, 0, plan.index_z_mm);
+  const auto moves = rtestCycleMoves(plan);
+  Pose pose = moves.front().pose;
+  for (const auto& mv : moves) {
+    const double d = (mv.position_m - cur).norm();
+    switch (mv.kind) {
+      case RtestMove::Kind::ClimbZ:
+      case RtestMove::Kind::Rapid: t += 60.0 * d / m.feeds.rapid_mm_min; break;
+      case RtestMove::Kind::Linear: t += 60.0 * d / m.feeds.positioning_mm_min; break;
+      case RtestMove::Kind::Index: {
+        const double da = std::max({std::abs(mv.pose.A - pose.A), std::abs(mv.pose.B - pose.B), std::abs(mv.pose.C - pose.C)});
+        t += 60.0 * da / m.feeds.rotary_deg_min;
+        pose = mv.pose;
+        break;
+      }
+      case RtestMove::Kind::Dwell: t += mv.seconds; break;
+      case RtestMove::Kind::Read: out.push_back(std::round(t * 1000.0) / 1000.0); break;
+    }
+    cur = mv.position_m;
+  }
+  return out;
+}
+
+bool rtestResetReads(const ProbePlan& plan) {
+  const auto it = plan.options.find("reset_reads");
+  return it != plan.options.end() && it->second == "1";
 }
 
 std::vector<std::string> rtestStrokeViolations(const ProbePlan& plan) {
@@ -288,8 +316,10 @@ double rtestCycleTime_s(const ProbePlan& plan) {
   // The last reading plus the withdrawal and climb (small next to the dwell and indexing).
   const MachineModel& m = plan.machine;
   const double retract = optionNumber(plan, "retract_mm");
-  return plan.points.back().t_s + 60.0 * retract / m.feeds.positioning_mm_min +
-         60.0 * (plan.index_z_mm - plan.points.back().trigger_m_mm.z()) / m.feeds.rapid_mm_min;
+  const ProbePoint& last = rtestResetReads(plan) ? plan.points.at(static_cast<size_t>(rtestReferencePoint(plan) - 1))
+                                                 : plan.points.back();
+  return rtestReadTimes(plan).back() + 60.0 * retract / m.feeds.positioning_mm_min +
+         60.0 * (plan.index_z_mm - last.trigger_m_mm.z()) / m.feeds.rapid_mm_min;
 }
 
 int rtestReciprocations(const ProbePlan& plan) {
@@ -330,24 +360,33 @@ RtestSeries simulateRtest(const ProbePlan& plan, const Truth& truth, const Rtest
   const int n = o.cycles > 0 ? o.cycles : s.cycles();
   const Kinematics k = plan.machine.kinematics;
   const ProbePoint& rp = plan.points[rtestReferencePoint(plan) - 1];
-  const Eigen::Vector3d ref = rtestSphere_w(plan, truth, extras, rp.pose, o.start_s + rp.t_s);
+  const bool reset = rtestResetReads(plan);
+  const std::vector<double> times = rtestReadTimes(plan);  // [reset] poses [re-read]
+  // The operator zeroes the sensors at the first reading of the reset pose.
+  const Eigen::Vector3d ref =
+      rtestSphere_w(plan, truth, extras, rp.pose, o.start_s + (reset ? times.front() : rp.t_s));
   Rng rng(o.seed, 0x7274657374ULL);  // stream "rtest"
+  auto read = [&](const ProbePoint& p, int id, double t) {
+    RtestReading r;
+    r.pose_id = id;
+    r.t_s = t;
+    r.tilt_deg = tiltOf(k, p.pose);
+    r.c_deg = p.pose.C;
+    r.dq_w_mm = rtestSphere_w(plan, truth, extras, p.pose, r.t_s) - ref;
+    for (const auto& st : extras.sensor_steps)
+      if (r.t_s >= st.t_s) r.dq_w_mm += st.offset_w_mm;
+    if (o.noise_um > 0)
+      for (int i = 0; i < 3; ++i) r.dq_w_mm[i] += umToMm(o.noise_um * rng.normal());
+    return r;
+  };
   RtestSeries series;
   series.source = "simulated";
   for (int c = 0; c < n; ++c) {
     RtestCycle cyc;
     const double t0 = o.start_s + c * s.interval_s;
-    for (const auto& p : plan.points) {
-      RtestReading r;
-      r.pose_id = p.id;
-      r.t_s = t0 + p.t_s;
-      r.tilt_deg = tiltOf(k, p.pose);
-      r.c_deg = p.pose.C;
-      r.dq_w_mm = rtestSphere_w(plan, truth, extras, p.pose, r.t_s) - ref;
-      if (o.noise_um > 0)
-        for (int i = 0; i < 3; ++i) r.dq_w_mm[i] += umToMm(o.noise_um * rng.normal());
-      cyc.readings.push_back(r);
-    }
+    if (reset) cyc.reset = read(rp, 0, t0 + times.front());
+    for (const auto& p : plan.points) cyc.readings.push_back(read(p, p.id, t0 + p.t_s));
+    if (reset) cyc.reread = read(rp, 0, t0 + times.back());
     series.cycles.push_back(cyc);
   }
   return series;
@@ -359,6 +398,25 @@ static void rtestTruthFrom(const JsonDoc& doc, Kinematics k, Truth& truth, Rtest
   if (j.contains("rtest")) {
     const Json& r = requireObject(doc, j, "rtest");
     extras.sphere_offset_m_mm.z() = umToMm(numberOr(doc, r, "tool_length_error_um", 0.0, um));
+    if (r.contains("sensor_steps")) {
+      const Json& steps = r["sensor_steps"];
+      if (!steps.is_array()) doc.fail(r, "sensor_steps", "rtest.sensor_steps must be an array of {\"t_s\", \"offset_um\"}");
+      if (steps.size() > static_cast<size_t>(kMaxListValues))
+        doc.fail(r, "sensor_steps", fmt::format("rtest.sensor_steps has {} entries; at most {}", steps.size(), kMaxListValues));
+      for (const auto& st : steps) {
+        if (!st.is_object()) doc.fail(r, "sensor_steps", "rtest.sensor_steps: each entry is {\"t_s\", \"offset_um\"}");
+        RtestSensorStep step;
+        step.t_s = requireNumber(doc, st, "t_s", Limits::symmetric(kMaxClockSeconds, "s"));
+        if (!st.contains("offset_um") || !st["offset_um"].is_array() || st["offset_um"].size() != 3)
+          doc.fail(st, "offset_um", "rtest.sensor_steps: offset_um must be [dx, dy, dz] (um, workpiece frame)");
+        for (int i = 0; i < 3; ++i) {
+          if (!st["offset_um"][static_cast<size_t>(i)].is_number())
+            doc.fail(st, "offset_um", "rtest.sensor_steps: offset_um must hold numbers");
+          step.offset_w_mm[i] = umToMm(checkNumber(doc, st, "offset_um", st["offset_um"][static_cast<size_t>(i)].get<double>(), um));
+        }
+        extras.sensor_steps.push_back(step);
+      }
+    }
   }
   if (!j.contains("component_errors")) return;
   const Json& ce = requireObject(doc, j, "component_errors");
@@ -416,10 +474,15 @@ void rtestTruthFromJson(const JsonDoc& doc, Kinematics k, Truth& truth, RtestTru
 std::string rtestResultsCsv(const ProbePlan& plan, const RtestSeries& series) {
   const char ax = tiltAxis(plan.machine.kinematics);
   std::string out = fmt::format("pose,t_s,{}_deg,C_deg,dx_um,dy_um,dz_um\n", ax);
-  for (const auto& c : series.cycles)
-    for (const auto& r : c.readings)
-      out += fmt::format("{},{:.3f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f}\n", r.pose_id, r.t_s, r.tilt_deg, r.c_deg,
-                         mmToUm(r.dq_w_mm.x()), mmToUm(r.dq_w_mm.y()), mmToUm(r.dq_w_mm.z()));
+  auto row = [&](const RtestReading& r) {
+    out += fmt::format("{},{:.3f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f}\n", r.pose_id, r.t_s, r.tilt_deg, r.c_deg,
+                       mmToUm(r.dq_w_mm.x()), mmToUm(r.dq_w_mm.y()), mmToUm(r.dq_w_mm.z()));
+  };
+  for (const auto& c : series.cycles) {
+    if (c.reset) row(*c.reset);
+    for (const auto& r : c.readings) row(r);
+    if (c.reread) row(*c.reread);
+  }
   return out;
 }
 
@@ -434,13 +497,22 @@ RtestSeries parseRtestResults(const std::string& text, const std::string& file, 
   bool have_header = false;
   RtestCycle cur;
   double last_t = -1e300;
+  const size_t N = plan.points.size();
+  const ProbePoint& rp = plan.points[static_cast<size_t>(rtestReferencePoint(plan) - 1)];
   auto close = [&](int at) {
-    if (cur.readings.empty()) return;
-    if (cur.readings.size() != plan.points.size())
+    if (cur.readings.empty()) {
+      if (cur.reset) throw InputError(file, at, "a reset reading (pose 0) with no poses after it");
+      return;
+    }
+    if (cur.readings.size() != N)
       throw InputError(file, at, fmt::format("cycle {} has {} readings, the plan has {} poses", s.cycles.size() + 1,
-                                             cur.readings.size(), plan.points.size()));
+                                             cur.readings.size(), N));
+    if (cur.reset && !cur.reread)
+      throw InputError(file, at, fmt::format("cycle {} has a reset reading (pose 0) before pose 1 but no re-read "
+                                             "(pose 0) after pose {}",
+                                             s.cycles.size() + 1, N));
     s.cycles.push_back(cur);
-    cur.readings.clear();
+    cur = RtestCycle{};
   };
   while (std::getline(in, line)) {
     ++n;
@@ -466,18 +538,12 @@ RtestSeries parseRtestResults(const std::string& text, const std::string& file, 
       }
     }
     const int id = static_cast<int>(v[0]);
-    if (id != v[0] || id < 1 || id > static_cast<int>(plan.points.size()))
-      throw InputError(file, n, fmt::format("pose '{}' is not a pose id of the plan (1..{})", f[0], plan.points.size()));
-    if (id != static_cast<int>(cur.readings.size()) + 1) {
-      if (id == 1) close(n);
-      else
-        throw InputError(file, n, fmt::format("pose {} out of order: expected {} (each cycle lists poses 1..{} in order)",
-                                              id, cur.readings.size() + 1, plan.points.size()));
-    }
-    const ProbePoint& p = plan.points[id - 1];
+    if (id != v[0] || id < 0 || id > static_cast<int>(N))
+      throw InputError(file, n, fmt::format("pose '{}' is not a pose id of the plan (0 = the reset reading, 1..{})", f[0], N));
+    const ProbePoint& p = id == 0 ? rp : plan.points[static_cast<size_t>(id - 1)];
     if (std::abs(v[2] - tiltOf(plan.machine.kinematics, p.pose)) > 1e-3 || std::abs(v[3] - p.pose.C) > 1e-3)
-      throw InputError(file, n, fmt::format("pose {}: angles {:g}, {:g} deg differ from the plan's {}", id, v[2], v[3],
-                                            p.pose_name));
+      throw InputError(file, n, fmt::format("pose {}: angles {:g}, {:g} deg differ from the plan's {}{}", id, v[2], v[3],
+                                            p.pose_name, id == 0 ? " (the reset pose)" : ""));
     if (v[1] < last_t) throw InputError(file, n, fmt::format("time {:g} s runs backwards", v[1]));
     last_t = v[1];
     RtestReading r;
@@ -486,6 +552,29 @@ RtestSeries parseRtestResults(const std::string& text, const std::string& file, 
     r.tilt_deg = v[2];
     r.c_deg = v[3];
     r.dq_w_mm = Eigen::Vector3d(umToMm(v[4]), umToMm(v[5]), umToMm(v[6]));
+    if (id == 0) {
+      if (cur.readings.empty() && !cur.reset) {
+        cur.reset = r;
+      } else if (cur.readings.size() == N && cur.reset) {
+        cur.reread = r;
+        close(n);
+      } else if (cur.readings.size() == N) {
+        throw InputError(file, n, fmt::format("a re-read (pose 0) after cycle {} whose reset reading (pose 0 before "
+                                              "pose 1) is missing",
+                                              s.cycles.size() + 1));
+      } else {
+        throw InputError(file, n, fmt::format("pose 0 (the reset reading) comes before pose 1 or after pose {} of a "
+                                              "cycle, not after pose {}",
+                                              N, cur.readings.size()));
+      }
+      continue;
+    }
+    if (id != static_cast<int>(cur.readings.size()) + 1) {
+      if (id == 1) close(n);
+      else
+        throw InputError(file, n, fmt::format("pose {} out of order: expected {} (each cycle lists poses 1..{} in order)",
+                                              id, cur.readings.size() + 1, N));
+    }
     cur.readings.push_back(r);
   }
   if (!have_header) throw InputError(file, 1, "empty results file: expected the header '" + header + "'");

@@ -9,6 +9,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -45,7 +46,9 @@ struct RtestSchedule {
 };
 
 /// Options (`--set`): b_list (a_list on an A/C table), c_list, nest_w_mm, dwell_s, retract_mm,
-/// thermal (0|1), interval_min, duration_h, recip_list, recip_feed_deg_min, sensor_noise_um.
+/// thermal (0|1), interval_min, duration_h, recip_list, recip_feed_deg_min, sensor_noise_um,
+/// reset_reads (0|1, default 1: the reset pose is read before the first pose of every cycle and
+/// re-read at its end; plans written before it lack the option and read as 0).
 ProbePlan makeRtestPlan(const MachineModel& machine, const CycleOptions& options);
 RtestSchedule rtestSchedule(const ProbePlan& plan);
 /// The options a loaded plan's simulation and analysis read back (schedule, retract, dwell,
@@ -55,6 +58,10 @@ Eigen::Vector3d rtestNest_w(const ProbePlan& plan);          // nominal sphere c
 double rtestCycleTime_s(const ProbePlan& plan);              // one measuring cycle, from its first index to its end
 int rtestReciprocations(const ProbePlan& plan);              // round trips between two cycles
 int rtestReferencePoint(const ProbePlan& plan);              // the plan point at tilt 0, C 0 (the reset pose)
+bool rtestResetReads(const ProbePlan& plan);                 // the plan reads the reset before and after every cycle
+/// Planned time of every reading of one cycle from its start, in reading order: with reset reads
+/// the reset, the poses, the re-read (poses + 2), else the poses.
+std::vector<double> rtestReadTimes(const ProbePlan& plan);
 
 /// The moves of one measuring cycle (shared by the time estimate, the program and the stroke
 /// check). Between poses the sphere withdraws along the nest axis by retract_mm, climbs to the
@@ -65,7 +72,7 @@ struct RtestMove {
   enum class Kind { ClimbZ, Rapid, Linear, Index, Dwell, Read } kind;
   Eigen::Vector3d position_m = Eigen::Vector3d::Zero();  // sphere centre, machine frame, mm
   Pose pose;
-  int point_id = 0;
+  int point_id = 0;      // Read: the plan point; 0 = the reset pose's reset or re-read
   double seconds = 0.0;  // Dwell
 };
 std::vector<RtestMove> rtestCycleMoves(const ProbePlan& plan);
@@ -81,7 +88,11 @@ struct RtestReading {
 };
 struct RtestCycle {
   std::vector<RtestReading> readings;  // one per plan point, in plan order
-  double t_s() const;                  // mean time
+  /// The reset pose (tilt 0, C 0) read before the first pose and again after the last (pose id 0
+  /// in the results; sensor counts like every reading). Absent in results written before the
+  /// plans read them: the reset cannot be checked then.
+  std::optional<RtestReading> reset, reread;
+  double t_s() const;                  // mean time of the poses' readings
 };
 struct RtestSeries {
   std::string source;
@@ -90,7 +101,15 @@ struct RtestSeries {
 
 /// What the simulator puts on the machine beyond Truth: the commanded sphere position is off by
 /// sphere_offset_m_mm (a tool-length error is its Z, 002 Sec. 4.3).
+/// A step of the sensors' zero (a knock, a lost count): every reading from t_s on (common clock)
+/// is off by offset_w_mm (workpiece frame, where the sensors sit).
+struct RtestSensorStep {
+  double t_s = 0.0;
+  Eigen::Vector3d offset_w_mm = Eigen::Vector3d::Zero();
+};
+
 struct RtestTruthExtras {
+  std::vector<RtestSensorStep> sensor_steps;
   Eigen::Vector3d sphere_offset_m_mm = Eigen::Vector3d::Zero();
   /// Time-dependent part of the sphere offset (e.g. the spindle's axial thermal growth: +Z),
   /// machine frame, mm, at a time on the common clock (s). Empty: none.
@@ -109,17 +128,22 @@ struct RtestSimOptions {
   int cycles = 0;          // 0: the schedule's count
 };
 /// The readings of the whole series (every cycle of the schedule), cycle k starting at
-/// start_s + k x interval; the sensors are zeroed at the first cycle's reading at tilt 0, C 0
-/// (the operator's initial reset), so that reading is 0 plus noise.
+/// start_s + k x interval; the sensors are zeroed at the first cycle's reset reading at tilt 0,
+/// C 0 (the operator's initial reset), so that reading is 0 plus noise; later readings are the
+/// sensors' counts since (plus any sensor step of the truth). With reset reads every cycle also
+/// carries its reset and re-read.
 RtestSeries simulateRtest(const ProbePlan& plan, const Truth& truth, const RtestTruthExtras& extras,
                           const RtestSimOptions& options);
 
 /// Truth file extras for the R-test: "component_errors" (position-dependent errors as tables in
-/// the tilt angle, linearly interpolated) and "rtest": {"tool_length_error_um": ...}.
+/// the tilt angle, linearly interpolated) and "rtest": {"tool_length_error_um": ...,
+/// "sensor_steps": [{"t_s": 5460, "offset_um": [1, 0, 0]}, ...]} (docs/rtest.md).
 /// {"component_errors": {"B_deg": [-60, 0, 60], "dx_BY": {"unit": "um", "values": [1, 0, -1]}, ...}}
 void rtestTruthFromJson(const JsonDoc& doc, Kinematics kinematics, Truth& truth, RtestTruthExtras& extras);
 
 /// Results CSV (neutral, every dialect: the R-test device's logger writes it, not the control).
+/// The reset and re-read rows have pose 0. Files without them (written before) are read: their
+/// cycles have no reset / reread.
 std::string rtestResultsCsv(const ProbePlan& plan, const RtestSeries& series);
 RtestSeries parseRtestResults(const std::string& text, const std::string& file, const ProbePlan& plan);
 

@@ -30,7 +30,11 @@ nc::Program rtestProgram(const ProbePlan& plan, const std::string& dialect) {
       fmt::format("sphere {:.3f} mm on the spindle; X Y Z = sphere centre; nest at {:.3f} {:.3f} {:.3f} mm on the table",
                   m.probe.ball_diameter_mm, nest.x(), nest.y(), nest.z()),
       fmt::format("each pose: enter along the nest axis, dwell, READ = trigger the R-test logger [pose id]"),
-      fmt::format("reset: the logger zeroes the sensors at the first reading at {} 0 C 0 [002 Eq. 4]", tilt),
+      rtestResetReads(plan)
+          ? fmt::format("reset: every cycle reads {} 0 C 0 first [pose 0, 002 Eq. 4] and again at its end [pose 0: a "
+                        "difference is a sensor step]; the logger zeroes the sensors at the first of them",
+                        tilt)
+          : fmt::format("reset: the logger zeroes the sensors at the first reading at {} 0 C 0 [002 Eq. 4]", tilt),
   };
   if (sched.thermal)
     prog.header.push_back(fmt::format("thermal test: every {:g} min for {:g} h, {} reciprocates {:g} to {:g} deg at "
@@ -61,6 +65,7 @@ nc::Program rtestProgram(const ProbePlan& plan, const std::string& dialect) {
   const auto moves = rtestCycleMoves(plan);
   auto cycle = [&](const std::string& title) {
     comment(title);
+    int reads_in_cycle = 0;
     for (const auto& mv : moves) {
       nc::Op op;
       op.xyz = mv.position_m * k;
@@ -78,7 +83,8 @@ nc::Program rtestProgram(const ProbePlan& plan, const std::string& dialect) {
           std::string name;
           for (const auto& p : plan.points)
             if (p.pose.A == mv.pose.A && p.pose.B == mv.pose.B && p.pose.C == mv.pose.C) name = p.pose_name;
-          comment("pose " + name);
+          const bool reset_visit = rtestResetReads(plan) && (reads_in_cycle == 0 || reads_in_cycle == static_cast<int>(plan.points.size()) + 1);
+          comment((reset_visit ? (reads_in_cycle == 0 ? "reset pose " : "re-read of the reset pose ") : "pose ") + name);
           index(mv.pose, false, 0.0);
           continue;
         }
@@ -89,8 +95,17 @@ nc::Program rtestProgram(const ProbePlan& plan, const std::string& dialect) {
         case RtestMove::Kind::Read:
           op.kind = nc::Op::Kind::Read;
           op.point_id = mv.point_id;
-          op.pose_name = plan.points[mv.point_id - 1].pose_name;
-          op.text = fmt::format("R-test reading pose {} {}", mv.point_id, op.pose_name);
+          if (mv.point_id == 0) {
+            // 002 Eq. (4): the reset pose, read before the first pose and again after the last.
+            const bool before = reads_in_cycle == 0;
+            op.pose_name = before ? "reset" : "re-read";
+            op.text = before ? fmt::format("R-test reset reading {} 0 C 0 [pose 0, before the first pose]", tilt)
+                             : fmt::format("R-test re-read of the reset {} 0 C 0 [pose 0, catches a sensor step]", tilt);
+          } else {
+            op.pose_name = plan.points[static_cast<size_t>(mv.point_id - 1)].pose_name;
+            op.text = fmt::format("R-test reading pose {} {}", mv.point_id, op.pose_name);
+          }
+          ++reads_in_cycle;
           break;
       }
       prog.ops.push_back(op);

@@ -92,9 +92,10 @@ TEST(RtestDiagnosis, ColumnsMatchTheExactSimulator) {
   const auto clean = series(plan, Truth{}, {}, 1, 0.0);
   const RtestJudgeSetup s = rtestJudgeSetup(plan, clean, 0.3);
   EXPECT_LT(s.problem.y.cwiseAbs().maxCoeff(), 1e-9);
-  // Table drift from the reset on (t0: the first cycle's reading at B = C = 0): dy_CB -2 um/h
-  // and c_BY +0.3 mdeg/h at every tilt.
-  const double t0 = plan.points[static_cast<size_t>(rtestReferencePoint(plan) - 1)].t_s;
+  // Table drift from the reset on (t0: the first cycle's reset reading at B = C = 0, before its
+  // first pose): dy_CB -2 um/h and c_BY +0.3 mdeg/h at every tilt.
+  const double t0 = rtestReadTimes(plan).front();
+  ASSERT_LT(t0, plan.points.front().t_s);
   {
     Truth t;
     t.errors.kinematics = Kinematics::TableBC;
@@ -155,7 +156,8 @@ TEST(RtestDiagnosis, Reproduction002DriftIsThermalDrift) {
     for (double b : {-60, -30, 0, 30, 60}) {
       const JudgeEstimate* e = param(f, fmt::format("dy_CB(B={:g})/h", b));
       ASSERT_NE(e, nullptr);
-      EXPECT_LE(std::abs(e->value + 2.0), 3.0 * e->u) << b;
+      // 20 slopes over the 4 seeds: 3.8 u keeps the family's chance of a false failure at 0.27 %.
+      EXPECT_LE(std::abs(e->value + 2.0), 3.8 * e->u) << b;
     }
     const RtestConfound* lin = confound(d, "linear_axis_drift");
     ASSERT_NE(lin, nullptr);
@@ -209,24 +211,46 @@ TEST(RtestDiagnosis, SpindleGrowthConfoundedWithTableDriftFromTheJacobians) {
   for (int b = 0; b < 5; ++b) EXPECT_NEAR(coef[s.problem.J0.cols() + 6 * b + 2], -1.0, 1e-6);
 }
 
-// A 1 um step of the sensors' x reading from cycle 7 of 11 on: flagged as sensor_step_cycle_7,
-// dx within 3 u of 1 um, dy and dz within 3 u of 0; thermal_drift not accepted.
+// A 1 um step of the sensors' x reading (the simulator's sensor_steps, 0.3 um noise), placed
+// (a) between cycles 6 and 7: flagged as sensor_step_cycle_7 (from its reset on);
+// (b) in cycle 7 after its last pose, before its re-read: sensor_step_in_cycle_7 (from its
+//     re-read on: only the re-read tells (a) from (b));
+// (c) in the middle of cycle 7 (between poses 12 and 13): a sensor step in cycle 7, either
+//     form (each leaves half of the cycle's poses unmodelled, docs/rtest.md).
+// dx within 3 u of 1 um (a, b), dy and dz within 3 u of 0; thermal_drift never accepted.
 TEST(RtestDiagnosis, SensorStepMidSeriesIsFlagged) {
   const ProbePlan plan = plan002(0.3);
-  for (int seed = 1; seed <= 4; ++seed) {
-    auto cyc = series(plan, baseTruth(seed), {}, static_cast<std::uint64_t>(100 + seed), 0.3);
-    for (size_t c = 6; c < cyc.size(); ++c)
-      for (auto& r : cyc[c].readings) r.dq_w_mm.x() += umToMm(1.0);
-    const RtestDiagnosis d = diagnose(plan, cyc, 0.3);
-    ASSERT_EQ(d.summary.verdict, JudgeVerdict::EffectFound) << rtestDiagnosisText(plan, d);
-    ASSERT_EQ(d.summary.findings.size(), 1u) << rtestDiagnosisText(plan, d);
-    const JudgeFinding& f = d.summary.findings[0];
-    EXPECT_EQ(f.cause, "sensor_step_cycle_7");
-    EXPECT_LE(std::abs(param(f, "dx")->value - 1.0), 3.0 * param(f, "dx")->u);
-    EXPECT_LE(std::abs(param(f, "dy")->value), 3.0 * param(f, "dy")->u);
-    EXPECT_LE(std::abs(param(f, "dz")->value), 3.0 * param(f, "dz")->u);
-    const Json j = rtestDiagnosisJson(plan, d);
-    EXPECT_EQ(j["findings"][0]["cause"], "sensor_step");
+  const double interval = rtestSchedule(plan).interval_s;
+  const std::vector<double> reads = rtestReadTimes(plan);
+  for (char where : {'a', 'b', 'c'}) {
+    RtestTruthExtras x;
+    const double at = where == 'a' ? 6 * interval - 60.0
+                      : where == 'b' ? 6 * interval + 0.5 * (plan.points.back().t_s + reads.back())
+                                     : 6 * interval + 0.5 * (plan.points[11].t_s + plan.points[12].t_s);
+    x.sensor_steps.push_back({at, Eigen::Vector3d(umToMm(1.0), 0, 0)});
+    for (int seed = 1; seed <= 4; ++seed) {
+      const auto cyc = series(plan, baseTruth(seed), x, static_cast<std::uint64_t>(100 + seed), 0.3);
+      ASSERT_TRUE(cyc[6].reset && cyc[6].reread);
+      // The simulator: the step is in the counts from its time on, reset and re-read included.
+      const double seen = mmToUm(cyc[6].reread->dq_w_mm.x() - cyc[6].reset->dq_w_mm.x());
+      EXPECT_NEAR(seen, where == 'a' ? 0.0 : 1.0, 5 * std::sqrt(2.0) * 0.3) << seed;
+      const RtestDiagnosis d = diagnose(plan, cyc, 0.3);
+      ASSERT_GE(d.summary.findings.size(), 1u) << rtestDiagnosisText(plan, d);
+      const JudgeFinding& f = d.summary.findings[0];
+      const Json j = rtestDiagnosisJson(plan, d);
+      EXPECT_EQ(j["findings"][0]["cause"], "sensor_step");
+      for (const auto& g : d.summary.findings) EXPECT_NE(g.cause, "thermal_drift");
+      if (where == 'c') {
+        EXPECT_TRUE(f.cause == "sensor_step_in_cycle_7" || f.cause == "sensor_step_cycle_7") << f.cause;
+        continue;
+      }
+      EXPECT_EQ(f.cause, where == 'b' ? "sensor_step_in_cycle_7" : "sensor_step_cycle_7") << rtestDiagnosisText(plan, d);
+      EXPECT_EQ(j["findings"][0]["variant"], where == 'b' ? "during cycle 7" : "from cycle 7");
+      EXPECT_EQ(d.summary.verdict, JudgeVerdict::EffectFound) << rtestDiagnosisText(plan, d);
+      EXPECT_LE(std::abs(param(f, "dx")->value - 1.0), 3.0 * param(f, "dx")->u);
+      EXPECT_LE(std::abs(param(f, "dy")->value), 3.0 * param(f, "dy")->u);
+      EXPECT_LE(std::abs(param(f, "dz")->value), 3.0 * param(f, "dz")->u);
+    }
   }
 }
 

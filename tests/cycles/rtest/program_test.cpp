@@ -67,15 +67,22 @@ TEST(RtestProgram, LinuxCncPassesCheckerAndRs274WithTheThermalLoops) {
   const std::string text = d.writeProgram(test::cycleProgram(p, "linuxcnc"));
   const auto problems = d.check(text, p, test::shapeOf(p, "linuxcnc"));
   EXPECT_TRUE(problems.empty()) << problems.front();
-  EXPECT_EQ(count(text, "M64 P0"), 50u);  // the first cycle and the loop body's cycle, 25 readings each
+  // The first cycle and the loop body's cycle, each: the reset (pose 0), 25 poses, the re-read.
+  EXPECT_EQ(count(text, "M64 P0"), 54u);
+  EXPECT_EQ(count(text, "R-test reset reading"), 2u);
+  EXPECT_EQ(count(text, "R-test re-read of the reset"), 2u);
+  // In each cycle the reset comes before the first pose's reading and the re-read after the last.
+  EXPECT_LT(text.find("R-test reset reading"), text.find("R-test reading pose 1 "));
+  EXPECT_GT(text.find("R-test re-read of the reset"), text.find("R-test reading pose 25 "));
+  EXPECT_LT(text.find("R-test re-read of the reset"), text.find("warm-up"));
   if (!fs::exists(kRs274)) GTEST_SKIP() << "rs274 not installed";
   int rc = -1;
   const std::string out = run(text, &rc);
   EXPECT_EQ(rc, 0);
   // What the interpreter executes: one trigger per pose per cycle, a dwell before each, and the
   // reciprocation (two feed moves of B per round trip) between the cycles.
-  EXPECT_EQ(count(out, "SET_AUX_OUTPUT_BIT(0)"), 25u * 7u);
-  EXPECT_EQ(count(out, "DWELL(2.0000)"), 25u * 7u);
+  EXPECT_EQ(count(out, "SET_AUX_OUTPUT_BIT(0)"), 27u * 7u);
+  EXPECT_EQ(count(out, "DWELL(2.0000)"), 27u * 7u);
   EXPECT_EQ(count(out, "PROGRAM_END()"), 1u);
   // The reciprocation moves: B at +60 / +90 (controller sign -1 for linuxcnc on this machine),
   // executed as STRAIGHT_FEEDs; each round trip ends at the -90 deg (paper) end.
@@ -98,6 +105,18 @@ TEST(RtestProgram, CheckerRejectsAReadingWithoutDwellAndTheWrongCount) {
   const size_t at = missing.find("M64 P0\n");
   missing.erase(at, 7);
   EXPECT_FALSE(d.check(missing, p, test::shapeOf(p, "linuxcnc")).empty());
+  // The re-read removed: the count is the neutral program's (27 per written cycle; the old
+  // "multiple of the plan's poses" rule would refuse every program with reset reads).
+  std::string no_reread = text;
+  const size_t rr = no_reread.find("M64 P0\n", no_reread.find("R-test re-read of the reset"));
+  no_reread.erase(rr, 7);
+  EXPECT_FALSE(d.check(no_reread, p, test::shapeOf(p, "linuxcnc")).empty());
+  // A plan written before the reset reads (no option) keeps 25 readings per cycle.
+  ProbePlan old = p;
+  old.options.erase("reset_reads");
+  const std::string old_text = d.writeProgram(test::cycleProgram(old, "linuxcnc"));
+  EXPECT_EQ(count(old_text, "M64 P0"), 25u);
+  EXPECT_TRUE(d.check(old_text, old, test::shapeOf(old, "linuxcnc")).empty());
 }
 
 TEST(RtestProgram, DialectsWithoutLoopsRefuse) {
