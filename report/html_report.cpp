@@ -106,6 +106,53 @@ std::string locationTable(const Json& le, const std::vector<std::pair<std::strin
   return s + "</table>\n";
 }
 
+// The uncertainty a report signs (core/uncertainty_budget.hpp: REPORT.json "uncertainty"): the
+// sources in words, u_A u_B u_c U per parameter with its largest contributors, and the
+// correlation matrix, each cell shaded by |r| so the strong pairs stand out.
+std::string uncertaintySection(const Json& doc) {
+  const auto it = doc.find("uncertainty");
+  if (it == doc.end() || !it->is_object() || !it->contains("order") || !it->contains("parameters")) return {};
+  const Json& u = *it;
+  const Json& order = u["order"];
+  const Json& le = doc.value("location_errors", Json::object());
+  std::string s = "<h2 id=\"uncertainty\">Uncertainty</h2>\n";
+  s += "<p>" + escape(fmt::format("u: standard uncertainty (k = 1); U = {} u_c (about 95 %).", str(u, "k"))) + "</p>";
+  s += "<ul><li>Type A: " + escape(str(u, "type_a")) + "</li><li>Type B: " + escape(str(u, "type_b")) + "</li></ul>";
+  s += "<table class=\"params\" data-table=\"uncertainty\">";
+  s += row({"parameter", "value", "u_A", "u_B", "u_c", "U", "unit", "largest contributors (u alone)"}, true);
+  for (const auto& nj : order) {
+    if (!nj.is_string()) continue;
+    const std::string name = nj.get<std::string>();
+    if (!u["parameters"].contains(name)) continue;
+    const Json& p = u["parameters"][name];
+    std::string largest;
+    if (u.contains("budget") && u["budget"].contains(name) && u["budget"][name].is_array())
+      for (const auto& t : u["budget"][name])
+        largest += (largest.empty() ? "" : ", ") + escape(str(t, "contributor")) + " " + numCell(dbl(t, "u"), 2);
+    s += row({escape(name), le.contains(name) ? numCell(dbl(le[name], "value"), 3) : "&ndash;", numCell(dbl(p, "u_a"), 3),
+              numCell(dbl(p, "u_b"), 3), numCell(dbl(p, "u_c"), 3), numCell(dbl(p, "U"), 3), escape(str(p, "unit")), largest});
+  }
+  s += "</table>\n";
+  if (u.contains("correlation") && u["correlation"].is_array() && u["correlation"].size() == order.size()) {
+    s += "<h3>Correlation of the estimates</h3><table class=\"params\" data-table=\"correlation\">";
+    std::vector<std::string> head = {""};
+    for (const auto& nj : order) head.push_back(escape(nj.is_string() ? nj.get<std::string>() : std::string()));
+    s += row(head, true);
+    for (size_t i = 0; i < order.size(); ++i) {
+      s += "<tr><th>" + escape(order[i].is_string() ? order[i].get<std::string>() : std::string()) + "</th>";
+      const Json& r = u["correlation"][i];
+      for (size_t j = 0; j < order.size() && r.is_array() && j < r.size(); ++j) {
+        const double v = r[j].is_number() ? r[j].get<double>() : 0.0;
+        const int shade = static_cast<int>(std::lround(255.0 - 120.0 * std::min(1.0, std::abs(v))));
+        s += fmt::format("<td style=\"background:rgb({0},{0},255)\">{1}</td>", shade, numCell(v, 2));
+      }
+      s += "</tr>";
+    }
+    s += "</table>\n";
+  }
+  return s;
+}
+
 std::string figureBlock(const Figure& f) {
   std::string s = "<div class=\"figure\" data-figure=\"" + escape(f.id) + "\">" + svgPlot(f);
   if (!f.note.empty()) s += "<p class=\"note\">" + escape(f.note) + "</p>";
@@ -363,6 +410,7 @@ std::string analyzeBody(const Json& doc) {
     for (const auto& [name, o] : doc["other_methods"].items())
       if (o.contains("location_errors")) others.push_back({name, &o["location_errors"]});
   if (doc.contains("location_errors")) s += locationTable(doc["location_errors"], others);
+  s += uncertaintySection(doc);
   if (doc.contains("runs") && doc["runs"].is_array() && doc["runs"].size() > 1) {
     s += "<h3>Per repeat (000 Table 4 layout)</h3>";
     std::vector<std::pair<std::string, const Json*>> cols;

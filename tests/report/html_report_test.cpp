@@ -9,6 +9,7 @@
 #include <string>
 
 #include "core/json_io.hpp"
+#include "core/uncertainty_budget.hpp"
 #include "report/figure.hpp"
 #include "report/html_report.hpp"
 #include "report/svg.hpp"
@@ -93,6 +94,38 @@ TEST(HtmlReport, TextIsEscaped) {
   const std::string html = reportHtml(doc);
   EXPECT_EQ(html.find("<script>alert"), std::string::npos);
   EXPECT_NE(html.find("&lt;script&gt;alert(1)"), std::string::npos);
+}
+
+TEST(HtmlReport, ShowsTheUncertaintyBudgetAndTheCorrelations) {
+  // A REPORT.json with the block core/uncertainty_budget writes: the table repeats its figures,
+  // and the correlation matrix has one row per parameter.
+  UncertaintyBudget b;
+  b.names = {"dx_AY", "b_AY"};
+  b.units = {"um", "mdeg"};
+  b.cov_a = Eigen::Vector2d(0.25, 0.01).asDiagonal();
+  b.cov_b = Eigen::Matrix2d::Zero();
+  b.cov_b << 16.0, -1.6, -1.6, 0.25;  // r_B = -0.8
+  b.type_a_source = "the <data>";
+  b.type_b_source = "S_xz & friends";
+  b.terms = {{"data", Eigen::Vector2d(0.5, 0.1)}, {"S_xz", Eigen::Vector2d(4.0, 0.5)}};
+  Json doc = {{"format", "rotacal-report/1"},
+              {"cycle", "touch154"},
+              {"location_errors", {{"dx_AY", {{"value", 14.6}, {"unit", "um"}, {"u", 0.5}, {"iso", "X0A"}}},
+                                   {"b_AY", {{"value", -0.1}, {"unit", "mdeg"}, {"u", 0.1}, {"iso", "B0A"}}}}},
+              {"uncertainty", budgetJson(b)}};
+  const std::string html = reportHtml(doc);
+  const Eigen::VectorXd U = b.expanded();
+  EXPECT_NE(html.find("data-table=\"uncertainty\""), std::string::npos);
+  EXPECT_NE(html.find(fmt::format("{:.3f}", U[0])), std::string::npos);  // 8.062
+  EXPECT_NE(html.find(fmt::format("{:.3f}", U[1])), std::string::npos);
+  EXPECT_NE(html.find("S_xz <span class=\"n\">4.00</span>"), std::string::npos);
+  const size_t cor = html.find("data-table=\"correlation\"");
+  ASSERT_NE(cor, std::string::npos);
+  const std::string matrix = html.substr(cor, html.find("</table>", cor) - cor);
+  EXPECT_EQ(count(matrix, "<tr><th>"), 1 + 2);  // the header, then one row per parameter
+  EXPECT_NE(matrix.find(fmt::format("{:.2f}", b.correlation()(0, 1))), std::string::npos);
+  EXPECT_EQ(html.find("<data>"), std::string::npos);  // the sources are text, escaped
+  EXPECT_NE(html.find("S_xz &amp; friends"), std::string::npos);
 }
 
 }  // namespace
