@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <Eigen/Eigenvalues>
 #include <cmath>
 #include <map>
 #include <stdexcept>
@@ -10,6 +11,7 @@
 
 #include "core/report_envelope.hpp"
 #include "core/transforms.hpp"
+#include "core/uncertainty_budget.hpp"
 #include "core/units.hpp"
 
 namespace rotacal {
@@ -368,7 +370,42 @@ SpaceframeAnalysis analyzeSpaceframe(const ProbePlan& plan, const std::vector<Me
   };
   a.nominal_m_mm = nominalPoints(a.measured_m_mm);
   a.lengths = lengthErrors(a.measured_m_mm, a.nominal_m_mm);
-  a.verdict = checkLengths(a.lengths, a.spec);
+  // u(dL) for ISO 14253-1's decision: each centre's covariance from its sphere fit, scaled by the
+  // per-touch scatter (the declared repeatability, or the fits' pooled residual when larger),
+  // divided by the repeats it averages; projected on the length's direction, the two centres
+  // independent (different touches). With nominal_from=initial the L_n points are measured too:
+  // their part is bounded by the largest eigenvalue of the initial centres' covariance (the
+  // rotation to the pose is not needed for a bound). Not included: the frame's own calibration
+  // (Table 1 is taken as exact).
+  {
+    double rss = 0.0;
+    int dof = 0;
+    for (const auto& f : a.fits) {
+      rss += f.rss_mm2;
+      dof += f.dof;
+    }
+    const double declared_mm = umToMm(plan.machine.probe.repeatability_um);
+    const double pooled_mm2 = dof > 0 ? rss / dof : 0.0;
+    const double sigma2 = std::max(declared_mm * declared_mm, pooled_mm2) / static_cast<double>(runs.size());
+    a.length_sigma_um = mmToUm(std::sqrt(sigma2 * static_cast<double>(runs.size())));
+    std::map<int, double> initial_var;  // sphere -> largest eigenvalue of its initial centre's covariance, mm^2
+    if (layout.nominal_from == "initial")
+      for (size_t i = 0; i < a.points.size(); ++i)
+        if (a.points[i].pose.A == 0.0 && a.points[i].pose.C == 0.0 && !initial_var.count(a.points[i].sphere))
+          initial_var[a.points[i].sphere] =
+              sigma2 * Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(a.fits[i].cov_centre_per_sigma2).eigenvalues().maxCoeff();
+    for (auto& l : a.lengths) {
+      const Eigen::Vector3d e = (a.measured_m_mm[static_cast<size_t>(l.j)] - a.measured_m_mm[static_cast<size_t>(l.k)]).normalized();
+      double var = sigma2 * e.dot((a.fits[static_cast<size_t>(l.j)].cov_centre_per_sigma2 +
+                                   a.fits[static_cast<size_t>(l.k)].cov_centre_per_sigma2) * e);
+      for (int idx : {l.j, l.k}) {
+        const auto it = initial_var.find(a.points[static_cast<size_t>(idx)].sphere);
+        if (it != initial_var.end()) var += it->second;
+      }
+      l.u_um = mmToUm(std::sqrt(std::max(0.0, var)));
+    }
+  }
+  a.verdict = checkLengths(a.lengths, a.spec, kCoverageFactor);
 
   // Least squares on the measured centres (3 per point): exact model, Gauss-Newton, Jacobian by
   // central differences in report units (um, mdeg, um/m), SVD with a rank check.
@@ -504,7 +541,7 @@ Json figuresJson(const SpaceframeAnalysis& a) {
                                           {"lo", blo},
                                           {"hi", bhi}}})},
                   {"note", fmt::format("{} of {} lengths outside the band: {}", a.verdict.outside, a.verdict.lengths,
-                                       a.verdict.pass ? "pass" : "fail")}});
+                                       lengthDecisionName(a.verdict.decision))}});
   figs.push_back({{"id", "spaceframe_length_histogram"},
                   {"title", "Frequency of length sizes (003 Fig. 5)"},
                   {"x", {{"label", "L (measured)"}, {"unit", "mm"}}},
@@ -566,7 +603,15 @@ Json spaceframeReportJson(const SpaceframeAnalysis& a, const ProbePlan& plan, co
                   {"count", a.lengths.size()},
                   {"A_um", a.spec.A_um},
                   {"K_um_per_m", a.spec.K_um_per_m},
-                  {"verdict", a.verdict.pass ? "pass" : "fail"},
+                  {"verdict", std::string(lengthDecisionName(a.verdict.decision))},
+                  {"decision_rule", "ISO 14253-1: pass when every |dL| <= A + K L - U, fail when any |dL| > A + K L + U, "
+                                    "inconclusive otherwise; U = 2 u(dL) from the sphere fits (frame calibration not "
+                                    "included)"},
+                  {"conforming", a.verdict.conforming},
+                  {"nonconforming", a.verdict.nonconforming},
+                  {"inconclusive", a.verdict.undecided},
+                  {"max_U_um", round6(a.verdict.max_U_um)},
+                  {"per_touch_sigma_um", round6(a.length_sigma_um)},
                   {"outside", a.verdict.outside},
                   {"max_abs_dL_um", round6(a.verdict.max_abs_dL_um)},
                   {"rms_dL_um", round6(a.verdict.rms_dL_um)},
@@ -611,8 +656,12 @@ std::string spaceframeText(const SpaceframeAnalysis& a, const ProbePlan& plan) {
                    a.radius_outside ? fmt::format(" ({} beyond {:.1f} um: probe pretravel, ball size or a dirty sphere?)",
                                                   a.radius_outside, a.radius_limit_um)
                                     : std::string());
-  s += fmt::format("U = +-({:g} um + {:g} um/m L): {} ({} lengths outside, worst |dL|/U = {:.3f})\n\n", a.spec.A_um,
-                   a.spec.K_um_per_m, a.verdict.pass ? "PASS" : "FAIL", a.verdict.outside, a.verdict.worst_ratio);
+  s += fmt::format("MPE = +-({:g} um + {:g} um/m L): {} lengths outside, worst |dL|/MPE = {:.3f}\n", a.spec.A_um,
+                   a.spec.K_um_per_m, a.verdict.outside, a.verdict.worst_ratio);
+  s += fmt::format("ISO 14253-1 decision with U = 2 u(dL) (up to {:.3f} um; per-touch scatter {:.3f} um): {} ({} conforming, "
+                   "{} non-conforming, {} inside the guard bands)\n\n",
+                   a.verdict.max_U_um, a.length_sigma_um, lengthDecisionName(a.verdict.decision), a.verdict.conforming,
+                   a.verdict.nonconforming, a.verdict.undecided);
   s += fmt::format("identification ({}, rank {}/{}, {} dof), what explains dL:\n", a.summary.termination, a.summary.rank,
                    a.summary.parameters, a.summary.dof);
   const auto& params = locationParameters(a.model.errors.kinematics);

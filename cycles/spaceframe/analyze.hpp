@@ -120,6 +120,7 @@ struct SpaceframeAnalysis {
   std::vector<LengthError> lengths;            // 003 Eq. (2)-(4)
   LengthSpec spec;
   LengthVerdict verdict;
+  double length_sigma_um = 0.0;                // per-touch scatter behind u(dL): declared, or the fits' when larger
   FrameModel model;                            // identified
   Eigen::Matrix<double, FrameModel::kSize, 1> u = Eigen::Matrix<double, FrameModel::kSize, 1>::Zero();  // k = 1, mm / rad / 1
   SpaceframeSummary summary;

@@ -40,7 +40,16 @@ std::vector<LengthError> lengthErrors(const std::vector<Eigen::Vector3d>& measur
   return out;
 }
 
-LengthVerdict checkLengths(const std::vector<LengthError>& lengths, const LengthSpec& spec) {
+std::string_view lengthDecisionName(LengthDecision d) {
+  switch (d) {
+    case LengthDecision::Pass: return "pass";
+    case LengthDecision::Fail: return "fail";
+    case LengthDecision::Inconclusive: return "inconclusive";
+  }
+  return "inconclusive";
+}
+
+LengthVerdict checkLengths(const std::vector<LengthError>& lengths, const LengthSpec& spec, double k) {
   if (!(spec.A_um >= 0) || !(spec.K_um_per_m >= 0) || spec.A_um + spec.K_um_per_m <= 0)
     throw std::invalid_argument("length specification needs A >= 0 um, K >= 0 um/m, not both zero");
   LengthVerdict v;
@@ -51,6 +60,11 @@ LengthVerdict checkLengths(const std::vector<LengthError>& lengths, const Length
     const double lim = spec.limit_um(lengths[i].measured_mm);
     ss += d * d;
     if (d > lim) ++v.outside;
+    const double U = k * lengths[i].u_um;
+    v.max_U_um = std::max(v.max_U_um, U);
+    if (d <= lim - U) ++v.conforming;
+    else if (d > lim + U) ++v.nonconforming;
+    else ++v.undecided;
     v.max_abs_dL_um = std::max(v.max_abs_dL_um, d);
     if (d / lim > v.worst_ratio || v.worst_index < 0) {
       v.worst_ratio = d / lim;
@@ -58,7 +72,10 @@ LengthVerdict checkLengths(const std::vector<LengthError>& lengths, const Length
     }
   }
   v.rms_dL_um = lengths.empty() ? 0.0 : std::sqrt(ss / static_cast<double>(lengths.size()));
-  v.pass = v.outside == 0;
+  v.decision = v.nonconforming > 0 ? LengthDecision::Fail
+               : v.undecided > 0    ? LengthDecision::Inconclusive
+                                    : LengthDecision::Pass;
+  v.pass = v.decision == LengthDecision::Pass;
   return v;
 }
 

@@ -10,6 +10,7 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
+#include <string_view>
 #include <vector>
 
 namespace rotacal {
@@ -29,6 +30,7 @@ struct LengthError {
   int k = 0;
   double nominal_mm = 0.0;   // L_n, Eq. (4)
   double measured_mm = 0.0;  // L_m, Eq. (3)
+  double u_um = 0.0;         // standard uncertainty of dL (k = 1); 0 when not evaluated
   double dL_mm() const { return measured_mm - nominal_mm; }  // Eq. (2)
 };
 
@@ -43,10 +45,21 @@ struct LengthSpec {
   double limit_um(double L_mm) const { return A_um + K_um_per_m * L_mm * 1e-3; }
 };
 
+/// ISO 14253-1's decision with the measurement's expanded uncertainty U = k u of each dL:
+/// conformance is proven where |dL| <= MPE - U, non-conformance where |dL| > MPE + U; between the
+/// two the measurement cannot decide.
+enum class LengthDecision { Pass, Fail, Inconclusive };
+std::string_view lengthDecisionName(LengthDecision d);  // "pass", "fail", "inconclusive"
+
 struct LengthVerdict {
-  bool pass = true;
+  bool pass = true;            // decision == Pass
+  LengthDecision decision = LengthDecision::Pass;
   int lengths = 0;
-  int outside = 0;             // |dL| > A + K L
+  int outside = 0;             // |dL| > A + K L (the verdict without the uncertainty)
+  int conforming = 0;          // |dL| <= A + K L - U
+  int nonconforming = 0;       // |dL| > A + K L + U
+  int undecided = 0;           // the rest: inside the guard bands
+  double max_U_um = 0.0;       // largest expanded uncertainty of a dL
   double max_abs_dL_um = 0.0;
   double rms_dL_um = 0.0;
   double worst_ratio = 0.0;    // max |dL| / (A + K L): <= 1 passes
@@ -54,7 +67,8 @@ struct LengthVerdict {
 };
 
 /// Checks every |dL| against A + K L, with L the measured length (003 Fig. 6 plots dL against
-/// the measured distances).
-LengthVerdict checkLengths(const std::vector<LengthError>& lengths, const LengthSpec& spec);
+/// the measured distances), and decides by ISO 14253-1 with U = k u_um of each length: Pass when
+/// every length conforms, Fail when any does not conform, Inconclusive otherwise.
+LengthVerdict checkLengths(const std::vector<LengthError>& lengths, const LengthSpec& spec, double k = 2.0);
 
 }  // namespace rotacal

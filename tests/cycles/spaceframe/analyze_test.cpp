@@ -163,8 +163,20 @@ TEST(SpaceframeAnalysis, ScaleErrorGivesTheClosedFormDLAndVerdict) {
     }
     // Sphere fits converge to 1e-13 mm; lengths of up to 0.5 m: 1e-6 um is far below that floor x 1e3.
     EXPECT_LT(worst, 1e-6) << "K " << K;
-    EXPECT_EQ(a.verdict.pass, expect_pass) << "K " << K;
+    EXPECT_EQ(a.verdict.outside > 0, !expect_pass) << "K " << K;
     EXPECT_EQ(a.verdict.outside, outside);
+    // ISO 14253-1 from the closed-form dL and each length's U = 2 u: the same counts.
+    int conforming = 0, nonconforming = 0;
+    for (const auto& L : a.lengths) {
+      const double d = std::abs(mmToUm(-s * L.nominal_mm / (1 + s))), lim = 1.0 + K * 1e-3 * L.nominal_mm / (1 + s);
+      conforming += d <= lim - 2.0 * L.u_um;
+      nonconforming += d > lim + 2.0 * L.u_um;
+    }
+    EXPECT_EQ(a.verdict.conforming, conforming);
+    EXPECT_EQ(a.verdict.nonconforming, nonconforming);
+    EXPECT_EQ(a.verdict.decision, nonconforming > 0                                        ? LengthDecision::Fail
+                                  : conforming == static_cast<int>(a.lengths.size()) ? LengthDecision::Pass
+                                                                                      : LengthDecision::Inconclusive);
     if (!expect_pass) {
       EXPECT_GT(outside, 0);
     }
@@ -209,6 +221,42 @@ TEST(SpaceframeAnalysis, RecoversLocationScaleAndSetupErrorsNoiseFree) {
   EXPECT_GT(a.dL_rms_um, 1.0);
   EXPECT_LT(a.dL_unexplained_rms_um, 1e-6);
   EXPECT_LT(a.summary.residual_rms_um, 1e-6);
+}
+
+// Issue 17: a perfect machine measured with 1 um of probe noise failed A + K L in 2 of 3 seeds,
+// because the verdict ignored the measurement's own uncertainty. With ISO 14253-1's guard bands
+// it never fails; a machine far out of specification still does. And u(dL) is what the lengths
+// actually scatter by over seeds (computed another way: the spread of simulated measurements).
+TEST(SpaceframeAnalysis, TheLengthVerdictUsesTheMeasurementsUncertainty) {
+  MachineModel m = a120();
+  m.probe.repeatability_um = 1.0;
+  // A tight specification (3 um + 5 um/m) that 1 um of probe noise alone exceeds: the old rule
+  // (|dL| > A + K L fails) failed the perfect machine.
+  const ProbePlan plan = makePlan("spaceframe", m, {{"phi_list", "0"}, {"theta_list", "0,90,180,270"},
+                                                    {"mpe_a_um", "3"}, {"mpe_k_um_per_m", "5"}});
+  Truth perfect;
+  perfect.noise_um = 1.0;
+  std::vector<double> dL0;  // one length over seeds
+  double u0 = 0.0;
+  int old_rule_failed = 0;
+  for (std::uint64_t seed = 1; seed <= 12; ++seed) {
+    const SpaceframeAnalysis a = analyzeSpaceframe(plan, {simulate(plan, perfect, {seed})});
+    EXPECT_NE(a.verdict.decision, LengthDecision::Fail) << "seed " << seed << ": " << a.verdict.outside << " outside";
+    old_rule_failed += a.verdict.outside > 0;
+    dL0.push_back(mmToUm(a.lengths[3].dL_mm()));
+    u0 = a.lengths[3].u_um;
+  }
+  double ss = 0.0;
+  for (double d : dL0) ss += d * d;  // the truth is 0
+  const double rms = std::sqrt(ss / static_cast<double>(dL0.size()));
+  EXPECT_GE(old_rule_failed, 4);  // 6 of these 12 seeds: the old rule would fail here
+  EXPECT_GT(u0, 0.3);
+  EXPECT_NEAR(rms, u0, 0.45 * u0);  // 12 seeds: the rms itself scatters by about 20 %
+  Truth scaled = perfect;
+  scaled.linear_axis_error = [](const Eigen::Vector3d& c) { return Eigen::Vector3d(60e-6 * c); };
+  const SpaceframeAnalysis bad = analyzeSpaceframe(plan, {simulate(plan, scaled, {1})});
+  EXPECT_EQ(bad.verdict.decision, LengthDecision::Fail);
+  EXPECT_GT(bad.verdict.nonconforming, 0);
 }
 
 TEST(SpaceframeAnalysis, WithNoiseTheErrorsLieWithinTheirUncertainty) {
