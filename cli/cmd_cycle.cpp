@@ -93,10 +93,16 @@ int cmdPlan(const Common& c, const std::string& cycle_name, const std::string& m
   checkOutputs({{"-o", out}}, {machine_file});
   const MachineModel machine = loadMachine(machine_file);
   ProbePlan plan;
+  const CycleOptions options = parseSets(sets);
   try {
-    plan = makePlan(std::string(cycle->name()), machine, parseSets(sets));
+    plan = makePlan(std::string(cycle->name()), machine, options);
   } catch (const std::invalid_argument& e) {
-    failFile(machine_file, e.what());
+    // An option given with --set that the cycle refuses is a usage error naming it; a plan that
+    // does not fit the machine is the machine file's.
+    const std::string what = e.what();
+    for (const auto& [key, value] : options)
+      if (what.find(key) != std::string::npos) throw CLI::ValidationError("--set", what);
+    failFile(machine_file, what);
   }
   outputs.add("-o", out, planToJson(plan).dump(1) + "\n");
   outputs.commit();
