@@ -97,11 +97,11 @@ int cmdPlan(const Common& c, const std::string& cycle_name, const std::string& m
   try {
     plan = makePlan(std::string(cycle->name()), machine, options);
   } catch (const std::invalid_argument& e) {
-    // An option given with --set that the cycle refuses is a usage error naming it; a plan that
-    // does not fit the machine is the machine file's.
+    // An option given with --set that the cycle refuses is named as such, not as a fault of the
+    // machine file at line 0; a plan that does not fit the machine is the machine file's.
     const std::string what = e.what();
     for (const auto& [key, value] : options)
-      if (what.find(key) != std::string::npos) throw CLI::ValidationError("--set", what);
+      if (what.find(key) != std::string::npos) throw std::runtime_error("--set: " + what);
     failFile(machine_file, what);
   }
   outputs.add("-o", out, planToJson(plan).dump(1) + "\n");

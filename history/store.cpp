@@ -136,7 +136,7 @@ Calibration calibrationFromReport(const JsonDoc& doc, const std::string& machine
       p.unit = requireString(doc, e, "unit");
       // The trend compares values of one parameter across reports: each in the unit analyze
       // writes for its kind (um for lengths, mdeg for angles).
-      for (const Kinematics k : {Kinematics::TableAC, Kinematics::TableBC, Kinematics::HeadAB}) {
+      for (const Kinematics k : {Kinematics::TableAC, Kinematics::TableBC}) {  // head_ab has no location errors
         const int i = parameterIndex(k, name);
         if (i < 0) continue;
         const char* want = locationParameters(k)[i].kind == ParamKind::Length ? "um" : "mdeg";

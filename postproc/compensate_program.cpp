@@ -478,6 +478,10 @@ LocationErrors errorsFromReport(const JsonDoc& doc, Kinematics k, bool force) {
     if (!j.contains("location_errors") || !j["location_errors"].is_object())
       doc.fail(j, "location_errors", "the report has no 'location_errors'");
     const Json& errs = j["location_errors"];
+    if (k == Kinematics::HeadAB)
+      doc.fail(j, j.contains("machine_model") ? "machine_model" : "location_errors",
+               "a spindle-head machine (head_ab) has no table location errors to compensate: compensate rewrites "
+               "programs of table machines (table_ac, table_bc)");
     for (const auto& p : locationParameters(k))
       if (!errs.contains(std::string(p.name)))
         doc.fail(j, "location_errors",
@@ -504,7 +508,7 @@ LocationErrors errorsFromReport(const JsonDoc& doc, Kinematics k, bool force) {
         else doc.fail(entry, "unit", "unit of '" + name + "' must be mdeg, urad or rad");
       }
       const std::string why = ctl::implausibility(k, i, e.values[i]);
-      if (!why.empty() && !force) doc.fail(entry, "value", why + " (--force)");
+      if (!why.empty() && !force) doc.fail(errs, name, why + " (--force)");
     }
     return e;
   });
