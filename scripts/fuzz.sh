@@ -24,10 +24,12 @@ if ! command -v "$CXX_" >/dev/null; then
   echo "fuzz: $CXX_ not found (scripts/install-deps.sh installs clang and libclang-rt-14-dev)" >&2
   exit 1
 fi
-SAN="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer -g"
+# -O1 -gline-tables-only: what libFuzzer's documentation uses; a third less compile time than
+# -O2 -g (core/identification.cpp: 53 s of CPU instead of 77 s), with file:line in every report.
+SAN="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer -O1 -gline-tables-only"
 LAUNCH=()
 if command -v ccache >/dev/null; then LAUNCH=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
-cmake -S . -B "$B" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER="$CC_" -DCMAKE_CXX_COMPILER="$CXX_" \
+cmake -S . -B "$B" -DCMAKE_BUILD_TYPE=None -DCMAKE_C_COMPILER="$CC_" -DCMAKE_CXX_COMPILER="$CXX_" \
   "${LAUNCH[@]}" -DROTACAL_FUZZ=ON -DROTACAL_BUILD_TESTS=OFF -DROTACAL_BUILD_BENCH=OFF -DROTACAL_WERROR=OFF \
   -DCMAKE_CXX_FLAGS="$SAN" >/dev/null
 cmake --build "$B" --target "${HARNESSES[@]}" -j"$(nproc)"

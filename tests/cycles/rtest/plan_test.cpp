@@ -258,6 +258,10 @@ TEST(Rtest, ResultsCsvRoundTripAndStrictParser) {
   bad(h + "1,0,-30,0,1,2,3\n", 2);                  // angles differ from the plan
   bad(h + "1,0,-60,0,1,2,3\n1,1,-60,0,1,2,3\n", 3);  // incomplete cycle closed by a new one
   bad(h + "1,5,-60,0,1,2,3\n2,4,-60,72,1,2,3\n", 3);  // time runs backwards
+  // fuzz_rtest_results (UBSan): a pose id beyond int was cast before its range was checked.
+  bad(h + "211111111111111111111111111111111111111111,0,-60,0,1,2,3\n", 2);
+  bad(h + "-1e300,0,-60,0,1,2,3\n", 2);
+  bad(h + "1.5,0,-60,0,1,2,3\n", 2);
 }
 
 }  // namespace

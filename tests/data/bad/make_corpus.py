@@ -382,6 +382,8 @@ add('results', 'rtest_missing_reading.csv', '\n'.join(rl[:3] + rl[4:]), T_RT, 1,
 add('results', 'rtest_nan.csv', RT.replace('-4.5586', 'nan', 1), T_RT, 1, 'not a number', 'line')
 add('results', 'rtest_time_backwards.csv', RT.replace('9.078', '1.000', 1), T_RT, 1, 'backwards', 'line')
 add('results', 'rtest_empty.csv', '', T_RT, 1, '', 'line')
+add('results', 'rtest_pose_id_2e41.csv', '\n'.join(rl[:2] + ['2' + '1' * 41 + rl[2][1:]] + rl[3:]), T_RT, 1,
+    'not a pose id', 'line')  # fuzz_rtest_results: undefined int cast
 add('results', 'rtest_line_1mb.csv', '\n'.join(rl[:2] + [rl[2] + ',' * 1048576] + rl[3:]), T_RT, 1, '', 'line')
 TT = rd('tooltip.csv')
 T_TT = 'analyze --plan {base}/tooltip.plan.json --results {in} --dialect csv --json {out}.json'
