@@ -25,6 +25,8 @@
 
 namespace rotacal {
 
+constexpr size_t kMaxProgramLineChars = 1024;
+
 ProgramCheckResult verifyProgram(const std::string& text, const std::string& dialect, const MachineModel& machine,
                                  const ProbePlan* plan, bool rotacal_number, const LocationErrors* errors) {
   ProgramCheckSetup s;
@@ -42,7 +44,23 @@ ProgramCheckResult verifyProgram(const std::string& text, const std::string& dia
   } else if (rotacal_number) {
     for (const Cycle* c : cycles()) s.rotacal_numbers.push_back(c->programNumber());
   }
-  return checkProgram(ctl::readMotions(dialect, text), s);
+  ProgramCheckResult r = checkProgram(ctl::readMotions(dialect, text), s);
+  // What no control reads: an empty program, a line beyond the longest block any of the dialects
+  // takes (compensate's limit, 1024 characters; LinuxCNC stops at 255).
+  std::vector<ProgramViolation> text_problems;
+  if (text.find_first_not_of(" \t\r\n") == std::string::npos)
+    text_problems.push_back({1, "empty program: nothing to run"});
+  size_t start = 0;
+  for (int line = 1; start < text.size(); ++line) {
+    size_t end = text.find('\n', start);
+    if (end == std::string::npos) end = text.size();
+    if (end - start > kMaxProgramLineChars)
+      text_problems.push_back({line, fmt::format("line of {} characters: no control reads a block longer than {}",
+                                                 end - start, kMaxProgramLineChars)});
+    start = end + 1;
+  }
+  r.violations.insert(r.violations.begin(), text_problems.begin(), text_problems.end());
+  return r;
 }
 
 void requireSafeProgram(const std::string& text, const std::string& file, const std::string& dialect,
@@ -88,9 +106,12 @@ int cmdCheck(const Common& c, const std::string& program_file, const std::string
   if (!r.violations.empty()) {
     for (const auto& v : r.violations) std::printf("%s:%d: %s\n", program_file.c_str(), v.line, v.problem.c_str());
     std::fflush(stdout);
-    std::fprintf(stderr, "rotacal: error: %s: %zu violation%s\n", program_file.c_str(), r.violations.size(),
-                 r.violations.size() == 1 ? "" : "s");
-    return 1;
+    // The one line of the contract: the first violation where it is, and how many there are.
+    const ProgramViolation& v = r.violations.front();
+    throw InputError(program_file, v.line,
+                     r.violations.size() == 1
+                         ? v.problem
+                         : fmt::format("{} (and {} more violations, listed on stdout)", v.problem, r.violations.size() - 1));
   }
   say(c, checkSummary(program_file, text, r));
   return 0;

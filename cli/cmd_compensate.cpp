@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "cli/command.hpp"
+#include "cli/output.hpp"
 #include "controllers/common.hpp"
 #include "core/errors.hpp"
 #include "core/json_io.hpp"
@@ -36,46 +37,6 @@ NcSyntax syntaxOf(const std::string& dialect) {
                                           "siemens, okuma)");
 }
 
-// The identified location errors of a REPORT.json (contract.md), in mm / rad. All eight must
-// be there (a missing one would be compensated as 0 under a header that claims the report's
-// errors), and each must be plausible as a correction unless `force`.
-LocationErrors errorsFromReport(const JsonDoc& doc, Kinematics k, bool force) {
-  const Json& j = doc.value;
-  if (!j.is_object() || j.value("format", "") != "rotacal-report/1")
-    doc.fail("format", "not a rotacal report (expected \"format\": \"rotacal-report/1\")");
-  if (!j.contains("location_errors") || !j["location_errors"].is_object())
-    doc.fail("location_errors", "the report has no 'location_errors'");
-  for (const auto& p : locationParameters(k))
-    if (!j["location_errors"].contains(std::string(p.name)))
-      doc.fail("location_errors", fmt::format("'location_errors' lacks {}: compensate needs all {} location errors of "
-                                              "the machine's kinematics (a missing one is not zero)",
-                                              p.name, kNumLocationErrors));
-  LocationErrors e;
-  e.kinematics = k;
-  for (const auto& [name, entry] : j["location_errors"].items()) {
-    const int i = parameterIndex(k, name);
-    if (i < 0) doc.fail(name, "'" + name + "' is not a location error of this machine's kinematics");
-    if (!entry.is_object() || !entry.contains("value") || !entry["value"].is_number())
-      doc.fail(name, "'" + name + "' needs {\"value\": number, \"unit\": ...}");
-    const double v = entry["value"].get<double>();
-    const std::string unit = entry.value("unit", "");
-    const ParamKind kind = locationParameters(k)[i].kind;
-    if (kind == ParamKind::Length) {
-      if (unit == "um") e.values[i] = umToMm(v);
-      else if (unit == "mm") e.values[i] = v;
-      else doc.fail(name, "unit of '" + name + "' must be um or mm");
-    } else {
-      if (unit == "mdeg") e.values[i] = mdegToRad(v);
-      else if (unit == "urad") e.values[i] = v * 1e-6;
-      else if (unit == "rad") e.values[i] = v;
-      else doc.fail(name, "unit of '" + name + "' must be mdeg, urad or rad");
-    }
-    const std::string why = ctl::implausibility(k, i, e.values[i]);
-    if (!why.empty() && !force) doc.fail(name, why + " (--force)");
-  }
-  return e;
-}
-
 std::vector<double> parseTriple(const std::string& opt, const std::string& text) {
   std::vector<double> v;
   size_t start = 0;
@@ -100,6 +61,9 @@ int cmdCompensate(const Common& c, const std::string& program_file, const std::s
                   const std::string& machine_file, const std::string& dialect, const std::string& origin,
                   const std::string& out, bool force) {
   const NcSyntax syntax = syntaxOf(dialect);
+  std::vector<std::string> inputs = {program_file, report_file};
+  if (!machine_file.empty()) inputs.push_back(machine_file);
+  checkOutputs({{"-o", out}}, inputs);  // -o on an input is a usage error, before anything is read
   const JsonDoc report = readJsonFile(report_file);
   MachineModel machine;
   if (!machine_file.empty()) {
@@ -107,8 +71,8 @@ int cmdCompensate(const Common& c, const std::string& program_file, const std::s
   } else if (report.value.is_object() && report.value.contains("machine_model")) {
     machine = machineFromJson(report, report.value["machine_model"]);
   } else {
-    failFile(report_file, "the report does not carry its machine ('machine_model', written by analyze since this "
-                          "version): give --machine MACHINE.json");
+    report.fail(report.value, "", "the report does not carry its machine ('machine_model', written by analyze since "
+                                  "this version): give --machine MACHINE.json");
   }
   const LocationErrors errors = errorsFromReport(report, machine.kinematics, force);
   ProgramCompensationOptions opt;
@@ -126,6 +90,9 @@ int cmdCompensate(const Common& c, const std::string& program_file, const std::s
   opt.header.push_back(values);
   const std::string text = readTextFile(program_file);
   const ProgramCompensation r = compensateProgram(text, program_file, machine, errors, syntax, opt);
+  // The input, on the nominal machine it was written for: what makes it unsafe is named at its
+  // own line (the rewrite's lines are not the user's).
+  requireSafeProgram(text, program_file, dialect, machine, nullptr, false);
   // The program verifier (`rotacal check`) on the rewrite, before it is written: the guards follow
   // their moves, strokes, clearances on the machine's set-up - the machine with the errors it is
   // compensated for, where it keeps its planned gaps. The input's program number is kept.

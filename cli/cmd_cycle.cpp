@@ -94,10 +94,16 @@ int cmdPlan(const Common& c, const std::string& cycle_name, const std::string& m
   checkOutputs({{"-o", out}}, {machine_file});
   const MachineModel machine = loadMachine(machine_file);
   ProbePlan plan;
+  const CycleOptions options = parseSets(sets);
   try {
-    plan = makePlan(std::string(cycle->name()), machine, parseSets(sets));
+    plan = makePlan(std::string(cycle->name()), machine, options);
   } catch (const std::invalid_argument& e) {
-    failFile(machine_file, e.what());
+    // An option given with --set that the cycle refuses is named as such, not as a fault of the
+    // machine file at line 0; a plan that does not fit the machine is the machine file's.
+    const std::string what = e.what();
+    for (const auto& [key, value] : options)
+      if (what.find(key) != std::string::npos) throw std::runtime_error("--set: " + what);
+    failFile(machine_file, what);
   }
   outputs.add("-o", out, planToJson(plan).dump(1) + "\n");
   outputs.commit();

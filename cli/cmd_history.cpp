@@ -56,6 +56,8 @@ std::vector<Command> historyCommands(CLI::App& app, const Common& common) {
              if (!a->plan.empty()) c.plan_json = readJsonFile(a->plan).value.dump();
              const std::string path = dbPath();
              history::Database db(path);
+             // What is there already is read back first: a damaged history is refused, not added to.
+             (void)db.list(a->machine_id);
              const long long id = db.add(c);
              say(common, fmt::format("history: calibration {} of machine {} ({}) -> {}\n", id, a->machine_id, c.time_utc, path));
              return 0;

@@ -29,16 +29,19 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
+    // --help and --version print on stdout; every other parse error is one line on stderr.
+    if (e.get_exit_code() == 0) return app.exit(e);
+    std::fprintf(stderr, "rotacal: usage error: %s (see --help)\n", oneLine(e.what()).c_str());
+    return 2;
   }
   try {
     for (const auto& c : commands)
       if (c.sub->parsed()) return c.run();
   } catch (const CLI::ValidationError& e) {
-    std::fprintf(stderr, "rotacal: usage error: %s\n", e.what());
+    std::fprintf(stderr, "rotacal: usage error: %s\n", oneLine(e.what()).c_str());
     return 2;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "rotacal: error: %s\n", e.what());
+    std::fprintf(stderr, "rotacal: error: %s\n", oneLine(e.what()).c_str());
     return 1;
   }
   return 2;

@@ -11,6 +11,7 @@
 
 #include "controllers/result_checks.hpp"
 #include "core/errors.hpp"
+#include "core/limits.hpp"
 #include "core/units.hpp"
 
 namespace rotacal::ctl {
@@ -144,6 +145,10 @@ void PointCollector::add(int line, int id, const Eigen::Vector3d& p, double t_s)
   const auto it = seen_line_.find(id);
   if (it != seen_line_.end())
     fail(file_, line, fmt::format("point {} appears twice (first at line {})", id, it->second));
+  // The clock of simulate --start-s and of the controllers: 0 to kMaxClockSeconds (NaN: unknown).
+  if (!std::isnan(t_s) && !(t_s >= 0.0 && t_s <= kMaxClockSeconds))
+    fail(file_, line, fmt::format("time {:g} s of point {} is outside the clock's range 0 to {:g} s", t_s, id,
+                                  kMaxClockSeconds));
   requireOnProbingMove(plan_, *point, p, file_, line);
   seen_line_[id] = line;
   run_.points.push_back({id, p, t_s});

@@ -89,6 +89,9 @@ Eigen::Vector3d vecFrom(const JsonDoc& doc, const Json& obj, const char* key, co
 Pose poseFrom(const JsonDoc& doc, const Json& obj) {
   const Json& j = requireObject(doc, obj, "pose");
   const Limits angle = Limits::symmetric(kMaxAngleDeg, "deg");
+  for (const auto& [key, value] : j.items())
+    if (key != "A" && key != "B" && key != "C")
+      doc.fail(j, key, "pose axis '" + key + "' is not a rotary axis (A, B or C)");
   Pose p;
   p.A = numberOr(doc, j, "A", 0.0, angle);
   p.B = numberOr(doc, j, "B", 0.0, angle);
@@ -136,6 +139,25 @@ void checkHeights(const JsonDoc& doc, const Json& j, const ProbePlan& plan, cons
                          plan.index_z_mm, highest + r, highest_pose));
 }
 
+// A pose names only the machine's rotary axes, each inside its stroke (a hand-edited pose would
+// otherwise reach the program or the analysis unchecked).
+void checkPoseOnMachine(const JsonDoc& doc, const Json& obj, const MachineModel& m, const Pose& pose) {
+  const Json& j = obj["pose"];
+  for (const auto& [key, value] : j.items()) {
+    bool known = false;
+    for (const auto& r : m.rotary) known = known || std::string(1, r.name) == key;
+    if (!known) doc.fail(j, key, "pose axis '" + key + "' is not a rotary axis of this machine (" +
+                                     std::string(kinematicsName(m.kinematics)) + ")");
+  }
+  for (const auto& r : m.rotary) {
+    const double ang = r.name == 'A' ? pose.A : (r.name == 'B' ? pose.B : pose.C);
+    if (!r.continuous && !r.stroke_deg.contains(ang))
+      doc.fail(j, std::string(1, r.name),
+               fmt::format("{} = {:g} deg is outside the {} stroke [{:g}, {:g}] deg", r.name, ang, r.name,
+                           r.stroke_deg.min, r.stroke_deg.max));
+  }
+}
+
 ProbePlan planFrom(const JsonDoc& doc, const PlanRules& rules) {
   const Json& j = doc.value;
   if (!j.is_object() || !j.contains("format") || j["format"] != "rotacal-plan/1")
@@ -158,6 +180,7 @@ ProbePlan planFrom(const JsonDoc& doc, const PlanRules& rules) {
     PlanPose pp;
     pp.name = requireString(doc, p, "name");
     pp.pose = poseFrom(doc, p);
+    checkPoseOnMachine(doc, p, plan.machine, pp.pose);
     pp.safe_z_mm = requireNumber(doc, p, "safe_z_mm", coord);
     if (!names.insert(pp.name).second) doc.fail(p, "name", "pose name '" + pp.name + "' appears twice");
     plan.poses.push_back(pp);
@@ -175,6 +198,13 @@ ProbePlan planFrom(const JsonDoc& doc, const PlanRules& rules) {
     if (!names.empty() && !names.count(p.pose_name))
       doc.fail(q, "pose_name", fmt::format("point {}: pose '{}' is not among the plan's poses", p.id, p.pose_name));
     p.pose = poseFrom(doc, q);
+    checkPoseOnMachine(doc, q, plan.machine, p.pose);
+    // A touch is made at its pose (a tool-tip sweep moves within its pose: not a touch).
+    for (const auto& pp : plan.poses)
+      if (rules.heights && rules.artefact_touched && pp.name == p.pose_name &&
+          (std::abs(pp.pose.A - p.pose.A) > 1e-9 || std::abs(pp.pose.B - p.pose.B) > 1e-9 ||
+           std::abs(pp.pose.C - p.pose.C) > 1e-9))
+        doc.fail(q, "pose", fmt::format("point {}: its pose is not that of pose '{}' it names", p.id, p.pose_name));
     p.target = intOr(doc, q, "target", p.id, 0, kMaxPlanPoints);
     try {
       p.face = faceFromName(stringOr(doc, q, "face", "top"));
@@ -190,6 +220,21 @@ ProbePlan planFrom(const JsonDoc& doc, const PlanRules& rules) {
     if (std::abs(p.approach_m.norm() - 1.0) > 1e-6)
       doc.fail(q, "approach_m",
                fmt::format("point {}: approach_m must be a unit vector (length {:g})", p.id, p.approach_m.norm()));
+    const MachineModel& m = plan.machine;
+    const AxisRange* linear[3] = {&m.x, &m.y, &m.z};
+    for (int a = 0; a < 3; ++a)
+      if (!linear[a]->contains(p.trigger_m_mm[a]))
+        doc.fail(q, "trigger_m_mm",
+                 fmt::format("point {}: trigger_m_mm {} = {:g} mm is outside the {} stroke [{:g}, {:g}] mm", p.id,
+                             "XYZ"[a], p.trigger_m_mm[a], "XYZ"[a], linear[a]->min, linear[a]->max));
+    // A probing move goes toward the surface it touches (a reversed one would start inside it).
+    if (rules.heights && rules.artefact_touched) {
+      const Eigen::Vector3d n_m = T_m_w_nominal(m.kinematics, p.pose).linear() * p.normal_w;
+      if (n_m.dot(p.approach_m) > -1e-9)
+        doc.fail(q, "approach_m",
+                 fmt::format("point {}: approach_m does not move toward the surface (its normal at the pose is "
+                             "({:.3f}, {:.3f}, {:.3f}))", p.id, n_m.x(), n_m.y(), n_m.z()));
+    }
     p.t_s = numberOr(doc, q, "t_s", 0.0, Limits::nonNegative(kMaxClockSeconds, "s"));
     if (q.contains("sphere")) {
       const Json& sj = requireObject(doc, q, "sphere");

@@ -124,11 +124,14 @@ Eigen::Vector3d vec3Or(const JsonDoc& doc, const Json& obj, const char* key, con
   return v;
 }
 
-// The plausible size of a simulated error in each unit a truth file may use.
-Limits lengthLimits(const std::string& unit) {
+// The plausible size of a simulated error in each unit a truth file may use. Limits keeps its
+// unit as a view: `unit` is a literal or the caller's string, never a temporary (a
+// `const std::string&` here bound angleLimits("mrad") to one that died at once: fuzz_truth,
+// AddressSanitizer stack-use-after-scope in the message of an out-of-range rotation_mrad).
+Limits lengthLimits(std::string_view unit) {
   return Limits::symmetric(unit == "mm" ? kMaxLocationErrorUm / 1000.0 : kMaxLocationErrorUm, unit);
 }
-Limits angleLimits(const std::string& unit) {
+Limits angleLimits(std::string_view unit) {
   const double mdeg = kMaxAngleErrorMdeg;
   if (unit == "urad") return Limits::symmetric(mdegToRad(mdeg) * 1e6, unit);
   if (unit == "mrad") return Limits::symmetric(mdegToRad(mdeg) * 1e3, unit);

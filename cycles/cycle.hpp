@@ -201,5 +201,7 @@ ProbePlan makePlan(const std::string& cycle, const MachineModel& machine, const 
 
 /// PLAN.json read with the rules of the cycle it names (an unknown cycle: the format alone).
 ProbePlan loadCyclePlan(const std::string& path);
+/// The same from a document already read (the fuzz harness of the plan loader).
+ProbePlan cyclePlanFromJson(const JsonDoc& doc);
 
 }  // namespace rotacal

@@ -88,17 +88,21 @@ ProbePlan makePlan(const std::string& cycle, const MachineModel& machine, const 
   return plan;
 }
 
-ProbePlan loadCyclePlan(const std::string& path) {
-  const JsonDoc doc = readJsonFile(path);
+ProbePlan loadCyclePlan(const std::string& path) { return cyclePlanFromJson(readJsonFile(path)); }
+
+ProbePlan cyclePlanFromJson(const JsonDoc& doc) {
   PlanRules rules;
   if (doc.value.is_object() && doc.value.contains("cycle") && doc.value["cycle"].is_string()) {
     ProbePlan named;
     named.cycle = doc.value["cycle"].get<std::string>();
+    const Cycle* cycle = nullptr;
     try {
-      rules = cycleOfPlan(named).planRules();
-    } catch (const std::invalid_argument&) {
-      // unknown: the loader checks the format; the caller names the cycle it cannot find
+      cycle = &cycleOfPlan(named);
+    } catch (const std::invalid_argument& e) {
+      // A plan of a cycle this rotacal does not know: named at its "cycle" (after the format).
+      if (doc.value.contains("format") && doc.value["format"] == "rotacal-plan/1") doc.fail(doc.value, "cycle", e.what());
     }
+    if (cycle) rules = cycle->planRules();
   }
   return planFromJson(doc, rules);
 }

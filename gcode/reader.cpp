@@ -1,5 +1,7 @@
 #include "gcode/reader.hpp"
 
+#include <fmt/format.h>
+
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -128,7 +130,12 @@ void readWords(std::string_view s, Block& b) {
       continue;
     }
     if (!isAlpha(s[i])) {
-      b.issues.push_back(std::string("unexpected character '") + s[i] + "'");
+      {
+        // Shown as itself when printable, else as \xNN: a NUL or a line end never reaches a message.
+        const auto u = static_cast<unsigned char>(s[i]);
+        b.issues.push_back(u >= 0x20 && u < 0x7f ? std::string("unexpected character '") + s[i] + "'"
+                                                 : fmt::format("unexpected character \\x{:02x}", u));
+      }
       ++i;
       continue;
     }

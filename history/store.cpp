@@ -1,5 +1,7 @@
 #include "history/store.hpp"
 
+#include "core/error_model.hpp"
+
 #include <sqlite3.h>
 
 #include <cctype>
@@ -132,6 +134,15 @@ Calibration calibrationFromReport(const JsonDoc& doc, const std::string& machine
       p.value = requireNumber(doc, e, "value", Limits::symmetric(kMaxStoredValue));
       p.u = requireNumber(doc, e, "u", Limits::nonNegative(kMaxStoredValue));
       p.unit = requireString(doc, e, "unit");
+      // The trend compares values of one parameter across reports: each in the unit analyze
+      // writes for its kind (um for lengths, mdeg for angles).
+      for (const Kinematics k : {Kinematics::TableAC, Kinematics::TableBC}) {  // head_ab has no location errors
+        const int i = parameterIndex(k, name);
+        if (i < 0) continue;
+        const char* want = locationParameters(k)[i].kind == ParamKind::Length ? "um" : "mdeg";
+        if (p.unit != want) doc.fail(e, "unit", fmt::format("unit of '{}' must be {} (got '{}')", name, want, p.unit));
+        break;
+      }
       p.iso = stringOr(doc, e, "iso", "");
       c.parameters.push_back(p);
     }
@@ -173,9 +184,27 @@ Database::Database(const std::string& path, bool create) : path_(path) {
       sqlite3_step(st.s);
       if (sqlite3_column_int(st.s, 0) != 0) fail("not a rotacal history database (it holds other tables)");
     }
-    exec(kSchema);
-    exec("INSERT OR IGNORE INTO meta(key, value) VALUES('format', 'rotacal-history/1')");
-    exec(("INSERT OR IGNORE INTO meta(key, value) VALUES('schema_version', '" + std::to_string(kSchemaVersion) + "')").c_str());
+    // A new file gets the schema; an existing one must have all of it (recreating a dropped
+    // table would hide the damage and change a file that `show` only reads).
+    int present = 0;
+    {
+      Stmt st;
+      if (sqlite3_prepare_v2(db_.get(), "SELECT count(*) FROM sqlite_master WHERE type='table' AND name IN "
+                                  "('meta','calibration','parameter')",
+                             -1, &st.s, nullptr) != SQLITE_OK)
+        fail("cannot read the schema");
+      sqlite3_step(st.s);
+      present = sqlite3_column_int(st.s, 0);
+    }
+    if (present != 0 && present != 3)
+      fail("damaged history: tables meta, calibration and parameter are not all there; keep the file for inspection "
+           "and use --db NEW_FILE");
+    if (present == 0 && !create) fail("not a rotacal history database (it holds no calibration table)");
+    if (present == 0) {
+      exec(kSchema);
+      exec("INSERT OR IGNORE INTO meta(key, value) VALUES('format', 'rotacal-history/1')");
+      exec(("INSERT OR IGNORE INTO meta(key, value) VALUES('schema_version', '" + std::to_string(kSchemaVersion) + "')").c_str());
+    }
     {
       Stmt st;
       if (sqlite3_prepare_v2(db_.get(), "SELECT value FROM meta WHERE key='schema_version'", -1, &st.s, nullptr) != SQLITE_OK ||

@@ -13,12 +13,12 @@
 #include "controllers/common.hpp"
 #include "controllers/dialect.hpp"
 #include "core/errors.hpp"
+#include "core/units.hpp"
 #include "gcode/reader.hpp"
 
 namespace rotacal {
 namespace {
 
-constexpr double kMmPerInch = 25.4;
 // The rotary words are compared as printed and parsed back: only the double's own rounding.
 constexpr double kRotaryStrokeTolDeg = 1e-9;
 // Written at the top of every compensated program, refused in an input program.
@@ -190,6 +190,7 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
     pending.reset();
   };
 
+  std::optional<double> work_offset;  // G54 ... as first selected
   for (size_t bi = 0; bi < blocks.size(); ++bi) {
     if (bi == header_at) emitHeader();
     emitting_line = blocks[bi].line;
@@ -240,17 +241,18 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
         continue;
       }
     }
-    if (!b.issues.empty()) fail(b.line, b.issues.front());
-    if (b.control || b.percent || b.words.empty()) {
-      emit(b.raw);
-      continue;
-    }
+    // Frame changes first: the tokenizer reads TRAORI as words T, R, A, ... and would name those.
     const std::string code_upper = upper(b.code);
     for (const char* kw : {"TRAORI", "TRANSMIT", "TRACYL", "CYCLE800", "ROT ", "AROT", "TRANS ", "ATRANS"})
       if (code_upper.find(kw) != std::string::npos)
         fail(b.line, fmt::format("{} changes the coordinate frame inside the program: compensate a program in plain "
                                  "machine coordinates, or through the kinematics (analyze --offsets)",
                                  std::string(kw)));
+    if (!b.issues.empty()) fail(b.line, b.issues.front());
+    if (b.control || b.percent || b.words.empty()) {
+      emit(b.raw);
+      continue;
+    }
     bool machine_coords = false, home = false;
     for (const auto& w : b.words) {
       if (w.letter != 'G') continue;
@@ -265,7 +267,14 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
       else if (is(2) || is(3)) m.motion = Modal::Motion::Arc;
       else if (is(53)) machine_coords = true;
       else if (is(28) || is(30)) home = true;
-      else if (is(10) || is(92) || is(52))
+      else if ((g >= 54 && g <= 59.3) || is(505)) {
+        // The work offset the program zero (--program-origin) is: chosen once, before any move.
+        if ((work_offset && std::abs(*work_offset - g) > 1e-9) || (!work_offset && out.motion_blocks > 0))
+          fail(b.line, fmt::format("G{} changes the work offset inside the program: the rewrite knows one program "
+                                   "zero (--program-origin); compensate each work offset's part separately",
+                                   w.text));
+        work_offset = g;
+      } else if (is(10) || is(92) || is(52))
         fail(b.line, fmt::format("G{} changes an offset inside the program: the rewrite cannot know the new program "
                                  "zero; set offsets before the program and give --program-origin",
                                  w.text));
@@ -456,6 +465,53 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
       fail(std::max(src, 1), fmt::format("the rewritten line fails the {} checker: {}", syntax.dialect, what));
   }
   return out;
+}
+
+// The identified location errors of a REPORT.json (contract.md), in mm / rad. All eight must
+// be there (a missing one would be compensated as 0 under a header that claims the report's
+// errors), and each must be plausible as a correction unless `force`.
+LocationErrors errorsFromReport(const JsonDoc& doc, Kinematics k, bool force) {
+  return guardJson(doc, [&] {
+    const Json& j = doc.value;
+    if (!j.is_object() || !j.contains("format") || j["format"] != "rotacal-report/1")
+      doc.fail(j, "format", "not a rotacal report (expected \"format\": \"rotacal-report/1\")");
+    if (!j.contains("location_errors") || !j["location_errors"].is_object())
+      doc.fail(j, "location_errors", "the report has no 'location_errors'");
+    const Json& errs = j["location_errors"];
+    if (k == Kinematics::HeadAB)
+      doc.fail(j, j.contains("machine_model") ? "machine_model" : "location_errors",
+               "a spindle-head machine (head_ab) has no table location errors to compensate: compensate rewrites "
+               "programs of table machines (table_ac, table_bc)");
+    for (const auto& p : locationParameters(k))
+      if (!errs.contains(std::string(p.name)))
+        doc.fail(j, "location_errors",
+                 fmt::format("'location_errors' lacks {}: compensate needs all {} location errors of the machine's "
+                             "kinematics (a missing one is not zero)",
+                             p.name, kNumLocationErrors));
+    LocationErrors e;
+    e.kinematics = k;
+    for (const auto& [name, entry] : errs.items()) {
+      const int i = parameterIndex(k, name);
+      if (i < 0) doc.fail(errs, name, "'" + name + "' is not a location error of this machine's kinematics");
+      if (!entry.is_object()) doc.fail(errs, name, "'" + name + "' needs {\"value\": number, \"unit\": ...}");
+      const double v = requireNumber(doc, entry, "value");
+      const std::string unit = requireString(doc, entry, "unit");
+      const ParamKind kind = locationParameters(k)[i].kind;
+      if (kind == ParamKind::Length) {
+        if (unit == "um") e.values[i] = umToMm(v);
+        else if (unit == "mm") e.values[i] = v;
+        else doc.fail(entry, "unit", "unit of '" + name + "' must be um or mm");
+      } else {
+        if (unit == "mdeg") e.values[i] = mdegToRad(v);
+        else if (unit == "urad") e.values[i] = v * 1e-6;
+        else if (unit == "rad") e.values[i] = v;
+        else doc.fail(entry, "unit", "unit of '" + name + "' must be mdeg, urad or rad");
+      }
+      const std::string why = ctl::implausibility(k, i, e.values[i]);
+      if (!why.empty() && !force) doc.fail(errs, name, why + " (--force)");
+    }
+    return e;
+  });
 }
 
 }  // namespace rotacal

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/compensation.hpp"
+#include "core/json_io.hpp"
 #include "core/machine.hpp"
 
 namespace rotacal {
@@ -54,6 +55,12 @@ struct ProgramCompensation {
 /// rewrite that the dialect's own checker finds a problem in that the input does not have.
 /// Lines longer than 1024 characters and exponent notation (X1e2) are refused too. Throws
 /// std::invalid_argument for heidenhain or csv (not word-address G-code) or an unknown dialect.
+/// The identified location errors of a REPORT.json (contract.md), in mm / rad. All of the
+/// kinematics' location errors must be there (a missing one would be compensated as 0 under a
+/// header that claims the report's errors), and each must be plausible as a correction unless
+/// `force`. Throws InputError(report file, line, why).
+LocationErrors errorsFromReport(const JsonDoc& doc, Kinematics k, bool force);
+
 ProgramCompensation compensateProgram(const std::string& text, const std::string& file, const MachineModel& machine,
                                       const LocationErrors& errors, const NcSyntax& syntax,
                                       const ProgramCompensationOptions& options);

@@ -1,5 +1,6 @@
 #include "cycles/tooltip/plan.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <set>
@@ -331,7 +332,7 @@ TooltipRun parseTooltipResults(const std::string& text, const std::string& file,
                                                   v[0], want));
     run.push_back({v[0], v[1], v[2]});
   }
-  if (!seen_header) throw InputError(file, line_no, "empty results file (expected the header '" + header + "')");
+  if (!seen_header) throw InputError(file, std::max(line_no, 1), "empty results file (expected the header '" + header + "')");
   if (run.size() != plan.points.size())
     throw InputError(file, line_no, fmt::format("{} readings, the plan has {} poses", run.size(), plan.points.size()));
   return run;

@@ -31,6 +31,14 @@ class Touch154 final : public Cycle {
   ProbePlan plan(const MachineModel& machine, const CycleOptions& options) const override {
     return makeTouch154Plan(machine, options);
   }
+  PlanRules planRules() const override {
+    PlanRules r;
+    // The layout options a touch154 plan records (a designed plan records its design instead).
+    r.check_options = [](const ProbePlan& p) {
+      if (p.cycle == "touch154") (void)Touch154Layout::fromOptions(p.options);
+    };
+    return r;
+  }
   int programNumber() const override { return 7154; }  // 7154: the 154 touches of 000; the others are 7000 + their source document.
   nc::Program buildProgram(const ProbePlan& plan, const std::string& dialect) const override {
     return probeProgram(plan, dialect);

@@ -20,6 +20,7 @@
 #include "core/simulation.hpp"
 #include "cycles/cycle.hpp"
 #include "cycles/spheres3/analyze.hpp"
+#include "history/store.hpp"
 #include "test_util.hpp"
 
 namespace rotacal {
@@ -389,6 +390,41 @@ TEST(TruthValidation, ImplausibleOrIllTypedErrorsAreRefusedAtTheirLine) {
     SCOPED_TRACE(c.to);
     const auto [text, line] = mutate(base, c);
     expectRefusedAt(text, line, c.says, "t.json", load);
+  }
+}
+
+// fuzz_truth (AddressSanitizer, stack-use-after-scope): the limits of rotation_mrad kept their
+// unit as a view of a temporary string, so the refusal printed whatever the stack held there.
+// The message must end in the unit itself (under scripts/sanitize.sh the old code aborts here).
+TEST(TruthValidation, AnOutOfRangeRotationNamesItsUnit) {
+  const std::string text = R"({"format": "rotacal-truth/1",
+ "setup_error": {"rotation_mrad": [0.0, 0.0, 1e300]}})";
+  try {
+    (void)truthFromJson(parseJsonText(text, "t.json"), Kinematics::TableAC);
+    FAIL() << "accepted";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(e.line(), 2) << what;
+    EXPECT_NE(what.find("rotation_mrad"), std::string::npos) << what;
+    EXPECT_NE(what.find(" mrad (got 1e+300)"), std::string::npos) << what;
+  }
+}
+
+// fuzz_report: a report whose location errors carry a head_ab parameter name made history's
+// unit check ask head_ab for its location errors, which throws std::invalid_argument (no file,
+// no line). Such a report is read like any other.
+TEST(ReportValidation, HistoryReadsAReportOfAnyKinematics) {
+  const std::string text = R"({"format": "rotacal-report/1", "cycle": "tooltip", "residual_rms_um": 0.5,
+ "location_errors": {"dR": {"value": 3.0, "u": 0.2, "unit": "um"}}})";
+  EXPECT_NO_THROW((void)history::calibrationFromReport(parseJsonText(text, "r.json"), "m1", 1.7e9));
+  const std::string inch = R"({"format": "rotacal-report/1", "cycle": "touch154", "residual_rms_um": 0.5,
+ "location_errors": {"dx_AY": {"value": 3.0, "u": 0.2, "unit": "inch"}}})";
+  try {
+    (void)history::calibrationFromReport(parseJsonText(inch, "r.json"), "m1", 1.7e9);
+    FAIL() << "accepted a length in inch";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line(), 2) << e.what();
+    EXPECT_NE(std::string(e.what()).find("must be um"), std::string::npos) << e.what();
   }
 }
 

@@ -524,6 +524,10 @@ TEST(Rtest, ResultsCsvRoundTripAndStrictParser) {
   ASSERT_EQ(no_reread.substr(no_reread.rfind('\n', no_reread.size() - 2) + 1, 3), "25,");
   bad(no_reread, 27);  // end of file: cycle 1 has a reset but no re-read
   bad(no_reread + "1,99999,-60,0,1,2,3\n", 28);
+  // fuzz_rtest_results (UBSan): a pose id beyond int was cast before its range was checked.
+  bad(h + "211111111111111111111111111111111111111111,0,-60,0,1,2,3\n", 2);
+  bad(h + "-1e300,0,-60,0,1,2,3\n", 2);
+  bad(h + "1.5,0,-60,0,1,2,3\n", 2);
 }
 
 }  // namespace
