@@ -5,6 +5,8 @@
 // +-U (k = 2) of the estimate, per parameter. Claimed: about 95 %; accepted: 93-97 %
 // (docs/uncertainty.md). Printed, not asserted.
 // Run: build/bench/rotacal_coverage_bench [machines] [method: lsq_per_point|closed_form]
+//      build/bench/rotacal_coverage_bench rtest [machines]   (the R-test cycle: bc_trunnion with
+//      its declared contributors, examples/contributors/rtest_002.json; analyze's rtestBudget)
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -18,10 +20,80 @@
 #include "cycles/touch154/budget.hpp"
 #include "cycles/touch154/closed_form.hpp"
 #include "cycles/touch154/uncertainty.hpp"
+#include "cycles/rtest/analyze.hpp"
+#include "cycles/rtest/budget.hpp"
 
 using namespace rotacal;
 
+namespace {
+
+// The R-test: every machine draws its location errors and every declared contributor (the Type
+// B ones through drawRtest, on the exact simulator; sensor noise and sphere form per reading),
+// and is analyzed as `analyze` does (analyzeRtest + rtestBudget, 1000 Monte Carlo runs).
+int rtestCoverage(int machines) {
+  const MachineModel machine = loadMachine(ROTACAL_SOURCE_DIR "/examples/machines/bc_trunnion.json");
+  const ProbePlan plan = makePlan("rtest", machine, {});
+  const ContributorSet& cs = *machine.contributors;
+  const double sensor_um = 0.2;  // the plan's sensor_noise_um (002 Table 1)
+  const double form_um = cs.find("rtest_sphere_form") ? mmToUm(cs.find("rtest_sphere_form")->u[0]) : 0.0;
+  const auto& params = locationParameters(machine.kinematics);
+  const double sd_um = 20.0, sd_mdeg = 2.0;
+  int inside[kNumLocationErrors] = {}, inside_1u[kNumLocationErrors] = {};
+  double e2[kNumLocationErrors] = {}, uc2[kNumLocationErrors] = {}, ua2[kNumLocationErrors] = {};
+  int done = 0;
+  for (int m = 0; m < machines; ++m) {
+    Rng rng(778, static_cast<std::uint64_t>(m));
+    Truth t;
+    t.errors.kinematics = machine.kinematics;
+    for (int i = 0; i < kNumLocationErrors; ++i)
+      t.errors.setReportValue(i, (params[i].kind == ParamKind::Length ? sd_um : sd_mdeg) * rng.normal());
+    RtestDraw d;
+    drawRtest(plan, cs, 4343, m, -1, &d);
+    RtestTruthExtras x;
+    applyRtestDraw(plan, d, &t, &x);
+    RtestSimOptions so;
+    so.seed = static_cast<std::uint64_t>(m) + 1;
+    so.noise_um = std::hypot(sensor_um, form_um);
+    so.cycles = 1;
+    const RtestSeries s = simulateRtest(plan, t, x, so);
+    RtestFitOptions fo;
+    fo.sensor_sigma_um = sensor_um;
+    const RtestAnalysis a = analyzeRtest(plan, s.cycles, fo);
+    if (!a.location.identifiable) continue;
+    RtestBudgetOptions bo;
+    bo.runs = 1000;
+    bo.alone_runs = 0;
+    const UncertaintyBudget b = rtestBudget(plan, s.cycles.front(), a.location, sensor_um, &cs, bo);
+    const Eigen::VectorXd uc = b.uC(), ua = b.uA();
+    LocationErrors est;
+    est.kinematics = machine.kinematics;
+    est.values = a.location.value;
+    for (int i = 0; i < kNumLocationErrors; ++i) {
+      const double err = std::abs(est.reportValue(i) - t.errors.reportValue(i));
+      inside[i] += err <= kCoverageFactor * uc[i];
+      inside_1u[i] += err <= uc[i];
+      e2[i] += err * err;
+      uc2[i] += uc[i] * uc[i];
+      ua2[i] += ua[i] * ua[i];
+    }
+    ++done;
+    if (done % 50 == 0) std::fprintf(stderr, "%d machines\n", done);
+  }
+  std::printf("rtest: %d machines drawn from %s (true errors sd %.0f um / %.0f mdeg, sensor noise %.2f um, form %.2f um)\n",
+              done, cs.file.c_str(), sd_um, sd_mdeg, sensor_um, form_um);
+  std::printf("%-8s %12s %12s %10s %10s %10s\n", "param", "within U", "within u", "rms e", "rms u_c", "rms u_A");
+  for (int i = 0; i < kNumLocationErrors; ++i)
+    std::printf("%-8s %11.1f%% %11.1f%% %10.3f %10.3f %10.3f  %s\n", std::string(params[i].name).c_str(),
+                100.0 * inside[i] / done, 100.0 * inside_1u[i] / done, std::sqrt(e2[i] / done), std::sqrt(uc2[i] / done),
+                std::sqrt(ua2[i] / done), std::string(reportUnit(params[i].kind)).c_str());
+  std::printf("claimed: 95.4 %% within U (k = 2), 68.3 %% within u; accepted 93-97 %% (docs/uncertainty.md)\n");
+  return 0;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
+  if (argc > 1 && std::string(argv[1]) == "rtest") return rtestCoverage(argc > 2 ? std::atoi(argv[2]) : 500);
   const int machines = argc > 1 ? std::atoi(argv[1]) : 500;
   const std::string method_name = argc > 2 ? argv[2] : "lsq_per_point";
   const Method method = methodFromName(method_name);

@@ -36,6 +36,14 @@ const std::vector<ContributorInfo>& contributorCatalog() {
       {"setup_orientation", K::SetupOrientation, -1, -1, "test piece: orientation error around X, Y, Z"},
       {"surface_roughness", K::SurfaceRoughness, -1, -1, "test piece: surface roughness under the ball, per touch"},
       {"form_error", K::FormError, -1, -1, "test piece: form of each face (offset along the normal, two tilts)"},
+      {"rtest_sensor_gain", K::RtestSensorGain, -1, -1, "R-test: gain (calibration) error of each displacement sensor"},
+      {"rtest_sensor_direction", K::RtestSensorDirection, -1, -1,
+       "R-test: direction of each sensor in the nest calibrated wrong (cross-talk between sensors)"},
+      {"rtest_sphere_form", K::RtestSphereForm, -1, -1, "R-test: form of the sphere at each contact, per reading"},
+      {"rtest_sphere_offset", K::RtestSphereOffset, -1, -1,
+       "R-test: sphere centre off its calibrated place on the spindle (runout, tool length) in X, Y, Z"},
+      {"rtest_cycle_drift", K::RtestCycleDrift, -1, -1,
+       "R-test: thermal drift of the sphere against the table over one measuring cycle in X, Y, Z"},
   };
   return c;
 }
@@ -116,9 +124,16 @@ Quantity quantityOf(ContributorKind k) {
   switch (k) {
     case ContributorKind::LinearScale:
     case ContributorKind::Squareness:
-    case ContributorKind::SetupOrientation: return Quantity::Ratio;
+    case ContributorKind::SetupOrientation:
+    case ContributorKind::RtestSensorGain:
+    case ContributorKind::RtestSensorDirection: return Quantity::Ratio;
     default: return Quantity::Length;
   }
+}
+
+bool isVectorKind(ContributorKind k) {
+  return k == ContributorKind::SetupPosition || k == ContributorKind::SetupOrientation ||
+         k == ContributorKind::RtestSphereOffset || k == ContributorKind::RtestCycleDrift;
 }
 
 /// The largest standard uncertainty of a contributor in internal units (mm, or a ratio / rad).
@@ -227,7 +242,7 @@ ContributorSet contributorsFrom(const JsonDoc& doc, const Json& j) {
       c.u[1] = readU(doc, e, "tilt", Quantity::Ratio, false, &u2)[0];
       c.unit = u1 + ", " + u2;
     } else {
-      const bool vec = info.kind == ContributorKind::SetupPosition || info.kind == ContributorKind::SetupOrientation;
+      const bool vec = isVectorKind(info.kind);
       c.u = readU(doc, cs, id, quantityOf(info.kind), vec, &c.unit);
     }
     set.items.push_back(c);
@@ -263,7 +278,7 @@ Json contributorsToJson(const ContributorSet& set) {
       e["offset"] = {{"u", mmToUm(c.u[0])}, {"unit", "um"}};
       e["tilt"] = {{"u", c.u[1] * 1e3}, {"unit", "mrad"}};
     } else if (quantityOf(k) == Quantity::Length) {
-      if (k == ContributorKind::SetupPosition) e["u"] = {mmToUm(c.u[0]), mmToUm(c.u[1]), mmToUm(c.u[2])};
+      if (isVectorKind(k)) e["u"] = {mmToUm(c.u[0]), mmToUm(c.u[1]), mmToUm(c.u[2])};
       else e["u"] = mmToUm(c.u[0]);
       e["unit"] = "um";
     } else {

@@ -7,6 +7,9 @@
 // E_xx_rand, E_yx_rand, E_zx_rand, E_yy_lin, E_yy_rand, E_xy_rand, E_zy_rand, S_xy, E_zz_lin,
 // E_zz_rand, E_xz_rand, E_yz_rand, S_xz, S_yz, setup_position, setup_orientation,
 // surface_roughness; and form_error (the test piece's own form, which 000 leaves out).
+// The R-test's own (002; used by the rtest cycle, ignored by the touch cycles): rtest_sensor_gain,
+// rtest_sensor_direction, rtest_sphere_form, rtest_sphere_offset, rtest_cycle_drift. The rtest
+// cycle also reads the linear-axis ids above (002 Sec. 4.3: the R-test cannot separate them).
 // E_ba_* is the error in direction b of the motion of axis a (ISO 230-1 naming); the linear-axis
 // model is core/linear_axes.hpp.
 //
@@ -18,6 +21,14 @@
 //   setup_orientation    rotation of the piece about X, Y, Z (about its top centre)
 //   surface_roughness    per touch, height of the surface under the ball along its normal
 //   form_error           per face: offset along the normal, and tilts about its two in-plane axes
+//   rtest_sensor_gain    per sensor (X, Y, Z of the nest), per run: reading scaled by 1 + g (ratio)
+//   rtest_sensor_direction  per sensor pair, per run: the sensor's direction calibrated wrong, so
+//                        each reading picks up the other two displacements times d (rad)
+//   rtest_sphere_form    per reading and sensor: the sphere's form at the contact point (Type A)
+//   rtest_sphere_offset  the sphere centre off its calibrated place on the spindle [x, y, z],
+//                        machine frame (runout, tool length), per run
+//   rtest_cycle_drift    thermal drift of the sphere against the table over one measuring cycle
+//                        [x, y, z] (its start to its end, linear in time), machine frame, per run
 #include <Eigen/Core>
 #include <map>
 #include <optional>
@@ -40,6 +51,11 @@ enum class ContributorKind {
   SetupOrientation,
   SurfaceRoughness,
   FormError,
+  RtestSensorGain,
+  RtestSensorDirection,
+  RtestSphereForm,
+  RtestSphereOffset,
+  RtestCycleDrift,
 };
 
 /// What a contributor id means: its kind and, for the linear axes, the moving axis and the
@@ -59,7 +75,8 @@ const ContributorInfo* findContributor(std::string_view id);  // nullptr when un
 struct Contributor {
   const ContributorInfo* info = nullptr;
   /// Standard uncertainty, internal units: mm (lengths), mm/mm (slopes), rad (angles). Scalar
-  /// contributors use u[0]; setup_* use [x, y, z]; form_error uses [offset mm, tilt rad, -].
+  /// contributors use u[0]; setup_*, rtest_sphere_offset and rtest_cycle_drift use [x, y, z];
+  /// form_error uses [offset mm, tilt rad, -].
   Eigen::Vector3d u = Eigen::Vector3d::Zero();
   std::string unit;  // as written in the file, for the echo in reports
   std::string note;

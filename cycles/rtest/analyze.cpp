@@ -32,6 +32,62 @@ Eigen::Matrix<double, 3, kNumLocationErrors> J_wq_e(Kinematics k, const Pose& po
   return -R.transpose() * J_pm_e(zero, pose, nest_w);
 }
 
+RtestLocationEstimator rtestLocationEstimator(const ProbePlan& plan, bool own) {
+  const Kinematics k = plan.machine.kinematics;
+  const Eigen::Vector3d nest = rtestNest_w(plan);
+  const int ref_point = rtestReferencePoint(plan) - 1;
+  const int m = 3 * static_cast<int>(plan.points.size());
+  const int rows = m + (own ? 6 : 0), ncol = kNumLocationErrors + (own ? 3 : 0);
+  const auto Jref = J_wq_e(k, plan.points[static_cast<size_t>(ref_point)].pose, nest);
+  RtestLocationEstimator e;
+  e.own = own;
+  e.zero_rows = own ? 0 : 3;  // without a reset reading the reset pose's own rows are 0 = 0
+  e.A = Eigen::MatrixXd::Zero(rows, ncol);
+  for (size_t j = 0; j < plan.points.size(); ++j) {
+    const auto r = 3 * static_cast<Eigen::Index>(j);
+    e.A.block(r, 0, 3, kNumLocationErrors) = J_wq_e(k, plan.points[j].pose, nest);
+    if (own) e.A.block(r, kNumLocationErrors, 3, 3).setIdentity();
+    else e.A.block(r, 0, 3, kNumLocationErrors) -= Jref;
+  }
+  if (own)
+    for (int k2 = 0; k2 < 2; ++k2) {
+      e.A.block(m + 3 * k2, 0, 3, kNumLocationErrors) = Jref;
+      e.A.block(m + 3 * k2, kNumLocationErrors, 3, 3).setIdentity();
+    }
+  e.scale.resize(ncol);
+  for (int q = 0; q < ncol; ++q) e.scale[q] = std::max(e.A.col(q).norm(), 1e-300);
+  const Eigen::MatrixXd As = e.A * e.scale.cwiseInverse().asDiagonal();
+  e.svd = Eigen::JacobiSVD<Eigen::MatrixXd>(As, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  const auto& sv = e.svd.singularValues();
+  if (!(sv[sv.size() - 1] > 1e-8 * sv[0])) {
+    std::vector<double> tilts;
+    for (const auto& p : plan.points) {
+      const double t = tiltOf(k, p.pose);
+      if (std::find(tilts.begin(), tilts.end(), t) == tilts.end()) tilts.push_back(t);
+    }
+    e.why = fmt::format("the plan's tilts ({} = {}) do not separate the eight location errors (condition {:.3g}); "
+                        "the per-tilt errors are reported alone",
+                        tiltAxis(k), fmt::join(tilts, ", "), sv[0] / std::max(sv[sv.size() - 1], 1e-300));
+    return e;
+  }
+  e.identifiable = true;
+  e.G = e.scale.cwiseInverse().asDiagonal() * e.svd.matrixV() * sv.cwiseInverse().asDiagonal() *
+        e.svd.matrixU().transpose();
+  return e;
+}
+
+Eigen::VectorXd rtestLocationRows(const ProbePlan& plan, const RtestCycle& cyc, bool own) {
+  const int m = 3 * static_cast<int>(plan.points.size());
+  Eigen::VectorXd y(m + (own ? 6 : 0));
+  for (size_t j = 0; j < plan.points.size(); ++j) y.segment<3>(3 * static_cast<Eigen::Index>(j)) = cyc.readings[j].dq_w_mm;
+  if (own) {
+    if (!cyc.reset || !cyc.reread) throw std::invalid_argument("rtest: the location rows need the reset and re-read");
+    y.segment<3>(m) = cyc.reset->dq_w_mm;
+    y.segment<3>(m + 3) = cyc.reread->dq_w_mm;
+  }
+  return y;
+}
+
 void RtestFitOptions::validate() const {
   if (!(sensor_sigma_um > 0)) throw std::invalid_argument("rtest fit: sensor_sigma_um must be > 0");
   if (!(reset_alpha > 0 && reset_alpha < 1)) throw std::invalid_argument("rtest fit: reset_alpha must be in (0, 1)");
@@ -76,54 +132,30 @@ Eigen::Vector3d exactW(const ProbePlan& plan, const Eigen::MatrixXd& value, int 
 /// C 0): rows J_wq_e(pose_j) - J_wq_e(reset pose), 002 Eq. (6) with constant errors; with reset
 /// reads the cycle's zero is a free offset observed by the reset and re-read rows, as in the
 /// per-tilt fit.
-RtestLocationFit fitLocation(const ProbePlan& plan, const Layout& L, const RtestCycle& cyc, double sensor_sigma_um) {
-  const Kinematics k = plan.machine.kinematics;
-  const Eigen::Vector3d nest = rtestNest_w(plan);
+RtestLocationFit fitLocation(const ProbePlan& plan, const RtestCycle& cyc, double sensor_sigma_um) {
   const bool own = cyc.reset.has_value() && cyc.reread.has_value();
-  const int m = 3 * static_cast<int>(plan.points.size());
-  const int rows = m + (own ? 6 : 0), ncol = kNumLocationErrors + (own ? 3 : 0);
-  const auto Jref = J_wq_e(k, plan.points[static_cast<size_t>(L.ref_point)].pose, nest);
-  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(rows, ncol);
-  Eigen::VectorXd y(rows);
-  for (size_t j = 0; j < plan.points.size(); ++j) {
-    const auto r = 3 * static_cast<Eigen::Index>(j);
-    A.block(r, 0, 3, kNumLocationErrors) = J_wq_e(k, plan.points[j].pose, nest);
-    if (own) A.block(r, kNumLocationErrors, 3, 3).setIdentity();
-    else A.block(r, 0, 3, kNumLocationErrors) -= Jref;
-    y.segment<3>(r) = cyc.readings[j].dq_w_mm;
-  }
-  if (own) {
-    for (int k2 = 0; k2 < 2; ++k2) {
-      A.block(m + 3 * k2, 0, 3, kNumLocationErrors) = Jref;
-      A.block(m + 3 * k2, kNumLocationErrors, 3, 3).setIdentity();
-    }
-    y.segment<3>(m) = cyc.reset->dq_w_mm;
-    y.segment<3>(m + 3) = cyc.reread->dq_w_mm;
-  }
+  const RtestLocationEstimator e = rtestLocationEstimator(plan, own);
   RtestLocationFit f;
-  Eigen::VectorXd scale(ncol);
-  for (int q = 0; q < ncol; ++q) scale[q] = std::max(A.col(q).norm(), 1e-300);
-  const Eigen::MatrixXd As = A * scale.cwiseInverse().asDiagonal();
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(As, Eigen::ComputeThinU | Eigen::ComputeThinV);
-  const auto& sv = svd.singularValues();
-  if (!(sv[sv.size() - 1] > 1e-8 * sv[0])) {
-    f.why = fmt::format("the plan's tilts ({} = {}) do not separate the eight location errors (condition {:.3g}); "
-                        "the per-tilt errors are reported alone",
-                        tiltAxis(k), fmt::join(L.tilts, ", "), sv[0] / std::max(sv[sv.size() - 1], 1e-300));
+  if (!e.identifiable) {
+    f.why = e.why;
     return f;
   }
   f.identifiable = true;
-  const Eigen::VectorXd x = scale.cwiseInverse().asDiagonal() * svd.solve(y);
-  const Eigen::VectorXd r = y - A * x;
-  const int zero_rows = own ? 0 : 3;  // without a reset reading the reset pose's own rows are 0 = 0
-  const int dof = rows - ncol - zero_rows;
+  const Eigen::VectorXd y = rtestLocationRows(plan, cyc, own);
+  const Eigen::VectorXd x = e.scale.cwiseInverse().asDiagonal() * e.svd.solve(y);
+  const Eigen::VectorXd r = y - e.A * x;
+  const int rows = static_cast<int>(e.A.rows()), ncol = static_cast<int>(e.A.cols());
+  const int dof = rows - ncol - e.zero_rows;
   const double s_res = dof > 0 ? mmToUm(std::sqrt(r.squaredNorm() / dof)) : 0.0;
-  f.residual_rms_um = mmToUm(std::sqrt(r.squaredNorm() / std::max(1, rows - zero_rows)));
+  f.residual_rms_um = mmToUm(std::sqrt(r.squaredNorm() / std::max(1, rows - e.zero_rows)));
+  f.residual_sd_um = s_res;
+  f.dof = dof;
   f.sigma_um = std::max(sensor_sigma_um, s_res);
-  const Eigen::MatrixXd Ns_inv = svd.matrixV() * sv.cwiseInverse().cwiseAbs2().asDiagonal() * svd.matrixV().transpose();
+  const auto& sv = e.svd.singularValues();
+  const Eigen::MatrixXd Ns_inv = e.svd.matrixV() * sv.cwiseInverse().cwiseAbs2().asDiagonal() * e.svd.matrixV().transpose();
   for (int q = 0; q < kNumLocationErrors; ++q) {
     f.value[q] = x[q];
-    f.u[q] = umToMm(f.sigma_um) * std::sqrt(std::max(0.0, Ns_inv(q, q))) / scale[q];
+    f.u[q] = umToMm(f.sigma_um) * std::sqrt(std::max(0.0, Ns_inv(q, q))) / e.scale[q];
   }
   return f;
 }
@@ -257,7 +289,7 @@ RtestAnalysis analyzeRtest(const ProbePlan& plan, const std::vector<RtestCycle>&
       f.linearisation_um = std::max(f.linearisation_um, mmToUm((ex - li).cwiseAbs().maxCoeff()));
     }
     if (first) {
-      out.location = fitLocation(plan, L, cyc, opt.sensor_sigma_um);
+      out.location = fitLocation(plan, cyc, opt.sensor_sigma_um);
       const Eigen::VectorXd x_ref = x.segment<kRtestParams>(kRtestParams * L.ref_tilt);
       ref_dev = Jref * x_ref;
       ref_cov = Jref * f.cov.block<kRtestParams, kRtestParams>(kRtestParams * L.ref_tilt, kRtestParams * L.ref_tilt) *

@@ -16,6 +16,7 @@
 //    about the C axis, is the C zero that the reset at C = 0 defines: fixed to 0 in the first
 //    cycle, and a value c0 there shifts the rotations at the other tilts by -c0 about their C axis.
 #include <Eigen/Core>
+#include <Eigen/SVD>
 #include <string>
 #include <vector>
 
@@ -72,7 +73,27 @@ struct RtestLocationFit {
   ErrorVector u = ErrorVector::Zero();
   double residual_rms_um = 0.0;  // first cycle's readings minus the eight-error model
   double sigma_um = 0.0;         // noise used for u: max(sensor_sigma, residual estimate)
+  double residual_sd_um = 0.0;   // residual standard deviation (divisor: dof)
+  int dof = 0;
 };
+
+/// The location fit's estimator: the design matrix A (rows: 3 per plan point in plan order, then
+/// with `own` the reset and the re-read; columns: the eight location errors of locationParameters,
+/// then with `own` the cycle's zero offset) and its least-squares map G (x = G y, mm / rad). The
+/// estimator is linear in the readings: G is exact, not a linearisation (issue 17: the budget's
+/// Monte Carlo runs the readings of the exact simulator through G).
+struct RtestLocationEstimator {
+  bool own = false;
+  bool identifiable = false;
+  std::string why;
+  int zero_rows = 0;  // rows that are 0 = 0 (the reset pose's own without a reset reading)
+  Eigen::MatrixXd A, G;
+  Eigen::VectorXd scale;  // column scales of the SVD
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd;
+};
+RtestLocationEstimator rtestLocationEstimator(const ProbePlan& plan, bool own);
+/// The readings of one cycle as the estimator's rows y (mm).
+Eigen::VectorXd rtestLocationRows(const ProbePlan& plan, const RtestCycle& cycle, bool own);
 
 struct RtestAnalysis {
   Kinematics kinematics = Kinematics::TableBC;

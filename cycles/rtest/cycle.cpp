@@ -7,6 +7,8 @@
 #include "cycles/rtest/plan.hpp"
 #include "cycles/rtest/diagnose.hpp"
 #include "cycles/rtest/analyze.hpp"
+#include "cycles/rtest/budget.hpp"
+#include "core/units.hpp"
 #include "core/simulation.hpp"
 #include "cycles/cycle.hpp"
 #include "cycles/rtest/program.hpp"
@@ -109,6 +111,22 @@ class Rtest final : public Cycle {
     // The eight ISO 230-7 location errors separated by the constant-error fit (issue 17); what
     // the R-test measures at each tilt is per_tilt_errors.
     out.doc["errors_heading"] = "ISO 230-7 location errors (constant over the tilt, first cycle)";
+    // What analyze signs (issue 17): u_A from the data, u_B from the declared contributors by
+    // Monte Carlo through the same fit (cycles/rtest/budget.hpp, docs/uncertainty.md).
+    if (a.location.identifiable) {
+      RtestBudgetOptions bo;
+      bo.runs = r.mc_runs;
+      bo.seed = r.mc_seed;
+      const UncertaintyBudget b = rtestBudget(plan, cycles.front(), a.location, o.sensor_sigma_um, r.contributors, bo);
+      addBudgetFields(&out.doc["location_errors"], b);
+      out.doc["uncertainty"] = budgetJson(b);
+      Eigen::VectorXd values(kNumLocationErrors);
+      const auto& params = locationParameters(plan.machine.kinematics);
+      for (int i = 0; i < kNumLocationErrors; ++i)
+        values[i] = params[static_cast<size_t>(i)].kind == ParamKind::Length ? mmToUm(a.location.value[i])
+                                                                             : radToMdeg(a.location.value[i]);
+      out.text += "\n" + budgetText(b, values);
+    }
     return out;
   }
 

@@ -348,8 +348,10 @@ Eigen::Vector3d rtestSphere_w(const ProbePlan& plan, const Truth& truth, const R
   e.kinematics = plan.machine.kinematics;
   if (truth.pose_dependent) e.values += truth.pose_dependent(pose);
   if (truth.drift) e.values += truth.drift(t_s);
-  Eigen::Vector3d r_q = T_m_w_nominal(e.kinematics, pose) * rtestNest_w(plan) + extras.sphere_offset_m_mm;
+  const Eigen::Vector3d read_q = T_m_w_nominal(e.kinematics, pose) * rtestNest_w(plan);
+  Eigen::Vector3d r_q = read_q + extras.sphere_offset_m_mm;
   if (extras.sphere_drift_m_mm) r_q += extras.sphere_drift_m_mm(t_s);
+  if (truth.linear_axis_error) r_q += truth.linear_axis_error(read_q);  // actual minus read, at the read position
   return T_m_w(e, pose).inverse() * r_q;  // 002 Eq. (1): wq = (rT_w)^-1 rq
 }
 
@@ -372,7 +374,7 @@ RtestSeries simulateRtest(const ProbePlan& plan, const Truth& truth, const Rtest
     r.t_s = t;
     r.tilt_deg = tiltOf(k, p.pose);
     r.c_deg = p.pose.C;
-    r.dq_w_mm = rtestSphere_w(plan, truth, extras, p.pose, r.t_s) - ref;
+    r.dq_w_mm = extras.sensor_response * (rtestSphere_w(plan, truth, extras, p.pose, r.t_s) - ref);
     for (const auto& st : extras.sensor_steps)
       if (r.t_s >= st.t_s) r.dq_w_mm += st.offset_w_mm;
     if (o.noise_um > 0)

@@ -114,10 +114,17 @@ struct RtestTruthExtras {
   /// Time-dependent part of the sphere offset (e.g. the spindle's axial thermal growth: +Z),
   /// machine frame, mm, at a time on the common clock (s). Empty: none.
   std::function<Eigen::Vector3d(double t_s)> sphere_drift_m_mm;
+  /// The sensors' actual response: reading = sensor_response x (sphere displacement since the
+  /// zero), workpiece frame. Its diagonal is 1 + the gain errors, the rest the cross-talk of
+  /// sensor directions calibrated wrong (rtest_sensor_gain, rtest_sensor_direction). Identity:
+  /// perfect sensors.
+  Eigen::Matrix3d sensor_response = Eigen::Matrix3d::Identity();
 };
 
 /// Exact sphere centre in the workpiece frame at a pose and time (002 Eq. (1)-(3)): the true
-/// table transform carries truth.errors + pose_dependent(pose) + drift(t).
+/// table transform carries truth.errors + pose_dependent(pose) + drift(t); the sphere is where
+/// the linear axes put it: the commanded position + the sphere offset (+ drift) + the linear
+/// axes' error at the commanded position (truth.linear_axis_error, when set).
 Eigen::Vector3d rtestSphere_w(const ProbePlan& plan, const Truth& truth, const RtestTruthExtras& extras,
                               const Pose& pose, double t_s);
 

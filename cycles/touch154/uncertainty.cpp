@@ -338,6 +338,7 @@ RunDraw onlyContributor(const RunDraw& d, const ContributorInfo& c) {
     case ContributorKind::SetupPosition: o.setup.translation_mm = d.setup.translation_mm; break;
     case ContributorKind::SetupOrientation: o.setup.rotation_rad = d.setup.rotation_rad; break;
     case ContributorKind::FormError: o.form = d.form; break;
+    default: break;  // the R-test's contributors do not act on a touch cycle
   }
   return o;
 }
@@ -464,6 +465,7 @@ void linearisedRun(const LinearChain& c, const MethodMask& active, const std::ve
         if (hasRandom(d, ci.axis)) randomTriggers(c, d, *w, ci.axis, ci.direction, &w->ds);
         perTrigger(w->ds);
         break;
+      default: break;  // the R-test's contributors do not act on a touch cycle
     }
     for (size_t m = 0; m < kNumUncertaintyMethods; ++m) (*combined)[m] += e[m];
   }

@@ -1,0 +1,224 @@
+#include "cycles/rtest/budget.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "core/units.hpp"
+
+namespace rotacal {
+
+void RtestBudgetOptions::validate() const {
+  if (runs < 100 || runs > 1000000) throw std::invalid_argument("Monte Carlo runs must be in [100, 1000000]");
+  if (alone_runs < 0 || alone_runs > 1000000)
+    throw std::invalid_argument("Monte Carlo runs per contributor must be in [0, 1000000]");
+  if (threads < 0 || threads > 256) throw std::invalid_argument("threads must be in [0, 256]");
+}
+
+bool rtestTypeA(const ContributorInfo& c) { return c.kind == ContributorKind::RtestSphereForm; }
+
+namespace {
+
+/// The contributors that act on an R-test cycle as Type B (the touch cycles' probe, set-up and
+/// piece contributors do not: the R-test has no probe and no piece).
+bool actsAsTypeB(const ContributorInfo& c) {
+  switch (c.kind) {
+    case ContributorKind::RtestSensorGain:
+    case ContributorKind::RtestSensorDirection:
+    case ContributorKind::RtestSphereOffset:
+    case ContributorKind::RtestCycleDrift:
+    case ContributorKind::LinearScale:
+    case ContributorKind::LinearRandom:
+    case ContributorKind::Squareness: return true;
+    default: return false;
+  }
+}
+
+std::uint64_t catalogIndex(const ContributorInfo* info) {
+  const auto& cat = contributorCatalog();
+  return static_cast<std::uint64_t>(info - cat.data());
+}
+
+/// The commanded sphere positions of the plan (machine frame): the span of the linear axes.
+void commandedSpan(const ProbePlan& plan, Eigen::Vector3d* lo, Eigen::Vector3d* hi) {
+  const Eigen::Vector3d nest = rtestNest_w(plan);
+  *lo = Eigen::Vector3d::Constant(1e300);
+  *hi = Eigen::Vector3d::Constant(-1e300);
+  for (const auto& p : plan.points) {
+    const Eigen::Vector3d q = T_m_w_nominal(plan.machine.kinematics, p.pose) * nest;
+    *lo = lo->cwiseMin(q);
+    *hi = hi->cwiseMax(q);
+  }
+}
+
+}  // namespace
+
+void drawRtest(const ProbePlan& plan, const ContributorSet& set, std::uint64_t seed, int run, int only, RtestDraw* d) {
+  *d = RtestDraw{};
+  ContributorSet linear;
+  const std::uint64_t base = static_cast<std::uint64_t>(run) << 7;
+  for (size_t i = 0; i < set.items.size(); ++i) {
+    const Contributor& c = set.items[i];
+    if (only >= 0 && static_cast<size_t>(only) != i) continue;
+    if (!actsAsTypeB(*c.info)) continue;
+    Rng rng(seed, base | catalogIndex(c.info));
+    switch (c.info->kind) {
+      case ContributorKind::RtestSensorGain:
+        for (int a = 0; a < 3; ++a) d->sensor_response(a, a) += c.u[0] * rng.normal();
+        break;
+      case ContributorKind::RtestSensorDirection:
+        for (int a = 0; a < 3; ++a)
+          for (int b = 0; b < 3; ++b)
+            if (a != b) d->sensor_response(a, b) += c.u[0] * rng.normal();
+        break;
+      case ContributorKind::RtestSphereOffset:
+        for (int a = 0; a < 3; ++a) d->sphere_offset_mm[a] = c.u[a] * rng.normal();
+        break;
+      case ContributorKind::RtestCycleDrift:
+        for (int a = 0; a < 3; ++a) d->cycle_drift_mm[a] = c.u[a] * rng.normal();
+        break;
+      default: linear.items.push_back(c); break;  // the linear axes, drawn together below
+    }
+  }
+  if (linear.items.empty()) return;
+  linear.node_spacing_min_mm = set.node_spacing_min_mm;
+  linear.node_spacing_max_mm = set.node_spacing_max_mm;
+  const LinearAxisModel model = linear.linearAxisModel();
+  Eigen::Vector3d lo, hi;
+  commandedSpan(plan, &lo, &hi);
+  Rng fixed(seed, base | 120), ax(seed, base | 121), ay(seed, base | 122), az(seed, base | 123);
+  drawLinearAxisErrors(model, lo, hi, fixed, {&ax, &ay, &az}, &d->linear_errors);
+  d->linear = true;
+}
+
+void applyRtestDraw(const ProbePlan& plan, const RtestDraw& d, Truth* truth, RtestTruthExtras* extras) {
+  if (d.linear) truth->linear_axis_error = d.linear_errors.asFunction();
+  extras->sensor_response = d.sensor_response * extras->sensor_response;
+  extras->sphere_offset_m_mm += d.sphere_offset_mm;
+  if (!d.cycle_drift_mm.isZero()) {
+    const double T = std::max(1.0, rtestCycleTime_s(plan));
+    const Eigen::Vector3d v = d.cycle_drift_mm / T;
+    auto before = extras->sphere_drift_m_mm;
+    extras->sphere_drift_m_mm = [v, before](double t) {
+      return Eigen::Vector3d(v * t + (before ? before(t) : Eigen::Vector3d::Zero()));
+    };
+  }
+}
+
+UncertaintyBudget rtestBudget(const ProbePlan& plan, const RtestCycle& first, const RtestLocationFit& fit,
+                              double sensor_sigma_um, const ContributorSet* contributors,
+                              const RtestBudgetOptions& options) {
+  options.validate();
+  const Kinematics k = plan.machine.kinematics;
+  const auto& params = locationParameters(k);
+  const int n = kNumLocationErrors;
+  UncertaintyBudget b;
+  Eigen::VectorXd f(n);  // internal -> report units
+  for (int i = 0; i < n; ++i) {
+    b.names.emplace_back(params[static_cast<size_t>(i)].name);
+    b.units.emplace_back(reportUnit(params[static_cast<size_t>(i)].kind));
+    f[i] = params[static_cast<size_t>(i)].kind == ParamKind::Length ? mmToUm(1.0) : radToMdeg(1.0);
+  }
+  b.cov_a = Eigen::MatrixXd::Zero(n, n);
+  b.cov_b = Eigen::MatrixXd::Zero(n, n);
+  if (!fit.identifiable) {
+    b.type_a_source = "not evaluated: " + fit.why;
+    b.type_b_source = "not evaluated: " + fit.why;
+    return b;
+  }
+  const bool own = first.reset.has_value() && first.reread.has_value();
+  const RtestLocationEstimator est = rtestLocationEstimator(plan, own);
+  const Eigen::MatrixXd G8 = est.G.topRows(n);
+
+  // The per-reading scatter declared: the sensors' noise and the sphere's form.
+  double declared_mm2 = umToMm(sensor_sigma_um) * umToMm(sensor_sigma_um);
+  ContributorSet type_b;
+  std::vector<std::string> ignored;
+  if (contributors) {
+    type_b.file = contributors->file;
+    type_b.node_spacing_min_mm = contributors->node_spacing_min_mm;
+    type_b.node_spacing_max_mm = contributors->node_spacing_max_mm;
+    for (const auto& c : contributors->items) {
+      if (rtestTypeA(*c.info)) declared_mm2 += c.u[0] * c.u[0];
+      else if (actsAsTypeB(*c.info)) type_b.items.push_back(c);
+      else ignored.emplace_back(c.info->id);
+    }
+  }
+  Truth truth0;
+  truth0.errors.kinematics = k;
+  truth0.errors.values = fit.value;
+  RtestSimOptions so;
+  so.noise_um = 0.0;
+  so.cycles = 1;
+  // Readings of the exact simulator with a draw, through the estimator: estimate - truth.
+  auto estimate = [&](const RtestDraw& d, Eigen::VectorXd* y_out) {
+    Truth t = truth0;
+    RtestTruthExtras x;
+    applyRtestDraw(plan, d, &t, &x);
+    const RtestSeries s = simulateRtest(plan, t, x, so);
+    const Eigen::VectorXd y = rtestLocationRows(plan, s.cycles.front(), own);
+    if (y_out) *y_out = y;
+    return Eigen::VectorXd(est.G * y);
+  };
+
+  // Type A: the residual measures the per-reading scatter, and also the part of the Type B
+  // contributors the eight-error model cannot absorb (linear axes between poses, cross-talk);
+  // that part is in u_B, so its expected value is taken out, floored at the declared scatter.
+  double expected_sys_mm2 = 0.0;
+  const int dof = fit.dof;
+  if (!type_b.items.empty() && dof > 0) {
+    constexpr int kResidualRuns = 200;
+    for (int r = 0; r < kResidualRuns; ++r) {
+      RtestDraw d;
+      drawRtest(plan, type_b, options.seed ^ 0x5245534944ULL, r, -1, &d);
+      Eigen::VectorXd y;
+      const Eigen::VectorXd x = estimate(d, &y);
+      expected_sys_mm2 += (y - est.A * x).squaredNorm() / dof;
+    }
+    expected_sys_mm2 /= kResidualRuns;
+  }
+  const double s_obs_mm = umToMm(fit.residual_sd_um);
+  const double sigma2 = std::max(declared_mm2, s_obs_mm * s_obs_mm - expected_sys_mm2);
+  b.cov_a = f.asDiagonal() * (sigma2 * G8 * G8.transpose()) * f.asDiagonal();
+  b.type_a_source = fmt::format(
+      "the per-reading scatter {:.3f} um (residual {:.3f} um, {} dof, less {:.3f} um expected from the Type B "
+      "contributors, floored at the declared {:.3f} um: sensor noise and sphere form) through the location fit",
+      mmToUm(std::sqrt(sigma2)), fit.residual_sd_um, dof, mmToUm(std::sqrt(expected_sys_mm2)),
+      mmToUm(std::sqrt(declared_mm2)));
+  b.terms.push_back({"data", b.uA()});
+  if (!contributors) {
+    b.type_b_source =
+        "not evaluated: the machine declares no contributors (MACHINE.json `contributors`, docs/uncertainty.md), so u_c "
+        "covers the data's scatter only";
+    return b;
+  }
+  if (type_b.items.empty()) {
+    b.type_b_evaluated = true;
+    b.type_b_source = "no declared contributor acts on the R-test as Type B (docs/uncertainty.md, rtest)";
+    return b;
+  }
+  MonteCarloProblem p;
+  p.parameters = n;
+  for (const auto& c : type_b.items) p.contributors.emplace_back(c.info->id);
+  p.deviation = [&](std::uint64_t seed, int run, int c) -> Eigen::VectorXd {
+    RtestDraw d;
+    drawRtest(plan, type_b, seed, run, c, &d);
+    const Eigen::VectorXd x = estimate(d, nullptr);
+    return f.cwiseProduct(Eigen::VectorXd(x.head(n) - fit.value));
+  };
+  const MonteCarloResult mc = runMonteCarlo(p, options.runs, options.alone_runs, options.seed, options.threads);
+  setTypeB(&b, mc, p.contributors);
+  b.seed = options.seed;
+  b.type_b_source = fmt::format(
+      "{} declared contributors (from {}) drawn on the exact simulator of the cycle (full HTMs) around the identified "
+      "errors and run through the location fit (linear in the readings), {} runs, seed {}{}",
+      p.contributors.size(), contributors->file.empty() ? std::string("the machine") : contributors->file, options.runs,
+      options.seed,
+      ignored.empty() ? std::string()
+                      : fmt::format("; not acting on an R-test and left out: {}", fmt::join(ignored, ", ")));
+  return b;
+}
+
+}  // namespace rotacal

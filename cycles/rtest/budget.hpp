@@ -1,0 +1,58 @@
+#pragma once
+// The uncertainty the rtest cycle signs for the eight location errors (issue 17), on
+// core/uncertainty_budget:
+//   Type A  the per-reading scatter (sensor noise, rtest_sphere_form) through the location fit's
+//           own map G, sigma^2 G G^T, with sigma from the residual less what the Type B
+//           contributors leave in it, floored at the declared scatter;
+//   Type B  the declared contributors the data cannot show (002 Sec. 2.2, 4.3, 4.4: sensor gain and
+//           direction, the sphere's offset on the spindle, thermal drift over the cycle, the linear
+//           axes), by Monte Carlo: each run draws them, simulates the cycle's readings on the exact
+//           simulator (simulateRtest, full HTMs) around the identified errors, and runs them
+//           through the same estimator (G: exact, the fit is linear in the readings).
+// docs/uncertainty.md (rtest) states the rules and the coverage measured.
+#include <array>
+#include <cstdint>
+
+#include "core/contributors.hpp"
+#include "core/linear_axes.hpp"
+#include "core/rng.hpp"
+#include "core/uncertainty_budget.hpp"
+#include "cycles/rtest/analyze.hpp"
+
+namespace rotacal {
+
+struct RtestBudgetOptions {
+  int runs = 2000;
+  int alone_runs = 400;  // per contributor, for the budget's shares
+  std::uint64_t seed = 1;
+  int threads = 0;
+  void validate() const;  // throws std::invalid_argument
+};
+
+/// Contributors that act independently at every reading: u_A measures them.
+bool rtestTypeA(const ContributorInfo& c);
+
+/// One drawn realisation of the R-test's Type B contributors (internal units).
+struct RtestDraw {
+  Eigen::Matrix3d sensor_response = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d sphere_offset_mm = Eigen::Vector3d::Zero();
+  Eigen::Vector3d cycle_drift_mm = Eigen::Vector3d::Zero();  // over one measuring cycle
+  bool linear = false;
+  LinearAxisErrors linear_errors;
+};
+
+/// Draws run `run` of `seed` from `set` (Type A contributors skipped); with `only` >= 0 every
+/// contributor but set.items[only] is zero. The same (seed, run) draws the same values whether
+/// alone or combined (one stream per contributor).
+void drawRtest(const ProbePlan& plan, const ContributorSet& set, std::uint64_t seed, int run, int only, RtestDraw* out);
+/// Puts a draw on a truth (linear axes) and its extras (sensors, sphere, drift). The drift runs
+/// linearly from 0 at the first cycle's start to cycle_drift at rtestCycleTime_s.
+void applyRtestDraw(const ProbePlan& plan, const RtestDraw& d, Truth* truth, RtestTruthExtras* extras);
+
+/// The budget of the eight location errors (report units, order of locationParameters).
+/// `contributors` null: u_B not evaluated (said in words). Not identifiable: empty budget.
+UncertaintyBudget rtestBudget(const ProbePlan& plan, const RtestCycle& first, const RtestLocationFit& fit,
+                              double sensor_sigma_um, const ContributorSet* contributors,
+                              const RtestBudgetOptions& options);
+
+}  // namespace rotacal
