@@ -7,9 +7,9 @@
 // E_xx_rand, E_yx_rand, E_zx_rand, E_yy_lin, E_yy_rand, E_xy_rand, E_zy_rand, S_xy, E_zz_lin,
 // E_zz_rand, E_xz_rand, E_yz_rand, S_xz, S_yz, setup_position, setup_orientation,
 // surface_roughness; and form_error (the test piece's own form, which 000 leaves out).
-// The R-test's own (002; used by the rtest cycle, ignored by the touch cycles): rtest_sensor_gain,
-// rtest_sensor_direction, rtest_sphere_form, rtest_sphere_offset, rtest_cycle_drift. The rtest
-// cycle also reads the linear-axis ids above (002 Sec. 4.3: the R-test cannot separate them).
+// The R-test device's own (002; touch probing ignores them): rtest_sensor_gain,
+// rtest_sensor_direction, rtest_sphere_form, rtest_sphere_offset, rtest_cycle_drift. The R-test
+// analysis also reads the linear-axis ids above (002 Sec. 4.3: the device cannot separate them).
 // E_ba_* is the error in direction b of the motion of axis a (ISO 230-1 naming); the linear-axis
 // model is core/linear_axes.hpp.
 //

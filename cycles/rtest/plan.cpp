@@ -539,9 +539,9 @@ RtestSeries parseRtestResults(const std::string& text, const std::string& file, 
         throw InputError(file, n, fmt::format("field {} '{}' is not a number", i + 1, f[i]));
       }
     }
-    // Range first: casting 2e41 to int is undefined (fuzz_rtest_results, UBSan).
-    if (!(v[0] >= 1 && v[0] <= static_cast<double>(plan.points.size())) || v[0] != std::floor(v[0]))
-      throw InputError(file, n, fmt::format("pose '{}' is not a pose id of the plan (1..{})", f[0], plan.points.size()));
+    // Range first: casting 2e41 to int is undefined (fuzz_rtest_results, UBSan). 0 is the reset reading.
+    if (!(v[0] >= 0 && v[0] <= static_cast<double>(N)) || v[0] != std::floor(v[0]))
+      throw InputError(file, n, fmt::format("pose '{}' is not a pose id of the plan (0 = the reset reading, 1..{})", f[0], N));
     const int id = static_cast<int>(v[0]);
     if (id != v[0] || id < 0 || id > static_cast<int>(N))
       throw InputError(file, n, fmt::format("pose '{}' is not a pose id of the plan (0 = the reset reading, 1..{})", f[0], N));
