@@ -276,7 +276,7 @@ TEST(CompensateProgram, FanucHeaderGoesAfterTheProgramNumber) {
   const Fixture f;
   const std::string prog = "%\nO7154 (TEST)\nG21 G90\nG0 X10.0 Y-200.0 Z200.0 A0.0 C0.0\nM30\n%\n";
   const ProgramCompensation c =
-      compensateProgram(prog, "p.nc", f.plan.machine, f.errors, NcSyntax{"fanuc"}, {{0, 0, 0}, {}, {"HELLO"}});
+      compensateProgram(prog, "p.nc", f.plan.machine, f.errors, NcSyntax{"fanuc"}, {{0, 0, 0}, {}, {"HELLO"}, {}, true});
   // The mark first, then the caller's lines, in Fanuc's comment form, before the first block.
   EXPECT_EQ(c.text.rfind("%\nO7154 (TEST)\n(ROTACAL-COMPENSATED: REWRITTEN BY ROTACAL COMPENSATE", 0), 0u) << c.text;
   EXPECT_NE(c.text.find(")\n(HELLO)\nG21 G90\n"), std::string::npos) << c.text;
