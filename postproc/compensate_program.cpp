@@ -125,7 +125,18 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
   // The rotary words as last printed: a block rewritten at a compensated pose must also carry a
   // rotary word the block lacks when the machine is not yet at the compensated angle.
   std::map<char, std::string> printed_rotary;
+  // The linear words likewise (G90 program coordinates, mm, as printed): a linear word the block
+  // lacks is written only where the compensated position differs from the one last commanded,
+  // so zero errors reproduce the program line for line.
+  std::array<std::optional<double>, 3> printed_linear;
+  auto linearIndex = [](char c) { return c == 'X' ? 0 : c == 'Y' ? 1 : c == 'Z' ? 2 : -1; };
   auto notePrinted = [&](const nc::Block& b) {
+    for (const auto& w : b.words) {
+      const int i = linearIndex(w.letter);
+      if (i < 0) continue;
+      if (m.incremental || !w.value) printed_linear[static_cast<size_t>(i)].reset();
+      else printed_linear[static_cast<size_t>(i)] = *w.value * (m.inch ? kMmPerInch : 1.0);
+    }
     for (const auto& w : b.words)
       if (isRotary(w.letter)) printed_rotary[w.letter] = w.text;
   };
@@ -327,6 +338,10 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
       last_nominal.reset();
       ++out.uncompensated_blocks;
       notePrinted(b);
+      // Machine coordinates are not program coordinates: what they moved is no longer known.
+      for (const auto& w : b.words)
+        if (linearIndex(w.letter) >= 0) printed_linear[static_cast<size_t>(linearIndex(w.letter))].reset();
+      if (home) printed_linear = {};
       emit(b.raw);
       continue;
     }
@@ -515,7 +530,14 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
         if (axes_written) continue;
         axes_written = true;
         std::string a;
-        for (int i = 0; i < 3; ++i) a += fmt::format("{}{}{}", a.empty() ? "" : " ", "XYZ"[i], fixedText(words[i] / unit_mm, dec));
+        for (int i = 0; i < 3; ++i) {
+          bool in_block = false;
+          for (const auto& w2 : b.words) in_block = in_block || w2.letter == "XYZ"[i];
+          const std::string t = fixedText(words[i] / unit_mm, dec);
+          const auto& pl = printed_linear[static_cast<size_t>(i)];
+          const bool moved = m.incremental ? parsedBack(t) != 0.0 : !pl || std::abs(*pl - parsedBack(t) * unit_mm) > 1e-12;
+          if (in_block || moved) a += fmt::format("{}{}{}", a.empty() ? "" : " ", "XYZ"[i], t);
+        }
         for (char c : rotary_letters) {
           bool in_block = false;
           for (const auto& w2 : b.words) in_block = in_block || w2.letter == c;
@@ -526,7 +548,7 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
                                      "give the rotary axes in a G90 block first",
                                      c));
           if (in_block || moved) {
-            a += fmt::format(" {}{}", c, rotary_text[c]);
+            a += fmt::format("{}{}{}", a.empty() ? "" : " ", c, rotary_text[c]);
             printed_rotary[c] = rotary_text[c];
           }
         }
@@ -545,6 +567,10 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
         emit(piece);
       }
       for (char c : rotary_letters) printed_rotary[c] = rotary_text[c];
+    }
+    for (int i = 0; i < 3; ++i) {
+      if (m.incremental) printed_linear[static_cast<size_t>(i)].reset();
+      else printed_linear[static_cast<size_t>(i)] = parsedBack(fixedText(x_new[i] / unit_mm, dec)) * unit_mm;
     }
     ++out.compensated_blocks;
     if (end_check && isGuardedMove(b, !prefix.empty())) {

@@ -301,9 +301,31 @@ ReportErrors errorsFromReports(const std::vector<JsonDoc>& reports, Kinematics k
         diffs += fmt::format("{}{} {:+.2f} {} (u {:.2f})", diffs.empty() ? "" : ", ", kAxisLocationIso[static_cast<size_t>(i)],
                              d, reportUnit(kind), ud);
       }
+      // The component errors are error motions about the axis average line of the report that
+      // identified them: its location of that line is the one they belong to. The full report
+      // keeps what only it sees (the tilt axis's own terms and the table's height).
+      if (!out.errors.components.empty()) {
+        LocationErrors& L = out.errors.location;
+        if (k == Kinematics::TableAC) {
+          L.set("dx_AY", axis_location->values[0]);
+          L.set("dy_CA", axis_location->values[1] - L.get("dy_AY"));
+          L.set("a_AY", axis_location->values[2]);
+          L.set("b_CA", axis_location->values[3] - L.get("b_AY"));
+        } else {
+          L.set("dx_CB", axis_location->values[0] - L.get("dx_BY"));
+          L.set("dy_CB", axis_location->values[1]);
+          L.set("a_CB", axis_location->values[2] - L.get("a_BY"));
+          L.set("b_BY", axis_location->values[3]);
+        }
+        out.errors.location_covariance.reset();  // no longer the full report's estimate
+      }
       out.notes.push_back(fmt::format("cross-check: the C axis's location of {} minus that of {}'s location errors at "
-                                      "the tilt axis's zero: {}; the location errors of {} are used",
-                                      axis_file, full_file, diffs, full_file));
+                                      "the tilt axis's zero: {}; {}",
+                                      axis_file, full_file, diffs,
+                                      out.errors.components.empty()
+                                          ? "the location errors of " + full_file + " are used"
+                                          : "the C axis's location at the tilt axis's zero is taken from " + axis_file +
+                                                " (its component errors are about that line), the rest from " + full_file));
     }
   } else if (axis_location) {
     for (int i = 0; i < 4; ++i) out.errors.location.set(targets[static_cast<size_t>(i)], axis_location->values[i]);
