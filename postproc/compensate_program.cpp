@@ -613,4 +613,32 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
   return out;
 }
 
+MeasurementRun undoCompensation(const ProbePlan& plan, const MeasurementRun& run, const GeometricErrors& errors,
+                                const NcSyntax& syntax, const ProgramCompensationOptions& options) {
+  if (errors.kinematics() != plan.machine.kinematics)
+    throw std::invalid_argument("the compensation's errors are for another kinematics than the plan's machine");
+  errors.validate();
+  std::map<std::array<double, 3>, Pose> printed;  // nominal pose -> compensated pose as printed
+  MeasurementRun out = run;
+  for (auto& t : out.points) {
+    const ProbePoint* p = plan.findPoint(t.point_id);
+    if (!p) throw std::invalid_argument(fmt::format("point {} is not in the plan", t.point_id));
+    const Pose& q = p->pose;
+    const std::array<double, 3> key{q.A, q.B, q.C};
+    auto it = printed.find(key);
+    if (it == printed.end()) {
+      Pose qc = compensatePose(errors, q, options.pose).pose;
+      for (const auto& r : plan.machine.rotary) {
+        const int sign = plan.machine.controllerSign(r.name, syntax.dialect);
+        poseAxis(qc, r.name) = sign * parsedBack(fixedText(sign * poseAxis(qc, r.name), syntax.angle_decimals));
+      }
+      it = printed.emplace(key, qc).first;
+    }
+    const Eigen::Vector3d x = t.position_m_mm + options.program_origin_m_mm;
+    t.position_m_mm = T_m_w_nominal(errors.kinematics(), q) * (T_m_w(errors, it->second).inverse() * x) -
+                      options.program_origin_m_mm;
+  }
+  return out;
+}
+
 }  // namespace rotacal

@@ -13,6 +13,8 @@
 #include "core/compensation.hpp"
 #include "core/geometric_errors.hpp"
 #include "core/machine.hpp"
+#include "core/measurement.hpp"
+#include "core/probe_plan.hpp"
 
 namespace rotacal {
 
@@ -72,5 +74,15 @@ struct ProgramCompensation {
 ProgramCompensation compensateProgram(const std::string& text, const std::string& file, const MachineModel& machine,
                                       const GeometricErrors& errors, const NcSyntax& syntax,
                                       const ProgramCompensationOptions& options);
+
+/// The results of a plan's program compensated for `errors` (compensateProgram with `syntax` and
+/// `options`), read back as the original program's: each trigger x' recorded at the compensated
+/// pose q' of its point's nominal pose q (recomputed and rounded exactly as the rewrite printed
+/// it) is mapped to T_m_w(0, q) T_m_w(errors, q')^-1 x', where the nominal machine would have
+/// recorded the same contact. Analyzed with the original plan, these results identify what the
+/// compensation left: the true errors minus `errors`, to first order (`analyze
+/// --compensated-with`, docs/compensation.md).
+MeasurementRun undoCompensation(const ProbePlan& plan, const MeasurementRun& run, const GeometricErrors& errors,
+                                const NcSyntax& syntax, const ProgramCompensationOptions& options = {});
 
 }  // namespace rotacal
