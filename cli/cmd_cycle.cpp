@@ -242,6 +242,8 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
   outputs.add("--json", json_out, docs.doc.dump(1) + "\n");
   addHtml(outputs, html_out, docs.doc);
   outputs.add("--text", text_out, docs.text);
+  if (!offsets_out.empty() && !docs.offsets_refused.empty() && !force)
+    failFile(offsets_out, "not written: " + docs.offsets_refused + " (--force writes it)");
   if (!offsets_out.empty() && docs.offsets) {
     OffsetRequest req;
     req.plan = &plan;

@@ -130,6 +130,9 @@ struct CycleDocuments {
   std::string text;
   std::vector<std::string> warnings;
   std::optional<LocationCorrection> offsets;
+  /// Why the data must not reach an offsets file (e.g. the outlier screen found the data beyond a
+  /// few chips): analyze --offsets refuses with it, --force writes them anyway.
+  std::string offsets_refused;
 };
 
 /// The smallest run of a cycle: a bundled machine it suits (a path under the source tree) and

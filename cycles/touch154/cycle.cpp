@@ -5,6 +5,7 @@
 
 #include "core/errors.hpp"
 #include "core/identification.hpp"
+#include "core/outliers.hpp"
 #include "core/point_deviations.hpp"
 #include "core/units.hpp"
 #include "cycles/touch154/budget.hpp"
@@ -57,6 +58,18 @@ class Touch154 final : public Cycle {
     IdentificationOptions opt;
     opt.method = method;
     opt.prior_sigma_um = plan.machine.probe.repeatability_um;
+    // Touches that hit a chip: found by the least squares' residuals, left out with the reason.
+    OutlierOptions oo;
+    oo.sigma_um = plan.machine.probe.repeatability_um;
+    const OutlierScreen screen = screenOutliers(
+        [&](const std::function<bool(int, const ProbePoint&)>& hold) {
+          IdentificationOptions o = opt;
+          o.method = Method::LeastSquaresPerPoint;
+          o.hold_out = hold;
+          return identify(plan, runs, o);
+        },
+        oo);
+    opt.hold_out = screen.holdOut();
     Analysis a;
     a.plan = &plan;
     for (const auto& f : r.results) a.result_files.push_back(f.path);
@@ -64,7 +77,11 @@ class Touch154 final : public Cycle {
     if (a.main.summary.termination == Termination::RankDeficient || a.main.summary.termination == Termination::InvalidInput)
       throw InputError(r.results.front().path, 0, a.main.summary.message);
     if (runs.size() > 1)
-      for (const auto& run : runs) a.per_run.push_back(identifyTouch154(plan, {run}, opt));
+      for (size_t k = 0; k < runs.size(); ++k) {
+        IdentificationOptions o = opt;
+        if (opt.hold_out) o.hold_out = [&opt, k](int, const ProbePoint& p) { return opt.hold_out(static_cast<int>(k), p); };
+        a.per_run.push_back(identifyTouch154(plan, {runs[k]}, o));
+      }
     for (Method other : {Method::LeastSquaresPerPoint, Method::LeastSquaresRigidSetup, Method::ClosedForm}) {
       if (other == method) continue;
       IdentificationOptions o = opt;
@@ -83,8 +100,17 @@ class Touch154 final : public Cycle {
     bo.seed = r.mc_seed;
     a.budget = touch154Budget(plan, a.main, a.per_run, r.contributors, bo);
     CycleDocuments out;
-    out.text = analysisText(a);
+    out.text = analysisText(a) + screen.text() + "\n";
     out.doc = analysisToJson(a);
+    out.doc["outliers"] = outlierScreenJson(screen, oo);
+    if (!screen.excluded.empty() || screen.too_many) out.warnings.push_back(screen.text());
+    if (screen.too_many) out.offsets_refused = screen.text();
+    if (!screen.excluded.empty() && method == Method::ClosedForm)
+      out.offsets_refused = "the closed form uses every touch, the outlier screen's excluded ones too (" + screen.text() +
+                            "): analyze with --method lsq_per_point";
+    if (!screen.excluded.empty() && method == Method::ClosedForm)
+      out.warnings.push_back("the closed form uses every touch, the excluded ones too: its estimate carries them "
+                             "(--method lsq_per_point leaves them out)");
     out.doc["points"] = pointDeviationsJson(plan, runs, a.main);  // the HTML report's deviation views
     if (plan.cycle == name())  // the poses of 000 Fig. 5: the report's views are the paper's figures
       out.doc["figure_titles"] = {{"fig7", "Probed positions at A = 0 (000 Fig. 7)"},

@@ -8,7 +8,9 @@
 #include <map>
 #include <sstream>
 #include <string>
+#include <vector>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "cli_run.hpp"
@@ -216,6 +218,69 @@ TEST_F(Safety, UnwritableAndSpecialTargetsAreRefusedBeforeWriting) {
   const auto m = sh("generate --plan " + p("plan.json") + " --dialect fanuc -o " + p("missing/prog.nc"));
   EXPECT_EQ(m.code, 1) << m.out;
   EXPECT_NE(m.out.find("rotacal: error: " + p("missing/prog.nc") + ":0: cannot write"), std::string::npos) << m.out;
+}
+
+}  // namespace
+}  // namespace rotacal
+
+namespace rotacal {
+namespace {
+
+// Issue 14, item 6: a touch far off is named, left out of the fit and never reaches an offsets
+// file; data beyond a few chips write no offsets without --force.
+TEST_F(Safety, AnOutlierIsNamedAndLeftOutAndNeverReachesTheOffsets) {
+  touch154Results();
+  // Point 40 approaches along -Y: a 5 mm chip stops it 5 mm early, at y + 5 mm.
+  std::string text = slurp(p("r1.csv")), chip;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("40,", 0) == 0) {
+      std::vector<std::string> f;
+      std::stringstream ls(line);
+      for (std::string c; std::getline(ls, c, ',');) f.push_back(c);
+      f[2] = fmt::format("{:.6f}", std::stod(f[2]) + 5.0);
+      line = f[0] + "," + f[1] + "," + f[2] + "," + f[3] + "," + f[4];
+    }
+    chip += line + "\n";
+  }
+  std::ofstream(p("chip.csv")) << chip;
+  const auto r = sh("analyze --plan " + p("plan.json") + " --results " + p("chip.csv") + " --dialect csv --json " +
+                    p("chip.json") + " --offsets " + p("off.csv") + " --mc-runs 100");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("point 40 (-5000."), std::string::npos) << r.out;
+  const auto clean = sh("analyze --plan " + p("plan.json") + " --results " + p("r1.csv") + " --dialect csv --json " +
+                        p("clean.json") + " --mc-runs 100");
+  ASSERT_EQ(clean.code, 0) << clean.out;
+  const auto a = nlohmann::json::parse(slurp(p("chip.json"))), b = nlohmann::json::parse(slurp(p("clean.json")));
+  EXPECT_EQ(a["outliers"]["excluded"][0]["point"], 40);
+  EXPECT_TRUE(b["outliers"]["excluded"].empty());
+  for (const auto& [name, e] : b["location_errors"].items())
+    EXPECT_NEAR(a["location_errors"][name]["value"].get<double>(), e["value"].get<double>(), e["u"].get<double>()) << name;
+  // The closed form cannot leave a touch out: its offsets are refused, nothing written.
+  fs::remove(p("off2.csv"));
+  const auto cf = sh("analyze --plan " + p("plan.json") + " --results " + p("chip.csv") +
+                     " --dialect csv --method closed_form --offsets " + p("off2.csv") + " --mc-runs 100");
+  EXPECT_EQ(cf.code, 1) << cf.out;
+  EXPECT_NE(cf.out.find("off2.csv"), std::string::npos) << cf.out;
+  EXPECT_NE(cf.out.find("closed form uses every touch"), std::string::npos) << cf.out;
+  EXPECT_FALSE(fs::exists(p("off2.csv")));
+}
+
+TEST_F(Safety, DataBeyondAFewChipsWriteNoOffsetsWithoutForce) {
+  ASSERT_EQ(sh("-q plan --cycle touch154 --machine " + machine + " -o " + p("plan.json")).code, 0);
+  std::ofstream(p("truth.json")) << R"({"format": "rotacal-truth/1", "linear_axis_scale": {"X_um_per_m": 150}})";
+  ASSERT_EQ(sh("-q simulate --plan " + p("plan.json") + " --truth " + p("truth.json") +
+               " --noise-um 0.7 --seed 3 --dialect csv -o " + p("r.csv")).code,
+            0);
+  const auto r = sh("analyze --plan " + p("plan.json") + " --results " + p("r.csv") + " --dialect csv --offsets " +
+                    p("off.csv") + " --mc-runs 100");
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("none excluded"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(p("off.csv")));
+  const auto f = sh("analyze --plan " + p("plan.json") + " --results " + p("r.csv") + " --dialect csv --offsets " +
+                    p("off.csv") + " --mc-runs 100 --force");
+  EXPECT_EQ(f.code, 0) << f.out;
+  EXPECT_TRUE(fs::exists(p("off.csv")));
 }
 
 }  // namespace

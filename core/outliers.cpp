@@ -1,0 +1,118 @@
+#include "core/outliers.hpp"
+
+#include <cmath>
+#include <set>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "core/statistics.hpp"
+
+namespace rotacal {
+
+bool OutlierOptions::validate(std::string* why) const {
+  auto fail = [&](const std::string& w) {
+    if (why) *why = w;
+    return false;
+  };
+  if (!(sigma_um > 0 && std::isfinite(sigma_um))) return fail("outlier screen: sigma_um must be > 0");
+  if (!(alpha > 0 && alpha < 1)) return fail("outlier screen: alpha must be in (0, 1)");
+  if (!(max_fraction >= 0 && max_fraction < 0.5)) return fail("outlier screen: max_fraction must be in [0, 0.5)");
+  return true;
+}
+
+std::function<bool(int, const ProbePoint&)> OutlierScreen::holdOut() const {
+  if (excluded.empty()) return nullptr;
+  std::set<std::pair<int, int>> out;
+  for (const auto& e : excluded) out.insert({e.run, e.point_id});
+  return [out](int run, const ProbePoint& p) { return out.count({run, p.id}) > 0; };
+}
+
+std::string OutlierScreen::text() const {
+  if (too_many)
+    return fmt::format("outlier screen: {} of {} touches beyond {:.2f} x the declared repeatability even with the worst "
+                       "left out: more than a few chips, a model that does not fit the data or a repeatability declared "
+                       "too small; none excluded (rotacal diagnose)",
+                       beyond, touches, threshold_t);
+  if (excluded.empty())
+    return fmt::format("outlier screen: no touch beyond {:.2f} x the declared repeatability ({} touches)", threshold_t,
+                       touches);
+  std::string list;
+  for (const auto& e : excluded)
+    list += fmt::format("{}point {}{} ({:+.2f} um, {:.1f} x)", list.empty() ? "" : ", ", e.point_id,
+                        e.run > 0 ? fmt::format(" of run {}", e.run + 1) : std::string(), e.residual_um, std::abs(e.t));
+  return fmt::format("outlier screen: excluded {} of {} touches beyond {:.2f} x the declared repeatability (a chip "
+                     "or dirt on the surface; fit without them): {}",
+                     excluded.size(), touches, threshold_t, list);
+}
+
+OutlierScreen screenOutliers(
+    const std::function<IdentificationResult(const std::function<bool(int, const ProbePoint&)>&)>& fit,
+    const OutlierOptions& options) {
+  std::string why;
+  if (!options.validate(&why)) throw std::invalid_argument(why);
+  OutlierScreen s;
+  IdentificationResult r = fit(nullptr);
+  for (const auto& p : r.residuals) s.touches += p.held_out ? 0 : 1;
+  if (s.touches == 0) return s;
+  s.threshold_t = normalQuantile(1.0 - options.alpha / (2.0 * s.touches));
+  const int cap = static_cast<int>(std::floor(options.max_fraction * s.touches));
+  auto beyondIn = [&](const IdentificationResult& fit) {
+    int n = 0;
+    for (const auto& p : fit.residuals)
+      if (!p.held_out && std::abs(p.residual_um) / options.sigma_um > s.threshold_t) ++n;
+    return n;
+  };
+  // Worst first: one gross outlier (a value millimetres off) drags the whole fit and puts many
+  // touches beyond the threshold; left out, the others come back.
+  while (true) {
+    const PointResidual* worst = nullptr;
+    for (const auto& p : r.residuals)
+      if (!p.held_out && (!worst || std::abs(p.residual_um) > std::abs(worst->residual_um))) worst = &p;
+    if (!worst || std::abs(worst->residual_um) / options.sigma_um <= s.threshold_t) break;
+    if (static_cast<int>(s.excluded.size()) >= cap) {
+      // Still beyond after the most a few chips can be: the model or the declared repeatability
+      // is wrong. Nothing is left out: the analysis and the adequacy test see all the data.
+      s.too_many = true;
+      s.beyond = beyondIn(r);
+      s.excluded.clear();
+      return s;
+    }
+    s.excluded.push_back({worst->run, worst->point_id, worst->residual_um, worst->residual_um / options.sigma_um});
+    IdentificationResult next = fit(s.holdOut());
+    if (next.summary.termination != Termination::Converged) {
+      // Leaving this touch out broke the fit (a point the model cannot do without): keep it.
+      s.excluded.pop_back();
+      break;
+    }
+    r = std::move(next);
+  }
+  // What each excluded touch is against the model fitted without it.
+  for (auto& e : s.excluded)
+    for (const auto& p : r.residuals)
+      if (p.run == e.run && p.point_id == e.point_id) e.residual_um = p.residual_um;
+  return s;
+}
+
+Json outlierScreenJson(const OutlierScreen& s, const OutlierOptions& o) {
+  Json ex = Json::array();
+  for (const auto& e : s.excluded)
+    ex.push_back({{"run", e.run + 1},
+                  {"point", e.point_id},
+                  {"residual_um", std::round(e.residual_um * 1e6) / 1e6},
+                  {"t", std::round(e.t * 1e4) / 1e4},
+                  {"reason", "beyond the threshold: a chip or dirt on the surface; left out of the fit"}});
+  return {{"test", "|residual| / declared repeatability against the normal quantile at alpha / (2 N), worst first, "
+                   "refitted after each"},
+          {"sigma_um", o.sigma_um},
+          {"alpha", o.alpha},
+          {"threshold_t", std::round(s.threshold_t * 1e4) / 1e4},
+          {"touches", s.touches},
+          {"max_fraction", o.max_fraction},
+          {"too_many", s.too_many},
+          {"beyond", s.beyond},
+          {"excluded", ex},
+          {"summary", s.text()}};
+}
+
+}  // namespace rotacal

@@ -1,0 +1,60 @@
+#pragma once
+// Outlier touches (issue 14, item 6): a touch that hit a chip or a dirty spot lies 5-50 um off in
+// otherwise good data. Least squares would average it in; this screen finds it, names it by run
+// and point, and leaves it out of the fit with the reason, never silently.
+//
+// The test: the residual of each fitted touch against the DECLARED probe repeatability,
+// t = r / sigma (the user's claim, never the fit's own sigma, which an outlier inflates; without
+// the leverage factor sqrt(1 - h) the test is conservative: a residual is smaller than its error).
+// Threshold: |t| > z with z the two-sided normal quantile at alpha / N (Bonferroni over the N
+// fitted touches: clean data lose a touch in at most alpha of the runs). The worst touch beyond z
+// is left out and the model refitted, until none is beyond z (worst first: a gross outlier, a
+// value millimetres off, drags the first fit and puts many touches beyond z; left out, they come
+// back). Still beyond after max_fraction of the touches is no longer a few chips but a model that
+// does not fit (or a repeatability declared too small): then nothing is left out and the screen
+// says so (too_many), so that the model's adequacy test (diagnose) sees the whole data; analyze
+// then writes no offsets without --force.
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/identification.hpp"
+#include "core/json_io.hpp"
+
+namespace rotacal {
+
+struct OutlierOptions {
+  double sigma_um = 0.7;      // declared probe repeatability, k = 1
+  double alpha = 0.01;        // family-wise rate of a clean run losing a touch
+  double max_fraction = 0.05; // of the fitted touches; beyond it nothing is left out
+  bool validate(std::string* why) const;
+};
+
+struct ExcludedTouch {
+  int run = 0;
+  int point_id = 0;
+  double residual_um = 0.0;  // measured - model of the fit that left it out
+  double t = 0.0;            // residual_um / sigma_um, in the fit where it was the worst
+};
+
+struct OutlierScreen {
+  std::vector<ExcludedTouch> excluded;
+  double threshold_t = 0.0;
+  int touches = 0;          // fitted touches of the first fit
+  bool too_many = false;    // still beyond after max_fraction left out: none excluded
+  int beyond = 0;           // touches beyond the threshold in the last fit, when too_many
+  /// The rule to give IdentificationOptions::hold_out for the excluded touches (null when none).
+  std::function<bool(int run, const ProbePoint& point)> holdOut() const;
+  std::string text() const;  // one line for the report
+};
+
+/// Runs `fit` (an identification with the given hold-out rule) repeatedly; returns the screen.
+/// `fit` is called with a null rule first.
+OutlierScreen screenOutliers(
+    const std::function<IdentificationResult(const std::function<bool(int, const ProbePoint&)>&)>& fit,
+    const OutlierOptions& options);
+
+/// The screen as REPORT.json's `outliers` block.
+Json outlierScreenJson(const OutlierScreen& screen, const OutlierOptions& options);
+
+}  // namespace rotacal
