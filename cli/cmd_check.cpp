@@ -28,7 +28,7 @@ namespace rotacal {
 constexpr size_t kMaxProgramLineChars = 1024;
 
 ProgramCheckResult verifyProgram(const std::string& text, const std::string& dialect, const MachineModel& machine,
-                                 const ProbePlan* plan, bool rotacal_number, const LocationErrors* errors) {
+                                 const ProbePlan* plan, bool rotacal_number, const GeometricErrors* errors) {
   ProgramCheckSetup s;
   if (errors) s.errors = *errors;
   s.machine = &machine;
@@ -65,7 +65,7 @@ ProgramCheckResult verifyProgram(const std::string& text, const std::string& dia
 
 void requireSafeProgram(const std::string& text, const std::string& file, const std::string& dialect,
                         const MachineModel& machine, const ProbePlan* plan, bool rotacal_number,
-                        const LocationErrors* errors) {
+                        const GeometricErrors* errors) {
   const ProgramCheckResult r = verifyProgram(text, dialect, machine, plan, rotacal_number, errors);
   if (r.violations.empty()) return;
   const ProgramViolation& v = r.violations.front();

@@ -16,6 +16,7 @@
 #include "core/machine.hpp"
 #include "core/units.hpp"
 #include "postproc/compensate_program.hpp"
+#include "postproc/report_errors.hpp"
 
 namespace rotacal {
 namespace {
@@ -57,37 +58,56 @@ std::vector<double> parseTriple(const std::string& opt, const std::string& text)
   return v;
 }
 
-int cmdCompensate(const Common& c, const std::string& program_file, const std::string& report_file,
+int cmdCompensate(const Common& c, const std::string& program_file, const std::vector<std::string>& report_files,
                   const std::string& machine_file, const std::string& dialect, const std::string& origin,
-                  const std::string& out, bool force) {
+                  const std::string& out, bool force, double max_deviation_um) {
   const NcSyntax syntax = syntaxOf(dialect);
-  std::vector<std::string> inputs = {program_file, report_file};
+  std::vector<std::string> inputs = {program_file};
+  for (const auto& r : report_files) inputs.push_back(r);
   if (!machine_file.empty()) inputs.push_back(machine_file);
   checkOutputs({{"-o", out}}, inputs);  // -o on an input is a usage error, before anything is read
-  const JsonDoc report = readJsonFile(report_file);
+  std::vector<JsonDoc> reports;
+  for (const auto& r : report_files) reports.push_back(readJsonFile(r));
   MachineModel machine;
   if (!machine_file.empty()) {
     machine = loadMachine(machine_file);
-  } else if (report.value.is_object() && report.value.contains("machine_model")) {
-    machine = machineFromJson(report, report.value["machine_model"]);
   } else {
-    report.fail(report.value, "", "the report does not carry its machine ('machine_model', written by analyze since "
-                                  "this version): give --machine MACHINE.json");
+    const JsonDoc& report = reports.front();
+    if (report.value.is_object() && report.value.contains("machine_model"))
+      machine = machineFromJson(report, report.value["machine_model"]);
+    else
+      report.fail(report.value, "", "the report does not carry its machine ('machine_model', written by analyze since "
+                                    "this version): give --machine MACHINE.json");
   }
-  const LocationErrors errors = errorsFromReport(report, machine.kinematics, force);
+  const ReportErrors read = errorsFromReports(reports, machine.kinematics, force);
+  const GeometricErrors& errors = read.errors;
   ProgramCompensationOptions opt;
   if (!origin.empty()) {
     const auto v = parseTriple("--program-origin", origin);
     opt.program_origin_m_mm = Eigen::Vector3d(v[0], v[1], v[2]);
   }
-  // The report's path is outside text: the dialect's comment form keeps only its safe characters.
-  opt.header.push_back(fmt::format("location errors of {}:", report_file));
-  std::string values;
+  opt.subdivision.max_deviation_mm = umToMm(max_deviation_um);
+  // The reports' paths are outside text: the dialect's comment form keeps only its safe characters.
+  for (const auto& s : read.sources) opt.header.push_back(s);
+  std::string values = "location errors:";
   for (int i = 0; i < kNumLocationErrors; ++i) {
     const auto& p = locationParameters(machine.kinematics)[i];
-    values += fmt::format("{}{} {:.2f} {}", values.empty() ? "" : ", ", p.name, errors.reportValue(i), reportUnit(p.kind));
+    values += fmt::format("{} {} {:.2f} {}", i == 0 ? "" : ",", p.name, errors.location.reportValue(i), reportUnit(p.kind));
   }
   opt.header.push_back(values);
+  for (const auto& comp : errors.components) {
+    // The largest magnitude of each component error over the sampled angles.
+    std::string line = fmt::format("component errors of {}, largest over the turn:", comp.axis);
+    const auto names = componentErrorNames(comp.axis);
+    for (int k = 0; k < kNumComponentErrors; ++k) {
+      double worst = 0.0;
+      for (const auto& v : comp.values) worst = std::max(worst, std::abs(v[k]));
+      line += fmt::format("{} {} {:.2f} {}", k == 0 ? "" : ",", names[static_cast<size_t>(k)],
+                          k < 3 ? mmToUm(worst) : radToMdeg(worst), k < 3 ? "um" : "mdeg");
+    }
+    opt.header.push_back(line);
+  }
+  for (const auto& n : read.notes) opt.header.push_back(n);
   const std::string text = readTextFile(program_file);
   const ProgramCompensation r = compensateProgram(text, program_file, machine, errors, syntax, opt);
   // The input, on the nominal machine it was written for: what makes it unsafe is named at its
@@ -98,6 +118,7 @@ int cmdCompensate(const Common& c, const std::string& program_file, const std::s
   // compensated for, where it keeps its planned gaps. The input's program number is kept.
   requireSafeProgram(r.text, out, dialect, machine, nullptr, false, &errors);
   writeFileAtomic(out, r.text);
+  for (const auto& n : read.notes) say(c, fmt::format("compensate: note: {}\n", n));
   say(c, fmt::format("compensate: {} of {} motion blocks rewritten ({} left as written: machine-coordinate moves or "
                      "before every axis was known); largest shift {:.2f} um, largest rotary change {:.2f} mdeg, tool "
                      "direction not restorable by the rotary axes up to {:.2f} urad; {} no-trigger check statements "
@@ -105,6 +126,14 @@ int cmdCompensate(const Common& c, const std::string& program_file, const std::s
                      r.compensated_blocks, r.motion_blocks, r.uncompensated_blocks, mmToUm(r.max_shift_mm),
                      r.max_rotary_change_deg * 1000.0, r.max_direction_residual_rad * 1e6, r.rewritten_checks,
                      mmToUm(r.max_check_shift_mm), out));
+  say(c, fmt::format("compensate: {} feed moves split into {} more lines (a move unsplit would leave the nominal path by "
+                     "up to {:.3f} um; written: {:.3f} um, tolerance {:.3f} um)\n",
+                     r.split_blocks, r.added_blocks, mmToUm(r.max_unsplit_deviation_mm), mmToUm(r.max_path_deviation_mm),
+                     max_deviation_um));
+  if (errors.location_covariance)
+    say(c, fmt::format("compensate: the identification's uncertainty leaves the compensated tool point uncertain by up "
+                       "to {:.2f} um (k = 2) at this program's end points\n",
+                       2.0 * mmToUm(r.max_position_u_mm)));
   return 0;
 }
 
@@ -112,23 +141,31 @@ int cmdCompensate(const Common& c, const std::string& program_file, const std::s
 
 std::vector<Command> compensateCommands(CLI::App& app, const Common& common) {
   struct Args {
-    std::string program, report, machine, dialect, origin, out;
+    std::string program, machine, dialect, origin, out;
+    std::vector<std::string> reports;
     bool force = false;
+    double max_deviation_um = 0.2;
   };
   auto a = std::make_shared<Args>();
   auto* cmd = app.add_subcommand("compensate", "rewrite an NC program to cancel the identified location errors");
   cmd->add_option("--program", a->program, "IN: the NC program (machine coordinates, no TCP)")->required();
-  cmd->add_option("--report", a->report, "REPORT.json of analyze")->required();
+  cmd->add_option("--report", a->reports,
+                  "REPORT.json of analyze; repeat to combine (location errors from one, component errors from another)")
+      ->required();
   cmd->add_option("--dialect", a->dialect, "linuxcnc | fanuc | haas | siemens | okuma")->required();
   cmd->add_option("--machine", a->machine, "MACHINE.json (default: the machine recorded in the report)");
   cmd->add_option("--program-origin", a->origin,
                   "X,Y,Z (mm): machine position of the program zero relative to the rotary-axis intersection (default "
                   "0,0,0)");
   cmd->add_option("-o,--output", a->out, "OUT: the rewritten program")->required();
+  cmd->add_option("--max-deviation-um", a->max_deviation_um,
+                  "split a feed move that turns a rotary axis where it would leave the nominal path by more (um)")
+      ->check(CLI::Range(0.001, 1000.0));
   cmd->add_flag("--force", a->force,
                 "compensate location errors beyond the plausibility limit of the offsets writers (0.5 mm, 100 mdeg)");
   return {{cmd, [a, &common] {
-             return cmdCompensate(common, a->program, a->report, a->machine, a->dialect, a->origin, a->out, a->force);
+             return cmdCompensate(common, a->program, a->reports, a->machine, a->dialect, a->origin, a->out, a->force,
+                                  a->max_deviation_um);
            }}};
 }
 

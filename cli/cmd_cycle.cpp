@@ -23,6 +23,8 @@
 #include "core/machine.hpp"
 #include "core/probe_plan.hpp"
 #include "cycles/cycle.hpp"
+#include "postproc/compensate_program.hpp"
+#include "postproc/report_errors.hpp"
 
 namespace rotacal {
 namespace {
@@ -178,10 +180,12 @@ int cmdSimulate(const Common& c, const std::string& plan_file, const std::string
 int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<std::string>& results,
                const std::string& dialect_name, const std::string& method, const std::string& json_out,
                const std::string& text_out, const std::string& offsets_out, bool force, const std::string& html_out,
-               const std::string& contributors_file, int mc_runs, std::uint64_t mc_seed) {
+               const std::string& contributors_file, int mc_runs, std::uint64_t mc_seed,
+               const std::vector<std::string>& compensated_with) {
   std::vector<std::string> inputs = results;
   inputs.push_back(plan_file);
   if (!contributors_file.empty()) inputs.push_back(contributors_file);
+  for (const auto& r : compensated_with) inputs.push_back(r);
   if (mc_runs < 100 || mc_runs > 1000000) throw CLI::ValidationError("--mc-runs", "must be in [100, 1000000]");
   checkOutputs({{"--json", json_out}, {"--text", text_out}, {"--html", html_out}, {"--offsets", offsets_out}}, inputs);
   const ProbePlan plan = loadCyclePlan(plan_file);
@@ -197,7 +201,20 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
                                                (known.empty() ? std::string(" (it has one estimator)")
                                                               : " (known: " + known + ")"));
   }
-  const DialectIO io = dialectIO(d);
+  DialectIO io = dialectIO(d);
+  // Results of a program rewritten by `compensate`: read back as the original program's, so that
+  // the analysis identifies what the compensation left (docs/compensation.md).
+  bool undone = false;
+  if (!compensated_with.empty()) {
+    std::vector<JsonDoc> reports;
+    for (const auto& f : compensated_with) reports.push_back(readJsonFile(f));
+    const GeometricErrors errors = errorsFromReports(reports, plan.machine.kinematics, true).errors;
+    io.read_results = [&d, errors, &undone, name = dialect_name](const std::string& text, const std::string& file,
+                                                               const ProbePlan& p) {
+      undone = true;
+      return undoCompensation(p, d.parseResults(text, file, p), errors, NcSyntax{name});
+    };
+  }
   AnalyzeRequest r;
   r.plan = &plan;
   r.results = readInputs(results);
@@ -209,7 +226,18 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
   r.contributors = declared ? &*declared : nullptr;
   r.mc_runs = mc_runs;
   r.mc_seed = mc_seed;
-  const CycleDocuments docs = onResults(results, [&] { return cycle.analyze(r); });
+  CycleDocuments docs = onResults(results, [&] { return cycle.analyze(r); });
+  if (!compensated_with.empty()) {
+    if (!undone)
+      throw CLI::ValidationError("--compensated-with", "the " + plan.cycle + " cycle's results are not the controller's "
+                                                      "trigger coordinates: there is no compensation to undo");
+    Json list = Json::array();
+    for (const auto& f : compensated_with) list.push_back(f);
+    docs.doc["compensated_with"] = list;
+    docs.doc["compensated_with_note"] =
+        "results of the program compensated for these reports' errors, read back as the original program's: the "
+        "errors identified are what the compensation left";
+  }
   OutputSet outputs(inputs);
   outputs.add("--json", json_out, docs.doc.dump(1) + "\n");
   addHtml(outputs, html_out, docs.doc);
@@ -275,7 +303,7 @@ std::vector<Command> cycleCommands(CLI::App& app, const Common& common) {
         html_out, contributors_file;
     int mc_runs = 2000;
     std::uint64_t mc_seed = 1;
-    std::vector<std::string> sets, results;
+    std::vector<std::string> sets, results, compensated_with;
     double noise_um = 0.0, start_s = 0.0, alpha = JudgeOptions{}.alpha;
     std::uint64_t seed = 1;
     bool force = false;
@@ -332,10 +360,13 @@ std::vector<Command> cycleCommands(CLI::App& app, const Common& common) {
                   "CONTRIB.json: the Type B contributors (default: the machine's `contributors`; docs/uncertainty.md)");
   ana->add_option("--mc-runs", a->mc_runs, "Monte Carlo runs of the Type B uncertainty (default 2000)");
   ana->add_option("--mc-seed", a->mc_seed, "seed of that Monte Carlo (default 1)");
+  ana->add_option("--compensated-with", a->compensated_with,
+                  "REPORT.json: the results are of a program `compensate` rewrote for this report's errors (repeat as "
+                  "given to compensate); the analysis then identifies what the compensation left");
   cmds.push_back({ana, [a, &common] {
                     return cmdAnalyze(common, a->plan_file, a->results, a->dialect, a->method, a->json_out, a->text_out,
                                       a->offsets_out, a->force, a->html_out, a->contributors_file, a->mc_runs,
-                                      a->mc_seed);
+                                      a->mc_seed, a->compensated_with);
                   }});
 
   auto* dia = app.add_subcommand("diagnose", "find what the model misses, name the cause, extend the model, measure the gain");

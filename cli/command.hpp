@@ -10,6 +10,7 @@
 
 #include "controllers/dialect.hpp"
 #include "core/errors.hpp"
+#include "core/geometric_errors.hpp"
 #include "core/machine.hpp"
 #include "core/probe_plan.hpp"
 #include "postproc/program_check.hpp"
@@ -77,12 +78,12 @@ inline const Dialect& dialectOrFail(const std::string& name) {
 /// rewrites programs rotacal did not write, keeps the number it was given and asks for none).
 /// `errors` (may be null): simulate on the machine with these location errors (compensate's).
 ProgramCheckResult verifyProgram(const std::string& text, const std::string& dialect, const MachineModel& machine,
-                                 const ProbePlan* plan, bool rotacal_number, const LocationErrors* errors = nullptr);
+                                 const ProbePlan* plan, bool rotacal_number, const GeometricErrors* errors = nullptr);
 /// Throws InputError(file, line, ...) with the first violation of verifyProgram and their count:
 /// `generate` and `compensate` call it before they write, so an unsafe program is never written.
 void requireSafeProgram(const std::string& text, const std::string& file, const std::string& dialect,
                         const MachineModel& machine, const ProbePlan* plan, bool rotacal_number,
-                        const LocationErrors* errors = nullptr);
+                        const GeometricErrors* errors = nullptr);
 /// The one line `check` prints for a clean program.
 std::string checkSummary(const std::string& file, const std::string& text, const ProgramCheckResult& result);
 

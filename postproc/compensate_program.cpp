@@ -1,5 +1,6 @@
 #include "postproc/compensate_program.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <array>
 #include <cmath>
 #include <map>
@@ -62,6 +63,9 @@ struct Modal {
   bool inch = false;
   bool incremental = false;
   enum class Motion { Linear, Arc } motion = Motion::Linear;
+  bool rapid = false;         // G0 (not split: the control's path)
+  bool inverse_time = false;  // G93: F is 1 / the block's time in minutes
+  bool guarded = false;       // G31 / G38.x as the modal motion
   std::array<std::optional<double>, 3> xyz_mm;  // program coordinates, mm
   std::map<char, std::optional<double>> rotary;  // paper-convention angles, deg
 };
@@ -98,11 +102,12 @@ std::pair<int, std::string> splitProblem(const std::string& p) {
 }  // namespace
 
 ProgramCompensation compensateProgram(const std::string& text, const std::string& file, const MachineModel& machine,
-                                      const LocationErrors& errors, const NcSyntax& syntax,
+                                      const GeometricErrors& errors, const NcSyntax& syntax,
                                       const ProgramCompensationOptions& options) {
   options.pose.validate();
-  if (errors.kinematics != machine.kinematics)
+  if (errors.kinematics() != machine.kinematics)
     throw std::invalid_argument("compensate: the location errors are for another kinematics than the machine");
+  errors.validate();
   if (syntax.dialect == "heidenhain" || syntax.dialect == "csv")
     throw std::invalid_argument("compensate: '" + syntax.dialect + "' programs are not word-address G-code");
   const Dialect& dialect = dialectByName(syntax.dialect);
@@ -120,7 +125,18 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
   // The rotary words as last printed: a block rewritten at a compensated pose must also carry a
   // rotary word the block lacks when the machine is not yet at the compensated angle.
   std::map<char, std::string> printed_rotary;
+  // The linear words likewise (G90 program coordinates, mm, as printed): a linear word the block
+  // lacks is written only where the compensated position differs from the one last commanded,
+  // so zero errors reproduce the program line for line.
+  std::array<std::optional<double>, 3> printed_linear;
+  auto linearIndex = [](char c) { return c == 'X' ? 0 : c == 'Y' ? 1 : c == 'Z' ? 2 : -1; };
   auto notePrinted = [&](const nc::Block& b) {
+    for (const auto& w : b.words) {
+      const int i = linearIndex(w.letter);
+      if (i < 0) continue;
+      if (m.incremental || !w.value) printed_linear[static_cast<size_t>(i)].reset();
+      else printed_linear[static_cast<size_t>(i)] = *w.value * (m.inch ? kMmPerInch : 1.0);
+    }
     for (const auto& w : b.words)
       if (isRotary(w.letter)) printed_rotary[w.letter] = w.text;
   };
@@ -157,7 +173,7 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
   while (header_at < blocks.size() && identifies(blocks[header_at])) ++header_at;
   std::vector<std::string> header =
       dialect.commentLines(std::string(kCompensatedMarker) +
-                           ": rewritten by rotacal compensate for the location errors below. Never compensate it "
+                           ": rewritten by rotacal compensate for the geometric errors below. Never compensate it "
                            "again; run it only on the uncompensated machine");
   for (const auto& h : options.header)
     for (auto& l : dialect.commentLines(h)) header.push_back(std::move(l));
@@ -191,6 +207,9 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
   };
 
   std::optional<double> work_offset;  // G54 ... as first selected
+  // The nominal command at the end of the last compensated block (machine frame): where a feed
+  // move to be split starts.
+  std::optional<MachineCommand> last_nominal;
   for (size_t bi = 0; bi < blocks.size(); ++bi) {
     if (bi == header_at) emitHeader();
     emitting_line = blocks[bi].line;
@@ -263,7 +282,12 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
       else if (is(21)) m.inch = false;
       else if (is(90)) m.incremental = false;
       else if (is(91)) m.incremental = true;
-      else if (is(0) || is(1) || is(31) || is(38.2) || is(38.3) || is(38.4) || is(38.5)) m.motion = Modal::Motion::Linear;
+      else if (is(0) || is(1) || is(31) || is(38.2) || is(38.3) || is(38.4) || is(38.5)) {
+        m.motion = Modal::Motion::Linear;
+        m.rapid = is(0);
+        m.guarded = !is(0) && !is(1);
+      } else if (is(93)) m.inverse_time = true;
+      else if (is(94) || is(95)) m.inverse_time = false;
       else if (is(2) || is(3)) m.motion = Modal::Motion::Arc;
       else if (is(53)) machine_coords = true;
       else if (is(28) || is(30)) home = true;
@@ -311,8 +335,13 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
       }
       if (home)
         for (auto& v : m.xyz_mm) v.reset();
+      last_nominal.reset();
       ++out.uncompensated_blocks;
       notePrinted(b);
+      // Machine coordinates are not program coordinates: what they moved is no longer known.
+      for (const auto& w : b.words)
+        if (linearIndex(w.letter) >= 0) printed_linear[static_cast<size_t>(linearIndex(w.letter))].reset();
+      if (home) printed_linear = {};
       emit(b.raw);
       continue;
     }
@@ -341,6 +370,7 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
     for (const auto& [c, v] : m.rotary) known = known && v.has_value();
     if (m.incremental) known = known && before[0] && before[1] && before[2];
     if (!known) {
+      last_nominal.reset();
       ++out.uncompensated_blocks;
       notePrinted(b);
       emit(b.raw);
@@ -396,15 +426,118 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
                                  "XYZ"[i], x_machine[i], strokes[i]->min, strokes[i]->max));
     Eigen::Vector3d words = x_new;
     if (m.incremental) words = x_new - compensate(before);
+    if (errors.location_covariance) {
+      const Eigen::Vector3d p_w = T_m_w_nominal(errors.kinematics(), q).inverse() * (x_nom + options.program_origin_m_mm);
+      const auto J = J_pm_e(errors.location, q_cmd, p_w);
+      const Eigen::Matrix3d C = J * (*errors.location_covariance) * J.transpose();
+      out.max_position_u_mm =
+          std::max(out.max_position_u_mm, std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(C).eigenvalues().maxCoeff())));
+    }
+    // A feed move that turns a rotary axis: the straight joint-space move between compensated
+    // ends leaves the nominal path in between; split it where it would leave it by more than
+    // the tolerance (core/compensation.hpp). The pieces' ends are printed as the block's are.
+    std::vector<std::pair<Eigen::Vector3d, std::map<char, std::string>>> pieces;  // all but the last
+    double piece_feed_factor = 1.0;
+    const MachineCommand nominal_end{x_nom + options.program_origin_m_mm, q};
+    bool turns = false;
+    if (last_nominal)
+      for (char c : rotary_letters) turns = turns || std::abs(poseAxis(last_nominal->pose, c) - poseAxis(q, c)) > 1e-12;
+    if (options.subdivide && last_nominal && turns && !m.rapid) {
+      if (m.guarded || !prefix.empty())
+        fail(b.line, "a probing move that turns a rotary axis: probe at a fixed rotary pose");
+      auto rounding = [&](const Pose& p) {
+        Pose r = p;
+        for (char c : rotary_letters) {
+          const int sign = machine.controllerSign(c, syntax.dialect);
+          poseAxis(r, c) = sign * parsedBack(fixedText(sign * poseAxis(r, c), syntax.angle_decimals));
+        }
+        return r;
+      };
+      CompensatedMove move;
+      try {
+        move = compensateMove(errors, *last_nominal, nominal_end, options.pose, options.subdivision, rounding);
+      } catch (const std::runtime_error& e) {
+        fail(b.line, e.what());
+      }
+      out.max_unsplit_deviation_mm = std::max(out.max_unsplit_deviation_mm, move.unsplit_deviation_mm);
+      out.max_path_deviation_mm = std::max(out.max_path_deviation_mm, move.max_deviation_mm);
+      if (move.ends.size() > 1) {
+        if (m.incremental) fail(b.line, "a G91 move that turns a rotary axis cannot be split: command it in G90");
+        for (const auto& w : b.words)
+          if (w.letter == 'M' && w.value &&
+              (*w.value == 0 || *w.value == 1 || *w.value == 2 || *w.value == 30 || *w.value == 60))
+            fail(b.line, fmt::format("this move must be split to stay on the nominal path, but M{} acts after the "
+                                     "move: put it on a line of its own",
+                                     w.text));
+        ++out.split_blocks;
+        out.added_blocks += static_cast<int>(move.ends.size()) - 1;
+        if (m.inverse_time) piece_feed_factor = static_cast<double>(move.ends.size());
+        for (size_t k = 0; k + 1 < move.ends.size(); ++k) {
+          std::map<char, std::string> rt;
+          for (char c : rotary_letters) {
+            const int sign = machine.controllerSign(c, syntax.dialect);
+            rt[c] = fixedText(sign * poseAxis(move.ends[k].pose, c), syntax.angle_decimals);
+            const RotaryAxis& axis = machine.rotaryAxis(c);
+            if (!axis.continuous && !axis.stroke_deg.contains(poseAxis(move.ends[k].pose, c), kRotaryStrokeTolDeg))
+              fail(b.line, fmt::format("a piece of this split move puts {} at {} deg, outside the stroke [{}, {}] deg "
+                                       "of MACHINE.json",
+                                       c, poseAxis(move.ends[k].pose, c), axis.stroke_deg.min, axis.stroke_deg.max));
+          }
+          const Eigen::Vector3d xm = move.ends[k].x_m_mm;
+          for (int i = 0; i < 3; ++i)
+            if (!strokes[i]->contains(xm[i], print_tol_mm))
+              fail(b.line, fmt::format("a piece of this split move puts {} at {:.4f} mm, outside the stroke [{}, {}] mm "
+                                       "of MACHINE.json",
+                                       "XYZ"[i], xm[i], strokes[i]->min, strokes[i]->max));
+          pieces.emplace_back(xm - options.program_origin_m_mm, rt);
+        }
+      }
+    }
+    last_nominal = nominal_end;
+    auto axisWords = [&](const Eigen::Vector3d& w, const std::map<char, std::string>& rt) {
+      std::string a;
+      for (int i = 0; i < 3; ++i) a += fmt::format("{}{}{}", a.empty() ? "" : " ", "XYZ"[i], fixedText(w[i] / unit_mm, dec));
+      for (char c : rotary_letters) a += fmt::format(" {}{}", c, rt.at(c));
+      return a;
+    };
+    // G93: each piece takes its share of the block's time, F = 1 / time.
+    auto feedText = [&](const nc::Word& f) {
+      const size_t dot = f.text.find('.');
+      const int decimals = std::max(3, dot == std::string::npos ? 0 : static_cast<int>(f.text.size() - dot - 1));
+      return fixedText(*f.value * piece_feed_factor, decimals);
+    };
+    const nc::Word* feed_word = nullptr;
+    for (const auto& w : b.words)
+      if (w.letter == 'F') feed_word = &w;
+    if (m.inverse_time && !pieces.empty() && (feed_word == nullptr || !feed_word->value))
+      fail(b.line, "an inverse-time (G93) move to be split needs its F word as a number on the block");
     std::string line = prefix + (b.block_delete ? "/" : "");
     bool axes_written = false;
     for (const auto& w : b.words) {
       const bool lin = w.letter == 'X' || w.letter == 'Y' || w.letter == 'Z';
+      if (!pieces.empty() && w.letter == 'F' && m.inverse_time) {
+        line += (line.empty() || line.back() == '/' || line.back() == ' ' ? "" : " ") + std::string("F") + feedText(w);
+        continue;
+      }
+      if ((lin || isRotary(w.letter)) && !pieces.empty()) {
+        if (axes_written) continue;
+        axes_written = true;
+        line += (line.empty() || line.back() == '/' || line.back() == ' ' ? "" : " ") +
+                axisWords(pieces.front().first, pieces.front().second);
+        continue;
+      }
       if (lin || isRotary(w.letter)) {
         if (axes_written) continue;
         axes_written = true;
         std::string a;
-        for (int i = 0; i < 3; ++i) a += fmt::format("{}{}{}", a.empty() ? "" : " ", "XYZ"[i], fixedText(words[i] / unit_mm, dec));
+        for (int i = 0; i < 3; ++i) {
+          bool in_block = false;
+          for (const auto& w2 : b.words) in_block = in_block || w2.letter == "XYZ"[i];
+          const std::string t = fixedText(words[i] / unit_mm, dec);
+          const auto& pl = printed_linear[static_cast<size_t>(i)];
+          const bool moved = m.incremental ? parsedBack(t) != 0.0 : !pl || std::abs(*pl - parsedBack(t) * unit_mm) > 1e-12;
+          if (in_block || moved) a += fmt::format("{}{}{}", a.empty() ? "" : " ", "XYZ"[i], t);
+        }
         for (char c : rotary_letters) {
           bool in_block = false;
           for (const auto& w2 : b.words) in_block = in_block || w2.letter == c;
@@ -415,7 +548,7 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
                                      "give the rotary axes in a G90 block first",
                                      c));
           if (in_block || moved) {
-            a += fmt::format(" {}{}", c, rotary_text[c]);
+            a += fmt::format("{}{}{}", a.empty() ? "" : " ", c, rotary_text[c]);
             printed_rotary[c] = rotary_text[c];
           }
         }
@@ -426,6 +559,19 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
     }
     for (const auto& c : b.comments) line += " " + comment(c);
     emit(line);
+    if (!pieces.empty()) {
+      // The remaining pieces, the last one the block's own end; G1 is modal from the first line.
+      for (size_t k = 1; k <= pieces.size(); ++k) {
+        std::string piece = k < pieces.size() ? axisWords(pieces[k].first, pieces[k].second) : axisWords(words, rotary_text);
+        if (m.inverse_time) piece += " F" + feedText(*feed_word);
+        emit(piece);
+      }
+      for (char c : rotary_letters) printed_rotary[c] = rotary_text[c];
+    }
+    for (int i = 0; i < 3; ++i) {
+      if (m.incremental) printed_linear[static_cast<size_t>(i)].reset();
+      else printed_linear[static_cast<size_t>(i)] = parsedBack(fixedText(x_new[i] / unit_mm, dec)) * unit_mm;
+    }
     ++out.compensated_blocks;
     if (end_check && isGuardedMove(b, !prefix.empty())) {
       PendingCheck p;
@@ -467,51 +613,32 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
   return out;
 }
 
-// The identified location errors of a REPORT.json (contract.md), in mm / rad. All eight must
-// be there (a missing one would be compensated as 0 under a header that claims the report's
-// errors), and each must be plausible as a correction unless `force`.
-LocationErrors errorsFromReport(const JsonDoc& doc, Kinematics k, bool force) {
-  return guardJson(doc, [&] {
-    const Json& j = doc.value;
-    if (!j.is_object() || !j.contains("format") || j["format"] != "rotacal-report/1")
-      doc.fail(j, "format", "not a rotacal report (expected \"format\": \"rotacal-report/1\")");
-    if (!j.contains("location_errors") || !j["location_errors"].is_object())
-      doc.fail(j, "location_errors", "the report has no 'location_errors'");
-    const Json& errs = j["location_errors"];
-    if (k == Kinematics::HeadAB)
-      doc.fail(j, j.contains("machine_model") ? "machine_model" : "location_errors",
-               "a spindle-head machine (head_ab) has no table location errors to compensate: compensate rewrites "
-               "programs of table machines (table_ac, table_bc)");
-    for (const auto& p : locationParameters(k))
-      if (!errs.contains(std::string(p.name)))
-        doc.fail(j, "location_errors",
-                 fmt::format("'location_errors' lacks {}: compensate needs all {} location errors of the machine's "
-                             "kinematics (a missing one is not zero)",
-                             p.name, kNumLocationErrors));
-    LocationErrors e;
-    e.kinematics = k;
-    for (const auto& [name, entry] : errs.items()) {
-      const int i = parameterIndex(k, name);
-      if (i < 0) doc.fail(errs, name, "'" + name + "' is not a location error of this machine's kinematics");
-      if (!entry.is_object()) doc.fail(errs, name, "'" + name + "' needs {\"value\": number, \"unit\": ...}");
-      const double v = requireNumber(doc, entry, "value");
-      const std::string unit = requireString(doc, entry, "unit");
-      const ParamKind kind = locationParameters(k)[i].kind;
-      if (kind == ParamKind::Length) {
-        if (unit == "um") e.values[i] = umToMm(v);
-        else if (unit == "mm") e.values[i] = v;
-        else doc.fail(entry, "unit", "unit of '" + name + "' must be um or mm");
-      } else {
-        if (unit == "mdeg") e.values[i] = mdegToRad(v);
-        else if (unit == "urad") e.values[i] = v * 1e-6;
-        else if (unit == "rad") e.values[i] = v;
-        else doc.fail(entry, "unit", "unit of '" + name + "' must be mdeg, urad or rad");
+MeasurementRun undoCompensation(const ProbePlan& plan, const MeasurementRun& run, const GeometricErrors& errors,
+                                const NcSyntax& syntax, const ProgramCompensationOptions& options) {
+  if (errors.kinematics() != plan.machine.kinematics)
+    throw std::invalid_argument("the compensation's errors are for another kinematics than the plan's machine");
+  errors.validate();
+  std::map<std::array<double, 3>, Pose> printed;  // nominal pose -> compensated pose as printed
+  MeasurementRun out = run;
+  for (auto& t : out.points) {
+    const ProbePoint* p = plan.findPoint(t.point_id);
+    if (!p) throw std::invalid_argument(fmt::format("point {} is not in the plan", t.point_id));
+    const Pose& q = p->pose;
+    const std::array<double, 3> key{q.A, q.B, q.C};
+    auto it = printed.find(key);
+    if (it == printed.end()) {
+      Pose qc = compensatePose(errors, q, options.pose).pose;
+      for (const auto& r : plan.machine.rotary) {
+        const int sign = plan.machine.controllerSign(r.name, syntax.dialect);
+        poseAxis(qc, r.name) = sign * parsedBack(fixedText(sign * poseAxis(qc, r.name), syntax.angle_decimals));
       }
-      const std::string why = ctl::implausibility(k, i, e.values[i]);
-      if (!why.empty() && !force) doc.fail(errs, name, why + " (--force)");
+      it = printed.emplace(key, qc).first;
     }
-    return e;
-  });
+    const Eigen::Vector3d x = t.position_m_mm + options.program_origin_m_mm;
+    t.position_m_mm = T_m_w_nominal(errors.kinematics(), q) * (T_m_w(errors, it->second).inverse() * x) -
+                      options.program_origin_m_mm;
+  }
+  return out;
 }
 
 }  // namespace rotacal

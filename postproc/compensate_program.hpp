@@ -11,8 +11,10 @@
 #include <vector>
 
 #include "core/compensation.hpp"
-#include "core/json_io.hpp"
+#include "core/geometric_errors.hpp"
 #include "core/machine.hpp"
+#include "core/measurement.hpp"
+#include "core/probe_plan.hpp"
 
 namespace rotacal {
 
@@ -30,7 +32,13 @@ struct ProgramCompensationOptions {
   /// the work offset sits at the intersection, as in rotacal's own programs).
   Eigen::Vector3d program_origin_m_mm = Eigen::Vector3d::Zero();
   CompensationOptions pose;
+  /// Feed moves (G1) whose rotary axes turn are split where the compensated straight joint-space
+  /// move would leave the nominal path by more than subdivision.max_deviation_mm (core/
+  /// compensation.hpp). Rapids (G0) are not split: their path is the control's, only their end
+  /// points are cutting-relevant. Probing moves never turn a rotary axis, so never need it.
   std::vector<std::string> header;  // provenance lines written as comments at the top
+  SubdivisionOptions subdivision;
+  bool subdivide = true;
 };
 
 struct ProgramCompensation {
@@ -44,6 +52,13 @@ struct ProgramCompensation {
   double max_direction_residual_rad = 0.0;  // tool direction the rotary axes could not restore
   int rewritten_checks = 0;              // no-trigger check statements given the new end point
   double max_check_shift_mm = 0.0;       // largest move of a probing move's end point (and its check)
+  int split_blocks = 0;                  // feed moves split into pieces
+  int added_blocks = 0;                  // lines the splitting added
+  double max_unsplit_deviation_mm = 0.0; // largest path deviation a move would have had unsplit
+  double max_path_deviation_mm = 0.0;    // largest path deviation of a written feed move (evaluated)
+  /// Largest standard uncertainty (k = 1) of the compensated controlled point from the location
+  /// errors' covariance (largest axis of J C J^T over the block ends); 0 without a covariance.
+  double max_position_u_mm = 0.0;
 };
 
 /// Rewrites `text` (read from `file`, for messages). Throws InputError(file, line, why) on what
@@ -55,14 +70,19 @@ struct ProgramCompensation {
 /// rewrite that the dialect's own checker finds a problem in that the input does not have.
 /// Lines longer than 1024 characters and exponent notation (X1e2) are refused too. Throws
 /// std::invalid_argument for heidenhain or csv (not word-address G-code) or an unknown dialect.
-/// The identified location errors of a REPORT.json (contract.md), in mm / rad. All of the
-/// kinematics' location errors must be there (a missing one would be compensated as 0 under a
-/// header that claims the report's errors), and each must be plausible as a correction unless
-/// `force`. Throws InputError(report file, line, why).
-LocationErrors errorsFromReport(const JsonDoc& doc, Kinematics k, bool force);
-
+/// The errors come from postproc/report_errors.hpp (one or several REPORT.json).
 ProgramCompensation compensateProgram(const std::string& text, const std::string& file, const MachineModel& machine,
-                                      const LocationErrors& errors, const NcSyntax& syntax,
+                                      const GeometricErrors& errors, const NcSyntax& syntax,
                                       const ProgramCompensationOptions& options);
+
+/// The results of a plan's program compensated for `errors` (compensateProgram with `syntax` and
+/// `options`), read back as the original program's: each trigger x' recorded at the compensated
+/// pose q' of its point's nominal pose q (recomputed and rounded exactly as the rewrite printed
+/// it) is mapped to T_m_w(0, q) T_m_w(errors, q')^-1 x', where the nominal machine would have
+/// recorded the same contact. Analyzed with the original plan, these results identify what the
+/// compensation left: the true errors minus `errors`, to first order (`analyze
+/// --compensated-with`, docs/compensation.md).
+MeasurementRun undoCompensation(const ProbePlan& plan, const MeasurementRun& run, const GeometricErrors& errors,
+                                const NcSyntax& syntax, const ProgramCompensationOptions& options = {});
 
 }  // namespace rotacal

@@ -112,7 +112,7 @@ struct Gap {
 
 class Simulator {
  public:
-  Simulator(const MachineModel& m, std::vector<Obstacle> obstacles, std::optional<LocationErrors> errors)
+  Simulator(const MachineModel& m, std::vector<Obstacle> obstacles, std::optional<GeometricErrors> errors)
       : m_(m), obstacles_(std::move(obstacles)), errors_(std::move(errors)), r_(m.probe.ball_radius_mm()),
         len_(m.probe.stylus_length_mm) {}
 
@@ -168,7 +168,7 @@ class Simulator {
  private:
   const MachineModel& m_;
   std::vector<Obstacle> obstacles_;
-  std::optional<LocationErrors> errors_;
+  std::optional<GeometricErrors> errors_;
   double r_, len_;
 };
 

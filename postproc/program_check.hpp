@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "core/error_model.hpp"
+#include "core/geometric_errors.hpp"
 #include "core/machine.hpp"
 #include "core/probe_plan.hpp"
 #include "gcode/motion.hpp"
@@ -49,7 +50,7 @@ struct ProgramCheckSetup {
   std::vector<int> rotacal_numbers;        // without a known cycle: the number must be one of these
   /// The machine's identified location errors: the program is simulated on that machine (a
   /// compensated program is written for it, and keeps its planned gaps there). Unset: nominal.
-  std::optional<LocationErrors> errors;
+  std::optional<GeometricErrors> errors;
 };
 
 struct ProgramViolation {

@@ -38,6 +38,7 @@
 #include <string>
 #include <vector>
 
+#include "core/geometric_errors.hpp"
 #include "core/json_io.hpp"
 #include "core/measurement.hpp"
 #include "core/probe_plan.hpp"
@@ -49,9 +50,8 @@ namespace rotacal {
 
 // ---- Stage 2 ------------------------------------------------------------------------------
 
-/// The six component errors of the C axis in ISO 230-7 order, lengths mm, angles rad.
-constexpr int kNumComponentErrors = 6;
-using ComponentVector = Eigen::Matrix<double, kNumComponentErrors, 1>;
+// The six component errors of the C axis in ISO 230-7 order, lengths mm, angles rad:
+// ComponentVector of core/geometric_errors.hpp.
 const std::array<const char*, kNumComponentErrors>& componentNames();  // EXC EYC EZC EAC EBC ECC
 const std::array<const char*, 4>& spheres3LocationNames();              // Oxc Oyc Sxc Syc
 const std::array<const char*, 4>& spheres3LocationIso();                // X0C Y0C A0C B0C

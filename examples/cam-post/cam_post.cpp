@@ -2,9 +2,9 @@
 // for CAM posts"): reads the location errors identified by `rotacal analyze` (REPORT.json) and a
 // CSV of nominal poses, and prints each pose compensated: the command that puts the controlled
 // point, with the nominal tool direction, on the same workpiece point on the machine with those
-// errors. It does per pose what `rotacal compensate` does per NC block, and prints what that
-// command would print: the angles rounded to the program's 4 decimals, the position computed for
-// the rounded angles.
+// errors. It does per pose what `rotacal compensate` does at each block's end point, and prints
+// what that command would print: the angles rounded to the program's 4 decimals, the position
+// computed for the rounded angles (a long move split to follow the nominal path: compensateMove).
 //
 //   cam_post REPORT.json POSES.csv [DIALECT]
 //
@@ -29,7 +29,7 @@
 #include "core/errors.hpp"
 #include "core/json_io.hpp"
 #include "core/machine.hpp"
-#include "postproc/compensate_program.hpp"
+#include "postproc/report_errors.hpp"
 
 namespace {
 
@@ -46,12 +46,13 @@ double printed(double v, int decimals = 4) {
 
 int run(const std::string& report_file, const std::string& poses_file, const std::string& dialect) {
   // The report carries the machine it was measured on (kinematics, strokes, axis counting) and
-  // the identified errors; errorsFromReport checks that all of them are there and plausible.
+  // the identified errors; errorsFromReport checks that all of them are there and plausible
+  // (errorsFromReports combines several: touch154's location errors, spheres3's error motions).
   const rotacal::JsonDoc report = rotacal::readJsonFile(report_file);
   if (!report.value.is_object() || !report.value.contains("machine_model"))
     report.fail(report.value, "", "no 'machine_model' (written by rotacal analyze)");
   const rotacal::MachineModel machine = rotacal::machineFromJson(report, report.value["machine_model"]);
-  const rotacal::LocationErrors errors = rotacal::errorsFromReport(report, machine.kinematics, /*force=*/false);
+  const rotacal::GeometricErrors errors = rotacal::errorsFromReport(report, machine.kinematics, /*force=*/false);
   if (machine.rotary.size() != 2) throw std::runtime_error(report_file + ": the machine has not two rotary axes");
   const std::array<char, 2> rot{machine.rotary[0].name, machine.rotary[1].name};
   std::array<int, 2> sign{1, 1};
@@ -62,9 +63,10 @@ int run(const std::string& report_file, const std::string& poses_file, const std
               std::string(rotacal::kinematicsName(machine.kinematics)).c_str(), machine.name.c_str());
   for (int i = 0; i < rotacal::kNumLocationErrors; ++i) {
     const auto& p = rotacal::locationParameters(machine.kinematics)[i];
-    std::printf(" %s %.2f %s", std::string(p.name).c_str(), errors.reportValue(i),
+    std::printf(" %s %.2f %s", std::string(p.name).c_str(), errors.location.reportValue(i),
                 std::string(rotacal::reportUnit(p.kind)).c_str());
   }
+  for (const auto& c : errors.components) std::printf("; component errors of %c at %zu angles", c.axis, c.angle_deg.size());
   std::printf("\nx,y,z,%c,%c,shift_um,tool_direction_residual_urad\n", rot[0] + ('a' - 'A'), rot[1] + ('a' - 'A'));
 
   std::ifstream in(poses_file);

@@ -48,22 +48,57 @@ TEST(Compensation, ControlledPointLandsOnTheNominalWorkpiecePoint) {
   }
 }
 
-TEST(Compensation, AtAZeroTheTiltAboutTheToolAxisPlaneIsReportedNotChased) {
-  // At A = 0 the C axis is parallel to the tool. A tilt of the C axis about Y (b_CA) tilts the
-  // tool relative to the piece about Y, which no rotary axis of an A/C table can undo without
-  // turning C by ~90 deg: the solve leaves it (C unchanged) and reports it as the residual.
+TEST(Compensation, AtAZeroTheTiltNoRotaryAxisUndoesIsReportedNotChased) {
+  // At A = 0 the C axis is parallel to the tool. Tilts about Y (b_AY of the A axis, b_CA of the
+  // C axis) tilt the tool relative to the piece about Y, which neither A (about X) nor C (about
+  // the tool) can undo: the damped solve leaves C almost where it was (a tilt of 5 mdeg would
+  // need 90 deg of C) and reports |b_AY + b_CA| as the residual.
   LocationErrors e;
-  e.set("b_CA", mdegToRad(5.0));
+  e.set("b_AY", mdegToRad(2.0));
+  e.set("b_CA", mdegToRad(3.0));
   const Pose q;  // A = 0, C = 0
   const CompensatedCommand cc = compensatePose(e, q);
-  EXPECT_NEAR(cc.pose.C, 0.0, 1e-12);
-  EXPECT_NEAR(cc.direction_residual_rad, mdegToRad(5.0), 1e-9);  // the whole tilt stays
-  // A tilt about X at A = 0 (a_AY) is undone by A itself.
+  EXPECT_LT(std::abs(cc.pose.C), 1e-3);  // deg
+  EXPECT_NEAR(cc.direction_residual_rad, mdegToRad(5.0), 1e-3 * mdegToRad(5.0));
+  // A tilt about X at A = 0 (a_AY) is undone by A itself, undamped.
   LocationErrors ea;
   ea.set("a_AY", mdegToRad(5.0));
   const CompensatedCommand ca = compensatePose(ea, q);
   EXPECT_NEAR(ca.pose.A, 0.005, 1e-9);  // Da(a_AY) Da(-A2) = Da(-A): A2 = A + a_AY (deg)
   EXPECT_LT(ca.direction_residual_rad, 1e-12);
+}
+
+TEST(Compensation, TheCommandIsContinuousThroughTheSingularPose) {
+  // A path through A = 0 in steps of 0.005 deg at C = 30 deg with 3 x 000 Table 4's errors: the
+  // compensated C must change smoothly (the former cap switched it off by about 0.1 deg between
+  // neighbouring blocks), stay bounded, and be exact beyond the blend tilt.
+  const LocationErrors e = scaled(test::table4Mean(), 3.0);
+  const CompensationOptions o;
+  double previous_dC = 0.0, worst_jump = 0.0, worst_dC = 0.0;
+  bool first = true;
+  for (int i = -800; i <= 800; ++i) {
+    Pose q;
+    q.A = 0.005 * i;
+    q.C = 30.0;
+    const CompensatedCommand cc = compensatePose(e, q, o);
+    const double dC = cc.pose.C - q.C;
+    if (!first) worst_jump = std::max(worst_jump, std::abs(dC - previous_dC));
+    worst_dC = std::max(worst_dC, std::abs(dC));
+    previous_dC = dC;
+    first = false;
+    if (std::abs(q.A) > o.singular_blend_deg + 1e-9) {
+      EXPECT_LT(cc.direction_residual_rad, 1e-12) << "A " << q.A;
+    }
+  }
+  // The undamped correction 1/sin(A) x tilt changes by ~tilt x 0.005 deg / sin^2 between
+  // neighbours; the damped one by at most its slope near A = 0: tilt / sin^2(2 deg) per rad.
+  // The tilt C restores near A = 0 is bounded by the angular errors that tilt the tool about Y
+  // there (b_AY, b_CA, c_AY: 0.8 mdeg in sum of magnitudes, scaled by 3).
+  const double tilt_rad = mdegToRad(3.0 * 0.8);
+  const double s1 = std::sin(degToRad(o.singular_blend_deg));
+  EXPECT_LT(worst_jump, radToDeg(tilt_rad / (s1 * s1) * degToRad(0.005)) * 1.5);
+  EXPECT_LT(worst_dC, radToDeg(1.3 * tilt_rad / s1));
+  EXPECT_GT(worst_dC, 1e-4);  // C does move to restore the direction near the blend
 }
 
 TEST(Compensation, ZeroErrorsChangeNothing) {
@@ -83,8 +118,11 @@ TEST(Compensation, OptionsAreValidated) {
   o.tool_axis_m = Eigen::Vector3d(0, 0, 2);
   EXPECT_THROW(o.validate(), std::invalid_argument);
   o = CompensationOptions{};
-  o.max_rotary_change_deg = 0;
+  o.singular_blend_deg = 0;
   EXPECT_THROW(o.validate(), std::invalid_argument);
+  SubdivisionOptions s;
+  s.max_deviation_mm = 0;
+  EXPECT_THROW(s.validate(), std::invalid_argument);
 }
 
 }  // namespace

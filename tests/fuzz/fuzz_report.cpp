@@ -2,7 +2,7 @@
 // and without --force) and as `history add` reads it (history::calibrationFromReport).
 #include "core/machine.hpp"
 #include "history/store.hpp"
-#include "postproc/compensate_program.hpp"
+#include "postproc/report_errors.hpp"
 #include "tests/fuzz/fuzz_common.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

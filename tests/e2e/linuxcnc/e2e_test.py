@@ -11,7 +11,10 @@
       then the compensation loop of 000 Sec. 4.5: analyze --offsets offsets.ngc (G10 L2 P1),
       run that program and the same cycle again in one LinuxCNC session, analyze: dx_AY, dy_AY,
       dz_AY and a_AY re-identify within 0.5 um / 0.05 mdeg of zero, the other four within the
-      same of the injected values (000 Table 4, last column).
+      same of the injected values (000 Table 4, last column); then the post-processor route
+      (issue 18): compensate the program for run 1's report, run the compensated program
+      unchanged, analyze --compensated-with the report: all eight within 0.5 um / 0.05 mdeg of
+      zero (what the compensation left).
   e2e_test.py no_trigger --rotacal BIN --work DIR
       the same program with the piece moved 5 mm away from the first point's face: LinuxCNC
       must stop with rotacal's own message for point 1, with no point recorded.
@@ -23,7 +26,9 @@
       analyze --dialect linuxcnc. Asserts: every trigger 0 .. F x 1 ms past the exact contact;
       the C location errors Oxc = dx_AY, Oyc = dy_AY + dy_CA, Sxc = a_AY, Syc = b_AY + b_CA
       (the 000 chain at A = 0) within 0.5 um / 0.05 mdeg; the component errors (none injected)
-      within the same bounds of zero at every angle.
+      within the same bounds of zero at every angle; then the spheres3 program compensated for
+      that report, run unchanged, analyze --compensated-with it: Oxc Oyc Sxc Syc within the same
+      bounds of zero.
 
 Exit 0 pass, 1 fail, 77 skip (LinuxCNC, halcompile or root missing: CTest SKIP_RETURN_CODE).
 """
@@ -185,6 +190,20 @@ def run_touch154(a):
     compare(got2, {k: (0.0 if k in SHIFTED else v) for k, v in want.items()},
             "run 2, after the work-offset correction")
     figures["identified2"] = got2
+
+    # 3. the post-processor route (issue 18): the program rewritten for run 1's errors, run
+    # unchanged, its records read back as the original program's
+    comp = os.path.join(work, "touch154_compensated.ngc")
+    sh([a.rotacal, "compensate", "--program", ngc, "--report", rep1, "--dialect", "linuxcnc", "-o", comp])
+    run3 = os.path.join(work, "run3")
+    _, t3 = sh([RUN, "--ngc", comp, "--truth", TRUTH, "--machine", MACHINE, "--out", run3, "--timeout", "900"])
+    figures["run3_s"] = t3
+    rep3 = os.path.join(work, "report3.json")
+    sh([a.rotacal, "analyze", "--plan", plan, "--results", os.path.join(run3, "rotacal_touch154.txt"),
+        "--dialect", "linuxcnc", "--json", rep3, "--compensated-with", rep1])
+    got3 = identified(rep3)
+    compare(got3, {k: 0.0 for k in want}, "run 3, the compensated program (what the compensation left)")
+    figures["identified3"] = got3
     with open(os.path.join(work, "figures.json"), "w") as f:
         json.dump(figures, f, indent=1)
 
@@ -220,7 +239,27 @@ def run_spheres3(a):
         m = max(abs(v) for v in c["values"])
         worst[name] = m
         check(m <= tol, "%s: none injected, identified at most %.4f %s over the turn (tol %g)" % (name, m, c["unit"], tol))
-    figures = {"run_s": t, "lateness": lat, "identified": {k: r["location_errors"][k] for k in want},
+    # The spheres3 program compensated for its own report (the C axis's location and error motions),
+    # run unchanged, read back: the C axis's location must be gone.
+    comp = os.path.join(work, "spheres3_compensated.ngc")
+    sh([a.rotacal, "compensate", "--program", ngc, "--report", rep, "--dialect", "linuxcnc", "-o", comp])
+    run2 = os.path.join(work, "run2")
+    _, t2 = sh([RUN, "--ngc", comp, "--truth", TRUTH, "--machine", MACHINE, "--plan", plan, "--out", run2,
+                "--timeout", "1200"])
+    rep2 = os.path.join(work, "report2.json")
+    sh([a.rotacal, "analyze", "--plan", plan, "--results", os.path.join(run2, "rotacal_spheres3.txt"),
+        "--dialect", "linuxcnc", "--json", rep2, "--compensated-with", rep])
+    with open(rep2) as f:
+        r2 = json.load(f)
+    print("after the compensated program (what the compensation left):")
+    left = {}
+    for name in want:
+        e = r2["location_errors"][name]
+        tol = LENGTH_TOL_UM if e["unit"] == "um" else ANGLE_TOL_MDEG
+        left[name] = e["value"]
+        check(abs(e["value"]) <= tol, "%-4s %9.4f %s (tol %g)" % (name, e["value"], e["unit"], tol))
+    figures = {"run_s": t, "run2_s": t2, "left_after_compensation": left,
+               "lateness": lat, "identified": {k: r["location_errors"][k] for k in want},
                "component_max": worst, "volumetric_error_um": r["volumetric_error_um"],
                "sphere_fit": r["sphere_fit"]}
     with open(os.path.join(work, "figures.json"), "w") as f:
