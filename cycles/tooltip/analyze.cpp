@@ -140,19 +140,22 @@ GnResult gaussNewton(const Problem& p, Eigen::VectorXd x, const std::vector<bool
     if (use(b)) obs.push_back(&b);
   const int m = 2 * static_cast<int>(obs.size()), n = static_cast<int>(cols.size());
   GnResult g;
-  g.used = m;
+  // A reading of the transverse direction alone has no Z row: its row stays zero and uncounted.
+  g.used = 0;
+  for (const auto* b : obs) g.used += std::isfinite(b->z_um) ? 2 : 1;
   g.active = n;
   Eigen::MatrixXd jac(m, n);
   Eigen::VectorXd res(m);
   auto evaluate = [&](const Eigen::VectorXd& xx) {
     for (size_t i = 0; i < obs.size(); ++i) {
       const Eigen::Vector2d mdl = p.model(*obs[i], xx);
+      const bool z = std::isfinite(obs[i]->z_um);
       res(2 * i) = obs[i]->t_um - mdl[0];
-      res(2 * i + 1) = obs[i]->z_um - mdl[1];
+      res(2 * i + 1) = z ? obs[i]->z_um - mdl[1] : 0.0;
       const auto full = p.jacobian(*obs[i], xx);
       for (int c = 0; c < n; ++c) {
         jac(2 * i, c) = full(0, cols[c]);
-        jac(2 * i + 1, c) = full(1, cols[c]);
+        jac(2 * i + 1, c) = z ? full(1, cols[c]) : 0.0;
       }
     }
   };
@@ -185,10 +188,22 @@ GnResult gaussNewton(const Problem& p, Eigen::VectorXd x, const std::vector<bool
   return g;
 }
 
+// No Z reading at all: the transverse reading alone.
+bool noZ(const Problem& p) {
+  for (const auto& b : p.obs)
+    if (std::isfinite(b.z_um)) return false;
+  return true;
+}
+
 std::vector<bool> activeFor(const Problem& p, bool pivot, int excluded) {
   std::vector<bool> active(p.J() + 1, false);
   for (const auto& b : p.obs)
     if (b.j != excluded) active[b.j] = active[b.j_ref] = true;
+  // From the transverse reading alone, e at the zero pose and e_j = e_0 cos(0) / cos(theta_j)
+  // leave every reading unchanged: the zero pose is the reference, its error 0 by definition
+  // (the laser is zeroed there, 004).
+  if (noZ(p))
+    for (const auto& b : p.obs) active[b.j_ref] = false;
   active[p.J()] = pivot;
   return active;
 }
@@ -242,9 +257,14 @@ TooltipFit fitTooltip(const ProbePlan& plan, const std::vector<TooltipRun>& runs
   f.sigma_um = std::max(s_data, options.sigma_floor_um);
   f.last_step_um = g.last_step;
   f.angles_deg = p.angles_deg;
+  const bool reference_fixed = noZ(p);
   for (int j = 0; j < p.J(); ++j) {
-    f.e_mdeg.push_back(active[j] ? radToMdeg(g.x[j]) : std::numeric_limits<double>::quiet_NaN());
-    f.u_e_mdeg.push_back(active[j] ? radToMdeg(f.sigma_um * std::sqrt(g.cov_unit(j, j))) : std::numeric_limits<double>::quiet_NaN());
+    bool is_ref = false;
+    for (const auto& b : p.obs) is_ref = is_ref || (reference_fixed && b.j_ref == j);
+    f.e_mdeg.push_back(active[j] ? radToMdeg(g.x[j]) : is_ref ? 0.0 : std::numeric_limits<double>::quiet_NaN());
+    f.u_e_mdeg.push_back(active[j]  ? radToMdeg(f.sigma_um * std::sqrt(g.cov_unit(j, j)))
+                         : is_ref ? 0.0
+                                  : std::numeric_limits<double>::quiet_NaN());
   }
   if (options.fit_pivot_length) {
     f.dR_um = mmToUm(g.x[p.J()]);
@@ -292,9 +312,21 @@ std::vector<double> angularError004Mdeg(const ProbePlan& plan, const TooltipRun&
   return out;
 }
 
+bool transverseOnly(const std::vector<TooltipRun>& runs) {
+  for (const auto& run : runs)
+    for (const auto& r : run)
+      if (std::isfinite(r.z_um)) return false;
+  return true;
+}
+
 TooltipAnalysis analyzeTooltip(const ProbePlan& plan, const std::vector<TooltipRun>& runs) {
   TooltipAnalysis a;
   TooltipFitOptions o;
+  // One reading per angle of one direction: each angle's angular error absorbs the pivot-length
+  // term (dy = dR sin A + R e(A) cos A, e free per angle): dR is not identifiable, and the angular
+  // errors are 004's model (dR = 0), with a pivot-length error read as e = dR tan A / R.
+  a.transverse_only = transverseOnly(runs);
+  o.fit_pivot_length = !a.transverse_only;
   a.joint = fitTooltip(plan, runs, o);
   o.fit_pivot_length = false;
   a.angular = fitTooltip(plan, runs, o);
@@ -309,8 +341,16 @@ Json tooltipReportJson(const ProbePlan& plan, const std::vector<TooltipRun>& run
   j["axis"] = std::string(1, o.axis);
   j["radius_mm"] = o.radius_mm;
   j["model"] = a.joint.model;
-  j["location_errors"] = {{"dR", {{"value", r6(a.joint.dR_um)}, {"unit", "um"}, {"u", r6(a.joint.u_dR_um)},
-                                  {"iso", "pivot length (tool-tip distance) error"}}}};
+  if (a.transverse_only) {
+    j["location_errors"] = Json::object();
+    j["not_identified"] = {{"dR", "the transverse reading alone (" + t + " without dz): each angle's angular error absorbs "
+                                  "the pivot-length term dR sin A, so dR is not identifiable and the angular errors "
+                                  "assume dR = 0 (a pivot-length error dR reads as e = dR tan A / R); read dz too, or "
+                                  "sweep with two tool lengths"}};
+  } else {
+    j["location_errors"] = {{"dR", {{"value", r6(a.joint.dR_um)}, {"unit", "um"}, {"u", r6(a.joint.u_dR_um)},
+                                    {"iso", "pivot length (tool-tip distance) error"}}}};
+  }
   Json ang = Json::array();
   for (size_t k = 0; k < a.joint.angles_deg.size(); ++k)
     ang.push_back({{"angle_deg", a.joint.angles_deg[k]},
@@ -320,7 +360,7 @@ Json tooltipReportJson(const ProbePlan& plan, const std::vector<TooltipRun>& run
                    {"value_004_model", num(a.angular.e_mdeg[k])}});
   j["angular_error"] = ang;
   j["residual_rms_um"] = r6(a.joint.residual_rms_um);
-  j["points_used"] = a.joint.observations / 2;
+  j["points_used"] = a.transverse_only ? a.joint.observations : a.joint.observations / 2;
   j["summary"] = {{"converged", a.joint.converged},   {"iterations", a.joint.iterations},
                   {"observations", a.joint.observations}, {"dof", a.joint.dof},
                   {"sigma_um", r6(a.joint.sigma_um)},   {"last_step", a.joint.last_step_um}};
@@ -373,8 +413,13 @@ Json tooltipReportJson(const ProbePlan& plan, const std::vector<TooltipRun>& run
 
 std::string tooltipReportText(const ProbePlan& plan, const TooltipAnalysis& a) {
   const TooltipOptions o = tooltipOptionsFrom(plan.options, plan.machine);
-  std::string s = fmt::format("tooltip ({} axis, R = {:.3f} mm): pivot-length error dR = {:.2f} um (u {:.2f} um)\n", o.axis,
-                              o.radius_mm, a.joint.dR_um, a.joint.u_dR_um);
+  std::string s = a.transverse_only
+                      ? fmt::format("tooltip ({} axis, R = {:.3f} mm): the transverse reading alone: the pivot-length "
+                                    "error dR is not identifiable (each angle's angular error absorbs dR sin A); the "
+                                    "angular errors below assume dR = 0\n",
+                                    o.axis, o.radius_mm)
+                      : fmt::format("tooltip ({} axis, R = {:.3f} mm): pivot-length error dR = {:.2f} um (u {:.2f} um)\n",
+                                    o.axis, o.radius_mm, a.joint.dR_um, a.joint.u_dR_um);
   s += fmt::format("residual rms {:.3f} um (angular+pivot) vs {:.3f} um (004's angular model)\n", a.joint.residual_rms_um,
                    a.angular.residual_rms_um);
   s += "angle_deg  e_mdeg  u_mdeg  e_004model_mdeg\n";

@@ -71,6 +71,7 @@ struct TooltipAnalysis {
   TooltipFit angular;    // 004's model
   std::vector<double> da004_mdeg;
   std::vector<std::string> result_files;
+  bool transverse_only = false;  // no dz read: dR not identifiable, joint = the angular model
 };
 TooltipAnalysis analyzeTooltip(const ProbePlan& plan, const std::vector<TooltipRun>& runs);
 Json tooltipReportJson(const ProbePlan& plan, const std::vector<TooltipRun>& runs, const TooltipAnalysis& a);

@@ -1,5 +1,7 @@
 // tooltip (004): angular positioning error and pivot length of a head's axis from a fixed-tool-tip
 // program. The laser writes its own file whatever the controller; no offsets.
+#include <cmath>
+
 #include <fmt/format.h>
 
 #include "core/errors.hpp"
@@ -77,6 +79,12 @@ class Tooltip final : public Cycle {
   CycleDocuments diagnose(const DiagnoseRequest& r) const override {
     const ProbePlan& plan = *r.plan;
     const std::vector<TooltipRun> runs = readRuns(plan, r.results);
+    for (size_t k = 0; k < runs.size(); ++k)
+      for (const auto& reading : runs[k])
+        if (!std::isfinite(reading.z_um))
+          throw InputError(r.results[k].path, 1,
+                           "diagnose needs both directions of the reading (dz too): its causes (pivot length, scale, "
+                           "drift) differ only in how they split between the two; analyze reads one direction");
     TooltipDiagnosisOptions o;
     o.judge.alpha = r.alpha;  // the declared noise: the plan's laser_noise_um
     o.validate();

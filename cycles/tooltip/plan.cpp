@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <set>
 #include <stdexcept>
@@ -19,7 +20,7 @@ namespace {
 
 const std::set<std::string> kKnownOptions = {"axis",  "radius_mm", "step_deg", "start_deg", "end_deg", "other_deg",
                                              "units", "move_s",    "dwell_s",  "sweeps",
-                                             "laser_noise_um"};
+                                             "laser_noise_um", "max_sag_um"};
 
 Eigen::Matrix3d rx(double a) {
   Eigen::Matrix3d m;
@@ -67,7 +68,7 @@ TooltipOptions tooltipOptionsFrom(const CycleOptions& options, const MachineMode
     if (!kKnownOptions.count(k))
       throw std::invalid_argument("tooltip: unknown option '" + k +
                                   "' (expected axis, radius_mm, step_deg, end_deg, other_deg, units, move_s, dwell_s, "
-                                  "sweeps, laser_noise_um)");
+                                  "sweeps, laser_noise_um, max_sag_um)");
   if (machine.kinematics != Kinematics::HeadAB)
     throw std::invalid_argument("tooltip: the fixed-tool-tip cycle needs a spindle-head machine (kinematics head_ab, "
                                 "e.g. examples/machines/head_ab.json)");
@@ -89,6 +90,7 @@ TooltipOptions tooltipOptionsFrom(const CycleOptions& options, const MachineMode
   if (auto* v = get("move_s")) o.move_s = parseNumber("move_s", *v);
   if (auto* v = get("dwell_s")) o.dwell_s = parseNumber("dwell_s", *v);
   if (auto* v = get("laser_noise_um")) o.noise_um = parseNumber("laser_noise_um", *v);
+  if (auto* v = get("max_sag_um")) o.max_sag_um = parseNumber("max_sag_um", *v);
   if (auto* v = get("units")) {
     if (*v != "inch" && *v != "mm") throw std::invalid_argument("tooltip: option units must be inch or mm, got '" + *v + "'");
     o.inch = *v == "inch";
@@ -117,10 +119,28 @@ TooltipOptions tooltipOptionsFrom(const CycleOptions& options, const MachineMode
                   per_sweep * static_cast<double>(o.other_deg.size()), static_cast<double>(o.other_deg.size()));
   if (o.start_deg < 0 && o.sweeps > 0) throw std::invalid_argument("tooltip: start_deg is for the static test (sweeps = 0)");
   if (!(o.move_s > 0)) throw std::invalid_argument("tooltip: option move_s must be positive");
+  if (!(o.max_sag_um > 0) || !(o.max_sag_um < 1000.0))
+    throw std::invalid_argument("tooltip: option max_sag_um must be in (0, 1000) um");
+  if (o.sweeps > 0 && tooltipPiecesPerStep(o) > 10000)
+    throw std::invalid_argument(fmt::format("tooltip: max_sag_um = {:g} needs {} moves per step: give a larger one",
+                                            o.max_sag_um, tooltipPiecesPerStep(o)));
   if (o.dwell_s < 0) throw std::invalid_argument("tooltip: option dwell_s must be >= 0");
   if (!(o.noise_um > 0) || !std::isfinite(o.noise_um))
     throw std::invalid_argument("tooltip: option laser_noise_um (the declared laser noise) must be > 0");
   return o;
+}
+
+int tooltipPiecesPerStep(const TooltipOptions& o) {
+  if (o.sweeps == 0) return 1;
+  // A piece of angle phi moves the pivot along the chord of its circle about the fixed tip: the
+  // tip leaves its point by the chord's sagitta, R (1 - cos(phi / 2)), at the piece's middle.
+  const double phi_max = 2.0 * std::acos(1.0 - umToMm(o.max_sag_um) / o.radius_mm);
+  return std::max(1, static_cast<int>(std::ceil(degToRad(o.step_deg) / phi_max - 1e-12)));
+}
+
+double tooltipSagUm(const TooltipOptions& o) {
+  const double phi = degToRad(o.step_deg) / tooltipPiecesPerStep(o);
+  return mmToUm(o.radius_mm * (1.0 - std::cos(phi / 2.0)));
 }
 
 Eigen::Vector3d tipOffset_m(double a_rad, double b_rad, double r_mm) {
@@ -290,6 +310,9 @@ std::string tooltipResultsText(const ProbePlan& plan, const TooltipRun& run) {
 TooltipRun parseTooltipResults(const std::string& text, const std::string& file, const ProbePlan& plan) {
   const TooltipOptions o = tooltipOptionsFrom(plan.options, plan.machine);
   const std::string header = o.axis == 'A' ? "angle_deg,dy_um,dz_um" : "angle_deg,dx_um,dz_um";
+  // 004's laser reads one direction: the transverse column alone is a results file too.
+  const std::string header_t = o.axis == 'A' ? "angle_deg,dy_um" : "angle_deg,dx_um";
+  int columns = 3;
   TooltipRun run;
   int line_no = 0;
   size_t pos = 0;
@@ -303,15 +326,19 @@ TooltipRun parseTooltipResults(const std::string& text, const std::string& file,
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.empty() || line[0] == '#') continue;
     if (!seen_header) {
-      if (line != header) throw InputError(file, line_no, "expected the header '" + header + "', got '" + line + "'");
+      if (line != header && line != header_t)
+        throw InputError(file, line_no,
+                         "expected the header '" + header + "' (or '" + header_t + "' for one direction), got '" + line + "'");
+      columns = line == header ? 3 : 2;
       seen_header = true;
       continue;
     }
-    double v[3];
+    double v[3] = {0.0, 0.0, std::numeric_limits<double>::quiet_NaN()};
     size_t p = 0;
-    for (int i = 0; i < 3; ++i) {
-      const size_t comma = i < 2 ? line.find(',', p) : line.size();
-      if (comma == std::string::npos) throw InputError(file, line_no, "expected 3 comma-separated numbers");
+    for (int i = 0; i < columns; ++i) {
+      const size_t comma = i < columns - 1 ? line.find(',', p) : line.size();
+      if (comma == std::string::npos || (i == columns - 1 && line.find(',', p) != std::string::npos))
+        throw InputError(file, line_no, fmt::format("expected {} comma-separated numbers", columns));
       const std::string cell = line.substr(p, comma - p);
       try {
         size_t used = 0;

@@ -33,11 +33,22 @@ struct TooltipOptions {
                                     // 0 -> +end -> -end -> 0, n times, no dwell
   double noise_um = 0.254;          // laser_noise_um: the DECLARED noise of a reading component;
                                     // default 004 Sec. VII's laser system error, 0.000010 in
+  /// Dynamic test: the largest distance the tool tip may leave its fixed point between the
+  /// program's block ends (um). A joint-space block of 5 deg at R = 381 mm sags 363 um mid-block
+  /// (more than 004's 0.010 in limit); each step is split into equal moves so that the sag
+  /// R (1 - cos(phi / 2)) of a move of phi stays below this. The static test reads at rest at the
+  /// block ends and keeps 004 Table 1's blocks.
+  double max_sag_um = 1.0;
 
   char otherAxis() const { return axis == 'A' ? 'B' : 'A'; }
 };
 
 TooltipOptions tooltipOptionsFrom(const CycleOptions& options, const MachineModel& machine);
+
+/// Moves per step of the program (1 for the static test) and the tool tip's largest departure
+/// from its fixed point between them, um (the chord's sagitta).
+int tooltipPiecesPerStep(const TooltipOptions& options);
+double tooltipSagUm(const TooltipOptions& options);
 
 /// The plan: one point per commanded angle (the reading), pose = commanded angles, trigger_m_mm =
 /// commanded pivot position, contact_w_mm = the fixed tool tip, approach_m = the laser's
@@ -73,7 +84,7 @@ TooltipTruth tooltipTruthFrom(const JsonDoc& doc, const Json& truth);
 struct TooltipReading {
   double angle_deg = 0.0;
   double t_um = 0.0;
-  double z_um = 0.0;
+  double z_um = 0.0;  // NaN when the laser read the transverse direction alone (004)
 };
 using TooltipRun = std::vector<TooltipReading>;
 

@@ -42,6 +42,11 @@ nc::Program tooltipProgram(const ProbePlan& plan, const std::string& dialect) {
       fmt::format("machine: {}; X Y Z = pivot, origin at its start position [004: Yp = Zp = A = B = 0]", m.name),
       fmt::format("readings: laser system, file angle_deg,{}_um,dz_um; stop M0: zero the laser", o.axis == 'A' ? "dy" : "dx"),
   };
+  const int pieces = tooltipPiecesPerStep(o);
+  if (o.sweeps > 0)
+    prog.header.push_back(fmt::format("each {}-degree step in {} moves: the tool tip stays within {:.3f} um of its point, "
+                                      "plus the rounding of the printed coordinates",
+                                      o.step_deg, pieces, tooltipSagUm(o)));
   const std::string axes = o.axis == 'A' ? "YZ" : "XYZ";
   auto angleOf = [&](const Pose& p) { return o.axis == 'A' ? p.A : p.B; };
   size_t i = 0;
@@ -88,25 +93,39 @@ nc::Program tooltipProgram(const ProbePlan& plan, const std::string& dialect) {
     Eigen::Vector3d prev_pos = zero->trigger_m_mm * k;
     for (int a = 0; a < 3; ++a) prev_pos[a] = roundTo(prev_pos[a], dec);
     double prev_angle = angleOf(zero->pose);
+    double prev_piece_angle = prev_angle;
+    const Eigen::Vector3d tip = zero->contact_w_mm;  // the fixed tool tip (machine frame)
     for (size_t q = 0; q < path.size(); ++q) {
       const ProbePoint& pt = *path[q];
-      Eigen::Vector3d pos = pt.trigger_m_mm * k;
-      for (int a = 0; a < 3; ++a) pos[a] = roundTo(pos[a], dec);
-      nc::Op mv;
-      mv.kind = nc::Op::Kind::RotaryLinear;
-      mv.axes = axes;
-      mv.xyz = pos - prev_pos;
-      for (int a = 0; a < 3; ++a) mv.xyz[a] = roundTo(mv.xyz[a], dec);
-      mv.rotary.emplace_back(o.axis, controllerAngle(m, o.axis, dialect, angleOf(pt.pose) - prev_angle));
-      mv.feed = 60.0 / o.move_s;  // inverse time: 1 / minutes
-      prog.ops.push_back(mv);
+      // The dynamic test's step in equal moves, each end on the exact pivot circle about the tip
+      // (absolute positions and angles rounded, increments their differences: no drift).
+      for (int j = 1; j <= pieces; ++j) {
+        Pose at = pt.pose;
+        // Angles are written with 4 decimals (controllers/common.cpp rotaryLinearWords).
+        const double angle = j == pieces ? angleOf(pt.pose)
+                                         : roundTo(prev_angle + (angleOf(pt.pose) - prev_angle) * j / pieces, 4);
+        (o.axis == 'A' ? at.A : at.B) = angle;
+        Eigen::Vector3d pos =
+            (j == pieces ? pt.trigger_m_mm : Eigen::Vector3d(tip - tipOffset_m(degToRad(at.A), degToRad(at.B), o.radius_mm))) * k;
+        for (int a = 0; a < 3; ++a) pos[a] = roundTo(pos[a], dec);
+        nc::Op mv;
+        mv.kind = nc::Op::Kind::RotaryLinear;
+        mv.axes = axes;
+        mv.xyz = pos - prev_pos;
+        for (int a = 0; a < 3; ++a) mv.xyz[a] = roundTo(mv.xyz[a], dec);
+        const double step = pieces == 1 ? angle - prev_piece_angle : roundTo(angle - prev_piece_angle, 4);
+        mv.rotary.emplace_back(o.axis, controllerAngle(m, o.axis, dialect, step));
+        mv.feed = 60.0 / o.move_s * pieces;  // inverse time: 1 / minutes of this move
+        prog.ops.push_back(mv);
+        prev_pos = pos;
+        prev_piece_angle = angle;
+      }
       if (o.sweeps == 0 && o.dwell_s > 0 && q + 1 > readings_from) {
         nc::Op dwell;
         dwell.kind = nc::Op::Kind::Pause;
         dwell.dwell_s = o.dwell_s;
         prog.ops.push_back(dwell);
       }
-      prev_pos = pos;
       prev_angle = angleOf(pt.pose);
     }
     mode.incremental = mode.inverse_time = false;

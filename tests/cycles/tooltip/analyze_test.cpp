@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fmt/format.h>
 
 #include "cycles/cycle.hpp"
 #include "core/errors.hpp"
@@ -201,6 +202,41 @@ TEST(TooltipResults, RoundTripAndErrors) {
   }
   EXPECT_THROW(parseTooltipResults("angle_deg,dy_um,dz_um\n0,0,0\n", "short.csv", plan), InputError);
   EXPECT_THROW(parseTooltipResults("a,b\n", "hdr.csv", plan), InputError);
+}
+
+}  // namespace
+}  // namespace rotacal
+
+namespace rotacal {
+namespace {
+
+// 004's laser reads one direction (issue 17): a results file of the transverse column alone is
+// analyzed, and what it cannot identify is said, not guessed.
+TEST(TooltipResults, TheTransverseReadingAloneGivesTheAngularErrorsAndSaysDRIsNotIdentified) {
+  const ProbePlan plan = makePlan("tooltip", loadMachine(test::sourcePath("examples/machines/head_ab.json")),
+                                  {{"radius_mm", "381"}, {"step_deg", "5"}, {"end_deg", "60"}});
+  TooltipTruth t;
+  t.sin_mdeg = 2.0;  // e(A) = 2 mdeg sin A: no pivot-length error
+  const TooltipRun full = simulateTooltip(plan, t, 1);
+  std::string text = "angle_deg,dy_um\n";
+  for (const auto& r : full) text += fmt::format("{:.4f},{:.4f}\n", r.angle_deg, r.t_um);
+  const TooltipRun dy = parseTooltipResults(text, "dy.csv", plan);
+  ASSERT_EQ(dy.size(), full.size());
+  EXPECT_FALSE(std::isfinite(dy[3].z_um));
+  const TooltipAnalysis a = analyzeTooltip(plan, {dy});
+  EXPECT_TRUE(a.transverse_only);
+  // The angular error at every angle, against the truth (closed form: 2 sin A mdeg, zeroed at 0).
+  for (size_t k = 0; k < a.joint.angles_deg.size(); ++k)
+    if (std::isfinite(a.joint.e_mdeg[k]) && std::abs(a.joint.angles_deg[k]) > 1e-9) {
+      EXPECT_NEAR(a.joint.e_mdeg[k] - a.joint.e_mdeg[0], 2.0 * std::sin(degToRad(a.joint.angles_deg[k])), 1e-3)
+          << a.joint.angles_deg[k];
+    }
+  const Json j = tooltipReportJson(plan, {dy}, a);
+  EXPECT_TRUE(j["location_errors"].empty());
+  EXPECT_NE(j["not_identified"]["dR"].get<std::string>().find("not identifiable"), std::string::npos);
+  EXPECT_NE(tooltipReportText(plan, a).find("not identifiable"), std::string::npos);
+  // A row with a third column under the one-direction header is refused at its line.
+  EXPECT_THROW(parseTooltipResults("angle_deg,dy_um\n0,0,0\n", "bad.csv", plan), InputError);
 }
 
 }  // namespace

@@ -191,8 +191,83 @@ TEST(TooltipRs274, DynamicTestRunsAtEveryAngleOfTheOtherAxis) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   size_t feeds = 0;
   for (size_t p = r.out.find("STRAIGHT_FEED"); p != std::string::npos; p = r.out.find("STRAIGHT_FEED", p + 1)) ++feeds;
-  // every point but the three zero poses is a move, plus one zero-length feed per sweep (mode line)
-  EXPECT_EQ(feeds, plan.points.size() - 3 + 3);
+  // every point but the three zero poses is a step of tooltipPiecesPerStep moves (the dynamic
+  // test keeps the tip on its point), plus one zero-length feed per sweep (mode line)
+  const int pieces = tooltipPiecesPerStep(tooltipOptionsFrom(plan.options, plan.machine));
+  EXPECT_GT(pieces, 1);
+  EXPECT_EQ(feeds, (plan.points.size() - 3) * static_cast<size_t>(pieces) + 3);
+}
+
+}  // namespace
+}  // namespace rotacal
+
+namespace rotacal {
+namespace {
+
+// The dynamic test's program (issue 17): each joint-space move keeps the tool tip on its point.
+// The test walks the neutral program's incremental moves itself and evaluates the tip, pivot +
+// Rx(A) Ry(B) (0, 0, -R), at 50 points along each move against the fixed tip.
+struct Walk {
+  double worst_um = 0.0;
+  int moves = 0;
+};
+
+Walk walkDynamic(const ProbePlan& plan) {
+  const nc::Program prog = tooltipProgram(plan, "linuxcnc");
+  const TooltipOptions o = tooltipOptionsFrom(plan.options, plan.machine);
+  const double unit = o.inch ? kMmPerInch : 1.0;
+  const Eigen::Vector3d tip = plan.points.front().contact_w_mm;
+  Eigen::Vector3d pivot = Eigen::Vector3d::Zero();
+  Pose q;
+  bool incremental = false;
+  Walk w;
+  const int sign = plan.machine.controllerSign(o.axis, "linuxcnc");
+  for (const auto& op : prog.ops) {
+    if (op.kind == nc::Op::Kind::Mode) incremental = op.incremental;
+    if (op.kind == nc::Op::Kind::Rapid) pivot = op.xyz * unit;
+    if (op.kind == nc::Op::Kind::Index)
+      for (const auto& [ax, deg] : op.rotary) (ax == 'A' ? q.A : q.B) = sign * deg;
+    if (op.kind != nc::Op::Kind::RotaryLinear) continue;
+    EXPECT_TRUE(incremental);
+    Eigen::Vector3d d = Eigen::Vector3d::Zero();
+    for (char ax : op.axes) d[ax - 'X'] = op.xyz[ax - 'X'] * unit;
+    const double dq = sign * op.rotary.front().second;
+    for (int i = 0; i <= 50; ++i) {
+      const double s = i / 50.0;
+      Pose at = q;
+      (o.axis == 'A' ? at.A : at.B) += s * dq;
+      const Eigen::Vector3d t = pivot + s * d + tipOffset_m(degToRad(at.A), degToRad(at.B), o.radius_mm);
+      w.worst_um = std::max(w.worst_um, mmToUm((t - tip).norm()));
+    }
+    pivot += d;
+    (o.axis == 'A' ? q.A : q.B) += dq;
+    ++w.moves;
+  }
+  return w;
+}
+
+TEST(TooltipProgram, TheDynamicTestKeepsTheTipWithinItsStatedSag) {
+  // 004 Sec. VI at R = 381 mm, 5 deg steps: one move per step sags 363 um mid-move.
+  const CycleOptions base{{"radius_mm", "381"}, {"step_deg", "5"}, {"end_deg", "30"}, {"sweeps", "1"}};
+  CycleOptions whole = base;
+  whole["max_sag_um"] = "999";
+  const Walk coarse = walkDynamic(makePlan("tooltip", loadMachine(test::sourcePath("examples/machines/head_ab.json")), whole));
+  EXPECT_NEAR(coarse.worst_um, mmToUm(381.0 * (1 - std::cos(degToRad(2.5)))), 1.0);  // 362.7 um
+  const ProbePlan plan = makePlan("tooltip", loadMachine(test::sourcePath("examples/machines/head_ab.json")), base);
+  const TooltipOptions o = tooltipOptionsFrom(plan.options, plan.machine);
+  const Walk fine = walkDynamic(plan);
+  std::printf("dynamic test, R 381 mm, 5 deg steps: one move per step %.1f um; %d moves per step %.3f um (bound %.3f "
+              "um + the printed decimals)\n",
+              coarse.worst_um, tooltipPiecesPerStep(o), fine.worst_um, tooltipSagUm(o));
+  EXPECT_EQ(fine.moves, coarse.moves * tooltipPiecesPerStep(o));
+  EXPECT_LE(tooltipSagUm(o), 1.0);
+  // The sag bound plus the rounding of the printed coordinates (half a unit of the last decimal
+  // per coordinate, two in the plane: head_ab is an inch machine, 4 decimals: 1.80 um).
+  const double half_unit_um = o.inch ? 0.5e-4 * kMmPerInch * 1000.0 : 0.5;
+  EXPECT_LT(fine.worst_um, tooltipSagUm(o) + std::sqrt(2.0) * half_unit_um);
+  // The program states it.
+  const std::string text = dialectByName("linuxcnc").writeProgram(tooltipProgram(plan, "linuxcnc"));
+  EXPECT_NE(text.find(fmt::format("in {} moves", tooltipPiecesPerStep(o))), std::string::npos);
 }
 
 }  // namespace
