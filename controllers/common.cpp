@@ -480,6 +480,25 @@ std::string rotaryLinearWords(const nc::Op& op, nc::Unit unit, const std::string
   return s;
 }
 
+std::string rapidBlock(std::string_view g, const nc::Op& op, int decimals) {
+  const Eigen::Vector3d& x = op.xyz;
+  if (op.z_only) return fmt::format("{} Z{}", g, fixed(x.z(), decimals));
+  return fmt::format("{} X{} Y{} Z{}", g, fixed(x.x(), decimals), fixed(x.y(), decimals), fixed(x.z(), decimals));
+}
+
+std::string linearBlock(std::string_view g, const nc::Op& op, int decimals, bool inch) {
+  const Eigen::Vector3d& x = op.xyz;
+  return fmt::format("{} X{} Y{} Z{} F{}", g, fixed(x.x(), decimals), fixed(x.y(), decimals), fixed(x.z(), decimals),
+                     fixed(op.feed, inch ? 3 : 1));
+}
+
+void requireRapidIndex(const nc::Op& op, std::string_view dialect) {
+  if (op.feed > 0)
+    throw std::invalid_argument(fmt::format("the {} program indexes at rapid only; a rotary move at a feed (R-test "
+                                            "reciprocation) is written for linuxcnc only",
+                                            dialect));
+}
+
 std::string inverseTimeRefusal(std::string_view dialect) {
   const char* why = dialect == "okuma"        ? "inverse-time feed (G93) is UNVERIFIED for OSP (controllers.md Sec. 6.5)"
                     : dialect == "heidenhain" ? "inverse-time feed is not verified for Klartext (controllers.md Sec. 5.5)"

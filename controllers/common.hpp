@@ -179,6 +179,16 @@ MeasurementRun parseTaggedResults(const std::string& text, const std::string& fi
 std::string trimmed(double v, int decimals);
 /// The words of a RotaryLinear op: "Y-1.3073Z-0.0571A5.F2." (sep = "") or with spaces.
 std::string rotaryLinearWords(const nc::Op& op, nc::Unit unit, const std::string& sep);
+
+/// The motion blocks the word-address writers (Macro B, Okuma, Siemens) share, in the dialect's
+/// G spelling (`g`: "G0"/"G00" for a rapid, "G1"/"G01" for a feed), coordinates with `decimals`,
+/// feeds with 3 decimals in inch and 1 in mm: "G00 Z150.0000" for a Z-only rapid, else
+/// "G00 X.. Y.. Z..", and "G01 X.. Y.. Z.. F..".
+std::string rapidBlock(std::string_view g, const nc::Op& op, int decimals);
+std::string linearBlock(std::string_view g, const nc::Op& op, int decimals, bool inch);
+/// Throws std::invalid_argument for a rotary move at a feed (the R-test's reciprocation), which
+/// only the LinuxCNC writer writes.
+void requireRapidIndex(const nc::Op& op, std::string_view dialect);
 /// Modal state of a writer: throws std::invalid_argument for a probing move under inverse time
 /// (LinuxCNC: "Cannot probe with zero feed rate") or an inverse-time move without F.
 class ModeGuard {

@@ -133,16 +133,10 @@ class SiemensDialect final : public Dialect {
       guard.apply(op);
       switch (op.kind) {
         case nc::Op::Kind::Comment: commentLines(op.text); break;
-        case nc::Op::Kind::Rapid:
-          line(op.z_only ? fmt::format("G0 Z{}", L(x.z())) : fmt::format("G0 X{} Y{} Z{}", L(x.x()), L(x.y()), L(x.z())));
-          break;
-        case nc::Op::Kind::Linear:
-          line(fmt::format("G1 X{} Y{} Z{} F{}", L(x.x()), L(x.y()), L(x.z()), F(op.feed)));
-          break;
+        case nc::Op::Kind::Rapid: line(ctl::rapidBlock("G0", op, kDecimals)); break;
+        case nc::Op::Kind::Linear: line(ctl::linearBlock("G1", op, kDecimals, inch)); break;
         case nc::Op::Kind::Index: {
-          if (op.feed > 0)
-            throw std::invalid_argument(fmt::format("the {} program indexes at rapid only; a rotary move at a feed "
-                                                    "(R-test reciprocation) is written for linuxcnc only", "siemens"));
+          ctl::requireRapidIndex(op, "siemens");
           std::string s = "G0";
           for (const auto& [axis, deg] : op.rotary) s += fmt::format(" {}{}", axis, L(deg));
           line(s);
