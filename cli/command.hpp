@@ -32,6 +32,7 @@ std::vector<Command> compensateCommands(CLI::App& app, const Common& common);
 std::vector<Command> reportCommands(CLI::App& app, const Common& common);
 std::vector<Command> historyCommands(CLI::App& app, const Common& common);
 std::vector<Command> checkCommands(CLI::App& app, const Common& common);  // check (cmd_check.cpp)
+std::vector<Command> compTableCommands(CLI::App& app, const Common& common);  // comp-table (cmd_comp_table.cpp)
 
 /// A message as the one line on stderr the contract promises: control characters (a line end,
 /// a NUL or an escape from an input file quoted in the message) become \xNN, and a message

@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   for (auto& c : reportCommands(app, common)) commands.push_back(c);
   for (auto& c : historyCommands(app, common)) commands.push_back(c);
   for (auto& c : checkCommands(app, common)) commands.push_back(c);
+  for (auto& c : compTableCommands(app, common)) commands.push_back(c);
 
   try {
     app.parse(argc, argv);

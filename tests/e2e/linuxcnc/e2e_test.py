@@ -30,10 +30,22 @@
       that report, run unchanged, analyze --compensated-with it: Oxc Oyc Sxc Syc within the same
       bounds of zero.
 
+  e2e_test.py comp_table --rotacal BIN --work DIR
+      the third compensation route (docs/compensation.md): the spheres3 program on LinuxCNC whose
+      C axis carries an angular positioning error (truth_ecc.json: E_CC = 3 cos C - 1.2 sin C +
+      2 sin 2C mdeg, played by the virtual probe from the C motor's command) -> analyze: E_CC
+      identified within 0.05 mdeg of the injected -> rotacal comp-table --dialect linuxcnc -> the
+      same program again with the table loaded as joint 4's COMP_FILE (COMP_FILE_TYPE = 0) ->
+      analyze: the re-measured E_CC within 0.05 mdeg of zero at every angle and below a tenth of
+      what it was. A program turning C through a full revolution runs first in both sessions
+      (LinuxCNC follows a joint's table only once the joint has moved through a point where the
+      correction is small: docs/e2e-linuxcnc.md).
+
 Exit 0 pass, 1 fail, 77 skip (LinuxCNC, halcompile or root missing: CTest SKIP_RETURN_CODE).
 """
 import argparse
 import json
+import math
 import os
 import shutil
 import subprocess
@@ -267,6 +279,142 @@ def run_spheres3(a):
     print("spheres3 on LinuxCNC: %d touches, LinuxCNC session %.0f s" % (n_points, t))
 
 
+TRUTH_ECC = os.path.join(HERE, "truth_ecc.json")
+QUEUE_RACE = "Queue is not empty after probing"
+
+
+def lcsim_errors(run_dir):
+    try:
+        with open(os.path.join(run_dir, "driver_status.json")) as f:
+            return [e.strip() for e in json.load(f)["errors"]]
+    except (OSError, ValueError, KeyError):
+        return None
+
+
+def ecc_injected(c_deg):
+    """E_CC of truth_ecc.json at the papers' angle C (mdeg), closed form."""
+    with open(TRUTH_ECC) as f:
+        e = json.load(f)["c_angular_positioning_error"]
+    c = math.radians(c_deg)
+    return (e.get("ECC_cos1C", 0.0) * math.cos(c) + e.get("ECC_sin1C", 0.0) * math.sin(c)
+            + e.get("ECC_cos2C", 0.0) * math.cos(2 * c) + e.get("ECC_sin2C", 0.0) * math.sin(2 * c))
+
+
+def table_residual_mdeg(table, c_list):
+    """The C axis' true angular error left with the loaded table (mdeg), from the truth and the
+    table's own rows, as LinuxCNC applies them (motor = joint + nominal - actual, interpolated
+    linearly) and as the probe plays the truth (true joint angle = motor + dc(motor), dc(c) =
+    E_CC(-c): truth_params.py). Independent of the second session's measurement, whose trigger
+    pattern repeats the first one's exactly (the simulation is deterministic)."""
+    rows = []
+    with open(table) as f:
+        for line in f:
+            try:
+                nom, fwd, _ = (float(x) for x in line.split())
+            except ValueError:
+                break
+            rows.append((nom, nom - fwd))
+
+    def trim(q):
+        for (n0, t0), (n1, t1) in zip(rows, rows[1:]):
+            if n0 <= q <= n1:
+                return t0 + (t1 - t0) * (q - n0) / (n1 - n0)
+        raise SystemExit("FAIL: joint angle %g outside the table" % q)
+
+    def after(q):
+        m = q + trim(q)
+        return (m + ecc_injected(-m) * 1e-3 - q) * 1e3
+
+    at_angles = max(abs(after(-c)) for c in c_list)
+    over_turn = max(abs(after(-0.5 * k)) for k in range(721))
+    return at_angles, over_turn
+
+
+def run_comp_table(a):
+    work = a.work
+    plan, ngc = os.path.join(work, "plan.json"), os.path.join(work, "spheres3.ngc")
+    sh([a.rotacal, "plan", "--cycle", "spheres3", "--machine", MACHINE, "-o", plan])
+    sh([a.rotacal, "generate", "--plan", plan, "--dialect", "linuxcnc", "-o", ngc])
+    with open(plan) as f:
+        n_points = len(json.load(f)["points"])
+    # LinuxCNC 2.9's motion applies a joint's table only while the joint moves, and from rest it did
+    # not take a step of 3 mdeg (observed: docs/e2e-linuxcnc.md); over one full turn the correction
+    # passes zero, the filter locks on and follows from there. So: one turn of C first.
+    turn = os.path.join(work, "turn_c.ngc")
+    with open(turn, "w") as f:
+        f.write("(rotacal e2e: one full turn of C, so that its compensation is followed from the start)\n"
+                "G90 G0 C-360.0000\nG0 C0.0000\nM2\n")
+    figures = {}
+
+    def measure(tag, extra):
+        run = os.path.join(work, tag)
+        cmd = [RUN, "--pre-ngc", turn, "--ngc", ngc, "--truth", TRUTH_ECC, "--machine", MACHINE, "--plan", plan,
+               "--out", run, "--timeout", "1200"] + extra
+        r, t = sh(cmd, expect=None)
+        if r.returncode == 1 and lcsim_errors(run) == [QUEUE_RACE]:
+            # LinuxCNC's task read-ahead race (LinuxCNC/linuxcnc issues #3650, #662, #263; fix proposed in
+            # pull request #3971): it stops a correct probing program at random, rarely. One rerun.
+            print("note: LinuxCNC stopped with %r (a known race of its task, not of the program): running the "
+                  "session once more" % QUEUE_RACE, flush=True)
+            r, t = sh(cmd, expect=None)
+        if r.returncode != 0:
+            raise SystemExit("FAIL: exit %d (expected 0): %s" % (r.returncode, " ".join(cmd)))
+        rep = os.path.join(work, tag + "_report.json")
+        sh([a.rotacal, "analyze", "--plan", plan, "--results", os.path.join(run, "rotacal_spheres3.txt"),
+            "--dialect", "linuxcnc", "--json", rep])
+        with open(rep) as f:
+            r = json.load(f)
+        figures[tag + "_s"] = t
+        return run, rep, r
+
+    # 1. the error, measured through the controller
+    run1, rep1, r1 = measure("before", ["--c-from-motor"])
+    figures["lateness_before"] = lateness(work, run1, plan, cycle="spheres3", points=n_points,
+                                          across_um=ROUNDING_ACROSS_UM)
+    ecc1 = r1["component_errors"]["ECC"]
+    check(ecc1["unit"] == "mdeg", "ECC in mdeg")
+    want = [ecc_injected(c) for c in ecc1["c_deg"]]
+    mean = sum(want) / len(want)          # the identification has no mean (a sphere position)
+    d1 = max(abs(v - (w - mean)) for v, w in zip(ecc1["values"], want))
+    check(d1 <= ANGLE_TOL_MDEG, "before: ECC identified - injected at most %.4f mdeg over %d angles (tol %g)"
+          % (d1, len(want), ANGLE_TOL_MDEG))
+    before = max(abs(v) for v in ecc1["values"])
+    # 2. the table, in LinuxCNC's form
+    table = os.path.join(work, "c_axis.comp")
+    if os.path.exists(table):
+        os.remove(table)
+    sh([a.rotacal, "comp-table", "--report", rep1, "--dialect", "linuxcnc", "--machine", MACHINE, "-o", table])
+    # 3. the same program with the table loaded
+    run2, rep2, r2 = measure("after", ["--comp-file", table])
+    ini = open(os.path.join(run2, "config", "lcsim_xyzac.ini")).read()
+    check("COMP_FILE_TYPE = 0" in ini, "the second session's INI loads the table into [JOINT_4]")
+    ecc2 = r2["component_errors"]["ECC"]
+    after = max(abs(v) for v in ecc2["values"])
+    check(after <= ANGLE_TOL_MDEG, "after: re-measured ECC at most %.4f mdeg over the turn (tol %g)"
+          % (after, ANGLE_TOL_MDEG))
+    check(after <= 0.1 * before, "ECC dropped from %.4f to %.4f mdeg (%.1f %%)"
+          % (before, after, 100.0 * (1.0 - after / before)))
+    # the truth's verdict on the table, independent of the second measurement
+    res_angles, res_turn = table_residual_mdeg(table, ecc1["c_deg"])
+    check(res_angles <= ANGLE_TOL_MDEG, "true C error left by the table at the %d angles: at most %.4f mdeg (tol %g)"
+          % (len(ecc1["c_deg"]), res_angles, ANGLE_TOL_MDEG))
+    check(res_turn <= ANGLE_TOL_MDEG, "true C error left by the table over the turn (every 0.5 deg): at most %.4f mdeg "
+          "(tol %g)" % (res_turn, ANGLE_TOL_MDEG))
+    figures["true_residual_at_angles_mdeg"] = res_angles
+    figures["true_residual_over_turn_mdeg"] = res_turn
+    for name in ("Oxc", "Oyc", "Sxc", "Syc"):
+        e = r2["location_errors"][name]
+        tol = LENGTH_TOL_UM if e["unit"] == "um" else ANGLE_TOL_MDEG
+        check(abs(e["value"]) <= tol, "after: %s %.4f %s (none injected, tol %g)" % (name, e["value"], e["unit"], tol))
+    vol = {"before": r1["volumetric_error_um"], "after": r2["volumetric_error_um"]}
+    figures.update({"ecc_before_mdeg": ecc1["values"], "ecc_after_mdeg": ecc2["values"], "c_deg": ecc1["c_deg"],
+                    "ecc_max_before_mdeg": before, "ecc_max_after_mdeg": after, "identified_minus_injected_mdeg": d1,
+                    "volumetric_error_um": vol})
+    with open(os.path.join(work, "figures.json"), "w") as f:
+        json.dump(figures, f, indent=1)
+    print("comp_table on LinuxCNC: max |ECC| %.4f -> %.4f mdeg" % (before, after))
+
+
 def run_no_trigger(a):
     work = a.work
     plan, ngc = os.path.join(work, "plan.json"), os.path.join(work, "touch154.ngc")
@@ -290,7 +438,7 @@ def run_no_trigger(a):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("case", choices=("touch154", "no_trigger", "spheres3"))
+    ap.add_argument("case", choices=("touch154", "no_trigger", "spheres3", "comp_table"))
     ap.add_argument("--rotacal", required=True)
     ap.add_argument("--work", required=True)
     a = ap.parse_args()
@@ -299,7 +447,8 @@ def main():
         print("SKIP: " + why)
         sys.exit(77)
     os.makedirs(a.work, exist_ok=True)
-    {"touch154": run_touch154, "no_trigger": run_no_trigger, "spheres3": run_spheres3}[a.case](a)
+    {"touch154": run_touch154, "no_trigger": run_no_trigger, "spheres3": run_spheres3,
+     "comp_table": run_comp_table}[a.case](a)
     if FAILURES:
         print("%d check(s) failed" % len(FAILURES))
         sys.exit(1)

@@ -5,6 +5,7 @@
 #
 # Usage: run.sh --ngc PROGRAM --truth TRUTH.json --machine MACHINE.json --out DIR
 #               [--plan PLAN.json] [--pre-ngc OFFSETS.ngc] [--timeout S] [--comp-build DIR]
+#               [--c-from-motor] [--comp-file TABLE]
 #   --ngc FILE        the program (rotacal generate --dialect linuxcnc); it runs as written
 #   --truth FILE      rotacal-truth/1: the true machine and piece (scripts/truth_params.py)
 #   --machine FILE    rotacal-machine/1: the nominal piece and probe ball
@@ -14,6 +15,10 @@
 #                     written by rotacal analyze --offsets X.ngc)
 #   --timeout S       hard limit for the whole LinuxCNC session (default 900)
 #   --comp-build DIR  where halcompile builds vtouchprobe.so (default /tmp/rotacal-e2e-comp)
+#   --c-from-motor    the probe reads C from joint 4's motor command (which carries its
+#                     compensation table) instead of the joint command
+#   --comp-file TABLE joint 4 (C) loads TABLE: COMP_FILE = TABLE, COMP_FILE_TYPE = 0 in [JOINT_4]
+#                     (rotacal comp-table --dialect linuxcnc); implies --c-from-motor
 # The program's (LOGOPEN,name) file is copied to DIR/name. Exit status: 0 ok, 1 program or
 # controller error (DIR/driver_status.json has the messages), 2 timeout, 3 setup problem.
 set -u -o pipefail
@@ -22,7 +27,7 @@ HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 PY=/usr/bin/python3          # Debian's interpreter: it has the linuxcnc and hal modules
 export PYTHONDONTWRITEBYTECODE=1   # no __pycache__ in the source tree
 
-NGC="" PRE="" TRUTH="" MACHINE="" PLAN="" OUT="" TIMEOUT=900 BUILD=/tmp/rotacal-e2e-comp
+NGC="" PRE="" TRUTH="" MACHINE="" PLAN="" OUT="" TIMEOUT=900 BUILD=/tmp/rotacal-e2e-comp C_MOTOR=0 COMP=""
 while [ $# -gt 0 ]; do
     case "$1" in
         --ngc) NGC="$2"; shift 2;;
@@ -33,6 +38,8 @@ while [ $# -gt 0 ]; do
         --out) OUT="$2"; shift 2;;
         --timeout) TIMEOUT="$2"; shift 2;;
         --comp-build) BUILD="$2"; shift 2;;
+        --c-from-motor) C_MOTOR=1; shift;;
+        --comp-file) COMP="$2"; C_MOTOR=1; shift 2;;
         -h|--help) sed -n '2,20p' "$0" | sed 's/^# \{0,1\}//'; exit 0;;
         *) echo "run.sh: unknown option $1 (see --help)" >&2; exit 3;;
     esac
@@ -40,11 +47,12 @@ done
 die() { echo "run.sh: $*" >&2; exit 3; }
 abspath() { echo "$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"; }
 [ -n "$NGC" ] && [ -n "$TRUTH" ] && [ -n "$MACHINE" ] && [ -n "$OUT" ] || die "--ngc, --truth, --machine and --out are required"
-for f in "$NGC" "$TRUTH" "$MACHINE" ${PRE:+"$PRE"} ${PLAN:+"$PLAN"}; do [ -f "$f" ] || die "file not found: $f"; done
+for f in "$NGC" "$TRUTH" "$MACHINE" ${PRE:+"$PRE"} ${PLAN:+"$PLAN"} ${COMP:+"$COMP"}; do [ -f "$f" ] || die "file not found: $f"; done
 [[ "$TIMEOUT" =~ ^[0-9]+$ ]] || die "--timeout must be whole seconds"
 NGC="$(abspath "$NGC")" TRUTH="$(abspath "$TRUTH")" MACHINE="$(abspath "$MACHINE")"
 [ -n "$PRE" ] && PRE="$(abspath "$PRE")"
 [ -n "$PLAN" ] && PLAN="$(abspath "$PLAN")"
+[ -n "$COMP" ] && COMP="$(abspath "$COMP")"
 
 command -v linuxcnc >/dev/null || die "linuxcnc not found (Debian package linuxcnc-uspace)"
 command -v halcompile >/dev/null || die "halcompile not found (Debian package linuxcnc-uspace-dev)"
@@ -84,11 +92,17 @@ fi
 
 # ---------------------------------------------- per-run LinuxCNC configuration
 sed "s#@HARNESS@#$HERE#g" "$HERE/config/lcsim_xyzac.ini" > "$OUT/config/lcsim_xyzac.ini"
+if [ -n "$COMP" ]; then
+    # the C joint's compensation table (LinuxCNC ini-config: COMP_FILE, COMP_FILE_TYPE per joint)
+    cp "$COMP" "$OUT/config/joint4.comp" || die "cannot copy $COMP"
+    sed -i "s#^\[JOINT_4\]\$#[JOINT_4]\nCOMP_FILE = $OUT/config/joint4.comp\nCOMP_FILE_TYPE = 0#" "$OUT/config/lcsim_xyzac.ini"
+    grep -q '^COMP_FILE = ' "$OUT/config/lcsim_xyzac.ini" || die "could not add COMP_FILE to [JOINT_4]"
+fi
 cp "$HERE/config/lcsim.tbl" "$OUT/config/"
 # the program's relative LOGOPEN file resolves in the INI's directory
 LOGNAME_="$(sed -n 's/^[[:space:]]*([Ll][Oo][Gg][Oo][Pp][Ee][Nn],\([^)]*\)).*/\1/p' "$NGC" | head -1)"
 
-export LCSIM_NGC="$NGC" LCSIM_PRE_NGC="$PRE" LCSIM_OUT="$OUT" LCSIM_PARAMS_HAL="$OUT/params.hal"
+export LCSIM_NGC="$NGC" LCSIM_PRE_NGC="$PRE" LCSIM_OUT="$OUT" LCSIM_PARAMS_HAL="$OUT/params.hal" LCSIM_C_FROM_MOTOR="$C_MOTOR"
 export LCSIM_TIMEOUT=$(( TIMEOUT > 40 ? TIMEOUT - 30 : TIMEOUT * 3 / 4 ))   # the driver's own limit
 # rtapi_app refuses to run as root unless given a fallback uid
 export RTAPI_UID="${RTAPI_UID:-65534}"

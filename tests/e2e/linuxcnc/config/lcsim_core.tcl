@@ -8,6 +8,7 @@
 #
 # Environment (exported by ../run.sh):
 #   LCSIM_PARAMS_HAL  setp file generated from the truth (truth_params.py + lcsim_params.py)
+#   LCSIM_C_FROM_MOTOR 1: the probe reads C from joint.4.motor-pos-cmd (run.sh --c-from-motor)
 
 # --- motion, kinematics ------------------------------------------------------
 # the INI value is a Tcl list (one element per occurrence): split "module sparm=..." into words
@@ -40,7 +41,15 @@ net :jx joint.0.pos-cmd => vtouchprobe.0.joint-x
 net :jy joint.1.pos-cmd => vtouchprobe.0.joint-y
 net :jz joint.2.pos-cmd => vtouchprobe.0.joint-z
 net :ja joint.3.pos-cmd => vtouchprobe.0.joint-a
-net :jc joint.4.pos-cmd => vtouchprobe.0.joint-c
+# C: the joint's command (default), or with LCSIM_C_FROM_MOTOR=1 the motor's command, which
+# carries the joint's compensation table (COMP_FILE: motor-pos-cmd = pos-cmd + correction); the
+# probe's true angle error is then a function of where the motor really is, as on a machine whose
+# encoder sits on the motor (tests/e2e/linuxcnc: the comp_table case)
+if {[info exists ::env(LCSIM_C_FROM_MOTOR)] && $::env(LCSIM_C_FROM_MOTOR) == 1} {
+    net j4-motor => vtouchprobe.0.joint-c
+} else {
+    net :jc joint.4.pos-cmd => vtouchprobe.0.joint-c
+}
 net :probe vtouchprobe.0.probe => motion.probe-input
 
 # --- parameters: nominal kinematics + true machine/artefact ------------------

@@ -18,6 +18,13 @@ The mapping (docs/e2e-linuxcnc.md, "Truth -> component"):
   Rz*Ry*Rx.
 * probe ball: radius = ball_diameter_mm / 2, tool length 0 (the programs control the ball
   centre), pretravel from probe_pretravel_um.
+* c_angular_positioning_error (harness only, not a rotacal truth field): the C axis' angular
+  positioning error E_CC of ISO 230-7 in the papers' convention, as first and second harmonics
+  {"unit": "mdeg", "ECC_cos1C": .., "ECC_sin1C": .., "ECC_cos2C": .., "ECC_sin2C": ..}. E_CC turns
+  the table about +Z; the component's true C angle is c + dc(c) with c the joint angle, and
+  c = -C*, so dc(c) = E_CC(-c): C_e1c = cos1, C_e1s = -sin1, C_e2c = cos2, C_e2s = -sin2 (deg).
+  The component takes angle errors only beside ISO axis errors, not beside "eq1": a truth with
+  both location errors and this is refused.
 * form_error, probe_noise_um and drifts are not modelled by the component: refused.
 * --plan: a sphere cycle's plan (spheres3) puts its spheres (ids 1..3: the component's sphere,
   sphere2, sphere3) at the plan's nominal centres and radius, workpiece frame, placed on the
@@ -37,7 +44,9 @@ LENGTH = {"um": 1.0, "mm": 1000.0}                       # -> um
 ANGLE = {"mdeg": 1.0, "deg": 1000.0, "urad": 180.0 / math.pi * 1e-3}   # -> mdeg
 NAMES = ("dx_AY", "dy_AY", "dz_AY", "dy_CA", "a_AY", "b_AY", "c_AY", "b_CA")
 KNOWN_TRUTH_KEYS = {"format", "location_errors", "setup_error", "probe_pretravel_um", "form_error",
-                    "probe_noise_um", "start_time_s"}
+                    "probe_noise_um", "start_time_s", "c_angular_positioning_error"}
+ECC_KEYS = {"ECC_cos1C": ("C_e1c", 1.0), "ECC_sin1C": ("C_e1s", -1.0), "ECC_cos2C": ("C_e2c", 1.0),
+            "ECC_sin2C": ("C_e2s", -1.0)}
 
 
 def fail(path, msg):
@@ -119,6 +128,24 @@ def params_from(truth, truth_path, machine, machine_path, plan=None, plan_path=N
         "block": {"enable": True, "center": centre, "size": size, "rpy_deg": rpy_deg},
         "sphere": {"enable": False, "center": [0.0, 0.0, 0.0], "radius": 12.7},
     }
+    ecc = truth.get("c_angular_positioning_error")
+    if ecc is not None:
+        if any(v != 0 for v in eq1.values()):
+            fail(truth_path, "c_angular_positioning_error cannot be combined with location errors in the harness "
+                 "(its component takes angle errors beside ISO axis errors, not beside \"eq1\")")
+        if ecc.get("unit") != "mdeg":
+            fail(truth_path, "c_angular_positioning_error needs \"unit\": \"mdeg\"")
+        errors = {}
+        for k, v in ecc.items():
+            if k == "unit" or k.startswith("_"):
+                continue
+            if k not in ECC_KEYS or not isinstance(v, (int, float)):
+                fail(truth_path, "c_angular_positioning_error: unknown or non-numeric %r (known: %s)"
+                     % (k, sorted(ECC_KEYS)))
+            name, sign = ECC_KEYS[k]
+            errors[name] = sign * v * 1e-3
+        out["errors"] = errors
+        del out["eq1"]
     if plan is not None:
         out.update(spheres_from(plan, plan_path))
     return out
