@@ -177,6 +177,12 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
                            "again; run it only on the uncompensated machine");
   for (const auto& h : options.header)
     for (auto& l : dialect.commentLines(h)) header.push_back(std::move(l));
+  // Zero errors change no word: the program is returned as it was, byte for byte, without the
+  // mark (compensating it again, for any errors, is then right).
+  bool zero = errors.location.values.isZero(0.0);
+  for (const auto& c : errors.components)
+    for (const auto& v : c.values) zero = zero && v.isZero(0.0);
+  if (zero) header.clear();
 
   std::string result;
   std::vector<int> source_line;  // per output line: the input line it comes from, 0 for the header

@@ -70,7 +70,8 @@ struct ProgramCompensation {
 /// rewrite that the dialect's own checker finds a problem in that the input does not have.
 /// Lines longer than 1024 characters and exponent notation (X1e2) are refused too. Throws
 /// std::invalid_argument for heidenhain or csv (not word-address G-code) or an unknown dialect.
-/// The errors come from postproc/report_errors.hpp (one or several REPORT.json).
+/// The errors come from postproc/report_errors.hpp (one or several REPORT.json). All-zero errors
+/// return the program byte for byte (no mark, no header).
 ProgramCompensation compensateProgram(const std::string& text, const std::string& file, const MachineModel& machine,
                                       const GeometricErrors& errors, const NcSyntax& syntax,
                                       const ProgramCompensationOptions& options);

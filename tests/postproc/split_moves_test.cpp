@@ -200,14 +200,19 @@ TEST(SplitMoves, LinuxcncInterpreterReadsTheSplitProgram) {
   std::filesystem::remove_all(dir);
 }
 
-TEST(SplitMoves, ZeroErrorsReproduceEveryDialectsProgramLineForLine) {
-  // Only the header (the mark and the errors) is added; every line of the program is as it was.
+TEST(SplitMoves, ZeroErrorsReproduceEveryDialectsProgramByteForByte) {
+  // Zero errors change no word: every dialect's program comes back as it was, without the mark.
+  // Errors of 1 nm change the header only (the mark and the errors) and no line of the program.
   const ProbePlan plan = test::touch154Plan();
   for (const std::string d : {"linuxcnc", "fanuc", "haas", "siemens", "okuma"}) {
     const std::string program = dialectByName(d).writeProgram(test::cycleProgram(plan, d));
     NcSyntax syntax{d};
     if (d == "siemens") syntax.comment = NcSyntax::Comment::Semicolon;
-    const std::string out = compensateProgram(program, "p", plan.machine, GeometricErrors(LocationErrors{}), syntax, {}).text;
+    EXPECT_EQ(compensateProgram(program, "p", plan.machine, GeometricErrors(LocationErrors{}), syntax, {}).text, program)
+        << d;
+    LocationErrors tiny;
+    tiny.set("dz_AY", 1e-6);
+    const std::string out = compensateProgram(program, "p", plan.machine, GeometricErrors(tiny), syntax, {}).text;
     std::vector<std::string> a, b;
     std::string l;
     for (std::istringstream s(program); std::getline(s, l);) a.push_back(l);
