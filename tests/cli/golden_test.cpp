@@ -22,6 +22,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cli_run.hpp"
 #include "controllers/dialects.hpp"
 #include "core/identification.hpp"
 #include "test_util.hpp"
@@ -30,6 +31,7 @@ namespace rotacal {
 namespace {
 
 namespace fs = std::filesystem;
+using test::slurp;
 
 struct ShellRun {
   int code;
@@ -45,12 +47,6 @@ ShellRun sh(const std::string& cmd) {
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
 }
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 const std::vector<std::string> kDialects = {"csv", "linuxcnc", "fanuc", "haas", "siemens", "heidenhain", "okuma"};
 

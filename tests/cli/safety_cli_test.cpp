@@ -21,13 +21,8 @@ namespace {
 
 namespace fs = std::filesystem;
 using test::sh;
+using test::slurp;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 class Safety : public ::testing::Test {
  protected:
