@@ -426,10 +426,13 @@ Evaluated evaluate(const Context& cx, const Model& m, size_t ci, int step) {
   return ev;
 }
 
+// One entry per cause and partner; a later step's evaluation replaces an earlier one: the model
+// has grown since, and `signal` must say whether the shared signal is still unexplained by the
+// final model (a cause accepted later may have taken it), as the verdict does.
 void addConfounded(std::vector<JudgeConfounded>* list, JudgeConfounded e) {
   for (auto& x : *list)
     if (x.cause == e.cause && x.with_model == e.with_model && (x.with_model || x.with == e.with)) {
-      x.signal = x.signal || e.signal;
+      x = std::move(e);
       return;
     }
   list->push_back(std::move(e));

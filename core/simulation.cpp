@@ -34,20 +34,38 @@ namespace {
 
 // The true table transform at a point's pose and time (location errors + drift + pose-dependent,
 // or the truth's own full transform).
-Eigen::Isometry3d trueTable_m_w(const ProbePoint& point, const Truth& truth) {
+Eigen::Isometry3d trueTable_m_w(const ProbePoint& point, const Pose& actual, const Truth& truth) {
   const double t = truth.start_time_s + point.t_s;
-  if (truth.table_transform) return truth.table_transform(point.pose, t);
+  if (truth.table_transform) return truth.table_transform(actual, t);
   LocationErrors e = truth.errors;
   if (truth.drift) e.values += truth.drift(t);
-  if (truth.pose_dependent) e.values += truth.pose_dependent(point.pose);
-  return T_m_w(e, point.pose);
+  if (truth.pose_dependent) e.values += truth.pose_dependent(actual);
+  return T_m_w(e, actual);
+}
+
+// Where the rotary axes really are at each point of the plan under the truth's backlash.
+std::vector<Pose> actualPoses(const ProbePlan& plan, const Truth& truth) {
+  std::vector<Pose> out;
+  out.reserve(plan.points.size());
+  const Eigen::Vector3d& b = truth.rotary_backlash_deg;
+  Eigen::Vector3d last = Eigen::Vector3d::Zero();  // the program starts at A = B = C = 0, reached in +
+  Eigen::Vector3d dir = Eigen::Vector3d::Ones();
+  for (const auto& p : plan.points) {
+    const Eigen::Vector3d cmd(p.pose.A, p.pose.B, p.pose.C);
+    for (int k = 0; k < 3; ++k)
+      if (cmd[k] != last[k]) dir[k] = cmd[k] > last[k] ? 1.0 : -1.0;
+    last = cmd;
+    const Eigen::Vector3d a = cmd - 0.5 * dir.cwiseProduct(b);
+    out.push_back(Pose{a[0], a[1], a[2]});
+  }
+  return out;
 }
 
 }  // namespace
 
 Plane truePlane_m(const ProbePlan& plan, const ProbePoint& point, const Truth& truth) {
   const Plane w = truth.artefact.face(*plan.machine.artefact, point.face);
-  const Eigen::Isometry3d T = trueTable_m_w(point, truth);
+  const Eigen::Isometry3d T = trueTable_m_w(point, point.pose, truth);
   return Plane{T * w.point, T.linear() * w.normal};
 }
 
@@ -57,7 +75,9 @@ MeasurementRun simulate(const ProbePlan& plan, const Truth& truth, const Simulat
   const double r = plan.machine.probe.ball_radius_mm();
   MeasurementRun run;
   run.source = "simulation";
-  for (const auto& p : plan.points) {
+  const std::vector<Pose> actual = actualPoses(plan, truth);
+  for (size_t i = 0; i < plan.points.size(); ++i) {
+    const ProbePoint& p = plan.points[i];
     if (!p.sphere && !plan.machine.artefact) throw std::invalid_argument("plan has no artefact to simulate");
     // The surface the ball meets: the face plane, or for sphere cycles the true sphere.
     std::function<double(const Eigen::Vector3d&)> contact;
@@ -65,7 +85,7 @@ MeasurementRun simulate(const ProbePlan& plan, const Truth& truth, const Simulat
       const auto err = truth.sphere_center_error_w_mm.find(p.sphere->id);
       const Eigen::Vector3d c_w =
           p.sphere->center_w_mm + (err == truth.sphere_center_error_w_mm.end() ? Eigen::Vector3d::Zero() : err->second);
-      const Eigen::Vector3d c_m = trueTable_m_w(p, truth) * c_w;
+      const Eigen::Vector3d c_m = trueTable_m_w(p, actual[i], truth) * c_w;
       const double R = p.sphere->radius_mm;
       contact = [&p, r, c_m, R](const Eigen::Vector3d& c0) {
         try {
@@ -77,7 +97,9 @@ MeasurementRun simulate(const ProbePlan& plan, const Truth& truth, const Simulat
         }
       };
     } else {
-      const Plane plane = truePlane_m(plan, p, truth);
+      const Plane w = truth.artefact.face(*plan.machine.artefact, p.face);
+      const Eigen::Isometry3d T = trueTable_m_w(p, actual[i], truth);
+      const Plane plane{T * w.point, T.linear() * w.normal};
       contact = [&p, r, plane](const Eigen::Vector3d& c0) { return ballPlaneContact(c0, p.approach_m, r, plane); };
     }
     double s = contact(p.trigger_m_mm);
@@ -244,6 +266,13 @@ Truth truthFrom(const JsonDoc& doc, Kinematics kinematics) {
       return Eigen::Vector3d(sc.cwiseProduct(c) + (before ? before(c) : Eigen::Vector3d::Zero()));
     };
   }
+  if (j.contains("rotary_backlash")) {
+    // Lost motion of the rotary axes: {"A_mdeg": 10, "B_mdeg": 0, "C_mdeg": 0}.
+    const Json& r = requireObject(doc, j, "rotary_backlash");
+    const Limits mdeg = Limits::nonNegative(kMaxAngleErrorMdeg, "mdeg");
+    t.rotary_backlash_deg = Eigen::Vector3d(numberOr(doc, r, "A_mdeg", 0.0, mdeg), numberOr(doc, r, "B_mdeg", 0.0, mdeg),
+                                            numberOr(doc, r, "C_mdeg", 0.0, mdeg)) * 1e-3;
+  }
   t.noise_um = numberOr(doc, j, "probe_noise_um", 0.0, Limits::nonNegative(kMaxNoiseUm, "um"));
   t.pretravel_um = numberOr(doc, j, "probe_pretravel_um", 0.0, Limits::symmetric(kMaxNoiseUm, "um"));
   t.start_time_s = numberOr(doc, j, "start_time_s", 0.0, Limits::nonNegative(kMaxClockSeconds, "s"));
@@ -279,6 +308,9 @@ Json truthToJson(const Truth& t) {
                                       {"tilt_v_mrad", ff.tilt_v_rad * 1e3}};
   }
   if (!form.empty()) j["form_error"] = form;
+  if (!t.rotary_backlash_deg.isZero())
+    j["rotary_backlash"] = {{"A_mdeg", t.rotary_backlash_deg[0] * 1e3}, {"B_mdeg", t.rotary_backlash_deg[1] * 1e3},
+                            {"C_mdeg", t.rotary_backlash_deg[2] * 1e3}};
   if (t.noise_um > 0) j["probe_noise_um"] = t.noise_um;
   if (t.pretravel_um != 0) j["probe_pretravel_um"] = t.pretravel_um;
   return j;

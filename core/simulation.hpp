@@ -41,6 +41,12 @@ struct Truth {
   /// truth holds more than location errors (component errors of a rotary axis as full
   /// transforms). Empty: T_m_w of the location errors (+ drift, + pose_dependent).
   std::function<Eigen::Isometry3d(const Pose& pose, double t_s)> table_transform;
+  /// Lost motion (backlash) of the rotary axes A, B, C, deg: the axis stops short of the commanded
+  /// angle by half of it in the direction it last moved, actual = commanded - sign(last move) b / 2.
+  /// The last move is read from the plan's order of poses (each probing pose reached straight from
+  /// the one before; the program starts at A = B = C = 0, reached in +). Outside every cycle's catalog: the test of
+  /// `model_inadequate` (issue 16).
+  Eigen::Vector3d rotary_backlash_deg = Eigen::Vector3d::Zero();
 };
 
 /// Distance s (mm) along the approach from the nominal trigger at which the ball of radius r

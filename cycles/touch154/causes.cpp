@@ -1,6 +1,8 @@
 #include "cycles/touch154/causes.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <map>
 
 #include <fmt/format.h>
 
@@ -149,6 +151,95 @@ class RotaryErrorMotionC2 : public ModelExtension {
   }
 };
 
+// The tilt axis's own angle at a point (A on an A/C table, B on a B/C table): an extra rotation
+// delta of the tilt axis about itself is, to first order, a change of its zero a_AY (b_BY) by
+// -delta (000 Eq. (1): Da(a_AY) Db Dc Da(-A - delta); the Db Dc in between move it by
+// delta x (b, c) ~ 1e-10 rad). Index 4 is a_AY (A/C) and b_BY (B/C).
+constexpr int kTiltZero = 4;
+double tiltOf(const ProbePlan& plan, const Pose& pose) {
+  return plan.machine.kinematics == Kinematics::TableBC ? pose.B : pose.A;
+}
+
+/// The distinct tilts of a plan in the order its points first reach them.
+std::vector<double> tiltsOf(const ProbePlan& plan) {
+  std::vector<double> t;
+  for (const auto& pt : plan.points) {
+    const double a = tiltOf(plan, pt.pose);
+    if (std::find(t.begin(), t.end(), a) == t.end()) t.push_back(a);
+  }
+  return t;
+}
+
+class TiltPositioning : public ModelExtension {
+ public:
+  TiltPositioning(const ProbePlan& plan, std::vector<double> tilts) : axis_(axisName(plan)), bc_(plan.machine.kinematics == Kinematics::TableBC), tilts_(std::move(tilts)) {}
+  std::string cause() const override { return "tilt_axis_positioning"; }
+  std::string variant() const override { return "per_tilt"; }
+  std::string describe() const override {
+    return fmt::format("the {} axis stands at an angle off its command that differs between its tilts (angular "
+                       "positioning error E{}{} of ISO 230-7), relative to {} = {:g} deg",
+                       axis_, axis_, axis_, axis_, tilts_.front());
+  }
+  std::vector<ExtensionParameter> parameters() const override {
+    std::vector<ExtensionParameter> p;
+    for (size_t k = 1; k < tilts_.size(); ++k)
+      p.push_back({fmt::format("E{}{}@{}{:g}", axis_, axis_, axis_, tilts_[k]), "mdeg", radToMdeg(1.0), 1e-7});
+    return p;
+  }
+  LocationErrors errorsAt(const Eigen::VectorXd& p, const ObservationContext& o, const LocationErrors& e) const override {
+    LocationErrors out = e;
+    if (!o.point) return out;
+    const double a = bc_ ? o.point->pose.B : o.point->pose.A;
+    for (size_t k = 1; k < tilts_.size(); ++k)
+      if (a == tilts_[k]) out.values[kTiltZero] -= p[static_cast<long>(k - 1)];
+    return out;
+  }
+  static std::string axisName(const ProbePlan& plan) { return plan.machine.kinematics == Kinematics::TableBC ? "B" : "A"; }
+
+ private:
+  std::string axis_;
+  bool bc_;
+  std::vector<double> tilts_;
+};
+
+/// Lost motion of the tilt axis: it stops b / 2 short of the command in the direction it last
+/// moved, read from the plan's order of points (the program starts at 0, reached in +; each
+/// probing pose reached straight from the one before: the simulator's own rule,
+/// core/simulation.hpp `rotary_backlash_deg`).
+class TiltBacklash : public ModelExtension {
+ public:
+  explicit TiltBacklash(const ProbePlan& plan) : axis_(TiltPositioning::axisName(plan)) {
+    double last = 0.0, dir = 1.0;
+    for (const auto& pt : plan.points) {
+      const double a = tiltOf(plan, pt.pose);
+      if (a != last) dir = a > last ? 1.0 : -1.0;
+      last = a;
+      dir_[pt.id] = dir;
+    }
+  }
+  std::string cause() const override { return "tilt_axis_backlash"; }
+  std::string variant() const override { return "lost_motion"; }
+  std::string describe() const override {
+    return fmt::format("the {} axis stops short of its command by half its lost motion, in the direction it last moved",
+                       axis_);
+  }
+  std::vector<ExtensionParameter> parameters() const override {
+    return {{fmt::format("backlash_{}", axis_), "mdeg", radToMdeg(1.0), 1e-7}};
+  }
+  LocationErrors errorsAt(const Eigen::VectorXd& p, const ObservationContext& o, const LocationErrors& e) const override {
+    LocationErrors out = e;
+    const auto it = o.point ? dir_.find(o.point->id) : dir_.end();
+    if (it != dir_.end()) out.values[kTiltZero] += 0.5 * it->second * p[0];  // actual - command = -dir b / 2
+    return out;
+  }
+  /// Whether the plan reaches some tilt from both sides, or only ever moves one way between tilts.
+  static bool applies(const ProbePlan& plan) { return tiltsOf(plan).size() >= 2; }
+
+ private:
+  std::string axis_;
+  std::map<int, double> dir_;  // by point id: the direction of the tilt axis's last move
+};
+
 }  // namespace
 
 ExtensionPtr rotaryErrorMotionC2() { return std::make_shared<RotaryErrorMotionC2>(); }
@@ -159,6 +250,8 @@ ExtensionPtr probePretravel() { return std::make_shared<Pretravel>(); }
 ExtensionPtr linearAxisSquareness() { return std::make_shared<Squareness>(); }
 ExtensionPtr linearAxisScale() { return std::make_shared<Scale>(); }
 ExtensionPtr probeLength() { return std::make_shared<ProbeLength>(); }
+ExtensionPtr tiltAxisPositioning(const ProbePlan& plan) { return std::make_shared<TiltPositioning>(plan, tiltsOf(plan)); }
+ExtensionPtr tiltAxisBacklash(const ProbePlan& plan) { return std::make_shared<TiltBacklash>(plan); }
 
 std::vector<ExtensionPtr> catalogFor(const ProbePlan& plan, int runs) {
   std::vector<ExtensionPtr> c = {thermalDriftLinear()};
@@ -168,6 +261,11 @@ std::vector<ExtensionPtr> catalogFor(const ProbePlan& plan, int runs) {
   c.push_back(linearAxisScale());
   c.push_back(probeLength());
   if (plan.machine.kinematics == Kinematics::TableAC) c.push_back(rotaryErrorMotionC2());
+  const bool table = plan.machine.kinematics == Kinematics::TableAC || plan.machine.kinematics == Kinematics::TableBC;
+  if (table && TiltBacklash::applies(plan)) {
+    c.push_back(tiltAxisPositioning(plan));
+    c.push_back(tiltAxisBacklash(plan));
+  }
   return c;
 }
 
@@ -190,6 +288,11 @@ std::string separationHint(const std::string& cause, const std::vector<std::stri
     return "direction-dependent pretravel of 000's 154-point plan shifts the same points as " + list +
            ": calibrate the probe on a reference sphere or ring gauge first (ISO 230-10), or probe each target from "
            "two opposite directions at one pose";
+  if (cause == "tilt_axis_backlash" || cause == "tilt_axis_positioning")
+    return "a plan that reaches each tilt from one side only sees the tilt axis's lost motion as a positioning error "
+           "at that tilt (" + cause + " and " + list + " move the data alike): reach each tilt from above and from "
+           "below (a second pass in the other direction), or measure the axis's reversal with an autocollimator and "
+           "polygon (ISO 230-2)";
   return "add poses or points where the columns of the Jacobian of " + cause + " and " + list + " differ";
 }
 

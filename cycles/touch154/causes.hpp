@@ -14,6 +14,12 @@
 //                            proportional to the read position (um/m)
 //  probe_length              the ball centre sits dL below where the controller thinks (um)
 //  rotary_error_motion       the C axis's centre moves with C: second-order radial error motion
+//  tilt_axis_positioning     the tilt axis (A, or B on a B/C table) stands off its command by an
+//                            angle that differs per tilt (EAA of ISO 230-7), relative to the first
+//                            tilt; on plans that visit two tilts or more
+//  tilt_axis_backlash        the tilt axis stops short by half its lost motion in the direction
+//                            it last moved (from the plan's order); on a plan that reaches each
+//                            tilt from one side, the judge finds it the same signal as the above
 //  pivot_length              fixed-tool-tip cycle (004) only, not a touch-cycle extension: the tool tip
 //                            is R + dR from the pivot; that cycle diagnoses it
 #include <string>
@@ -33,6 +39,10 @@ ExtensionPtr probeLength();
 /// EYC = r_y cos 2C (um). Its first order is a location error, and with C at 0/90/180/270 deg
 /// only the cos 2C terms are visible.
 ExtensionPtr rotaryErrorMotionC2();
+/// tilt_axis_positioning: one angle per tilt of the plan after its first (mdeg).
+ExtensionPtr tiltAxisPositioning(const ProbePlan& plan);
+/// tilt_axis_backlash: the tilt axis's lost motion (mdeg), the direction read from the plan's order.
+ExtensionPtr tiltAxisBacklash(const ProbePlan& plan);
 
 /// The candidate extensions for a plan with `runs` repeats.
 std::vector<ExtensionPtr> catalogFor(const ProbePlan& plan, int runs);

@@ -569,6 +569,32 @@ TEST(Judge, PivotLengthAndScaleCandidatesAreAmbiguous) {
   }
 }
 
+TEST(Judge, ConfoundedSignalFollowsTheFinalModel) {
+  // Two candidates a and b with the same column d (exactly confounded), and c = d tilted by about
+  // 0.6 deg toward a direction e off the model: separable from both. A signal along d makes a and
+  // b ambiguous at step 0; c takes it; at step 1 nothing is left for a or b. The entry for the
+  // pair must then say the shared signal is explained (signal false), as the verdict does.
+  const ProbeDesign dsg = probeDesign();
+  JudgeProblem p = probeProblem(dsg, probeData(dsg, 11, 0.7), 0.7);
+  const Eigen::MatrixXd P = p.J0 * p.J0.completeOrthogonalDecomposition().pseudoInverse();
+  Eigen::VectorXd d = driftCause(dsg).J.col(0);
+  d = (d - P * d).normalized();
+  Eigen::VectorXd e = harmonicCause(dsg).J.col(0);
+  e = (e - P * e - d * d.dot(e)).normalized();
+  p.y += 40.0 * d;  // 40 um along d: a plain signal at 0.7 um noise
+  p.causes = {{"a", "", Eigen::MatrixXd(d), {{"a", "um"}}},
+              {"b", "", Eigen::MatrixXd(d), {{"b", "um"}}},
+              {"c", "", Eigen::MatrixXd(d + 0.01 * e), {{"c", "um"}}}};
+  const JudgeSummary s = judge(p);
+  ASSERT_EQ(s.verdict, JudgeVerdict::EffectFound) << judgeText(s);
+  ASSERT_EQ(s.findings.size(), 1u);
+  EXPECT_EQ(s.findings[0].cause, "c");
+  const JudgeConfounded* ab = confoundedFor(s, "a");
+  ASSERT_NE(ab, nullptr) << judgeText(s);
+  EXPECT_FALSE(ab->signal) << judgeText(s);
+  EXPECT_EQ(judgeText(s).find("with a significant signal"), std::string::npos) << judgeText(s);
+}
+
 // ---------------------------------------------------------------------------------------------
 // An R-test series like 002 Sec. 4.3: 11 cycles over 3 h, 5 tilts x 3 directions x 2 nest
 // positions a cycle (330 readings), 0.3 um sensor noise. Baseline: one static error per tilt

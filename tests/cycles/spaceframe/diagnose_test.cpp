@@ -130,6 +130,30 @@ TEST(SpaceframeDiagnosis, HiddenDriftIsThermalDrift) {
   EXPECT_NEAR(f->parameters[2].value, 4.0, 3 * f->parameters[2].u) << text;
 }
 
+// The factor carrying the largest share of the baseline's misfit.
+std::string worstFactor(const JudgeSummary& s) {
+  const auto it = std::max_element(s.baseline.factors.begin(), s.baseline.factors.end(),
+                                   [](const JudgeFactorShare& a, const JudgeFactorShare& b) { return a.chi2 < b.chi2; });
+  return it == s.baseline.factors.end() ? std::string() : it->factor;
+}
+
+TEST(SpaceframeDiagnosis, EffectsOutsideTheCatalogAreModelInadequate) {
+  // issue 16: an effect no catalogued cause models must never read "no significant effect".
+  // Straightness: a 4 um bow of Z along X over the +-103 mm the centres span (E_zx).
+  const ProbePlan plan = framePlan();
+  Truth bow = truthOf(plan, variedCase(21), Eigen::Vector3d::Zero(), 0.7);
+  bow.linear_axis_error = [](const Eigen::Vector3d& c) { return Eigen::Vector3d(0.0, 0.0, 4e-3 * (c.x() / 103) * (c.x() / 103)); };
+  const SpaceframeDiagnosis d_bow = diagnoseSpaceframe(plan, {simulate(plan, bow, {22})}, optionsFor(plan));
+  EXPECT_EQ(d_bow.judged.verdict, JudgeVerdict::ModelInadequate) << spaceframeDiagnosisText(d_bow);
+  // Lost motion of the tilt axis, 10 arcsec: -90 deg is reached from 0 (from above), -45 and 0
+  // from below; the misfit sits with A.
+  Truth lost = truthOf(plan, variedCase(23), Eigen::Vector3d::Zero(), 0.7);
+  lost.rotary_backlash_deg[0] = 10.0 / 3600.0;
+  const SpaceframeDiagnosis d_lost = diagnoseSpaceframe(plan, {simulate(plan, lost, {24})}, optionsFor(plan));
+  EXPECT_EQ(d_lost.judged.verdict, JudgeVerdict::ModelInadequate) << spaceframeDiagnosisText(d_lost);
+  EXPECT_EQ(worstFactor(d_lost.judged), "A") << spaceframeDiagnosisText(d_lost);
+}
+
 TEST(SpaceframeDiagnosis, CleanDataRaisesAtMostTheAlphaShareOfAlarms) {
   // 8 seeds at alpha = 1 %: two or more alarms has probability 0.3 % under a correct judge.
   const ProbePlan plan = framePlan();
