@@ -47,11 +47,21 @@ SpaceframeLayout SpaceframeLayout::fromOptions(const CycleOptions& options) {
     else if (key == "mpe_k_um_per_m") l.spec.K_um_per_m = parseNumber(key, value);
     else if (key == "min_touch_angle_deg") l.min_touch_angle_deg = parseNumber(key, value);
     else if (key == "nominal_from") l.nominal_from = value;
-    else
+    else if (key == "frame_file") l.frame = loadFrameCalibration(value);
+    else if (key == "frame_u_um") l.frame.u_um = parseNumber(key, value);
+    else if (key == "frame_source") l.frame.source = value;
+    else if (key == "frame_spheres_mm") {
+      const auto v = parseNumberList(key, value);
+      if (v.size() != 21) throw std::invalid_argument("option frame_spheres_mm: expected 7 x (x,y,z), 21 numbers");
+      for (size_t i = 0; i < 7; ++i) l.frame.spheres_mm[i] = Eigen::Vector3d(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
+    } else
       throw std::invalid_argument("unknown option '" + key +
                                   "' for cycle spaceframe (known: theta_list, phi_list, origin_w_mm, sphere_diameter_mm, "
-                                  "mpe_a_um, mpe_k_um_per_m, min_touch_angle_deg, nominal_from)");
+                                  "mpe_a_um, mpe_k_um_per_m, min_touch_angle_deg, nominal_from, frame_file)");
   }
+  if (options.count("frame_file") && (options.count("frame_spheres_mm") || options.count("frame_u_um")))
+    throw std::invalid_argument("option frame_file cannot be combined with frame_spheres_mm or frame_u_um");
+  if (!(l.frame.u_um >= 0 && l.frame.u_um <= 1000)) throw std::invalid_argument("option frame_u_um must lie in [0, 1000] um");
   if (!(l.sphere_diameter_mm > 0)) throw std::invalid_argument("option sphere_diameter_mm must be positive");
   if (l.spec.A_um < 0 || l.spec.K_um_per_m < 0 || l.spec.A_um + l.spec.K_um_per_m <= 0)
     throw std::invalid_argument("options mpe_a_um and mpe_k_um_per_m must be >= 0 and not both zero");
@@ -68,7 +78,7 @@ SpaceframeLayout SpaceframeLayout::fromOptions(const CycleOptions& options) {
 }
 
 CycleOptions SpaceframeLayout::toOptions() const {
-  return {{"theta_list", listText(theta_deg)},
+  CycleOptions o = {{"theta_list", listText(theta_deg)},
           {"phi_list", listText(phi_deg)},
           {"origin_w_mm", fmt::format("{:g},{:g},{:g}", origin_w_mm.x(), origin_w_mm.y(), origin_w_mm.z())},
           {"sphere_diameter_mm", fmt::format("{:g}", sphere_diameter_mm)},
@@ -76,6 +86,15 @@ CycleOptions SpaceframeLayout::toOptions() const {
           {"mpe_k_um_per_m", fmt::format("{:g}", spec.K_um_per_m)},
           {"min_touch_angle_deg", fmt::format("{:g}", min_touch_angle_deg)},
           {"nominal_from", nominal_from}};
+  if (frame.spheres_mm != FrameCalibration{}.spheres_mm || frame.u_um != 0.0) {
+    std::string xyz;
+    for (const auto& c : frame.spheres_mm)
+      xyz += fmt::format("{}{:.6f},{:.6f},{:.6f}", xyz.empty() ? "" : ",", c.x(), c.y(), c.z());
+    o["frame_spheres_mm"] = xyz;
+    o["frame_u_um"] = fmt::format("{:g}", frame.u_um);
+    o["frame_source"] = frame.source;
+  }
+  return o;
 }
 
 ProbePlan makeSpaceframePlan(const MachineModel& machine, const CycleOptions& options) {
@@ -92,7 +111,7 @@ ProbePlan makeSpaceframePlan(const MachineModel& machine, const CycleOptions& op
   const double R = l.sphere_diameter_mm / 2.0;
   const double r = machine.probe.ball_radius_mm();
   const double rho = R + r;
-  const auto& table1 = spaceFrameTable1_mm();
+  const auto& table1 = l.frame.spheres_mm;
 
   ProbePlan plan;
   plan.cycle = "spaceframe";
@@ -375,8 +394,10 @@ SpaceframeAnalysis analyzeSpaceframe(const ProbePlan& plan, const std::vector<Me
   // divided by the repeats it averages; projected on the length's direction, the two centres
   // independent (different touches). With nominal_from=initial the L_n points are measured too:
   // their part is bounded by the largest eigenvalue of the initial centres' covariance (the
-  // rotation to the pose is not needed for a bound). Not included: the frame's own calibration
-  // (Table 1 is taken as exact).
+  // rotation to the pose is not needed for a bound). With nominal_from=table1 the L_n points are
+  // the frame's calibrated centres (FRAME.json, u per coordinate): an error d_s of sphere s moves
+  // L_n by e . (R_j d_sj - R_k d_sk), R the poses' nominal rotations; one sphere seen at two poses
+  // is one error, two spheres are independent.
   {
     double rss = 0.0;
     int dof = 0;
@@ -401,6 +422,15 @@ SpaceframeAnalysis analyzeSpaceframe(const ProbePlan& plan, const std::vector<Me
       for (int idx : {l.j, l.k}) {
         const auto it = initial_var.find(a.points[static_cast<size_t>(idx)].sphere);
         if (it != initial_var.end()) var += it->second;
+      }
+      if (layout.nominal_from == "table1" && layout.frame.u_um > 0) {
+        const FramePoint& pj = a.points[static_cast<size_t>(l.j)];
+        const FramePoint& pk = a.points[static_cast<size_t>(l.k)];
+        const Eigen::Vector3d en = (a.nominal_m_mm[static_cast<size_t>(l.j)] - a.nominal_m_mm[static_cast<size_t>(l.k)]).normalized();
+        const Eigen::Vector3d gj = T_m_w_nominal(plan.machine.kinematics, pj.pose).linear().transpose() * en;
+        const Eigen::Vector3d gk = -T_m_w_nominal(plan.machine.kinematics, pk.pose).linear().transpose() * en;
+        const double u2 = umToMm(layout.frame.u_um) * umToMm(layout.frame.u_um);
+        var += pj.sphere == pk.sphere ? u2 * (gj + gk).squaredNorm() : u2 * (gj.squaredNorm() + gk.squaredNorm());
       }
       l.u_um = mmToUm(std::sqrt(std::max(0.0, var)));
     }
@@ -598,15 +628,22 @@ Json spaceframeReportJson(const SpaceframeAnalysis& a, const ProbePlan& plan, co
                   {"sigma_um", round6(a.summary.sigma_um)},
                   {"residual_rms_um", round6(a.summary.residual_rms_um)}};
   const auto& w = a.verdict.worst_index >= 0 ? a.lengths[a.verdict.worst_index] : LengthError{};
+  const SpaceframeLayout lay = SpaceframeLayout::fromOptions(plan.options);
   j["lengths"] = {{"points", a.points.size()},
-                  {"nominal_from", SpaceframeLayout::fromOptions(plan.options).nominal_from},
+                  {"nominal_from", lay.nominal_from},
+                  {"frame", {{"source", lay.frame.source}, {"u_um", lay.frame.u_um}}},
                   {"count", a.lengths.size()},
                   {"A_um", a.spec.A_um},
                   {"K_um_per_m", a.spec.K_um_per_m},
                   {"verdict", std::string(lengthDecisionName(a.verdict.decision))},
-                  {"decision_rule", "ISO 14253-1: pass when every |dL| <= A + K L - U, fail when any |dL| > A + K L + U, "
-                                    "inconclusive otherwise; U = 2 u(dL) from the sphere fits (frame calibration not "
-                                    "included)"},
+                  {"decision_rule",
+                   fmt::format("ISO 14253-1: pass when every |dL| <= A + K L - U, fail when any |dL| > A + K L + U, "
+                               "inconclusive otherwise; U = 2 u(dL) from the sphere fits{}",
+                               lay.nominal_from == "initial" ? " (self-calibrated: the initial centres' own u)"
+                               : lay.frame.u_um > 0      ? fmt::format(" and the frame's calibration ({:g} um per "
+                                                                       "coordinate, {})", lay.frame.u_um, lay.frame.source)
+                                                         : std::string(" (the frame's calibration taken as exact: " +
+                                                                       lay.frame.source + ")"))},
                   {"conforming", a.verdict.conforming},
                   {"nonconforming", a.verdict.nonconforming},
                   {"inconclusive", a.verdict.undecided},

@@ -35,6 +35,9 @@ struct SpaceframeLayout {
   /// Table 1) or "initial" (003 Sec. 3.1: the centres this machine measured at theta = phi = 0,
   /// turned by the nominal map: self-calibration; needs the pose theta = phi = 0 in the map).
   std::string nominal_from = "table1";
+  /// The frame's calibrated sphere centres (plan option frame_file=FRAME.json at plan time; the
+  /// plan then carries them inline as frame_spheres_mm, frame_u_um, frame_source).
+  FrameCalibration frame;
 
   static SpaceframeLayout fromOptions(const CycleOptions& options);
   CycleOptions toOptions() const;

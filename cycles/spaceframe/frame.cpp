@@ -3,6 +3,9 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <fmt/format.h>
+
+#include "core/json_io.hpp"
 #include "core/units.hpp"
 
 namespace rotacal {
@@ -14,6 +17,37 @@ const std::array<Eigen::Vector3d, 7>& spaceFrameTable1_mm() {
       Eigen::Vector3d(-2.3838, 101.2081, 150.2041),  Eigen::Vector3d(86.5175, 51.0002, 0.0012),
       Eigen::Vector3d(88.7260, -52.6343, 150.1732)};
   return t;
+}
+
+FrameCalibration loadFrameCalibration(const std::string& path) {
+  const JsonDoc doc = readJsonFile(path);
+  return guardJson(doc, [&] {
+    const Json& j = doc.value;
+    if (!j.is_object() || stringOr(doc, j, "format", "") != "rotacal-frame/1")
+      doc.fail(j, "format", "not a frame calibration: \"format\" must be \"rotacal-frame/1\"");
+    FrameCalibration c;
+    c.source = requireString(doc, j, "source");
+    if (c.source.empty()) doc.fail(j, "source", "\"source\" must say where the centres come from (a CMM report)");
+    c.u_um = requireNumber(doc, j, "u_um", Limits::nonNegative(1000.0, "um"));
+    const Json& sp = requireObject(doc, j, "spheres_mm");
+    if (sp.size() != 7) doc.fail(j, "spheres_mm", "\"spheres_mm\" must hold the seven spheres \"1\" .. \"7\"");
+    for (int s = 1; s <= 7; ++s) {
+      const std::string key = std::to_string(s);
+      const Json& a = requireArray(doc, sp, key);
+      if (a.size() != 3) doc.fail(sp, key, "sphere " + key + " must be [x, y, z] in mm");
+      for (int k = 0; k < 3; ++k) {
+        if (!a[k].is_number()) doc.fail(sp, key, "sphere " + key + " must hold numbers");
+        c.spheres_mm[static_cast<size_t>(s - 1)][k] = checkNumber(doc, sp, key, a[k].get<double>(), Limits::symmetric(1000.0, "mm"));
+      }
+      // A calibration of this frame: each centre within 5 mm of 003's design (a different frame
+      // would need its own planning, which the layout does not offer).
+      const double off = (c.spheres_mm[static_cast<size_t>(s - 1)] - spaceFrameTable1_mm()[static_cast<size_t>(s - 1)]).norm();
+      if (off > 5.0)
+        doc.fail(sp, key, fmt::format("sphere {} lies {:.3f} mm from 003 Table 1's centre: more than 5 mm, not a "
+                                      "calibration of this frame", s, off));
+    }
+    return c;
+  });
 }
 
 Eigen::Matrix3d rotTilt003(double theta, double phi) {

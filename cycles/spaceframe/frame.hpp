@@ -10,6 +10,7 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -17,6 +18,20 @@ namespace rotacal {
 
 /// 003 Table 1: nominal sphere centres at theta = phi = 0, frame coordinates, mm (spheres 1..7).
 const std::array<Eigen::Vector3d, 7>& spaceFrameTable1_mm();
+
+/// The frame as calibrated by its owner (a CMM report): the seven sphere centres in frame
+/// coordinates (those of 003 Table 1: origin, axes), mm, their standard uncertainty per
+/// coordinate (um, k = 1) and where they come from. FRAME.json, "rotacal-frame/1":
+///   {"format": "rotacal-frame/1", "source": "CMM report 4711, 2026-10-02, 20.0 C",
+///    "u_um": 1.0, "spheres_mm": {"1": [x, y, z], ..., "7": [x, y, z]}}
+/// The default is 003 Table 1 taken as exact (u 0): 003's own frame, not the user's.
+struct FrameCalibration {
+  std::array<Eigen::Vector3d, 7> spheres_mm = spaceFrameTable1_mm();
+  double u_um = 0.0;
+  std::string source = "003 Table 1 (taken as exact)";
+};
+/// Throws InputError naming the file and line of what is wrong.
+FrameCalibration loadFrameCalibration(const std::string& path);
 
 /// 003's [RotTilt] (corrected, see above): frame point at (theta, phi) = RotTilt * point at (0, 0).
 Eigen::Matrix3d rotTilt003(double theta_rad, double phi_rad);

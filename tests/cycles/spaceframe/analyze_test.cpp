@@ -2,6 +2,11 @@
 // measured with a known scale error in closed form with the A + K L verdict, and simulate with
 // known errors -> analyze recovers them.
 #include <gtest/gtest.h>
+#include "core/json_io.hpp"
+#include "core/rng.hpp"
+#include <unistd.h>
+#include <fstream>
+#include <filesystem>
 
 #include <Eigen/Dense>
 #include <cmath>
@@ -257,6 +262,68 @@ TEST(SpaceframeAnalysis, TheLengthVerdictUsesTheMeasurementsUncertainty) {
   const SpaceframeAnalysis bad = analyzeSpaceframe(plan, {simulate(plan, scaled, {1})});
   EXPECT_EQ(bad.verdict.decision, LengthDecision::Fail);
   EXPECT_GT(bad.verdict.nonconforming, 0);
+}
+
+// Issue 17: the nominal was 003 Table 1 placed exactly, with no way to load the user's frame
+// calibration: a frame whose spheres sit about 10 um off Table 1 failed a perfect machine over
+// thousands of lengths. FRAME.json (the frame's CMM calibration) is now the nominal, and its
+// uncertainty enters u(dL) by the closed form: +2 u^2 for two different spheres.
+TEST(SpaceframeAnalysis, TheFramesOwnCalibrationIsTheNominalAndItsUncertaintyCounts) {
+  const CycleOptions opt = {{"phi_list", "-90,0,90"}};
+  const ProbePlan table1 = makePlan("spaceframe", a120(), opt);
+  Truth t;
+  t.noise_um = 0.7;
+  Rng rng(2026, 17);
+  std::array<Eigen::Vector3d, 7> calibrated;
+  for (int s = 1; s <= 7; ++s) {
+    const Eigen::Vector3d off = umToMm(10.0 / std::sqrt(3.0)) * Eigen::Vector3d(rng.normal(), rng.normal(), rng.normal());
+    t.sphere_center_error_w_mm[s] = off;  // the frame as built
+    // Its calibration: the true centre seen through a CMM with 1 um per coordinate.
+    calibrated[static_cast<size_t>(s - 1)] = spaceFrameTable1_mm()[static_cast<size_t>(s - 1)] + off +
+                                             umToMm(1.0) * Eigen::Vector3d(rng.normal(), rng.normal(), rng.normal());
+  }
+  const SpaceframeAnalysis a = analyzeSpaceframe(table1, {simulate(table1, t, {5})});
+  EXPECT_EQ(a.verdict.decision, LengthDecision::Fail);
+  EXPECT_GT(a.verdict.nonconforming, static_cast<int>(a.lengths.size()) / 20) << a.verdict.nonconforming;
+
+  const std::filesystem::path file =
+      std::filesystem::temp_directory_path() / ("rotacal_frame_" + std::to_string(::getpid()) + ".json");
+  {
+    Json j = {{"format", "rotacal-frame/1"}, {"source", "simulated CMM, 1 um"}, {"u_um", 1.0}};
+    for (int s = 1; s <= 7; ++s) {
+      const Eigen::Vector3d& c = calibrated[static_cast<size_t>(s - 1)];
+      j["spheres_mm"][std::to_string(s)] = {c.x(), c.y(), c.z()};
+    }
+    std::ofstream(file) << j.dump(1);
+  }
+  CycleOptions with_file = opt;
+  with_file["frame_file"] = file.string();
+  const ProbePlan cal = makePlan("spaceframe", a120(), with_file);
+  std::filesystem::remove(file);
+  EXPECT_EQ(cal.options.count("frame_file"), 0u);  // the plan carries the centres, not the path
+  ASSERT_EQ(cal.options.count("frame_spheres_mm"), 1u);
+  // The same frame: its true centres are now given relative to the calibrated nominal.
+  Truth tc = t;
+  for (int s = 1; s <= 7; ++s)
+    tc.sphere_center_error_w_mm[s] = spaceFrameTable1_mm()[static_cast<size_t>(s - 1)] + t.sphere_center_error_w_mm[s] -
+                                     calibrated[static_cast<size_t>(s - 1)];
+  const std::vector<MeasurementRun> runs = {simulate(cal, tc, {5})};
+  const SpaceframeAnalysis b = analyzeSpaceframe(cal, runs);
+  EXPECT_NE(b.verdict.decision, LengthDecision::Fail) << b.verdict.nonconforming << " nonconforming";
+  // The same data with the calibration's u set to 0: only the calibration term differs.
+  ProbePlan exact = cal;
+  exact.options["frame_u_um"] = "0";
+  const SpaceframeAnalysis c = analyzeSpaceframe(exact, runs);
+  int checked = 0;
+  for (size_t i = 0; i < b.lengths.size(); ++i) {
+    const FramePoint& pj = b.points[static_cast<size_t>(b.lengths[i].j)];
+    const FramePoint& pk = b.points[static_cast<size_t>(b.lengths[i].k)];
+    if (pj.sphere == pk.sphere) continue;
+    const double d2 = b.lengths[i].u_um * b.lengths[i].u_um - c.lengths[i].u_um * c.lengths[i].u_um;
+    EXPECT_NEAR(d2, 2.0, 1e-9) << "length " << i;
+    ++checked;
+  }
+  EXPECT_GT(checked, 1000);
 }
 
 TEST(SpaceframeAnalysis, WithNoiseTheErrorsLieWithinTheirUncertainty) {
