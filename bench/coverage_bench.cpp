@@ -101,7 +101,7 @@ int rtestCoverage(int machines) {
 // angle, the size of docs/tooltip.md's example) and every declared contributor (the Type B ones
 // through drawTooltip on the exact head geometry; the per-reading ones, 004's laser, sphere and
 // lateral coupling, as noise per reading component), and is analyzed as `analyze` does
-// (analyzeTooltip + tooltipBudget, 1000 Monte Carlo runs).
+// (analyzeTooltip + tooltipBudget, 400 Monte Carlo runs).
 int tooltipCoverage(int machines) {
   const MachineModel machine = loadMachine(ROTACAL_SOURCE_DIR "/examples/machines/head_ab.json");
   const ProbePlan plan =
@@ -135,7 +135,7 @@ int tooltipCoverage(int machines) {
     const TooltipRun run = simulateTooltipHead(plan, head, d, true, noise_um, &noise);
     const TooltipAnalysis a = analyzeTooltip(plan, {run});
     TooltipBudgetOptions bo;
-    bo.runs = 1000;
+    bo.runs = 400;  // u_B to about 3.5 %: enough for a coverage count, and 500 machines in minutes
     bo.alone_runs = 0;
     const UncertaintyBudget b = tooltipBudget(plan, {run}, a, 0.254, &cs, bo);
     if (b.size() != J + 1) continue;

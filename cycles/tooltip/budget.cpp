@@ -181,7 +181,7 @@ Eigen::VectorXd tooltipBudgetValues(const TooltipAnalysis& a, const UncertaintyB
     }
     v[i] = std::numeric_limits<double>::quiet_NaN();
     for (size_t j = 0; j < a.joint.angles_deg.size(); ++j)
-      if (b.names[static_cast<size_t>(i)].substr(2) == fmt::format("{:g}", a.joint.angles_deg[j])) v[i] = a.joint.e_mdeg[j];
+      if (b.names[static_cast<size_t>(i)].substr(3) == fmt::format("{:g}", a.joint.angles_deg[j])) v[i] = a.joint.e_mdeg[j];
   }
   return v;
 }
