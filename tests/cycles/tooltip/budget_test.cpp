@@ -204,6 +204,13 @@ TEST(TooltipBudget, NoneDeclaredLeavesTypeBAtZeroAndSaysSo) {
 TEST(TooltipBudget, The004ContributorsPutMachinePositioningFirst) {
   const MachineModel m = headMachine();
   ASSERT_TRUE(m.contributors.has_value());
+  // 004 Sec. VII's figures in internal units (mm): 0.000010, 0.000025, 0.000070 in; the machine
+  // positioning's 0.000500 in as node values 12.7 / sqrt(2) um.
+  EXPECT_DOUBLE_EQ(m.contributors->find("laser_resolution")->u[0], 0.254e-3);
+  EXPECT_DOUBLE_EQ(m.contributors->find("laser_sphere_form")->u[0], 0.635e-3);
+  EXPECT_DOUBLE_EQ(m.contributors->find("laser_lateral_coupling")->u[0], 1.778e-3);
+  EXPECT_NEAR(m.contributors->find("E_zz_rand")->u[0] * std::sqrt(2.0), 12.7e-3, 0.05e-3);
+  EXPECT_DOUBLE_EQ(m.contributors->find("laser_alignment")->u[0], 2e-3);  // 2 mrad
   const ProbePlan plan = plan004();
   const TooltipHead h = head004(plan);
   Rng rng(3, 1);
