@@ -44,6 +44,12 @@ const std::vector<ContributorInfo>& contributorCatalog() {
        "R-test: sphere centre off its calibrated place on the spindle (runout, tool length) in X, Y, Z"},
       {"rtest_cycle_drift", K::RtestCycleDrift, -1, -1,
        "R-test: thermal drift of the sphere against the table over one measuring cycle in X, Y, Z"},
+      {"laser_resolution", K::LaserResolution, -1, -1, "laser: the system's own error of one reading, per reading"},
+      {"laser_alignment", K::LaserAlignment, -1, -1,
+       "laser: beam direction off its nominal one (cosine error, cross-talk of the other components), per run"},
+      {"laser_sphere_form", K::LaserSphereForm, -1, -1, "laser: form of the target sphere where the beam meets it, per reading"},
+      {"laser_lateral_coupling", K::LaserLateralCoupling, -1, -1,
+       "laser: the target sphere moving across the beam (its curvature read as a change of path), per reading"},
   };
   return c;
 }
@@ -126,7 +132,8 @@ Quantity quantityOf(ContributorKind k) {
     case ContributorKind::Squareness:
     case ContributorKind::SetupOrientation:
     case ContributorKind::RtestSensorGain:
-    case ContributorKind::RtestSensorDirection: return Quantity::Ratio;
+    case ContributorKind::RtestSensorDirection:
+    case ContributorKind::LaserAlignment: return Quantity::Ratio;
     default: return Quantity::Length;
   }
 }

@@ -29,6 +29,15 @@
 //                        machine frame (runout, tool length), per run
 //   rtest_cycle_drift    thermal drift of the sphere against the table over one measuring cycle
 //                        [x, y, z] (its start to its end, linear in time), machine frame, per run
+// A laser reading a target sphere (004 Sec. VII; the tool-tip cycle):
+//   laser_resolution     per reading and read direction: the laser system's own error (Type A)
+//   laser_alignment      per read direction, per run: the beam tilted off its nominal direction by
+//                        a drawn angle in the read plane and one out of it (rad): the cosine error
+//                        of the reading and the cross-talk of the other components
+//   laser_sphere_form    per reading: the target sphere's form where the beam meets it (the sphere
+//                        turns with the head, so every reading sees another spot; Type A)
+//   laser_lateral_coupling  per reading: the sphere moving across the beam changes the path by
+//                        the sagitta d^2 / (2 r) (004: 0.000070 in at 0.010 in lateral; Type A)
 #include <Eigen/Core>
 #include <map>
 #include <optional>
@@ -56,6 +65,10 @@ enum class ContributorKind {
   RtestSphereForm,
   RtestSphereOffset,
   RtestCycleDrift,
+  LaserResolution,
+  LaserAlignment,
+  LaserSphereForm,
+  LaserLateralCoupling,
 };
 
 /// What a contributor id means: its kind and, for the linear axes, the moving axis and the

@@ -7,12 +7,15 @@
 #include "core/errors.hpp"
 #include "cycles/tooltip/plan.hpp"
 #include "cycles/tooltip/analyze.hpp"
+#include "cycles/tooltip/budget.hpp"
 #include "cycles/tooltip/diagnose.hpp"
 #include "cycles/cycle.hpp"
 #include "cycles/tooltip/program.hpp"
 
 namespace rotacal {
 namespace {
+
+double round6(double v) { return std::round(v * 1e6) / 1e6; }
 
 std::vector<TooltipRun> readRuns(const ProbePlan& plan, const std::vector<InputFile>& results) {
   std::vector<TooltipRun> runs;
@@ -73,6 +76,27 @@ class Tooltip final : public Cycle {
     out.text = tooltipReportText(plan, a);
     out.doc = tooltipReportJson(plan, runs, a);
     out.doc["errors_heading"] = "Identified errors";  // a pivot length and angular errors, not location errors in ISO 230-7's sense
+    // What analyze signs (issue 17): u_A from the data, u_B from the declared contributors by
+    // Monte Carlo through the same fit (cycles/tooltip/budget.hpp, docs/uncertainty.md).
+    TooltipBudgetOptions bo;
+    bo.runs = r.mc_runs;
+    bo.seed = r.mc_seed;
+    const TooltipOptions to = tooltipOptionsFrom(plan.options, plan.machine);
+    const UncertaintyBudget b = tooltipBudget(plan, runs, a, to.noise_um, r.contributors, bo);
+    addBudgetFields(&out.doc["location_errors"], b);
+    // The angular errors are an array by angle: each entry gets the same fields beside its u.
+    const Eigen::VectorXd ua = b.uA(), ub = b.uB(), uc = b.uC();
+    for (auto& e : out.doc["angular_error"])
+      for (int i = 0; i < b.size(); ++i)
+        if (b.names[static_cast<size_t>(i)] == fmt::format("e_{}{:g}", to.axis, e["angle_deg"].get<double>())) {
+          e["u_a"] = round6(ua[i]);
+          e["u_b"] = round6(ub[i]);
+          e["u_c"] = round6(uc[i]);
+          e["U"] = round6(kCoverageFactor * uc[i]);
+          e["k"] = kCoverageFactor;
+        }
+    out.doc["uncertainty"] = budgetJson(b);
+    out.text += "\n" + budgetText(b, tooltipBudgetValues(a, b));
     return out;
   }
 

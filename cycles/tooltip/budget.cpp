@@ -1,0 +1,348 @@
+#include "cycles/tooltip/budget.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "core/units.hpp"
+
+namespace rotacal {
+
+void TooltipBudgetOptions::validate() const {
+  if (runs < 100 || runs > 1000000) throw std::invalid_argument("Monte Carlo runs must be in [100, 1000000]");
+  if (alone_runs < 0 || alone_runs > 1000000)
+    throw std::invalid_argument("Monte Carlo runs per contributor must be in [0, 1000000]");
+  if (threads < 0 || threads > 256) throw std::invalid_argument("threads must be in [0, 256]");
+}
+
+bool tooltipTypeA(const ContributorInfo& c) {
+  return c.kind == ContributorKind::LaserResolution || c.kind == ContributorKind::LaserSphereForm ||
+         c.kind == ContributorKind::LaserLateralCoupling;
+}
+
+namespace {
+
+/// The contributors that act on the tool-tip readings as Type B: the linear axes carry the pivot
+/// (004 Sec. VII's machine positioning), and the beams' alignment. The touch and R-test ids have
+/// no probe, piece or sensor nest here.
+bool actsAsTypeB(const ContributorInfo& c) {
+  switch (c.kind) {
+    case ContributorKind::LaserAlignment:
+    case ContributorKind::LinearScale:
+    case ContributorKind::LinearRandom:
+    case ContributorKind::Squareness: return true;
+    default: return false;
+  }
+}
+
+std::uint64_t catalogIndex(const ContributorInfo* info) {
+  return static_cast<std::uint64_t>(info - contributorCatalog().data());
+}
+
+int transverse(char axis) { return axis == 'A' ? 1 : 0; }  // Y for A, X for B
+int unread(char axis) { return axis == 'A' ? 0 : 1; }      // the direction 004's laser does not read
+
+int angleIndex(const std::vector<double>& angles, double a) {
+  for (size_t j = 0; j < angles.size(); ++j)
+    if (std::abs(angles[j] - a) < 1e-9) return static_cast<int>(j);
+  throw std::invalid_argument("tooltip budget: a plan angle is not among the head's angles");
+}
+
+/// The budget's parameters: indices of the estimated angular errors (the fit's order), and dR.
+struct Layout {
+  std::vector<int> e;  // indices into the fit's angles
+  bool dR = false;
+  int size() const { return static_cast<int>(e.size()) + (dR ? 1 : 0); }
+};
+
+Layout layoutOf(const ProbePlan& plan, const TooltipAnalysis& a) {
+  const TooltipOptions o = tooltipOptionsFrom(plan.options, plan.machine);
+  const std::vector<double>& angles = a.joint.angles_deg;
+  // From the transverse reading alone the zero pose's error is fixed at 0 (the reference): not
+  // estimated, so not budgeted.
+  std::vector<bool> fixed(angles.size(), false);
+  if (a.transverse_only)
+    for (int r : tooltipReferences(plan)) {
+      const Pose& p = plan.points[static_cast<size_t>(r)].pose;
+      fixed[static_cast<size_t>(angleIndex(angles, o.axis == 'A' ? p.A : p.B))] = true;
+    }
+  Layout l;
+  for (size_t j = 0; j < angles.size(); ++j)
+    if (!fixed[j]) l.e.push_back(static_cast<int>(j));
+  l.dR = !a.transverse_only;
+  return l;
+}
+
+Eigen::VectorXd valuesOf(const Layout& l, const TooltipFit& f) {
+  Eigen::VectorXd v(l.size());
+  for (size_t i = 0; i < l.e.size(); ++i) v[static_cast<int>(i)] = f.e_mdeg[static_cast<size_t>(l.e[i])];
+  if (l.dR) v[v.size() - 1] = f.dR_um;
+  return v;
+}
+
+/// The commanded pivot positions' span (machine frame): where the linear axes are read.
+void commandedSpan(const ProbePlan& plan, Eigen::Vector3d* lo, Eigen::Vector3d* hi) {
+  *lo = Eigen::Vector3d::Constant(1e300);
+  *hi = Eigen::Vector3d::Constant(-1e300);
+  for (const auto& p : plan.points) {
+    *lo = lo->cwiseMin(p.trigger_m_mm);
+    *hi = hi->cwiseMax(p.trigger_m_mm);
+  }
+}
+
+}  // namespace
+
+void drawTooltip(const ProbePlan& plan, const ContributorSet& set, std::uint64_t seed, int run, int only,
+                 TooltipDraw* d) {
+  *d = TooltipDraw{};
+  ContributorSet linear;
+  const std::uint64_t base = static_cast<std::uint64_t>(run) << 7;
+  for (size_t i = 0; i < set.items.size(); ++i) {
+    const Contributor& c = set.items[i];
+    if (only >= 0 && static_cast<size_t>(only) != i) continue;
+    if (!actsAsTypeB(*c.info)) continue;
+    if (c.info->kind == ContributorKind::LaserAlignment) {
+      Rng rng(seed, base | catalogIndex(c.info));
+      d->in_t = c.u[0] * rng.normal();
+      d->out_t = c.u[0] * rng.normal();
+      d->in_z = c.u[0] * rng.normal();
+      d->out_z = c.u[0] * rng.normal();
+    } else {
+      linear.items.push_back(c);  // the linear axes, drawn together below
+    }
+  }
+  if (linear.items.empty()) return;
+  linear.node_spacing_min_mm = set.node_spacing_min_mm;
+  linear.node_spacing_max_mm = set.node_spacing_max_mm;
+  const LinearAxisModel model = linear.linearAxisModel();
+  Eigen::Vector3d lo, hi;
+  commandedSpan(plan, &lo, &hi);
+  Rng fixed(seed, base | 120), ax(seed, base | 121), ay(seed, base | 122), az(seed, base | 123);
+  drawLinearAxisErrors(model, lo, hi, fixed, {&ax, &ay, &az}, &d->linear_errors);
+  d->linear = true;
+}
+
+TooltipRun simulateTooltipHead(const ProbePlan& plan, const TooltipHead& head, const TooltipDraw& draw, bool read_z,
+                               double noise_um, Rng* rng) {
+  const TooltipOptions o = tooltipOptionsFrom(plan.options, plan.machine);
+  if (head.e_mdeg.size() != head.angles_deg.size())
+    throw std::invalid_argument("tooltip head: one angular error per angle");
+  const int ti = transverse(o.axis), ui = unread(o.axis);
+  const double r_true = o.radius_mm + umToMm(head.dR_um);
+  std::vector<Eigen::Vector3d> devs;
+  devs.reserve(plan.points.size());
+  for (const auto& pt : plan.points) {
+    // The head turns to the commanded angle plus its error at that angle; the linear axes put
+    // the pivot at its command plus their error there; the tip hangs at the true R.
+    Pose actual = pt.pose;
+    double& th = o.axis == 'A' ? actual.A : actual.B;
+    th += head.e_mdeg[static_cast<size_t>(angleIndex(head.angles_deg, th))] / 1000.0;  // mdeg -> deg
+    Eigen::Vector3d pivot = pt.trigger_m_mm;
+    if (draw.linear) pivot += draw.linear_errors.error(pt.trigger_m_mm);
+    devs.push_back(pivot + tipOffset_m(degToRad(actual.A), degToRad(actual.B), r_true) - pt.contact_w_mm);
+  }
+  // The beams' directions: a tilt in the read plane is the cosine error plus cross-talk of the
+  // other read component; a tilt out of it reads the unread component.
+  Eigen::Vector3d nt = Eigen::Vector3d::Zero(), nz = Eigen::Vector3d::Zero();
+  nt[ti] = std::cos(draw.out_t) * std::cos(draw.in_t);
+  nt[2] = std::cos(draw.out_t) * std::sin(draw.in_t);
+  nt[ui] = std::sin(draw.out_t);
+  nz[2] = std::cos(draw.out_z) * std::cos(draw.in_z);
+  nz[ti] = std::cos(draw.out_z) * std::sin(draw.in_z);
+  nz[ui] = std::sin(draw.out_z);
+  const std::vector<int> refs = tooltipReferences(plan);
+  TooltipRun run;
+  run.reserve(plan.points.size());
+  for (size_t k = 0; k < plan.points.size(); ++k) {
+    const Eigen::Vector3d rel = mmToUm(1.0) * (devs[k] - devs[static_cast<size_t>(refs[k])]);
+    TooltipReading r;
+    r.angle_deg = o.axis == 'A' ? plan.points[k].pose.A : plan.points[k].pose.B;
+    r.t_um = nt.dot(rel);
+    r.z_um = read_z ? nz.dot(rel) : std::numeric_limits<double>::quiet_NaN();
+    if (rng && noise_um > 0 && refs[k] != static_cast<int>(k)) {  // the zero reading is 0 by construction
+      r.t_um += noise_um * rng->normal();
+      if (read_z) r.z_um += noise_um * rng->normal();
+    }
+    run.push_back(r);
+  }
+  return run;
+}
+
+Eigen::VectorXd tooltipBudgetValues(const TooltipAnalysis& a, const UncertaintyBudget& b) {
+  Eigen::VectorXd v(b.size());
+  for (int i = 0; i < b.size(); ++i) {
+    if (b.names[static_cast<size_t>(i)] == "dR") {
+      v[i] = a.joint.dR_um;
+      continue;
+    }
+    v[i] = std::numeric_limits<double>::quiet_NaN();
+    for (size_t j = 0; j < a.joint.angles_deg.size(); ++j)
+      if (b.names[static_cast<size_t>(i)].substr(3) == fmt::format("{:g}", a.joint.angles_deg[j])) v[i] = a.joint.e_mdeg[j];
+  }
+  return v;
+}
+
+UncertaintyBudget tooltipBudget(const ProbePlan& plan, const std::vector<TooltipRun>& runs, const TooltipAnalysis& a,
+                                double declared_noise_um, const ContributorSet* contributors,
+                                const TooltipBudgetOptions& options) {
+  options.validate();
+  const TooltipOptions o = tooltipOptionsFrom(plan.options, plan.machine);
+  const TooltipFit& fit = a.joint;
+  const int J = static_cast<int>(fit.angles_deg.size());
+  const Layout l = layoutOf(plan, a);
+  const int n = l.size();
+  UncertaintyBudget b;
+  Eigen::VectorXd f(n);  // internal (rad, mm) -> report units (mdeg, um)
+  for (size_t i = 0; i < l.e.size(); ++i) {
+    b.names.push_back(fmt::format("e_{}{:g}", o.axis, fit.angles_deg[static_cast<size_t>(l.e[i])]));
+    b.units.emplace_back("mdeg");
+    f[static_cast<int>(i)] = radToMdeg(1.0);
+  }
+  if (l.dR) {
+    b.names.emplace_back("dR");
+    b.units.emplace_back("um");
+    f[n - 1] = mmToUm(1.0);
+  }
+
+  // The fit's map at its solution: sigma^2 (J^T J)^-1 over the estimated parameters, on the
+  // components actually read (a transverse-only file has no Z rows).
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(J + 1);
+  for (int j = 0; j < J; ++j)
+    x[j] = std::isfinite(fit.e_mdeg[static_cast<size_t>(j)]) ? mdegToRad(fit.e_mdeg[static_cast<size_t>(j)]) : 0.0;
+  x[J] = l.dR ? umToMm(fit.dR_um) : 0.0;
+  const TooltipModelEval ev = evaluateTooltipModel(plan, runs, x);
+  const std::vector<int> refs = tooltipReferences(plan);
+  std::vector<int> rows;
+  int obs = 0;
+  for (const auto& run : runs)
+    for (size_t k = 0; k < run.size(); ++k) {
+      if (refs[k] == static_cast<int>(k)) continue;
+      rows.push_back(2 * obs);
+      if (std::isfinite(run[k].z_um)) rows.push_back(2 * obs + 1);
+      ++obs;
+    }
+  std::vector<int> cols(l.e.begin(), l.e.end());
+  if (l.dR) cols.push_back(J);
+  Eigen::MatrixXd jr(static_cast<int>(rows.size()), n);
+  for (size_t r = 0; r < rows.size(); ++r)
+    for (int c = 0; c < n; ++c) jr(static_cast<int>(r), c) = ev.J_model_x(rows[r], cols[static_cast<size_t>(c)]);
+  // Column scaling: rad and mm columns differ by R (about 1e3).
+  const Eigen::VectorXd scale = jr.colwise().norm().transpose();
+  const Eigen::MatrixXd js = jr * scale.cwiseInverse().asDiagonal();
+  const Eigen::MatrixXd cov_unit = scale.cwiseInverse().asDiagonal() *
+                                   (js.transpose() * js).ldlt().solve(Eigen::MatrixXd::Identity(n, n)) *
+                                   scale.cwiseInverse().asDiagonal();  // per um^2 of reading variance
+
+  // The per-reading scatter declared: the laser's own error (laser_resolution, else the plan's
+  // laser_noise_um: the same 004 figure), the sphere's form, lateral coupling.
+  double declared_um2 = 0.0;
+  bool resolution_declared = false;
+  ContributorSet type_b;
+  std::vector<std::string> ignored;
+  if (contributors) {
+    type_b.file = contributors->file;
+    type_b.node_spacing_min_mm = contributors->node_spacing_min_mm;
+    type_b.node_spacing_max_mm = contributors->node_spacing_max_mm;
+    for (const auto& c : contributors->items) {
+      if (tooltipTypeA(*c.info)) {
+        declared_um2 += mmToUm(c.u[0]) * mmToUm(c.u[0]);
+        resolution_declared = resolution_declared || c.info->kind == ContributorKind::LaserResolution;
+      } else if (actsAsTypeB(*c.info)) {
+        type_b.items.push_back(c);
+      } else {
+        ignored.emplace_back(c.info->id);
+      }
+    }
+  }
+  if (!resolution_declared) declared_um2 += declared_noise_um * declared_noise_um;
+
+  TooltipHead truth;
+  truth.angles_deg = fit.angles_deg;
+  for (int j = 0; j < J; ++j)
+    truth.e_mdeg.push_back(std::isfinite(fit.e_mdeg[static_cast<size_t>(j)]) ? fit.e_mdeg[static_cast<size_t>(j)] : 0.0);
+  truth.dR_um = l.dR ? fit.dR_um : 0.0;
+  TooltipFitOptions fo;
+  fo.fit_pivot_length = l.dR;
+  const Eigen::VectorXd truth_v = valuesOf(l, fit);
+  // Readings of the exact geometry with a draw, through the same fit.
+  auto estimate = [&](const TooltipDraw& d) {
+    const TooltipRun run = simulateTooltipHead(plan, truth, d, !a.transverse_only, 0.0, nullptr);
+    return fitTooltip(plan, {run}, fo);
+  };
+
+  // Type A: the residual measures the per-reading scatter and also the part of the Type B
+  // contributors the model cannot absorb (the linear axes between poses); that part is in u_B,
+  // so its expected value is taken out, floored at the declared scatter.
+  double expected_sys_um2 = 0.0;
+  if (!type_b.items.empty() && fit.dof > 0) {
+    constexpr int kResidualRuns = 200;
+    for (int r = 0; r < kResidualRuns; ++r) {
+      TooltipDraw d;
+      drawTooltip(plan, type_b, options.seed ^ 0x5245534944ULL, r, -1, &d);
+      const TooltipFit e = estimate(d);
+      expected_sys_um2 += e.dof > 0 ? e.rss_um2 / e.dof : 0.0;
+    }
+    expected_sys_um2 /= kResidualRuns;
+  }
+  const double s_obs = fit.dof > 0 ? fit.sigma_um : 0.0;
+  const double sigma2 = std::max(declared_um2, s_obs * s_obs - expected_sys_um2);
+  Eigen::MatrixXd cov_a = f.asDiagonal() * (sigma2 * cov_unit) * f.asDiagonal();
+  b.type_a_source = fmt::format(
+      "the per-reading scatter {:.3f} um (residual {:.3f} um, {} dof, less {:.3f} um expected from the Type B "
+      "contributors, floored at the declared {:.3f} um: laser, sphere form, lateral coupling) through the fit",
+      std::sqrt(sigma2), s_obs, fit.dof, std::sqrt(expected_sys_um2), std::sqrt(declared_um2));
+  // Repeats: a parameter whose repeats scatter more than that (drift between runs, a set-up that
+  // moved) takes the standard error of the repeats' mean instead; correlations kept by scaling.
+  if (runs.size() >= 2) {
+    SampleMoments m(n);
+    for (const auto& run : runs) m.add(valuesOf(l, fitTooltip(plan, {run}, fo)));
+    const Eigen::MatrixXd of_mean = m.covariance() / static_cast<double>(runs.size());
+    Eigen::VectorXd d = Eigen::VectorXd::Ones(n);
+    for (int i = 0; i < n; ++i)
+      if (cov_a(i, i) > 0 && of_mean(i, i) > cov_a(i, i)) d[i] = std::sqrt(of_mean(i, i) / cov_a(i, i));
+    cov_a = d.asDiagonal() * cov_a * d.asDiagonal();
+    b.type_a_source += fmt::format(
+        "; each parameter raised to the scatter of the {} repeats' own estimates (standard error of their mean) where "
+        "that is larger",
+        runs.size());
+  }
+  b.cov_a = cov_a;
+  b.cov_b = Eigen::MatrixXd::Zero(n, n);
+  b.terms.push_back({"data", b.uA()});
+  if (!contributors) {
+    b.type_b_source =
+        "not evaluated: the machine declares no contributors (MACHINE.json `contributors`, docs/uncertainty.md), so u_c "
+        "covers the data's scatter only";
+    return b;
+  }
+  if (type_b.items.empty()) {
+    b.type_b_evaluated = true;
+    b.type_b_source = "no declared contributor acts on the tool-tip readings as Type B (docs/uncertainty.md, tooltip)";
+    return b;
+  }
+  MonteCarloProblem p;
+  p.parameters = n;
+  for (const auto& c : type_b.items) p.contributors.emplace_back(c.info->id);
+  p.deviation = [&](std::uint64_t seed, int run, int c) -> Eigen::VectorXd {
+    TooltipDraw d;
+    drawTooltip(plan, type_b, seed, run, c, &d);
+    return valuesOf(l, estimate(d)) - truth_v;
+  };
+  const MonteCarloResult mc = runMonteCarlo(p, options.runs, options.alone_runs, options.seed, options.threads);
+  setTypeB(&b, mc, p.contributors);
+  b.seed = options.seed;
+  b.type_b_source = fmt::format(
+      "{} declared contributors (from {}) drawn on the exact head geometry around the identified errors (the pivot "
+      "where the linear axes put it, the beams as aligned) and run through the tooltip fit, {} runs, seed {}{}",
+      p.contributors.size(), contributors->file.empty() ? std::string("the machine") : contributors->file, options.runs,
+      options.seed,
+      ignored.empty() ? std::string()
+                      : fmt::format("; not acting on the tool-tip readings and left out: {}", fmt::join(ignored, ", ")));
+  return b;
+}
+
+}  // namespace rotacal
