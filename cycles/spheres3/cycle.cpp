@@ -2,9 +2,14 @@
 #include "cycles/spheres3/plan.hpp"
 #include "cycles/spheres3/diagnose.hpp"
 #include "cycles/spheres3/analyze.hpp"
+#include "cycles/spheres3/budget.hpp"
 #include "cycles/cycle.hpp"
 #include "cycles/probing.hpp"
 #include "postproc/probe_program.hpp"
+
+#include <fmt/format.h>
+
+#include "core/units.hpp"
 
 namespace rotacal {
 namespace {
@@ -45,10 +50,29 @@ class Spheres3 final : public Cycle {
     const ProbePlan& plan = *r.plan;
     Spheres3Options opt;
     opt.prior_sigma_um = plan.machine.probe.repeatability_um;
-    const Spheres3Result res = identifySpheres3(plan, readProbeRuns(plan, r.results, *r.dialect), opt);
+    const std::vector<MeasurementRun> runs = readProbeRuns(plan, r.results, *r.dialect);
+    const Spheres3Result res = identifySpheres3(plan, runs, opt);
     CycleDocuments out;
     out.text = spheres3Text(res);
     out.doc = spheres3ReportJson(plan, res, paths(r.results));
+    // What analyze signs (issue 17): u_A from the data, u_B from the declared contributors by
+    // Monte Carlo through the same estimator (cycles/spheres3/budget.hpp, docs/uncertainty.md).
+    std::vector<Spheres3Result> per_run;
+    if (runs.size() >= 2)
+      for (const auto& run : runs) per_run.push_back(identifySpheres3(plan, {run}, opt));
+    Spheres3BudgetOptions bo;
+    bo.runs = r.mc_runs;
+    bo.seed = r.mc_seed;
+    const Spheres3Budget b = spheres3Budget(plan, res, per_run, r.contributors, bo);
+    addSpheres3Budget(&out.doc, b);
+    Eigen::VectorXd values(4);
+    for (int i = 0; i < 4; ++i) values[i] = i < 2 ? mmToUm(res.location[i]) : radToMdeg(res.location[i]);
+    out.text += "\n" + budgetText(b.location, values);
+    if (b.component_u_c.size() > 0)
+      out.text += fmt::format("component errors: U (k = {:g}) at most {:.3f} um (EXC EYC EZC), {:.3f} mdeg (EAC EBC ECC) "
+                              "over the sampled angles (REPORT.json component_errors: u_a u_b u_c U)\n",
+                              kCoverageFactor, kCoverageFactor * b.component_u_c.leftCols(3).maxCoeff(),
+                              kCoverageFactor * b.component_u_c.rightCols(3).maxCoeff());
     return out;
   }
 

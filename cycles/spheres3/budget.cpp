@@ -1,0 +1,431 @@
+#include "cycles/spheres3/budget.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "core/identification.hpp"
+#include "core/report_envelope.hpp"
+#include "core/rng.hpp"
+#include "core/sphere_centre_fit.hpp"
+#include "core/units.hpp"
+
+namespace rotacal {
+
+bool Spheres3BudgetOptions::validate(std::string* why) const {
+  const auto fail = [&](const std::string& w) {
+    if (why) *why = w;
+    return false;
+  };
+  if (runs < 100 || runs > 1000000) return fail("Monte Carlo runs must be in [100, 1000000]");
+  if (alone_runs < 0 || alone_runs > 1000000) return fail("Monte Carlo runs per contributor must be in [0, 1000000]");
+  if (threads < 0 || threads > 256) return fail("threads must be in [0, 256]");
+  return true;
+}
+
+bool spheres3TypeA(const ContributorInfo& c) {
+  return c.kind == ContributorKind::ProbeRepeatability || c.kind == ContributorKind::SurfaceRoughness;
+}
+
+bool spheres3TypeB(const ContributorInfo& c) {
+  switch (c.kind) {
+    case ContributorKind::ProbePretravel:
+    case ContributorKind::LinearScale:
+    case ContributorKind::LinearRandom:
+    case ContributorKind::Squareness: return true;
+    default: return false;
+  }
+}
+
+namespace {
+
+constexpr int kLocation = 4;
+bool isAngleComponent(int k) { return k >= 3; }
+double componentFactor(int k) { return isAngleComponent(k) ? kMdegPerRad : kUmPerMm; }
+double locationFactor(int i) { return i < 2 ? kUmPerMm : kMdegPerRad; }
+
+/// Pretravel along an approach u from the six directional values (+X -X +Y -Y +Z -Z): the
+/// spheres3 touches approach along machine axes, so exactly one weight is 1.
+double pretravelAlong(const std::array<double, 6>& v, const Eigen::Vector3d& u) {
+  double s = 0.0;
+  for (int k = 0; k < 3; ++k)
+    s += u[k] * u[k] * (u[k] >= 0 ? v[static_cast<size_t>(2 * k)] : v[static_cast<size_t>(2 * k + 1)]);
+  return s;
+}
+
+std::uint64_t catalogIndex(const ContributorInfo* info) {
+  return static_cast<std::uint64_t>(info - contributorCatalog().data());
+}
+
+// Random streams of the linear axes (beyond every catalog index).
+constexpr std::uint64_t kLinearFixed = 120, kLinearX = 121;
+
+/// The parameter scales of analyze's stage 2 (1 um, 10 urad): the finite-difference steps.
+double parameterScale(const Spheres3Result& r, int p) {
+  if (p < 2) return 1e-3;
+  if (p < 4) return 1e-5;
+  if (p < 13) return 1e-3;
+  return isAngleComponent(r.terms[static_cast<size_t>(p - 13)].component) ? 1e-5 : 1e-3;
+}
+
+Eigen::VectorXd parameters(const Spheres3Result& r) {
+  Eigen::VectorXd th(13 + r.h.size());
+  th.head<4>() = r.location;
+  for (int i = 0; i < 3; ++i) th.segment<3>(4 + 3 * i) = r.sphere_w_mm[static_cast<size_t>(i)];
+  th.tail(r.h.size()) = r.h;
+  return th;
+}
+
+Eigen::Vector3d predict(const Spheres3Result& r, const Eigen::VectorXd& th, int sphere, double c_rad) {
+  ComponentVector e = ComponentVector::Zero();
+  for (size_t t = 0; t < r.terms.size(); ++t) e += th[13 + static_cast<Eigen::Index>(t)] * r.terms[t].value(c_rad);
+  return spheres3Table_m_w(th.head<4>(), e, c_rad) * th.segment<3>(4 + 3 * sphere);
+}
+
+}  // namespace
+
+Truth spheres3IdentifiedTruth(const ProbePlan& plan, const Spheres3Result& r) {
+  Truth t;
+  t.errors.kinematics = plan.machine.kinematics;
+  // The table at each sampled C computed once: the simulator asks for it at every touch.
+  std::vector<std::pair<double, Eigen::Isometry3d>> table;
+  for (double c : r.c_deg)
+    table.emplace_back(c, spheres3Table_m_w(r.location, r.componentAt(c), degToRad(c)));
+  const Eigen::Vector4d location = r.location;
+  const std::vector<ComponentTerm> terms = r.terms;
+  const Eigen::VectorXd h = r.h;
+  t.table_transform = [table, location, terms, h](const Pose& pose, double) {
+    for (const auto& [c, T] : table)
+      if (std::abs(c - pose.C) < 1e-12) return T;
+    ComponentVector e = ComponentVector::Zero();
+    for (size_t k = 0; k < terms.size(); ++k) e += h[static_cast<Eigen::Index>(k)] * terms[k].value(degToRad(pose.C));
+    return spheres3Table_m_w(location, e, degToRad(pose.C));
+  };
+  for (int i = 0; i < 3; ++i)
+    t.sphere_center_error_w_mm[i + 1] = r.sphere_w_mm[static_cast<size_t>(i)] - r.nominal_w_mm[static_cast<size_t>(i)];
+  return t;
+}
+
+Spheres3LinearMap linearSpheres3(const ProbePlan& plan, const Spheres3Result& r) {
+  const int np_points = static_cast<int>(plan.points.size());
+  const int n_angles = static_cast<int>(r.c_deg.size());
+  const int np = 13 + static_cast<int>(r.h.size());
+  Spheres3LinearMap out;
+  const MeasurementRun ideal = simulate(plan, spheres3IdentifiedTruth(plan, r), {1});
+  out.ideal_s_mm.resize(np_points);
+  for (int i = 0; i < np_points; ++i)
+    out.ideal_s_mm[i] = alongApproach(plan.points[static_cast<size_t>(i)], ideal.points[static_cast<size_t>(i)]);
+
+  // The same grouping as identifySpheres3: angle (pose order) x sphere.
+  std::map<std::string, int> angle_of;
+  for (size_t a = 0; a < plan.poses.size(); ++a) angle_of[plan.poses[a].name] = static_cast<int>(a);
+  std::vector<std::vector<int>> group(static_cast<size_t>(n_angles * 3));  // plan point indices
+  for (int i = 0; i < np_points; ++i) {
+    const ProbePoint& p = plan.points[static_cast<size_t>(i)];
+    group[static_cast<size_t>(angle_of.at(p.pose_name) * 3 + p.sphere->id - 1)].push_back(i);
+  }
+  const double rho = r.nominal_radius_mm + plan.machine.probe.ball_radius_mm();
+
+  // Stage 1, per sphere and angle: the centre's change from the touches' shifts along their
+  // approach, -pinv(J1)_xyz diag(n.u), J1 = [-n^T, -1] the sphere fit's own Jacobian; and what
+  // stays in its residual, (I - J1 pinv(J1)) diag(n.u).
+  const int m = 3 * n_angles * 3;
+  Eigen::MatrixXd centre_map = Eigen::MatrixXd::Zero(m, np_points);
+  Eigen::MatrixXd whiten = Eigen::MatrixXd::Zero(m, m);
+  out.residual = Eigen::MatrixXd::Zero(np_points, np_points);
+  for (int g = 0; g < n_angles * 3; ++g) {
+    const auto& ids = group[static_cast<size_t>(g)];
+    std::vector<Eigen::Vector3d> pts;
+    for (int i : ids) pts.push_back(ideal.points[static_cast<size_t>(i)].position_m_mm);
+    const Eigen::Vector3d guess =
+        predict(r, parameters(r), g % 3, degToRad(r.c_deg[static_cast<size_t>(g / 3)]));
+    const SphereFit fit = fitSphereCentre(pts, guess, {rho, true, 50});
+    const int n = static_cast<int>(ids.size());
+    Eigen::MatrixXd J1(n, 4);
+    Eigen::VectorXd nu(n);
+    for (int j = 0; j < n; ++j) {
+      const Eigen::Vector3d nj = (pts[static_cast<size_t>(j)] - fit.centre_mm).normalized();
+      J1.row(j) << -nj.transpose(), -1.0;
+      nu[j] = nj.dot(plan.points[static_cast<size_t>(ids[static_cast<size_t>(j)])].approach_m);
+    }
+    const Eigen::MatrixXd pinv = J1.completeOrthogonalDecomposition().pseudoInverse();
+    const Eigen::MatrixXd dc = -pinv.topRows(3) * nu.asDiagonal();
+    const Eigen::MatrixXd res = (Eigen::MatrixXd::Identity(n, n) - J1 * pinv) * nu.asDiagonal();
+    for (int j = 0; j < n; ++j) {
+      centre_map.block(3 * g, ids[static_cast<size_t>(j)], 3, 1) = dc.col(j);
+      for (int k = 0; k < n; ++k)
+        out.residual(ids[static_cast<size_t>(k)], ids[static_cast<size_t>(j)]) = res(k, j);
+    }
+    out.stage1_dof += fit.dof;
+    const Eigen::LLT<Eigen::Matrix3d> llt(fit.cov_centre_per_sigma2);
+    whiten.block<3, 3>(3 * g, 3 * g) = llt.matrixL().solve(Eigen::Matrix3d::Identity());
+  }
+
+  // Stage 2: the weighted least squares' own map at the identified parameters,
+  // d theta = S pinv(W J S) W d centres (S the column scales, J by central differences).
+  const Eigen::VectorXd th = parameters(r);
+  Eigen::MatrixXd J(m, np);
+  for (int p = 0; p < np; ++p) {
+    const double h = 1e-3 * parameterScale(r, p);
+    Eigen::VectorXd tp = th, tm = th;
+    tp[p] += h;
+    tm[p] -= h;
+    for (int g = 0; g < n_angles * 3; ++g) {
+      const double c = degToRad(r.c_deg[static_cast<size_t>(g / 3)]);
+      J.block(3 * g, p, 3, 1) = (predict(r, tp, g % 3, c) - predict(r, tm, g % 3, c)) / (2 * h) * parameterScale(r, p);
+    }
+  }
+  Eigen::VectorXd scale(np);
+  for (int p = 0; p < np; ++p) scale[p] = parameterScale(r, p);
+  const Eigen::MatrixXd pinv2 = (whiten * J).completeOrthogonalDecomposition().pseudoInverse();
+  out.G = scale.asDiagonal() * pinv2 * whiten * centre_map;
+  out.values.resize(kNumComponentErrors * n_angles, np_points);
+  const int nt = static_cast<int>(r.terms.size());
+  for (int a = 0; a < n_angles; ++a) {
+    Eigen::MatrixXd B(kNumComponentErrors, nt);
+    for (int t = 0; t < nt; ++t) B.col(t) = r.terms[static_cast<size_t>(t)].value(degToRad(r.c_deg[static_cast<size_t>(a)]));
+    out.values.middleRows(kNumComponentErrors * a, kNumComponentErrors) = B * out.G.bottomRows(nt);
+  }
+  return out;
+}
+
+void drawSpheres3(const ProbePlan& plan, const ContributorSet& set, std::uint64_t seed, int run, int only,
+                  Spheres3Draw* d) {
+  d->pretravel_mm.fill(0.0);
+  d->linear = false;
+  ContributorSet linear;
+  const std::uint64_t base = static_cast<std::uint64_t>(run) << 7;
+  for (size_t i = 0; i < set.items.size(); ++i) {
+    const Contributor& c = set.items[i];
+    if (only >= 0 && static_cast<size_t>(only) != i) continue;
+    if (!spheres3TypeB(*c.info)) continue;
+    if (c.info->kind == ContributorKind::ProbePretravel) {
+      Rng rng(seed, base | catalogIndex(c.info));
+      for (auto& v : d->pretravel_mm) v = c.u[0] * rng.normal();
+    } else {
+      linear.items.push_back(c);
+    }
+  }
+  if (linear.items.empty()) return;
+  linear.node_spacing_min_mm = set.node_spacing_min_mm;
+  linear.node_spacing_max_mm = set.node_spacing_max_mm;
+  // The span of the read positions: every nominal trigger (the triggers move by um).
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = Eigen::Vector3d::Constant(-1e300);
+  for (const auto& p : plan.points) {
+    lo = lo.cwiseMin(p.trigger_m_mm);
+    hi = hi.cwiseMax(p.trigger_m_mm);
+  }
+  Rng fixed(seed, base | kLinearFixed), ax(seed, base | kLinearX), ay(seed, base | (kLinearX + 1)),
+      az(seed, base | (kLinearX + 2));
+  drawLinearAxisErrors(linear.linearAxisModel(), lo, hi, fixed, {&ax, &ay, &az}, &d->linear_errors);
+  d->linear = true;
+}
+
+void applySpheres3Draw(const Spheres3Draw& d, Truth* truth) {
+  if (d.linear) truth->linear_axis_error = d.linear_errors.asFunction();
+  if (std::any_of(d.pretravel_mm.begin(), d.pretravel_mm.end(), [](double x) { return x != 0.0; })) {
+    auto before = truth->pretravel_by_direction_um;
+    truth->pretravel_by_direction_um = [v = d.pretravel_mm, before](const Eigen::Vector3d& u) {
+      return mmToUm(pretravelAlong(v, u)) + (before ? before(u) : 0.0);
+    };
+  }
+}
+
+namespace {
+
+UncertaintyBudget slice(const UncertaintyBudget& full, int first, int count) {
+  UncertaintyBudget b;
+  b.names.assign(full.names.begin() + first, full.names.begin() + first + count);
+  b.units.assign(full.units.begin() + first, full.units.begin() + first + count);
+  b.cov_a = full.cov_a.block(first, first, count, count);
+  b.cov_b = full.cov_b.block(first, first, count, count);
+  b.type_a_source = full.type_a_source;
+  b.type_b_evaluated = full.type_b_evaluated;
+  b.type_b_source = full.type_b_source;
+  for (const auto& t : full.terms) b.terms.push_back({t.contributor, t.u.segment(first, count)});
+  b.runs = full.runs;
+  b.seed = full.seed;
+  return b;
+}
+
+}  // namespace
+
+Spheres3Budget spheres3Budget(const ProbePlan& plan, const Spheres3Result& r, const std::vector<Spheres3Result>& per_run,
+                              const ContributorSet* contributors, const Spheres3BudgetOptions& options) {
+  std::string why;
+  if (!options.validate(&why)) throw std::invalid_argument(why);
+  const int n_angles = static_cast<int>(r.c_deg.size());
+  const int n = kLocation + kNumComponentErrors * n_angles;
+  const double repeats = static_cast<double>(std::max<size_t>(1, per_run.size()));
+
+  // Every parameter the budget covers, in report units: the four location errors, then each
+  // component error at each sampled angle ("EXC@30").
+  UncertaintyBudget full;
+  Eigen::VectorXd factor(n);
+  for (int i = 0; i < kLocation; ++i) {
+    full.names.emplace_back(spheres3LocationNames()[static_cast<size_t>(i)]);
+    full.units.emplace_back(i < 2 ? "um" : "mdeg");
+    factor[i] = locationFactor(i);
+  }
+  for (int a = 0; a < n_angles; ++a)
+    for (int k = 0; k < kNumComponentErrors; ++k) {
+      full.names.push_back(fmt::format("{}@{:g}", componentNames()[static_cast<size_t>(k)], r.c_deg[static_cast<size_t>(a)]));
+      full.units.emplace_back(isAngleComponent(k) ? "mdeg" : "um");
+      factor[kLocation + kNumComponentErrors * a + k] = componentFactor(k);
+    }
+  const Spheres3LinearMap lin = linearSpheres3(plan, r);
+  Eigen::MatrixXd G(n, lin.G.cols());
+  G.topRows(kLocation) = lin.G.topRows(kLocation);
+  G.bottomRows(n - kLocation) = lin.values;
+  G = factor.asDiagonal() * G;
+
+  // The split of the declared contributors.
+  double declared_mm2 = 0.0;
+  ContributorSet type_b;
+  std::vector<std::string> left_out;
+  if (contributors) {
+    type_b.file = contributors->file;
+    type_b.node_spacing_min_mm = contributors->node_spacing_min_mm;
+    type_b.node_spacing_max_mm = contributors->node_spacing_max_mm;
+    for (const auto& c : contributors->items) {
+      if (spheres3TypeA(*c.info)) declared_mm2 += c.u[0] * c.u[0];
+      else if (spheres3TypeB(*c.info)) type_b.items.push_back(c);
+      else left_out.emplace_back(c.info->id);
+    }
+  }
+  const Truth base = spheres3IdentifiedTruth(plan, r);
+  // The triggers' deviation along the approach under a draw (exact simulator), mm.
+  auto triggerShift = [&](const Spheres3Draw& d) {
+    Truth t = base;
+    applySpheres3Draw(d, &t);
+    const MeasurementRun run = simulate(plan, t, {1});
+    Eigen::VectorXd s(lin.ideal_s_mm.size());
+    for (Eigen::Index i = 0; i < s.size(); ++i)
+      s[i] = alongApproach(plan.points[static_cast<size_t>(i)], run.points[static_cast<size_t>(i)]) - lin.ideal_s_mm[i];
+    return s;
+  };
+
+  // Type A. The sphere fits' residual (1 dof per sphere and angle) measures the per-touch
+  // scatter, and also the part of the Type B contributors a sphere cannot absorb (the linear
+  // axes' random errors across its 38 mm, pretravel differing between opposite directions is
+  // absorbed by the centre): that part is in u_B, so its expected value is taken out, floored at
+  // the declared scatter.
+  double sigma2 = 0.0;
+  std::string how;
+  const double s_obs_mm = umToMm(r.sigma_touch_um);
+  if (!contributors) {
+    sigma2 = std::pow(umToMm(r.sigma_used_um), 2);
+    how = fmt::format("the larger of the sphere fits' touch noise {:.3f} um and the probe repeatability of the machine",
+                      r.sigma_touch_um);
+  } else {
+    double expected_sys_mm2 = 0.0;
+    if (!type_b.items.empty() && lin.stage1_dof > 0) {
+      constexpr int kResidualRuns = 200;
+      for (int k = 0; k < kResidualRuns; ++k) {
+        Spheres3Draw d;
+        drawSpheres3(plan, type_b, options.seed ^ 0x5245534944ULL, k, -1, &d);
+        expected_sys_mm2 += (lin.residual * triggerShift(d)).squaredNorm() / lin.stage1_dof;
+      }
+      expected_sys_mm2 /= kResidualRuns;
+    }
+    sigma2 = std::max(declared_mm2, s_obs_mm * s_obs_mm - expected_sys_mm2);
+    how = fmt::format("sphere fits' residual {:.3f} um, less {:.3f} um expected from the Type B contributors, floored at "
+                      "the declared {:.3f} um (probe repeatability, surface roughness)",
+                      r.sigma_touch_um, mmToUm(std::sqrt(expected_sys_mm2)), mmToUm(std::sqrt(declared_mm2)));
+  }
+  Eigen::MatrixXd cov_a = sigma2 / repeats * G * G.transpose();
+  full.type_a_source = fmt::format("the per-touch scatter {:.3f} um ({}) through the estimator, {} run(s)",
+                                   mmToUm(std::sqrt(sigma2)), how, per_run.size() > 1 ? per_run.size() : 1);
+  // Repeats: a parameter whose repeats scatter more (drift between runs, a sphere that moved)
+  // takes the scatter of their mean instead; correlations kept by scaling.
+  if (per_run.size() >= 2) {
+    SampleMoments mom(n);
+    for (const auto& pr : per_run) {
+      Eigen::VectorXd v(n);
+      v.head<kLocation>() = pr.location;
+      for (int a = 0; a < n_angles; ++a) v.segment<kNumComponentErrors>(kLocation + kNumComponentErrors * a) = pr.values.row(a).transpose();
+      mom.add(factor.cwiseProduct(v));
+    }
+    const Eigen::MatrixXd of_mean = mom.covariance() / repeats;
+    Eigen::VectorXd sc = Eigen::VectorXd::Ones(n);
+    for (int i = 0; i < n; ++i)
+      if (cov_a(i, i) > 0 && of_mean(i, i) > cov_a(i, i)) sc[i] = std::sqrt(of_mean(i, i) / cov_a(i, i));
+    cov_a = sc.asDiagonal() * cov_a * sc.asDiagonal();
+    full.type_a_source += fmt::format(
+        "; each parameter raised to the scatter of the {} repeats' own estimates (standard error of their mean) where "
+        "that is larger",
+        per_run.size());
+  }
+  full.cov_a = cov_a;
+  full.cov_b = Eigen::MatrixXd::Zero(n, n);
+  full.terms.push_back({"data", full.uA()});
+  const std::string left_out_text =
+      left_out.empty() ? std::string()
+                       : fmt::format("; not acting on three spheres and left out: {}", fmt::join(left_out, ", "));
+  if (!contributors) {
+    full.type_b_source =
+        "not evaluated: the machine declares no contributors (MACHINE.json `contributors`, docs/uncertainty.md), so u_c "
+        "covers the data's scatter only";
+  } else if (type_b.items.empty()) {
+    full.type_b_evaluated = true;
+    full.type_b_source = "no declared contributor acts on the three-sphere cycle as Type B" + left_out_text;
+  } else {
+    MonteCarloProblem p;
+    p.parameters = n;
+    for (const auto& c : type_b.items) p.contributors.emplace_back(c.info->id);
+    p.deviation = [&](std::uint64_t seed, int run, int c) -> Eigen::VectorXd {
+      Spheres3Draw d;
+      drawSpheres3(plan, type_b, seed, run, c, &d);
+      return G * triggerShift(d);
+    };
+    const MonteCarloResult mc = runMonteCarlo(p, options.runs, options.alone_runs, options.seed, options.threads);
+    setTypeB(&full, mc, p.contributors);
+    full.seed = options.seed;
+    full.type_b_source = fmt::format(
+        "{} declared contributors (from {}) drawn on the exact simulator (full HTMs, exact ball-on-sphere contact) around "
+        "the identified errors, the triggers' deviation run through the estimator linearised there (both stages), {} "
+        "runs, seed {}{}",
+        p.contributors.size(), contributors->file.empty() ? std::string("the machine") : contributors->file,
+        options.runs, options.seed, left_out_text);
+  }
+
+  Spheres3Budget out;
+  out.location = slice(full, 0, kLocation);
+  const Eigen::VectorXd ua = full.uA(), ub = full.uB(), uc = full.uC();
+  out.component_u_a.resize(n_angles, kNumComponentErrors);
+  out.component_u_b.resize(n_angles, kNumComponentErrors);
+  out.component_u_c.resize(n_angles, kNumComponentErrors);
+  for (int a = 0; a < n_angles; ++a)
+    for (int k = 0; k < kNumComponentErrors; ++k) {
+      const int i = kLocation + kNumComponentErrors * a + k;
+      out.component_u_a(a, k) = ua[i];
+      out.component_u_b(a, k) = ub[i];
+      out.component_u_c(a, k) = uc[i];
+    }
+  return out;
+}
+
+void addSpheres3Budget(Json* report, const Spheres3Budget& b) {
+  addBudgetFields(&(*report)["location_errors"], b.location);
+  (*report)["uncertainty"] = budgetJson(b.location);
+  if (!report->contains("component_errors")) return;
+  auto column = [](const Eigen::MatrixXd& m, int k, double mult) {
+    Json a = Json::array();
+    for (Eigen::Index i = 0; i < m.rows(); ++i) a.push_back(round6(mult * m(i, k)));
+    return a;
+  };
+  for (int k = 0; k < kNumComponentErrors; ++k) {
+    Json& e = (*report)["component_errors"][componentNames()[static_cast<size_t>(k)]];
+    e["u_a"] = column(b.component_u_a, k, 1.0);
+    e["u_b"] = column(b.component_u_b, k, 1.0);
+    e["u_c"] = column(b.component_u_c, k, 1.0);
+    e["U"] = column(b.component_u_c, k, kCoverageFactor);
+    e["k"] = kCoverageFactor;
+  }
+}
+
+}  // namespace rotacal
