@@ -77,9 +77,30 @@ void touch154(int clean_seeds, int effect_seeds) {
     return diagnoseTouch154(plan, runs, o).judged;
   };
   std::printf("touch154 x 4 repeats, 0.7 um probe noise declared and simulated, alpha %.2f\n", kAlpha);
-  Tally clean, scale, sq, drift, straight, backlash;
+  Tally clean, scale, sq, drift, straight, backlash, motion, lobing;
   for (int s = 0; s < clean_seeds; ++s) clean.add(run([](Truth*) {}, s), "", 0, 0.0);
   clean.print("clean (location errors only)");
+  // 001's C axis: 3 um of second-order radial error motion (the spheres3 bench's size).
+  for (int s = 0; s < effect_seeds; ++s)
+    motion.add(run([](Truth* t) {
+                 t->pose_dependent = [](const Pose& p) {
+                   ErrorVector d = ErrorVector::Zero();
+                   d[0] = umToMm(3.0) * std::cos(2.0 * degToRad(p.C));
+                   return d;
+                 };
+               }, s),
+               "rotary_error_motion", 0, 3.0);
+  motion.print("radial error motion EXC = 3 cos 2C um");
+  // Probe lobing: +X triggers 2 um late, -X 2 um early (a kinematic probe's lobing is of this
+  // size; 000 calibrates it away, so no seed gives one).
+  for (int s = 0; s < effect_seeds; ++s)
+    lobing.add(run([](Truth* t) {
+                 t->pretravel_by_direction_um = [](const Eigen::Vector3d& u) {
+                   return std::abs(u.x()) > 0.9 ? 2.0 * u.x() : 0.0;
+                 };
+               }, s),
+               "probe_pretravel", 0, 2.0);
+  lobing.print("pretravel +X 2 um, -X -2 um (lobing)");
   for (int s = 0; s < effect_seeds; ++s)
     scale.add(run([](Truth* t) { t->linear_axis_error = [](const Eigen::Vector3d& c) { return Eigen::Vector3d(60e-6 * c.x(), 0, 0); }; }, s),
               "linear_axis_scale", 0, 60.0);

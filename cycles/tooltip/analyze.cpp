@@ -202,8 +202,22 @@ std::vector<bool> activeFor(const Problem& p, bool pivot, int excluded) {
   // From the transverse reading alone, e at the zero pose and e_j = e_0 cos(0) / cos(theta_j)
   // leave every reading unchanged: the zero pose is the reference, its error 0 by definition
   // (the laser is zeroed there, 004).
-  if (noZ(p))
+  if (noZ(p)) {
     for (const auto& b : p.obs) active[b.j_ref] = false;
+    // Where the tip moves along the beam (A = +-90 deg: d(dy)/de = R cos A = 0) the transverse
+    // reading does not see the angle to first order: not identifiable there, never a number
+    // from a near-singular column (it came out as 1e17 mdeg).
+    std::vector<double> sens(static_cast<size_t>(p.J()), 0.0);
+    double largest = 0.0;
+    const Eigen::VectorXd x0 = Eigen::VectorXd::Zero(p.J() + 1);
+    for (const auto& b : p.obs) {
+      const double d = std::abs(p.jacobian(b, x0)(0, b.j));
+      sens[static_cast<size_t>(b.j)] = std::max(sens[static_cast<size_t>(b.j)], d);
+      largest = std::max(largest, d);
+    }
+    for (int j = 0; j < p.J(); ++j)
+      if (sens[static_cast<size_t>(j)] <= 1e-9 * largest) active[static_cast<size_t>(j)] = false;
+  }
   active[p.J()] = pivot;
   return active;
 }

@@ -239,5 +239,33 @@ TEST(TooltipResults, TheTransverseReadingAloneGivesTheAngularErrorsAndSaysDRIsNo
   EXPECT_THROW(parseTooltipResults("angle_deg,dy_um\n0,0,0\n", "bad.csv", plan), InputError);
 }
 
+// At A = +-90 deg the tip moves along the beam: the transverse reading does not see the angle to
+// first order (d(dy)/de = R cos A). The fit said -1.4e17 mdeg there; it must say "not
+// identifiable" (NaN, null in REPORT.json) and keep the other angles right.
+TEST(TooltipResults, TheTransverseReadingAloneCannotSeeTheAngleAt90Degrees) {
+  const ProbePlan plan = plan004();  // 0 .. 90 deg in 5 deg steps, both ways
+  TooltipTruth t;
+  t.sin_mdeg = 2.0;
+  const TooltipRun full = simulateTooltip(plan, t, 1);
+  std::string text = "angle_deg,dy_um\n";
+  for (const auto& r : full) text += fmt::format("{:.6f},{:.6f}\n", r.angle_deg, r.t_um);
+  const TooltipAnalysis a = analyzeTooltip(plan, {parseTooltipResults(text, "dy.csv", plan)});
+  int at90 = 0;
+  for (size_t k = 0; k < a.joint.angles_deg.size(); ++k) {
+    const double A = a.joint.angles_deg[k];
+    if (std::abs(std::abs(A) - 90.0) < 1e-9) {
+      EXPECT_FALSE(std::isfinite(a.joint.e_mdeg[k])) << a.joint.e_mdeg[k];
+      EXPECT_FALSE(std::isfinite(a.joint.u_e_mdeg[k]));
+      ++at90;
+    } else if (std::abs(A) > 1e-9) {
+      ASSERT_TRUE(std::isfinite(a.joint.e_mdeg[k])) << A;
+      EXPECT_NEAR(a.joint.e_mdeg[k] - a.joint.e_mdeg[0], 2.0 * std::sin(degToRad(A)), 2e-3) << A;
+    }
+  }
+  EXPECT_GE(at90, 1);
+  const Json j = tooltipReportJson(plan, {parseTooltipResults(text, "dy.csv", plan)}, a);
+  EXPECT_NO_THROW((void)j.dump());
+}
+
 }  // namespace
 }  // namespace rotacal

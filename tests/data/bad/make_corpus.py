@@ -465,6 +465,27 @@ add('cli', 'uncertainty_runs_huge.json', rd('contributors.json'), 'uncertainty -
 add('cli', 'compensate_dialect_heidenhain.h', rd('small.heidenhain.prog'), 'compensate --program {in} --report {base}/report.json --dialect heidenhain -o {out}.h', 2, 'heidenhain', '-')
 add('cli', 'missing_input_file.json', MT, 'plan --cycle touch154 --machine {tmp}/no_such_machine.json -o {out}.json', 1, 'no_such_machine.json', '-')
 
+# ---------------------------------------------------------------- frame (FRAME.json, spaceframe frame_file)
+TABLE1 = [[-0.0170, -0.2243, 73.6373], [0.1266, -102.977, 0.1119], [-88.1763, -51.6103, 149.8827],
+          [-88.4696, 50.0995, -0.0242], [-2.3838, 101.2081, 150.2041], [86.5175, 51.0002, 0.0012],
+          [88.7260, -52.6343, 150.1732]]
+FR = {'format': 'rotacal-frame/1', 'source': 'CMM report (corpus)', 'u_um': 1.0,
+      'spheres_mm': {str(i + 1): c for i, c in enumerate(TABLE1)}}
+T_FRAME = 'plan --cycle spaceframe --machine {base}/machine.json --set phi_list=-90,-45,0 --set frame_file={in} -o {out}.json'
+for name, path, value, frag in [
+    ('sphere_far', ['spheres_mm', '3'], [-78.1763, -51.6103, 149.8827], 'not a calibration of this frame'),
+    ('u_negative', ['u_um'], -1.0, 'u_um'),
+    ('u_nan', ['u_um'], raw('NaN'), 'parse error'),
+    ('sphere_two_numbers', ['spheres_mm', '5'], [1.0, 2.0], 'sphere 5'),
+    ('sphere_text', ['spheres_mm', '2'], ['a', 'b', 'c'], 'sphere 2'),
+    ('format_wrong', ['format'], 'rotacal-frame/2', 'rotacal-frame/1'),
+    ('source_empty', ['source'], '', 'source'),
+]:
+    add('frame', name + '.json', dump(setp(FR, path, value)), T_FRAME, 1, frag, 'line')
+six = copy.deepcopy(FR)
+del six['spheres_mm']['7']
+add('frame', 'six_spheres.json', dump(six), T_FRAME, 1, 'seven', 'line')
+
 with open(os.path.join(HERE, 'MANIFEST.tsv'), 'w') as f:
     f.write('# file\tcommand (rotacal arguments; {in} a copy of the file, {out} a fresh output path, {base} '
             'tests/data/bad/base, {db} a copy of base/history.db, {nodir} a missing directory, {rodir} a read-only '
