@@ -456,13 +456,28 @@ JudgeConfounded modelConfounded(const Context& cx, const Model& m, const Evaluat
   e.cause_terms = terms(a, ev.Jw, cause.parameters, scale);
   e.with_terms = terms(b, m.X, m.names, scale);
   for (const auto& t : e.with_terms) e.with.push_back(t.name);
-  if (ev.sc.rank() < ev.c.k)
+  if (ev.sc.rank() < ev.c.k) {
     e.why = fmt::format("{}'s own columns are dependent on this plan", cause.name);
-  else
-    e.why = fmt::format("on this plan {} moves the data exactly as the model's {} do (principal angle {:.2g} deg): {} is "
-                        "read as {}",
-                        cause.name, fmt::join(e.with, ", "), e.angle_deg, termsText(e.cause_terms),
-                        termsText(e.with_terms));
+    return e;
+  }
+  e.why = fmt::format("on this plan {} moves the data exactly as the model's {} do (principal angle {:.2g} deg): {} is "
+                      "read as {}",
+                      cause.name, fmt::join(e.with, ", "), e.angle_deg, termsText(e.cause_terms), termsText(e.with_terms));
+  // Every other direction of the cause the model absorbs as exactly: each is an error the data
+  // cannot show and the model's parameters take in full (lobing +X/-X read as dx_AY, say).
+  for (Eigen::Index d = 1; d < ev.pr.angle.size() && d < ev.pr.V.cols() && ev.pr.angle[d] < cx.exact_rad; ++d) {
+    const Eigen::VectorXd ad = ev.sc.coef * ev.pr.V.col(d);
+    const Eigen::VectorXd bd = m.span.coef.cols() ? Eigen::VectorXd(m.span.coef * ev.pr.W.col(d))
+                                                  : Eigen::VectorXd::Zero(m.X.cols());
+    const Eigen::VectorXd cd = ad.cwiseAbs().cwiseProduct(ev.Jw.colwise().norm().transpose());
+    Eigen::Index ld = 0;
+    cd.maxCoeff(&ld);
+    const double sd = ad[ld] != 0 ? 1.0 / ad[ld] : 1.0;
+    const auto wt = terms(bd, m.X, m.names, sd);
+    for (const auto& t : wt)
+      if (std::find(e.with.begin(), e.with.end(), t.name) == e.with.end()) e.with.push_back(t.name);
+    e.why += fmt::format("; and {} is read as {}", termsText(terms(ad, ev.Jw, cause.parameters, sd)), termsText(wt));
+  }
   return e;
 }
 

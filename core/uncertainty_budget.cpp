@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <stdexcept>
 #include <thread>
 
 #include <fmt/format.h>
@@ -217,6 +218,43 @@ std::string budgetText(const UncertaintyBudget& b, const Eigen::VectorXd& values
     s += "\n";
   }
   return s;
+}
+
+bool BudgetOptions::validate(std::string* why) const {
+  const auto fail = [&](const std::string& w) {
+    if (why) *why = w;
+    return false;
+  };
+  if (runs < 100 || runs > 1000000) return fail("Monte Carlo runs must be in [100, 1000000]");
+  if (alone_runs < 0 || alone_runs > 1000000) return fail("Monte Carlo runs per contributor must be in [0, 1000000]");
+  if (threads < 0 || threads > 256) return fail("threads must be in [0, 256]");
+  return true;
+}
+
+void BudgetOptions::validateOrThrow() const {
+  std::string why;
+  if (!validate(&why)) throw std::invalid_argument(why);
+}
+
+std::string typeBNotDeclared() {
+  return "not evaluated: the machine declares no contributors (MACHINE.json `contributors`, docs/uncertainty.md), so "
+         "u_c covers the data's scatter only";
+}
+
+std::string raiseToRepeatScatter(Eigen::MatrixXd* cov_a, const std::vector<Eigen::VectorXd>& per_repeat) {
+  if (per_repeat.size() < 2) return {};
+  const Eigen::Index n = cov_a->rows();
+  SampleMoments m(static_cast<int>(n));
+  for (const auto& v : per_repeat) m.add(v);
+  const Eigen::MatrixXd of_mean = m.covariance() / static_cast<double>(per_repeat.size());
+  Eigen::VectorXd d = Eigen::VectorXd::Ones(n);
+  for (Eigen::Index i = 0; i < n; ++i)
+    if ((*cov_a)(i, i) > 0 && of_mean(i, i) > (*cov_a)(i, i)) d[i] = std::sqrt(of_mean(i, i) / (*cov_a)(i, i));
+  *cov_a = d.asDiagonal() * (*cov_a) * d.asDiagonal();
+  return fmt::format(
+      "; each parameter raised to the scatter of the {} repeats' own estimates (standard error of their mean) where "
+      "that is larger",
+      per_repeat.size());
 }
 
 }  // namespace rotacal

@@ -52,6 +52,25 @@ struct UncertaintyBudget {
   bool validate(std::string* why) const;
 };
 
+/// The Monte Carlo settings of every cycle's budget (analyze --mc-runs, --mc-seed).
+struct BudgetOptions {
+  int runs = 2000;        // Monte Carlo runs with every contributor
+  int alone_runs = 400;   // runs of each contributor alone (the budget table's shares)
+  std::uint64_t seed = 1;
+  int threads = 0;        // 0: all cores
+  bool validate(std::string* why) const;
+  void validateOrThrow() const;  // std::invalid_argument with the reason
+};
+
+/// u_B's sentence when the machine declares no contributors.
+std::string typeBNotDeclared();
+
+/// Repeats: a parameter whose repeats scatter more than cov_a says (drift between runs, a set-up
+/// that moved) takes the variance of the repeats' mean instead, correlations kept by scaling.
+/// `per_repeat` holds each repeat's own estimate (report units). Returns the clause for the
+/// budget's type_a_source; cov_a is unchanged with fewer than two repeats (empty clause).
+std::string raiseToRepeatScatter(Eigen::MatrixXd* cov_a, const std::vector<Eigen::VectorXd>& per_repeat);
+
 /// Mean and covariance of Monte Carlo samples (one vector per run), accumulated in one pass.
 class SampleMoments {
  public:

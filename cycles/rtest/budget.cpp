@@ -10,13 +10,6 @@
 
 namespace rotacal {
 
-void RtestBudgetOptions::validate() const {
-  if (runs < 100 || runs > 1000000) throw std::invalid_argument("Monte Carlo runs must be in [100, 1000000]");
-  if (alone_runs < 0 || alone_runs > 1000000)
-    throw std::invalid_argument("Monte Carlo runs per contributor must be in [0, 1000000]");
-  if (threads < 0 || threads > 256) throw std::invalid_argument("threads must be in [0, 256]");
-}
-
 bool rtestTypeA(const ContributorInfo& c) { return c.kind == ContributorKind::RtestSphereForm; }
 
 namespace {
@@ -110,7 +103,7 @@ void applyRtestDraw(const ProbePlan& plan, const RtestDraw& d, Truth* truth, Rte
 UncertaintyBudget rtestBudget(const ProbePlan& plan, const RtestCycle& first, const RtestLocationFit& fit,
                               double sensor_sigma_um, const ContributorSet* contributors,
                               const RtestBudgetOptions& options) {
-  options.validate();
+  options.validateOrThrow();
   const Kinematics k = plan.machine.kinematics;
   const auto& params = locationParameters(k);
   const int n = kNumLocationErrors;
@@ -190,8 +183,7 @@ UncertaintyBudget rtestBudget(const ProbePlan& plan, const RtestCycle& first, co
   b.terms.push_back({"data", b.uA()});
   if (!contributors) {
     b.type_b_source =
-        "not evaluated: the machine declares no contributors (MACHINE.json `contributors`, docs/uncertainty.md), so u_c "
-        "covers the data's scatter only";
+        typeBNotDeclared();
     return b;
   }
   if (type_b.items.empty()) {

@@ -21,13 +21,7 @@
 
 namespace rotacal {
 
-struct RtestBudgetOptions {
-  int runs = 2000;
-  int alone_runs = 400;  // per contributor, for the budget's shares
-  std::uint64_t seed = 1;
-  int threads = 0;
-  void validate() const;  // throws std::invalid_argument
-};
+struct RtestBudgetOptions : BudgetOptions {};
 
 /// Contributors that act independently at every reading: u_A measures them.
 bool rtestTypeA(const ContributorInfo& c);

@@ -16,17 +16,6 @@
 
 namespace rotacal {
 
-bool Spheres3BudgetOptions::validate(std::string* why) const {
-  const auto fail = [&](const std::string& w) {
-    if (why) *why = w;
-    return false;
-  };
-  if (runs < 100 || runs > 1000000) return fail("Monte Carlo runs must be in [100, 1000000]");
-  if (alone_runs < 0 || alone_runs > 1000000) return fail("Monte Carlo runs per contributor must be in [0, 1000000]");
-  if (threads < 0 || threads > 256) return fail("threads must be in [0, 256]");
-  return true;
-}
-
 bool spheres3TypeA(const ContributorInfo& c) {
   return c.kind == ContributorKind::ProbeRepeatability || c.kind == ContributorKind::SurfaceRoughness;
 }
@@ -256,8 +245,7 @@ UncertaintyBudget slice(const UncertaintyBudget& full, int first, int count) {
 
 Spheres3Budget spheres3Budget(const ProbePlan& plan, const Spheres3Result& r, const std::vector<Spheres3Result>& per_run,
                               const ContributorSet* contributors, const Spheres3BudgetOptions& options) {
-  std::string why;
-  if (!options.validate(&why)) throw std::invalid_argument(why);
+  options.validateOrThrow();
   const int n_angles = static_cast<int>(r.c_deg.size());
   const int n = kLocation + kNumComponentErrors * n_angles;
   const double repeats = static_cast<double>(std::max<size_t>(1, per_run.size()));
@@ -342,23 +330,15 @@ Spheres3Budget spheres3Budget(const ProbePlan& plan, const Spheres3Result& r, co
                                    mmToUm(std::sqrt(sigma2)), how, per_run.size() > 1 ? per_run.size() : 1);
   // Repeats: a parameter whose repeats scatter more (drift between runs, a sphere that moved)
   // takes the scatter of their mean instead; correlations kept by scaling.
-  if (per_run.size() >= 2) {
-    SampleMoments mom(n);
+  {
+    std::vector<Eigen::VectorXd> each;
     for (const auto& pr : per_run) {
       Eigen::VectorXd v(n);
       v.head<kLocation>() = pr.location;
       for (int a = 0; a < n_angles; ++a) v.segment<kNumComponentErrors>(kLocation + kNumComponentErrors * a) = pr.values.row(a).transpose();
-      mom.add(factor.cwiseProduct(v));
+      each.push_back(factor.cwiseProduct(v));
     }
-    const Eigen::MatrixXd of_mean = mom.covariance() / repeats;
-    Eigen::VectorXd sc = Eigen::VectorXd::Ones(n);
-    for (int i = 0; i < n; ++i)
-      if (cov_a(i, i) > 0 && of_mean(i, i) > cov_a(i, i)) sc[i] = std::sqrt(of_mean(i, i) / cov_a(i, i));
-    cov_a = sc.asDiagonal() * cov_a * sc.asDiagonal();
-    full.type_a_source += fmt::format(
-        "; each parameter raised to the scatter of the {} repeats' own estimates (standard error of their mean) where "
-        "that is larger",
-        per_run.size());
+    full.type_a_source += raiseToRepeatScatter(&cov_a, each);
   }
   full.cov_a = cov_a;
   full.cov_b = Eigen::MatrixXd::Zero(n, n);
@@ -368,8 +348,7 @@ Spheres3Budget spheres3Budget(const ProbePlan& plan, const Spheres3Result& r, co
                        : fmt::format("; not acting on three spheres and left out: {}", fmt::join(left_out, ", "));
   if (!contributors) {
     full.type_b_source =
-        "not evaluated: the machine declares no contributors (MACHINE.json `contributors`, docs/uncertainty.md), so u_c "
-        "covers the data's scatter only";
+        typeBNotDeclared();
   } else if (type_b.items.empty()) {
     full.type_b_evaluated = true;
     full.type_b_source = "no declared contributor acts on the three-sphere cycle as Type B" + left_out_text;

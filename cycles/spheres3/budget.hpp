@@ -33,13 +33,7 @@
 
 namespace rotacal {
 
-struct Spheres3BudgetOptions {
-  int runs = 2000;        // Monte Carlo runs with every contributor
-  int alone_runs = 400;   // runs of each contributor alone (the budget table)
-  std::uint64_t seed = 1;
-  int threads = 0;        // 0: all cores
-  bool validate(std::string* why) const;
-};
+struct Spheres3BudgetOptions : BudgetOptions {};
 
 /// Contributors that act independently at every touch: the sphere fits' residual measures them.
 bool spheres3TypeA(const ContributorInfo& contributor);

@@ -12,13 +12,6 @@
 
 namespace rotacal {
 
-void TooltipBudgetOptions::validate() const {
-  if (runs < 100 || runs > 1000000) throw std::invalid_argument("Monte Carlo runs must be in [100, 1000000]");
-  if (alone_runs < 0 || alone_runs > 1000000)
-    throw std::invalid_argument("Monte Carlo runs per contributor must be in [0, 1000000]");
-  if (threads < 0 || threads > 256) throw std::invalid_argument("threads must be in [0, 256]");
-}
-
 bool tooltipTypeA(const ContributorInfo& c) {
   return c.kind == ContributorKind::LaserResolution || c.kind == ContributorKind::LaserSphereForm ||
          c.kind == ContributorKind::LaserLateralCoupling;
@@ -189,7 +182,7 @@ Eigen::VectorXd tooltipBudgetValues(const TooltipAnalysis& a, const UncertaintyB
 UncertaintyBudget tooltipBudget(const ProbePlan& plan, const std::vector<TooltipRun>& runs, const TooltipAnalysis& a,
                                 double declared_noise_um, const ContributorSet* contributors,
                                 const TooltipBudgetOptions& options) {
-  options.validate();
+  options.validateOrThrow();
   const TooltipOptions o = tooltipOptionsFrom(plan.options, plan.machine);
   const TooltipFit& fit = a.joint;
   const int J = static_cast<int>(fit.angles_deg.size());
@@ -298,25 +291,16 @@ UncertaintyBudget tooltipBudget(const ProbePlan& plan, const std::vector<Tooltip
   // Repeats: a parameter whose repeats scatter more than that (drift between runs, a set-up that
   // moved) takes the standard error of the repeats' mean instead; correlations kept by scaling.
   if (runs.size() >= 2) {
-    SampleMoments m(n);
-    for (const auto& run : runs) m.add(valuesOf(l, fitTooltip(plan, {run}, fo)));
-    const Eigen::MatrixXd of_mean = m.covariance() / static_cast<double>(runs.size());
-    Eigen::VectorXd d = Eigen::VectorXd::Ones(n);
-    for (int i = 0; i < n; ++i)
-      if (cov_a(i, i) > 0 && of_mean(i, i) > cov_a(i, i)) d[i] = std::sqrt(of_mean(i, i) / cov_a(i, i));
-    cov_a = d.asDiagonal() * cov_a * d.asDiagonal();
-    b.type_a_source += fmt::format(
-        "; each parameter raised to the scatter of the {} repeats' own estimates (standard error of their mean) where "
-        "that is larger",
-        runs.size());
+    std::vector<Eigen::VectorXd> each;
+    for (const auto& run : runs) each.push_back(valuesOf(l, fitTooltip(plan, {run}, fo)));
+    b.type_a_source += raiseToRepeatScatter(&cov_a, each);
   }
   b.cov_a = cov_a;
   b.cov_b = Eigen::MatrixXd::Zero(n, n);
   b.terms.push_back({"data", b.uA()});
   if (!contributors) {
     b.type_b_source =
-        "not evaluated: the machine declares no contributors (MACHINE.json `contributors`, docs/uncertainty.md), so u_c "
-        "covers the data's scatter only";
+        typeBNotDeclared();
     return b;
   }
   if (type_b.items.empty()) {

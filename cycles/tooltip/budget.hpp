@@ -23,13 +23,7 @@
 
 namespace rotacal {
 
-struct TooltipBudgetOptions {
-  int runs = 2000;
-  int alone_runs = 400;  // per contributor, for the budget's shares
-  std::uint64_t seed = 1;
-  int threads = 0;
-  void validate() const;  // throws std::invalid_argument
-};
+struct TooltipBudgetOptions : BudgetOptions {};
 
 /// Contributors that act independently at every reading: u_A measures them.
 bool tooltipTypeA(const ContributorInfo& c);

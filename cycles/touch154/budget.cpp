@@ -12,17 +12,6 @@
 
 namespace rotacal {
 
-bool Touch154BudgetOptions::validate(std::string* why) const {
-  const auto fail = [&](const std::string& w) {
-    if (why) *why = w;
-    return false;
-  };
-  if (runs < 100 || runs > 1000000) return fail("Monte Carlo runs must be in [100, 1000000]");
-  if (alone_runs < 0 || alone_runs > 1000000) return fail("Monte Carlo runs per contributor must be in [0, 1000000]");
-  if (threads < 0 || threads > 256) return fail("threads must be in [0, 256]");
-  return true;
-}
-
 bool measuredByTypeA(const ContributorInfo& c) {
   return c.kind == ContributorKind::ProbeRepeatability || c.kind == ContributorKind::SurfaceRoughness;
 }
@@ -44,8 +33,7 @@ bool chainMethod(Method m, UncertaintyMethod* out) {
 UncertaintyBudget touch154Budget(const ProbePlan& plan, const IdentificationResult& main,
                                  const std::vector<IdentificationResult>& per_run, const ContributorSet* contributors,
                                  const Touch154BudgetOptions& options) {
-  std::string why;
-  if (!options.validate(&why)) throw std::invalid_argument(why);
+  options.validateOrThrow();
   const auto& params = locationParameters(main.estimate.kinematics);
   UncertaintyBudget b;
   Eigen::VectorXd f(kNumLocationErrors);  // internal -> report units
@@ -69,8 +57,7 @@ UncertaintyBudget touch154Budget(const ProbePlan& plan, const IdentificationResu
   std::optional<LinearChain> chain;
   if (!contributors) {
     type_b_missing =
-        "not evaluated: the machine declares no contributors (MACHINE.json `contributors`, docs/uncertainty.md), so u_c "
-        "covers the data's scatter only";
+        typeBNotDeclared();
   } else if (!chainMethod(main.method, &um)) {
     type_b_missing = fmt::format("not evaluated: no Monte Carlo model of the estimator {} (use lsq_per_point or closed_form)",
                                  methodName(main.method));
@@ -123,18 +110,10 @@ UncertaintyBudget touch154Budget(const ProbePlan& plan, const IdentificationResu
   }
   // Repeats: a parameter whose repeats scatter more than that (drift between runs, set-up
   // changes) takes the scatter of the runs' mean instead; correlations kept by scaling.
-  if (per_run.size() >= 2) {
-    SampleMoments m(n);
-    for (const auto& r : per_run) m.add(f.cwiseProduct(Eigen::VectorXd(r.estimate.values)));
-    const Eigen::MatrixXd of_mean = m.covariance() / runs_n;
-    Eigen::VectorXd d = Eigen::VectorXd::Ones(n);
-    for (int i = 0; i < n; ++i)
-      if (cov_a(i, i) > 0 && of_mean(i, i) > cov_a(i, i)) d[i] = std::sqrt(of_mean(i, i) / cov_a(i, i));
-    cov_a = d.asDiagonal() * cov_a * d.asDiagonal();
-    b.type_a_source += fmt::format(
-        "; each parameter raised to the scatter of the {} repeats' own estimates (standard error of their mean) where "
-        "that is larger",
-        per_run.size());
+  {
+    std::vector<Eigen::VectorXd> each;
+    for (const auto& r : per_run) each.push_back(f.cwiseProduct(Eigen::VectorXd(r.estimate.values)));
+    b.type_a_source += raiseToRepeatScatter(&cov_a, each);
   }
   b.cov_a = cov_a;
   b.terms.push_back({"data", b.uA()});

@@ -13,12 +13,9 @@
 
 namespace rotacal {
 
-struct Touch154BudgetOptions {
-  int runs = 2000;        // Monte Carlo runs with every contributor
-  int alone_runs = 500;   // runs of each contributor alone (the budget table)
-  std::uint64_t seed = 1;
-  int threads = 0;        // 0: all cores
-  bool validate(std::string* why) const;
+struct Touch154BudgetOptions : BudgetOptions {
+  // Its budget table's shares from 500 runs each (the touch154 default since issue 17).
+  Touch154BudgetOptions() { alone_runs = 500; }
 };
 
 /// The budget of `main` (identified from `per_run.size()` repeats, or one run when per_run is

@@ -11,6 +11,7 @@
 #include "core/simulation.hpp"
 #include "core/units.hpp"
 #include "cycles/touch154/causes.hpp"
+#include "cycles/touch154/closed_form.hpp"
 #include "cycles/touch154/diagnose.hpp"
 #include "test_util.hpp"
 
@@ -183,6 +184,28 @@ TEST(Touch154Diagnose, SyzAndTheTiltAxisAngleAtMinus90AreOneSignalOnThe000Plan) 
   const Eigen::VectorXd v = a.extension_J[0] * Eigen::VectorXd::Constant(1, radToMdeg(b_rad));
   const Eigen::VectorXd predicted = v - a.J0 * a.J0.completeOrthogonalDecomposition().solve(v);
   EXPECT_LT((a.residual_um - predicted).norm(), 0.02 * predicted.norm());
+}
+
+TEST(Touch154Diagnose, LobingThatReversesWithTheApproachIsReadAsDxAYAndTheJudgeSaysSo) {
+  // +X late and -X early by 2 um: on 000's plan each point is probed from one side, so the data
+  // cannot show it (the fit is exact) while dx_AY takes it in full. The simulator says how much;
+  // the judge, from the Jacobians alone, must name dx_AY among what pretravel is read as.
+  const ProbePlan plan = test::touch154Plan();
+  Truth t = test::truthWith(test::table4Mean());
+  t.pretravel_by_direction_um = [](const Eigen::Vector3d& u) { return std::abs(u.x()) > 0.9 ? 2.0 * u.x() : 0.0; };
+  const auto runs = repeats(plan, t, 1, 1);
+  IdentificationOptions io;
+  io.method = Method::LeastSquaresPerPoint;
+  const IdentificationResult r = identifyTouch154(plan, runs, io);
+  EXPECT_LT(r.summary.sigma_um, 1e-3);  // invisible: the model fits exactly
+  EXPECT_NEAR(r.estimate.reportValue(0) - test::table4Mean().reportValue(0), 2.0, 1e-3);  // dx_AY, um
+  Touch154DiagnosisOptions o = options();
+  o.candidates = {probePretravel()};
+  const Touch154Diagnosis d = diagnoseTouch154(plan, runs, o);
+  bool names_dx = false;
+  for (const auto& c : d.judged.confounded)
+    if (c.cause == "probe_pretravel") names_dx = std::find(c.with.begin(), c.with.end(), "dx_AY") != c.with.end();
+  EXPECT_TRUE(names_dx) << touch154DiagnosisText(d);
 }
 
 TEST(Touch154Diagnose, CauseColumnsMatchTheExactSimulator) {
