@@ -220,6 +220,21 @@ std::string budgetText(const UncertaintyBudget& b, const Eigen::VectorXd& values
   return s;
 }
 
+void runTypeB(UncertaintyBudget* budget, const ContributorSet& type_b, const BudgetOptions& options,
+              const std::function<Eigen::VectorXd(std::uint64_t, int, int)>& deviation) {
+  MonteCarloProblem p;
+  p.parameters = budget->size();
+  for (const auto& c : type_b.items) p.contributors.emplace_back(c.info->id);
+  p.deviation = deviation;
+  const MonteCarloResult mc = runMonteCarlo(p, options.runs, options.alone_runs, options.seed, options.threads);
+  setTypeB(budget, mc, p.contributors);
+  budget->seed = options.seed;
+}
+
+std::string contributorsSource(const ContributorSet& declared) {
+  return declared.file.empty() ? std::string("the machine") : declared.file;
+}
+
 bool BudgetOptions::validate(std::string* why) const {
   const auto fail = [&](const std::string& w) {
     if (why) *why = w;

@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "core/contributors.hpp"
 #include "core/json_io.hpp"
 
 namespace rotacal {
@@ -105,6 +106,15 @@ struct MonteCarloResult {
 /// Runs `runs` draws with every contributor and `alone_runs` draws of each contributor alone.
 MonteCarloResult runMonteCarlo(const MonteCarloProblem& problem, int runs, int alone_runs, std::uint64_t seed,
                                int threads);
+
+/// The Monte Carlo every cycle runs for u_B: `deviation(seed, run, contributor)` (estimate -
+/// truth, report units; contributor -1 = all of type_b drawn, else that index alone) over
+/// type_b's contributors, options.runs and options.alone_runs; fills cov_b, the terms and the
+/// seed. The caller writes type_b_source (what was drawn, through what).
+void runTypeB(UncertaintyBudget* budget, const ContributorSet& type_b, const BudgetOptions& options,
+              const std::function<Eigen::VectorXd(std::uint64_t seed, int run, int contributor)>& deviation);
+/// Where the declared contributors came from, for type_b_source: their file, or "the machine".
+std::string contributorsSource(const ContributorSet& declared);
 
 /// Fills cov_b and the contributor terms of `budget` from a Monte Carlo result.
 void setTypeB(UncertaintyBudget* budget, const MonteCarloResult& mc, const std::vector<std::string>& contributors);

@@ -182,8 +182,7 @@ UncertaintyBudget rtestBudget(const ProbePlan& plan, const RtestCycle& first, co
       mmToUm(std::sqrt(declared_mm2)));
   b.terms.push_back({"data", b.uA()});
   if (!contributors) {
-    b.type_b_source =
-        typeBNotDeclared();
+    b.type_b_source = typeBNotDeclared();
     return b;
   }
   if (type_b.items.empty()) {
@@ -191,23 +190,16 @@ UncertaintyBudget rtestBudget(const ProbePlan& plan, const RtestCycle& first, co
     b.type_b_source = "no declared contributor acts on the R-test as Type B (docs/uncertainty.md, rtest)";
     return b;
   }
-  MonteCarloProblem p;
-  p.parameters = n;
-  for (const auto& c : type_b.items) p.contributors.emplace_back(c.info->id);
-  p.deviation = [&](std::uint64_t seed, int run, int c) -> Eigen::VectorXd {
+  runTypeB(&b, type_b, options, [&](std::uint64_t seed, int run, int c) -> Eigen::VectorXd {
     RtestDraw d;
     drawRtest(plan, type_b, seed, run, c, &d);
     const Eigen::VectorXd x = estimate(d, nullptr);
     return f.cwiseProduct(Eigen::VectorXd(x.head(n) - fit.value));
-  };
-  const MonteCarloResult mc = runMonteCarlo(p, options.runs, options.alone_runs, options.seed, options.threads);
-  setTypeB(&b, mc, p.contributors);
-  b.seed = options.seed;
+  });
   b.type_b_source = fmt::format(
       "{} declared contributors (from {}) drawn on the exact simulator of the cycle (full HTMs) around the identified "
       "errors and run through the location fit (linear in the readings), {} runs, seed {}{}",
-      p.contributors.size(), contributors->file.empty() ? std::string("the machine") : contributors->file, options.runs,
-      options.seed,
+      type_b.items.size(), contributorsSource(*contributors), options.runs, options.seed,
       ignored.empty() ? std::string()
                       : fmt::format("; not acting on an R-test and left out: {}", fmt::join(ignored, ", ")));
   return b;

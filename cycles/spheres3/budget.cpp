@@ -347,29 +347,21 @@ Spheres3Budget spheres3Budget(const ProbePlan& plan, const Spheres3Result& r, co
       left_out.empty() ? std::string()
                        : fmt::format("; not acting on three spheres and left out: {}", fmt::join(left_out, ", "));
   if (!contributors) {
-    full.type_b_source =
-        typeBNotDeclared();
+    full.type_b_source = typeBNotDeclared();
   } else if (type_b.items.empty()) {
     full.type_b_evaluated = true;
     full.type_b_source = "no declared contributor acts on the three-sphere cycle as Type B" + left_out_text;
   } else {
-    MonteCarloProblem p;
-    p.parameters = n;
-    for (const auto& c : type_b.items) p.contributors.emplace_back(c.info->id);
-    p.deviation = [&](std::uint64_t seed, int run, int c) -> Eigen::VectorXd {
+    runTypeB(&full, type_b, options, [&](std::uint64_t seed, int run, int c) -> Eigen::VectorXd {
       Spheres3Draw d;
       drawSpheres3(plan, type_b, seed, run, c, &d);
       return G * triggerShift(d);
-    };
-    const MonteCarloResult mc = runMonteCarlo(p, options.runs, options.alone_runs, options.seed, options.threads);
-    setTypeB(&full, mc, p.contributors);
-    full.seed = options.seed;
+    });
     full.type_b_source = fmt::format(
         "{} declared contributors (from {}) drawn on the exact simulator (full HTMs, exact ball-on-sphere contact) around "
         "the identified errors, the triggers' deviation run through the estimator linearised there (both stages), {} "
         "runs, seed {}{}",
-        p.contributors.size(), contributors->file.empty() ? std::string("the machine") : contributors->file,
-        options.runs, options.seed, left_out_text);
+        type_b.items.size(), contributorsSource(*contributors), options.runs, options.seed, left_out_text);
   }
 
   Spheres3Budget out;

@@ -299,8 +299,7 @@ UncertaintyBudget tooltipBudget(const ProbePlan& plan, const std::vector<Tooltip
   b.cov_b = Eigen::MatrixXd::Zero(n, n);
   b.terms.push_back({"data", b.uA()});
   if (!contributors) {
-    b.type_b_source =
-        typeBNotDeclared();
+    b.type_b_source = typeBNotDeclared();
     return b;
   }
   if (type_b.items.empty()) {
@@ -308,22 +307,15 @@ UncertaintyBudget tooltipBudget(const ProbePlan& plan, const std::vector<Tooltip
     b.type_b_source = "no declared contributor acts on the tool-tip readings as Type B (docs/uncertainty.md, tooltip)";
     return b;
   }
-  MonteCarloProblem p;
-  p.parameters = n;
-  for (const auto& c : type_b.items) p.contributors.emplace_back(c.info->id);
-  p.deviation = [&](std::uint64_t seed, int run, int c) -> Eigen::VectorXd {
+  runTypeB(&b, type_b, options, [&](std::uint64_t seed, int run, int c) -> Eigen::VectorXd {
     TooltipDraw d;
     drawTooltip(plan, type_b, seed, run, c, &d);
     return valuesOf(l, estimate(d)) - truth_v;
-  };
-  const MonteCarloResult mc = runMonteCarlo(p, options.runs, options.alone_runs, options.seed, options.threads);
-  setTypeB(&b, mc, p.contributors);
-  b.seed = options.seed;
+  });
   b.type_b_source = fmt::format(
       "{} declared contributors (from {}) drawn on the exact head geometry around the identified errors (the pivot "
       "where the linear axes put it, the beams as aligned) and run through the tooltip fit, {} runs, seed {}{}",
-      p.contributors.size(), contributors->file.empty() ? std::string("the machine") : contributors->file, options.runs,
-      options.seed,
+      type_b.items.size(), contributorsSource(*contributors), options.runs, options.seed,
       ignored.empty() ? std::string()
                       : fmt::format("; not acting on the tool-tip readings and left out: {}", fmt::join(ignored, ", ")));
   return b;

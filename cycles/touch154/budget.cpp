@@ -129,26 +129,19 @@ UncertaintyBudget touch154Budget(const ProbePlan& plan, const IdentificationResu
   const auto mi = static_cast<size_t>(um);
   const DrawModel model = drawModel(type_b);
   const LinearChain& ch = *chain;
-  MonteCarloProblem p;
-  p.parameters = n;
-  for (const auto& c : type_b.items) p.contributors.emplace_back(c.info->id);
   MethodMask mask{};
   mask[mi] = true;
-  p.deviation = [&](std::uint64_t seed, int run, int c) -> Eigen::VectorXd {
+  runTypeB(&b, type_b, options, [&](std::uint64_t seed, int run, int c) -> Eigen::VectorXd {
     thread_local RunDraw d;
     drawRun(model, ch, seed, run, &d);
     const ErrorVector dev = c < 0 ? linearisedDeviation(ch, mask, d)[mi]
                                   : linearisedDeviation(ch, mask, onlyContributor(d, *type_b.items[static_cast<size_t>(c)].info))[mi];
     return f.cwiseProduct(Eigen::VectorXd(dev));
-  };
-  const MonteCarloResult mc = runMonteCarlo(p, options.runs, options.alone_runs, options.seed, options.threads);
-  setTypeB(&b, mc, p.contributors);
-  b.seed = options.seed;
+  });
   b.type_b_source = fmt::format(
       "{} declared contributors (from {}) propagated through {} by the linearised Monte Carlo of the exact simulator "
       "(000 Sec. 5), {} runs, seed {}, around the identified errors; the per-touch ones are in u_A",
-      p.contributors.size(), contributors->file.empty() ? std::string("the machine") : contributors->file,
-      methodName(main.method), options.runs, options.seed);
+      type_b.items.size(), contributorsSource(*contributors), methodName(main.method), options.runs, options.seed);
   return b;
 }
 
