@@ -21,57 +21,22 @@
 #include "controllers/dialects.hpp"
 #include "ctl_test_util.hpp"
 #include "postproc/probe_program.hpp"
+#include "rs274_run.hpp"
 
 namespace rotacal {
 namespace {
 
 namespace fs = std::filesystem;
 
-#ifdef ROTACAL_RS274
-const char* kRs274 = ROTACAL_RS274;
-#else
-const char* kRs274 = "/usr/bin/rs274";
-#endif
+using test::kRs274;
+using test::Rs274Run;
+using test::runRs274;
+size_t count(const std::string& text, const std::string& what) { return test::countOf(text, what); }
 
 // rs274 logs the end point as the interpreter read it from the program (4 decimals, so exact
 // to the printed value), through %.6f: half a unit of the 6th decimal, plus the program's own
 // rounding of the plan's end point to 4 decimals.
 constexpr double kEndPointTolMm = 0.5e-4 + 0.5e-6 + 1e-12;
-
-struct Rs274Run {
-  int exit_code = -1;
-  std::string out;
-  std::string err;
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-Rs274Run runRs274(const std::string& program, const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / fmt::format("rotacal_rs274_{}_{}", name, ::getpid());
-  fs::create_directories(dir);
-  const fs::path ngc = dir / "probe.ngc";
-  std::ofstream(ngc, std::ios::binary) << program;
-  const std::string cmd = fmt::format("cd '{}' && '{}' -g probe.ngc < /dev/null > out.txt 2> err.txt", dir.string(),
-                                      kRs274);
-  const int status = std::system(cmd.c_str());
-  Rs274Run r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = slurp(dir / "out.txt");
-  r.err = slurp(dir / "err.txt");
-  fs::remove_all(dir);
-  return r;
-}
-
-size_t count(const std::string& text, const std::string& what) {
-  size_t n = 0;
-  for (size_t p = text.find(what); p != std::string::npos; p = text.find(what, p + what.size())) ++n;
-  return n;
-}
 
 class Rs274 : public ::testing::Test {
  protected:
@@ -83,7 +48,7 @@ class Rs274 : public ::testing::Test {
 };
 
 TEST_F(Rs274, UntrippedProbeStopsAtTheFirstPointWithOurAbort) {
-  const Rs274Run r = runRs274(program, "plain");
+  const Rs274Run r = runRs274(program);
   EXPECT_EQ(count(r.out, "STRAIGHT_PROBE("), 1u) << r.out;
   EXPECT_EQ(count(r.out, "PROGRAM_END"), 0u);
   EXPECT_NE(r.err.find("(ABORT, rotacal: point 1 did not trigger)"), std::string::npos) << r.err;
@@ -95,7 +60,7 @@ TEST_F(Rs274, UntrippedProbeStopsAtTheFirstPointWithOurAbort) {
 
 TEST_F(Rs274, TrippingProbeRunsToTheEndAndLogsAParsableResultsFile) {
   const std::string tripped = std::regex_replace(program, std::regex("#5070"), "1");
-  const Rs274Run r = runRs274(tripped, "tripped");
+  const Rs274Run r = runRs274(tripped);
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(std::regex_replace(r.err, std::regex(R"(executing|\s)"), ""), "") << r.err;
   EXPECT_EQ(count(r.out, "STRAIGHT_PROBE("), plan.points.size());
@@ -121,7 +86,7 @@ TEST(Rs274Spheres3, TrippingProbeRunsToTheEnd) {
   if (!fs::exists(kRs274)) GTEST_SKIP() << kRs274 << " not found: install linuxcnc-uspace to run this test";
   const ProbePlan plan = makePlan("spheres3", test::acTestMachine(), {});
   const std::string program = dialectByName("linuxcnc").writeProgram(test::cycleProgram(plan, "linuxcnc"));
-  const Rs274Run r = runRs274(std::regex_replace(program, std::regex("#5070"), "1"), "spheres3");
+  const Rs274Run r = runRs274(std::regex_replace(program, std::regex("#5070"), "1"));
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(std::regex_replace(r.err, std::regex(R"(executing|\s)"), ""), "") << r.err;
   EXPECT_EQ(count(r.out, "STRAIGHT_PROBE("), plan.points.size());

@@ -23,6 +23,7 @@
 #include "core/simulation.hpp"
 #include "postproc/compensate_program.hpp"
 #include "postproc/probe_program.hpp"
+#include "rs274_run.hpp"
 #include "test_util.hpp"
 
 namespace rotacal {
@@ -139,8 +140,7 @@ TEST(CompensateProgram, ZeroErrorsReproduceEveryCoordinate) {
 }
 
 TEST(CompensateProgram, LinuxcncInterpreterAcceptsTheRewrittenProgram) {
-  const char* rs274 = "/usr/bin/rs274";
-  if (!std::filesystem::exists(rs274)) GTEST_SKIP() << "rs274 (linuxcnc-uspace) not installed";
+  if (!test::haveRs274()) GTEST_SKIP() << "rs274 (linuxcnc-uspace) not installed";
   const Fixture f;
   // A report path with parentheses: as written before, "(... REPORT (1).json)" nested them and
   // rs274 refused the program.
@@ -149,22 +149,9 @@ TEST(CompensateProgram, LinuxcncInterpreterAcceptsTheRewrittenProgram) {
   std::string text = compensateProgram(f.program, "touch154.ngc", f.plan.machine, f.errors, NcSyntax{"linuxcnc"}, opt).text;
   ASSERT_NE(text.find("REPORT [1].json"), std::string::npos);
   text = std::regex_replace(text, std::regex("#5070"), "1");  // a probe that trips (rs274's canon never does)
-  const auto dir = std::filesystem::temp_directory_path() / fmt::format("rotacal_comp_{}", ::getpid());
-  std::filesystem::create_directories(dir);
-  std::ofstream(dir / "c.ngc") << text;
-  const std::string cmd =
-      fmt::format("cd '{}' && {} -g c.ngc < /dev/null > out.txt 2> err.txt", dir.string(), rs274);
-  const int status = std::system(cmd.c_str());
-  std::ifstream out(dir / "out.txt"), err(dir / "err.txt");
-  std::stringstream so, se;
-  so << out.rdbuf();
-  se << err.rdbuf();
-  EXPECT_EQ(status, 0) << se.str();
-  const std::string o = so.str();
-  int probes = 0;
-  for (size_t p = o.find("STRAIGHT_PROBE"); p != std::string::npos; p = o.find("STRAIGHT_PROBE", p + 1)) ++probes;
-  EXPECT_EQ(probes, 154);
-  std::filesystem::remove_all(dir);
+  const test::Rs274Run r = test::runRs274(text);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(test::countOf(r.out, "STRAIGHT_PROBE"), 154u);
 }
 
 TEST(CompensateProgram, IncrementalLinearMovesGetTheRotatedIncrement) {

@@ -22,6 +22,7 @@
 #include "core/compensation.hpp"
 #include "core/units.hpp"
 #include "postproc/compensate_program.hpp"
+#include "rs274_run.hpp"
 #include "test_util.hpp"
 
 namespace rotacal {
@@ -181,23 +182,14 @@ TEST(SplitMoves, FiveAxisPathStaysWithinHalfAMicrometreOfTheNominalPath) {
 }
 
 TEST(SplitMoves, LinuxcncInterpreterReadsTheSplitProgram) {
-  const char* rs274 = "/usr/bin/rs274";
-  if (!std::filesystem::exists(rs274)) GTEST_SKIP() << "rs274 (linuxcnc-uspace) not installed";
+  if (!test::haveRs274()) GTEST_SKIP() << "rs274 (linuxcnc-uspace) not installed";
   const MachineModel m = test::acMachine();
   const ProgramCompensation c =
       compensateProgram(pathProgram(m, true), "path.ngc", m, threeTimesTable4WithMotion(), NcSyntax{"linuxcnc"}, {});
   ASSERT_GT(c.added_blocks, 0);
-  const auto dir = std::filesystem::temp_directory_path() / fmt::format("rotacal_split_{}", ::getpid());
-  std::filesystem::create_directories(dir);
-  std::ofstream(dir / "p.ngc") << c.text;
-  const int status = std::system(fmt::format("cd '{}' && {} -g p.ngc < /dev/null > out.txt 2> err.txt", dir.string(), rs274).c_str());
-  std::stringstream so;
-  so << std::ifstream(dir / "out.txt").rdbuf();
-  EXPECT_EQ(status, 0);
-  int feeds = 0;
-  for (size_t p = so.str().find("STRAIGHT_FEED"); p != std::string::npos; p = so.str().find("STRAIGHT_FEED", p + 1)) ++feeds;
-  EXPECT_EQ(feeds, kMoves + c.added_blocks);
-  std::filesystem::remove_all(dir);
+  const test::Rs274Run r = test::runRs274(c.text);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(static_cast<int>(test::countOf(r.out, "STRAIGHT_FEED")), kMoves + c.added_blocks);
 }
 
 TEST(SplitMoves, ZeroErrorsReproduceEveryDialectsProgramByteForByte) {

@@ -13,6 +13,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "rs274_run.hpp"
 #include "test_util.hpp"
 #include "cycles/cycle.hpp"
 #include "controllers/dialect.hpp"
@@ -26,34 +27,18 @@ namespace {
 
 namespace fs = std::filesystem;
 
-#ifdef ROTACAL_RS274
-const char* kRs274 = ROTACAL_RS274;
-#else
-const char* kRs274 = "/usr/bin/rs274";
-#endif
+using test::kRs274;
 
 ProbePlan plan(const CycleOptions& o) {
   return makePlan("rtest", loadMachine(std::string(ROTACAL_SOURCE_DIR) + "/examples/machines/bc_trunnion.json"), o);
 }
 
-size_t count(const std::string& text, const std::string& what) {
-  size_t n = 0;
-  for (size_t p = text.find(what); p != std::string::npos; p = text.find(what, p + what.size())) ++n;
-  return n;
-}
+size_t count(const std::string& text, const std::string& what) { return test::countOf(text, what); }
 
 std::string run(const std::string& program, int* exit_code) {
-  const fs::path dir = fs::temp_directory_path() / fmt::format("rotacal_rtest_rs274_{}", ::getpid());
-  fs::create_directories(dir);
-  std::ofstream(dir / "rtest.ngc", std::ios::binary) << program;
-  const int status = std::system(
-      fmt::format("cd '{}' && '{}' -g rtest.ngc < /dev/null > out.txt 2> err.txt", dir.string(), kRs274).c_str());
-  *exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream in(dir / "out.txt");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  fs::remove_all(dir);
-  return ss.str();
+  const test::Rs274Run r = test::runRs274(program);
+  *exit_code = r.exit_code;
+  return r.out;
 }
 
 TEST(RtestProgram, LinuxCncPassesCheckerAndRs274WithTheThermalLoops) {

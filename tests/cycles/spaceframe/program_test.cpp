@@ -19,6 +19,7 @@
 #include "cycles/spaceframe/analyze.hpp"
 #include "controllers/ctl_test_util.hpp"
 #include "postproc/probe_program.hpp"
+#include "rs274_run.hpp"
 
 namespace rotacal {
 namespace {
@@ -53,29 +54,17 @@ TEST(SpaceframeDialects, EveryProgramPassesItsCheckerAndResultsRoundTrip) {
   }
 }
 
-#ifdef ROTACAL_RS274
-const char* kRs274 = ROTACAL_RS274;
-#else
-const char* kRs274 = "/usr/bin/rs274";
-#endif
+using test::kRs274;
 
 TEST(SpaceframeRs274, TheFullMapRunsInLinuxCncsInterpreter) {
   if (!fs::exists(kRs274)) GTEST_SKIP() << kRs274 << " not found";
   const ProbePlan plan = spaceframePlan();
   const std::string program = std::regex_replace(
       dialectByName("linuxcnc").writeProgram(test::cycleProgram(plan, "linuxcnc")), std::regex("#5070"), "1");  // probe trips
-  const fs::path dir = fs::temp_directory_path() / fmt::format("rotacal_rs274_spaceframe_{}", ::getpid());
-  fs::create_directories(dir);
-  std::ofstream(dir / "probe.ngc", std::ios::binary) << program;
-  const std::string cmd = fmt::format("cd '{}' && '{}' -g probe.ngc < /dev/null > out.txt 2> err.txt", dir.string(), kRs274);
-  const int status = std::system(cmd.c_str());
-  std::stringstream out, err;
-  out << std::ifstream(dir / "out.txt").rdbuf();
-  err << std::ifstream(dir / "err.txt").rdbuf();
-  fs::remove_all(dir);
-  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << err.str();
-  EXPECT_EQ(std::regex_replace(err.str(), std::regex(R"(executing|\s)"), ""), "") << err.str();
-  const std::string o = out.str();
+  const test::Rs274Run r = test::runRs274(program);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(std::regex_replace(r.err, std::regex(R"(executing|\s)"), ""), "") << r.err;
+  const std::string& o = r.out;
   size_t probes = 0;
   for (size_t p = o.find("STRAIGHT_PROBE("); p != std::string::npos; p = o.find("STRAIGHT_PROBE(", p + 1)) ++probes;
   EXPECT_EQ(probes, plan.points.size());

@@ -19,6 +19,7 @@
 #include "cycles/tooltip/plan.hpp"
 #include "core/units.hpp"
 #include "cycles/tooltip/program.hpp"
+#include "rs274_run.hpp"
 #include "test_util.hpp"
 
 namespace rotacal {
@@ -26,11 +27,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-#ifdef ROTACAL_RS274
-const char* kRs274 = ROTACAL_RS274;
-#else
-const char* kRs274 = "/usr/bin/rs274";
-#endif
+using test::kRs274;
+using test::Rs274Run;
+using test::runRs274;
 
 // 004 Table 1, typed from the seed text (R = 15 in, 5 deg steps, 0..90 deg).
 const char* kTable1[18] = {
@@ -125,30 +124,6 @@ TEST(TooltipProgram, DialectsWhereG93IsUnverifiedRefuseInverseTimeWithTheReason)
   EXPECT_TRUE(flagged);
 }
 
-struct Rs274Run {
-  int exit_code = -1;
-  std::string out, err;
-};
-
-Rs274Run runRs274(const std::string& program) {
-  const fs::path dir = fs::temp_directory_path() / fmt::format("rotacal_tooltip_rs274_{}", ::getpid());
-  fs::create_directories(dir);
-  std::ofstream(dir / "t.ngc", std::ios::binary) << program;
-  const std::string cmd = fmt::format("cd '{}' && '{}' -g t.ngc < /dev/null > out.txt 2> err.txt", dir.string(), kRs274);
-  const int status = std::system(cmd.c_str());
-  Rs274Run r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  auto slurp = [](const fs::path& p) {
-    std::ifstream in(p);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-  };
-  r.out = slurp(dir / "out.txt");
-  r.err = slurp(dir / "err.txt");
-  fs::remove_all(dir);
-  return r;
-}
 
 /// rs274 accepts the program, and the absolute end points of its STRAIGHT_FEED moves keep the
 /// tool tip fixed: |pivot + Rx(A) Ry(B) (0,0,-R) - tip0| within the program's rounding.
