@@ -58,4 +58,23 @@ SphereFit fitSphereCentre(const std::vector<Eigen::Vector3d>& t, const Eigen::Ve
   return f;
 }
 
+SphereFitMap linearSphereFit(const std::vector<Eigen::Vector3d>& triggers, const std::vector<Eigen::Vector3d>& approaches,
+                             const SphereFit& fit) {
+  const int n = static_cast<int>(triggers.size());
+  const int cols = fit.radius_fitted ? 4 : 3;
+  Eigen::MatrixXd J(n, cols);
+  Eigen::VectorXd nu(n);
+  for (int j = 0; j < n; ++j) {
+    const Eigen::Vector3d nj = (triggers[static_cast<size_t>(j)] - fit.centre_mm).normalized();
+    J.block(j, 0, 1, 3) = -nj.transpose();
+    if (fit.radius_fitted) J(j, 3) = -1.0;
+    nu[j] = nj.dot(approaches[static_cast<size_t>(j)]);
+  }
+  const Eigen::MatrixXd pinv = J.completeOrthogonalDecomposition().pseudoInverse();
+  SphereFitMap m;
+  m.centre = -pinv.topRows(3) * nu.asDiagonal();
+  m.residual = (Eigen::MatrixXd::Identity(n, n) - J * pinv) * nu.asDiagonal();
+  return m;
+}
+
 }  // namespace rotacal

@@ -32,4 +32,16 @@ struct SphereFit {
 SphereFit fitSphereCentre(const std::vector<Eigen::Vector3d>& triggers_mm, const Eigen::Vector3d& start_mm,
                           const SphereFitOptions& options);
 
+/// The fit linearised at its solution, for uncertainty propagation: how the centre and the
+/// residual move when each trigger moves by d s_j along its approach u_j (triggers pushed along
+/// the approach, as pretravel, noise and axis errors move them). With J = [-n_j^T, -1] (n_j the
+/// unit normal from the centre to trigger j; the -1 column only when the radius is fitted):
+/// d centre = -pinv(J)_xyz diag(n.u) d s, d residual = (I - J pinv(J)) diag(n.u) d s.
+struct SphereFitMap {
+  Eigen::MatrixXd centre;    // 3 x triggers, mm per mm
+  Eigen::MatrixXd residual;  // triggers x triggers
+};
+SphereFitMap linearSphereFit(const std::vector<Eigen::Vector3d>& triggers_mm,
+                             const std::vector<Eigen::Vector3d>& approaches, const SphereFit& fit);
+
 }  // namespace rotacal

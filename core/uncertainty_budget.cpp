@@ -235,6 +235,21 @@ std::string contributorsSource(const ContributorSet& declared) {
   return declared.file.empty() ? std::string("the machine") : declared.file;
 }
 
+UncertaintyBudget UncertaintyBudget::slice(int first, int count) const {
+  UncertaintyBudget b;
+  b.names.assign(names.begin() + first, names.begin() + first + count);
+  b.units.assign(units.begin() + first, units.begin() + first + count);
+  b.cov_a = cov_a.block(first, first, count, count);
+  b.cov_b = cov_b.block(first, first, count, count);
+  b.type_a_source = type_a_source;
+  b.type_b_evaluated = type_b_evaluated;
+  b.type_b_source = type_b_source;
+  for (const auto& t : terms) b.terms.push_back({t.contributor, t.u.segment(first, count)});
+  b.runs = runs;
+  b.seed = seed;
+  return b;
+}
+
 bool BudgetOptions::validate(std::string* why) const {
   const auto fail = [&](const std::string& w) {
     if (why) *why = w;

@@ -51,6 +51,8 @@ struct UncertaintyBudget {
   Eigen::MatrixXd covariance() const { return cov_a + cov_b; }
   Eigen::MatrixXd correlation() const;  // 0 where a variance is 0
   bool validate(std::string* why) const;
+  /// Parameters first..first+count-1 alone (their covariance blocks and budget terms).
+  UncertaintyBudget slice(int first, int count) const;
 };
 
 /// The Monte Carlo settings of every cycle's budget (analyze --mc-runs, --mc-seed).

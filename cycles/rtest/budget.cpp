@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "core/contributor_draw.hpp"
 #include "core/units.hpp"
 
 namespace rotacal {
@@ -29,11 +30,6 @@ bool actsAsTypeB(const ContributorInfo& c) {
   }
 }
 
-std::uint64_t catalogIndex(const ContributorInfo* info) {
-  const auto& cat = contributorCatalog();
-  return static_cast<std::uint64_t>(info - cat.data());
-}
-
 /// The commanded sphere positions of the plan (machine frame): the span of the linear axes.
 void commandedSpan(const ProbePlan& plan, Eigen::Vector3d* lo, Eigen::Vector3d* hi) {
   const Eigen::Vector3d nest = rtestNest_w(plan);
@@ -50,13 +46,11 @@ void commandedSpan(const ProbePlan& plan, Eigen::Vector3d* lo, Eigen::Vector3d* 
 
 void drawRtest(const ProbePlan& plan, const ContributorSet& set, std::uint64_t seed, int run, int only, RtestDraw* d) {
   *d = RtestDraw{};
-  ContributorSet linear;
-  const std::uint64_t base = static_cast<std::uint64_t>(run) << 7;
   for (size_t i = 0; i < set.items.size(); ++i) {
     const Contributor& c = set.items[i];
     if (only >= 0 && static_cast<size_t>(only) != i) continue;
     if (!actsAsTypeB(*c.info)) continue;
-    Rng rng(seed, base | catalogIndex(c.info));
+    Rng rng(seed, contributorStream(*c.info, run));
     switch (c.info->kind) {
       case ContributorKind::RtestSensorGain:
         for (int a = 0; a < 3; ++a) d->sensor_response(a, a) += c.u[0] * rng.normal();
@@ -72,18 +66,12 @@ void drawRtest(const ProbePlan& plan, const ContributorSet& set, std::uint64_t s
       case ContributorKind::RtestCycleDrift:
         for (int a = 0; a < 3; ++a) d->cycle_drift_mm[a] = c.u[a] * rng.normal();
         break;
-      default: linear.items.push_back(c); break;  // the linear axes, drawn together below
+      default: break;  // the linear axes, drawn together below
     }
   }
-  if (linear.items.empty()) return;
-  linear.node_spacing_min_mm = set.node_spacing_min_mm;
-  linear.node_spacing_max_mm = set.node_spacing_max_mm;
-  const LinearAxisModel model = linear.linearAxisModel();
   Eigen::Vector3d lo, hi;
   commandedSpan(plan, &lo, &hi);
-  Rng fixed(seed, base | 120), ax(seed, base | 121), ay(seed, base | 122), az(seed, base | 123);
-  drawLinearAxisErrors(model, lo, hi, fixed, {&ax, &ay, &az}, &d->linear_errors);
-  d->linear = true;
+  d->linear = drawLinearAxes(set, only, lo, hi, seed, run, &d->linear_errors);
 }
 
 void applyRtestDraw(const ProbePlan& plan, const RtestDraw& d, Truth* truth, RtestTruthExtras* extras) {
@@ -126,19 +114,10 @@ UncertaintyBudget rtestBudget(const ProbePlan& plan, const RtestCycle& first, co
   const Eigen::MatrixXd G8 = est.G.topRows(n);
 
   // The per-reading scatter declared: the sensors' noise and the sphere's form.
-  double declared_mm2 = umToMm(sensor_sigma_um) * umToMm(sensor_sigma_um);
-  ContributorSet type_b;
-  std::vector<std::string> ignored;
-  if (contributors) {
-    type_b.file = contributors->file;
-    type_b.node_spacing_min_mm = contributors->node_spacing_min_mm;
-    type_b.node_spacing_max_mm = contributors->node_spacing_max_mm;
-    for (const auto& c : contributors->items) {
-      if (rtestTypeA(*c.info)) declared_mm2 += c.u[0] * c.u[0];
-      else if (actsAsTypeB(*c.info)) type_b.items.push_back(c);
-      else ignored.emplace_back(c.info->id);
-    }
-  }
+  const ContributorSplit split = contributors ? splitContributors(*contributors, rtestTypeA, actsAsTypeB) : ContributorSplit{};
+  const double declared_mm2 = umToMm(sensor_sigma_um) * umToMm(sensor_sigma_um) + split.per_reading_mm2;
+  const ContributorSet& type_b = split.type_b;
+  const std::vector<std::string>& ignored = split.left_out;
   Truth truth0;
   truth0.errors.kinematics = k;
   truth0.errors.values = fit.value;

@@ -282,10 +282,12 @@ std::vector<int> activeParameters(bool frame_free) {
   return a;
 }
 
+Eigen::Vector3d FrameModel::placedCentre_w(const Eigen::Vector3d& center_w, int sphere, const Eigen::Vector3d& origin_w) const {
+  return setupTransform(setup_translation_mm, setup_rotation_rad, origin_w) * (center_w + sphere_offset_w_mm.at(sphere - 1));
+}
+
 Eigen::Vector3d FrameModel::actualCentre_m(const FramePoint& p, const Eigen::Vector3d& origin_w) const {
-  const Eigen::Vector3d c_w =
-      setupTransform(setup_translation_mm, setup_rotation_rad, origin_w) * (p.center_w_mm + sphere_offset_w_mm.at(p.sphere - 1));
-  return T_m_w(errors, p.pose) * c_w;
+  return T_m_w(errors, p.pose) * placedCentre_w(p.center_w_mm, p.sphere, origin_w);
 }
 
 namespace {
@@ -313,6 +315,27 @@ Eigen::Vector3d FrameModel::fittedCentre_m(const ProbePlan& plan, const FramePoi
     t.push_back(q.trigger_m_mm + ((-ab - std::sqrt(disc)) / bb) * q.approach_m);
   }
   return fitSphereCentre(t, p.nominal_m_mm, fitOptions(plan, *plan.findPoint(p.point_ids.front()))).centre_mm;
+}
+
+Eigen::MatrixXd frameJacobian(const ProbePlan& plan, const std::vector<FramePoint>& points, const Eigen::Vector3d& origin_w,
+                              const FrameModel& model, const std::vector<int>& active, double step) {
+  const Eigen::Matrix<double, FrameModel::kSize, 1> unit = FrameModel::reportUnits(plan.machine.kinematics);
+  const Eigen::Matrix<double, FrameModel::kSize, 1> x = model.toVector();
+  const int n = static_cast<int>(points.size());
+  Eigen::MatrixXd J(3 * n, static_cast<Eigen::Index>(active.size()));
+  for (size_t k = 0; k < active.size(); ++k) {
+    const int c = active[k];
+    Eigen::Matrix<double, FrameModel::kSize, 1> xp = x, xm = x;
+    xp[c] += step / unit[c];
+    xm[c] -= step / unit[c];
+    FrameModel mp = FrameModel::fromVector(plan.machine.kinematics, xp), mm = FrameModel::fromVector(plan.machine.kinematics, xm);
+    mp.shear = mm.shear = model.shear;
+    for (int i = 0; i < n; ++i)
+      J.block<3, 1>(3 * i, static_cast<Eigen::Index>(k)) =
+          (mp.fittedCentre_m(plan, points[static_cast<size_t>(i)], origin_w) -
+           mm.fittedCentre_m(plan, points[static_cast<size_t>(i)], origin_w)) / (2.0 * step);
+  }
+  return J;
 }
 
 namespace {
@@ -458,14 +481,7 @@ SpaceframeAnalysis analyzeSpaceframe(const ProbePlan& plan, const std::vector<Me
   Eigen::JacobiSVD<Eigen::MatrixXd> svd;
   a.summary.termination = "max_iterations";
   for (int it = 0; it < options.max_iterations; ++it) {
-    for (int k = 0; k < np; ++k) {
-      const int c = active[k];
-      const double h = options.finite_step_scale / unit[c];
-      ModelVector xp = x, xm = x;
-      xp[c] += h;
-      xm[c] -= h;
-      J.col(k) = -(residuals(xp) - residuals(xm)) / (2.0 * options.finite_step_scale);
-    }
+    J = frameJacobian(plan, a.points, layout.origin_w_mm, FrameModel::fromVector(kin, x), active, options.finite_step_scale);
     svd.compute(J, Eigen::ComputeThinU | Eigen::ComputeThinV);
     const auto& sv = svd.singularValues();
     const double tol = options.rank_tolerance * sv[0];

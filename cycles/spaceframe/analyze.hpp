@@ -82,6 +82,9 @@ struct FrameModel {
   /// Report units per entry of toVector() (um, mdeg, um/m, um, mdeg, um per mm / rad / 1): the
   /// identification and the diagnosis take their Jacobians in these.
   static Eigen::Matrix<double, kSize, 1> reportUnits(Kinematics k);
+  /// Where the frame's sphere `sphere` (1..7, nominal centre center_w) really sits on the table:
+  /// set-up and sphere offset applied, workpiece frame.
+  Eigen::Vector3d placedCentre_w(const Eigen::Vector3d& center_w, int sphere, const Eigen::Vector3d& origin_w) const;
   /// Actual centre of a frame point, machine frame (exact HTMs).
   Eigen::Vector3d actualCentre_m(const FramePoint& p, const Eigen::Vector3d& origin_w) const;
   /// What the analysis reports as the centre on such a machine: the sphere fit of the triggers the
@@ -89,6 +92,12 @@ struct FrameModel {
   /// an anisotropic scale this is not actual / (1 + s): one-sided touches bias the fit.
   Eigen::Vector3d fittedCentre_m(const ProbePlan& plan, const FramePoint& p, const Eigen::Vector3d& origin_w) const;
 };
+
+/// d(fitted centre)/d(parameter) at `model` for the `active` entries of FrameModel::toVector(),
+/// in mm per report unit (3 rows per point): central differences of fittedCentre_m with steps of
+/// `step` report units. The least squares' Jacobian, and its map for the uncertainty budget.
+Eigen::MatrixXd frameJacobian(const ProbePlan& plan, const std::vector<FramePoint>& points, const Eigen::Vector3d& origin_w,
+                              const FrameModel& model, const std::vector<int>& active, double step);
 
 struct SpaceframeOptions {
   double finite_step_scale = 1e-3;   // Jacobian steps: 1e-3 um / mdeg / um/m / ...

@@ -1,6 +1,7 @@
 // spaceframe (003): length errors of a 7-sphere frame against U = +-(A + K L), and what explains them.
 #include "core/errors.hpp"
 #include "cycles/spaceframe/analyze.hpp"
+#include "cycles/spaceframe/budget.hpp"
 #include "cycles/spaceframe/diagnose.hpp"
 #include "cycles/cycle.hpp"
 #include "cycles/probing.hpp"
@@ -31,12 +32,24 @@ class Spaceframe final : public Cycle {
 
   CycleDocuments analyze(const AnalyzeRequest& r) const override {
     const ProbePlan& plan = *r.plan;
-    const SpaceframeAnalysis a = analyzeSpaceframe(plan, readProbeRuns(plan, r.results, *r.dialect));
+    const std::vector<MeasurementRun> runs = readProbeRuns(plan, r.results, *r.dialect);
+    const SpaceframeAnalysis a = analyzeSpaceframe(plan, runs);
     std::vector<std::string> files;
     for (const auto& f : r.results) files.push_back(f.path);
     CycleDocuments out;
     out.text = spaceframeText(a, plan);
     out.doc = spaceframeReportJson(a, plan, files);
+    // What analyze signs (issue 17): u_A from the data, u_B from the declared contributors and
+    // the frame's calibration by Monte Carlo through the same estimator (cycles/spaceframe/budget.hpp).
+    std::vector<SpaceframeAnalysis> per_run;
+    if (runs.size() >= 2)
+      for (const auto& run : runs) per_run.push_back(analyzeSpaceframe(plan, {run}));
+    SpaceframeBudgetOptions bo;
+    bo.runs = r.mc_runs;
+    bo.seed = r.mc_seed;
+    const UncertaintyBudget b = spaceframeBudget(plan, a, per_run, r.contributors, bo);
+    addSpaceframeBudget(&out.doc, b);
+    out.text += "\n" + budgetText(b, spaceframeBudgetValues(plan, a));
     if (a.summary.termination != "converged") out.warnings.push_back("spaceframe identification " + a.summary.termination);
     return out;
   }

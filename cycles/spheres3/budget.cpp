@@ -16,19 +16,9 @@
 
 namespace rotacal {
 
-bool spheres3TypeA(const ContributorInfo& c) {
-  return c.kind == ContributorKind::ProbeRepeatability || c.kind == ContributorKind::SurfaceRoughness;
-}
+bool spheres3TypeA(const ContributorInfo& c) { return isPerTouchContributor(c); }
 
-bool spheres3TypeB(const ContributorInfo& c) {
-  switch (c.kind) {
-    case ContributorKind::ProbePretravel:
-    case ContributorKind::LinearScale:
-    case ContributorKind::LinearRandom:
-    case ContributorKind::Squareness: return true;
-    default: return false;
-  }
-}
+bool spheres3TypeB(const ContributorInfo& c) { return isProbeAxesContributor(c); }
 
 namespace {
 
@@ -36,22 +26,6 @@ constexpr int kLocation = 4;
 bool isAngleComponent(int k) { return k >= 3; }
 double componentFactor(int k) { return isAngleComponent(k) ? kMdegPerRad : kUmPerMm; }
 double locationFactor(int i) { return i < 2 ? kUmPerMm : kMdegPerRad; }
-
-/// Pretravel along an approach u from the six directional values (+X -X +Y -Y +Z -Z): the
-/// spheres3 touches approach along machine axes, so exactly one weight is 1.
-double pretravelAlong(const std::array<double, 6>& v, const Eigen::Vector3d& u) {
-  double s = 0.0;
-  for (int k = 0; k < 3; ++k)
-    s += u[k] * u[k] * (u[k] >= 0 ? v[static_cast<size_t>(2 * k)] : v[static_cast<size_t>(2 * k + 1)]);
-  return s;
-}
-
-std::uint64_t catalogIndex(const ContributorInfo* info) {
-  return static_cast<std::uint64_t>(info - contributorCatalog().data());
-}
-
-// Random streams of the linear axes (beyond every catalog index).
-constexpr std::uint64_t kLinearFixed = 120, kLinearX = 121;
 
 /// The parameter scales of analyze's stage 2 (1 um, 10 urad): the finite-difference steps.
 double parameterScale(const Spheres3Result& r, int p) {
@@ -134,16 +108,11 @@ Spheres3LinearMap linearSpheres3(const ProbePlan& plan, const Spheres3Result& r)
         predict(r, parameters(r), g % 3, degToRad(r.c_deg[static_cast<size_t>(g / 3)]));
     const SphereFit fit = fitSphereCentre(pts, guess, {rho, true, 50});
     const int n = static_cast<int>(ids.size());
-    Eigen::MatrixXd J1(n, 4);
-    Eigen::VectorXd nu(n);
-    for (int j = 0; j < n; ++j) {
-      const Eigen::Vector3d nj = (pts[static_cast<size_t>(j)] - fit.centre_mm).normalized();
-      J1.row(j) << -nj.transpose(), -1.0;
-      nu[j] = nj.dot(plan.points[static_cast<size_t>(ids[static_cast<size_t>(j)])].approach_m);
-    }
-    const Eigen::MatrixXd pinv = J1.completeOrthogonalDecomposition().pseudoInverse();
-    const Eigen::MatrixXd dc = -pinv.topRows(3) * nu.asDiagonal();
-    const Eigen::MatrixXd res = (Eigen::MatrixXd::Identity(n, n) - J1 * pinv) * nu.asDiagonal();
+    std::vector<Eigen::Vector3d> approaches;
+    for (int i : ids) approaches.push_back(plan.points[static_cast<size_t>(i)].approach_m);
+    const SphereFitMap sm = linearSphereFit(pts, approaches, fit);
+    const Eigen::MatrixXd& dc = sm.centre;
+    const Eigen::MatrixXd& res = sm.residual;
     for (int j = 0; j < n; ++j) {
       centre_map.block(3 * g, ids[static_cast<size_t>(j)], 3, 1) = dc.col(j);
       for (int k = 0; k < n; ++k)
@@ -184,64 +153,10 @@ Spheres3LinearMap linearSpheres3(const ProbePlan& plan, const Spheres3Result& r)
 
 void drawSpheres3(const ProbePlan& plan, const ContributorSet& set, std::uint64_t seed, int run, int only,
                   Spheres3Draw* d) {
-  d->pretravel_mm.fill(0.0);
-  d->linear = false;
-  ContributorSet linear;
-  const std::uint64_t base = static_cast<std::uint64_t>(run) << 7;
-  for (size_t i = 0; i < set.items.size(); ++i) {
-    const Contributor& c = set.items[i];
-    if (only >= 0 && static_cast<size_t>(only) != i) continue;
-    if (!spheres3TypeB(*c.info)) continue;
-    if (c.info->kind == ContributorKind::ProbePretravel) {
-      Rng rng(seed, base | catalogIndex(c.info));
-      for (auto& v : d->pretravel_mm) v = c.u[0] * rng.normal();
-    } else {
-      linear.items.push_back(c);
-    }
-  }
-  if (linear.items.empty()) return;
-  linear.node_spacing_min_mm = set.node_spacing_min_mm;
-  linear.node_spacing_max_mm = set.node_spacing_max_mm;
-  // The span of the read positions: every nominal trigger (the triggers move by um).
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = Eigen::Vector3d::Constant(-1e300);
-  for (const auto& p : plan.points) {
-    lo = lo.cwiseMin(p.trigger_m_mm);
-    hi = hi.cwiseMax(p.trigger_m_mm);
-  }
-  Rng fixed(seed, base | kLinearFixed), ax(seed, base | kLinearX), ay(seed, base | (kLinearX + 1)),
-      az(seed, base | (kLinearX + 2));
-  drawLinearAxisErrors(linear.linearAxisModel(), lo, hi, fixed, {&ax, &ay, &az}, &d->linear_errors);
-  d->linear = true;
+  drawProbeAxes(plan, set, spheres3TypeB, seed, run, only, d);
 }
 
-void applySpheres3Draw(const Spheres3Draw& d, Truth* truth) {
-  if (d.linear) truth->linear_axis_error = d.linear_errors.asFunction();
-  if (std::any_of(d.pretravel_mm.begin(), d.pretravel_mm.end(), [](double x) { return x != 0.0; })) {
-    auto before = truth->pretravel_by_direction_um;
-    truth->pretravel_by_direction_um = [v = d.pretravel_mm, before](const Eigen::Vector3d& u) {
-      return mmToUm(pretravelAlong(v, u)) + (before ? before(u) : 0.0);
-    };
-  }
-}
-
-namespace {
-
-UncertaintyBudget slice(const UncertaintyBudget& full, int first, int count) {
-  UncertaintyBudget b;
-  b.names.assign(full.names.begin() + first, full.names.begin() + first + count);
-  b.units.assign(full.units.begin() + first, full.units.begin() + first + count);
-  b.cov_a = full.cov_a.block(first, first, count, count);
-  b.cov_b = full.cov_b.block(first, first, count, count);
-  b.type_a_source = full.type_a_source;
-  b.type_b_evaluated = full.type_b_evaluated;
-  b.type_b_source = full.type_b_source;
-  for (const auto& t : full.terms) b.terms.push_back({t.contributor, t.u.segment(first, count)});
-  b.runs = full.runs;
-  b.seed = full.seed;
-  return b;
-}
-
-}  // namespace
+void applySpheres3Draw(const Spheres3Draw& d, Truth* truth) { applyProbeAxesDraw(d, truth); }
 
 Spheres3Budget spheres3Budget(const ProbePlan& plan, const Spheres3Result& r, const std::vector<Spheres3Result>& per_run,
                               const ContributorSet* contributors, const Spheres3BudgetOptions& options) {
@@ -272,19 +187,10 @@ Spheres3Budget spheres3Budget(const ProbePlan& plan, const Spheres3Result& r, co
   G = factor.asDiagonal() * G;
 
   // The split of the declared contributors.
-  double declared_mm2 = 0.0;
-  ContributorSet type_b;
-  std::vector<std::string> left_out;
-  if (contributors) {
-    type_b.file = contributors->file;
-    type_b.node_spacing_min_mm = contributors->node_spacing_min_mm;
-    type_b.node_spacing_max_mm = contributors->node_spacing_max_mm;
-    for (const auto& c : contributors->items) {
-      if (spheres3TypeA(*c.info)) declared_mm2 += c.u[0] * c.u[0];
-      else if (spheres3TypeB(*c.info)) type_b.items.push_back(c);
-      else left_out.emplace_back(c.info->id);
-    }
-  }
+  const ContributorSplit split = contributors ? splitContributors(*contributors, spheres3TypeA, spheres3TypeB) : ContributorSplit{};
+  const double declared_mm2 = split.per_reading_mm2;
+  const ContributorSet& type_b = split.type_b;
+  const std::vector<std::string>& left_out = split.left_out;
   const Truth base = spheres3IdentifiedTruth(plan, r);
   // The triggers' deviation along the approach under a draw (exact simulator), mm.
   auto triggerShift = [&](const Spheres3Draw& d) {
@@ -365,7 +271,7 @@ Spheres3Budget spheres3Budget(const ProbePlan& plan, const Spheres3Result& r, co
   }
 
   Spheres3Budget out;
-  out.location = slice(full, 0, kLocation);
+  out.location = full.slice(0, kLocation);
   const Eigen::VectorXd ua = full.uA(), ub = full.uB(), uc = full.uC();
   out.component_u_a.resize(n_angles, kNumComponentErrors);
   out.component_u_b.resize(n_angles, kNumComponentErrors);

@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "core/contributor_draw.hpp"
 #include "core/contributors.hpp"
 #include "core/linear_axes.hpp"
 #include "core/probe_plan.hpp"
@@ -55,12 +56,8 @@ struct Spheres3LinearMap {
 Truth spheres3IdentifiedTruth(const ProbePlan& plan, const Spheres3Result& result);
 Spheres3LinearMap linearSpheres3(const ProbePlan& plan, const Spheres3Result& result);
 
-/// One drawn realisation of the Type B contributors as a truth modifier.
-struct Spheres3Draw {
-  std::array<double, 6> pretravel_mm{};  // +X -X +Y -Y +Z -Z
-  bool linear = false;
-  LinearAxisErrors linear_errors;
-};
+/// One drawn realisation of the Type B contributors (pretravel, the linear axes) as a truth modifier.
+using Spheres3Draw = ProbeAxesDraw;
 /// Draws run `run` of `seed` from `set` (only the spheres3TypeB contributors); with `only` >= 0
 /// every contributor but set.items[only] is zero. One random stream per contributor, so a
 /// contributor draws the same values alone and combined.

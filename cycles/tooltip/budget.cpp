@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "core/contributor_draw.hpp"
 #include "core/units.hpp"
 
 namespace rotacal {
@@ -30,10 +31,6 @@ bool actsAsTypeB(const ContributorInfo& c) {
     case ContributorKind::Squareness: return true;
     default: return false;
   }
-}
-
-std::uint64_t catalogIndex(const ContributorInfo* info) {
-  return static_cast<std::uint64_t>(info - contributorCatalog().data());
 }
 
 int transverse(char axis) { return axis == 'A' ? 1 : 0; }  // Y for A, X for B
@@ -77,46 +74,26 @@ Eigen::VectorXd valuesOf(const Layout& l, const TooltipFit& f) {
   return v;
 }
 
-/// The commanded pivot positions' span (machine frame): where the linear axes are read.
-void commandedSpan(const ProbePlan& plan, Eigen::Vector3d* lo, Eigen::Vector3d* hi) {
-  *lo = Eigen::Vector3d::Constant(1e300);
-  *hi = Eigen::Vector3d::Constant(-1e300);
-  for (const auto& p : plan.points) {
-    *lo = lo->cwiseMin(p.trigger_m_mm);
-    *hi = hi->cwiseMax(p.trigger_m_mm);
-  }
-}
-
 }  // namespace
 
 void drawTooltip(const ProbePlan& plan, const ContributorSet& set, std::uint64_t seed, int run, int only,
                  TooltipDraw* d) {
   *d = TooltipDraw{};
-  ContributorSet linear;
-  const std::uint64_t base = static_cast<std::uint64_t>(run) << 7;
   for (size_t i = 0; i < set.items.size(); ++i) {
     const Contributor& c = set.items[i];
     if (only >= 0 && static_cast<size_t>(only) != i) continue;
     if (!actsAsTypeB(*c.info)) continue;
     if (c.info->kind == ContributorKind::LaserAlignment) {
-      Rng rng(seed, base | catalogIndex(c.info));
+      Rng rng(seed, contributorStream(*c.info, run));
       d->in_t = c.u[0] * rng.normal();
       d->out_t = c.u[0] * rng.normal();
       d->in_z = c.u[0] * rng.normal();
       d->out_z = c.u[0] * rng.normal();
-    } else {
-      linear.items.push_back(c);  // the linear axes, drawn together below
-    }
+    }  // the linear axes: drawn together below
   }
-  if (linear.items.empty()) return;
-  linear.node_spacing_min_mm = set.node_spacing_min_mm;
-  linear.node_spacing_max_mm = set.node_spacing_max_mm;
-  const LinearAxisModel model = linear.linearAxisModel();
   Eigen::Vector3d lo, hi;
-  commandedSpan(plan, &lo, &hi);
-  Rng fixed(seed, base | 120), ax(seed, base | 121), ay(seed, base | 122), az(seed, base | 123);
-  drawLinearAxisErrors(model, lo, hi, fixed, {&ax, &ay, &az}, &d->linear_errors);
-  d->linear = true;
+  triggerSpan(plan, &lo, &hi);  // the commanded pivot positions: where the linear axes are read
+  d->linear = drawLinearAxes(set, only, lo, hi, seed, run, &d->linear_errors);
 }
 
 TooltipRun simulateTooltipHead(const ProbePlan& plan, const TooltipHead& head, const TooltipDraw& draw, bool read_z,
@@ -232,25 +209,13 @@ UncertaintyBudget tooltipBudget(const ProbePlan& plan, const std::vector<Tooltip
 
   // The per-reading scatter declared: the laser's own error (laser_resolution, else the plan's
   // laser_noise_um: the same 004 figure), the sphere's form, lateral coupling.
-  double declared_um2 = 0.0;
-  bool resolution_declared = false;
-  ContributorSet type_b;
-  std::vector<std::string> ignored;
-  if (contributors) {
-    type_b.file = contributors->file;
-    type_b.node_spacing_min_mm = contributors->node_spacing_min_mm;
-    type_b.node_spacing_max_mm = contributors->node_spacing_max_mm;
-    for (const auto& c : contributors->items) {
-      if (tooltipTypeA(*c.info)) {
-        declared_um2 += mmToUm(c.u[0]) * mmToUm(c.u[0]);
-        resolution_declared = resolution_declared || c.info->kind == ContributorKind::LaserResolution;
-      } else if (actsAsTypeB(*c.info)) {
-        type_b.items.push_back(c);
-      } else {
-        ignored.emplace_back(c.info->id);
-      }
-    }
-  }
+  const ContributorSplit split = contributors ? splitContributors(*contributors, tooltipTypeA, actsAsTypeB) : ContributorSplit{};
+  double declared_um2 = split.per_reading_mm2 * kUmPerMm * kUmPerMm;
+  const bool resolution_declared =
+      contributors && std::any_of(contributors->items.begin(), contributors->items.end(),
+                                  [](const Contributor& c) { return c.info->kind == ContributorKind::LaserResolution; });
+  const ContributorSet& type_b = split.type_b;
+  const std::vector<std::string>& ignored = split.left_out;
   if (!resolution_declared) declared_um2 += declared_noise_um * declared_noise_um;
 
   TooltipHead truth;

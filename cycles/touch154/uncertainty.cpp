@@ -15,6 +15,7 @@
 
 #include <fmt/format.h>
 
+#include "core/contributor_draw.hpp"
 #include "core/limits.hpp"
 
 #include "cycles/touch154/causes.hpp"
@@ -72,15 +73,6 @@ namespace {
 
 constexpr int kStreamsPerRun = 16;
 enum Stream { kRepeat = 0, kRough, kPretravel, kLinearFixed, kNodesX, kNodesY, kNodesZ, kSetup, kForm };
-
-/// Pre-travel along an approach direction u from the six directional values (+X -X +Y -Y +Z -Z):
-/// sum_k u_k^2 v(k, sign u_k). Exact for the axis-parallel approaches of 000's 154-point plan; a smooth
-/// blend for oblique ones (the weights sum to 1).
-double pretravelAlong(const std::array<double, 6>& v, const Eigen::Vector3d& u) {
-  double s = 0.0;
-  for (int k = 0; k < 3; ++k) s += u[k] * u[k] * (u[k] >= 0 ? v[static_cast<size_t>(2 * k)] : v[static_cast<size_t>(2 * k + 1)]);
-  return s;
-}
 
 Eigen::VectorXd triggersAlong(const ProbePlan& plan, const Truth& truth) {
   const MeasurementRun run = simulate(plan, truth, {1});

@@ -15,6 +15,7 @@
 #include "cycles/cycle.hpp"
 #include "cycles/spheres3/analyze.hpp"
 #include "cycles/spheres3/budget.hpp"
+#include "contributor_test_util.hpp"
 #include "test_util.hpp"
 
 namespace rotacal {
@@ -52,13 +53,7 @@ Measured measure(const Truth& truth, int repeats = 1, std::uint64_t seed = 1) {
   return m;
 }
 
-Contributor item(const char* id, double u_internal) {
-  Contributor c;
-  c.info = findContributor(id);
-  EXPECT_NE(c.info, nullptr) << id;
-  c.u = Eigen::Vector3d::Constant(u_internal);
-  return c;
-}
+Contributor item(const char* id, double u_internal) { return test::contributorItem(id, u_internal); }
 
 Eigen::VectorXd reportLocation(const Eigen::Vector4d& x) {
   return Eigen::Vector4d(mmToUm(x[0]), mmToUm(x[1]), radToMdeg(x[2]), radToMdeg(x[3]));

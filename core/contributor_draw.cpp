@@ -1,0 +1,117 @@
+#include "core/contributor_draw.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+#include "core/rng.hpp"
+#include "core/units.hpp"
+
+namespace rotacal {
+
+double pretravelAlong(const std::array<double, 6>& v, const Eigen::Vector3d& u) {
+  double s = 0.0;
+  for (int k = 0; k < 3; ++k)
+    s += u[k] * u[k] * (u[k] >= 0 ? v[static_cast<size_t>(2 * k)] : v[static_cast<size_t>(2 * k + 1)]);
+  return s;
+}
+
+std::uint64_t contributorStream(const ContributorInfo& info, int run) {
+  return (static_cast<std::uint64_t>(run) << 7) | static_cast<std::uint64_t>(&info - contributorCatalog().data());
+}
+
+bool isLinearAxisContributor(const ContributorInfo& c) {
+  return c.kind == ContributorKind::LinearScale || c.kind == ContributorKind::LinearRandom ||
+         c.kind == ContributorKind::Squareness;
+}
+
+bool isPerTouchContributor(const ContributorInfo& c) {
+  return c.kind == ContributorKind::ProbeRepeatability || c.kind == ContributorKind::SurfaceRoughness;
+}
+
+bool isProbeAxesContributor(const ContributorInfo& c) {
+  return c.kind == ContributorKind::ProbePretravel || isLinearAxisContributor(c);
+}
+
+ContributorSplit splitContributors(const ContributorSet& declared, const std::function<bool(const ContributorInfo&)>& type_a,
+                                   const std::function<bool(const ContributorInfo&)>& type_b) {
+  ContributorSplit s;
+  s.type_b.file = declared.file;
+  s.type_b.node_spacing_min_mm = declared.node_spacing_min_mm;
+  s.type_b.node_spacing_max_mm = declared.node_spacing_max_mm;
+  for (const auto& c : declared.items) {
+    if (type_a(*c.info)) s.per_reading_mm2 += c.u[0] * c.u[0];
+    else if (type_b(*c.info)) s.type_b.items.push_back(c);
+    else s.left_out.emplace_back(c.info->id);
+  }
+  return s;
+}
+
+bool drawLinearAxes(const ContributorSet& set, int only, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
+                    std::uint64_t seed, int run, LinearAxisErrors* out) {
+  ContributorSet linear;
+  for (size_t i = 0; i < set.items.size(); ++i)
+    if ((only < 0 || static_cast<size_t>(only) == i) && isLinearAxisContributor(*set.items[i].info))
+      linear.items.push_back(set.items[i]);
+  if (linear.items.empty()) return false;
+  linear.node_spacing_min_mm = set.node_spacing_min_mm;
+  linear.node_spacing_max_mm = set.node_spacing_max_mm;
+  // Streams 120..123: beyond every catalog index (the catalog has fewer than 120 ids).
+  const std::uint64_t base = static_cast<std::uint64_t>(run) << 7;
+  Rng fixed(seed, base | 120), ax(seed, base | 121), ay(seed, base | 122), az(seed, base | 123);
+  drawLinearAxisErrors(linear.linearAxisModel(), lo, hi, fixed, {&ax, &ay, &az}, out);
+  return true;
+}
+
+void triggerSpan(const ProbePlan& plan, Eigen::Vector3d* lo, Eigen::Vector3d* hi) {
+  *lo = Eigen::Vector3d::Constant(1e300);
+  *hi = Eigen::Vector3d::Constant(-1e300);
+  for (const auto& p : plan.points) {
+    *lo = lo->cwiseMin(p.trigger_m_mm);
+    *hi = hi->cwiseMax(p.trigger_m_mm);
+  }
+}
+
+void drawProbeAxes(const ProbePlan& plan, const ContributorSet& set, const std::function<bool(const ContributorInfo&)>& acts,
+                   std::uint64_t seed, int run, int only, ProbeAxesDraw* d) {
+  d->pretravel_mm.fill(0.0);
+  ContributorSet drawn;  // the accepted ones; `only` keeps its index in `set`
+  int drawn_only = -1;
+  for (size_t i = 0; i < set.items.size(); ++i) {
+    const Contributor& c = set.items[i];
+    if (!acts(*c.info)) continue;
+    if (!isProbeAxesContributor(*c.info))
+      throw std::logic_error("drawProbeAxes: contributor " + std::string(c.info->id) + " is neither probe nor axis");
+    if (only >= 0 && static_cast<size_t>(only) == i) drawn_only = static_cast<int>(drawn.items.size());
+    if ((only < 0 || static_cast<size_t>(only) == i) && c.info->kind == ContributorKind::ProbePretravel) {
+      Rng rng(seed, contributorStream(*c.info, run));
+      for (auto& v : d->pretravel_mm) v = c.u[0] * rng.normal();
+    }
+    drawn.items.push_back(c);
+  }
+  drawn.node_spacing_min_mm = set.node_spacing_min_mm;
+  drawn.node_spacing_max_mm = set.node_spacing_max_mm;
+  Eigen::Vector3d lo, hi;
+  triggerSpan(plan, &lo, &hi);
+  d->linear = (only < 0 || drawn_only >= 0) &&
+              drawLinearAxes(drawn, only < 0 ? -1 : drawn_only, lo, hi, seed, run, &d->linear_errors);
+}
+
+void applyProbeAxesDraw(const ProbeAxesDraw& d, Truth* truth) {
+  if (d.linear) {
+    auto drawn = d.linear_errors.asFunction();
+    auto before = truth->linear_axis_error;
+    if (before)
+      truth->linear_axis_error = [drawn, before](const Eigen::Vector3d& c) { return Eigen::Vector3d(drawn(c) + before(c)); };
+    else
+      truth->linear_axis_error = drawn;
+  }
+  if (std::any_of(d.pretravel_mm.begin(), d.pretravel_mm.end(), [](double x) { return x != 0.0; })) {
+    auto before = truth->pretravel_by_direction_um;
+    truth->pretravel_by_direction_um = [v = d.pretravel_mm, before](const Eigen::Vector3d& u) {
+      return mmToUm(pretravelAlong(v, u)) + (before ? before(u) : 0.0);
+    };
+  }
+}
+
+}  // namespace rotacal

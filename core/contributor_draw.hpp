@@ -1,0 +1,71 @@
+#pragma once
+// One Monte Carlo draw of the declared contributors that every probing cycle shares (issue 17):
+// the probe's pretravel per approach direction and the linear axes' errors (000 Sec. 5,
+// core/linear_axes.hpp), as a modifier of the simulator's Truth. The cycles' budgets draw their
+// own instruments (R-test sensors, laser) beside it. Random streams: one per contributor (its
+// catalog index) and per run, so a contributor draws the same values alone and combined, whatever
+// the thread count.
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/contributors.hpp"
+#include "core/linear_axes.hpp"
+#include "core/probe_plan.hpp"
+#include "core/simulation.hpp"
+
+namespace rotacal {
+
+/// Pretravel along the approach u (unit) from six directional values (+X -X +Y -Y +Z -Z):
+/// sum_k u_k^2 v(k, sign u_k). Exact for axis-parallel approaches; a smooth blend for oblique
+/// ones (the weights sum to 1).
+double pretravelAlong(const std::array<double, 6>& v, const Eigen::Vector3d& u);
+
+/// The random stream of a contributor in run `run`: its catalog index beside the run's bits.
+std::uint64_t contributorStream(const ContributorInfo& info, int run);
+
+/// The linear axes' contributors: scale, random, squareness.
+bool isLinearAxisContributor(const ContributorInfo& info);
+/// What acts independently at every touch of a probe (repeatability, roughness): Type A.
+bool isPerTouchContributor(const ContributorInfo& info);
+/// What a probe cycle on spheres can be drawn with here: pretravel and the linear axes.
+bool isProbeAxesContributor(const ContributorInfo& info);
+
+/// A declared set split for one cycle's budget: the per-reading variance its data measure (Type
+/// A, mm^2), the Type B contributors (file and node spacing kept) and the ids that do not act.
+struct ContributorSplit {
+  double per_reading_mm2 = 0.0;
+  ContributorSet type_b;
+  std::vector<std::string> left_out;
+};
+ContributorSplit splitContributors(const ContributorSet& declared, const std::function<bool(const ContributorInfo&)>& type_a,
+                                   const std::function<bool(const ContributorInfo&)>& type_b);
+
+/// Draws the linear axes' errors of run `run` from the linear-axis contributors of `set` (only
+/// set.items[only] when only >= 0) over the read positions lo..hi (machine frame, mm). Returns
+/// false, drawing nothing, when none is declared. Its streams lie beyond every catalog index.
+bool drawLinearAxes(const ContributorSet& set, int only, const Eigen::Vector3d& lo_mm, const Eigen::Vector3d& hi_mm,
+                    std::uint64_t seed, int run, LinearAxisErrors* out);
+
+/// The span of a plan's nominal triggers (machine frame): where a probing cycle reads the axes.
+void triggerSpan(const ProbePlan& plan, Eigen::Vector3d* lo_mm, Eigen::Vector3d* hi_mm);
+
+/// The probe's pretravel and the linear axes, drawn for one run.
+struct ProbeAxesDraw {
+  std::array<double, 6> pretravel_mm{};  // +X -X +Y -Y +Z -Z
+  bool linear = false;
+  LinearAxisErrors linear_errors;
+};
+
+/// Draws run `run` of `seed` from the contributors of `set` that `acts` accepts (pretravel and the
+/// linear axes; any other kind accepted is an error of the caller); with `only` >= 0 every
+/// contributor but set.items[only] is zero. The linear axes cover the plan's trigger span.
+void drawProbeAxes(const ProbePlan& plan, const ContributorSet& set, const std::function<bool(const ContributorInfo&)>& acts,
+                   std::uint64_t seed, int run, int only, ProbeAxesDraw* out);
+/// Adds a draw to a truth (to its linear_axis_error and pretravel, if it has them).
+void applyProbeAxesDraw(const ProbeAxesDraw& draw, Truth* truth);
+
+}  // namespace rotacal
