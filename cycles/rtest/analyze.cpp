@@ -247,6 +247,8 @@ RtestAnalysis analyzeRtest(const ProbePlan& plan, const std::vector<RtestCycle>&
     RtestCycleFit f;
     f.t_s = cyc.t_s();
     f.sigma_um = std::max(opt.sensor_sigma_um, s_res);
+    f.residual_sd_um = s_res;
+    f.dof = dof;
     f.residual_rms_um = mmToUm(std::sqrt(r.squaredNorm() / (rows - zero_rows)));
     f.dz_reference_fixed = referred;
     f.own_reset = own;

@@ -45,6 +45,8 @@ struct RtestCycleFit {
   double residual_rms_um = 0.0;     // readings minus the linear model
   double linearisation_um = 0.0;    // max |exact model - linear model| at the estimate
   double sigma_um = 0.0;            // noise used for u: max(sensor_sigma, residual estimate)
+  double residual_sd_um = 0.0;      // residual standard deviation (divisor: dof)
+  int dof = 0;
   bool dz_reference_fixed = false;  // referred to its own reset (first cycle, or every cycle with reset reads): dz and c at tilt 0 fixed to 0
   bool own_reset = false;           // the cycle's readings are referred to its own reset reading
   // The re-read check: the reset pose read again at the end of the cycle against its reading

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "core/contributor_draw.hpp"
+#include "core/report_envelope.hpp"
 #include "core/units.hpp"
 
 namespace rotacal {
@@ -182,6 +183,135 @@ UncertaintyBudget rtestBudget(const ProbePlan& plan, const RtestCycle& first, co
       ignored.empty() ? std::string()
                       : fmt::format("; not acting on an R-test and left out: {}", fmt::join(ignored, ", ")));
   return b;
+}
+
+namespace {
+
+Eigen::MatrixXd asTilts(const Eigen::VectorXd& v, int tilts) { return Eigen::Map<const Eigen::MatrixXd>(v.data(), kRtestParams, tilts); }
+
+}  // namespace
+
+Eigen::MatrixXd RtestTiltBudget::uA() const { return asTilts(budget.uA(), tilts); }
+Eigen::MatrixXd RtestTiltBudget::uB() const { return asTilts(budget.uB(), tilts); }
+Eigen::MatrixXd RtestTiltBudget::uC() const { return asTilts(budget.uC(), tilts); }
+
+RtestTiltBudget rtestTiltBudget(const ProbePlan& plan, const RtestCycle& first, const RtestAnalysis& a,
+                                const RtestFitOptions& fit_options, const ContributorSet* contributors,
+                                const RtestBudgetOptions& options) {
+  options.validateOrThrow();
+  if (a.cycles.empty()) throw std::invalid_argument("rtest tilt budget: no cycle analyzed");
+  const Kinematics k = plan.machine.kinematics;
+  const int nt = static_cast<int>(a.tilt_deg.size());
+  const int n = kRtestParams * nt;
+  RtestTiltBudget out;
+  out.tilts = nt;
+  UncertaintyBudget& b = out.budget;
+  Eigen::VectorXd f(n);  // internal -> report units
+  for (int i = 0; i < nt; ++i)
+    for (int p = 0; p < kRtestParams; ++p) {
+      b.names.push_back(fmt::format("{}@{:g}", rtestParameterName(k, p), a.tilt_deg[static_cast<size_t>(i)]));
+      b.units.emplace_back(rtestParameterIsLength(p) ? "um" : "mdeg");
+      f[kRtestParams * i + p] = rtestParameterIsLength(p) ? kUmPerMm : kMdegPerRad;
+    }
+  const RtestCycleFit& fit = a.cycles.front();
+  b.cov_b = Eigen::MatrixXd::Zero(n, n);
+  const ContributorSplit split =
+      contributors ? splitContributors(*contributors, rtestTypeA, actsAsTypeB) : ContributorSplit{};
+  Truth truth0;
+  truth0.errors.kinematics = k;
+  if (a.location.identifiable) truth0.errors.values = a.location.value;
+  RtestSimOptions so;
+  so.noise_um = 0.0;
+  so.cycles = 1;
+  // The per-tilt fit of the exact simulator's first cycle, read as the data were.
+  auto fitOf = [&](const Truth& t, const RtestTruthExtras& x) -> RtestCycleFit {
+    RtestSeries s = simulateRtest(plan, t, x, so);  // one cycle
+    if (!first.reset || !first.reread)
+      for (auto& c : s.cycles) c.reset = c.reread = std::nullopt;
+    return analyzeRtest(plan, s.cycles, fit_options).cycles.front();
+  };
+  auto perTilt = [&](const Truth& t, const RtestTruthExtras& x) -> Eigen::VectorXd {
+    const RtestCycleFit c = fitOf(t, x);
+    return f.cwiseProduct(Eigen::Map<const Eigen::VectorXd>(c.value.data(), n));
+  };
+  // Type A, the rule of the location fit: the per-tilt fit's residual also holds what the Type B
+  // contributors leave in it (the linear axes between poses); that part is in u_B, so its
+  // expected value is taken out, floored at the declared per-reading scatter.
+  const double declared_mm2 = std::pow(umToMm(fit_options.sensor_sigma_um), 2) + split.per_reading_mm2;
+  double expected_sys_mm2 = 0.0;
+  if (!split.type_b.items.empty() && fit.dof > 0) {
+    constexpr int kResidualRuns = 100;
+    for (int run = 0; run < kResidualRuns; ++run) {
+      RtestDraw d;
+      drawRtest(plan, split.type_b, options.seed ^ 0x5245534944ULL, run, -1, &d);
+      Truth t = truth0;
+      RtestTruthExtras x;
+      applyRtestDraw(plan, d, &t, &x);
+      expected_sys_mm2 += std::pow(umToMm(fitOf(t, x).residual_sd_um), 2);
+    }
+    expected_sys_mm2 /= kResidualRuns;
+  }
+  const double s_obs_mm2 = std::pow(umToMm(fit.residual_sd_um), 2);
+  const double sigma2 = std::max(declared_mm2, s_obs_mm2 - expected_sys_mm2);
+  // The fit's covariance is sigma_um^2 N^-1: rescaled to this per-reading scatter.
+  const double fit_sigma2 = std::pow(umToMm(fit.sigma_um), 2);
+  b.cov_a = fit_sigma2 > 0 ? Eigen::MatrixXd(sigma2 / fit_sigma2 * f.asDiagonal() * fit.cov * f.asDiagonal())
+                           : Eigen::MatrixXd::Zero(n, n);
+  b.type_a_source = fmt::format(
+      "the first cycle's per-tilt fit (002 Eq. (6)): the per-reading scatter {:.3f} um (residual {:.3f} um, {} dof, "
+      "less {:.3f} um expected from the Type B contributors, floored at the declared {:.3f} um) through that fit",
+      mmToUm(std::sqrt(sigma2)), fit.residual_sd_um, fit.dof, mmToUm(std::sqrt(expected_sys_mm2)),
+      mmToUm(std::sqrt(declared_mm2)));
+  b.terms.push_back({"data", b.uA()});
+  if (!contributors) {
+    b.type_b_source = typeBNotDeclared();
+    return out;
+  }
+  if (split.type_b.items.empty()) {
+    b.type_b_evaluated = true;
+    b.type_b_source = "no declared contributor acts on the R-test as Type B (docs/uncertainty.md, rtest)";
+    return out;
+  }
+  const Eigen::VectorXd base = perTilt(truth0, RtestTruthExtras{});
+  runTypeB(&b, split.type_b, options, [&](std::uint64_t seed, int run, int c) -> Eigen::VectorXd {
+    RtestDraw d;
+    drawRtest(plan, split.type_b, seed, run, c, &d);
+    Truth t = truth0;
+    RtestTruthExtras x;
+    applyRtestDraw(plan, d, &t, &x);
+    return perTilt(t, x) - base;
+  });
+  b.type_b_source = fmt::format(
+      "{} declared contributors (from {}) drawn on the exact simulator of the cycle (full HTMs) around the identified "
+      "location errors, the first cycle's readings run through the per-tilt fit, {} runs, seed {}{}",
+      split.type_b.items.size(), contributorsSource(*contributors), options.runs, options.seed,
+      split.left_out.empty() ? std::string()
+                             : fmt::format("; not acting on an R-test and left out: {}", fmt::join(split.left_out, ", ")));
+  return out;
+}
+
+void addRtestTiltBudget(Json* report, const ProbePlan& plan, const RtestTiltBudget& b) {
+  if (!report->contains("cycles") || (*report)["cycles"].empty()) return;
+  Json& errors = (*report)["cycles"][0]["errors"];
+  const Eigen::MatrixXd ua = b.uA(), ub = b.uB(), uc = b.uC();
+  auto row = [&](const Eigen::MatrixXd& m, int p, double mult) {
+    Json r = Json::array();
+    for (int i = 0; i < b.tilts; ++i) r.push_back(round6(mult * m(p, i)));
+    return r;
+  };
+  for (int p = 0; p < kRtestParams; ++p) {
+    const std::string name = rtestParameterName(plan.machine.kinematics, p);
+    if (!errors.contains(name)) continue;
+    Json& e = errors[name];
+    e["u_a"] = row(ua, p, 1.0);
+    e["u_b"] = row(ub, p, 1.0);
+    e["u_c"] = row(uc, p, 1.0);
+    e["U"] = row(uc, p, kCoverageFactor);
+    e["k"] = kCoverageFactor;
+  }
+  (*report)["per_tilt_uncertainty"] = {{"type_a", b.budget.type_a_source},
+                                       {"type_b", b.budget.type_b_source},
+                                       {"where", "cycles[0].errors: u_a u_b u_c U per tilt"}};
 }
 
 }  // namespace rotacal

@@ -49,4 +49,28 @@ UncertaintyBudget rtestBudget(const ProbePlan& plan, const RtestCycle& first, co
                               double sensor_sigma_um, const ContributorSet* contributors,
                               const RtestBudgetOptions& options);
 
+/// The per-tilt errors of the first cycle (002 Eq. (6): what the R-test measures at each tilt),
+/// 6 x tilts in report units (um, mdeg), order of rtestParameterIndices:
+///   u_A  the per-tilt fit's own covariance (the per-reading scatter max(sensor noise, residual)
+///        through that fit); it may hold the part of the linear axes' errors the six errors per
+///        tilt cannot absorb a second time, which is conservative;
+///   u_B  the declared contributors by Monte Carlo through analyzeRtest itself on the exact
+///        simulator's first cycle (estimate with a draw minus estimate without).
+/// dz and c at the reset's tilt are fixed to 0 by the reset (docs/rtest.md): their u is 0.
+struct RtestTiltBudget {
+  UncertaintyBudget budget;  // parameters "dx_BY@-60" ..., tilt-major
+  int tilts = 0;
+  /// Column i of a 6 x tilts matrix of u_A / u_B / u_c.
+  Eigen::MatrixXd uA() const;
+  Eigen::MatrixXd uB() const;
+  Eigen::MatrixXd uC() const;
+};
+/// `first` is the first cycle's readings as measured (with or without its reset rows: the
+/// simulated cycle is read the same way).
+RtestTiltBudget rtestTiltBudget(const ProbePlan& plan, const RtestCycle& first, const RtestAnalysis& analysis,
+                                const RtestFitOptions& fit_options, const ContributorSet* contributors,
+                                const RtestBudgetOptions& options);
+/// Adds u_a, u_b, u_c, U and k arrays beside the first cycle's per-tilt values in REPORT.json.
+void addRtestTiltBudget(Json* report, const ProbePlan& plan, const RtestTiltBudget& b);
+
 }  // namespace rotacal

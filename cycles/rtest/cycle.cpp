@@ -127,6 +127,20 @@ class Rtest final : public Cycle {
                                                                              : radToMdeg(a.location.value[i]);
       out.text += "\n" + budgetText(b, values);
     }
+    // The per-tilt errors, what the R-test measures at each tilt, with the same contributors.
+    {
+      RtestBudgetOptions bo;
+      bo.runs = r.mc_runs;
+      bo.seed = r.mc_seed;
+      const RtestTiltBudget tb = rtestTiltBudget(plan, cycles.front(), a, o, r.contributors, bo);
+      addRtestTiltBudget(&out.doc, plan, tb);
+      const Eigen::MatrixXd uc = tb.uC();
+      out.text += fmt::format("per-tilt errors of the first cycle: U (k = {:g}) at most {:.3f} um (translations), {:.3f} "
+                              "mdeg (rotations) over the {} tilts; u_B {} (REPORT.json cycles[0].errors: u_a u_b u_c U)\n",
+                              kCoverageFactor, kCoverageFactor * uc.topRows(3).maxCoeff(),
+                              kCoverageFactor * uc.bottomRows(3).maxCoeff(), tb.tilts,
+                              tb.budget.type_b_evaluated ? "from the declared contributors" : "not evaluated (none declared)");
+    }
     return out;
   }
 
