@@ -314,4 +314,75 @@ void addRtestTiltBudget(Json* report, const ProbePlan& plan, const RtestTiltBudg
                                        {"where", "cycles[0].errors: u_a u_b u_c U per tilt"}};
 }
 
+RtestDriftBudget rtestDriftBudget(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, const RtestAnalysis& a,
+                                  const RtestFitOptions& fit_options, const ContributorSet* contributors) {
+  RtestDriftBudget out;
+  if (a.cycles.size() < 3) return out;
+  const int nt = static_cast<int>(a.tilt_deg.size());
+  Eigen::MatrixXd f(kRtestParams, nt);  // internal per s -> report units per h
+  for (int p = 0; p < kRtestParams; ++p) f.row(p).setConstant((rtestParameterIsLength(p) ? kUmPerMm : kMdegPerRad) * 3600.0);
+  out.u_a = a.rate_u.cwiseProduct(f);
+  out.u_b = Eigen::MatrixXd::Zero(kRtestParams, nt);
+  if (!contributors) {
+    out.type_b_source = typeBNotDeclared();
+    return out;
+  }
+  double u_gain = 0.0, u_direction = 0.0;
+  std::vector<std::string> cancel;
+  for (const auto& c : contributors->items) {
+    if (c.info->kind == ContributorKind::RtestSensorGain) u_gain = c.u[0];
+    else if (c.info->kind == ContributorKind::RtestSensorDirection) u_direction = c.u[0];
+    else if (!rtestTypeA(*c.info)) cancel.emplace_back(c.info->id);
+  }
+  out.type_b_evaluated = true;
+  // d rate / d S_ab: every reading (reset and re-read too) gets eps times its component b added
+  // to its component a, the series is analyzed again.
+  constexpr double kEps = 1e-4;
+  for (int ra = 0; ra < 3; ++ra)
+    for (int rb = 0; rb < 3; ++rb) {
+      const double u = ra == rb ? u_gain : u_direction;
+      if (u == 0.0) continue;
+      std::vector<RtestCycle> moved = cycles;
+      auto perturb = [&](RtestReading& r) { r.dq_w_mm[ra] += kEps * r.dq_w_mm[rb]; };
+      for (auto& c : moved) {
+        for (auto& r : c.readings) perturb(r);
+        if (c.reset) perturb(*c.reset);
+        if (c.reread) perturb(*c.reread);
+      }
+      const Eigen::MatrixXd d = (analyzeRtest(plan, moved, fit_options).rate - a.rate) / kEps;
+      out.u_b += (u * d.cwiseProduct(f)).cwiseAbs2();
+    }
+  out.u_b = out.u_b.cwiseSqrt();
+  out.type_b_source = fmt::format(
+      "the sensors' gain ({:g} %) and cross-talk ({:g} mrad) scale the drift they read: first-order propagation through "
+      "the trend, each entry of the sensors' response perturbed in the measured series and re-analyzed{}",
+      100.0 * u_gain, 1000.0 * u_direction,
+      cancel.empty() ? std::string()
+                     : fmt::format("; the same in every cycle, so cancelling in a rate: {}", fmt::join(cancel, ", ")));
+  return out;
+}
+
+void addRtestDriftBudget(Json* report, const ProbePlan& plan, const RtestDriftBudget& b) {
+  if (!report->contains("drift") || b.u_a.size() == 0) return;
+  Json& drift = (*report)["drift"];
+  const Eigen::MatrixXd uc = b.uC();
+  auto row = [&](const Eigen::MatrixXd& m, int p, double mult) {
+    Json r = Json::array();
+    for (Eigen::Index i = 0; i < m.cols(); ++i) r.push_back(round6(mult * m(p, i)));
+    return r;
+  };
+  for (int p = 0; p < kRtestParams; ++p) {
+    const std::string name = rtestParameterName(plan.machine.kinematics, p);
+    if (!drift.contains(name)) continue;
+    Json& e = drift[name];
+    e["u_a"] = row(b.u_a, p, 1.0);
+    e["u_b"] = row(b.u_b, p, 1.0);
+    e["u_c"] = row(uc, p, 1.0);
+    e["U"] = row(uc, p, kCoverageFactor);
+    e["k"] = kCoverageFactor;
+  }
+  (*report)["drift_uncertainty"] = {{"type_a", "the trend's own u: the cycles' u, widened by the scatter about the line"},
+                                    {"type_b", b.type_b_source}};
+}
+
 }  // namespace rotacal

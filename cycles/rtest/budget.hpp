@@ -73,4 +73,24 @@ RtestTiltBudget rtestTiltBudget(const ProbePlan& plan, const RtestCycle& first, 
 /// Adds u_a, u_b, u_c, U and k arrays beside the first cycle's per-tilt values in REPORT.json.
 void addRtestTiltBudget(Json* report, const ProbePlan& plan, const RtestTiltBudget& b);
 
+/// The drift rates across cycles (the weighted line per parameter and tilt, 002 Fig. 10):
+///   u_A  the trend's own u (the cycles' u, widened by the scatter about the line);
+///   u_B  the contributors that do not cancel in a rate: the sensors' gain and cross-talk
+///        (rtest_sensor_gain, rtest_sensor_direction) scale what the sensors read of the drift.
+///        Propagated to first order (GUM law of propagation) with the derivative of the rates
+///        with respect to each entry of the sensors' response, by re-analysis of the measured
+///        series with that entry perturbed. The linear axes, the sphere's offset and the drift
+///        within a cycle are the same in every cycle and cancel in a rate: named, not counted.
+/// Report units per hour (um/h, mdeg/h), 6 x tilts; empty matrices with fewer than 3 cycles.
+struct RtestDriftBudget {
+  Eigen::MatrixXd u_a, u_b;
+  bool type_b_evaluated = false;
+  std::string type_b_source;
+  Eigen::MatrixXd uC() const { return (u_a.cwiseAbs2() + u_b.cwiseAbs2()).cwiseSqrt(); }
+};
+RtestDriftBudget rtestDriftBudget(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, const RtestAnalysis& analysis,
+                                  const RtestFitOptions& fit_options, const ContributorSet* contributors);
+/// Adds u_a, u_b, u_c, U and k arrays to REPORT.json's drift block, and its sources.
+void addRtestDriftBudget(Json* report, const ProbePlan& plan, const RtestDriftBudget& b);
+
 }  // namespace rotacal

@@ -127,6 +127,7 @@ class Rtest final : public Cycle {
                                                                              : radToMdeg(a.location.value[i]);
       out.text += "\n" + budgetText(b, values);
     }
+    addRtestDriftBudget(&out.doc, plan, rtestDriftBudget(plan, cycles, a, o, r.contributors));
     // The per-tilt errors, what the R-test measures at each tilt, with the same contributors.
     {
       RtestBudgetOptions bo;

@@ -10,6 +10,7 @@
 #include <cstdlib>
 
 #include "core/machine.hpp"
+#include "core/rng.hpp"
 #include "core/units.hpp"
 #include "cycles/cycle.hpp"
 #include "cycles/rtest/analyze.hpp"
@@ -225,6 +226,71 @@ TEST(RtestTiltBudget, TypeAMatchesTheScatterOfRepeatedMeasurements) {
       ++compared;
     }
   EXPECT_GE(compared, 20);
+}
+
+TEST(RtestDriftBudget, SensorResponseMatchesTheSimulatorsOwn) {
+  // A drifting table (002 Sec. 4.3: about -2 um/h in Y) read by sensors whose response is off by
+  // a gain and cross-talk. Another route than the budget's derivative: draw the sensors' response
+  // in the simulator (sensor_response) 300 times and take the scatter of the rates it gives.
+  const CycleOptions o = {{"thermal", "1"}, {"interval_min", "18"}, {"sensor_noise_um", "0.2"}};
+  const ProbePlan plan = makePlan("rtest", bc(), o);
+  Truth t;
+  t.errors.kinematics = Kinematics::TableBC;
+  const double v[kNumLocationErrors] = {12.0, -8.0, 5.0, 1.5, -2.0, 1.0, 0.7, -9.0};
+  for (int i = 0; i < kNumLocationErrors; ++i) t.errors.setReportValue(i, v[i]);
+  RtestTruthExtras x;
+  x.sphere_drift_m_mm = [](double ts) -> Eigen::Vector3d {
+    return Eigen::Vector3d(umToMm(0.7), umToMm(-2.0), umToMm(0.7)) * (ts / 3600.0);
+  };
+  RtestSimOptions so;
+  so.noise_um = 0.2;
+  const std::vector<RtestCycle> cycles = simulateRtest(plan, t, x, so).cycles;
+  ASSERT_GE(cycles.size(), 10u);
+  RtestFitOptions fo;
+  const RtestAnalysis a = analyzeRtest(plan, cycles, fo);
+  const double u_gain = 0.01, u_dir = 0.01;  // large, so that the effect stands far above rounding
+  ContributorSet cs;
+  Contributor g, d;
+  g.info = findContributor("rtest_sensor_gain");
+  g.u = Eigen::Vector3d::Constant(u_gain);
+  d.info = findContributor("rtest_sensor_direction");
+  d.u = Eigen::Vector3d::Constant(u_dir);
+  cs.items = {g, d};
+  const RtestDriftBudget b = rtestDriftBudget(plan, cycles, a, fo, &cs);
+  ASSERT_TRUE(b.type_b_evaluated);
+  // The simulator's route: the same noise (same seed), the response drawn.
+  Rng rng(99, 1);
+  Eigen::MatrixXd var = Eigen::MatrixXd::Zero(b.u_b.rows(), b.u_b.cols());
+  constexpr int kRuns = 300;
+  for (int run = 0; run < kRuns; ++run) {
+    RtestTruthExtras xs = x;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) xs.sensor_response(r, c) += (r == c ? u_gain : u_dir) * rng.normal();
+    const RtestAnalysis as = analyzeRtest(plan, simulateRtest(plan, t, xs, so).cycles, fo);
+    for (int p = 0; p < kRtestParams; ++p) {
+      const double f = (rtestParameterIsLength(p) ? 1e3 : radToMdeg(1.0)) * 3600.0;
+      var.row(p) += (f * (as.rate.row(p) - a.rate.row(p))).cwiseAbs2() / kRuns;
+    }
+  }
+  int compared = 0;
+  for (Eigen::Index i = 0; i < var.cols(); ++i)
+    for (int p = 0; p < kRtestParams; ++p) {
+      const double mc = std::sqrt(var(p, i));
+      if (mc < 1e-3) continue;
+      // 300 runs: the sample sd is within about 12 % (3 sd) of the truth.
+      EXPECT_NEAR(b.u_b(p, i), mc, 0.15 * mc) << rtestParameterName(plan.machine.kinematics, p) << " at tilt " << i;
+      ++compared;
+    }
+  EXPECT_GE(compared, 10);
+  // Contributors that are the same in every cycle are named as cancelling, not counted.
+  ContributorSet same;
+  Contributor off;
+  off.info = findContributor("rtest_sphere_offset");
+  off.u = Eigen::Vector3d::Constant(umToMm(5.0));
+  same.items = {off};
+  const RtestDriftBudget b0 = rtestDriftBudget(plan, cycles, a, fo, &same);
+  EXPECT_LT(b0.u_b.maxCoeff(), 1e-15);
+  EXPECT_NE(b0.type_b_source.find("rtest_sphere_offset"), std::string::npos);
 }
 
 }  // namespace
