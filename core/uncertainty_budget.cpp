@@ -167,6 +167,10 @@ Json budgetJson(const UncertaintyBudget& b, int top) {
             {"covariance", cov_rows},
             {"correlation", cor_rows},
             {"budget", budget}};
+  j["between_calibrations"] =
+      "u_between: u_A and the contributors drawn anew at every calibration (set-up, the R-test sphere's mounting, the "
+      "laser's alignment, the cycle's thermal state), each alone; what differs between two calibrations of this machine, "
+      "and what history trends with";
   if (b.type_b_evaluated) {
     j["runs"] = b.runs;
     j["seed"] = b.seed;
@@ -175,13 +179,14 @@ Json budgetJson(const UncertaintyBudget& b, int top) {
 }
 
 void addBudgetFields(Json* parameters, const UncertaintyBudget& b) {
-  const Eigen::VectorXd ua = b.uA(), ub = b.uB(), uc = b.uC();
+  const Eigen::VectorXd ua = b.uA(), ub = b.uB(), uc = b.uC(), ubetween = b.uBetween();
   for (int i = 0; i < b.size(); ++i) {
     if (!parameters->contains(b.names[i])) continue;
     Json& e = (*parameters)[b.names[i]];
     e["u_a"] = round6(ua[i]);
     e["u_b"] = round6(ub[i]);
     e["u_c"] = round6(uc[i]);
+    e["u_between"] = round6(ubetween[i]);
     e["U"] = round6(kCoverageFactor * uc[i]);
     e["k"] = kCoverageFactor;
   }
@@ -233,6 +238,27 @@ void runTypeB(UncertaintyBudget* budget, const ContributorSet& type_b, const Bud
 
 std::string contributorsSource(const ContributorSet& declared) {
   return declared.file.empty() ? std::string("the machine") : declared.file;
+}
+
+bool variesBetweenCalibrations(const ContributorInfo& c) {
+  switch (c.kind) {
+    case ContributorKind::SetupPosition:
+    case ContributorKind::SetupOrientation:
+    case ContributorKind::RtestSphereOffset:
+    case ContributorKind::RtestCycleDrift:
+    case ContributorKind::LaserAlignment: return true;
+    default: return false;
+  }
+}
+
+Eigen::VectorXd UncertaintyBudget::uBetween() const {
+  Eigen::VectorXd v = uA().cwiseAbs2();
+  for (const auto& t : terms) {
+    const ContributorInfo* info = findContributor(t.contributor);
+    if (info && variesBetweenCalibrations(*info)) v += t.u.cwiseAbs2();
+  }
+  // The terms come from shorter runs than u_c: never more than u_c.
+  return v.cwiseSqrt().cwiseMin(uC());
 }
 
 UncertaintyBudget UncertaintyBudget::slice(int first, int count) const {

@@ -26,6 +26,12 @@ namespace rotacal {
 /// The coverage factor of every expanded uncertainty rotacal writes (about 95 %, normal).
 constexpr double kCoverageFactor = 2.0;
 
+/// Contributors drawn anew at every calibration: the artefact's set-up on the table, the R-test
+/// sphere's mounting on the spindle, the laser's alignment, the thermal state of the cycle. The
+/// others (the linear axes, the probe's pretravel, the artefact's form, the sensors' calibration)
+/// belong to the machine and its instruments and repeat.
+bool variesBetweenCalibrations(const ContributorInfo& contributor);
+
 struct BudgetTerm {
   std::string contributor;  // a contributor id, or "data" for the Type A part
   Eigen::VectorXd u;        // its standard uncertainty alone, per parameter, report units
@@ -47,6 +53,11 @@ struct UncertaintyBudget {
   Eigen::VectorXd uA() const;
   Eigen::VectorXd uB() const;
   Eigen::VectorXd uC() const;
+  /// What differs between two calibrations of the same machine: u_A and the contributors drawn
+  /// anew at every set-up (variesBetweenCalibrations), each alone from the budget's terms. The
+  /// machine's own systematic errors (its linear axes, the artefact's form) are the same in every
+  /// calibration and cancel in a comparison: history trends with this, not with u_c.
+  Eigen::VectorXd uBetween() const;
   Eigen::VectorXd expanded() const { return kCoverageFactor * uC(); }
   Eigen::MatrixXd covariance() const { return cov_a + cov_b; }
   Eigen::MatrixXd correlation() const;  // 0 where a variance is 0

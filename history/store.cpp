@@ -132,7 +132,10 @@ Calibration calibrationFromReport(const JsonDoc& doc, const std::string& machine
       StoredParameter p;
       p.name = name;
       p.value = requireNumber(doc, e, "value", Limits::symmetric(kMaxStoredValue));
-      p.u = requireNumber(doc, e, "u", Limits::nonNegative(kMaxStoredValue));
+      // What differs between calibrations (issue 17): u_between where the report signs a budget
+      // (u_A and the contributors drawn anew at every set-up); the data's u in older reports.
+      p.u = e.contains("u_between") ? requireNumber(doc, e, "u_between", Limits::nonNegative(kMaxStoredValue))
+                                    : requireNumber(doc, e, "u", Limits::nonNegative(kMaxStoredValue));
       p.unit = requireString(doc, e, "unit");
       // The trend compares values of one parameter across reports: each in the unit analyze
       // writes for its kind (um for lengths, mdeg for angles).

@@ -16,6 +16,7 @@
 #include "cycles/rtest/analyze.hpp"
 #include "cycles/rtest/budget.hpp"
 #include "cycles/rtest/plan.hpp"
+#include "history/trend.hpp"
 #include "test_util.hpp"
 
 namespace rotacal {
@@ -291,6 +292,50 @@ TEST(RtestDriftBudget, SensorResponseMatchesTheSimulatorsOwn) {
   const RtestDriftBudget b0 = rtestDriftBudget(plan, cycles, a, fo, &same);
   EXPECT_LT(b0.u_b.maxCoeff(), 1e-15);
   EXPECT_NE(b0.type_b_source.find("rtest_sphere_offset"), std::string::npos);
+}
+
+TEST(RtestBudget, ARemountedSphereIsNotADriftWhenHistoryUsesUBetween) {
+  // Eight R-test sessions of one stable machine; the sphere is mounted anew each time (its offset
+  // drawn from the bundled rtest_sphere_offset, [2, 2, 5] um). With the data's u (tenths of a um)
+  // the trend of Z0B calls the remounts a drift or a step; with u_between (u_A and what is drawn
+  // anew at every set-up) it is stable, and it still sees a real drift of 3 um per session.
+  const MachineModel m = bc();
+  const ProbePlan plan = makePlan("rtest", m, {});
+  const ContributorSet& cs = *m.contributors;
+  const Contributor* offset = cs.find("rtest_sphere_offset");
+  ASSERT_NE(offset, nullptr);
+  Truth t;
+  t.errors.kinematics = m.kinematics;
+  const double v[kNumLocationErrors] = {12.0, -8.0, 5.0, 1.5, -2.0, 1.0, 0.7, -9.0};
+  for (int i = 0; i < kNumLocationErrors; ++i) t.errors.setReportValue(i, v[i]);
+  const int z0b = 2;  // dz_BY (Z0B) in locationParameters' order
+  ASSERT_EQ(std::string(locationParameters(m.kinematics)[z0b].name), "dz_BY");
+  RtestBudgetOptions bo;
+  bo.runs = 200;
+  bo.alone_runs = 200;
+  auto trend = [&](double drift_um_per_session, bool use_between) {
+    Rng rng(2024, 7);
+    std::vector<history::TrendPoint> pts;
+    for (int k = 0; k < 8; ++k) {
+      Truth tk = t;
+      tk.errors.setReportValue(z0b, v[z0b] + drift_um_per_session * k);
+      RtestTruthExtras x;
+      for (int a = 0; a < 3; ++a) x.sphere_offset_m_mm[a] = offset->u[a] * rng.normal();
+      RtestSimOptions so;
+      so.noise_um = 0.2;
+      so.cycles = 1;
+      so.seed = static_cast<std::uint64_t>(k) + 1;
+      const RtestSeries s = simulateRtest(plan, tk, x, so);
+      const RtestAnalysis a = analyzeRtest(plan, s.cycles, RtestFitOptions{});
+      const UncertaintyBudget b = rtestBudget(plan, s.cycles.front(), a.location, 0.2, &cs, bo);
+      const double u = use_between ? b.uBetween()[z0b] : a.location.u[z0b] * 1e3;
+      pts.push_back({7.0 * k, a.location.value[z0b] * 1e3, u});
+    }
+    return history::analyzeTrend(pts, history::TrendOptions{});
+  };
+  EXPECT_NE(trend(0.0, false).verdict, "stable");  // the remounts read as changes of the machine
+  EXPECT_EQ(trend(0.0, true).verdict, "stable");
+  EXPECT_EQ(trend(3.0, true).verdict, "drift");    // 21 um over the series: far beyond 5 um per remount
 }
 
 }  // namespace
