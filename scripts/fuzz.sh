@@ -6,8 +6,11 @@
 # any crash, leak, timeout, out-of-memory, sanitizer report or escaped exception; the input that
 # found it is left in build-fuzz/findings/HARNESS/.
 #   scripts/fuzz.sh [SECONDS_PER_HARNESS] [HARNESS...]     (FUZZ_JOBS=2: two harnesses at a time)
+#   scripts/fuzz.sh --configure-only    (the sanitizer build's configuration alone: scripts/sanitize-corpus.sh)
 set -euo pipefail
 cd "$(dirname "$0")/.."
+CONFIGURE_ONLY=0
+if [ "${1:-}" = "--configure-only" ]; then CONFIGURE_ONLY=1; shift; fi
 SECONDS_PER=${1:-20}
 shift || true
 ROOT=$PWD
@@ -32,6 +35,7 @@ if command -v ccache >/dev/null; then LAUNCH=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccac
 cmake -S . -B "$B" -DCMAKE_BUILD_TYPE=None -DCMAKE_C_COMPILER="$CC_" -DCMAKE_CXX_COMPILER="$CXX_" \
   "${LAUNCH[@]}" -DROTACAL_FUZZ=ON -DROTACAL_BUILD_TESTS=OFF -DROTACAL_BUILD_BENCH=OFF -DROTACAL_WERROR=OFF \
   -DCMAKE_CXX_FLAGS="$SAN" >/dev/null
+if [ $CONFIGURE_ONLY = 1 ]; then exit 0; fi
 cmake --build "$B" --target "${HARNESSES[@]}" -j"$(nproc)"
 
 # Seeds: the real files each boundary reads, made by the normal build's rotacal (built if absent).
