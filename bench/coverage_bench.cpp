@@ -4,7 +4,7 @@
 // `analyze` does (estimate + touch154Budget); the bench counts how often the truth lies within
 // +-U (k = 2) of the estimate, per parameter. Claimed: about 95 %; accepted: 93-97 %
 // (docs/uncertainty.md). Printed, not asserted.
-// Run: build/bench/rotacal_coverage_bench [machines] [method: lsq_per_point|closed_form]
+// Run: build/bench/rotacal_coverage_bench [machines] [method: lsq_per_point|closed_form|lsq_rigid_setup] [CONTRIB.json]
 //      build/bench/rotacal_coverage_bench rtest [machines]   (the R-test cycle: bc_trunnion with
 //      its declared contributors, examples/contributors/rtest_002.json; analyze's rtestBudget)
 //      build/bench/rotacal_coverage_bench tooltip [machines]  (the tool-tip cycle of 004: head_ab
@@ -423,7 +423,9 @@ int main(int argc, char** argv) {
   const Method method = methodFromName(method_name);
   const MachineModel machine = loadMachine(ROTACAL_SOURCE_DIR "/examples/machines/ac_trunnion.json");
   const ProbePlan plan = makePlan("touch154", machine, {});
-  const ContributorSet& contributors = *machine.contributors;
+  // A third argument replaces the machine's contributors (lsq_rigid_setup presumes a piece of
+  // perfect form: docs/uncertainty.md runs it with Table 5 less form_error).
+  const ContributorSet contributors = argc > 3 ? loadContributors(argv[3]) : *machine.contributors;
   const DrawModel all = drawModel(contributors);
   const LinearChain chain0 = lineariseChain(plan, LocationErrors{});  // the draw's node span only
   const auto& params = locationParameters(machine.kinematics);

@@ -166,6 +166,13 @@ ProbePlan planFrom(const JsonDoc& doc, const PlanRules& rules) {
   plan.cycle = requireString(doc, j, "cycle");
   if (!j.contains("machine")) doc.fail(j, "", "plan lacks 'machine'");
   plan.machine = machineFromJson(doc, requireObject(doc, j, "machine"));
+  // Planned probing moves turn a workpiece on a rotary table (safe heights, surfaces at poses):
+  // a spindle-head machine has none, and its transforms would throw far from this file's lines.
+  if (rules.heights && plan.machine.kinematics == Kinematics::HeadAB)
+    doc.fail(j["machine"], "kinematics",
+             fmt::format("cycle '{}' probes a workpiece turned by a rotary table; a spindle-head machine (head_ab) has "
+                         "none (a head is calibrated at a fixed tool tip, 004)",
+                         plan.cycle));
   if (j.contains("options")) {
     const Json& o = requireObject(doc, j, "options");
     for (const auto& [k, v] : o.items()) plan.options[k] = v.is_string() ? v.get<std::string>() : v.dump();

@@ -23,7 +23,7 @@ bool chainMethod(Method m, UncertaintyMethod* out) {
   switch (m) {
     case Method::LeastSquaresPerPoint: *out = UncertaintyMethod::LsqPerPoint; return true;
     case Method::ClosedForm: *out = UncertaintyMethod::ClosedFormPooled; return true;
-    case Method::LeastSquaresRigidSetup: return false;
+    case Method::LeastSquaresRigidSetup: *out = UncertaintyMethod::LsqRigidSetup; return true;
   }
   return false;
 }
@@ -68,7 +68,9 @@ UncertaintyBudget touch154Budget(const ProbePlan& plan, const IdentificationResu
                        type_b.items.end());
     chain = lineariseChain(plan, main.estimate);
     if (!chain->has[static_cast<size_t>(um)]) {
-      type_b_missing = "not evaluated: " + (chain->closed_form_why.empty() ? chain->least_squares_why : chain->closed_form_why);
+      type_b_missing = "not evaluated: " + (um == UncertaintyMethod::LsqRigidSetup ? chain->rigid_setup_why
+                                            : chain->closed_form_why.empty() ? chain->least_squares_why
+                                                                             : chain->closed_form_why);
       chain.reset();
     }
   }
@@ -90,7 +92,7 @@ UncertaintyBudget touch154Budget(const ProbePlan& plan, const IdentificationResu
       double expected_sys_mm2 = 0.0;
       if (!type_b.items.empty()) {
         const Eigen::MatrixXd C = triggerCovariance(*chain, type_b);
-        const Eigen::MatrixXd& U = chain->range_lp;
+        const Eigen::MatrixXd& U = um == UncertaintyMethod::LsqRigidSetup ? chain->range_rs : chain->range_lp;
         const double dof = static_cast<double>(chain->points - U.cols());
         if (dof > 0) expected_sys_mm2 = std::max(0.0, (C.trace() - (U.transpose() * C * U).trace()) / dof);
       }

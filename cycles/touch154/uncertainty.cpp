@@ -32,6 +32,7 @@ std::string_view uncertaintyMethodName(UncertaintyMethod m) {
     case UncertaintyMethod::ClosedFormPooled: return "closed_form_pooled";
     case UncertaintyMethod::LeastSquares: return "least_squares";
     case UncertaintyMethod::LsqPerPoint: return "lsq_per_point";
+    case UncertaintyMethod::LsqRigidSetup: return "lsq_rigid_setup";
   }
   return "?";
 }
@@ -40,7 +41,8 @@ UncertaintyMethod uncertaintyMethodFromName(std::string_view name) {
   for (int m = 0; m < kNumUncertaintyMethods; ++m)
     if (uncertaintyMethodName(static_cast<UncertaintyMethod>(m)) == name) return static_cast<UncertaintyMethod>(m);
   throw std::invalid_argument("unknown estimator '" + std::string(name) +
-                              "' (expected closed_form, closed_form_pooled, least_squares, lsq_per_point)");
+                              "' (expected closed_form, closed_form_pooled, least_squares, lsq_per_point, "
+                              "lsq_rigid_setup)");
 }
 
 std::string_view uncertaintyMethodDescription(UncertaintyMethod m) {
@@ -53,6 +55,8 @@ std::string_view uncertaintyMethodDescription(UncertaintyMethod m) {
       return "least squares over all points, form-immune, squareness of the linear axes fitted alongside";
     case UncertaintyMethod::LsqPerPoint:
       return "least squares over all points, form-immune (`analyze`'s default lsq_per_point)";
+    case UncertaintyMethod::LsqRigidSetup:
+      return "least squares over all points, the piece one rigid body (`analyze --method lsq_rigid_setup`; not form-immune)";
   }
   return "?";
 }
@@ -94,19 +98,20 @@ Eigen::VectorXd sensitivity(const ProbePlan& plan, const Truth& base, double h, 
 /// pseudo-inverse of the model's Jacobian [J_s_e, per-target offsets, extra columns] at the truth.
 /// `extra` holds the trigger sensitivities of fitted nuisance parameters (e.g. squareness).
 IdentificationMap leastSquaresMap(const ProbePlan& plan, const LocationErrors& truth, const Eigen::MatrixXd& J_e,
-                                  const Eigen::MatrixXd& extra, Eigen::MatrixXd* range = nullptr) {
+                                  const Eigen::MatrixXd& extra, Eigen::MatrixXd* range = nullptr,
+                                  bool per_target = true) {
   const long n = static_cast<long>(plan.points.size());
   const auto& params = locationParameters(plan.machine.kinematics);
   std::map<int, int> target_index;
   for (const auto& p : plan.points)
     if (!target_index.count(p.target)) target_index.emplace(p.target, static_cast<int>(target_index.size()));
-  const long nt = static_cast<long>(target_index.size());
+  const long nt = per_target ? static_cast<long>(target_index.size()) : 0;
   const long p = kNumLocationErrors + nt + extra.cols();
   Eigen::MatrixXd X = Eigen::MatrixXd::Zero(n, p);
   X.leftCols<kNumLocationErrors>() = J_e;
   // One surface offset per target point (lsq_per_point): the plane moves by d along its normal,
   // the trigger by d / (n . u) (exact for a plane).
-  for (long i = 0; i < n; ++i) {
+  for (long i = 0; per_target && i < n; ++i) {
     const ProbePoint& pt = plan.points[static_cast<size_t>(i)];
     const Eigen::Vector3d n_m = T_m_w(truth, pt.pose).linear() * pt.normal_w;
     X(i, kNumLocationErrors + target_index.at(pt.target)) = 1.0 / n_m.dot(pt.approach_m);
@@ -217,8 +222,21 @@ LinearChain lineariseChain(const ProbePlan& plan, const LocationErrors& truth) {
   } catch (const std::invalid_argument& e) {
     c.least_squares_why = std::string(e.what()) + " when the squareness of the linear axes is fitted too";
   }
+  // lsq_rigid_setup: the piece's six set-up parameters instead of one offset per target (any
+  // parametrisation of a rigid motion spans the same columns to first order).
+  const auto rs = static_cast<size_t>(UncertaintyMethod::LsqRigidSetup);
+  c.G[rs].setZero(kNumLocationErrors, n);
+  try {
+    Eigen::MatrixXd setup(n, 6);
+    setup << c.S.middleCols<3>(fv::kSetupT), c.S.middleCols<3>(fv::kSetupR);
+    c.G[rs] = leastSquaresMap(plan, truth, J_e, setup, &c.range_rs, false);
+    c.has[rs] = true;
+  } catch (const std::invalid_argument& e) {
+    c.rigid_setup_why = std::string(e.what()) + " with the piece as one rigid body";
+  }
   c.bias[lp].setZero();  // the model is the exact simulator: with no contributor, no deviation
   c.bias[ls].setZero();
+  c.bias[rs].setZero();
 
   // Closed forms: linear in the measured coordinates (cycles/touch154/closed_form_map.hpp).
   const auto cf = static_cast<size_t>(UncertaintyMethod::ClosedForm);
@@ -512,11 +530,11 @@ std::array<ErrorVector, kNumUncertaintyMethods> exactDeviation(const ProbePlan& 
   // 000's closed form is exactly this linear map of the triggers (cycles/touch154/closed_form_map.hpp).
   if (active[cf]) out[cf] = chain.G[cf] * s - truth.values;
   if (active[cp]) out[cp] = solvePatterns(touch154Patterns(plan, run)).values - truth.values;
-  for (auto m : {UncertaintyMethod::LeastSquares, UncertaintyMethod::LsqPerPoint}) {
+  for (auto m : {UncertaintyMethod::LeastSquares, UncertaintyMethod::LsqPerPoint, UncertaintyMethod::LsqRigidSetup}) {
     const auto mi = static_cast<size_t>(m);
     if (!active[mi]) continue;
     IdentificationOptions o;
-    o.method = Method::LeastSquaresPerPoint;
+    o.method = m == UncertaintyMethod::LsqRigidSetup ? Method::LeastSquaresRigidSetup : Method::LeastSquaresPerPoint;
     if (m == UncertaintyMethod::LeastSquares) o.extensions = {linearAxisSquareness()};
     const IdentificationResult r = identify(plan, {run}, o);
     if (r.summary.termination == Termination::RankDeficient || r.summary.termination == Termination::InvalidInput)

@@ -15,6 +15,9 @@
 //                      identify(LeastSquaresPerPoint) with the linear_axis_squareness extension
 //                      (cycles/touch154/causes.hpp), as `diagnose` re-estimates them
 //  lsq_per_point       `analyze`'s default: identify(LeastSquaresPerPoint), no extension
+//  lsq_rigid_setup     `analyze --method lsq_rigid_setup`: the piece as one rigid body on the
+//                      table (6 set-up parameters instead of one offset per target): not
+//                      form-immune, so the faces' form is part of its deviation
 // The closed forms need the poses of 000's 154-point plan; they are left out for other plans.
 //
 // Two evaluations of the same runs (same random numbers):
@@ -47,9 +50,10 @@
 
 namespace rotacal {
 
-enum class UncertaintyMethod { ClosedForm = 0, ClosedFormPooled = 1, LeastSquares = 2, LsqPerPoint = 3 };
-constexpr int kNumUncertaintyMethods = 4;
-std::string_view uncertaintyMethodName(UncertaintyMethod m);  // closed_form, closed_form_pooled, least_squares, lsq_per_point
+enum class UncertaintyMethod { ClosedForm = 0, ClosedFormPooled = 1, LeastSquares = 2, LsqPerPoint = 3, LsqRigidSetup = 4 };
+constexpr int kNumUncertaintyMethods = 5;
+// closed_form, closed_form_pooled, least_squares, lsq_per_point, lsq_rigid_setup
+std::string_view uncertaintyMethodName(UncertaintyMethod m);
 UncertaintyMethod uncertaintyMethodFromName(std::string_view name);  // throws std::invalid_argument
 std::string_view uncertaintyMethodDescription(UncertaintyMethod m);  // one line, for reports
 
@@ -98,6 +102,8 @@ struct LinearChain {
   /// Orthonormal basis of the lsq_per_point model's column space (points x parameters): the
   /// residual of a trigger change s is s - range_lp range_lp^T s.
   Eigen::MatrixXd range_lp;
+  Eigen::MatrixXd range_rs;  // the same for lsq_rigid_setup
+  std::string rigid_setup_why;  // why lsq_rigid_setup does not apply, when not
 };
 
 /// Builds the linear chain from the exact simulator and the estimators. Throws

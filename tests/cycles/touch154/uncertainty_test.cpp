@@ -9,6 +9,8 @@
 // 1/sqrt(2N); tolerances below are stated in those units where sampling is what limits them.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <cmath>
 #include <map>
 
@@ -95,6 +97,9 @@ TEST(Uncertainty, LinearisedChainAgreesWithTheExactChainRunByRun) {
   const DrawModel model = drawModel(table5());
   MethodMask all;
   all.fill(true);
+  // lsq_rigid_setup is not form-immune: Table 5's 50 um face offsets leave it a misfit its
+  // Gauss-Newton does not settle to the step tolerance; its own test below draws no form.
+  all[static_cast<size_t>(UncertaintyMethod::LsqRigidSetup)] = false;
   const int runs = 50;
   std::array<ErrorVector, kNumUncertaintyMethods> d2, l2, e2;
   for (size_t m = 0; m < kNumUncertaintyMethods; ++m) d2[m] = l2[m] = e2[m] = ErrorVector::Zero();
@@ -112,12 +117,45 @@ TEST(Uncertainty, LinearisedChainAgreesWithTheExactChainRunByRun) {
     }
   }
   for (size_t m = 0; m < kNumUncertaintyMethods; ++m)
-    for (int i = 0; i < kNumLocationErrors; ++i) {
+    for (int i = 0; i < kNumLocationErrors && all[m]; ++i) {
       const std::string what = std::string(uncertaintyMethodName(static_cast<UncertaintyMethod>(m))) + " " +
                                std::string(locationParameters(Kinematics::TableAC)[static_cast<size_t>(i)].name);
       EXPECT_LT(std::sqrt(d2[m][i] / l2[m][i]), 0.05) << what;
       EXPECT_NEAR(std::sqrt(e2[m][i] / l2[m][i]), 1.0, 0.05) << what;
     }
+}
+
+TEST(Uncertainty, RigidSetupLinearisedAgreesWithItsExactEstimatorRunByRun) {
+  // lsq_rigid_setup (the piece as one rigid body: 6 set-up parameters) through the exact
+  // simulator and identify(LeastSquaresRigidSetup), against its linear map; Table 5 without the
+  // faces' form, which that estimator is not immune to. The same bounds as above.
+  const ProbePlan plan = test::touch154Plan();
+  const LinearChain& c = chain154();
+  ContributorSet cs = table5();
+  cs.items.erase(std::remove_if(cs.items.begin(), cs.items.end(),
+                                [](const Contributor& x) { return x.info->kind == ContributorKind::FormError; }),
+                 cs.items.end());
+  const DrawModel model = drawModel(cs);
+  const auto rs = static_cast<size_t>(UncertaintyMethod::LsqRigidSetup);
+  ASSERT_TRUE(c.has[rs]) << c.rigid_setup_why;
+  MethodMask only{};
+  only[rs] = true;
+  ErrorVector d2 = ErrorVector::Zero(), l2 = ErrorVector::Zero(), e2 = ErrorVector::Zero();
+  for (int r = 0; r < 50; ++r) {
+    RunDraw d;
+    drawRun(model, c, 1, r, &d);
+    bool ok = false;
+    const auto ex = exactDeviation(plan, c, only, LocationErrors{}, d, &ok);
+    ASSERT_TRUE(ok) << "run " << r << ": lsq_rigid_setup did not converge";
+    const auto li = linearisedDeviation(c, only, d);
+    d2 += (ex[rs] - li[rs]).cwiseAbs2();
+    l2 += li[rs].cwiseAbs2();
+    e2 += ex[rs].cwiseAbs2();
+  }
+  for (int i = 0; i < kNumLocationErrors; ++i) {
+    EXPECT_LT(std::sqrt(d2[i] / l2[i]), 0.05) << i;
+    EXPECT_NEAR(std::sqrt(e2[i] / l2[i]), 1.0, 0.05) << i;
+  }
 }
 
 TEST(Uncertainty, MonteCarloMatchesTheAnalyticPropagation) {
@@ -132,7 +170,7 @@ TEST(Uncertainty, MonteCarloMatchesTheAnalyticPropagation) {
   o.combined_only = true;
   const UncertaintySummary s = runUncertainty(plan, c, cs, o);
   const Eigen::MatrixXd C = triggerCovariance(c, cs);
-  ASSERT_EQ(s.methods.size(), 4u);
+  ASSERT_EQ(s.methods.size(), 5u);
   const double tol = 4.0 / std::sqrt(2.0 * o.runs);
   for (const auto& m : s.methods) {
     const ErrorVector a = propagatedUncertainty(c, m.method, C);
@@ -230,6 +268,11 @@ TEST(Uncertainty, FormErrorDoesNotReachTheFormImmuneEstimators) {
   const auto s = runUncertainty(plan, chain154(), cs, o);
   for (const auto& m : s.methods) {
     const ErrorVector u = contributor(m, "form_error").u;
+    if (m.method == UncertaintyMethod::LsqRigidSetup) {
+      // One rigid body for the whole piece: a face's own offset is read as location errors.
+      EXPECT_GT(report(0, u[0]), 1.0) << "lsq_rigid_setup is not form-immune";
+      continue;
+    }
     for (int i = 0; i < kNumLocationErrors; ++i) EXPECT_LT(std::abs(report(i, u[i])), 1e-6) << uncertaintyMethodName(m.method);
   }
   const DrawModel model = drawModel(cs);
@@ -240,9 +283,10 @@ TEST(Uncertainty, FormErrorDoesNotReachTheFormImmuneEstimators) {
     drawRun(model, chain154(), 3, r, &d);
     const RunDraw form = onlyContributor(d, *findContributor("form_error"));
     bool ok = false;
+    all[static_cast<size_t>(UncertaintyMethod::LsqRigidSetup)] = false;
     const auto ex = exactDeviation(plan, chain154(), all, LocationErrors{}, form, &ok);
     for (size_t m = 0; m < kNumUncertaintyMethods; ++m)
-      for (int i = 0; i < kNumLocationErrors; ++i) EXPECT_LT(std::abs(report(i, ex[m][i])), i < 4 ? 1e-3 : 1e-4);
+      for (int i = 0; i < kNumLocationErrors && all[m]; ++i) EXPECT_LT(std::abs(report(i, ex[m][i])), i < 4 ? 1e-3 : 1e-4);
   }
 }
 

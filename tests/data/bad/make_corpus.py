@@ -168,6 +168,10 @@ for name, path, value, frag, locus in plan_cases:
     add('plan', name + '.json', dump(setp(P, path, value)), tmpl, 1, frag, locus)
 for name, path, value, frag, locus in plan_cases[:12]:
     add('plan', 'analyze_' + name + '.json', dump(setp(P, path, value)), T_PLAN_AN, 1, frag, locus)
+# a spindle-head machine's plan read as a table cycle's (found by fuzz_plan): refused at its
+# kinematics line, not with the kinematics' own message
+TP = json.loads(rd('tooltip.plan.json'))
+add('plan', 'tooltip_plan_as_touch154.json', dump(setp(TP, ['cycle'], 'touch154')), T_PLAN_GEN, 1, 'spindle-head', 'line')
 # more points than the loader takes (kMaxPlanPoints = 10000)
 big = copy.deepcopy(P)
 p0 = big['points'][0]
