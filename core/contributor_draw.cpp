@@ -4,6 +4,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/identification.hpp"
 #include "core/rng.hpp"
 #include "core/units.hpp"
 
@@ -61,6 +62,14 @@ bool drawLinearAxes(const ContributorSet& set, int only, const Eigen::Vector3d& 
   Rng fixed(seed, base | 120), ax(seed, base | 121), ay(seed, base | 122), az(seed, base | 123);
   drawLinearAxisErrors(linear.linearAxisModel(), lo, hi, fixed, {&ax, &ay, &az}, out);
   return true;
+}
+
+Eigen::VectorXd triggersAlong(const ProbePlan& plan, const Truth& truth) {
+  const MeasurementRun run = simulate(plan, truth, {1});
+  Eigen::VectorXd s(static_cast<Eigen::Index>(plan.points.size()));
+  for (size_t i = 0; i < plan.points.size(); ++i)
+    s[static_cast<Eigen::Index>(i)] = alongApproach(plan.points[i], run.points[i]);
+  return s;
 }
 
 void triggerSpan(const ProbePlan& plan, Eigen::Vector3d* lo, Eigen::Vector3d* hi) {

@@ -50,6 +50,10 @@ ContributorSplit splitContributors(const ContributorSet& declared, const std::fu
 bool drawLinearAxes(const ContributorSet& set, int only, const Eigen::Vector3d& lo_mm, const Eigen::Vector3d& hi_mm,
                     std::uint64_t seed, int run, LinearAxisErrors* out);
 
+/// Every plan point's trigger on `truth` (exact simulator, no noise) as its distance along the
+/// approach (identification.hpp alongApproach), mm, plan order: what a draw moves.
+Eigen::VectorXd triggersAlong(const ProbePlan& plan, const Truth& truth);
+
 /// The span of a plan's nominal triggers (machine frame): where a probing cycle reads the axes.
 void triggerSpan(const ProbePlan& plan, Eigen::Vector3d* lo_mm, Eigen::Vector3d* hi_mm);
 

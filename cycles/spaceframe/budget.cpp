@@ -172,13 +172,7 @@ UncertaintyBudget spaceframeBudget(const ProbePlan& plan, const SpaceframeAnalys
     }
     return d;
   };
-  auto triggerShift = [&](const Truth& t) {
-    const MeasurementRun run = simulate(plan, t, {1});
-    Eigen::VectorXd s(lin.ideal_s_mm.size());
-    for (Eigen::Index i = 0; i < s.size(); ++i)
-      s[i] = alongApproach(plan.points[static_cast<size_t>(i)], run.points[static_cast<size_t>(i)]) - lin.ideal_s_mm[i];
-    return s;
-  };
+  auto triggerShift = [&](const Truth& t) { return Eigen::VectorXd(triggersAlong(plan, t) - lin.ideal_s_mm); };
 
   // Type A: the per-touch scatter through G, its estimate freed of what the Type B contributors
   // leave in the sphere fits' residual, floored at the declared scatter.

@@ -196,11 +196,7 @@ Spheres3Budget spheres3Budget(const ProbePlan& plan, const Spheres3Result& r, co
   auto triggerShift = [&](const Spheres3Draw& d) {
     Truth t = base;
     applySpheres3Draw(d, &t);
-    const MeasurementRun run = simulate(plan, t, {1});
-    Eigen::VectorXd s(lin.ideal_s_mm.size());
-    for (Eigen::Index i = 0; i < s.size(); ++i)
-      s[i] = alongApproach(plan.points[static_cast<size_t>(i)], run.points[static_cast<size_t>(i)]) - lin.ideal_s_mm[i];
-    return s;
+    return Eigen::VectorXd(triggersAlong(plan, t) - lin.ideal_s_mm);
   };
 
   // Type A. The sphere fits' residual (1 dof per sphere and angle) measures the per-touch

@@ -78,13 +78,6 @@ namespace {
 constexpr int kStreamsPerRun = 16;
 enum Stream { kRepeat = 0, kRough, kPretravel, kLinearFixed, kNodesX, kNodesY, kNodesZ, kSetup, kForm };
 
-Eigen::VectorXd triggersAlong(const ProbePlan& plan, const Truth& truth) {
-  const MeasurementRun run = simulate(plan, truth, {1});
-  Eigen::VectorXd s(static_cast<long>(plan.points.size()));
-  for (size_t i = 0; i < plan.points.size(); ++i) s[static_cast<long>(i)] = alongApproach(plan.points[i], run.points[i]);
-  return s;
-}
-
 /// Central difference of the exact triggers with respect to one drawn value.
 template <class Apply>
 Eigen::VectorXd sensitivity(const ProbePlan& plan, const Truth& base, double h, Apply apply) {
