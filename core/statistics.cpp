@@ -1,5 +1,6 @@
 #include "core/statistics.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -60,6 +61,38 @@ double fSurvival(double f, double d1, double d2) {
 double normalQuantile(double p) {
   if (!(p > 0 && p < 1)) throw std::invalid_argument("normalQuantile: p must be in (0, 1)");
   return guarded("normalQuantile", [&] { return quantile(boost::math::normal_distribution<double, Policy>(), p); });
+}
+
+double coverageHalfWidth(const std::vector<double>& samples, double sd, double p) {
+  if (!(p > 0 && p < 1)) throw std::invalid_argument("coverageHalfWidth: p must be in (0, 1)");
+  if (samples.empty()) throw std::invalid_argument("coverageHalfWidth: no samples");
+  if (!(sd >= 0) || !std::isfinite(sd)) throw std::invalid_argument("coverageHalfWidth: sd must be finite and >= 0");
+  double reach = 0.0;
+  for (double x : samples) {
+    if (!std::isfinite(x)) throw std::invalid_argument("coverageHalfWidth: a sample is not finite");
+    reach = std::max(reach, std::abs(x));
+  }
+  const auto n = static_cast<double>(samples.size());
+  if (sd == 0.0) {
+    std::vector<double> a(samples.size());
+    std::transform(samples.begin(), samples.end(), a.begin(), [](double x) { return std::abs(x); });
+    const auto i = static_cast<size_t>(std::max(0.0, std::ceil(p * n) - 1.0));
+    std::nth_element(a.begin(), a.begin() + static_cast<std::ptrdiff_t>(i), a.end());
+    return a[i];
+  }
+  // P(|x + E| <= q) = Phi((q - x)/sd) - Phi((-q - x)/sd), rising in q: bisection on the mean.
+  const double s2 = sd * std::sqrt(2.0);
+  const auto held = [&](double q) {
+    double sum = 0.0;
+    for (double x : samples) sum += 0.5 * (std::erfc((-q - x) / s2) - std::erfc((q - x) / s2));
+    return sum / n;
+  };
+  double lo = 0.0, hi = reach + 10.0 * sd;
+  for (int it = 0; it < 40 && hi - lo > 1e-9 * hi; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (held(mid) < p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
 }
 
 }  // namespace rotacal

@@ -3,6 +3,8 @@
 // field's maintained implementation, in place of the hand-written tails each cycle once had.
 // Upper tails are computed directly (complement), so p-values far below 1e-16 keep their digits.
 
+#include <vector>
+
 namespace rotacal {
 
 /// P(X > x) for X ~ chi-square with k degrees of freedom (k > 0). 1 for x <= 0.
@@ -15,5 +17,10 @@ double studentTwoSided(double t, double nu);
 double fSurvival(double f, double d1, double d2);
 /// The z with P(Z < z) = p for the standard normal; p in (0, 1).
 double normalQuantile(double p);
+/// The half-width q of the symmetric interval [-q, q] that holds the fraction p of X + E, where X
+/// is given by Monte Carlo samples and E ~ N(0, sd^2) is independent of it: q solves
+/// mean_j P(|x_j + E| <= q) = p (JCGM 101 Sec. 7.7 with the normal part convolved analytically).
+/// sd = 0: the samples' own p-quantile of |x|. p in (0, 1), samples not empty, sd >= 0.
+double coverageHalfWidth(const std::vector<double>& samples, double sd, double p);
 
 }  // namespace rotacal

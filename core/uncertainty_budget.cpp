@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "core/report_envelope.hpp"
+#include "core/statistics.hpp"
 
 namespace rotacal {
 
@@ -29,6 +30,10 @@ constexpr int kBlock = 64;
 Eigen::VectorXd UncertaintyBudget::uA() const { return sqrtDiag(cov_a); }
 Eigen::VectorXd UncertaintyBudget::uB() const { return sqrtDiag(cov_b); }
 Eigen::VectorXd UncertaintyBudget::uC() const { return sqrtDiag(covariance()); }
+
+Eigen::VectorXd UncertaintyBudget::coverageFactors() const {
+  return coverage_factor.size() == size() ? coverage_factor : Eigen::VectorXd::Constant(size(), kCoverageFactor);
+}
 
 Eigen::MatrixXd UncertaintyBudget::correlation() const {
   const Eigen::MatrixXd c = covariance();
@@ -93,10 +98,16 @@ MonteCarloResult runMonteCarlo(const MonteCarloProblem& p, int runs, int alone_r
     for (int b = 0; b < n; b += kBlock) tasks.push_back({c, b, std::min(n, b + kBlock)});
   }
   std::vector<SampleMoments> partial(tasks.size(), SampleMoments(p.parameters));
+  MonteCarloResult out;
+  out.deviations = Eigen::MatrixXd::Zero(p.parameters, std::max(0, runs));
   std::atomic<size_t> next{0};
   const auto work = [&] {
     for (size_t t; (t = next.fetch_add(1)) < tasks.size();)
-      for (int r = tasks[t].first; r < tasks[t].last; ++r) partial[t].add(p.deviation(seed, r, tasks[t].contributor));
+      for (int r = tasks[t].first; r < tasks[t].last; ++r) {
+        const Eigen::VectorXd d = p.deviation(seed, r, tasks[t].contributor);
+        partial[t].add(d);
+        if (tasks[t].contributor < 0) out.deviations.col(r) = d;  // each run its own column
+      }
   };
   int nt = threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   nt = std::min<int>(nt, static_cast<int>(tasks.size()));
@@ -104,7 +115,6 @@ MonteCarloResult runMonteCarlo(const MonteCarloProblem& p, int runs, int alone_r
   for (int i = 1; i < nt; ++i) pool.emplace_back(work);
   work();
   for (auto& th : pool) th.join();
-  MonteCarloResult out;
   out.combined = SampleMoments(p.parameters);
   out.alone.assign(nc, SampleMoments(p.parameters));
   for (size_t t = 0; t < tasks.size(); ++t)
@@ -125,17 +135,81 @@ void setTypeB(UncertaintyBudget* b, const MonteCarloResult& mc, const std::vecto
     for (Eigen::Index i = 0; i < u.size(); ++i) u[i] = std::sqrt(u[i] * u[i] + m[i] * m[i]);
     b->terms.push_back({contributors[c], u});
   }
+  b->coverage_factor.resize(0);
+  const int n = b->size();
+  if (mc.deviations.cols() < kMinRunsForCoverageFactor || mc.deviations.rows() != n) return;
+  const Eigen::VectorXd ua = b->cov_a.rows() == n ? b->uA() : Eigen::VectorXd::Zero(n);
+  const Eigen::VectorXd uc = b->uC();
+  b->coverage_factor = Eigen::VectorXd::Constant(n, kCoverageFactor);
+  std::vector<double> x(static_cast<size_t>(mc.deviations.cols()));
+  for (int i = 0; i < n; ++i) {
+    if (!(uc[i] > 0)) continue;
+    for (Eigen::Index r = 0; r < mc.deviations.cols(); ++r) x[static_cast<size_t>(r)] = mc.deviations(i, r);
+    b->coverage_factor[i] = coverageHalfWidth(x, ua[i], kCoverageProbability) / uc[i];
+  }
 }
 
-Json budgetJson(const UncertaintyBudget& b, int top) {
-  const Eigen::VectorXd ua = b.uA(), ub = b.uB(), uc = b.uC();
+ReadingScatter readingScatter(double declared_um2, double observed_um2, int dof, const std::vector<double>& systematic_um2) {
+  ReadingScatter out;
+  double mean_sys = 0.0;
+  for (double s : systematic_um2) mean_sys += s;
+  if (!systematic_um2.empty()) mean_sys /= static_cast<double>(systematic_um2.size());
+  const std::string contributors =
+      systematic_um2.empty() ? std::string() : fmt::format(" and the Type B contributors' own residual ({:.3f} um rms)", std::sqrt(mean_sys));
+  if (dof <= 0 || !(observed_um2 >= 0)) {
+    out.variance_um2 = declared_um2;
+    out.why = fmt::format("no residual degrees of freedom: the declared {:.3f} um", std::sqrt(declared_um2));
+    return out;
+  }
+  const double nu = dof;
+  if (declared_um2 > 0) {
+    const auto p_given = [&](double s) { return chiSquareSurvival(nu * (observed_um2 - s) / declared_um2, nu); };
+    if (systematic_um2.empty()) {
+      out.p_value = p_given(0.0);
+    } else {
+      double p = 0.0;
+      for (double s : systematic_um2) p += p_given(s);
+      out.p_value = p / static_cast<double>(systematic_um2.size());
+    }
+  } else {
+    out.p_value = 0.0;
+  }
+  if (out.p_value >= kScatterExcessAlpha) {
+    out.variance_um2 = declared_um2;
+    out.why = fmt::format("the declared {:.3f} um: the residual {:.3f} um ({} dof) is what it{} leave (p = {:.2g})",
+                          std::sqrt(declared_um2), std::sqrt(observed_um2), dof, contributors, out.p_value);
+    return out;
+  }
+  out.variance_um2 = std::max(declared_um2, observed_um2 - mean_sys);
+  out.why = fmt::format("the residual {:.3f} um ({} dof) exceeds the declared {:.3f} um{} (p = {:.2g}): the residual "
+                        "less the contributors' mean share",
+                        std::sqrt(observed_um2), dof, std::sqrt(declared_um2), contributors, out.p_value);
+  return out;
+}
+
+std::string coverageFactorSource(const UncertaintyBudget& b) {
+  if (b.coverage_factor.size() == b.size() && b.size() > 0)
+    return fmt::format("k per parameter from the Monte Carlo distribution ({} runs) convolved with the normal Type A part "
+                       "(JCGM 101 7.7)",
+                       b.runs);
+  return fmt::format("k = {:g}, the distribution taken as normal ({})", kCoverageFactor,
+                     b.type_b_evaluated && b.runs > 0
+                         ? fmt::format("{} Monte Carlo runs, fewer than the {} its tail needs", b.runs, kMinRunsForCoverageFactor)
+                         : std::string("no Monte Carlo distribution"));
+}
+
+Json budgetJson(const UncertaintyBudget& b, const Eigen::VectorXd& values, int top) {
+  const Eigen::VectorXd ua = b.uA(), ub = b.uB(), uc = b.uC(), k = b.coverageFactors();
   Json params = Json::object();
   for (int i = 0; i < b.size(); ++i)
     params[b.names[i]] = {{"unit", b.units[i]},
                           {"u_a", round6(ua[i])},
                           {"u_b", round6(ub[i])},
                           {"u_c", round6(uc[i])},
-                          {"U", round6(kCoverageFactor * uc[i])}};
+                          {"U", round6(k[i] * uc[i])},
+                          {"k", round6(k[i])}};
+  if (values.size() == b.size())
+    for (int i = 0; i < b.size(); ++i) params[b.names[i]]["value"] = round6(values[i]);
   const Eigen::MatrixXd cov = b.covariance(), cor = b.correlation();
   Json cov_rows = Json::array(), cor_rows = Json::array();
   for (int i = 0; i < b.size(); ++i) {
@@ -157,7 +231,8 @@ Json budgetJson(const UncertaintyBudget& b, int top) {
       if (shares[k].first > 0) list.push_back({{"contributor", shares[k].second}, {"u", round6(shares[k].first)}});
     budget[b.names[i]] = list;
   }
-  Json j = {{"k", kCoverageFactor},
+  Json j = {{"coverage_probability", round6(kCoverageProbability)},
+            {"coverage_factor", coverageFactorSource(b)},
             {"type_a", b.type_a_source},
             {"type_b", b.type_b_source},
             {"type_b_evaluated", b.type_b_evaluated},
@@ -179,7 +254,7 @@ Json budgetJson(const UncertaintyBudget& b, int top) {
 }
 
 void addBudgetFields(Json* parameters, const UncertaintyBudget& b) {
-  const Eigen::VectorXd ua = b.uA(), ub = b.uB(), uc = b.uC(), ubetween = b.uBetween();
+  const Eigen::VectorXd ua = b.uA(), ub = b.uB(), uc = b.uC(), ubetween = b.uBetween(), k = b.coverageFactors();
   for (int i = 0; i < b.size(); ++i) {
     if (!parameters->contains(b.names[i])) continue;
     Json& e = (*parameters)[b.names[i]];
@@ -187,17 +262,18 @@ void addBudgetFields(Json* parameters, const UncertaintyBudget& b) {
     e["u_b"] = round6(ub[i]);
     e["u_c"] = round6(uc[i]);
     e["u_between"] = round6(ubetween[i]);
-    e["U"] = round6(kCoverageFactor * uc[i]);
-    e["k"] = kCoverageFactor;
+    e["U"] = round6(k[i] * uc[i]);
+    e["k"] = round6(k[i]);
   }
 }
 
 std::string budgetText(const UncertaintyBudget& b, const Eigen::VectorXd& values, int top) {
-  const Eigen::VectorXd ua = b.uA(), ub = b.uB(), uc = b.uC();
-  std::string s = fmt::format("uncertainty (u: k = 1; U: k = {:g}, about 95 %)\n", kCoverageFactor);
+  const Eigen::VectorXd ua = b.uA(), ub = b.uB(), uc = b.uC(), k = b.coverageFactors();
+  std::string s = fmt::format("uncertainty (u: k = 1; U = k u_c: {:.2f} % coverage, {})\n", 100.0 * kCoverageProbability,
+                              coverageFactorSource(b));
   s += fmt::format("  Type A: {}\n  Type B: {}\n", b.type_a_source, b.type_b_source);
-  s += fmt::format("{:<10} {:>10} {:>9} {:>9} {:>9} {:>9}  {:<6} {}\n", "parameter", "value", "u_A", "u_B", "u_c", "U",
-                   "unit", "largest contributors (u alone)");
+  s += fmt::format("{:<10} {:>10} {:>9} {:>9} {:>9} {:>9} {:>5}  {:<6} {}\n", "parameter", "value", "u_A", "u_B", "u_c",
+                   "U", "k", "unit", "largest contributors (u alone)");
   for (int i = 0; i < b.size(); ++i) {
     std::vector<std::pair<double, std::string>> shares;
     for (const auto& t : b.terms) shares.push_back({t.u[i], t.contributor});
@@ -206,9 +282,8 @@ std::string budgetText(const UncertaintyBudget& b, const Eigen::VectorXd& values
     for (int k = 0; k < static_cast<int>(shares.size()) && k < top; ++k)
       if (shares[k].first > 0)
         largest += fmt::format("{}{} {:.2f}", largest.empty() ? "" : ", ", shares[k].second, shares[k].first);
-    s += fmt::format("{:<10} {:>10.3f} {:>9.3f} {:>9.3f} {:>9.3f} {:>9.3f}  {:<6} {}\n", b.names[i],
-                     i < values.size() ? values[i] : 0.0, ua[i], ub[i], uc[i], kCoverageFactor * uc[i], b.units[i],
-                     largest);
+    s += fmt::format("{:<10} {:>10.3f} {:>9.3f} {:>9.3f} {:>9.3f} {:>9.3f} {:>5.2f}  {:<6} {}\n", b.names[i],
+                     i < values.size() ? values[i] : 0.0, ua[i], ub[i], uc[i], k[i] * uc[i], k[i], b.units[i], largest);
   }
   const Eigen::MatrixXd cor = b.correlation();
   std::vector<std::pair<double, std::string>> strong;
@@ -273,6 +348,7 @@ UncertaintyBudget UncertaintyBudget::slice(int first, int count) const {
   for (const auto& t : terms) b.terms.push_back({t.contributor, t.u.segment(first, count)});
   b.runs = runs;
   b.seed = seed;
+  if (coverage_factor.size() == size()) b.coverage_factor = coverage_factor.segment(first, count);
   return b;
 }
 
@@ -303,14 +379,23 @@ std::string raiseToRepeatScatter(Eigen::MatrixXd* cov_a, const std::vector<Eigen
   SampleMoments m(static_cast<int>(n));
   for (const auto& v : per_repeat) m.add(v);
   const Eigen::MatrixXd of_mean = m.covariance() / static_cast<double>(per_repeat.size());
+  // Under "cov_a is right", (R - 1) of_mean / cov_a is chi^2 with R - 1 dof. Raising wherever
+  // of_mean is larger would take every upward fluctuation (two repeats: u_A 20 % high on
+  // average): only a significant excess counts, as in readingScatter.
+  const double nu = static_cast<double>(per_repeat.size() - 1);
   Eigen::VectorXd d = Eigen::VectorXd::Ones(n);
+  int raised = 0;
   for (Eigen::Index i = 0; i < n; ++i)
-    if ((*cov_a)(i, i) > 0 && of_mean(i, i) > (*cov_a)(i, i)) d[i] = std::sqrt(of_mean(i, i) / (*cov_a)(i, i));
+    if ((*cov_a)(i, i) > 0 && of_mean(i, i) > (*cov_a)(i, i) &&
+        chiSquareSurvival(nu * of_mean(i, i) / (*cov_a)(i, i), nu) < kScatterExcessAlpha) {
+      d[i] = std::sqrt(of_mean(i, i) / (*cov_a)(i, i));
+      ++raised;
+    }
   *cov_a = d.asDiagonal() * (*cov_a) * d.asDiagonal();
   return fmt::format(
-      "; each parameter raised to the scatter of the {} repeats' own estimates (standard error of their mean) where "
-      "that is larger",
-      per_repeat.size());
+      "; the {} repeats' own estimates scatter more than that (chi-square, {:g} %) for {} parameter(s), raised to the "
+      "standard error of their mean",
+      per_repeat.size(), 100.0 * kScatterExcessAlpha, raised);
 }
 
 }  // namespace rotacal

@@ -7,7 +7,8 @@
 //        estimator (GUM Supplement 1); contributors that act independently at every reading
 //        (repeatability, roughness) are left to u_A, which measures them, so nothing is counted
 //        twice;
-//   u_c = sqrt(u_A^2 + u_B^2), U = k u_c with k = 2;
+//   u_c = sqrt(u_A^2 + u_B^2), U = k u_c with k read off the propagated distribution for 95.45 %
+//   (JCGM 101 7.7; k = 2, the normal value, when there is no Monte Carlo to read it from);
 // the combined covariance (cov_A + cov_B) and its correlation matrix, and the budget: each
 // contributor's share alone. Cycle-neutral: a cycle hands in the numbers (report units: um, mdeg,
 // um/h, ...); this file combines and writes them. docs/uncertainty.md states the rules and the
@@ -23,8 +24,16 @@
 
 namespace rotacal {
 
-/// The coverage factor of every expanded uncertainty rotacal writes (about 95 %, normal).
+/// The coverage probability every expanded uncertainty U rotacal writes stands for: that of
+/// k = 2 for a normal distribution, P(|Z| <= 2) = 95.45 %.
+constexpr double kCoverageProbability = 0.954499736103642;
+/// The coverage factor when the distribution is taken as normal: no Monte Carlo (u_B not
+/// evaluated, or evaluated to first order), or too few runs for its tail (below).
 constexpr double kCoverageFactor = 2.0;
+/// Monte Carlo runs from which the coverage factor is read off the propagated distribution
+/// (JCGM 101 Sec. 7.7): with 1000 runs, 45 lie beyond the 95.45 % point, and k's relative
+/// standard error is about 3 % for a normal distribution. Fewer runs: kCoverageFactor.
+constexpr int kMinRunsForCoverageFactor = 1000;
 
 /// Contributors drawn anew at every calibration: the artefact's set-up on the table, the R-test
 /// sphere's mounting on the spindle, the laser's alignment, the thermal state of the cycle. The
@@ -48,6 +57,11 @@ struct UncertaintyBudget {
   std::vector<BudgetTerm> terms;   // "data" first, then each contributor alone (catalog order)
   int runs = 0;
   std::uint64_t seed = 0;
+  /// Per parameter: U = k u_c holds kCoverageProbability of the combined distribution, the Monte
+  /// Carlo's deviations (bias included) convolved with the normal Type A part (setTypeB). A
+  /// distribution with lighter tails than a normal's (a bounded or mixed contributor) gets k < 2,
+  /// heavier tails k > 2. Empty: kCoverageFactor for every parameter.
+  Eigen::VectorXd coverage_factor;
 
   int size() const { return static_cast<int>(names.size()); }
   Eigen::VectorXd uA() const;
@@ -58,7 +72,8 @@ struct UncertaintyBudget {
   /// machine's own systematic errors (its linear axes, the artefact's form) are the same in every
   /// calibration and cancel in a comparison: history trends with this, not with u_c.
   Eigen::VectorXd uBetween() const;
-  Eigen::VectorXd expanded() const { return kCoverageFactor * uC(); }
+  Eigen::VectorXd coverageFactors() const;
+  Eigen::VectorXd expanded() const { return coverageFactors().cwiseProduct(uC()); }
   Eigen::MatrixXd covariance() const { return cov_a + cov_b; }
   Eigen::MatrixXd correlation() const;  // 0 where a variance is 0
   bool validate(std::string* why) const;
@@ -76,11 +91,35 @@ struct BudgetOptions {
   void validateOrThrow() const;  // std::invalid_argument with the reason
 };
 
+/// The significance level at which the data's residual is taken to show a per-reading scatter
+/// larger than the declared one (readingScatter). 5 %, not the judge's 1 %: here a missed excess
+/// costs coverage, a false one only a slightly wider U.
+constexpr double kScatterExcessAlpha = 0.05;
+
+/// The per-reading variance u_A rests on, in um^2, and one clause saying why.
+struct ReadingScatter {
+  double variance_um2 = 0.0;
+  double p_value = 1.0;  // of the residual under the declared scatter plus the contributors' residual
+  std::string why;
+};
+/// The rule every cycle's u_A follows. The fit's residual variance `observed_um2` (dof degrees of
+/// freedom) holds the per-reading scatter and the part of the Type B contributors the model
+/// cannot absorb (u_B counts that part). Under "the declared scatter is right" it is
+/// declared chi^2_dof / dof plus a systematic share whose distribution `systematic_um2` samples
+/// (the residual variance of noise-free simulations with the contributors drawn, through the
+/// same fit; empty when none act). p = mean_j P(declared chi^2_dof / dof >= observed - s_j).
+/// p >= kScatterExcessAlpha: the declared scatter. Else the residual less the contributors' mean
+/// share, never below the declared. (Taking that difference always, floored, gave every machine
+/// whose own linear-axis draw left a residual above the mean a larger u_A: 4 times too large
+/// for the R-test's dx_CB.)
+ReadingScatter readingScatter(double declared_um2, double observed_um2, int dof, const std::vector<double>& systematic_um2);
+
 /// u_B's sentence when the machine declares no contributors.
 std::string typeBNotDeclared();
 
-/// Repeats: a parameter whose repeats scatter more than cov_a says (drift between runs, a set-up
-/// that moved) takes the variance of the repeats' mean instead, correlations kept by scaling.
+/// Repeats: a parameter whose repeats scatter significantly more than cov_a says (chi-square at
+/// kScatterExcessAlpha: drift between runs, a set-up that moved) takes the variance of the
+/// repeats' mean instead, correlations kept by scaling.
 /// `per_repeat` holds each repeat's own estimate (report units). Returns the clause for the
 /// budget's type_a_source; cov_a is unchanged with fewer than two repeats (empty clause).
 std::string raiseToRepeatScatter(Eigen::MatrixXd* cov_a, const std::vector<Eigen::VectorXd>& per_repeat);
@@ -113,6 +152,7 @@ struct MonteCarloProblem {
 
 struct MonteCarloResult {
   SampleMoments combined{0};
+  Eigen::MatrixXd deviations;        // parameters x runs: every run with all contributors, in run order
   std::vector<SampleMoments> alone;  // per contributor
 };
 
@@ -129,12 +169,18 @@ void runTypeB(UncertaintyBudget* budget, const ContributorSet& type_b, const Bud
 /// Where the declared contributors came from, for type_b_source: their file, or "the machine".
 std::string contributorsSource(const ContributorSet& declared);
 
-/// Fills cov_b and the contributor terms of `budget` from a Monte Carlo result.
+/// Fills cov_b, the contributor terms and the coverage factors of `budget` from a Monte Carlo
+/// result. cov_a must already hold the Type A part: the coverage factor convolves it in.
 void setTypeB(UncertaintyBudget* budget, const MonteCarloResult& mc, const std::vector<std::string>& contributors);
 
-/// "uncertainty": {k, type_a, type_b, parameters: {name: {unit, u_a, u_b, u_c, U}}, covariance,
-/// correlation, budget: {name: [{contributor, u}, ...] largest first]}}.
-Json budgetJson(const UncertaintyBudget& budget, int top = 5);
+/// One sentence: where the coverage factors come from (the Monte Carlo's distribution, or k = 2).
+std::string coverageFactorSource(const UncertaintyBudget& budget);
+
+/// "uncertainty": {coverage_probability, coverage_factor (its source), type_a, type_b, parameters:
+/// {name: {unit, u_a, u_b, u_c, U, k}}, covariance, correlation, budget: {name: [{contributor, u},
+/// ...] largest first]}}. `values` (report units, the budget's order), when given, adds each
+/// parameter's value beside its uncertainty.
+Json budgetJson(const UncertaintyBudget& budget, const Eigen::VectorXd& values = Eigen::VectorXd(), int top = 5);
 /// Adds u_a, u_b, u_c, U and k to each entry of a parameters object ({name: {value, unit, u}})
 /// whose name the budget has; `u` (contract.md: from the data) is left as it is.
 void addBudgetFields(Json* parameters, const UncertaintyBudget& budget);

@@ -116,10 +116,12 @@ std::string uncertaintySection(const Json& doc) {
   const Json& order = u["order"];
   const Json& le = doc.value("location_errors", Json::object());
   std::string s = "<h2 id=\"uncertainty\">Uncertainty</h2>\n";
-  s += "<p>" + escape(fmt::format("u: standard uncertainty (k = 1); U = {} u_c (about 95 %).", str(u, "k"))) + "</p>";
+  s += "<p>" + escape(fmt::format("u: standard uncertainty (k = 1); U = k u_c, {:.2f} % coverage: {}.",
+                                  100.0 * dbl(u, "coverage_probability", 0.9545), str(u, "coverage_factor"))) +
+       "</p>";
   s += "<ul><li>Type A: " + escape(str(u, "type_a")) + "</li><li>Type B: " + escape(str(u, "type_b")) + "</li></ul>";
   s += "<table class=\"params\" data-table=\"uncertainty\">";
-  s += row({"parameter", "value", "u_A", "u_B", "u_c", "U", "unit", "largest contributors (u alone)"}, true);
+  s += row({"parameter", "value", "u_A", "u_B", "u_c", "U", "k", "unit", "largest contributors (u alone)"}, true);
   for (const auto& nj : order) {
     if (!nj.is_string()) continue;
     const std::string name = nj.get<std::string>();
@@ -129,8 +131,10 @@ std::string uncertaintySection(const Json& doc) {
     if (u.contains("budget") && u["budget"].contains(name) && u["budget"][name].is_array())
       for (const auto& t : u["budget"][name])
         largest += (largest.empty() ? "" : ", ") + escape(str(t, "contributor")) + " " + numCell(dbl(t, "u"), 2);
-    s += row({escape(name), le.contains(name) ? numCell(dbl(le[name], "value"), 3) : "&ndash;", numCell(dbl(p, "u_a"), 3),
-              numCell(dbl(p, "u_b"), 3), numCell(dbl(p, "u_c"), 3), numCell(dbl(p, "U"), 3), escape(str(p, "unit")), largest});
+    const double value = p.contains("value") ? dbl(p, "value") : le.contains(name) ? dbl(le[name], "value") : std::nan("");
+    s += row({escape(name), numCell(value, 3), numCell(dbl(p, "u_a"), 3),
+              numCell(dbl(p, "u_b"), 3), numCell(dbl(p, "u_c"), 3), numCell(dbl(p, "U"), 3), numCell(dbl(p, "k"), 2),
+              escape(str(p, "unit")), largest});
   }
   s += "</table>\n";
   if (u.contains("correlation") && u["correlation"].is_array() && u["correlation"].size() == order.size()) {

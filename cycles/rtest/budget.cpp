@@ -136,10 +136,9 @@ UncertaintyBudget rtestBudget(const ProbePlan& plan, const RtestCycle& first, co
     return Eigen::VectorXd(est.G * y);
   };
 
-  // Type A: the residual measures the per-reading scatter, and also the part of the Type B
-  // contributors the eight-error model cannot absorb (linear axes between poses, cross-talk);
-  // that part is in u_B, so its expected value is taken out, floored at the declared scatter.
-  double expected_sys_mm2 = 0.0;
+  // Type A (readingScatter): the residual also holds the part of the Type B contributors the
+  // eight-error model cannot absorb (linear axes between poses, cross-talk), which u_B counts.
+  std::vector<double> sys_um2;
   const int dof = fit.dof;
   if (!type_b.items.empty() && dof > 0) {
     constexpr int kResidualRuns = 200;
@@ -148,18 +147,16 @@ UncertaintyBudget rtestBudget(const ProbePlan& plan, const RtestCycle& first, co
       drawRtest(plan, type_b, options.seed ^ 0x5245534944ULL, r, -1, &d);
       Eigen::VectorXd y;
       const Eigen::VectorXd x = estimate(d, &y);
-      expected_sys_mm2 += (y - est.A * x).squaredNorm() / dof;
+      sys_um2.push_back(mmToUm(1.0) * mmToUm(1.0) * (y - est.A * x).squaredNorm() / dof);
     }
-    expected_sys_mm2 /= kResidualRuns;
   }
-  const double s_obs_mm = umToMm(fit.residual_sd_um);
-  const double sigma2 = std::max(declared_mm2, s_obs_mm * s_obs_mm - expected_sys_mm2);
+  const ReadingScatter scatter = readingScatter(mmToUm(1.0) * mmToUm(1.0) * declared_mm2,
+                                                fit.residual_sd_um * fit.residual_sd_um, dof, sys_um2);
+  const double sigma2 = umToMm(1.0) * umToMm(1.0) * scatter.variance_um2;
   b.cov_a = f.asDiagonal() * (sigma2 * G8 * G8.transpose()) * f.asDiagonal();
   b.type_a_source = fmt::format(
-      "the per-reading scatter {:.3f} um (residual {:.3f} um, {} dof, less {:.3f} um expected from the Type B "
-      "contributors, floored at the declared {:.3f} um: sensor noise and sphere form) through the location fit",
-      mmToUm(std::sqrt(sigma2)), fit.residual_sd_um, dof, mmToUm(std::sqrt(expected_sys_mm2)),
-      mmToUm(std::sqrt(declared_mm2)));
+      "the per-reading scatter {:.3f} um ({}; declared: sensor noise and sphere form) through the location fit",
+      std::sqrt(scatter.variance_um2), scatter.why);
   b.terms.push_back({"data", b.uA()});
   if (!contributors) {
     b.type_b_source = typeBNotDeclared();
@@ -194,6 +191,8 @@ Eigen::MatrixXd asTilts(const Eigen::VectorXd& v, int tilts) { return Eigen::Map
 Eigen::MatrixXd RtestTiltBudget::uA() const { return asTilts(budget.uA(), tilts); }
 Eigen::MatrixXd RtestTiltBudget::uB() const { return asTilts(budget.uB(), tilts); }
 Eigen::MatrixXd RtestTiltBudget::uC() const { return asTilts(budget.uC(), tilts); }
+Eigen::MatrixXd RtestTiltBudget::expanded() const { return asTilts(budget.expanded(), tilts); }
+Eigen::MatrixXd RtestTiltBudget::coverageFactors() const { return asTilts(budget.coverageFactors(), tilts); }
 
 RtestTiltBudget rtestTiltBudget(const ProbePlan& plan, const RtestCycle& first, const RtestAnalysis& a,
                                 const RtestFitOptions& fit_options, const ContributorSet* contributors,
@@ -234,11 +233,11 @@ RtestTiltBudget rtestTiltBudget(const ProbePlan& plan, const RtestCycle& first, 
     const RtestCycleFit c = fitOf(t, x);
     return f.cwiseProduct(Eigen::Map<const Eigen::VectorXd>(c.value.data(), n));
   };
-  // Type A, the rule of the location fit: the per-tilt fit's residual also holds what the Type B
-  // contributors leave in it (the linear axes between poses); that part is in u_B, so its
-  // expected value is taken out, floored at the declared per-reading scatter.
-  const double declared_mm2 = std::pow(umToMm(fit_options.sensor_sigma_um), 2) + split.per_reading_mm2;
-  double expected_sys_mm2 = 0.0;
+  // Type A, the rule of the location fit (readingScatter): the per-tilt fit's residual also holds
+  // what the Type B contributors leave in it (the linear axes between poses), which u_B counts.
+  const double declared_um2 =
+      fit_options.sensor_sigma_um * fit_options.sensor_sigma_um + mmToUm(1.0) * mmToUm(1.0) * split.per_reading_mm2;
+  std::vector<double> sys_um2;
   if (!split.type_b.items.empty() && fit.dof > 0) {
     constexpr int kResidualRuns = 100;
     for (int run = 0; run < kResidualRuns; ++run) {
@@ -247,21 +246,18 @@ RtestTiltBudget rtestTiltBudget(const ProbePlan& plan, const RtestCycle& first, 
       Truth t = truth0;
       RtestTruthExtras x;
       applyRtestDraw(plan, d, &t, &x);
-      expected_sys_mm2 += std::pow(umToMm(fitOf(t, x).residual_sd_um), 2);
+      sys_um2.push_back(std::pow(fitOf(t, x).residual_sd_um, 2));
     }
-    expected_sys_mm2 /= kResidualRuns;
   }
-  const double s_obs_mm2 = std::pow(umToMm(fit.residual_sd_um), 2);
-  const double sigma2 = std::max(declared_mm2, s_obs_mm2 - expected_sys_mm2);
+  const ReadingScatter scatter = readingScatter(declared_um2, fit.residual_sd_um * fit.residual_sd_um, fit.dof, sys_um2);
+  const double sigma2 = umToMm(1.0) * umToMm(1.0) * scatter.variance_um2;
   // The fit's covariance is sigma_um^2 N^-1: rescaled to this per-reading scatter.
   const double fit_sigma2 = std::pow(umToMm(fit.sigma_um), 2);
   b.cov_a = fit_sigma2 > 0 ? Eigen::MatrixXd(sigma2 / fit_sigma2 * f.asDiagonal() * fit.cov * f.asDiagonal())
                            : Eigen::MatrixXd::Zero(n, n);
   b.type_a_source = fmt::format(
-      "the first cycle's per-tilt fit (002 Eq. (6)): the per-reading scatter {:.3f} um (residual {:.3f} um, {} dof, "
-      "less {:.3f} um expected from the Type B contributors, floored at the declared {:.3f} um) through that fit",
-      mmToUm(std::sqrt(sigma2)), fit.residual_sd_um, fit.dof, mmToUm(std::sqrt(expected_sys_mm2)),
-      mmToUm(std::sqrt(declared_mm2)));
+      "the first cycle's per-tilt fit (002 Eq. (6)): the per-reading scatter {:.3f} um ({}) through that fit",
+      std::sqrt(scatter.variance_um2), scatter.why);
   b.terms.push_back({"data", b.uA()});
   if (!contributors) {
     b.type_b_source = typeBNotDeclared();
@@ -293,25 +289,26 @@ RtestTiltBudget rtestTiltBudget(const ProbePlan& plan, const RtestCycle& first, 
 void addRtestTiltBudget(Json* report, const ProbePlan& plan, const RtestTiltBudget& b) {
   if (!report->contains("cycles") || (*report)["cycles"].empty()) return;
   Json& errors = (*report)["cycles"][0]["errors"];
-  const Eigen::MatrixXd ua = b.uA(), ub = b.uB(), uc = b.uC();
-  auto row = [&](const Eigen::MatrixXd& m, int p, double mult) {
+  const Eigen::MatrixXd ua = b.uA(), ub = b.uB(), uc = b.uC(), U = b.expanded(), k = b.coverageFactors();
+  auto row = [&](const Eigen::MatrixXd& m, int p) {
     Json r = Json::array();
-    for (int i = 0; i < b.tilts; ++i) r.push_back(round6(mult * m(p, i)));
+    for (int i = 0; i < b.tilts; ++i) r.push_back(round6(m(p, i)));
     return r;
   };
   for (int p = 0; p < kRtestParams; ++p) {
     const std::string name = rtestParameterName(plan.machine.kinematics, p);
     if (!errors.contains(name)) continue;
     Json& e = errors[name];
-    e["u_a"] = row(ua, p, 1.0);
-    e["u_b"] = row(ub, p, 1.0);
-    e["u_c"] = row(uc, p, 1.0);
-    e["U"] = row(uc, p, kCoverageFactor);
-    e["k"] = kCoverageFactor;
+    e["u_a"] = row(ua, p);
+    e["u_b"] = row(ub, p);
+    e["u_c"] = row(uc, p);
+    e["U"] = row(U, p);
+    e["k"] = row(k, p);
   }
   (*report)["per_tilt_uncertainty"] = {{"type_a", b.budget.type_a_source},
                                        {"type_b", b.budget.type_b_source},
-                                       {"where", "cycles[0].errors: u_a u_b u_c U per tilt"}};
+                                       {"coverage_factor", coverageFactorSource(b.budget)},
+                                       {"where", "cycles[0].errors: u_a u_b u_c U k per tilt"}};
 }
 
 RtestDriftBudget rtestDriftBudget(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, const RtestAnalysis& a,

@@ -64,6 +64,8 @@ struct RtestTiltBudget {
   Eigen::MatrixXd uA() const;
   Eigen::MatrixXd uB() const;
   Eigen::MatrixXd uC() const;
+  Eigen::MatrixXd expanded() const;  // U per tilt: each parameter's own coverage factor
+  Eigen::MatrixXd coverageFactors() const;
 };
 /// `first` is the first cycle's readings as measured (with or without its reset rows: the
 /// simulated cycle is read the same way).

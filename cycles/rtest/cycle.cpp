@@ -135,11 +135,10 @@ class Rtest final : public Cycle {
       bo.seed = r.mc_seed;
       const RtestTiltBudget tb = rtestTiltBudget(plan, cycles.front(), a, o, r.contributors, bo);
       addRtestTiltBudget(&out.doc, plan, tb);
-      const Eigen::MatrixXd uc = tb.uC();
-      out.text += fmt::format("per-tilt errors of the first cycle: U (k = {:g}) at most {:.3f} um (translations), {:.3f} "
-                              "mdeg (rotations) over the {} tilts; u_B {} (REPORT.json cycles[0].errors: u_a u_b u_c U)\n",
-                              kCoverageFactor, kCoverageFactor * uc.topRows(3).maxCoeff(),
-                              kCoverageFactor * uc.bottomRows(3).maxCoeff(), tb.tilts,
+      const Eigen::MatrixXd U = tb.expanded();
+      out.text += fmt::format("per-tilt errors of the first cycle: U ({:.2f} %) at most {:.3f} um (translations), {:.3f} "
+                              "mdeg (rotations) over the {} tilts; u_B {} (REPORT.json cycles[0].errors: u_a u_b u_c U k)\n",
+                              100.0 * kCoverageProbability, U.topRows(3).maxCoeff(), U.bottomRows(3).maxCoeff(), tb.tilts,
                               tb.budget.type_b_evaluated ? "from the declared contributors" : "not evaluated (none declared)");
     }
     return out;

@@ -183,22 +183,24 @@ UncertaintyBudget spaceframeBudget(const ProbePlan& plan, const SpaceframeAnalys
     dof += f.dof;
   }
   const double s_obs2 = dof > 0 ? rss / dof : 0.0;
-  double expected_sys_mm2 = 0.0;
+  // Type A (readingScatter): the sphere fits' residual also holds what the Type B contributors
+  // leave in it, which u_B counts.
+  std::vector<double> sys_um2;
   if ((nb > 0 || frame_term) && lin.stage1_dof > 0) {
     constexpr int kResidualRuns = 100;
     for (int k = 0; k < kResidualRuns; ++k)
-      expected_sys_mm2 += (lin.residual * triggerShift(draw(options.seed ^ 0x5245534944ULL, k, -1).truth)).squaredNorm() /
-                          lin.stage1_dof;
-    expected_sys_mm2 /= kResidualRuns;
+      sys_um2.push_back(mmToUm(1.0) * mmToUm(1.0) *
+                        (lin.residual * triggerShift(draw(options.seed ^ 0x5245534944ULL, k, -1).truth)).squaredNorm() /
+                        lin.stage1_dof);
   }
-  const double sigma2 = std::max(declared_mm2, s_obs2 - expected_sys_mm2);
+  const ReadingScatter scatter =
+      readingScatter(mmToUm(1.0) * mmToUm(1.0) * declared_mm2, mmToUm(1.0) * mmToUm(1.0) * s_obs2, dof, sys_um2);
+  const double sigma2 = umToMm(1.0) * umToMm(1.0) * scatter.variance_um2;
   Eigen::MatrixXd cov_a = sigma2 / repeats * lin.G * lin.G.transpose();
   b.type_a_source = fmt::format(
-      "the per-touch scatter {:.3f} um (sphere fits' residual {:.3f} um, less {:.3f} um expected from the Type B "
-      "contributors, floored at the declared {:.3f} um) through the estimator (sphere fits, then the least squares on the "
-      "centres), {} run(s)",
-      mmToUm(std::sqrt(sigma2)), mmToUm(std::sqrt(s_obs2)), mmToUm(std::sqrt(expected_sys_mm2)),
-      mmToUm(std::sqrt(declared_mm2)), per_run.size() > 1 ? per_run.size() : 1);
+      "the per-touch scatter {:.3f} um ({}) through the estimator (sphere fits, then the least squares on the centres), "
+      "{} run(s)",
+      std::sqrt(scatter.variance_um2), scatter.why, per_run.size() > 1 ? per_run.size() : 1);
   if (!contributors) {
     // Nothing declared: what the centres' misfit says (a-posteriori u) is the larger claim where
     // it is larger; correlations kept by scaling.
@@ -275,7 +277,7 @@ Eigen::VectorXd spaceframeBudgetValues(const ProbePlan& plan, const SpaceframeAn
   return out;
 }
 
-void addSpaceframeBudget(Json* report, const UncertaintyBudget& b) {
+void addSpaceframeBudget(Json* report, const UncertaintyBudget& b, const Eigen::VectorXd& values) {
   addBudgetFields(&(*report)["location_errors"], b.slice(0, kNumLocationErrors));
   int first = kNumLocationErrors;
   int scales = 0;
@@ -284,7 +286,7 @@ void addSpaceframeBudget(Json* report, const UncertaintyBudget& b) {
   for (auto& name : sc.names) name = name.substr(6);  // REPORT.json's linear_axis_scale: X, Y, Z
   if (report->contains("linear_axis_scale")) addBudgetFields(&(*report)["linear_axis_scale"], sc);
   if (report->contains("frame_setup")) addBudgetFields(&(*report)["frame_setup"], b);
-  (*report)["uncertainty"] = budgetJson(b);
+  (*report)["uncertainty"] = budgetJson(b, values);
 }
 
 }  // namespace rotacal

@@ -68,6 +68,6 @@ Eigen::VectorXd spaceframeBudgetValues(const ProbePlan& plan, const SpaceframeAn
 
 /// Adds u_a, u_b, u_c, U and k to REPORT.json's location_errors, linear_axis_scale and
 /// frame_setup entries, and the `uncertainty` block.
-void addSpaceframeBudget(Json* report, const UncertaintyBudget& budget);
+void addSpaceframeBudget(Json* report, const UncertaintyBudget& budget, const Eigen::VectorXd& values);
 
 }  // namespace rotacal

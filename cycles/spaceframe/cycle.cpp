@@ -48,8 +48,9 @@ class Spaceframe final : public Cycle {
     bo.runs = r.mc_runs;
     bo.seed = r.mc_seed;
     const UncertaintyBudget b = spaceframeBudget(plan, a, per_run, r.contributors, bo);
-    addSpaceframeBudget(&out.doc, b);
-    out.text += "\n" + budgetText(b, spaceframeBudgetValues(plan, a));
+    const Eigen::VectorXd values = spaceframeBudgetValues(plan, a);
+    addSpaceframeBudget(&out.doc, b, values);
+    out.text += "\n" + budgetText(b, values);
     if (a.summary.termination != "converged") out.warnings.push_back("spaceframe identification " + a.summary.termination);
     return out;
   }

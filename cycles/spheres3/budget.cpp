@@ -199,11 +199,10 @@ Spheres3Budget spheres3Budget(const ProbePlan& plan, const Spheres3Result& r, co
     return Eigen::VectorXd(triggersAlong(plan, t) - lin.ideal_s_mm);
   };
 
-  // Type A. The sphere fits' residual (1 dof per sphere and angle) measures the per-touch
-  // scatter, and also the part of the Type B contributors a sphere cannot absorb (the linear
-  // axes' random errors across its 38 mm, pretravel differing between opposite directions is
-  // absorbed by the centre): that part is in u_B, so its expected value is taken out, floored at
-  // the declared scatter.
+  // Type A (readingScatter). The sphere fits' residual (1 dof per sphere and angle) measures the
+  // per-touch scatter, and also the part of the Type B contributors a sphere cannot absorb (the
+  // linear axes' random errors across its 38 mm; pretravel differing between opposite directions
+  // is absorbed by the centre), which u_B counts.
   double sigma2 = 0.0;
   std::string how;
   const double s_obs_mm = umToMm(r.sigma_touch_um);
@@ -212,20 +211,20 @@ Spheres3Budget spheres3Budget(const ProbePlan& plan, const Spheres3Result& r, co
     how = fmt::format("the larger of the sphere fits' touch noise {:.3f} um and the probe repeatability of the machine",
                       r.sigma_touch_um);
   } else {
-    double expected_sys_mm2 = 0.0;
+    std::vector<double> sys_um2;
     if (!type_b.items.empty() && lin.stage1_dof > 0) {
       constexpr int kResidualRuns = 200;
       for (int k = 0; k < kResidualRuns; ++k) {
         Spheres3Draw d;
         drawSpheres3(plan, type_b, options.seed ^ 0x5245534944ULL, k, -1, &d);
-        expected_sys_mm2 += (lin.residual * triggerShift(d)).squaredNorm() / lin.stage1_dof;
+        sys_um2.push_back(mmToUm(1.0) * mmToUm(1.0) * (lin.residual * triggerShift(d)).squaredNorm() / lin.stage1_dof);
       }
-      expected_sys_mm2 /= kResidualRuns;
     }
-    sigma2 = std::max(declared_mm2, s_obs_mm * s_obs_mm - expected_sys_mm2);
-    how = fmt::format("sphere fits' residual {:.3f} um, less {:.3f} um expected from the Type B contributors, floored at "
-                      "the declared {:.3f} um (probe repeatability, surface roughness)",
-                      r.sigma_touch_um, mmToUm(std::sqrt(expected_sys_mm2)), mmToUm(std::sqrt(declared_mm2)));
+    const ReadingScatter scatter = readingScatter(mmToUm(1.0) * mmToUm(1.0) * declared_mm2,
+                                                  mmToUm(s_obs_mm) * mmToUm(s_obs_mm),
+                                                  lin.stage1_dof * static_cast<int>(repeats), sys_um2);
+    sigma2 = umToMm(1.0) * umToMm(1.0) * scatter.variance_um2;
+    how = scatter.why + "; declared: probe repeatability, surface roughness";
   }
   Eigen::MatrixXd cov_a = sigma2 / repeats * G * G.transpose();
   full.type_a_source = fmt::format("the per-touch scatter {:.3f} um ({}) through the estimator, {} run(s)",
@@ -268,16 +267,19 @@ Spheres3Budget spheres3Budget(const ProbePlan& plan, const Spheres3Result& r, co
 
   Spheres3Budget out;
   out.location = full.slice(0, kLocation);
-  const Eigen::VectorXd ua = full.uA(), ub = full.uB(), uc = full.uC();
+  const Eigen::VectorXd ua = full.uA(), ub = full.uB(), uc = full.uC(), kf = full.coverageFactors();
+  out.coverage_source = coverageFactorSource(full);
   out.component_u_a.resize(n_angles, kNumComponentErrors);
   out.component_u_b.resize(n_angles, kNumComponentErrors);
   out.component_u_c.resize(n_angles, kNumComponentErrors);
+  out.component_k.resize(n_angles, kNumComponentErrors);
   for (int a = 0; a < n_angles; ++a)
     for (int k = 0; k < kNumComponentErrors; ++k) {
       const int i = kLocation + kNumComponentErrors * a + k;
       out.component_u_a(a, k) = ua[i];
       out.component_u_b(a, k) = ub[i];
       out.component_u_c(a, k) = uc[i];
+      out.component_k(a, k) = kf[i];
     }
   return out;
 }
@@ -296,8 +298,8 @@ void addSpheres3Budget(Json* report, const Spheres3Budget& b) {
     e["u_a"] = column(b.component_u_a, k, 1.0);
     e["u_b"] = column(b.component_u_b, k, 1.0);
     e["u_c"] = column(b.component_u_c, k, 1.0);
-    e["U"] = column(b.component_u_c, k, kCoverageFactor);
-    e["k"] = kCoverageFactor;
+    e["U"] = column(b.componentExpanded(), k, 1.0);
+    e["k"] = column(b.component_k, k, 1.0);
   }
 }
 

@@ -69,6 +69,9 @@ struct Spheres3Budget {
   UncertaintyBudget location;                // Oxc Oyc Sxc Syc, report units (um, mdeg)
   /// Component errors at the sampled angles (rows) x EXC..ECC, report units.
   Eigen::MatrixXd component_u_a, component_u_b, component_u_c;
+  Eigen::MatrixXd component_k;  // each one's coverage factor (UncertaintyBudget::coverage_factor)
+  std::string coverage_source;  // coverageFactorSource of the whole budget
+  Eigen::MatrixXd componentExpanded() const { return component_k.cwiseProduct(component_u_c); }
 };
 
 /// The budget of `result` (identified from per_run.size() repeats, or one run when per_run is

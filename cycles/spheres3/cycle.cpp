@@ -69,10 +69,10 @@ class Spheres3 final : public Cycle {
     for (int i = 0; i < 4; ++i) values[i] = i < 2 ? mmToUm(res.location[i]) : radToMdeg(res.location[i]);
     out.text += "\n" + budgetText(b.location, values);
     if (b.component_u_c.size() > 0)
-      out.text += fmt::format("component errors: U (k = {:g}) at most {:.3f} um (EXC EYC EZC), {:.3f} mdeg (EAC EBC ECC) "
-                              "over the sampled angles (REPORT.json component_errors: u_a u_b u_c U)\n",
-                              kCoverageFactor, kCoverageFactor * b.component_u_c.leftCols(3).maxCoeff(),
-                              kCoverageFactor * b.component_u_c.rightCols(3).maxCoeff());
+      out.text += fmt::format("component errors: U ({:.2f} %) at most {:.3f} um (EXC EYC EZC), {:.3f} mdeg (EAC EBC ECC) "
+                              "over the sampled angles (REPORT.json component_errors: u_a u_b u_c U k)\n",
+                              100.0 * kCoverageProbability, b.componentExpanded().leftCols(3).maxCoeff(),
+                              b.componentExpanded().rightCols(3).maxCoeff());
     return out;
   }
 

@@ -232,27 +232,25 @@ UncertaintyBudget tooltipBudget(const ProbePlan& plan, const std::vector<Tooltip
     return fitTooltip(plan, {run}, fo);
   };
 
-  // Type A: the residual measures the per-reading scatter and also the part of the Type B
-  // contributors the model cannot absorb (the linear axes between poses); that part is in u_B,
-  // so its expected value is taken out, floored at the declared scatter.
-  double expected_sys_um2 = 0.0;
+  // Type A (readingScatter): the residual also holds the part of the Type B contributors the
+  // model cannot absorb (the linear axes between poses), which u_B counts.
+  std::vector<double> sys_um2;
   if (!type_b.items.empty() && fit.dof > 0) {
     constexpr int kResidualRuns = 200;
     for (int r = 0; r < kResidualRuns; ++r) {
       TooltipDraw d;
       drawTooltip(plan, type_b, options.seed ^ 0x5245534944ULL, r, -1, &d);
       const TooltipFit e = estimate(d);
-      expected_sys_um2 += e.dof > 0 ? e.rss_um2 / e.dof : 0.0;
+      sys_um2.push_back(e.dof > 0 ? e.rss_um2 / e.dof : 0.0);
     }
-    expected_sys_um2 /= kResidualRuns;
   }
   const double s_obs = fit.dof > 0 ? fit.sigma_um : 0.0;
-  const double sigma2 = std::max(declared_um2, s_obs * s_obs - expected_sys_um2);
+  const ReadingScatter scatter = readingScatter(declared_um2, s_obs * s_obs, fit.dof, sys_um2);
+  const double sigma2 = scatter.variance_um2;
   Eigen::MatrixXd cov_a = f.asDiagonal() * (sigma2 * cov_unit) * f.asDiagonal();
   b.type_a_source = fmt::format(
-      "the per-reading scatter {:.3f} um (residual {:.3f} um, {} dof, less {:.3f} um expected from the Type B "
-      "contributors, floored at the declared {:.3f} um: laser, sphere form, lateral coupling) through the fit",
-      std::sqrt(sigma2), s_obs, fit.dof, std::sqrt(expected_sys_um2), std::sqrt(declared_um2));
+      "the per-reading scatter {:.3f} um ({}; declared: laser, sphere form, lateral coupling) through the fit",
+      std::sqrt(sigma2), scatter.why);
   // Repeats: a parameter whose repeats scatter more than that (drift between runs, a set-up that
   // moved) takes the standard error of the repeats' mean instead; correlations kept by scaling.
   if (runs.size() >= 2) {

@@ -85,18 +85,19 @@ class Tooltip final : public Cycle {
     const UncertaintyBudget b = tooltipBudget(plan, runs, a, to.noise_um, r.contributors, bo);
     addBudgetFields(&out.doc["location_errors"], b);
     // The angular errors are an array by angle: each entry gets the same fields beside its u.
-    const Eigen::VectorXd ua = b.uA(), ub = b.uB(), uc = b.uC();
+    const Eigen::VectorXd ua = b.uA(), ub = b.uB(), uc = b.uC(), k = b.coverageFactors();
     for (auto& e : out.doc["angular_error"])
       for (int i = 0; i < b.size(); ++i)
         if (b.names[static_cast<size_t>(i)] == fmt::format("e_{}{:g}", to.axis, e["angle_deg"].get<double>())) {
           e["u_a"] = round6(ua[i]);
           e["u_b"] = round6(ub[i]);
           e["u_c"] = round6(uc[i]);
-          e["U"] = round6(kCoverageFactor * uc[i]);
-          e["k"] = kCoverageFactor;
+          e["U"] = round6(k[i] * uc[i]);
+          e["k"] = round6(k[i]);
         }
-    out.doc["uncertainty"] = budgetJson(b);
-    out.text += "\n" + budgetText(b, tooltipBudgetValues(a, b));
+    const Eigen::VectorXd values = tooltipBudgetValues(a, b);
+    out.doc["uncertainty"] = budgetJson(b, values);
+    out.text += "\n" + budgetText(b, values);
     return out;
   }
 

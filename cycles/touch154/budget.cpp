@@ -85,22 +85,23 @@ UncertaintyBudget touch154Budget(const ProbePlan& plan, const IdentificationResu
     double declared_mm2 = 0.0;
     for (const auto& c : contributors->items)
       if (measuredByTypeA(*c.info)) declared_mm2 += c.u[0] * c.u[0];
-    const double sigma_obs_mm = umToMm(main.summary.sigma_um);
     double sigma2 = declared_mm2;
     std::string how;
     if (main.method != Method::ClosedForm && main.summary.dof > 0) {
-      double expected_sys_mm2 = 0.0;
+      // readingScatter with the contributors' residual share by its expected value alone: the
+      // linear chain gives it in closed form (trace of the trigger covariance left by the fit).
+      std::vector<double> sys_um2;
       if (!type_b.items.empty()) {
         const Eigen::MatrixXd C = triggerCovariance(*chain, type_b);
         const Eigen::MatrixXd& U = um == UncertaintyMethod::LsqRigidSetup ? chain->range_rs : chain->range_lp;
         const double dof = static_cast<double>(chain->points - U.cols());
-        if (dof > 0) expected_sys_mm2 = std::max(0.0, (C.trace() - (U.transpose() * C * U).trace()) / dof);
+        if (dof > 0)
+          sys_um2.push_back(mmToUm(1.0) * mmToUm(1.0) * std::max(0.0, (C.trace() - (U.transpose() * C * U).trace()) / dof));
       }
-      sigma2 = std::max(declared_mm2, sigma_obs_mm * sigma_obs_mm - expected_sys_mm2);
-      how = fmt::format("residual {:.3f} um ({} dof), less {:.3f} um expected from the Type B contributors, floored at the "
-                        "declared {:.3f} um",
-                        main.summary.sigma_um, main.summary.dof, mmToUm(std::sqrt(expected_sys_mm2)),
-                        mmToUm(std::sqrt(declared_mm2)));
+      const ReadingScatter scatter = readingScatter(mmToUm(1.0) * mmToUm(1.0) * declared_mm2,
+                                                    main.summary.sigma_um * main.summary.sigma_um, main.summary.dof, sys_um2);
+      sigma2 = umToMm(1.0) * umToMm(1.0) * scatter.variance_um2;
+      how = scatter.why;
     } else {
       how = fmt::format("the declared {:.3f} um (the closed form leaves no residual to measure it)",
                         mmToUm(std::sqrt(declared_mm2)));

@@ -1,5 +1,6 @@
 // core/uncertainty_budget: the Monte Carlo's moments against closed forms, independence of the
-// thread count, and the combination rules (u_c^2 = u_A^2 + u_B^2, U = 2 u_c, correlation).
+// thread count, the combination rules (u_c^2 = u_A^2 + u_B^2, U = k u_c, correlation), the
+// coverage factor read off the Monte Carlo against closed forms, and u_A's scatter rule.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -103,7 +104,7 @@ TEST(MonteCarlo, ResultsDoNotDependOnTheNumberOfThreads) {
   EXPECT_NE(one.combined.covariance(), other_seed.combined.covariance());
 }
 
-TEST(UncertaintyBudget, CombinesTypeAAndTypeBAndExpandsWithK2) {
+TEST(UncertaintyBudget, CombinesTypeAAndTypeBAndExpandsWithItsCoverageFactor) {
   const LinearToy t = toy();
   UncertaintyBudget b;
   b.names = {"x", "y", "z"};
@@ -115,7 +116,10 @@ TEST(UncertaintyBudget, CombinesTypeAAndTypeBAndExpandsWithK2) {
   const Eigen::VectorXd ua = b.uA(), ub = b.uB(), uc = b.uC();
   for (int i = 0; i < 3; ++i) {
     EXPECT_NEAR(uc[i] * uc[i], ua[i] * ua[i] + ub[i] * ub[i], 1e-9);
-    EXPECT_NEAR(b.expanded()[i], 2.0 * uc[i], 1e-12);
+    // Normal contributors and a normal u_A: the Monte Carlo's k is the normal 2, within the
+    // sampling of a 95.45 % point from 4000 runs (relative standard error about 1.5 %).
+    EXPECT_NEAR(b.coverageFactors()[i], 2.0, 0.1);
+    EXPECT_NEAR(b.expanded()[i], b.coverageFactors()[i] * uc[i], 1e-12);
   }
   const Eigen::MatrixXd r = b.correlation();
   const Eigen::MatrixXd c = b.covariance();
@@ -123,7 +127,8 @@ TEST(UncertaintyBudget, CombinesTypeAAndTypeBAndExpandsWithK2) {
   EXPECT_DOUBLE_EQ(r(2, 2), 1.0);
   // The JSON carries the same numbers, and the budget lists the largest contributor first.
   const Json j = budgetJson(b);
-  EXPECT_NEAR(j["parameters"]["y"]["U"].get<double>(), 2.0 * uc[1], 1e-5);
+  EXPECT_NEAR(j["parameters"]["y"]["U"].get<double>(), b.expanded()[1], 1e-5);
+  EXPECT_NEAR(j["parameters"]["y"]["k"].get<double>(), b.coverageFactors()[1], 1e-5);
   EXPECT_EQ(j["covariance"].size(), 3u);
   const auto& top = j["budget"]["x"];
   ASSERT_GE(top.size(), 2u);
@@ -133,4 +138,93 @@ TEST(UncertaintyBudget, CombinesTypeAAndTypeBAndExpandsWithK2) {
   EXPECT_NEAR(params["x"]["u_c"].get<double>(), uc[0], 1e-5);
   EXPECT_DOUBLE_EQ(params["x"]["u"].get<double>(), 0.3);  // contract.md: u stays the data's
   EXPECT_FALSE(params["w"].contains("u_c"));
+}
+
+namespace {
+
+// A Monte Carlo whose deviation is uniform on [-a, a] in its one parameter.
+MonteCarloProblem uniformProblem(double a) {
+  MonteCarloProblem p;
+  p.parameters = 1;
+  p.contributors = {"u"};
+  p.deviation = [a](std::uint64_t seed, int run, int) {
+    Rng r(seed, static_cast<std::uint64_t>(run));
+    return Eigen::VectorXd::Constant(1, a * (2.0 * r.uniform() - 1.0));
+  };
+  return p;
+}
+
+// P(|X + E| <= q), X uniform on [-a, a], E ~ N(0, s^2), by the trapezoidal rule over x: the
+// closed form's integrand, not the code's sample mean.
+double uniformPlusNormalHeld(double a, double s, double q) {
+  constexpr int kSteps = 20000;
+  double sum = 0.0;
+  for (int i = 0; i <= kSteps; ++i) {
+    const double x = -a + 2.0 * a * i / kSteps;
+    const double f = 0.5 * (std::erf((q - x) / (s * std::sqrt(2.0))) + std::erf((q + x) / (s * std::sqrt(2.0))));
+    sum += (i == 0 || i == kSteps ? 0.5 : 1.0) * f;
+  }
+  return sum / kSteps;
+}
+
+}  // namespace
+
+TEST(UncertaintyBudget, CoverageFactorOfABoundedContributorIsItsClosedForm) {
+  // u_B alone, uniform on [-a, a]: U holds 95.45 % at q = 0.9545 a, u = a / sqrt(3): k = 1.653
+  // (a normal's 2 would hold 100 %).
+  const double a = 3.0;
+  UncertaintyBudget b;
+  b.names = {"x"};
+  b.units = {"um"};
+  b.cov_a = Eigen::MatrixXd::Zero(1, 1);
+  setTypeB(&b, runMonteCarlo(uniformProblem(a), 20000, 0, 3, 2), {"u"});
+  EXPECT_NEAR(b.uB()[0], a / std::sqrt(3.0), 0.02);
+  EXPECT_NEAR(b.coverageFactors()[0], kCoverageProbability * std::sqrt(3.0), 0.02);
+  // With a normal Type A part as large: k from the convolution, checked by quadrature.
+  b.cov_a(0, 0) = 3.0;  // u_A = sqrt(3) um = u_B
+  setTypeB(&b, runMonteCarlo(uniformProblem(a), 20000, 0, 3, 2), {"u"});
+  const double U = b.expanded()[0];
+  EXPECT_NEAR(uniformPlusNormalHeld(a, std::sqrt(3.0), U), kCoverageProbability, 0.003);
+  EXPECT_LT(b.coverageFactors()[0], 2.0);
+  // Below kMinRunsForCoverageFactor runs the tail is not read: k = 2.
+  setTypeB(&b, runMonteCarlo(uniformProblem(a), kMinRunsForCoverageFactor - 1, 0, 3, 2), {"u"});
+  EXPECT_DOUBLE_EQ(b.coverageFactors()[0], kCoverageFactor);
+}
+
+TEST(UncertaintyBudget, ReadingScatterRaisesOnlyWhatTheResidualShows) {
+  // No systematic share: a residual at the declared 0.7 um (100 dof) keeps it.
+  ReadingScatter r = readingScatter(0.49, 0.52, 100, {});
+  EXPECT_DOUBLE_EQ(r.variance_um2, 0.49);
+  EXPECT_GT(r.p_value, kScatterExcessAlpha);
+  // Twice the declared variance over 100 dof: chi^2 survival of 200 at 100 dof, far below 5 %.
+  r = readingScatter(0.49, 0.98, 100, {});
+  EXPECT_LT(r.p_value, 1e-6);
+  EXPECT_DOUBLE_EQ(r.variance_um2, 0.98);
+  // A residual the contributors' own spread explains (10 % of their draws left 6 um^2, the rest
+  // 4): the declared scatter, where "residual less the mean share" would have said 0.85 um^2.
+  std::vector<double> sys(90, 4.0);
+  sys.insert(sys.end(), 10, 6.0);
+  r = readingScatter(0.05, 5.05, 100, sys);
+  EXPECT_DOUBLE_EQ(r.variance_um2, 0.05);
+  EXPECT_NEAR(r.p_value, 0.10, 1e-6);  // only the 6 um^2 draws reach 5.05 (the 4 um^2 ones need chi^2 >= 2100)
+  // One draw in 100: p = 1 %, below the 5 % level, so the excess is taken.
+  std::vector<double> rare(99, 4.0);
+  rare.push_back(6.0);
+  r = readingScatter(0.05, 5.05, 100, rare);
+  EXPECT_NEAR(r.p_value, 0.01, 1e-6);
+  EXPECT_NEAR(r.variance_um2, 5.05 - 4.02, 1e-12);  // the residual less the mean share
+}
+
+TEST(UncertaintyBudget, RepeatsRaiseTypeAOnlyWhenTheirScatterIsSignificant) {
+  // Three repeats of two parameters, u_A 1 for both. x: 0, 10, 20 (a drift: standard error of the
+  // mean 10 / sqrt(3), chi^2_2 = 2 * 33.3, p = 4e-15): raised to it, the correlation kept. y: 0,
+  // 2, 4 (standard error 1.15, above u_A, but chi^2_2 = 2.67, p = 0.26): a fluctuation, left.
+  Eigen::MatrixXd cov_a(2, 2);
+  cov_a << 1.0, 0.5, 0.5, 1.0;
+  const std::vector<Eigen::VectorXd> repeats = {Eigen::Vector2d(0, 0), Eigen::Vector2d(10, 2.0), Eigen::Vector2d(20, 4.0)};
+  const std::string why = raiseToRepeatScatter(&cov_a, repeats);
+  EXPECT_NEAR(cov_a(0, 0), 100.0 / 3.0, 1e-9);
+  EXPECT_DOUBLE_EQ(cov_a(1, 1), 1.0);
+  EXPECT_NEAR(cov_a(0, 1) / std::sqrt(cov_a(0, 0) * cov_a(1, 1)), 0.5, 1e-12);
+  EXPECT_NE(why.find("1 parameter(s)"), std::string::npos) << why;
 }
