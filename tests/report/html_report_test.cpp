@@ -128,5 +128,26 @@ TEST(HtmlReport, ShowsTheUncertaintyBudgetAndTheCorrelations) {
   EXPECT_NE(html.find("S_xz &amp; friends"), std::string::npos);
 }
 
+TEST(HtmlReport, UncertaintyRowsCarryTheirCoverageFactorAndValuesBeyondTheLocationErrors) {
+  // A parameter that is not a location error (a scale) shows the value budgetJson was given, and
+  // every row its own k (a Monte Carlo's k is not 2).
+  UncertaintyBudget b;
+  b.names = {"scale_X"};
+  b.units = {"um/m"};
+  b.cov_a = Eigen::MatrixXd::Constant(1, 1, 4.0);
+  b.cov_b = Eigen::MatrixXd::Constant(1, 1, 5.0);
+  b.coverage_factor = Eigen::VectorXd::Constant(1, 1.71);
+  b.runs = 2000;
+  Json doc = {{"format", "rotacal-report/1"}, {"cycle", "spaceframe"}, {"uncertainty", budgetJson(b, Eigen::VectorXd::Constant(1, -12.345))}};
+  const std::string html = reportHtml(doc);
+  const size_t table = html.find("data-table=\"uncertainty\"");
+  ASSERT_NE(table, std::string::npos);
+  const std::string rows = html.substr(table, html.find("</table>", table) - table);
+  EXPECT_NE(rows.find("<span class=\"n\">-12.345</span>"), std::string::npos) << rows;
+  EXPECT_NE(rows.find("<span class=\"n\">1.71</span>"), std::string::npos);
+  EXPECT_NE(rows.find("<span class=\"n\">5.130</span>"), std::string::npos);  // U = 1.71 x 3
+  EXPECT_NE(html.find("95.45 % coverage"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace rotacal::report
