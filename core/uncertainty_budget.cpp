@@ -155,7 +155,7 @@ ReadingScatter readingScatter(double declared_um2, double observed_um2, int dof,
   for (double s : systematic_um2) mean_sys += s;
   if (!systematic_um2.empty()) mean_sys /= static_cast<double>(systematic_um2.size());
   const std::string contributors =
-      systematic_um2.empty() ? std::string() : fmt::format(" and the Type B contributors' own residual ({:.3f} um rms)", std::sqrt(mean_sys));
+      systematic_um2.empty() ? std::string() : fmt::format(" and the Type B contributors' own residual, {:.3f} um rms,", std::sqrt(mean_sys));
   if (dof <= 0 || !(observed_um2 >= 0)) {
     out.variance_um2 = declared_um2;
     out.why = fmt::format("no residual degrees of freedom: the declared {:.3f} um", std::sqrt(declared_um2));
@@ -176,13 +176,13 @@ ReadingScatter readingScatter(double declared_um2, double observed_um2, int dof,
   }
   if (out.p_value >= kScatterExcessAlpha) {
     out.variance_um2 = declared_um2;
-    out.why = fmt::format("the declared {:.3f} um: the residual {:.3f} um ({} dof) is what it{} leave (p = {:.2g})",
+    out.why = fmt::format("the declared {:.3f} um; the residual, {:.3f} um over {} dof, is within what it{} can leave: p = {:.2g}",
                           std::sqrt(declared_um2), std::sqrt(observed_um2), dof, contributors, out.p_value);
     return out;
   }
   out.variance_um2 = std::max(declared_um2, observed_um2 - mean_sys);
-  out.why = fmt::format("the residual {:.3f} um ({} dof) exceeds the declared {:.3f} um{} (p = {:.2g}): the residual "
-                        "less the contributors' mean share",
+  out.why = fmt::format("the residual, {:.3f} um over {} dof, exceeds what the declared {:.3f} um{} can leave (p = {:.2g}): "
+                        "the residual less the contributors' mean share",
                         std::sqrt(observed_um2), dof, std::sqrt(declared_um2), contributors, out.p_value);
   return out;
 }
