@@ -16,6 +16,7 @@
 #include "cycles/cycle.hpp"
 #include "cycles/rtest/diagnose.hpp"
 #include "cycles/tooltip/diagnose.hpp"
+#include "rtest_002_scenario.hpp"
 
 namespace rotacal {
 namespace {
@@ -24,27 +25,8 @@ std::string src(const std::string& rel) { return std::string(ROTACAL_SOURCE_DIR)
 
 // ----------------------------------------------------------------------------------------------
 // rtest: 002 Sec. 4.3's series, 11 cycles every 18 min, sensors 0.3 um declared and drawn.
-ProbePlan rtestPlan() {
-  const CycleOptions o = {{"thermal", "1"}, {"interval_min", "18"}, {"sensor_noise_um", "0.3"}};
-  return makePlan("rtest", loadMachine(src("examples/machines/bc_trunnion.json")), o);
-}
-
-Truth rtestBase(int shape) {
-  Truth t;
-  t.errors.kinematics = Kinematics::TableBC;
-  t.pose_dependent = [shape](const Pose& p) {
-    const double s = p.B / 60.0;
-    ErrorVector d = ErrorVector::Zero();
-    d[0] = umToMm(3.0 + 2.0 * s);
-    d[1] = umToMm(-4.0 + (shape % 2 ? 1.5 : -1.0) * s * s);
-    d[2] = umToMm(5.0 * s);
-    d[3] = mdegToRad(2.0 - s);
-    d[4] = mdegToRad(-1.5 + 2.5 * s);
-    d[5] = mdegToRad((shape % 3) * 0.5 * s * s);
-    return d;
-  };
-  return t;
-}
+ProbePlan rtestPlan() { return test::rtest002Plan(ROTACAL_SOURCE_DIR, 0.3); }
+const auto rtestBase = test::rtest002Truth;
 
 std::vector<RtestCycle> rtestSeries(const ProbePlan& plan, const Truth& t, const RtestTruthExtras& x, std::uint64_t seed) {
   RtestSimOptions o;

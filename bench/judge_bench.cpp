@@ -11,68 +11,17 @@
 
 #include "core/judge.hpp"
 #include "core/rng.hpp"
+#include "judge_probe_design.hpp"
 
 using namespace rotacal;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
-// 8 table angles, 6 repeats 0.5 h apart, 5 points per angle along u in [-1, 1] (100 mm).
-struct Design {
-  std::vector<double> theta, t_h, u;
-  std::vector<int> angle, repeat;
-  int n() const { return static_cast<int>(theta.size()); }
-};
-
-Design design() {
-  Design d;
-  for (int r = 0; r < 6; ++r)
-    for (int a = 0; a < 8; ++a)
-      for (int k = 0; k < 5; ++k) {
-        d.theta.push_back(a * kPi / 4);
-        d.t_h.push_back(0.5 * r + 0.05 * a);
-        d.u.push_back(-1.0 + 0.5 * k);
-        d.angle.push_back(a);
-        d.repeat.push_back(r);
-      }
-  return d;
-}
-
-JudgeProblem problem(const Design& d) {
-  JudgeProblem p;
-  p.sigma = Eigen::VectorXd::Constant(d.n(), 0.7);
-  p.J0.resize(d.n(), 4);
-  p.baseline_parameters = {{"dz", "um"}, {"dx", "um"}, {"dy", "um"}, {"tilt", "um/100mm"}};
-  JudgeCause drift{"thermal_drift", "", Eigen::MatrixXd(d.n(), 3), {{"dz/h", "um/h"}, {"dx/h", "um/h"}, {"dy/h", "um/h"}}};
-  JudgeCause harm{"rotary_error_motion", "", Eigen::MatrixXd(d.n(), 2), {{"cos2C", "um"}, {"sin2C", "um"}}};
-  JudgeCause scale{"linear_axis_scale", "", Eigen::MatrixXd(d.n(), 1), {{"s", "um/100mm"}}};
-  JudgeFactor angle{"angle", {}, {}, ""}, repeat{"repeat", {}, {}, ""}, u{"u", {}, d.u, "100 mm"},
-      time{"time", {}, d.t_h, "h"};
-  for (int i = 0; i < d.n(); ++i) {
-    const double c = std::cos(d.theta[i]), s = std::sin(d.theta[i]);
-    p.J0.row(i) << 1.0, c, s, d.u[i];
-    drift.J.row(i) << d.t_h[i], d.t_h[i] * c, d.t_h[i] * s;
-    harm.J.row(i) << std::cos(2 * d.theta[i]), std::sin(2 * d.theta[i]);
-    scale.J(i, 0) = d.u[i] * c;
-    p.groups.push_back(100 * d.repeat[i] + d.angle[i]);
-    angle.levels.push_back(std::to_string(45 * d.angle[i]));
-    repeat.levels.push_back(std::to_string(d.repeat[i] + 1));
-  }
-  p.causes = {drift, harm, scale};
-  p.factors = {angle, repeat, u, time};
-  p.group_name = "pose x repeat";
-  return p;
-}
-
-Eigen::VectorXd data(const JudgeProblem& p, std::uint64_t seed, double sigma, const Eigen::VectorXd& effect) {
-  Rng rng(seed, 16);
-  Eigen::Vector4d beta;
-  for (int j = 0; j < 4; ++j) beta[j] = rng.uniform(-20.0, 20.0);
-  Eigen::VectorXd y = p.J0 * beta + effect;
-  for (Eigen::Index i = 0; i < y.size(); ++i) y[i] += sigma * rng.normal();
-  return y;
-}
+// The judge test's design and problem (tests/judge_probe_design.hpp): the rates printed here
+// are of the problem the test asserts on.
+using Design = test::ProbeDesign;
+Design design() { return test::probeDesign(); }
+JudgeProblem problem(const Design& d) { return test::probeProblem(d, Eigen::VectorXd(), 0.7); }
 
 /// Upper end of the two-sided 95 % Clopper-Pearson-like interval by the normal approximation
 /// with continuity correction (enough for a printed figure).
@@ -97,7 +46,7 @@ int main(int argc, char** argv) {
     int found = 0, inadequate = 0, baseline_fail = 0;
     const auto t0 = std::chrono::steady_clock::now();
     for (int seed = 1; seed <= clean; ++seed) {
-      p.y = data(p, static_cast<std::uint64_t>(seed), 0.7, zero);
+      p.y = test::probeData(d, static_cast<std::uint64_t>(seed), 0.7, zero);
       const JudgeSummary s = judge(p, o);
       found += s.verdict == JudgeVerdict::EffectFound;
       inadequate += s.verdict == JudgeVerdict::ModelInadequate;
@@ -127,7 +76,7 @@ int main(int argc, char** argv) {
       const Eigen::VectorXd effect = cause->J * (size * c.theta);
       int right = 0, within = 0, wrong = 0, inadequate = 0;
       for (int seed = 1; seed <= effect_seeds; ++seed) {
-        p.y = data(p, 100000 + static_cast<std::uint64_t>(seed), 0.7, effect);
+        p.y = test::probeData(d, 100000 + static_cast<std::uint64_t>(seed), 0.7, effect);
         const JudgeSummary s = judge(p);
         inadequate += s.verdict == JudgeVerdict::ModelInadequate;
         if (s.verdict != JudgeVerdict::EffectFound) continue;

@@ -20,6 +20,7 @@
 #include "core/json_io.hpp"
 #include "core/machine.hpp"
 #include "core/probe_plan.hpp"
+#include "cycles/check_rules.hpp"
 #include "cycles/cycle.hpp"
 #include "postproc/program_check.hpp"
 
@@ -29,21 +30,8 @@ constexpr size_t kMaxProgramLineChars = 1024;
 
 ProgramCheckResult verifyProgram(const std::string& text, const std::string& dialect, const MachineModel& machine,
                                  const ProbePlan* plan, bool rotacal_number, const GeometricErrors* errors) {
-  ProgramCheckSetup s;
+  ProgramCheckSetup s = programCheckSetup(machine, dialect, ctl::numbersPrograms(dialect), plan, rotacal_number);
   if (errors) s.errors = *errors;
-  s.machine = &machine;
-  s.dialect = dialect;
-  s.plan = plan;
-  s.numbered = ctl::numbersPrograms(dialect);
-  if (plan) {
-    // The plan names its cycle: its number, and whether the machine's artefact stands on the
-    // table while it runs (a cycle whose artefact is another, e.g. a sensor nest, says not).
-    const Cycle& cycle = cycleOfPlan(*plan);
-    s.artefact_on_table = cycle.planRules().artefact_touched;
-    if (s.numbered) s.program_number = cycle.programNumber();
-  } else if (rotacal_number) {
-    for (const Cycle* c : cycles()) s.rotacal_numbers.push_back(c->programNumber());
-  }
   ProgramCheckResult r = checkProgram(ctl::readMotions(dialect, text), s);
   // What no control reads: an empty program, a line beyond the longest block any of the dialects
   // takes (compensate's limit, 1024 characters; LinuxCNC stops at 255).

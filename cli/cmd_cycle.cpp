@@ -61,6 +61,20 @@ DialectIO dialectIO(const Dialect& d) {
           [&d](const ProbePlan& plan, const MeasurementRun& run) { return d.writeResults(plan, run); }};
 }
 
+// What simulate and diagnose read first, in this order: the plan (a bad one is named before a bad
+// dialect), its cycle, the dialect and its results I/O.
+struct PlanReader {
+  PlanReader(const std::string& plan_file, const std::string& dialect_name)
+      : plan(loadCyclePlan(plan_file)),
+        cycle(cycleOfPlanFile(plan, plan_file)),
+        dialect(dialectOrFail(dialect_name)),
+        io(dialectIO(dialect)) {}
+  const ProbePlan plan;
+  const Cycle& cycle;
+  const Dialect& dialect;
+  const DialectIO io;
+};
+
 // Each results file a distinct repeat (readResultsFiles refuses one measurement given twice).
 std::vector<InputFile> readInputs(const std::vector<std::string>& paths) {
   const std::vector<std::string> texts = readResultsFiles(paths);
@@ -153,10 +167,7 @@ int cmdSimulate(const Common& c, const std::string& plan_file, const std::string
     throw CLI::ValidationError("--start-s", fmt::format("must be a number of seconds from 0 to {:g} (got {})",
                                                         kMaxClockSeconds, *start_s));
   checkOutputs({{"-o", out}}, {plan_file, truth_file});
-  const ProbePlan plan = loadCyclePlan(plan_file);
-  const Cycle& cycle = cycleOfPlanFile(plan, plan_file);
-  const Dialect& d = dialectOrFail(dialect_name);
-  const DialectIO io = dialectIO(d);
+  const auto& [plan, cycle, d, io] = PlanReader(plan_file, dialect_name);
   SimulateRequest r;
   r.plan = &plan;
   r.truth = {truth_file, readTextFile(truth_file)};
@@ -274,10 +285,7 @@ int cmdDiagnose(const Common& c, const std::string& plan_file, const std::vector
   std::vector<std::string> inputs = results;
   inputs.push_back(plan_file);
   checkOutputs({{"--json", json_out}, {"--text", text_out}, {"--html", html_out}}, inputs);
-  const ProbePlan plan = loadCyclePlan(plan_file);
-  const Cycle& cycle = cycleOfPlanFile(plan, plan_file);
-  const Dialect& d = dialectOrFail(dialect_name);
-  const DialectIO io = dialectIO(d);
+  const auto& [plan, cycle, d, io] = PlanReader(plan_file, dialect_name);
   DiagnoseRequest r;
   r.plan = &plan;
   r.results = readInputs(results);

@@ -215,6 +215,16 @@ double poseAngle(const Pose& pose, char axis) {
   }
 }
 
+namespace {
+// The G codes of a block with a value, in order: the modes the checks below follow.
+std::vector<double> gCodes(const nc::Block& b) {
+  std::vector<double> out;
+  for (const auto& w : b.words)
+    if (w.letter == 'G' && w.value) out.push_back(*w.value);
+  return out;
+}
+}  // namespace
+
 std::vector<std::string> strokeProblems(const std::vector<nc::Block>& blocks, const ProbePlan& plan,
                                         const std::string& dialect) {
   std::vector<std::string> out;
@@ -224,9 +234,7 @@ std::vector<std::string> strokeProblems(const std::vector<nc::Block>& blocks, co
   const AxisRange* linear[3] = {&m.x, &m.y, &m.z};
   for (const auto& b : blocks) {
     if (b.control || b.words.empty()) continue;
-    for (const auto& w : b.words) {
-      if (w.letter != 'G' || !w.value) continue;
-      const double g = *w.value;
+    for (const double g : gCodes(b)) {
       if (g == 20) inch = true;
       if (g == 21) inch = false;
       if (g == 90) absolute = true;
@@ -615,9 +623,7 @@ std::vector<std::string> inverseTimeProblems(const std::vector<nc::Block>& block
   int motion = 0;
   for (const auto& b : blocks) {
     if (b.control || b.words.empty()) continue;
-    for (const auto& w : b.words) {
-      if (w.letter != 'G' || !w.value) continue;
-      const double g = *w.value;
+    for (const double g : gCodes(b)) {
       if (g == 93) g93 = true;
       if (g == 94 || g == 95) g93 = false;
       if (g == 0 || g == 1 || g == 2 || g == 3) motion = static_cast<int>(g);
@@ -635,6 +641,145 @@ std::vector<std::string> inverseTimeProblems(const std::vector<nc::Block>& block
     if (axis_word && motion >= 1 && !b.find('F'))
       out.push_back(fmt::format("{}: inverse-time (G93) move without an F word", b.line));
   }
+  return out;
+}
+
+}  // namespace rotacal::ctl
+
+namespace rotacal::ctl {
+
+int probeCount(const nc::Program& p) {
+  int probes = 0;
+  for (const auto& op : p.ops) probes += op.kind == nc::Op::Kind::Probe;
+  if (p.point_count != 0 && p.point_count != probes)
+    throw std::invalid_argument(fmt::format("program has {} probing moves but point_count {}", probes, p.point_count));
+  return probes;
+}
+
+void appendLine(std::string& out, const std::string& s, size_t max_chars) {
+  if (s.size() > max_chars) throw std::invalid_argument(fmt::format("line longer than {} characters: {}", max_chars, s));
+  out += s;
+  out += '\n';
+}
+
+void refuseRtestOps(std::string_view dialect) {
+  throw std::invalid_argument(fmt::format("the {} program cannot express an R-test dwell, logger trigger or loop "
+                                          "in this version: generate this program for linuxcnc",
+                                          dialect));
+}
+
+void writeOps(const nc::Program& p, const WordAddressMoves& moves, const std::function<void(const std::string&)>& line,
+              const std::function<void(const nc::Op&)>& own, const std::function<void()>& before_index) {
+  const bool inch = p.unit == nc::Unit::Inch;
+  ModeGuard guard;
+  for (const auto& op : p.ops) {
+    guard.apply(op);
+    switch (op.kind) {
+      case nc::Op::Kind::Rapid: line(rapidBlock(moves.rapid, op, moves.decimals)); break;
+      case nc::Op::Kind::Linear: line(linearBlock(moves.feed, op, moves.decimals, inch)); break;
+      case nc::Op::Kind::Index: {
+        requireRapidIndex(op, moves.dialect);
+        std::string s(moves.rapid);
+        for (const auto& [axis, deg] : op.rotary) s += fmt::format(" {}{}", axis, fixed(deg, moves.decimals));
+        if (before_index) before_index();
+        line(s);
+        break;
+      }
+      case nc::Op::Kind::RotaryLinear: line(rotaryLinearWords(op, p.unit, moves.rotary_linear_sep)); break;
+      case nc::Op::Kind::Dwell:
+      case nc::Op::Kind::Read:
+      case nc::Op::Kind::RepeatBegin:
+      case nc::Op::Kind::RepeatEnd: refuseRtestOps(moves.dialect);
+      case nc::Op::Kind::Comment:
+      case nc::Op::Kind::Mode:
+      case nc::Op::Kind::Pause:
+      case nc::Op::Kind::Probe: own(op); break;
+    }
+  }
+}
+
+std::string isoModeBlock(const nc::Op& op) {
+  if (op.inverse_time && op.feed > 0)
+    return fmt::format("{} G01 G93 F{}", op.incremental ? "G91" : "G90", trimmed(op.feed, 4));
+  return fmt::format("{} {}", op.incremental ? "G91" : "G90", op.inverse_time ? "G93" : "G94");
+}
+
+void requireSingleTouch(const nc::Op& op, std::string_view dialect) {
+  const int id = op.point_id;
+  if (!(op.feed > 0)) throw std::invalid_argument(fmt::format("point {}: probing feed must be > 0", id));
+  if (op.retract_mm > 0)
+    throw std::invalid_argument(fmt::format(
+        "point {}: the {} program records a single touch; a double touch (retract_mm > 0) is not implemented", id,
+        dialect));
+}
+
+OffsetBasis::OffsetBasis(const OffsetRequest& r)
+    : plan((requirePlausible(r), *r.plan)),
+      machine(plan.machine),
+      e(r.identified),
+      ac(e.kinematics == Kinematics::TableAC),
+      inch(machine.units == LengthUnit::Inch),
+      k(inch ? 1.0 / kMmPerInch : 1.0),
+      tilt(ac ? 'A' : 'B') {}
+
+Eigen::Vector3d OffsetBasis::pivot() const {
+  return ac ? Eigen::Vector3d(e.get("dx_AY"), e.get("dy_AY"), e.get("dz_AY"))
+            : Eigen::Vector3d(e.get("dx_BY"), e.get("dy_CB"), e.get("dz_BY"));
+}
+
+Eigen::Vector3d OffsetBasis::second() const {
+  return ac ? Eigen::Vector3d(0, e.get("dy_CA"), 0) : Eigen::Vector3d(e.get("dx_CB"), 0, 0);
+}
+
+double OffsetBasis::zeroDeg(std::string_view dialect) const {
+  return (machine.hasRotary(tilt) ? machine.controllerSign(tilt, std::string(dialect)) : 1) *
+         radToDeg(e.get(ac ? "a_AY" : "b_BY"));
+}
+
+std::string TaggedResultsDialect::writeResults(const ProbePlan& plan, const MeasurementRun& run) const {
+  const bool inch = plan.machine.units == LengthUnit::Inch;
+  const double k = inch ? 1.0 / kMmPerInch : 1.0;
+  const std::string eol(form_.eol);
+  std::string out = fmt::format("ROTACAL-RESULTS DIALECT {} CYCLE {} POINTS {} UNIT {}{}", form_.tag,
+                                form_.cycle_token(plan.cycle), plan.points.size(), inch ? "INCH" : "MM", eol);
+  auto field = [&](double v) {
+    std::string s = fixed(v, resultDecimals(inch));
+    if (s.size() < static_cast<size_t>(form_.width)) s.insert(0, form_.width - s.size(), ' ');
+    return s;
+  };
+  for (const auto& t : run.points) {
+    if (!plan.findPoint(t.point_id)) throw std::invalid_argument(fmt::format("run point {} is not in the plan", t.point_id));
+    const Eigen::Vector3d x = t.position_m_mm * k;
+    out += fmt::format("P{} X{} Y{} Z{}{}", t.point_id, field(x.x()), field(x.y()), field(x.z()), eol);
+  }
+  return out + "END" + eol;
+}
+
+MeasurementRun TaggedResultsDialect::parseResults(const std::string& text, const std::string& file,
+                                                  const ProbePlan& plan) const {
+  return parseTaggedResults(text, file, plan, form_.tag, form_.cycle_token(plan.cycle), form_.second_header_why);
+}
+
+size_t nextCode(const std::vector<std::string>& code, size_t i) {
+  for (size_t j = i + 1; j < code.size(); ++j)
+    if (!code[j].empty()) return j;
+  return code.size();
+}
+
+std::vector<std::string> closingProblems(const std::string& text, const std::vector<TextLine>& lines,
+                                         const std::vector<std::string>& code, std::string_view end,
+                                         const std::string& motion_text, bool inch, const ProbePlan& plan,
+                                         const std::string& dialect) {
+  std::vector<std::string> out = inverseTimeProblems(nc::readProgram(text), isProbingBlock);
+  // The unit line comes first: each motion block then keeps its line's number.
+  std::vector<nc::Block> blocks = nc::readProgram(std::string(inch ? "G20" : "G21") + "\n" + motion_text);
+  for (size_t i = 0; i < blocks.size(); ++i) blocks[i].line = static_cast<int>(i);
+  for (auto& s : strokeProblems(blocks, plan, dialect)) out.push_back(std::move(s));
+  size_t last = lines.size();
+  for (size_t i = 0; i < lines.size(); ++i)
+    if (!code[i].empty()) last = i;
+  if (last == lines.size() || code[last] != end)
+    out.push_back(fmt::format("{}: the program does not end with {}", last == lines.size() ? 1 : lines[last].number, end));
   return out;
 }
 

@@ -4,6 +4,7 @@
 // of written corrections and the stroke check of a parsed program.
 #include <Eigen/Core>
 #include <array>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -248,5 +249,104 @@ struct EndPointCheckStatement {
   int decimals = 0;
 };
 std::optional<EndPointCheckStatement> parseEndPointCheckStatement(const EndPointCheck& form, std::string_view code);
+
+// ---- The steps every writer and checker of a program took in its own words ----
+
+/// The probing moves of `program`. Throws std::invalid_argument when it states another
+/// point_count: the cycle's plan and its program would then disagree on what a results line is.
+int probeCount(const nc::Program& program);
+
+/// Appends `s` and '\n' to `out`. Throws std::invalid_argument when `s` is longer than
+/// `max_chars`: the control would cut the block or refuse the program.
+void appendLine(std::string& out, const std::string& s, size_t max_chars);
+
+/// Throws std::invalid_argument: the R-test program's dwell, logger trigger and loops (002) are
+/// spelled for linuxcnc only so far.
+[[noreturn]] void refuseRtestOps(std::string_view dialect);
+
+/// How a word-address writer (Macro B, Okuma, Siemens) spells the moves they all write alike.
+struct WordAddressMoves {
+  std::string_view dialect;
+  std::string_view rapid;  // "G00" or "G0"
+  std::string_view feed;   // "G01" or "G1"
+  int decimals = 4;        // of coordinates and angles
+  std::string rotary_linear_sep;  // between the words of a RotaryLinear op
+};
+/// The ops of `program` in order, each after ModeGuard::apply: the moves spelled alike (Rapid,
+/// Linear, Index at rapid only, RotaryLinear) written through `line`, the R-test's ops refused
+/// (refuseRtestOps), and the dialect's own (Comment, Mode, Pause, Probe) given to `own`.
+/// `before_index` runs before an index block is written.
+void writeOps(const nc::Program& program, const WordAddressMoves& moves,
+              const std::function<void(const std::string&)>& line, const std::function<void(const nc::Op&)>& own,
+              const std::function<void()>& before_index = {});
+/// The block of a Mode op in ISO words (004 Table 1): "G91 G01 G93 F2." when it switches to
+/// inverse time at a feed (G1 in force for the word-only blocks after it), else "G90 G94" and the
+/// like.
+std::string isoModeBlock(const nc::Op& op);
+/// Throws std::invalid_argument unless probing move `op` has a feed and no retract: these
+/// dialects' programs record a single touch.
+void requireSingleTouch(const nc::Op& op, std::string_view dialect);
+
+/// What the offsets writers of a table A/C or B/C machine start from, the request checked by
+/// requirePlausible first.
+struct OffsetBasis {
+  explicit OffsetBasis(const OffsetRequest& request);
+  const ProbePlan& plan;
+  const MachineModel& machine;
+  const LocationErrors& e;
+  bool ac;   // table A/C, else B/C
+  bool inch;
+  double k;  // mm -> the machine's unit
+  char tilt;  // the tilting axis, 'A' or 'B'
+  /// The tilting axis' pivot error: (dx_AY, dy_AY, dz_AY), or (dx_BY, dy_CB, dz_BY).
+  Eigen::Vector3d pivot() const;
+  /// The C axis' offset from the tilting axis: (0, dy_CA, 0), or (dx_CB, 0, 0).
+  Eigen::Vector3d second() const;
+  /// The tilting axis' zero error in `dialect`'s sign of that axis (+1 without it), degrees.
+  double zeroDeg(std::string_view dialect) const;
+};
+
+/// The results side of the dialects whose programs print tagged lines with their own output
+/// statements (okuma PUT, siemens WRITE): parseTaggedResults reads what writeResults writes, the
+/// header, "P<id> X<x> Y<y> Z<z>" per point with the coordinates in 5 decimals in inch and 4 in
+/// mm, right-aligned in `width` characters (0: unpadded), and "END", every line ended by `eol`,
+/// in a .txt file.
+class TaggedResultsDialect : public Dialect {
+ public:
+  struct Form {
+    std::string_view name;               // the dialect's
+    std::string_view program_extension;  // ".min"
+    std::string_view tag;                // "OKUMA"
+    std::string (*cycle_token)(std::string_view);  // the cycle's name as the programs print it
+    int width = 0;
+    std::string_view eol;
+    std::string_view second_header_why;  // parseTaggedResults'
+  };
+  explicit TaggedResultsDialect(const Form& form) : form_(form) {}
+  std::string_view name() const override { return form_.name; }
+  std::string_view programExtension() const override { return form_.program_extension; }
+  std::string_view resultsExtension() const override { return ".txt"; }
+  /// Decimals of the printed coordinates, the programs' and writeResults': 4 in mm, 5 in inch (4
+  /// inch decimals would round by up to 1.27 um and move the identified errors by up to 3.1 um,
+  /// docs/dialects.md).
+  static int resultDecimals(bool inch) { return inch ? 5 : 4; }
+  std::string writeResults(const ProbePlan& plan, const MeasurementRun& run) const override;
+  MeasurementRun parseResults(const std::string& text, const std::string& file, const ProbePlan& plan) const override;
+
+ private:
+  Form form_;
+};
+
+/// Index of the next non-empty entry of `code` after `i` (code.size() when none).
+size_t nextCode(const std::vector<std::string>& code, size_t i);
+
+/// The checks the line-based checkers (okuma, siemens) end with, in this order: the
+/// inverse-time problems of `text`, the stroke problems of `motion_text` (the motion blocks at
+/// their lines' places, the others blank, read after the unit line of `inch`), and
+/// "LINE: the program does not end with <end>" when the last non-empty `code` entry is not `end`.
+std::vector<std::string> closingProblems(const std::string& text, const std::vector<TextLine>& lines,
+                                         const std::vector<std::string>& code, std::string_view end,
+                                         const std::string& motion_text, bool inch, const ProbePlan& plan,
+                                         const std::string& dialect);
 
 }  // namespace rotacal::ctl

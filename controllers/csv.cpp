@@ -10,6 +10,7 @@
 #include "controllers/dialects.hpp"
 #include "controllers/result_checks.hpp"
 #include "core/units.hpp"
+#include "core/singleton.hpp"
 
 namespace rotacal {
 namespace {
@@ -113,9 +114,6 @@ class CsvDialect final : public Dialect {
 
 }  // namespace
 
-const Dialect& csvDialect() {
-  static const CsvDialect d;
-  return d;
-}
+const Dialect& csvDialect() { return singleton<CsvDialect>(); }
 
 }  // namespace rotacal

@@ -21,6 +21,7 @@
 #include "controllers/dialects.hpp"
 #include "controllers/macro_b.hpp"
 #include "core/units.hpp"
+#include "core/singleton.hpp"
 
 namespace rotacal {
 namespace {
@@ -46,20 +47,12 @@ class FanucDialect final : public MacroBDialect {
   FanucDialect() : MacroBDialect(fanucFlavor()) {}
 
   std::string writeOffsets(const OffsetRequest& r) const override {
-    ctl::requirePlausible(r);
-    const ProbePlan& plan = *r.plan;
-    const MachineModel& m = plan.machine;
-    const bool ac = r.identified.kinematics == Kinematics::TableAC;
-    const bool inch = m.units == LengthUnit::Inch;
-    const double k = inch ? 1.0 / kMmPerInch : 1.0;
+    const ctl::OffsetBasis b(r);
+    const auto& [plan, m, e, ac, inch, k, tilt] = b;
     const std::string u = inch ? "INCH" : "MM";
-    const LocationErrors& e = r.identified;
-    const char tilt = ac ? 'A' : 'B';
-    const Eigen::Vector3d shift = ac ? Eigen::Vector3d(e.get("dx_AY"), e.get("dy_AY"), e.get("dz_AY"))
-                                     : Eigen::Vector3d(e.get("dx_BY"), e.get("dy_CB"), e.get("dz_BY"));
-    const double zero_deg = (m.hasRotary(tilt) ? m.controllerSign(tilt, kDialect) : 1) *
-                            radToDeg(e.get(ac ? "a_AY" : "b_BY"));
-    const Eigen::Vector3d second = ac ? Eigen::Vector3d(0, e.get("dy_CA"), 0) : Eigen::Vector3d(e.get("dx_CB"), 0, 0);
+    const Eigen::Vector3d shift = b.pivot();
+    const double zero_deg = b.zeroDeg(kDialect);
+    const Eigen::Vector3d second = b.second();
 
     std::string out;
     auto line = [&](const std::string& s) { out += s + "\n"; };
@@ -100,9 +93,6 @@ std::string fanucDprntNumber(double value, int integer_digits, int decimals) {
   return fmt::format("{:>{}}", s, width);
 }
 
-const Dialect& fanucDialect() {
-  static const FanucDialect d;
-  return d;
-}
+const Dialect& fanucDialect() { return singleton<FanucDialect>(); }
 
 }  // namespace rotacal

@@ -26,6 +26,7 @@
 #include "controllers/dialects.hpp"
 #include "controllers/macro_b.hpp"
 #include "core/units.hpp"
+#include "core/singleton.hpp"
 
 namespace rotacal {
 namespace {
@@ -54,17 +55,10 @@ class HaasDialect final : public MacroBDialect {
   HaasDialect() : MacroBDialect(haasFlavor()) {}
 
   std::string writeOffsets(const OffsetRequest& r) const override {
-    ctl::requirePlausible(r);
-    const ProbePlan& plan = *r.plan;
-    const MachineModel& m = plan.machine;
-    const bool ac = r.identified.kinematics == Kinematics::TableAC;
-    const bool inch = m.units == LengthUnit::Inch;
-    const double k = inch ? 1.0 / kMmPerInch : 1.0;
-    const LocationErrors& e = r.identified;
-    const char tilt = ac ? 'A' : 'B';
+    const ctl::OffsetBasis b(r);
+    const auto& [plan, m, e, ac, inch, k, tilt] = b;
     const auto changes = haasMrzpChanges(e);
-    const double zero_deg = (m.hasRotary(tilt) ? m.controllerSign(tilt, kDialect) : 1) *
-                            radToDeg(e.get(ac ? "a_AY" : "b_BY"));
+    const double zero_deg = b.zeroDeg(kDialect);
     std::string out;
     auto line = [&](const std::string& s) { out += s + "\n"; };
     auto commentLines = [&](std::string_view text) {
@@ -111,9 +105,6 @@ std::vector<std::pair<std::string, double>> haasMrzpChanges(const LocationErrors
   return {{"MRZP X", e.get("dx_BY")}, {"MRZP Y", e.get("dy_CB")}, {"MRZP Z", e.get("dz_BY")}};
 }
 
-const Dialect& haasDialect() {
-  static const HaasDialect d;
-  return d;
-}
+const Dialect& haasDialect() { return singleton<HaasDialect>(); }
 
 }  // namespace rotacal

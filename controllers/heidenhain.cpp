@@ -46,6 +46,7 @@
 #include "controllers/dialects.hpp"
 #include "controllers/result_checks.hpp"
 #include "core/units.hpp"
+#include "core/singleton.hpp"
 
 namespace rotacal {
 namespace {
@@ -108,10 +109,7 @@ class HeidenhainDialect final : public Dialect {
 
   std::string writeProgram(const nc::Program& p) const override {
     const double k = p.unit == nc::Unit::Inch ? kMmPerInch : 1.0;  // always MM programs
-    int probes = 0;
-    for (const auto& op : p.ops) probes += op.kind == nc::Op::Kind::Probe;
-    if (p.point_count != 0 && p.point_count != probes)
-      throw std::invalid_argument(fmt::format("program has {} probing moves but point_count {}", probes, p.point_count));
+    const int probes = ctl::probeCount(p);
     ctl::requireInverseTimeAllowed(p, kDialect);  // the tool-tip cycle: refused with the reason, not the probe count
     if (probes == 0)  // the result format files below are built per probing move
       throw std::invalid_argument("the heidenhain program records probing moves and this one has none (use linuxcnc)");
@@ -195,10 +193,7 @@ class HeidenhainDialect final : public Dialect {
         case nc::Op::Kind::Dwell:
         case nc::Op::Kind::Read:
         case nc::Op::Kind::RepeatBegin:
-        case nc::Op::Kind::RepeatEnd:
-          // The R-test program (002): dwell, logger trigger and loops are spelled for linuxcnc only so far.
-          throw std::invalid_argument(fmt::format("the {} program cannot express an R-test dwell, logger trigger or loop "
-                                                  "in this version: generate this program for linuxcnc", "heidenhain"));
+        case nc::Op::Kind::RepeatEnd: ctl::refuseRtestOps(kDialect);
         case nc::Op::Kind::Probe: {
           const int id = op.point_id;
           if (id <= 0 || kLabelBase + id > 65535) throw std::invalid_argument(fmt::format("point id {} out of range", id));
@@ -241,12 +236,7 @@ class HeidenhainDialect final : public Dialect {
     }
     std::string out;
     int n = 0;
-    for (const auto& s : body) {
-      const std::string l = fmt::format("{} {}", n++, s);
-      if (l.size() > kMaxLineChars)
-        throw std::invalid_argument(fmt::format("line longer than {} characters: {}", kMaxLineChars, l));
-      out += l + "\n";
-    }
+    for (const auto& s : body) ctl::appendLine(out, fmt::format("{} {}", n++, s), kMaxLineChars);
     out += fmt::format("{} END PGM {} MM\n", n, name);
     return out;
   }
@@ -352,17 +342,11 @@ class HeidenhainDialect final : public Dialect {
   }
 
   std::string writeOffsets(const OffsetRequest& r) const override {
-    ctl::requirePlausible(r);
-    const ProbePlan& plan = *r.plan;
-    const MachineModel& m = plan.machine;
-    const bool ac = r.identified.kinematics == Kinematics::TableAC;
-    const LocationErrors& e = r.identified;
-    const char tilt = ac ? 'A' : 'B';
-    const Eigen::Vector3d pivot = ac ? Eigen::Vector3d(e.get("dx_AY"), e.get("dy_AY"), e.get("dz_AY"))
-                                     : Eigen::Vector3d(e.get("dx_BY"), e.get("dy_CB"), e.get("dz_BY"));
-    const Eigen::Vector3d second = ac ? Eigen::Vector3d(0, e.get("dy_CA"), 0) : Eigen::Vector3d(e.get("dx_CB"), 0, 0);
-    const double zero_deg = (m.hasRotary(tilt) ? m.controllerSign(tilt, kDialect) : 1) *
-                            radToDeg(e.get(ac ? "a_AY" : "b_BY"));
+    const ctl::OffsetBasis b(r);
+    const auto& [plan, m, e, ac, inch, k, tilt] = b;
+    const Eigen::Vector3d pivot = b.pivot();
+    const Eigen::Vector3d second = b.second();
+    const double zero_deg = b.zeroDeg(kDialect);
     std::vector<std::string> body;
     auto c = [&](const std::string& s) {
       // Block numbers up to 2 digits (a few dozen lines): "NN ; " leaves 75 characters of text.
@@ -385,12 +369,7 @@ class HeidenhainDialect final : public Dialect {
     c(ac ? "reported only (axis directions): b_AY, c_AY, b_CA" : "reported only (axis directions): a_BY, c_BY, a_CB");
     std::string out = "0 BEGIN PGM ROTACAL_KIN MM\n";
     int n = 1;
-    for (const auto& s : body) {
-      const std::string l = fmt::format("{} {}", n++, s);
-      if (l.size() > kMaxLineChars)
-        throw std::invalid_argument(fmt::format("line longer than {} characters: {}", kMaxLineChars, l));
-      out += l + "\n";
-    }
+    for (const auto& s : body) ctl::appendLine(out, fmt::format("{} {}", n++, s), kMaxLineChars);
     out += fmt::format("{} END PGM ROTACAL_KIN MM\n", n);
     return out;
   }
@@ -507,9 +486,6 @@ std::vector<std::pair<std::string, std::string>> heidenhainFormatFiles(const std
   };
 }
 
-const Dialect& heidenhainDialect() {
-  static const HeidenhainDialect d;
-  return d;
-}
+const Dialect& heidenhainDialect() { return singleton<HeidenhainDialect>(); }
 
 }  // namespace rotacal

@@ -80,26 +80,15 @@ std::vector<std::string> MacroBDialect::commentLines(std::string_view text) cons
 
 std::string MacroBDialect::writeProgram(const nc::Program& p) const {
   const bool inch = p.unit == nc::Unit::Inch;
-  auto L = [](double v) { return ctl::fixed(v, 4); };  // mm and inch: 4 decimals, always a point
-  auto Ang = [](double v) { return ctl::fixed(v, 4); };
-  auto F = [&](double v) { return ctl::fixed(v, inch ? 3 : 1); };
   const int number = ctl::programNumber(p);
   const int max_number = f_.program_digits == 5 ? 99999 : 9999;
   if (number < 1 || number > max_number)
     throw std::invalid_argument(fmt::format("{} program number O{} must be 1..{}", f_.tag, number, max_number));
-  int probes = 0;
-  for (const auto& op : p.ops) probes += op.kind == nc::Op::Kind::Probe;
-  if (p.point_count != 0 && p.point_count != probes)
-    throw std::invalid_argument(fmt::format("program has {} probing moves but point_count {}", probes, p.point_count));
+  const int probes = ctl::probeCount(p);
   const int store_top = f_.store_base + 4 * f_.max_points_per_pose - 1;
 
   std::string out;
-  auto line = [&](const std::string& s) {
-    if (s.size() > kMaxLineChars)
-      throw std::invalid_argument(fmt::format("line longer than {} characters: {}", kMaxLineChars, s));
-    out += s;
-    out += '\n';
-  };
+  auto line = [&](const std::string& s) { ctl::appendLine(out, s, kMaxLineChars); };
   auto commentLines = [&](std::string_view text) {
     for (const auto& c : comments(text)) line(c);
   };
@@ -149,59 +138,32 @@ std::string MacroBDialect::writeProgram(const nc::Program& p) const {
     }
     pose_points.clear();
   };
-  ctl::ModeGuard guard;
-  for (const auto& op : p.ops) {
+  auto own = [&](const nc::Op& op) {
     const Eigen::Vector3d& x = op.xyz;
-    guard.apply(op);
     switch (op.kind) {
       case nc::Op::Kind::Comment: commentLines(op.text); break;
-      case nc::Op::Kind::Rapid: line(ctl::rapidBlock("G00", op, 4)); break;
-      case nc::Op::Kind::Linear: line(ctl::linearBlock("G01", op, 4, inch)); break;
-      case nc::Op::Kind::Index: {
-        ctl::requireRapidIndex(op, f_.name);
-        flush();
-        std::string s = "G00";
-        for (const auto& [axis, deg] : op.rotary) s += fmt::format(" {}{}", axis, Ang(deg));
-        line(s);
-        break;
-      }
       case nc::Op::Kind::Mode:
-        // 004 Table 1: "G91 G01 G93 F2."; G93 with F on every block (Haas: [HaasMan]; Fanuc:
-        // UNVERIFIED in controllers.md, F on every block is the safe form).
-        if (op.inverse_time && op.feed > 0)
-          line(fmt::format("{} G01 G93 F{}", op.incremental ? "G91" : "G90", ctl::trimmed(op.feed, 4)));
-        else
-          line(fmt::format("{} {}", op.incremental ? "G91" : "G90", op.inverse_time ? "G93" : "G94"));
+        // G93 with F on every block (Haas: [HaasMan]; Fanuc: UNVERIFIED in controllers.md, F on
+        // every block is the safe form).
+        line(ctl::isoModeBlock(op));
         break;
-      case nc::Op::Kind::RotaryLinear: line(ctl::rotaryLinearWords(op, p.unit, "")); break;
       case nc::Op::Kind::Pause:
         // Seconds with a decimal point: Fanuc X2. (P would be integer ms), Haas P2. [HaasMan].
         if (op.dwell_s > 0) line(fmt::format("G04 {}{}", f_.dwell_word, ctl::trimmed(op.dwell_s, 3)));
         else line("M00");
         break;
-      case nc::Op::Kind::Dwell:
-      case nc::Op::Kind::Read:
-      case nc::Op::Kind::RepeatBegin:
-      case nc::Op::Kind::RepeatEnd:
-        // The R-test program (002): dwell, logger trigger and loops are spelled for linuxcnc only so far.
-        throw std::invalid_argument(fmt::format("the {} program cannot express an R-test dwell, logger trigger or loop "
-                                                "in this version: generate this program for linuxcnc", f_.name));
       case nc::Op::Kind::Probe: {
         const int id = op.point_id;
         if (id <= 0 || kLabelBase + id > kMaxLabel)
           throw std::invalid_argument(fmt::format("point id {} cannot be a {} label (1..{})", id, f_.tag, kMaxLabel - kLabelBase));
-        if (!(op.feed > 0)) throw std::invalid_argument(fmt::format("point {}: probing feed must be > 0", id));
-        if (op.retract_mm > 0)
-          throw std::invalid_argument(fmt::format(
-              "point {}: the {} program records a single touch; a double touch (retract_mm > 0) is not implemented",
-              id, f_.name));
+        ctl::requireSingleTouch(op, f_.name);
         if (pose_points.size() >= static_cast<size_t>(f_.max_points_per_pose))
           throw std::invalid_argument(fmt::format("pose {} has more than {} points: the {} program stores them in #{}-#{}",
                                                   op.pose_name, f_.max_points_per_pose, f_.name, f_.store_base, store_top));
         const int b = f_.store_base + 4 * static_cast<int>(pose_points.size());
         const int label = kLabelBase + id;
         if (!op.text.empty()) commentLines(op.text);
-        line(fmt::format("G31 X{} Y{} Z{} F{}", L(x.x()), L(x.y()), L(x.z()), F(op.feed)));
+        line(ctl::linearBlock("G31", op, 4, inch));  // mm and inch: 4 decimals, always a point
         for (int a = 0; a < 3; ++a) line(ctl::endPointCheckStatement(*end_check, a, x[a], 4));
         line(fmt::format("IF[[#1*#1+#2*#2+#3*#3]GT{}]GOTO{}", no_trigger_sq, label));
         line(fmt::format("#3000=1(POINT {} NOT TRIGGERED)", id));
@@ -213,8 +175,11 @@ std::string MacroBDialect::writeProgram(const nc::Program& p) const {
         pose_points.push_back(id);
         break;
       }
+      default: break;  // written by ctl::writeOps
     }
-  }
+  };
+  // The pose's stored points are printed before the table turns to the next pose.
+  ctl::writeOps(p, {f_.name, "G00", "G01", 4, ""}, line, own, flush);
   flush();
   line("DPRNT[END]");
   line("PCLOS");

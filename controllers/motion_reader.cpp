@@ -19,29 +19,17 @@ namespace {
 // the literal moved forward again by the same amount.
 constexpr double kHeidenhainNoTriggerMm = 0.01;
 
-// A line of the richer dialects that is a statement, not a word-address block: an assignment to
-// a named variable (R90=, VC1=, TXT=), a call or keyword (WRITE(, MSG(, DEF, GOTOF, PUT, FWRITC,
-// ...), or a label (NOHIT1:). An assignment to an axis letter (X=10, Siemens) would be a motion;
-// rotacal writes none, and it is read as unreadable below rather than skipped.
-bool isStatement(const std::string& code) {
-  static const std::regex stmt(
-      R"(^\s*(N\d+\s+)?(([A-Z_$][A-Z0-9_$]*)(\[[^\]]*\])?\s*=|[A-Z_][A-Z0-9_]*\s*\(|[A-Z_][A-Z0-9_]*:|(DEF|ELSE|ENDIF|GOTOF|GOTOB|GOTO|STOPRE|FWRITC|FREADC|PUT|WRITE|CLOSE|WHILE|ENDWHILE|LOOP|ENDLOOP|RET|MSG|SPRINT)\b))",
-      std::regex::icase);
-  std::smatch m;
-  if (!std::regex_search(code, m, stmt)) return false;
-  const std::string name = upper(m.str(3));
-  return !(name.size() == 1 && std::string("XYZABC").find(name) != std::string::npos);
-}
-
 bool isAxisLetter(char c) { return std::string_view("XYZABC").find(c) != std::string_view::npos; }
 
-nc::Motion unreadable(int line, std::string why) {
+nc::Motion motionAt(nc::Motion::Kind kind, int line, std::string why = "") {
   nc::Motion m;
-  m.kind = nc::Motion::Kind::Unreadable;
+  m.kind = kind;
   m.line = line;
   m.problem = std::move(why);
   return m;
 }
+
+nc::Motion unreadable(int line, std::string why) { return motionAt(nc::Motion::Kind::Unreadable, line, std::move(why)); }
 
 std::vector<nc::Motion> readWordAddress(std::string_view dialect, const std::string& text) {
   const bool siemens = dialect == "siemens";
@@ -92,7 +80,7 @@ std::vector<nc::Motion> readWordAddress(std::string_view dialect, const std::str
       b = rest.front();
       b.line = whole.line;
       probe_prefix = true;
-    } else if (isStatement(whole.code)) {
+    } else if (isStatement(whole.code, false)) {
       continue;
     }
     if (!b.issues.empty()) {
@@ -199,10 +187,7 @@ std::vector<nc::Motion> readWordAddress(std::string_view dialect, const std::str
       out.push_back(m);
     }
     if (end) {
-      nc::Motion e;
-      e.kind = nc::Motion::Kind::End;
-      e.line = b.line;
-      out.push_back(e);
+      out.push_back(motionAt(nc::Motion::Kind::End, b.line));
       return out;
     }
   }
@@ -331,10 +316,7 @@ std::vector<nc::Motion> readHeidenhain(const std::string& text) {
       mo.kind = rapid ? nc::Motion::Kind::Rapid : nc::Motion::Kind::Feed;
       if (!mo.words.empty()) out.push_back(mo);
       if (end) {
-        nc::Motion e;
-        e.kind = nc::Motion::Kind::End;
-        e.line = tl.number;
-        out.push_back(e);
+        out.push_back(motionAt(nc::Motion::Kind::End, tl.number));
         return out;
       }
     }
@@ -344,6 +326,18 @@ std::vector<nc::Motion> readHeidenhain(const std::string& text) {
 }
 
 }  // namespace
+
+bool isStatement(const std::string& code, bool if_is_statement) {
+  static const std::regex stmt(
+      R"(^\s*(N\d+\s+)?(([A-Z_$][A-Z0-9_$]*)(\[[^\]]*\])?\s*=|[A-Z_][A-Z0-9_]*\s*\(|[A-Z_][A-Z0-9_]*:|(DEF|IF|ELSE|ENDIF|GOTOF|GOTOB|GOTO|STOPRE|FWRITC|FREADC|PUT|WRITE|CLOSE|WHILE|ENDWHILE|LOOP|ENDLOOP|RET|MSG|SPRINT)\b))",
+      std::regex::icase);
+  std::smatch m;
+  if (!std::regex_search(code, m, stmt)) return false;
+  // Only the keyword IF matched: the caller reads IF lines itself (the no-trigger checks).
+  if (!if_is_statement && m[5].matched && upper(m.str(5)) == "IF") return false;
+  const std::string name = upper(m.str(3));
+  return !(name.size() == 1 && std::string("XYZABC").find(name) != std::string::npos);
+}
 
 bool numbersPrograms(std::string_view dialect) { return dialect == "fanuc" || dialect == "haas" || dialect == "okuma"; }
 

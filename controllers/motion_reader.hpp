@@ -19,6 +19,12 @@ namespace rotacal::ctl {
 /// dialect without programs (csv) or an unknown one.
 std::vector<nc::Motion> readMotions(std::string_view dialect, const std::string& text);
 
+/// Whether a line of the richer dialects is a statement, not a word-address block: an assignment
+/// to a named variable (R90=, VC1=, TXT=, $TC_CARR1=), a call or keyword (WRITE(, MSG(, DEF,
+/// GOTOF, PUT, FWRITC, ...; IF too when `if_is_statement`), or a label (NOHIT1:). An assignment
+/// to an axis letter (X=10, Siemens) is a motion, never a statement.
+bool isStatement(const std::string& code, bool if_is_statement);
+
 /// Whether the dialect's programs carry a program number (O word): fanuc, haas, okuma.
 bool numbersPrograms(std::string_view dialect);
 

@@ -34,6 +34,7 @@
 #include "controllers/common.hpp"
 #include "controllers/dialects.hpp"
 #include "core/units.hpp"
+#include "core/singleton.hpp"
 
 namespace rotacal {
 namespace {
@@ -43,9 +44,6 @@ constexpr size_t kMaxLineChars = 80;
 constexpr int kLabelBase = 1000;  // label N<1000 + id> after each point's check
 
 std::string unitName(bool inch) { return inch ? "INCH" : "MM"; }
-// Decimals of the printed trigger coordinates (PUT VCn,d): 4 in mm, 5 in inch (4 inch decimals
-// would round by up to 1.27 um and move the identified errors by up to 3.1 um, docs/dialects.md).
-int resultDecimals(bool inch) { return inch ? 5 : 4; }
 
 std::string safeName(std::string_view name) {
   std::string s;
@@ -69,32 +67,21 @@ std::vector<std::string> comments(std::string_view text) {
   return out;
 }
 
-class OkumaDialect final : public Dialect {
+class OkumaDialect final : public ctl::TaggedResultsDialect {
  public:
-  std::string_view name() const override { return kDialect; }
-  std::string_view programExtension() const override { return ".min"; }
-  std::string_view resultsExtension() const override { return ".txt"; }
-
+  // FWRITC appends: an old run stays in the file unless it is deleted.
+  OkumaDialect()
+      : TaggedResultsDialect({kDialect, ".min", "OKUMA", safeName, 0, "\r\n", " (FWRITC appends: delete the old file)"}) {}
   std::vector<std::string> commentLines(std::string_view text) const override { return comments(text); }
 
   std::string writeProgram(const nc::Program& p) const override {
     const bool inch = p.unit == nc::Unit::Inch;
-    auto L = [](double v) { return ctl::fixed(v, 4); };
-    auto F = [&](double v) { return ctl::fixed(v, inch ? 3 : 1); };
     ctl::requireInverseTimeAllowed(p, kDialect);
-    int probes = 0;
-    for (const auto& op : p.ops) probes += op.kind == nc::Op::Kind::Probe;
-    if (p.point_count != 0 && p.point_count != probes)
-      throw std::invalid_argument(fmt::format("program has {} probing moves but point_count {}", probes, p.point_count));
+    const int probes = ctl::probeCount(p);
     const std::string file = safeName(p.results_file.empty() ? "ROTACAL" : p.results_file);
     const std::string no_trigger_sq = inch ? "0.000001" : "0.0001";
     std::string out;
-    auto line = [&](const std::string& s) {
-      if (s.size() > kMaxLineChars)
-        throw std::invalid_argument(fmt::format("line longer than {} characters: {}", kMaxLineChars, s));
-      out += s;
-      out += '\n';
-    };
+    auto line = [&](const std::string& s) { ctl::appendLine(out, s, kMaxLineChars); };
     auto commentLines = [&](std::string_view text) {
       for (const auto& c : comments(text)) line(c);
     };
@@ -118,46 +105,23 @@ class OkumaDialect final : public Dialect {
     }
     line(fmt::format("FWRITC MD1:{}.TXT;A", file));
     put(fmt::format("ROTACAL-RESULTS DIALECT OKUMA CYCLE {} POINTS {} UNIT {}", safeName(p.cycle), probes, unitName(inch)));
-    ctl::ModeGuard guard;
-    for (const auto& op : p.ops) {
+    ctl::writeOps(p, {kDialect, "G00", "G01", 4, " "}, line, [&](const nc::Op& op) {
       const Eigen::Vector3d& x = op.xyz;
-      guard.apply(op);
       switch (op.kind) {
         case nc::Op::Kind::Comment: commentLines(op.text); break;
-        case nc::Op::Kind::Rapid: line(ctl::rapidBlock("G00", op, 4)); break;
-        case nc::Op::Kind::Linear: line(ctl::linearBlock("G01", op, 4, inch)); break;
-        case nc::Op::Kind::Index: {
-          ctl::requireRapidIndex(op, "okuma");
-          std::string s = "G00";
-          for (const auto& [axis, deg] : op.rotary) s += fmt::format(" {}{}", axis, L(deg));
-          line(s);
-          break;
-        }
         case nc::Op::Kind::Mode:  // never G93: refused above (ctl::inverseTimeRefusal)
           line(fmt::format("{} G94", op.incremental ? "G91" : "G90"));
           break;
-        case nc::Op::Kind::RotaryLinear: line(ctl::rotaryLinearWords(op, p.unit, " ")); break;
         case nc::Op::Kind::Pause:
           if (op.dwell_s > 0) line(fmt::format("G04 F{}", ctl::trimmed(op.dwell_s, 3)));  // UNVERIFIED: F seconds
           else line("M00");
           break;
-        case nc::Op::Kind::Dwell:
-        case nc::Op::Kind::Read:
-        case nc::Op::Kind::RepeatBegin:
-        case nc::Op::Kind::RepeatEnd:
-          // The R-test program (002): dwell, logger trigger and loops are spelled for linuxcnc only so far.
-          throw std::invalid_argument(fmt::format("the {} program cannot express an R-test dwell, logger trigger or loop "
-                                                  "in this version: generate this program for linuxcnc", "okuma"));
         case nc::Op::Kind::Probe: {
           const int id = op.point_id;
           if (id <= 0 || id > 8999) throw std::invalid_argument(fmt::format("point id {} out of range 1..8999", id));
-          if (!(op.feed > 0)) throw std::invalid_argument(fmt::format("point {}: probing feed must be > 0", id));
-          if (op.retract_mm > 0)
-            throw std::invalid_argument(fmt::format(
-                "point {}: the okuma program records a single touch; a double touch (retract_mm > 0) is not implemented",
-                id));
+          ctl::requireSingleTouch(op, kDialect);
           if (!op.text.empty()) commentLines(op.text);
-          line(fmt::format("G31 X{} Y{} Z{} F{}", L(x.x()), L(x.y()), L(x.z()), F(op.feed)));
+          line(ctl::linearBlock("G31", op, 4, inch));
           line("VC1=VSKPX");
           line("VC2=VSKPY");
           line("VC3=VSKPZ");
@@ -176,46 +140,20 @@ class OkumaDialect final : public Dialect {
           line("WRITE C");
           break;
         }
+        default: break;  // written by ctl::writeOps
       }
-    }
+    });
     put("END");
     line("CLOSE C");
     line("M02");
     return out;
   }
 
-  std::string writeResults(const ProbePlan& plan, const MeasurementRun& run) const override {
-    const bool inch = plan.machine.units == LengthUnit::Inch;
-    const double k = inch ? 1.0 / kMmPerInch : 1.0;
-    std::string out = fmt::format("ROTACAL-RESULTS DIALECT OKUMA CYCLE {} POINTS {} UNIT {}\r\n", safeName(plan.cycle),
-                                  plan.points.size(), unitName(inch));
-    for (const auto& t : run.points) {
-      if (!plan.findPoint(t.point_id)) throw std::invalid_argument(fmt::format("run point {} is not in the plan", t.point_id));
-      const Eigen::Vector3d x = t.position_m_mm * k;
-      const int d = resultDecimals(inch);
-      out += fmt::format("P{} X{} Y{} Z{}\r\n", t.point_id, ctl::fixed(x.x(), d), ctl::fixed(x.y(), d), ctl::fixed(x.z(), d));
-    }
-    out += "END\r\n";
-    return out;
-  }
-
-  MeasurementRun parseResults(const std::string& text, const std::string& file, const ProbePlan& plan) const override {
-    return ctl::parseTaggedResults(text, file, plan, "OKUMA", safeName(plan.cycle), " (FWRITC appends: delete the old file)");
-  }
-
   std::string writeOffsets(const OffsetRequest& r) const override {
-    ctl::requirePlausible(r);
-    const ProbePlan& plan = *r.plan;
-    const MachineModel& m = plan.machine;
-    const bool ac = r.identified.kinematics == Kinematics::TableAC;
-    const bool inch = m.units == LengthUnit::Inch;
-    const double k = inch ? 1.0 / kMmPerInch : 1.0;
-    const LocationErrors& e = r.identified;
-    const char tilt = ac ? 'A' : 'B';
-    const Eigen::Vector3d shift = ac ? Eigen::Vector3d(e.get("dx_AY"), e.get("dy_AY"), e.get("dz_AY"))
-                                     : Eigen::Vector3d(e.get("dx_BY"), e.get("dy_CB"), e.get("dz_BY"));
-    const double zero_deg = (m.hasRotary(tilt) ? m.controllerSign(tilt, kDialect) : 1) *
-                            radToDeg(e.get(ac ? "a_AY" : "b_BY"));
+    const ctl::OffsetBasis b(r);
+    const auto& [plan, m, e, ac, inch, k, tilt] = b;
+    const Eigen::Vector3d shift = b.pivot();
+    const double zero_deg = b.zeroDeg(kDialect);
     std::string out;
     auto line = [&](const std::string& s) { out += s + "\n"; };
     auto commentLines = [&](std::string_view text) {
@@ -264,11 +202,7 @@ class OkumaDialect final : public Dialect {
       if (quote) problem(ls[i].number, "quote not closed");
       code[i] = ctl::trim(c);
     }
-    auto nextCode = [&](size_t i) {
-      for (size_t j = i + 1; j < ls.size(); ++j)
-        if (!code[j].empty()) return j;
-      return ls.size();
-    };
+    auto nextCode = [&](size_t i) { return ctl::nextCode(code, i); };
     std::set<std::string> labels;
     static const std::regex label_re(R"(^(N\d+) )");
     for (const auto& c : code) {
@@ -325,28 +259,13 @@ class OkumaDialect final : public Dialect {
     if (open) problem(ls.empty() ? 1 : ls.back().number, "FWRITC without CLOSE C");
     if (static_cast<size_t>(probes) != shape.probes)
       problem(ls.empty() ? 1 : ls.back().number, fmt::format("{} G31 moves, the plan has {} points", probes, shape.probes));
-    for (auto& s : ctl::inverseTimeProblems(nc::readProgram(text), ctl::isProbingBlock)) out.push_back(std::move(s));
-    const auto blocks = nc::readProgram(std::string(inch ? "G20" : "G21") + "\n" + motion_text);
-    std::vector<nc::Block> shifted;
-    for (size_t i = 0; i < blocks.size(); ++i) {
-      nc::Block b = blocks[i];
-      b.line = static_cast<int>(i);  // line 0: the unit; then the program's own numbering
-      shifted.push_back(std::move(b));
-    }
-    for (auto& s : ctl::strokeProblems(shifted, plan, kDialect)) out.push_back(std::move(s));
-    size_t last = ls.size();
-    for (size_t i = 0; i < ls.size(); ++i)
-      if (!code[i].empty()) last = i;
-    if (last == ls.size() || code[last] != "M02") problem(last == ls.size() ? 1 : ls[last].number, "the program does not end with M02");
+    for (auto& s : ctl::closingProblems(text, ls, code, "M02", motion_text, inch, plan, kDialect)) out.push_back(std::move(s));
     return out;
   }
 };
 
 }  // namespace
 
-const Dialect& okumaDialect() {
-  static const OkumaDialect d;
-  return d;
-}
+const Dialect& okumaDialect() { return singleton<OkumaDialect>(); }
 
 }  // namespace rotacal

@@ -33,6 +33,7 @@
 #include "controllers/common.hpp"
 #include "controllers/dialects.hpp"
 #include "core/units.hpp"
+#include "core/singleton.hpp"
 
 namespace rotacal {
 namespace {
@@ -40,9 +41,6 @@ namespace {
 constexpr const char* kDialect = "siemens";
 constexpr size_t kMaxLineChars = 80;  // UNVERIFIED for Sinumerik: conservative
 constexpr int kDecimals = 4;          // SPRINT %10.4F and program coordinates
-// Results in inch: SPRINT %10.5F (4 inch decimals would round by up to 1.27 um and move the
-// identified errors by up to 3.1 um, docs/dialects.md).
-int resultDecimals(bool inch) { return inch ? 5 : kDecimals; }
 
 std::string unitName(bool inch) { return inch ? "INCH" : "MM"; }
 
@@ -71,22 +69,15 @@ std::string safeName(std::string_view name) {
   return s;
 }
 
-class SiemensDialect final : public Dialect {
+class SiemensDialect final : public ctl::TaggedResultsDialect {
  public:
-  std::string_view name() const override { return kDialect; }
-  std::string_view programExtension() const override { return ".mpf"; }
-  std::string_view resultsExtension() const override { return ".txt"; }
-
+  // SPRINT's %10.4F (inch %10.5F): right-aligned in 10 characters.
+  SiemensDialect() : TaggedResultsDialect({kDialect, ".mpf", "SIEMENS", safeName, 10, "\n", ""}) {}
   std::vector<std::string> commentLines(std::string_view text) const override { return comments(text); }
 
   std::string writeProgram(const nc::Program& p) const override {
     const bool inch = p.unit == nc::Unit::Inch;
-    auto L = [](double v) { return ctl::fixed(v, kDecimals); };
-    auto F = [&](double v) { return ctl::fixed(v, inch ? 3 : 1); };
-    int probes = 0;
-    for (const auto& op : p.ops) probes += op.kind == nc::Op::Kind::Probe;
-    if (p.point_count != 0 && p.point_count != probes)
-      throw std::invalid_argument(fmt::format("program has {} probing moves but point_count {}", probes, p.point_count));
+    const int probes = ctl::probeCount(p);
     const std::string prog = safeName(p.name.empty() ? "ROTACAL" : p.name);
     const std::string file = safeName(p.results_file.empty() ? "ROTACAL_RESULTS" : p.results_file);
     const std::string write = fmt::format("WRITE(ERR,\"{}\",TXT)", file);
@@ -94,12 +85,7 @@ class SiemensDialect final : public Dialect {
     const std::string no_trigger_sq = inch ? "0.000001" : "0.0001";
 
     std::string out;
-    auto line = [&](const std::string& s) {
-      if (s.size() > kMaxLineChars)
-        throw std::invalid_argument(fmt::format("line longer than {} characters: {}", kMaxLineChars, s));
-      out += s;
-      out += '\n';
-    };
+    auto line = [&](const std::string& s) { ctl::appendLine(out, s, kMaxLineChars); };
     auto commentLines = [&](std::string_view text) {
       for (const auto& c : comments(text)) line(c);
     };
@@ -127,49 +113,25 @@ class SiemensDialect final : public Dialect {
     writeText(fmt::format("ROTACAL-RESULTS DIALECT SIEMENS CYCLE {} POINTS {} UNIT {}", safeName(p.cycle), probes,
                           unitName(inch)));
     std::vector<int> ids;
-    ctl::ModeGuard guard;
-    for (const auto& op : p.ops) {
+    ctl::writeOps(p, {kDialect, "G0", "G1", kDecimals, " "}, line, [&](const nc::Op& op) {
       const Eigen::Vector3d& x = op.xyz;
-      guard.apply(op);
       switch (op.kind) {
         case nc::Op::Kind::Comment: commentLines(op.text); break;
-        case nc::Op::Kind::Rapid: line(ctl::rapidBlock("G0", op, kDecimals)); break;
-        case nc::Op::Kind::Linear: line(ctl::linearBlock("G1", op, kDecimals, inch)); break;
-        case nc::Op::Kind::Index: {
-          ctl::requireRapidIndex(op, "siemens");
-          std::string s = "G0";
-          for (const auto& [axis, deg] : op.rotary) s += fmt::format(" {}{}", axis, L(deg));
-          line(s);
-          break;
-        }
         case nc::Op::Kind::Mode:
           // G93 inverse time (F = 1/min): the F-every-block rule is UNVERIFIED for Sinumerik;
           // F on every block is the safe form.
           line(fmt::format("{} {}", op.incremental ? "G91" : "G90", op.inverse_time ? "G1 G93" : "G94"));
           break;
-        case nc::Op::Kind::RotaryLinear: line(ctl::rotaryLinearWords(op, p.unit, " ")); break;
         case nc::Op::Kind::Pause:
           if (op.dwell_s > 0) line(fmt::format("G4 F{}", ctl::trimmed(op.dwell_s, 3)));  // F: seconds, own block
           else line("M0");
           break;
-        case nc::Op::Kind::Dwell:
-        case nc::Op::Kind::Read:
-        case nc::Op::Kind::RepeatBegin:
-        case nc::Op::Kind::RepeatEnd:
-          // The R-test program (002): dwell, logger trigger and loops are spelled for linuxcnc only so far.
-          throw std::invalid_argument(fmt::format("the {} program cannot express an R-test dwell, logger trigger or loop "
-                                                  "in this version: generate this program for linuxcnc", "siemens"));
         case nc::Op::Kind::Probe: {
           const int id = op.point_id;
           if (id <= 0) throw std::invalid_argument("probing move without a point id");
-          if (!(op.feed > 0)) throw std::invalid_argument(fmt::format("point {}: probing feed must be > 0", id));
-          if (op.retract_mm > 0)
-            throw std::invalid_argument(fmt::format(
-                "point {}: the siemens program records a single touch; a double touch (retract_mm > 0) is not "
-                "implemented",
-                id));
+          ctl::requireSingleTouch(op, kDialect);
           if (!op.text.empty()) commentLines(op.text);
-          line(fmt::format("MEAS=1 G1 X{} Y{} Z{} F{}", L(x.x()), L(x.y()), L(x.z()), F(op.feed)));
+          line(ctl::linearBlock("MEAS=1 G1", op, kDecimals, inch));
           line("STOPRE");
           line("R90=$AA_MW[X]");
           line("R91=$AA_MW[Y]");
@@ -183,8 +145,9 @@ class SiemensDialect final : public Dialect {
           ids.push_back(id);
           break;
         }
+        default: break;  // written by ctl::writeOps
       }
-    }
+    });
     writeText("END");
     line("GOTOF FINISH");
     for (int id : ids) {
@@ -203,34 +166,10 @@ class SiemensDialect final : public Dialect {
     return out;
   }
 
-  std::string writeResults(const ProbePlan& plan, const MeasurementRun& run) const override {
-    const bool inch = plan.machine.units == LengthUnit::Inch;
-    const double k = inch ? 1.0 / kMmPerInch : 1.0;
-    std::string out = fmt::format("ROTACAL-RESULTS DIALECT SIEMENS CYCLE {} POINTS {} UNIT {}\n", safeName(plan.cycle),
-                                  plan.points.size(), unitName(inch));
-    for (const auto& t : run.points) {
-      if (!plan.findPoint(t.point_id)) throw std::invalid_argument(fmt::format("run point {} is not in the plan", t.point_id));
-      const Eigen::Vector3d x = t.position_m_mm * k;
-      out += fmt::format("P{} X{:>10} Y{:>10} Z{:>10}\n", t.point_id, ctl::fixed(x.x(), resultDecimals(inch)),
-                         ctl::fixed(x.y(), resultDecimals(inch)), ctl::fixed(x.z(), resultDecimals(inch)));
-    }
-    out += "END\n";
-    return out;
-  }
-
-  MeasurementRun parseResults(const std::string& text, const std::string& file, const ProbePlan& plan) const override {
-    return ctl::parseTaggedResults(text, file, plan, "SIEMENS", safeName(plan.cycle), "");
-  }
-
   std::string writeOffsets(const OffsetRequest& r) const override {
-    ctl::requirePlausible(r);
-    const ProbePlan& plan = *r.plan;
-    const MachineModel& m = plan.machine;
-    const bool ac = r.identified.kinematics == Kinematics::TableAC;
-    const bool inch = m.units == LengthUnit::Inch;
-    const double k = inch ? 1.0 / kMmPerInch : 1.0;
-    const auto c = siemensToolcarrierChanges(r.identified);
-    const char tilt = ac ? 'A' : 'B';
+    const ctl::OffsetBasis b(r);
+    const auto& [plan, m, e, ac, inch, k, tilt] = b;
+    const auto c = siemensToolcarrierChanges(e);
     std::string out;
     auto line = [&](const std::string& s) { out += s + "\n"; };
     auto commentLines = [&](std::string_view text) {
@@ -269,11 +208,7 @@ class SiemensDialect final : public Dialect {
       const size_t sc = ls[i].text.find(';');
       code[i] = ctl::trim(sc == std::string::npos ? ls[i].text : ls[i].text.substr(0, sc));
     }
-    auto nextCode = [&](size_t i) {
-      for (size_t j = i + 1; j < ls.size(); ++j)
-        if (!code[j].empty()) return j;
-      return ls.size();
-    };
+    auto nextCode = [&](size_t i) { return ctl::nextCode(code, i); };
     std::set<std::string> labels;
     for (size_t i = 0; i < ls.size(); ++i)
       if (!code[i].empty() && code[i].back() == ':') labels.insert(code[i].substr(0, code[i].size() - 1));
@@ -353,24 +288,7 @@ class SiemensDialect final : public Dialect {
     if (static_cast<size_t>(probes) != shape.probes)
       problem(ls.empty() ? 1 : ls.back().number,
               fmt::format("{} MEAS=1 moves, the plan has {} points", probes, shape.probes));
-    for (auto& s : ctl::inverseTimeProblems(nc::readProgram(text), ctl::isProbingBlock)) out.push_back(std::move(s));
-    const auto blocks = nc::readProgram((inch ? "G20" : "G21") + std::string(";\n").substr(1) + motion_text);
-    // The unit line above shifted the numbering by one: renumber.
-    std::vector<nc::Block> shifted;
-    nc::Block unit = blocks.front();
-    unit.line = 0;
-    shifted.push_back(unit);
-    for (size_t i = 1; i < blocks.size(); ++i) {
-      nc::Block b = blocks[i];
-      b.line = static_cast<int>(i);
-      shifted.push_back(std::move(b));
-    }
-    for (auto& s : ctl::strokeProblems(shifted, plan, kDialect)) out.push_back(std::move(s));
-    size_t last = ls.size();
-    for (size_t i = 0; i < ls.size(); ++i)
-      if (!code[i].empty()) last = i;
-    if (last == ls.size() || code[last] != "M30")
-      problem(last == ls.size() ? 1 : ls[last].number, "the program does not end with M30");
+    for (auto& s : ctl::closingProblems(text, ls, code, "M30", motion_text, inch, plan, kDialect)) out.push_back(std::move(s));
     return out;
   }
 };
@@ -402,9 +320,6 @@ SiemensToolcarrierChanges siemensToolcarrierChanges(const LocationErrors& e) {
   return c;
 }
 
-const Dialect& siemensDialect() {
-  static const SiemensDialect d;
-  return d;
-}
+const Dialect& siemensDialect() { return singleton<SiemensDialect>(); }
 
 }  // namespace rotacal

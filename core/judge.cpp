@@ -308,6 +308,15 @@ std::vector<JudgeEstimate> estimates(const Context& cx, const Eigen::MatrixXd& X
 
 /// Names the terms of a combination (coefficients on named columns of whitened X), scaled by
 /// `scale`, keeping the terms that move the data by at least kTermShare of the largest.
+// The scale that gives the cause's leading term (coefficients `a`, weighted by the norms of its
+// whitened columns `Jw`) the coefficient 1.
+double leadScale(const Eigen::VectorXd& a, const Eigen::MatrixXd& Jw) {
+  const Eigen::VectorXd contrib = a.cwiseAbs().cwiseProduct(Jw.colwise().norm().transpose());
+  Eigen::Index lead = 0;
+  contrib.maxCoeff(&lead);
+  return a[lead] != 0 ? 1.0 / a[lead] : 1.0;
+}
+
 std::vector<JudgeTerm> terms(const Eigen::VectorXd& coef, const Eigen::MatrixXd& X, const std::vector<JudgeParameter>& names,
                              double scale) {
   std::vector<JudgeTerm> out;
@@ -448,11 +457,7 @@ JudgeConfounded modelConfounded(const Context& cx, const Model& m, const Evaluat
   const Eigen::VectorXd a = ev.sc.coef * ev.pr.V.col(0);  // cause coefficients
   const Eigen::VectorXd b = m.span.coef.cols() ? Eigen::VectorXd(m.span.coef * ev.pr.W.col(0))
                                                : Eigen::VectorXd::Zero(m.X.cols());
-  // Scale so that the cause's leading term has coefficient 1.
-  const Eigen::VectorXd contrib = a.cwiseAbs().cwiseProduct(ev.Jw.colwise().norm().transpose());
-  Eigen::Index lead = 0;
-  contrib.maxCoeff(&lead);
-  const double scale = a[lead] != 0 ? 1.0 / a[lead] : 1.0;
+  const double scale = leadScale(a, ev.Jw);
   e.cause_terms = terms(a, ev.Jw, cause.parameters, scale);
   e.with_terms = terms(b, m.X, m.names, scale);
   for (const auto& t : e.with_terms) e.with.push_back(t.name);
@@ -513,10 +518,7 @@ JudgeConfounded pairConfounded(const Context& cx, const Evaluated& a, size_t ia,
   // A coordinates -> Qc coordinates -> the cause's own coefficients. A_a u ~ A_b v (cos ~ 1).
   const Eigen::VectorXd ka = a.sc.coef * (a.pr.Acoord * p.u);
   const Eigen::VectorXd kb = b.sc.coef * (b.pr.Acoord * p.v);
-  const Eigen::VectorXd contrib = ka.cwiseAbs().cwiseProduct(a.Jw.colwise().norm().transpose());
-  Eigen::Index lead = 0;
-  contrib.maxCoeff(&lead);
-  const double scale = ka[lead] != 0 ? 1.0 / ka[lead] : 1.0;
+  const double scale = leadScale(ka, a.Jw);
   e.cause_terms = terms(ka, a.Jw, ca.parameters, scale);
   e.with_terms = terms(kb, b.Jw, cb.parameters, scale);
   e.why = fmt::format("beyond the model, {} and {} move the data alike on this plan (principal angle {:.2g} deg): {} "

@@ -161,6 +161,19 @@ Limits angleLimits(std::string_view unit) {
   return Limits::symmetric(mdeg, unit);
 }
 
+namespace {
+// The index of location error `name`, a key of `obj` whose entry must hold the number `field`;
+// fails (FILE:LINE) naming an unknown error (`where`: in which table) or a missing number (`needs`).
+int locationEntry(const JsonDoc& doc, const Json& obj, const std::string& name, Kinematics kinematics, const char* field,
+                  const std::string& where, const std::string& needs) {
+  const int i = parameterIndex(kinematics, name);
+  if (i < 0) doc.fail(obj, name, "unknown location error '" + name + "' " + where);
+  const Json& entry = obj[name];
+  if (!entry.is_object() || !entry.contains(field) || !entry[field].is_number()) doc.fail(obj, name, needs);
+  return i;
+}
+}  // namespace
+
 Truth truthFrom(const JsonDoc& doc, Kinematics kinematics) {
   const Json& j = doc.value;
   if (!j.is_object() || !j.contains("format") || j["format"] != "rotacal-truth/1")
@@ -170,10 +183,8 @@ Truth truthFrom(const JsonDoc& doc, Kinematics kinematics) {
   if (j.contains("location_errors")) {
     const Json& le = requireObject(doc, j, "location_errors");
     for (const auto& [name, entry] : le.items()) {
-      const int i = parameterIndex(kinematics, name);
-      if (i < 0) doc.fail(le, name, "unknown location error '" + name + "' for this machine");
-      if (!entry.is_object() || !entry.contains("value") || !entry["value"].is_number())
-        doc.fail(le, name, "location error '" + name + "' needs {\"value\": number, \"unit\": ...}");
+      const int i = locationEntry(doc, le, name, kinematics, "value", "for this machine",
+                                  "location error '" + name + "' needs {\"value\": number, \"unit\": ...}");
       const std::string unit = stringOr(doc, entry, "unit", "");
       const ParamKind kind = locationParameters(kinematics)[i].kind;
       if (kind == ParamKind::Length) {
@@ -216,10 +227,8 @@ Truth truthFrom(const JsonDoc& doc, Kinematics kinematics) {
     const Json& dr = requireObject(doc, j, "drift");
     ErrorVector rate = ErrorVector::Zero();  // per second, mm or rad
     for (const auto& [name, entry] : dr.items()) {
-      const int i = parameterIndex(kinematics, name);
-      if (i < 0) doc.fail(dr, name, "unknown location error '" + name + "' in drift");
-      if (!entry.is_object() || !entry.contains("rate") || !entry["rate"].is_number())
-        doc.fail(dr, name, "drift of '" + name + "' needs {\"rate\": number, \"unit\": \"um/h\" or \"mdeg/h\"}");
+      const int i = locationEntry(doc, dr, name, kinematics, "rate", "in drift",
+                                  "drift of '" + name + "' needs {\"rate\": number, \"unit\": \"um/h\" or \"mdeg/h\"}");
       const std::string unit = stringOr(doc, entry, "unit", "");
       const bool length = locationParameters(kinematics)[i].kind == ParamKind::Length;
       if (length && unit != "um/h") doc.fail(entry, "unit", "drift unit of '" + name + "' must be um/h");

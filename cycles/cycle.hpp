@@ -134,6 +134,13 @@ struct CycleDocuments {
   /// few chips): analyze --offsets refuses with it, --force writes them anyway.
   std::string offsets_refused;
 };
+/// The documents of a command that writes a JSON document and its text, nothing else.
+inline CycleDocuments documents(Json doc, std::string text) {
+  CycleDocuments d;
+  d.doc = std::move(doc);
+  d.text = std::move(text);
+  return d;
+}
 
 /// The smallest run of a cycle: a bundled machine it suits (a path under the source tree) and
 /// options that keep it short. The test battery over every cycle and the README start from it.

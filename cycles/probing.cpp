@@ -2,10 +2,18 @@
 
 #include <fmt/format.h>
 
+#include <stdexcept>
+
 #include "core/errors.hpp"
 #include "core/simulation.hpp"
 
 namespace rotacal {
+
+void finishTouchPlan(ProbePlan& plan) {
+  const auto bad = strokeViolations(plan);
+  if (!bad.empty()) throw std::invalid_argument("plan does not fit the machine: " + bad.front());
+  estimateTimes(plan);
+}
 
 std::vector<MeasurementRun> readProbeRuns(const ProbePlan& plan, const std::vector<InputFile>& results,
                                           const DialectIO& dialect) {

@@ -7,6 +7,10 @@
 
 namespace rotacal {
 
+/// The last step of a touch cycle's plan: throws std::invalid_argument naming the first point
+/// beyond the machine's strokes, then estimates the points' times.
+void finishTouchPlan(ProbePlan& plan);
+
 /// Every results file of the request, read by the dialect's reader against the plan.
 std::vector<MeasurementRun> readProbeRuns(const ProbePlan& plan, const std::vector<InputFile>& results,
                                           const DialectIO& dialect);

@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "core/limits.hpp"
+#include "cycles/check_rules.hpp"
 #include "cycles/cycle.hpp"
 
 #define ROTACAL_CYCLES(X) \
@@ -26,6 +27,23 @@ const std::vector<const Cycle*>& cycles() {
   static const std::vector<const Cycle*> all{ROTACAL_CYCLES(ROTACAL_LIST_CYCLE)};
 #undef ROTACAL_LIST_CYCLE
   return all;
+}
+
+ProgramCheckSetup programCheckSetup(const MachineModel& machine, const std::string& dialect, bool numbered,
+                                    const ProbePlan* plan, bool any_rotacal_number) {
+  ProgramCheckSetup s;
+  s.machine = &machine;
+  s.dialect = dialect;
+  s.plan = plan;
+  s.numbered = numbered;
+  if (plan) {
+    const Cycle& cycle = cycleOfPlan(*plan);
+    s.artefact_on_table = cycle.planRules().artefact_touched;
+    if (s.numbered) s.program_number = cycle.programNumber();
+  } else if (any_rotacal_number) {
+    for (const Cycle* c : cycles()) s.rotacal_numbers.push_back(c->programNumber());
+  }
+  return s;
 }
 
 std::vector<std::string> cycleNames() {

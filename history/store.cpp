@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -58,6 +59,15 @@ struct Stmt {
   sqlite3_stmt* s = nullptr;
   ~Stmt() { sqlite3_finalize(s); }
 };
+
+// How many tables of the schema `where` selects; nullopt when the schema cannot be read.
+std::optional<int> tableCount(sqlite3* db, const std::string& where) {
+  Stmt st;
+  const std::string sql = "SELECT count(*) FROM sqlite_master WHERE type='table' AND " + where;
+  if (sqlite3_prepare_v2(db, sql.c_str(), -1, &st.s, nullptr) != SQLITE_OK) return std::nullopt;
+  sqlite3_step(st.s);
+  return sqlite3_column_int(st.s, 0);
+}
 
 }  // namespace
 
@@ -178,27 +188,14 @@ Database::Database(const std::string& path, bool create) : path_(path) {
   // Creating the schema: one writer at a time, and idempotent.
   exec("BEGIN IMMEDIATE");
   try {
-    {
-      Stmt st;
-      if (sqlite3_prepare_v2(db_.get(), "SELECT count(*) FROM sqlite_master WHERE type='table' AND name NOT IN "
-                                  "('meta','calibration','parameter','sqlite_sequence')",
-                             -1, &st.s, nullptr) != SQLITE_OK)
-        fail("cannot read the schema");
-      sqlite3_step(st.s);
-      if (sqlite3_column_int(st.s, 0) != 0) fail("not a rotacal history database (it holds other tables)");
-    }
+    const auto others = tableCount(db_.get(), "name NOT IN ('meta','calibration','parameter','sqlite_sequence')");
+    if (!others) fail("cannot read the schema");
+    if (*others != 0) fail("not a rotacal history database (it holds other tables)");
     // A new file gets the schema; an existing one must have all of it (recreating a dropped
     // table would hide the damage and change a file that `show` only reads).
-    int present = 0;
-    {
-      Stmt st;
-      if (sqlite3_prepare_v2(db_.get(), "SELECT count(*) FROM sqlite_master WHERE type='table' AND name IN "
-                                  "('meta','calibration','parameter')",
-                             -1, &st.s, nullptr) != SQLITE_OK)
-        fail("cannot read the schema");
-      sqlite3_step(st.s);
-      present = sqlite3_column_int(st.s, 0);
-    }
+    const auto counted = tableCount(db_.get(), "name IN ('meta','calibration','parameter')");
+    if (!counted) fail("cannot read the schema");
+    const int present = *counted;
     if (present != 0 && present != 3)
       fail("damaged history: tables meta, calibration and parameter are not all there; keep the file for inspection "
            "and use --db NEW_FILE");

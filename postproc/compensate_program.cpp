@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 
 #include "controllers/common.hpp"
+#include "controllers/motion_reader.hpp"
 #include "controllers/dialect.hpp"
 #include "core/errors.hpp"
 #include "core/units.hpp"
@@ -42,19 +43,6 @@ std::string upper(std::string_view s) {
   return r;
 }
 
-// A line of a richer dialect that is a statement, not a word-address block: an assignment to a
-// named variable (R90=, VC1=, TXT=, $TC_CARR1=), a call or keyword (WRITE(, MSG(, DEF, IF, GOTOF,
-// PUT, FWRITC, ...), or a label (NOHIT1:). An assignment to an axis letter (X=10, Siemens) is a
-// motion and is not a statement.
-bool isStatement(const std::string& code) {
-  static const std::regex stmt(
-      R"(^\s*(N\d+\s+)?(([A-Z_$][A-Z0-9_$]*)(\[[^\]]*\])?\s*=|[A-Z_][A-Z0-9_]*\s*\(|[A-Z_][A-Z0-9_]*:|(DEF|IF|ELSE|ENDIF|GOTOF|GOTOB|GOTO|STOPRE|FWRITC|FREADC|PUT|WRITE|CLOSE|WHILE|ENDWHILE|LOOP|ENDLOOP|RET|MSG|SPRINT)\b))",
-      std::regex::icase);
-  std::smatch m;
-  if (!std::regex_search(code, m, stmt)) return false;
-  const std::string name = upper(m.str(3));
-  return !(name.size() == 1 && std::string("XYZABC").find(name) != std::string::npos);
-}
 
 double& poseAxis(Pose& p, char axis) { return axis == 'A' ? p.A : axis == 'B' ? p.B : p.C; }
 
@@ -261,7 +249,7 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
         b = move.front();
         b.line = line_no;
         b.raw = blocks[bi].raw;
-      } else if (isStatement(b.code)) {
+      } else if (ctl::isStatement(b.code, true)) {
         emit(b.raw);
         continue;
       }

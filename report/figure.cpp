@@ -71,6 +71,21 @@ std::string Figure::problem() const {
   return {};
 }
 
+namespace {
+// Each entry of the optional array `key` of figure object `j`: its name and where it stands for
+// the messages ("figure ID, series NAME").
+template <class F>
+void eachNamed(const Json& j, const std::string& key, const std::string& noun, const std::string& where, F&& f) {
+  const auto a = j.find(key);
+  if (a == j.end()) return;
+  if (!a->is_array()) throw std::invalid_argument(where + ": " + key + " must be an array");
+  for (const auto& e : *a) {
+    const std::string name = text(e, "name", where + "." + key, false);
+    f(e, name, where + ", " + noun + " " + name);
+  }
+}
+}  // namespace
+
 Figure figureFromJson(const Json& j) {
   if (!j.is_object()) throw std::invalid_argument("figures: each figure must be an object");
   Figure f;
@@ -80,33 +95,25 @@ Figure figureFromJson(const Json& j) {
   f.note = text(j, "note", where, false);
   f.x = axis(j, "x", where);
   f.y = axis(j, "y", where);
-  if (const auto s = j.find("series"); s != j.end()) {
-    if (!s->is_array()) throw std::invalid_argument(where + ": series must be an array");
-    for (const auto& e : *s) {
-      PlotSeries ps;
-      ps.name = text(e, "name", where + ".series", false);
-      const std::string w = where + ", series " + ps.name;
-      if (e.contains("style")) ps.style = text(e, "style", w, true);
-      if (!e.contains("x") || !e.contains("y")) throw std::invalid_argument(w + ": needs x and y");
-      ps.x = numbers(e["x"], w + ".x");
-      ps.y = numbers(e["y"], w + ".y");
-      if (e.contains("u")) ps.u = numbers(e["u"], w + ".u");
-      f.series.push_back(std::move(ps));
-    }
-  }
-  if (const auto b = j.find("bands"); b != j.end()) {
-    if (!b->is_array()) throw std::invalid_argument(where + ": bands must be an array");
-    for (const auto& e : *b) {
-      PlotBand pb;
-      pb.name = text(e, "name", where + ".bands", false);
-      const std::string w = where + ", band " + pb.name;
-      if (!e.contains("x") || !e.contains("lo") || !e.contains("hi")) throw std::invalid_argument(w + ": needs x, lo and hi");
-      pb.x = numbers(e["x"], w + ".x");
-      pb.lo = numbers(e["lo"], w + ".lo");
-      pb.hi = numbers(e["hi"], w + ".hi");
-      f.bands.push_back(std::move(pb));
-    }
-  }
+  eachNamed(j, "series", "series", where, [&](const Json& e, const std::string& name, const std::string& w) {
+    PlotSeries ps;
+    ps.name = name;
+    if (e.contains("style")) ps.style = text(e, "style", w, true);
+    if (!e.contains("x") || !e.contains("y")) throw std::invalid_argument(w + ": needs x and y");
+    ps.x = numbers(e["x"], w + ".x");
+    ps.y = numbers(e["y"], w + ".y");
+    if (e.contains("u")) ps.u = numbers(e["u"], w + ".u");
+    f.series.push_back(std::move(ps));
+  });
+  eachNamed(j, "bands", "band", where, [&](const Json& e, const std::string& name, const std::string& w) {
+    PlotBand pb;
+    pb.name = name;
+    if (!e.contains("x") || !e.contains("lo") || !e.contains("hi")) throw std::invalid_argument(w + ": needs x, lo and hi");
+    pb.x = numbers(e["x"], w + ".x");
+    pb.lo = numbers(e["lo"], w + ".lo");
+    pb.hi = numbers(e["hi"], w + ".hi");
+    f.bands.push_back(std::move(pb));
+  });
   if (const std::string p = f.problem(); !p.empty()) throw std::invalid_argument(p);
   return f;
 }

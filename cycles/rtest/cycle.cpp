@@ -12,6 +12,7 @@
 #include "core/simulation.hpp"
 #include "cycles/cycle.hpp"
 #include "cycles/rtest/program.hpp"
+#include "core/singleton.hpp"
 
 namespace rotacal {
 namespace {
@@ -161,9 +162,6 @@ class Rtest final : public Cycle {
 
 }  // namespace
 
-const Cycle& rtestCycle() {
-  static const Rtest cycle;
-  return cycle;
-}
+const Cycle& rtestCycle() { return singleton<Rtest>(); }
 
 }  // namespace rotacal

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "core/units.hpp"
+#include "cycles/judge_contract.hpp"
 
 namespace rotacal {
 
@@ -286,12 +287,6 @@ std::string rtestFindingSummary(const ProbePlan& plan, const RtestDiagnosis& d, 
 
 namespace {
 
-Json paramsJson(const std::vector<JudgeEstimate>& ps) {
-  Json j = Json::object();
-  for (const auto& p : ps)
-    j[p.name] = {{"value", p.value}, {"unit", p.unit}, {"u", p.identifiable ? Json(p.u) : Json(nullptr)}};
-  return j;
-}
 
 std::string separateWith(const std::string& cause) {
   if (cause == kSpindle)
@@ -310,34 +305,20 @@ Json rtestDiagnosisJson(const ProbePlan& plan, const RtestDiagnosis& d) {
   const char ax = tiltAxis(k);
   const JudgeSummary& s = d.summary;
   Json j;
-  j["format"] = "rotacal-diagnosis/1";
-  j["cycle"] = "rtest";
+  stampDiagnosis(j, "rtest");
   j["cycles"] = d.cycles;
   j["declared_sigma_um"] = s.declared_sigma_rms;
-  j["baseline"] = {{"model", "002 Table 2 errors at each tilt, constant over the series (Eq. (6) over all cycles)"},
-                   {"residual_rms_um", s.baseline.rms_residual},
-                   {"holdout_rms_um", s.baseline_holdout_rms},
-                   {"chi2", s.baseline.chi2},
-                   {"dof", s.baseline.dof},
-                   {"p_value", s.baseline.p_value},
-                   {"within_declared_noise", s.baseline.passes}};
+  j["baseline"] =
+      contractBaselineJson(s, "002 Table 2 errors at each tilt, constant over the series (Eq. (6) over all cycles)");
   j["holdout_scheme"] = "leave one cycle out";
-  j["verdict"] = judgeVerdictName(s.verdict);
-  j["message"] = s.message;
-  j["explains_data"] = s.explainsData();
+  verdictJson(j, s);
   Json findings = Json::array();
   for (const auto& f : s.findings) {
-    Json e = {{"cause", isStep(f.cause) ? std::string("sensor_step") : f.cause},
-              {"variant", isStep(f.cause) ? fmt::format(isInStep(f.cause) ? "during cycle {}" : "from cycle {}",
-                                                        stepCycle(f.cause))
-                                          : std::string("linear")},
-              {"summary", rtestFindingSummary(plan, d, f)},
-              {"parameters", paramsJson(f.parameters)},
-              {"residual_rms_um", s.final_model.rms_residual},
-              {"holdout_rms_um", f.holdout_rms_cause},
-              {"gain_pct", f.holdout_rms_model > 0 ? 100.0 * (1.0 - f.holdout_rms_cause / f.holdout_rms_model) : 0.0},
-              {"separability", f.separability},
-              {"confidence", f.confidence}};
+    Json e = contractFindingJson(s, f);
+    e["cause"] = isStep(f.cause) ? std::string("sensor_step") : f.cause;
+    e["variant"] = isStep(f.cause) ? fmt::format(isInStep(f.cause) ? "during cycle {}" : "from cycle {}", stepCycle(f.cause))
+                                   : std::string("linear");
+    e["summary"] = rtestFindingSummary(plan, d, f);
     if (f.cause == kDrift) {
       // The errors re-estimated at the last cycle's time: the per-cycle estimates of analyze.
       Json le = Json::object();

@@ -13,6 +13,7 @@
 #include "core/transforms.hpp"
 #include "core/uncertainty_budget.hpp"
 #include "core/units.hpp"
+#include "cycles/probing.hpp"
 
 namespace rotacal {
 
@@ -215,9 +216,7 @@ ProbePlan makeSpaceframePlan(const MachineModel& machine, const CycleOptions& op
     for (const auto& p : plan.poses) has_initial = has_initial || (p.pose.A == 0.0 && p.pose.C == 0.0);
     if (!has_initial) throw std::invalid_argument("nominal_from=initial needs theta = 0 and phi = 0 in the map");
   }
-  const auto bad = strokeViolations(plan);
-  if (!bad.empty()) throw std::invalid_argument("plan does not fit the machine: " + bad.front());
-  estimateTimes(plan);
+  finishTouchPlan(plan);
   return plan;
 }
 

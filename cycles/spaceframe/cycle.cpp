@@ -6,6 +6,7 @@
 #include "cycles/cycle.hpp"
 #include "cycles/probing.hpp"
 #include "postproc/probe_program.hpp"
+#include "core/singleton.hpp"
 
 namespace rotacal {
 namespace {
@@ -63,18 +64,12 @@ class Spaceframe final : public Cycle {
     const SpaceframeDiagnosis d = diagnoseSpaceframe(plan, readProbeRuns(plan, r.results, *r.dialect), o);
     if (!d.baseline.converged)
       throw InputError(r.results.front().path, 0, "spaceframe diagnosis: a model fit did not converge");
-    CycleDocuments out;
-    out.text = spaceframeDiagnosisText(d);
-    out.doc = spaceframeDiagnosisJson(d, plan);
-    return out;
+    return documents(spaceframeDiagnosisJson(d, plan), spaceframeDiagnosisText(d));
   }
 };
 
 }  // namespace
 
-const Cycle& spaceframeCycle() {
-  static const Spaceframe cycle;
-  return cycle;
-}
+const Cycle& spaceframeCycle() { return singleton<Spaceframe>(); }
 
 }  // namespace rotacal

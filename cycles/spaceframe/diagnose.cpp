@@ -10,6 +10,7 @@
 
 #include "core/report_envelope.hpp"
 #include "core/units.hpp"
+#include "cycles/judge_contract.hpp"
 
 namespace rotacal {
 
@@ -322,8 +323,7 @@ Json fitJson(const SpaceframeFit& f) {
 Json spaceframeDiagnosisJson(const SpaceframeDiagnosis& d, const ProbePlan& plan) {
   const JudgeSummary& s = d.judged;
   Json j = judgeToJson(s);
-  j["format"] = "rotacal-diagnosis/1";
-  j["cycle"] = "spaceframe";
+  stampDiagnosis(j, "spaceframe");
   j["machine"] = plan.machine.name;
   // The contract's fields beside the judge's own.
   Json b = fitJson(d.baseline);
@@ -340,10 +340,8 @@ Json spaceframeDiagnosisJson(const SpaceframeDiagnosis& d, const ProbePlan& plan
   for (size_t k = 0; k < s.findings.size(); ++k) {
     Json& f = j["findings"][k];
     const JudgeFinding& jf = s.findings[k];
-    std::string params;
-    for (const auto& p : jf.parameters)
-      params += (params.empty() ? "" : ", ") + fmt::format("{} = {:.3g} +- {:.2g} {}", p.name, p.value, p.u, p.unit);
-    const double gain = s.baseline_holdout_rms > 0 ? 100.0 * (1.0 - jf.holdout_rms_cause / s.baseline_holdout_rms) : 0.0;
+    const std::string params = findingParametersText(jf);
+    const double gain = holdoutGainPct(s, jf);
     f["summary"] = jf.description + ": " + params;
     // Location errors with the causes: the baseline's plus the judge's linear step.
     Json le = Json::object();

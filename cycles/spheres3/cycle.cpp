@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "core/units.hpp"
+#include "core/singleton.hpp"
 
 namespace rotacal {
 namespace {
@@ -82,18 +83,12 @@ class Spheres3 final : public Cycle {
     o.judge.alpha = r.alpha;
     o.sigma_um = plan.machine.probe.repeatability_um;  // the declared noise, never the fit's own
     const Spheres3Diagnosis d = diagnoseSpheres3(plan, readProbeRuns(plan, r.results, *r.dialect), o);
-    CycleDocuments out;
-    out.text = spheres3DiagnosisText(d);
-    out.doc = spheres3DiagnosisJson(d);
-    return out;
+    return documents(spheres3DiagnosisJson(d), spheres3DiagnosisText(d));
   }
 };
 
 }  // namespace
 
-const Cycle& spheres3Cycle() {
-  static const Spheres3 cycle;
-  return cycle;
-}
+const Cycle& spheres3Cycle() { return singleton<Spheres3>(); }
 
 }  // namespace rotacal

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "core/units.hpp"
+#include "cycles/judge_contract.hpp"
 
 namespace rotacal {
 
@@ -241,8 +242,7 @@ std::string separationHint(const std::vector<std::string>& causes) {
 Json spheres3DiagnosisJson(const Spheres3Diagnosis& d) {
   const JudgeSummary& s = d.judged;
   Json j = judgeToJson(s);
-  j["format"] = "rotacal-diagnosis/1";
-  j["cycle"] = "spheres3";
+  stampDiagnosis(j, "spheres3");
   // The contract's fields (../shared/contract.md), beside the judge's own.
   Json& b = j["baseline"];
   b["model"] = "C-axis location errors Oxc Oyc Sxc Syc and the sphere positions (no error motion)";
@@ -258,10 +258,8 @@ Json spheres3DiagnosisJson(const Spheres3Diagnosis& d) {
     f["judge_cause"] = jf.cause;
     f["cause"] = cause;
     f["variant"] = variant;
-    std::string params;
-    for (const auto& p : jf.parameters)
-      params += (params.empty() ? "" : ", ") + fmt::format("{} = {:.3g} +- {:.2g} {}", p.name, p.value, p.u, p.unit);
-    const double gain = s.baseline_holdout_rms > 0 ? 100.0 * (1.0 - jf.holdout_rms_cause / s.baseline_holdout_rms) : 0.0;
+    const std::string params = findingParametersText(jf);
+    const double gain = holdoutGainPct(s, jf);
     f["summary"] = fmt::format("{}: {}; held-out residual {:.3f} -> {:.3f} um ({:+.0f} %)", jf.description, params,
                                s.baseline_holdout_rms, jf.holdout_rms_cause, -gain);
     // Re-estimated with every accepted cause in (one Gauss-Newton step from the baseline).

@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "core/units.hpp"
+#include "cycles/probing.hpp"
 
 namespace rotacal {
 
@@ -167,9 +168,7 @@ ProbePlan makeSpheres3Plan(const MachineModel& machine, const CycleOptions& opti
       }
     }
   }
-  const auto bad = strokeViolations(plan);
-  if (!bad.empty()) throw std::invalid_argument("plan does not fit the machine: " + bad.front());
-  estimateTimes(plan);
+  finishTouchPlan(plan);
   return plan;
 }
 

@@ -11,6 +11,7 @@
 #include "cycles/tooltip/diagnose.hpp"
 #include "cycles/cycle.hpp"
 #include "cycles/tooltip/program.hpp"
+#include "core/singleton.hpp"
 
 namespace rotacal {
 namespace {
@@ -114,18 +115,12 @@ class Tooltip final : public Cycle {
     o.judge.alpha = r.alpha;  // the declared noise: the plan's laser_noise_um
     o.validate();
     const TooltipDiagnosis d = diagnoseTooltip({{&plan, runs}}, o);
-    CycleDocuments out;
-    out.text = tooltipDiagnosisText(d);
-    out.doc = tooltipDiagnosisJson(d);
-    return out;
+    return documents(tooltipDiagnosisJson(d), tooltipDiagnosisText(d));
   }
 };
 
 }  // namespace
 
-const Cycle& tooltipCycle() {
-  static const Tooltip cycle;
-  return cycle;
-}
+const Cycle& tooltipCycle() { return singleton<Tooltip>(); }
 
 }  // namespace rotacal

@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "core/units.hpp"
+#include "cycles/judge_contract.hpp"
 
 namespace rotacal {
 
@@ -217,43 +218,24 @@ std::string separateWith(const JudgeConfounded& c) {
   return "a plan on which their columns differ (other angles, a second tool length, repeats)";
 }
 
-Json paramsJson(const std::vector<JudgeEstimate>& ps) {
-  Json j = Json::object();
-  for (const auto& p : ps) j[p.name] = {{"value", p.value}, {"unit", p.unit}, {"u", p.identifiable ? Json(p.u) : Json(nullptr)}};
-  return j;
-}
 
 }  // namespace
 
 Json tooltipDiagnosisJson(const TooltipDiagnosis& d) {
   const JudgeSummary& s = d.summary;
   Json j;
-  j["format"] = "rotacal-diagnosis/1";
-  j["cycle"] = "tooltip";
+  stampDiagnosis(j, "tooltip");
   j["radius_mm"] = d.radius_mm;
   j["repeats"] = d.runs;
   j["declared_sigma_um"] = s.declared_sigma_rms;
-  j["baseline"] = {{"model", "angular (004: one angular error per angle, pivot length as programmed)"},
-                   {"residual_rms_um", s.baseline.rms_residual},
-                   {"holdout_rms_um", s.baseline_holdout_rms},
-                   {"holdout", fmt::format("leave one {} out", s.group_name)},
-                   {"chi2", s.baseline.chi2},
-                   {"dof", s.baseline.dof},
-                   {"p_value", s.baseline.p_value},
-                   {"within_declared_noise", s.baseline.passes}};
-  j["verdict"] = judgeVerdictName(s.verdict);
-  j["message"] = s.message;
-  j["explains_data"] = s.explainsData();
+  j["baseline"] = contractBaselineJson(s, "angular (004: one angular error per angle, pivot length as programmed)");
+  j["baseline"]["holdout"] = fmt::format("leave one {} out", s.group_name);
+  verdictJson(j, s);
   Json findings = Json::array();
   for (const auto& f : s.findings) {
-    Json e = {{"cause", f.cause},
-              {"summary", findingSummary(f)},
-              {"parameters", paramsJson(f.parameters)},
-              {"residual_rms_um", s.final_model.rms_residual},
-              {"holdout_rms_um", f.holdout_rms_cause},
-              {"gain_pct", f.holdout_rms_model > 0 ? 100.0 * (1.0 - f.holdout_rms_cause / f.holdout_rms_model) : 0.0},
-              {"separability", f.separability},
-              {"confidence", f.confidence}};
+    Json e = contractFindingJson(s, f);
+    e["cause"] = f.cause;
+    e["summary"] = findingSummary(f);
     if (f.cause == kPivot)
       e["location_errors"] = {{"dR", {{"value", f.parameters[0].value}, {"unit", "um"}, {"u", f.parameters[0].u}}}};
     findings.push_back(e);

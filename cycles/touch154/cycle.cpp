@@ -18,6 +18,7 @@
 #include "cycles/cycle.hpp"
 #include "cycles/probing.hpp"
 #include "postproc/probe_program.hpp"
+#include "core/singleton.hpp"
 
 namespace rotacal {
 namespace {
@@ -164,9 +165,6 @@ class Touch154 final : public Cycle {
 
 }  // namespace
 
-const Cycle& touch154Cycle() {
-  static const Touch154 cycle;
-  return cycle;
-}
+const Cycle& touch154Cycle() { return singleton<Touch154>(); }
 
 }  // namespace rotacal

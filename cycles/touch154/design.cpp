@@ -15,6 +15,7 @@
 #include "cycles/touch154/closed_form_map.hpp"
 #include "cycles/touch154/uncertainty.hpp"
 #include "core/units.hpp"
+#include "cycles/touch154/targets.hpp"
 
 namespace rotacal {
 
@@ -38,35 +39,17 @@ bool DesignOptions::validate(std::string* why) const {
 
 namespace {
 
-struct Target {
-  int k;
-  Face face;
-  Eigen::Vector3d contact_w;
-};
+using touch154::Target;
 
 std::vector<Target> designTargets(const SquareColumn& col, const DesignOptions& o) {
-  std::vector<Target> t;
-  const Eigen::Vector3d c = col.top_centre_w;
-  const double hx = col.size_mm.x() / 2, hy = col.size_mm.y() / 2;
-  int k = 1;
-  auto inside = [](double off, double half, const char* what) {
-    if (std::abs(off) >= half) throw std::invalid_argument(fmt::format("{} offset {:g} mm lies off the face", what, off));
-  };
+  touch154::Targets t(col);
   for (double d : o.side_depths_mm) {
     if (d >= col.size_mm.z()) throw std::invalid_argument(fmt::format("side depth {:g} mm lies below the piece", d));
-    const double z = c.z() - d;
-    for (double off : o.side_offsets_mm) { inside(off, hy, "side"); t.push_back({k++, Face::PosX, {c.x() + hx, c.y() + off, z}}); }
-    for (double off : o.side_offsets_mm) { inside(off, hx, "side"); t.push_back({k++, Face::PosY, {c.x() - off, c.y() + hy, z}}); }
-    for (double off : o.side_offsets_mm) { inside(off, hy, "side"); t.push_back({k++, Face::NegX, {c.x() - hx, c.y() - off, z}}); }
-    for (double off : o.side_offsets_mm) { inside(off, hx, "side"); t.push_back({k++, Face::NegY, {c.x() + off, c.y() - hy, z}}); }
+    t.addSides(d, o.side_offsets_mm);
   }
   for (double oy : o.top_offsets_mm)
-    for (double ox : o.top_offsets_mm) {
-      inside(ox, hx, "top");
-      inside(oy, hy, "top");
-      t.push_back({k++, Face::Top, {c.x() + ox, c.y() + oy, c.z()}});
-    }
-  return t;
+    for (double ox : o.top_offsets_mm) t.addTop(ox, oy);
+  return t.list;
 }
 
 std::string poseName(const Pose& p) { return fmt::format("A{:g}_C{:g}", p.A, p.C); }
@@ -97,18 +80,7 @@ ProbePlan assemble(const MachineModel& machine, const std::vector<Pose>& poses,
   for (const auto& [pi, t] : touches) {
     const Pose& pose = poses[static_cast<size_t>(pi)];
     const Eigen::Isometry3d T = T_m_w_nominal(machine.kinematics, pose);
-    const Eigen::Vector3d n_w = faceNormal_w(t.face);
-    ProbePoint p;
-    p.id = id++;
-    p.pose_name = poseName(pose);
-    p.pose = pose;
-    p.target = t.k;
-    p.face = t.face;
-    p.contact_w_mm = t.contact_w;
-    p.normal_w = n_w;
-    p.trigger_m_mm = T * (t.contact_w + r * n_w);
-    p.approach_m = -(T.linear() * n_w);
-    plan.points.push_back(p);
+    plan.points.push_back(touch154::touchPoint(id++, poseName(pose), pose, T, t, r));
   }
   return plan;
 }

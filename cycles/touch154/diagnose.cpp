@@ -10,6 +10,7 @@
 
 #include "core/report_envelope.hpp"
 #include "core/units.hpp"
+#include "cycles/judge_contract.hpp"
 #include "cycles/touch154/causes.hpp"
 
 namespace rotacal {
@@ -122,8 +123,7 @@ Touch154Diagnosis diagnoseTouch154(const ProbePlan& plan, const std::vector<Meas
 Json touch154DiagnosisJson(const Touch154Diagnosis& d, const ProbePlan& plan) {
   const JudgeSummary& s = d.judged;
   Json j = judgeToJson(s);
-  j["format"] = "rotacal-diagnosis/1";
-  j["cycle"] = plan.cycle;
+  stampDiagnosis(j, plan.cycle);
   // The contract's fields (docs/../contract.md), beside the judge's own.
   Json& b = j["baseline"];
   b["model"] = "location errors + one surface offset per target point (lsq_per_point)";
@@ -138,10 +138,8 @@ Json touch154DiagnosisJson(const Touch154Diagnosis& d, const ProbePlan& plan) {
     const JudgeFinding& jf = s.findings[k];
     f["cause"] = tf.extension->cause();
     f["variant"] = tf.extension->variant();
-    std::string params;
-    for (const auto& p : jf.parameters)
-      params += (params.empty() ? "" : ", ") + fmt::format("{} = {:.3g} +- {:.2g} {}", p.name, p.value, p.u, p.unit);
-    const double gain = s.baseline_holdout_rms > 0 ? 100.0 * (1.0 - jf.holdout_rms_cause / s.baseline_holdout_rms) : 0.0;
+    const std::string params = findingParametersText(jf);
+    const double gain = holdoutGainPct(s, jf);
     f["summary"] = fmt::format("{}: {}; held-out residual {:.3f} -> {:.3f} um ({:+.0f} %)", tf.extension->describe(), params,
                                s.baseline_holdout_rms, jf.holdout_rms_cause, -gain);
     f["location_errors"] = locationErrorsJson(tf.fit.estimate, tf.fit.u);

@@ -6,6 +6,8 @@
 #include <fmt/format.h>
 
 #include "core/units.hpp"
+#include "cycles/probing.hpp"
+#include "cycles/touch154/targets.hpp"
 
 namespace rotacal {
 
@@ -43,26 +45,13 @@ CycleOptions Touch154Layout::toOptions() const {
 
 namespace {
 
-struct Target {
-  int k;
-  Face face;
-  Eigen::Vector3d contact_w;
-};
+using touch154::Target;
 
 std::vector<Target> targets(const SquareColumn& col, const Touch154Layout& l) {
-  std::vector<Target> t;
-  const Eigen::Vector3d c = col.top_centre_w;
+  touch154::Targets t(col);
+  t.addSides(l.side_depth_mm, l.side_offsets_mm);
   const double hx = col.size_mm.x() / 2, hy = col.size_mm.y() / 2;
-  const double z = c.z() - l.side_depth_mm;
-  int k = 1;
-  auto check_in = [&](double off, double half, const char* what) {
-    if (std::abs(off) >= half) throw std::invalid_argument(fmt::format("{} offset {:g} mm lies off the face", what, off));
-  };
-  // Going round the column counter-clockwise seen from above: +X, +Y, -X, -Y.
-  for (double o : l.side_offsets_mm) { check_in(o, hy, "side"); t.push_back({k++, Face::PosX, {c.x() + hx, c.y() + o, z}}); }
-  for (double o : l.side_offsets_mm) { check_in(o, hx, "side"); t.push_back({k++, Face::PosY, {c.x() - o, c.y() + hy, z}}); }
-  for (double o : l.side_offsets_mm) { check_in(o, hy, "side"); t.push_back({k++, Face::NegX, {c.x() - hx, c.y() - o, z}}); }
-  for (double o : l.side_offsets_mm) { check_in(o, hx, "side"); t.push_back({k++, Face::NegY, {c.x() + o, c.y() - hy, z}}); }
+  auto check_in = touch154::requireOnFace;
   const auto& g = l.top_offsets_mm;
   const double inner = g.size() >= 4 ? std::min(std::abs(g[g.size() / 2 - 1]), std::abs(g[g.size() / 2])) : 0.0;
   for (size_t row = 0; row < g.size(); ++row) {
@@ -72,13 +61,54 @@ std::vector<Target> targets(const SquareColumn& col, const Touch154Layout& l) {
       const double ox = g[col_i], oy = g[row];
       check_in(ox, hx, "top");
       if (l.top_ring && std::abs(ox) <= inner + 1e-9 && std::abs(oy) <= inner + 1e-9) continue;
-      t.push_back({k++, Face::Top, {c.x() + ox, c.y() + oy, c.z()}});
+      t.addTop(ox, oy);
     }
   }
-  return t;
+  return t.list;
 }
 
 }  // namespace
+
+namespace touch154 {
+
+void requireOnFace(double off, double half, const char* what) {
+  if (std::abs(off) >= half) throw std::invalid_argument(fmt::format("{} offset {:g} mm lies off the face", what, off));
+}
+
+void Targets::addSides(double depth, const std::vector<double>& offsets) {
+  const Eigen::Vector3d c = col_.top_centre_w;
+  const double hx = col_.size_mm.x() / 2, hy = col_.size_mm.y() / 2;
+  const double z = c.z() - depth;
+  for (double o : offsets) { requireOnFace(o, hy, "side"); list.push_back({k_++, Face::PosX, {c.x() + hx, c.y() + o, z}}); }
+  for (double o : offsets) { requireOnFace(o, hx, "side"); list.push_back({k_++, Face::PosY, {c.x() - o, c.y() + hy, z}}); }
+  for (double o : offsets) { requireOnFace(o, hy, "side"); list.push_back({k_++, Face::NegX, {c.x() - hx, c.y() - o, z}}); }
+  for (double o : offsets) { requireOnFace(o, hx, "side"); list.push_back({k_++, Face::NegY, {c.x() + o, c.y() - hy, z}}); }
+}
+
+ProbePoint touchPoint(int id, const std::string& pose_name, const Pose& pose, const Eigen::Isometry3d& T,
+                      const Target& t, double r) {
+  const Eigen::Vector3d n_w = faceNormal_w(t.face);
+  ProbePoint p;
+  p.id = id;
+  p.pose_name = pose_name;
+  p.pose = pose;
+  p.target = t.k;
+  p.face = t.face;
+  p.contact_w_mm = t.contact_w;
+  p.normal_w = n_w;
+  p.trigger_m_mm = T * (t.contact_w + r * n_w);
+  p.approach_m = -(T.linear() * n_w);
+  return p;
+}
+
+void Targets::addTop(double ox, double oy) {
+  requireOnFace(ox, col_.size_mm.x() / 2, "top");
+  requireOnFace(oy, col_.size_mm.y() / 2, "top");
+  const Eigen::Vector3d& c = col_.top_centre_w;
+  list.push_back({k_++, Face::Top, {c.x() + ox, c.y() + oy, c.z()}});
+}
+
+}  // namespace touch154
 
 ProbePlan makeTouch154Plan(const MachineModel& machine, const CycleOptions& options) {
   if (machine.kinematics != Kinematics::TableAC)
@@ -116,22 +146,10 @@ ProbePlan makeTouch154Plan(const MachineModel& machine, const CycleOptions& opti
       const bool from_above = n_m.z() > 0.95;
       const double depth = top_z - contact_m.z();
       if (!from_above && depth > machine.probe.stylus_length_mm - machine.probe.body_clearance_mm) continue;
-      ProbePoint p;
-      p.id = id++;
-      p.pose_name = name;
-      p.pose = pose;
-      p.target = t.k;
-      p.face = t.face;
-      p.contact_w_mm = t.contact_w;
-      p.normal_w = n_w;
-      p.trigger_m_mm = T * (t.contact_w + r * n_w);
-      p.approach_m = -n_m;
-      plan.points.push_back(p);
+      plan.points.push_back(touch154::touchPoint(id++, name, pose, T, t, r));
     }
   }
-  const auto bad = strokeViolations(plan);
-  if (!bad.empty()) throw std::invalid_argument("plan does not fit the machine: " + bad.front());
-  estimateTimes(plan);
+  finishTouchPlan(plan);
   return plan;
 }
 

@@ -20,27 +20,15 @@
 #include "cli_run.hpp"
 #include "test_util.hpp"
 
-namespace rotacal {
+namespace rotacal::test {
 namespace {
 
-namespace fs = std::filesystem;
-
 using Run = test::CliRun;
-using test::sh;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-class Cli : public ::testing::Test {
+class Cli : public ScratchTest {
  protected:
   void SetUp() override {
-    dir = fs::path(ROTACAL_BINARY_DIR) / "test_tmp" / ::testing::UnitTest::GetInstance()->current_test_info()->name();
-    fs::remove_all(dir);
-    fs::create_directories(dir);
+    ScratchTest::SetUp();
     machine = test::sourcePath("examples/machines/ac_trunnion.json");
     truth = (dir / "truth.json").string();
     // The Table 4 mean errors and nothing else (no setup or form error, no noise).
@@ -50,7 +38,6 @@ class Cli : public ::testing::Test {
       "a_AY": {"value": -0.5, "unit": "mdeg"}, "b_AY": {"value": -0.1, "unit": "mdeg"},
       "c_AY": {"value": -0.5, "unit": "mdeg"}, "b_CA": {"value": 0.2, "unit": "mdeg"}}})";
   }
-  std::string p(const std::string& name) const { return (dir / name).string(); }
 
   nlohmann::json analyzeThrough(const std::string& dialect, const std::string& method, const std::string& ext) {
     const auto plan = sh("plan --cycle touch154 --machine " + machine + " -o " + p("plan.json"));
@@ -74,7 +61,6 @@ class Cli : public ::testing::Test {
     }
   }
 
-  fs::path dir;
   std::string machine, truth;
 };
 
@@ -120,9 +106,7 @@ TEST_F(Cli, GeneratesBothProgramsFromTheBundledPlan) {
 TEST_F(Cli, BadInputNamesFileAndLineAndExits1) {
   std::ofstream(p("bad.json")) << "{\n  \"format\": \"rotacal-machine/1\",\n  \"name\": 12,\n}\n";
   const auto r = sh("plan --cycle touch154 --machine " + p("bad.json") + " -o " + p("plan.json"));
-  EXPECT_EQ(r.code, 1);
-  EXPECT_NE(r.out.find("rotacal: error: " + p("bad.json") + ":"), std::string::npos) << r.out;
-  EXPECT_FALSE(fs::exists(p("plan.json"))) << "nothing half-written";
+  EXPECT_TRUE(refused(r, 1, "rotacal: error: " + p("bad.json") + ":", p("plan.json"))) << "nothing half-written";
   const auto missing = sh("plan --cycle touch154 --machine " + p("nope.json") + " -o " + p("plan.json"));
   EXPECT_EQ(missing.code, 1) << missing.out;
 }
@@ -165,9 +149,9 @@ TEST_F(Cli, RepeatsAreAnalyzedPerRunAndTogether) {
 }
 
 }  // namespace
-}  // namespace rotacal
+}  // namespace rotacal::test
 
-namespace rotacal {
+namespace rotacal::test {
 namespace {
 
 // compensate: the contract's command on the bundled example. The rewritten program's numbers are
@@ -215,15 +199,13 @@ TEST_F(Cli, CompensateRewritesTheProgramForTheReportsErrors) {
   std::ofstream(p("bad.json")) << R"({"format": "rotacal-report/1", "machine_model": {}})";
   const auto bad = sh("compensate --program " + p("t.nc") + " --report " + p("bad.json") + " --dialect fanuc -o " +
                       p("x.nc"));
-  EXPECT_EQ(bad.code, 1);
-  EXPECT_NE(bad.out.find("bad.json"), std::string::npos) << bad.out;
-  EXPECT_FALSE(fs::exists(p("x.nc")));
+  EXPECT_TRUE(refused(bad, 1, "bad.json", p("x.nc")));
 }
 
 }  // namespace
-}  // namespace rotacal
+}  // namespace rotacal::test
 
-namespace rotacal {
+namespace rotacal::test {
 namespace {
 
 int lineOf(const std::string& text, const std::string& what) {
@@ -308,4 +290,4 @@ TEST_F(Cli, CompensateRefusesUnsafeInputAndWritesNothing) {
 }
 
 }  // namespace
-}  // namespace rotacal
+}  // namespace rotacal::test

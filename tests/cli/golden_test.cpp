@@ -33,31 +33,15 @@ namespace {
 namespace fs = std::filesystem;
 using test::slurp;
 
-struct ShellRun {
-  int code;
-  std::string out;
-};
-
-ShellRun sh(const std::string& cmd) {
-  FILE* p = popen((cmd + " 2>&1").c_str(), "r");
-  std::string out;
-  std::array<char, 4096> buf{};
-  while (p && fgets(buf.data(), buf.size(), p)) out += buf.data();
-  const int status = p ? pclose(p) : -1;
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
+/// A whole command line (golden.sh, diff), stdout and stderr together.
+using ShellRun = test::CliRun;
+ShellRun sh(const std::string& cmd) { return test::runCommand(cmd + " 2>&1"); }
 
 
 const std::vector<std::string> kDialects = {"csv", "linuxcnc", "fanuc", "haas", "siemens", "heidenhain", "okuma"};
 
 std::string resultsName(const std::string& d) { return d == "csv" ? "results.csv" : "results.txt"; }
 
-fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::path(ROTACAL_BINARY_DIR) / "test_tmp" / name;
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
 
 /// Relative paths of the regular files under `dir`.
 std::set<std::string> filesUnder(const fs::path& dir) {
@@ -69,7 +53,7 @@ std::set<std::string> filesUnder(const fs::path& dir) {
 
 TEST(Golden, RegeneratedExamplesEqualTheCommittedOnesByteForByte) {
   const fs::path committed = test::sourcePath("examples/programs");
-  const fs::path out = scratch("golden") / "programs";
+  const fs::path out = test::freshDir("golden") / "programs";
   const ShellRun r = sh("bash " + test::sourcePath("scripts/golden.sh") + " " + ROTACAL_CLI + " " + out.string());
   ASSERT_EQ(r.code, 0) << r.out;
   const auto generated = filesUnder(out);
@@ -119,7 +103,7 @@ TEST(Golden, EverySampleIdentifiesAsTheCsvSampleAndTheTruth) {
 }
 
 TEST(CliMalformed, AnalyzeExitsOneNamesFileAndLineAndWritesNothing) {
-  const fs::path dir = scratch("cli_malformed");
+  const fs::path dir = test::freshDir("cli_malformed");
   for (const auto& d : kDialects) {
     const std::string good = slurp(test::sourcePath("examples/programs/" + d + "/" + resultsName(d)));
     // Three kinds per dialect: a line cut off (file ends inside point 100's line), a NUL byte in
@@ -185,7 +169,7 @@ TEST(CliInch, EveryDialectRoundTripsOnAnInchCopyOfTheMachine) {
   // The bundled A/C machine declared inch: every program is written in inch (G20 / G70;
   // Heidenhain stays MM, see docs/dialects.md), every results file in the dialect's inch form,
   // and analysis through each dialect gives the csv path's errors.
-  const fs::path dir = scratch("cli_inch");
+  const fs::path dir = test::freshDir("cli_inch");
   std::string machine = slurp(test::sourcePath("examples/machines/ac_trunnion.json"));
   const size_t at = machine.find("\"units\": \"mm\"");
   ASSERT_NE(at, std::string::npos);

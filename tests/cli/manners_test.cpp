@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cli_run.hpp"
 #include "test_util.hpp"
 
 namespace rotacal {
@@ -17,18 +18,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Out {
-  int code;
-  std::string text;
-};
-Out run(const std::string& cmd) {
-  FILE* p = popen(cmd.c_str(), "r");
-  std::string out;
-  std::array<char, 4096> buf{};
-  while (p && fgets(buf.data(), buf.size(), p)) out += buf.data();
-  const int status = p ? pclose(p) : -1;
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
+// stdout alone: what goes where is the subject here.
+using Out = test::CliRun;
+using test::runCommand;
 
 class Manners : public ::testing::Test {
  protected:
@@ -37,10 +29,10 @@ class Manners : public ::testing::Test {
     fs::create_directories(dir);
     cli = ROTACAL_CLI;
     plan = (dir / "plan.json").string();
-    ASSERT_EQ(run(cli + " -q plan --cycle touch154 --machine " + test::sourcePath("examples/machines/ac_trunnion.json") +
+    ASSERT_EQ(runCommand(cli + " -q plan --cycle touch154 --machine " + test::sourcePath("examples/machines/ac_trunnion.json") +
                   " -o " + plan).code, 0);
     results = (dir / "r.csv").string();
-    ASSERT_EQ(run(cli + " -q simulate --plan " + plan + " --truth " + test::sourcePath("examples/truth/table4_mean.json") +
+    ASSERT_EQ(runCommand(cli + " -q simulate --plan " + plan + " --truth " + test::sourcePath("examples/truth/table4_mean.json") +
                   " --noise-um 0.7 --dialect csv -o " + results).code, 0);
   }
   std::string uncertainty(const std::string& extra) const {
@@ -53,35 +45,35 @@ class Manners : public ::testing::Test {
 };
 
 TEST_F(Manners, ProgressOnlyOnATerminalAndNotWhenQuiet) {
-  const Out tty = run("script -qec \"" + uncertainty("") + "\" /dev/null");
-  ASSERT_EQ(tty.code, 0) << tty.text;
-  EXPECT_NE(tty.text.find("400/400 runs"), std::string::npos) << tty.text;
-  const Out quiet_tty = run("script -qec \"" + uncertainty(" -q") + "\" /dev/null");
+  const Out tty = runCommand("script -qec \"" + uncertainty("") + "\" /dev/null");
+  ASSERT_EQ(tty.code, 0) << tty.out;
+  EXPECT_NE(tty.out.find("400/400 runs"), std::string::npos) << tty.out;
+  const Out quiet_tty = runCommand("script -qec \"" + uncertainty(" -q") + "\" /dev/null");
   ASSERT_EQ(quiet_tty.code, 0);
-  EXPECT_EQ(quiet_tty.text, "");
-  const Out piped = run(uncertainty("") + " 2>&1 >/dev/null");  // stderr only, not a terminal
+  EXPECT_EQ(quiet_tty.out, "");
+  const Out piped = runCommand(uncertainty("") + " 2>&1 >/dev/null");  // stderr only, not a terminal
   ASSERT_EQ(piped.code, 0);
-  EXPECT_EQ(piped.text, "");
+  EXPECT_EQ(piped.out, "");
 }
 
 TEST_F(Manners, JsonDashIsTheDocumentAloneOnStdout) {
-  const Out a = run(cli + " analyze --plan " + plan + " --results " + results + " --dialect csv --json - --html " +
+  const Out a = runCommand(cli + " analyze --plan " + plan + " --results " + results + " --dialect csv --json - --html " +
                     (dir / "a.html").string());
   ASSERT_EQ(a.code, 0);
-  const auto j = nlohmann::json::parse(a.text);  // throws if the summary leaked into stdout
+  const auto j = nlohmann::json::parse(a.out);  // throws if the summary leaked into stdout
   EXPECT_EQ(j["format"], "rotacal-report/1");
   EXPECT_EQ(j["points"].size(), 154u);
   EXPECT_TRUE(fs::exists(dir / "a.html"));
-  const Out u = run(cli + " uncertainty --plan " + plan + " --contributors " +
+  const Out u = runCommand(cli + " uncertainty --plan " + plan + " --contributors " +
                     test::sourcePath("examples/contributors/table5.json") + " --runs 50 --combined-only --json -");
   ASSERT_EQ(u.code, 0);
-  EXPECT_EQ(nlohmann::json::parse(u.text)["format"], "rotacal-uncertainty/1");
+  EXPECT_EQ(nlohmann::json::parse(u.out)["format"], "rotacal-uncertainty/1");
 }
 
 TEST_F(Manners, Version) {
-  const Out v = run(cli + " --version");
+  const Out v = runCommand(cli + " --version");
   EXPECT_EQ(v.code, 0);
-  EXPECT_EQ(v.text.rfind("rotacal ", 0), 0u) << v.text;
+  EXPECT_EQ(v.out.rfind("rotacal ", 0), 0u) << v.out;
 }
 
 }  // namespace

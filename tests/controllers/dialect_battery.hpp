@@ -9,6 +9,9 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <functional>
+#include <regex>
+#include <stdexcept>
 #include <string>
 
 #include "controllers/dialects.hpp"
@@ -121,5 +124,34 @@ inline bool hasProblem(const std::vector<std::string>& ps, const std::string& wh
     if (p.find(what) != std::string::npos) return true;
   return false;
 }
+
+/// A dialect's touch154 program (the A/C plan) as lines, `g` the first line that matches
+/// `probing_move` (a regex), and what the dialect's checker finds once `edit` has planted a fault
+/// in a copy.
+class PlantedFaults : public ::testing::Test {
+ protected:
+  PlantedFaults(const std::string& dialect, const std::string& probing_move)
+      : dialect_(dialect),
+        ls(lines(dialectByName(dialect).writeProgram(cycleProgram(plan, dialect)))),
+        g(firstMatch(ls, std::regex(probing_move))) {}
+  std::vector<std::string> with(const std::function<void(std::vector<std::string>&)>& edit) const {
+    auto v = ls;
+    edit(v);
+    return dialectByName(dialect_).check(join(v), plan, shapeOf(plan, dialect_));
+  }
+  static size_t firstMatch(const std::vector<std::string>& ls, const std::regex& re) {
+    for (size_t i = 0; i < ls.size(); ++i)
+      if (std::regex_search(ls[i], re)) return i;
+    throw std::runtime_error("no line of the program matches");
+  }
+
+ private:
+  std::string dialect_;
+
+ protected:
+  ProbePlan plan = acPlan();
+  std::vector<std::string> ls;
+  size_t g;
+};
 
 }  // namespace rotacal::test

@@ -13,6 +13,7 @@
 #include "core/errors.hpp"
 #include "core/units.hpp"
 #include "ctl_test_util.hpp"
+#include "dialect_battery.hpp"
 #include "postproc/probe_program.hpp"
 
 namespace rotacal {
@@ -222,57 +223,45 @@ TEST(FanucProgram, PoseWithMoreThanSeventyPointsIsRefused) {
   EXPECT_NO_THROW(fc().writeProgram(p));
 }
 
-class FanucCheck : public ::testing::Test {
+class FanucCheck : public test::PlantedFaults {
  protected:
-  ProbePlan plan = test::acPlan();
-  std::vector<std::string> ls = lines(fc().writeProgram(test::cycleProgram(plan, "fanuc")));
-  size_t g = test::lineStarting(ls, "G31");
-  std::vector<std::string> problemsWith(const std::function<void(std::vector<std::string>&)>& edit) {
-    auto v = ls;
-    edit(v);
-    return fc().check(test::join(v), plan, test::shapeOf(plan, "fanuc"));
-  }
-  static bool has(const std::vector<std::string>& ps, const std::string& what) {
-    for (const auto& p : ps)
-      if (p.find(what) != std::string::npos) return true;
-    return false;
-  }
+  FanucCheck() : PlantedFaults("fanuc", "^G31") {}
 };
 
 TEST_F(FanucCheck, CatchesAMissingDecimalPoint) {
-  const auto ps = problemsWith([&](auto& v) { v[g] = "G31 X51 Y-235.0000 Z150.0000 F100.0"; });
+  const auto ps = with([&](auto& v) { v[g] = "G31 X51 Y-235.0000 Z150.0000 F100.0"; });
   ASSERT_EQ(ps.size(), 1u);
   EXPECT_EQ(ps[0], fmt::format("{}: X51 has no decimal point (read in least input increments)", g + 1));
-  EXPECT_TRUE(has(problemsWith([&](auto& v) { v[g] = "G31 X51.0000 Y-235.0000 Z150.0000 F100"; }), "F100 has no"));
+  EXPECT_TRUE(test::hasProblem(with([&](auto& v) { v[g] = "G31 X51.0000 Y-235.0000 Z150.0000 F100"; }), "F100 has no"));
 }
 
 TEST_F(FanucCheck, CatchesARemovedNoTriggerAlarm) {
-  const auto ps = problemsWith([&](auto& v) { v.erase(v.begin() + static_cast<long>(g) + 5); });
+  const auto ps = with([&](auto& v) { v.erase(v.begin() + static_cast<long>(g) + 5); });
   ASSERT_EQ(ps.size(), 1u);
   EXPECT_EQ(ps[0].rfind(fmt::format("{}: G31 is not followed by the no-trigger check", g + 1), 0), 0u) << ps[0];
 }
 
 TEST_F(FanucCheck, CatchesAPointOutsideTheStrokes) {
-  const auto ps = problemsWith([&](auto& v) { v[g] = "G31 X51.0000 Y-335.0000 Z150.0000 F100.0"; });
+  const auto ps = with([&](auto& v) { v[g] = "G31 X51.0000 Y-335.0000 Z150.0000 F100.0"; });
   ASSERT_EQ(ps.size(), 1u);
   EXPECT_NE(ps[0].find("Y = -335.0000 mm is outside the stroke"), std::string::npos) << ps[0];
 }
 
 TEST_F(FanucCheck, CatchesConstructsThatAreNotMacroB) {
-  EXPECT_TRUE(has(problemsWith([&](auto& v) { v[g + 1] = "o1001 if [#5070 NE 1]"; }), "o-word"));
-  EXPECT_TRUE(has(problemsWith([&](auto& v) { v[g + 1] = "#<dx>=#5061-51.0000"; }), "named parameters"));
-  EXPECT_TRUE(has(problemsWith([&](auto& v) { v[g] = "g31 X51.0000 Y-235.0000 Z150.0000 F100.0"; }), "lower-case"));
-  EXPECT_TRUE(has(problemsWith([&](auto& v) { v[3] = "(probe)"; }), "lower-case letters in a comment"));
-  EXPECT_TRUE(has(problemsWith([&](auto& v) { v[3] = "(" + std::string(90, 'X') + ")"; }), "more than 80"));
-  EXPECT_TRUE(has(problemsWith([&](auto& v) { v[test::lineStarting(v, "DPRNT[ROTACAL")] = "DPRNT[A=B]"; }),
+  EXPECT_TRUE(test::hasProblem(with([&](auto& v) { v[g + 1] = "o1001 if [#5070 NE 1]"; }), "o-word"));
+  EXPECT_TRUE(test::hasProblem(with([&](auto& v) { v[g + 1] = "#<dx>=#5061-51.0000"; }), "named parameters"));
+  EXPECT_TRUE(test::hasProblem(with([&](auto& v) { v[g] = "g31 X51.0000 Y-235.0000 Z150.0000 F100.0"; }), "lower-case"));
+  EXPECT_TRUE(test::hasProblem(with([&](auto& v) { v[3] = "(probe)"; }), "lower-case letters in a comment"));
+  EXPECT_TRUE(test::hasProblem(with([&](auto& v) { v[3] = "(" + std::string(90, 'X') + ")"; }), "more than 80"));
+  EXPECT_TRUE(test::hasProblem(with([&](auto& v) { v[test::lineStarting(v, "DPRNT[ROTACAL")] = "DPRNT[A=B]"; }),
                   "DPRNT text has '='"));
-  EXPECT_TRUE(has(problemsWith([&](auto& v) { v[g + 4] = "IF[[#1*#1+#2*#2+#3*#3]GT0.0001]GOTO1001]"; }),
+  EXPECT_TRUE(test::hasProblem(with([&](auto& v) { v[g + 4] = "IF[[#1*#1+#2*#2+#3*#3]GT0.0001]GOTO1001]"; }),
                   "unbalanced brackets"));
 }
 
 TEST_F(FanucCheck, CatchesAMissingEnd) {
-  EXPECT_TRUE(has(problemsWith([&](auto& v) { v.erase(v.end() - 2); }), "does not end with M30"));
-  EXPECT_TRUE(has(problemsWith([&](auto& v) { v.pop_back(); }), "does not end with '%'"));
+  EXPECT_TRUE(test::hasProblem(with([&](auto& v) { v.erase(v.end() - 2); }), "does not end with M30"));
+  EXPECT_TRUE(test::hasProblem(with([&](auto& v) { v.pop_back(); }), "does not end with '%'"));
 }
 
 TEST(FanucOffsets, IncrementalG54ShiftWithTheFanucSign) {

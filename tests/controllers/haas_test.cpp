@@ -15,11 +15,6 @@ using test::lines;
 
 const Dialect& hs() { return dialectByName("haas"); }
 
-TEST(HaasResults, RoundTripWithinThePrintedDigitsAndTheMsTimer) {
-  test::expectRoundTrip(hs(), test::acPlan(), 1.0, 4, test::Clock::Milliseconds);
-  test::expectRoundTrip(hs(), test::acPlan(LengthUnit::Inch), 25.4, 5, test::Clock::Milliseconds);
-}
-
 TEST(HaasResults, HeaderClockAndPointLines) {
   const ProbePlan plan = test::acPlan();
   MeasurementRun run = test::displacedRun(plan);
@@ -36,7 +31,6 @@ TEST(HaasResults, HeaderClockAndPointLines) {
   EXPECT_EQ(ls.back(), "END");
 }
 
-TEST(HaasResults, RecoversInjectedErrors) { test::expectRecovery(hs(), test::acPlan()); }
 
 TEST(HaasResults, RejectsWithTheLine) {
   const ProbePlan plan = test::acPlan();
@@ -68,18 +62,10 @@ TEST(HaasProgram, HaasFrameAndStorage) {
   EXPECT_EQ(text.find("#10980"), std::string::npos) << "retained globals end at #10999";
 }
 
-TEST(HaasProgram, GeneratedProgramsPassTheChecker) { test::expectCleanPrograms(hs()); }
 
-class HaasCheck : public ::testing::Test {
+class HaasCheck : public test::PlantedFaults {
  protected:
-  ProbePlan plan = test::acPlan();
-  std::vector<std::string> ls = lines(hs().writeProgram(test::cycleProgram(plan, "haas")));
-  size_t g = test::lineStarting(ls, "G31");
-  std::vector<std::string> with(const std::function<void(std::vector<std::string>&)>& edit) {
-    auto v = ls;
-    edit(v);
-    return hs().check(test::join(v), plan, test::shapeOf(plan, "haas"));
-  }
+  HaasCheck() : PlantedFaults("haas", "^G31") {}
 };
 
 TEST_F(HaasCheck, CatchesHaasFaults) {

@@ -13,6 +13,7 @@
 #include "core/errors.hpp"
 #include "core/units.hpp"
 #include "ctl_test_util.hpp"
+#include "dialect_battery.hpp"
 #include "postproc/probe_program.hpp"
 
 namespace rotacal {
@@ -183,61 +184,43 @@ TEST(LinuxCncProgram, BcMachineLogsTheBAxisParameter) {
   EXPECT_NE(text.find("%.4f#5065 %.4f#5066 %d#5070)"), std::string::npos) << text;
 }
 
-TEST(LinuxCncCheck, CatchesARemovedAbort) {
-  const ProbePlan plan = test::acPlan();
-  auto ls = lines(lc().writeProgram(test::cycleProgram(plan, "linuxcnc")));
-  const size_t g = test::lineStarting(ls, "G38.2");
-  ls.erase(ls.begin() + static_cast<long>(g) + 2);  // the (ABORT, ...) of point 1
-  const auto problems = lc().check(test::join(ls), plan, test::shapeOf(plan, "linuxcnc"));
+class LinuxCncCheck : public test::PlantedFaults {
+ protected:
+  LinuxCncCheck() : PlantedFaults("linuxcnc", "^G38\\.2") {}
+};
+
+TEST_F(LinuxCncCheck, CatchesARemovedAbort) {
+  const auto problems = with([&](auto& v) { v.erase(v.begin() + static_cast<long>(g) + 2); });  // point 1's (ABORT, ...)
   ASSERT_EQ(problems.size(), 1u);
   EXPECT_EQ(problems[0].rfind(fmt::format("{}: G38.2 is not followed", g + 1), 0), 0u) << problems[0];
 }
 
-TEST(LinuxCncCheck, CatchesAPointOutsideTheStrokes) {
-  const ProbePlan plan = test::acPlan();
-  auto ls = lines(lc().writeProgram(test::cycleProgram(plan, "linuxcnc")));
-  const size_t g = test::lineStarting(ls, "G38.2");
-  ls[g] = "G38.2 X700.0000 Y-235.0000 Z150.0000 F100.0";
-  const auto problems = lc().check(test::join(ls), plan, test::shapeOf(plan, "linuxcnc"));
+TEST_F(LinuxCncCheck, CatchesAPointOutsideTheStrokes) {
+  const auto problems = with([&](auto& v) { v[g] = "G38.2 X700.0000 Y-235.0000 Z150.0000 F100.0"; });
   ASSERT_EQ(problems.size(), 1u);
   EXPECT_NE(problems[0].find(fmt::format("{}: X = 700.0000 mm is outside the stroke", g + 1)), std::string::npos)
       << problems[0];
 }
 
-TEST(LinuxCncCheck, CatchesARotaryAngleOutsideItsStrokeInThePapersConvention) {
-  const ProbePlan plan = test::acPlan();
-  auto ls = lines(lc().writeProgram(test::cycleProgram(plan, "linuxcnc")));
-  const size_t g = test::lineStarting(ls, "G0 A");
-  ls[g] = "G0 A-30.0000 C0.0000";  // LinuxCNC A-30 = paper A* +30 > +20
-  const auto problems = lc().check(test::join(ls), plan, test::shapeOf(plan, "linuxcnc"));
+TEST_F(LinuxCncCheck, CatchesARotaryAngleOutsideItsStrokeInThePapersConvention) {
+  const size_t a = test::lineStarting(ls, "G0 A");
+  const auto problems = with([&](auto& v) { v[a] = "G0 A-30.0000 C0.0000"; });  // LinuxCNC A-30 = paper A* +30 > +20
   ASSERT_EQ(problems.size(), 1u);
   EXPECT_NE(problems[0].find("papers' convention 30.0000"), std::string::npos) << problems[0];
 }
 
-TEST(LinuxCncCheck, CatchesLineSyntaxAndStructureFaults) {
-  const ProbePlan plan = test::acPlan();
-  const auto ls = lines(lc().writeProgram(test::cycleProgram(plan, "linuxcnc")));
-  auto problemsWith = [&](const std::function<void(std::vector<std::string>&)>& edit) {
-    auto v = ls;
-    edit(v);
-    return lc().check(test::join(v), plan, test::shapeOf(plan, "linuxcnc"));
-  };
-  auto has = [](const std::vector<std::string>& ps, const std::string& what) {
-    for (const auto& p : ps)
-      if (p.find(what) != std::string::npos) return true;
-    return false;
-  };
-  EXPECT_TRUE(has(problemsWith([](auto& v) { v[1] = "(" + std::string(260, 'x') + ")"; }), "Command too long"));
-  EXPECT_TRUE(has(problemsWith([](auto& v) { v[1] = "(open"; }), "comment not closed"));
-  EXPECT_TRUE(has(problemsWith([](auto& v) { v[test::lineStarting(v, "(LOGOPEN")] = "(LOGOPEN x.txt)"; }),
+TEST_F(LinuxCncCheck, CatchesLineSyntaxAndStructureFaults) {
+  EXPECT_TRUE(test::hasProblem(with([](auto& v) { v[1] = "(" + std::string(260, 'x') + ")"; }), "Command too long"));
+  EXPECT_TRUE(test::hasProblem(with([](auto& v) { v[1] = "(open"; }), "comment not closed"));
+  EXPECT_TRUE(test::hasProblem(with([](auto& v) { v[test::lineStarting(v, "(LOGOPEN")] = "(LOGOPEN x.txt)"; }),
                   "LOGOPEN needs a comma"));
-  EXPECT_TRUE(has(problemsWith([](auto& v) {
+  EXPECT_TRUE(test::hasProblem(with([](auto& v) {
                     const size_t i = test::lineStarting(v, "(LOG,P1 ");
                     v[i] = "(note)" + v[i];
                   }),
                   "shares its line"));
-  EXPECT_TRUE(has(problemsWith([](auto& v) { v.erase(v.end() - 2); }), "does not end with M2 or M30"));
-  EXPECT_TRUE(has(problemsWith([](auto& v) {
+  EXPECT_TRUE(test::hasProblem(with([](auto& v) { v.erase(v.end() - 2); }), "does not end with M2 or M30"));
+  EXPECT_TRUE(test::hasProblem(with([](auto& v) {
                     const size_t g = test::lineStarting(v, "G38.2");
                     v.erase(v.begin() + static_cast<long>(g), v.begin() + static_cast<long>(g) + 5);
                   }),

@@ -15,11 +15,6 @@ using test::lines;
 
 const Dialect& ok() { return dialectByName("okuma"); }
 
-TEST(OkumaResults, RoundTripWithinThePrintedDigitsAndNoTime) {
-  test::expectRoundTrip(ok(), test::acPlan(), 1.0, 4, test::Clock::None);
-  test::expectRoundTrip(ok(), test::acPlan(LengthUnit::Inch), 25.4, 5, test::Clock::None);
-}
-
 TEST(OkumaResults, LinesAndTolerance) {
   const ProbePlan plan = test::acPlan();
   auto ls = lines(ok().writeResults(plan, test::displacedRun(plan)));
@@ -30,7 +25,6 @@ TEST(OkumaResults, LinesAndTolerance) {
   EXPECT_EQ(back.points[0].position_m_mm, Eigen::Vector3d(53.584, -235.0, 150.0));
 }
 
-TEST(OkumaResults, RecoversInjectedErrors) { test::expectRecovery(ok(), test::acPlan()); }
 
 TEST(OkumaResults, RejectsWithTheLine) {
   const ProbePlan plan = test::acPlan();
@@ -76,18 +70,10 @@ TEST(OkumaProgram, ProbeBlockCheckAndOutput) {
   EXPECT_EQ(ls.back(), "M02");
 }
 
-TEST(OkumaProgram, GeneratedProgramsPassTheChecker) { test::expectCleanPrograms(ok()); }
 
-class OkumaCheck : public ::testing::Test {
+class OkumaCheck : public test::PlantedFaults {
  protected:
-  ProbePlan plan = test::acPlan();
-  std::vector<std::string> ls = lines(ok().writeProgram(test::cycleProgram(plan, "okuma")));
-  size_t g = test::lineStarting(ls, "G31");
-  std::vector<std::string> with(const std::function<void(std::vector<std::string>&)>& edit) {
-    auto v = ls;
-    edit(v);
-    return ok().check(test::join(v), plan, test::shapeOf(plan, "okuma"));
-  }
+  OkumaCheck() : PlantedFaults("okuma", "^G31") {}
 };
 
 TEST_F(OkumaCheck, CatchesPlantedFaults) {

@@ -23,14 +23,11 @@
 #include "postproc/probe_program.hpp"
 #include "rs274_run.hpp"
 
-namespace rotacal {
+namespace rotacal::test {
 namespace {
 
 namespace fs = std::filesystem;
 
-using test::kRs274;
-using test::Rs274Run;
-using test::runRs274;
 size_t count(const std::string& text, const std::string& what) { return test::countOf(text, what); }
 
 // rs274 logs the end point as the interpreter read it from the program (4 decimals, so exact
@@ -95,4 +92,4 @@ TEST(Rs274Spheres3, TrippingProbeRunsToTheEnd) {
 }
 
 }  // namespace
-}  // namespace rotacal
+}  // namespace rotacal::test

@@ -16,11 +16,6 @@ using test::lines;
 
 const Dialect& sm() { return dialectByName("siemens"); }
 
-TEST(SiemensResults, RoundTripWithinThePrintedDigitsAndNoTime) {
-  test::expectRoundTrip(sm(), test::acPlan(), 1.0, 4, test::Clock::None);
-  test::expectRoundTrip(sm(), test::acPlan(LengthUnit::Inch), 25.4, 5, test::Clock::None);
-}
-
 TEST(SiemensResults, LinesAsSprintWritesThem) {
   const ProbePlan plan = test::acPlan();
   MeasurementRun run;
@@ -30,7 +25,6 @@ TEST(SiemensResults, LinesAsSprintWritesThem) {
   EXPECT_EQ(ls[1], "P1 X   53.5840 Y -235.0000 Z  150.0000");  // %10.4F
 }
 
-TEST(SiemensResults, RecoversInjectedErrors) { test::expectRecovery(sm(), test::acPlan()); }
 
 TEST(SiemensResults, RejectsWithTheLine) {
   const ProbePlan plan = test::acPlan();
@@ -77,18 +71,10 @@ TEST(SiemensProgram, ProbeBlockAndCheck) {
   EXPECT_EQ(ls.back(), "M30");
 }
 
-TEST(SiemensProgram, GeneratedProgramsPassTheChecker) { test::expectCleanPrograms(sm()); }
 
-class SiemensCheck : public ::testing::Test {
+class SiemensCheck : public test::PlantedFaults {
  protected:
-  ProbePlan plan = test::acPlan();
-  std::vector<std::string> ls = lines(sm().writeProgram(test::cycleProgram(plan, "siemens")));
-  size_t g = test::lineStarting(ls, "MEAS=1");
-  std::vector<std::string> with(const std::function<void(std::vector<std::string>&)>& edit) {
-    auto v = ls;
-    edit(v);
-    return sm().check(test::join(v), plan, test::shapeOf(plan, "siemens"));
-  }
+  SiemensCheck() : PlantedFaults("siemens", "^MEAS=1") {}
 };
 
 TEST_F(SiemensCheck, CatchesPlantedFaults) {

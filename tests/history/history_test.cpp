@@ -24,6 +24,7 @@
 #include "history/store.hpp"
 #include "history/trend.hpp"
 #include "history/trend_report.hpp"
+#include "cli/cli_run.hpp"
 #include "test_util.hpp"
 
 namespace rotacal::history {
@@ -31,27 +32,12 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct ShellRun {
-  int code;
-  std::string out;
-};
-ShellRun sh(const std::string& cmd) {
-  FILE* p = popen((cmd + " 2>&1").c_str(), "r");
-  std::string out;
-  std::array<char, 4096> buf{};
-  while (p && fgets(buf.data(), buf.size(), p)) out += buf.data();
-  const int status = p ? pclose(p) : -1;
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
+using ShellRun = test::CliRun;
+/// A whole command line, stdout and stderr together.
+ShellRun sh(const std::string& cmd) { return test::runCommand(cmd + " 2>&1"); }
 const std::string kCli = ROTACAL_CLI;
 
-fs::path freshDir() {
-  const fs::path d = fs::path(ROTACAL_BINARY_DIR) / "test_tmp" /
-                     (std::string("history_") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+fs::path freshDir() { return test::freshDir("history_" + test::testName()); }
 
 std::vector<TrendPoint> series(const std::vector<double>& t, const std::vector<double>& v, double u) {
   std::vector<TrendPoint> p;

@@ -16,6 +16,7 @@
 #include "controllers/dialect.hpp"
 #include "controllers/motion_reader.hpp"
 #include "core/machine.hpp"
+#include "cycles/check_rules.hpp"
 #include "cycles/cycle.hpp"
 #include "postproc/compensate_program.hpp"
 #include "postproc/program_check.hpp"
@@ -28,19 +29,8 @@ namespace {
 // number and whether the machine's artefact is on the table.
 ProgramCheckResult verify(const std::string& text, const std::string& dialect, const MachineModel& machine,
                           const ProbePlan* plan, const LocationErrors* errors = nullptr) {
-  ProgramCheckSetup s;
+  ProgramCheckSetup s = programCheckSetup(machine, dialect, ctl::numbersPrograms(dialect), plan, true);
   if (errors) s.errors = *errors;
-  s.machine = &machine;
-  s.dialect = dialect;
-  s.plan = plan;
-  s.numbered = ctl::numbersPrograms(dialect);
-  if (plan) {
-    const Cycle& c = cycleOfPlan(*plan);
-    s.artefact_on_table = c.planRules().artefact_touched;
-    if (s.numbered) s.program_number = c.programNumber();
-  } else {
-    for (const Cycle* c : cycles()) s.rotacal_numbers.push_back(c->programNumber());
-  }
   return checkProgram(ctl::readMotions(dialect, text), s);
 }
 

@@ -19,34 +19,14 @@
 #include "cycles/cycle.hpp"
 #include "cycles/rtest/diagnose.hpp"
 #include "cycles/rtest/plan.hpp"
+#include "rtest_002_scenario.hpp"
 #include "test_util.hpp"
 
 namespace rotacal {
 namespace {
 
-// 002 Sec. 4.3: 11 measuring cycles over 3 h (every 18 min), 0.3 um sensor noise declared.
-ProbePlan plan002(double noise_um) {
-  const CycleOptions o = {{"thermal", "1"}, {"interval_min", "18"}, {"sensor_noise_um", fmt::format("{:g}", noise_um)}};
-  return makePlan("rtest", loadMachine(test::sourcePath("examples/machines/bc_trunnion.json")), o);
-}
-
-/// 002-like position-dependent errors (um / mdeg at B = -60..60), varied by `shape`.
-Truth baseTruth(int shape) {
-  Truth t;
-  t.errors.kinematics = Kinematics::TableBC;
-  t.pose_dependent = [shape](const Pose& p) {
-    const double s = p.B / 60.0;
-    ErrorVector d = ErrorVector::Zero();
-    d[0] = umToMm(3.0 + 2.0 * s);
-    d[1] = umToMm(-4.0 + (shape % 2 ? 1.5 : -1.0) * s * s);
-    d[2] = umToMm(5.0 * s);
-    d[3] = mdegToRad(2.0 - s);
-    d[4] = mdegToRad(-1.5 + 2.5 * s);
-    d[5] = mdegToRad((shape % 3) * 0.5 * s * s);
-    return d;
-  };
-  return t;
-}
+ProbePlan plan002(double noise_um) { return test::rtest002Plan(ROTACAL_SOURCE_DIR, noise_um); }
+const auto baseTruth = test::rtest002Truth;
 
 std::vector<RtestCycle> series(const ProbePlan& plan, const Truth& truth, const RtestTruthExtras& x, std::uint64_t seed,
                                double noise) {

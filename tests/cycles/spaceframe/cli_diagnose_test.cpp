@@ -12,42 +12,21 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cli/cli_run.hpp"
 #include "test_util.hpp"
 
-namespace rotacal {
+namespace rotacal::test {
 namespace {
 
-namespace fs = std::filesystem;
-
-struct Run {
-  int code;
-  std::string out;
-};
-
-Run sh(const std::string& args) {
-  const std::string cmd = std::string(ROTACAL_CLI) + " " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  std::string out;
-  std::array<char, 4096> buf{};
-  while (p && fgets(buf.data(), buf.size(), p)) out += buf.data();
-  const int status = p ? pclose(p) : -1;
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
-
-class SpaceframeDiagnoseCli : public ::testing::Test {
+class SpaceframeDiagnoseCli : public ScratchTest {
  protected:
   void SetUp() override {
-    dir = fs::path(ROTACAL_BINARY_DIR) / "test_tmp" /
-          ("sfdiag_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir);
-    fs::create_directories(dir);
+    ScratchTest::SetUp();
     const auto r = sh("plan --cycle spaceframe --machine " + test::sourcePath("examples/machines/ac_trunnion.json") +
                       " --set phi_list=-90,-45,0 -o " + p("plan.json"));
     ASSERT_EQ(r.code, 0) << r.out;
   }
-  std::string p(const std::string& name) const { return (dir / name).string(); }
-  nlohmann::json load(const std::string& name) const { return nlohmann::json::parse(std::ifstream(p(name))); }
-  fs::path dir;
+  nlohmann::json load(const std::string& name) const { return test::loadJson(p(name)); }
 };
 
 TEST_F(SpaceframeDiagnoseCli, BundledScaleTruthIsNamed) {
@@ -104,4 +83,4 @@ TEST_F(SpaceframeDiagnoseCli, BadResultsFailWithoutOutput) {
 }
 
 }  // namespace
-}  // namespace rotacal
+}  // namespace rotacal::test

@@ -15,23 +15,13 @@
 #include "cli/cli_run.hpp"
 #include "test_util.hpp"
 
-namespace rotacal {
+namespace rotacal::test {
 namespace {
 
-namespace fs = std::filesystem;
-
 using Run = test::CliRun;
-using test::sh;
 
-class SpaceframeCli : public ::testing::Test {
+class SpaceframeCli : public ScratchTest {
  protected:
-  void SetUp() override {
-    dir = fs::path(ROTACAL_BINARY_DIR) / "test_tmp" / ("spaceframe_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-  }
-  std::string p(const std::string& name) const { return (dir / name).string(); }
-  fs::path dir;
   const std::string machine = test::sourcePath("examples/machines/ac_trunnion_a120.json");
 };
 
@@ -107,4 +97,4 @@ TEST_F(SpaceframeCli, TiltOutsideTheStrokeAndOffsetsAreClearErrors) {
 }
 
 }  // namespace
-}  // namespace rotacal
+}  // namespace rotacal::test

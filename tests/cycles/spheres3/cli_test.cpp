@@ -16,21 +16,13 @@
 #include "cli/cli_run.hpp"
 #include "test_util.hpp"
 
-namespace rotacal {
+namespace rotacal::test {
 namespace {
 
-namespace fs = std::filesystem;
-
-using CliRun = test::CliRun;
-using test::sh;
-
-class Spheres3Cli : public ::testing::Test {
+class Spheres3Cli : public ScratchTest {
  protected:
   void SetUp() override {
-    dir = fs::path(ROTACAL_BINARY_DIR) / "test_tmp" /
-          (std::string("spheres3_") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir);
-    fs::create_directories(dir);
+    ScratchTest::SetUp();
     plan = (dir / "plan.json").string();
     truth = (dir / "truth.json").string();
     // 000 Table 4 means and a 3 um second-order radial error motion of C (issue 6).
@@ -45,7 +37,6 @@ class Spheres3Cli : public ::testing::Test {
                   .code,
               0);
   }
-  fs::path dir;
   std::string plan, truth;
 };
 
@@ -115,4 +106,4 @@ TEST_F(Spheres3Cli, RefusesAWrongSphereRadiusAndWritesNothing) {
 }
 
 }  // namespace
-}  // namespace rotacal
+}  // namespace rotacal::test

@@ -16,23 +16,11 @@
 #include "cli/cli_run.hpp"
 #include "test_util.hpp"
 
-namespace rotacal {
+namespace rotacal::test {
 namespace {
 
-namespace fs = std::filesystem;
-
-using CliRun = test::CliRun;
-using test::sh;
-
-nlohmann::json readJson(const fs::path& p) {
-  std::ifstream in(p);
-  return nlohmann::json::parse(in);
-}
-
 TEST(TooltipCli, PlanGenerateSimulateAnalyzeDiagnose) {
-  const fs::path dir = fs::path(ROTACAL_BINARY_DIR) / "test_tmp" / "tooltip_cli";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = test::freshDir("tooltip_cli");
   const std::string d = dir.string();
   const std::string machine = test::sourcePath("examples/machines/head_ab.json");
   CliRun r = sh("plan --cycle tooltip --machine " + machine +
@@ -56,7 +44,7 @@ TEST(TooltipCli, PlanGenerateSimulateAnalyzeDiagnose) {
   ASSERT_EQ(r.code, 0) << r.out;
   r = sh("analyze --plan " + d + "/plan.json --results " + d + "/r.csv --dialect csv --json " + d + "/REPORT.json");
   ASSERT_EQ(r.code, 0) << r.out;
-  const auto rep = readJson(d + "/REPORT.json");
+  const auto rep = loadJson(d + "/REPORT.json");
   EXPECT_EQ(rep["format"], "rotacal-report/1");
   EXPECT_EQ(rep["cycle"], "tooltip");
   // The results file rounds to 1e-4 um: the recovered dR is the truth to far better than 1e-3 x 40 um.
@@ -70,7 +58,7 @@ TEST(TooltipCli, PlanGenerateSimulateAnalyzeDiagnose) {
 
   r = sh("diagnose --plan " + d + "/plan.json --results " + d + "/r.csv --dialect csv --json " + d + "/DIAG.json");
   ASSERT_EQ(r.code, 0) << r.out;
-  const auto dg = readJson(d + "/DIAG.json");
+  const auto dg = loadJson(d + "/DIAG.json");
   // One tool: a 40 um pivot error moves the tip exactly as an isotropic scale of -1000 x 40 / 381
   // um/m would (issue 16): never "effect found: pivot_length", a confounded pair with a signal.
   EXPECT_EQ(dg["verdict"], "model_inadequate");
@@ -84,13 +72,11 @@ TEST(TooltipCli, PlanGenerateSimulateAnalyzeDiagnose) {
   // Bad input: FILE:LINE, exit 1, nothing written.
   std::ofstream(d + "/bad.csv") << "angle_deg,dy_um,dz_um\n0,0,0\n5,1.0,oops\n";
   r = sh("analyze --plan " + d + "/plan.json --results " + d + "/bad.csv --dialect csv --json " + d + "/BAD.json");
-  EXPECT_EQ(r.code, 1);
-  EXPECT_NE(r.out.find("bad.csv:3:"), std::string::npos) << r.out;
-  EXPECT_FALSE(fs::exists(d + "/BAD.json"));
+  EXPECT_TRUE(refused(r, 1, "bad.csv:3:", d + "/BAD.json"));
   r = sh("plan --cycle tooltip --machine " + machine + " --set step_deg=7 -o " + d + "/p2.json");
   EXPECT_EQ(r.code, 1) << r.out;
   EXPECT_NE(r.out.find("head_ab.json"), std::string::npos) << r.out;
 }
 
 }  // namespace
-}  // namespace rotacal
+}  // namespace rotacal::test

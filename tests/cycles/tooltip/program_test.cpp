@@ -22,14 +22,11 @@
 #include "rs274_run.hpp"
 #include "test_util.hpp"
 
-namespace rotacal {
+namespace rotacal::test {
 namespace {
 
 namespace fs = std::filesystem;
 
-using test::kRs274;
-using test::Rs274Run;
-using test::runRs274;
 
 // 004 Table 1, typed from the seed text (R = 15 in, 5 deg steps, 0..90 deg).
 const char* kTable1[18] = {
@@ -174,9 +171,9 @@ TEST(TooltipRs274, DynamicTestRunsAtEveryAngleOfTheOtherAxis) {
 }
 
 }  // namespace
-}  // namespace rotacal
+}  // namespace rotacal::test
 
-namespace rotacal {
+namespace rotacal::test {
 namespace {
 
 // The dynamic test's program (issue 17): each joint-space move keeps the tool tip on its point.
@@ -246,4 +243,4 @@ TEST(TooltipProgram, TheDynamicTestKeepsTheTipWithinItsStatedSag) {
 }
 
 }  // namespace
-}  // namespace rotacal
+}  // namespace rotacal::test

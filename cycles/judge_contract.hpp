@@ -1,0 +1,68 @@
+#pragma once
+// The diagnosis contract's fields (contract.md) that the cycles derive from the judge's summary
+// (core/judge.hpp): one form for every cycle that writes them.
+#include <fmt/format.h>
+
+#include <string>
+
+#include "core/json_io.hpp"
+#include "core/judge.hpp"
+
+namespace rotacal {
+
+/// The contract's format and cycle of a diagnosis document.
+inline void stampDiagnosis(Json& j, const std::string& cycle) {
+  j["format"] = "rotacal-diagnosis/1";
+  j["cycle"] = cycle;
+}
+
+/// The judge's verdict, its message and whether the final model explains the data, for a cycle
+/// that does not write the whole summary (judgeToJson writes them too).
+inline void verdictJson(Json& j, const JudgeSummary& s) {
+  j["verdict"] = judgeVerdictName(s.verdict);
+  j["message"] = s.message;
+  j["explains_data"] = s.explainsData();
+}
+
+/// The contract's fields of a finding that the judge's summary holds: its parameters (u null
+/// where not identifiable), the final model's residual, the finding's held-out residual and its
+/// gain against the model before it (percent), its separability and confidence.
+inline Json contractFindingJson(const JudgeSummary& s, const JudgeFinding& f) {
+  Json params = Json::object();
+  for (const auto& p : f.parameters)
+    params[p.name] = {{"value", p.value}, {"unit", p.unit}, {"u", p.identifiable ? Json(p.u) : Json(nullptr)}};
+  return {{"parameters", params},
+          {"residual_rms_um", s.final_model.rms_residual},
+          {"holdout_rms_um", f.holdout_rms_cause},
+          {"gain_pct", f.holdout_rms_model > 0 ? 100.0 * (1.0 - f.holdout_rms_cause / f.holdout_rms_model) : 0.0},
+          {"separability", f.separability},
+          {"confidence", f.confidence}};
+}
+
+/// "name = value +- u unit" of each of a finding's parameters, comma-separated.
+inline std::string findingParametersText(const JudgeFinding& f) {
+  std::string params;
+  for (const auto& p : f.parameters)
+    params += (params.empty() ? "" : ", ") + fmt::format("{} = {:.3g} +- {:.2g} {}", p.name, p.value, p.u, p.unit);
+  return params;
+}
+
+/// How far a finding lowers the held-out residual below the baseline's, percent (0 without a
+/// baseline residual).
+inline double holdoutGainPct(const JudgeSummary& s, const JudgeFinding& f) {
+  return s.baseline_holdout_rms > 0 ? 100.0 * (1.0 - f.holdout_rms_cause / s.baseline_holdout_rms) : 0.0;
+}
+
+/// The contract's baseline of a cycle that writes the judge's adequacy test itself: `model` in
+/// words, its residual and held-out rms, chi2, dof, p and whether it is within the declared noise.
+inline Json contractBaselineJson(const JudgeSummary& s, const std::string& model) {
+  return {{"model", model},
+          {"residual_rms_um", s.baseline.rms_residual},
+          {"holdout_rms_um", s.baseline_holdout_rms},
+          {"chi2", s.baseline.chi2},
+          {"dof", s.baseline.dof},
+          {"p_value", s.baseline.p_value},
+          {"within_declared_noise", s.baseline.passes}};
+}
+
+}  // namespace rotacal
