@@ -130,26 +130,12 @@ Eigen::Isometry3d T_m_w_nominal(Kinematics kinematics, const Pose& pose) {
 Eigen::Matrix<double, 3, kNumLocationErrors> J_pm_e(const LocationErrors& errors, const Pose& pose,
                                                     const Eigen::Vector3d& p_w) {
   const auto& chain = kinematicChain(errors.kinematics);
-  const size_t n = chain.size();
-  // prefix[i] = product of factors 0..i (inclusive); suffix[i] = product of factors i+1..n-1.
-  std::vector<Eigen::Matrix4d> prefix(n), suffix(n);
-  Eigen::Matrix4d acc = Eigen::Matrix4d::Identity();
-  for (size_t i = 0; i < n; ++i) {
-    acc = acc * elementary(chain[i].motion, factorValue(chain[i], errors, pose)).matrix();
-    prefix[i] = acc;
-  }
-  acc = Eigen::Matrix4d::Identity();
-  for (size_t i = n; i-- > 0;) {
-    suffix[i] = acc;
-    acc = elementary(chain[i].motion, factorValue(chain[i], errors, pose)).matrix() * acc;
-  }
-  const Eigen::Vector4d ph(p_w.x(), p_w.y(), p_w.z(), 1.0);
+  std::vector<ChainFactorValue> values;
+  for (const auto& f : chain) values.push_back({f.motion, factorValue(f, errors, pose)});
+  const auto D = chainPointDerivatives(values, p_w);
   Eigen::Matrix<double, 3, kNumLocationErrors> J = Eigen::Matrix<double, 3, kNumLocationErrors>::Zero();
-  for (size_t i = 0; i < n; ++i) {
-    if (chain[i].source != ChainFactor::Source::Parameter) continue;
-    const Eigen::Vector4d d = prefix[i] * generator(chain[i].motion) * suffix[i] * ph;
-    J.col(chain[i].index) += d.head<3>();
-  }
+  for (size_t i = 0; i < chain.size(); ++i)
+    if (chain[i].source == ChainFactor::Source::Parameter) J.col(chain[i].index) += D.col(static_cast<Eigen::Index>(i));
   return J;
 }
 

@@ -358,6 +358,17 @@ int intFrom(const JsonDoc& doc, const Json& obj, std::string_view key, const Jso
 
 }  // namespace
 
+Eigen::Vector3d requireVec3(const JsonDoc& doc, const Json& obj, const char* key, const Limits& limits) {
+  const Json& a = requireArray(doc, obj, key);
+  if (a.size() != 3) doc.fail(obj, key, std::string("field '") + key + "' must be [x, y, z]");
+  Eigen::Vector3d v;
+  for (int i = 0; i < 3; ++i) {
+    if (!a[i].is_number()) doc.fail(obj, key, std::string("field '") + key + "' must hold numbers");
+    v[i] = checkNumber(doc, obj, key, a[i].get<double>(), limits);
+  }
+  return v;
+}
+
 double checkNumber(const JsonDoc& doc, const Json& obj, std::string_view key, double v, const Limits& limits) {
   if (!std::isfinite(v)) doc.fail(obj, key, "field '" + std::string(key) + "' must be a finite number");
   if (!limits.contains(v))

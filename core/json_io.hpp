@@ -2,6 +2,7 @@
 // Reading and writing rotacal's JSON files (MACHINE, PLAN, TRUTH, REPORT): parse errors and
 // missing, ill-typed or out-of-range fields become InputError with the file and the line of the
 // offending value (found by its place in the document, not by the first key of that name).
+#include <Eigen/Core>
 #include <nlohmann/json.hpp>
 #include <limits>
 #include <string>
@@ -84,6 +85,8 @@ const Json& requireArray(const JsonDoc& doc, const Json& obj, std::string_view k
 /// Checks a number that is already in hand (an array element, a computed value) against the
 /// limits, failing at obj[key].
 double checkNumber(const JsonDoc& doc, const Json& obj, std::string_view key, double v, const Limits& limits);
+/// obj[key] as [x, y, z], each number within the limits.
+Eigen::Vector3d requireVec3(const JsonDoc& doc, const Json& obj, const char* key, const Limits& limits);
 
 template <class F>
 auto guardJson(const JsonDoc& doc, F&& load) -> decltype(load()) {

@@ -75,16 +75,6 @@ Json poseJson(Kinematics k, const Pose& p) {
   return {{"B", p.B}, {"C", p.C}};
 }
 
-Eigen::Vector3d vecFrom(const JsonDoc& doc, const Json& obj, const char* key, const Limits& limits) {
-  const Json& a = requireArray(doc, obj, key);
-  if (a.size() != 3) doc.fail(obj, key, std::string("field '") + key + "' must be [x, y, z]");
-  Eigen::Vector3d v;
-  for (int i = 0; i < 3; ++i) {
-    if (!a[i].is_number()) doc.fail(obj, key, std::string("field '") + key + "' must hold numbers");
-    v[i] = checkNumber(doc, obj, key, a[i].get<double>(), limits);
-  }
-  return v;
-}
 
 Pose poseFrom(const JsonDoc& doc, const Json& obj) {
   const Json& j = requireObject(doc, obj, "pose");
@@ -218,10 +208,10 @@ ProbePlan planFrom(const JsonDoc& doc, const PlanRules& rules) {
     } catch (const std::invalid_argument& e) {
       doc.fail(q, "face", e.what());
     }
-    p.contact_w_mm = vecFrom(doc, q, "contact_w_mm", coord);
-    p.normal_w = vecFrom(doc, q, "normal_w", unit_component);
-    p.trigger_m_mm = vecFrom(doc, q, "trigger_m_mm", coord);
-    p.approach_m = vecFrom(doc, q, "approach_m", unit_component);
+    p.contact_w_mm = requireVec3(doc, q, "contact_w_mm", coord);
+    p.normal_w = requireVec3(doc, q, "normal_w", unit_component);
+    p.trigger_m_mm = requireVec3(doc, q, "trigger_m_mm", coord);
+    p.approach_m = requireVec3(doc, q, "approach_m", unit_component);
     if (std::abs(p.normal_w.norm() - 1.0) > 1e-6)
       doc.fail(q, "normal_w", fmt::format("point {}: normal_w must be a unit vector (length {:g})", p.id, p.normal_w.norm()));
     if (std::abs(p.approach_m.norm() - 1.0) > 1e-6)
@@ -247,7 +237,7 @@ ProbePlan planFrom(const JsonDoc& doc, const PlanRules& rules) {
       const Json& sj = requireObject(doc, q, "sphere");
       SphereTarget st;
       st.id = requireInt(doc, sj, "id", 1, kMaxPlanPoints);
-      st.center_w_mm = vecFrom(doc, sj, "center_w_mm", coord);
+      st.center_w_mm = requireVec3(doc, sj, "center_w_mm", coord);
       st.radius_mm = requireNumber(doc, sj, "radius_mm", Limits::positive(kMaxCoordinateMm, "mm"));
       p.sphere = st;
     }
@@ -381,27 +371,50 @@ std::vector<Waypoint> plannedPath(const ProbePlan& plan) {
   return out;
 }
 
-std::vector<std::string> strokeViolations(const ProbePlan& plan) {
-  std::vector<std::string> v;
-  const MachineModel& m = plan.machine;
+void linearStrokeViolations(const MachineModel& m, const Eigen::Vector3d& position_m, const std::string& where,
+                            std::vector<std::string>* out) {
   const char names[3] = {'X', 'Y', 'Z'};
   const AxisRange* ranges[3] = {&m.x, &m.y, &m.z};
-  for (const auto& w : plannedPath(plan)) {
-    for (int i = 0; i < 3; ++i)
-      if (!ranges[i]->contains(w.position_m[i]))
-        v.push_back(fmt::format("{} = {:.3f} mm is outside the stroke [{:.3f}, {:.3f}]{}", names[i], w.position_m[i],
-                                ranges[i]->min, ranges[i]->max,
-                                w.point_id ? fmt::format(" (point {})", w.point_id) : std::string()));
+  for (int i = 0; i < 3; ++i)
+    if (!ranges[i]->contains(position_m[i]))
+      out->push_back(fmt::format("{} = {:.3f} mm is outside the stroke [{:.3f}, {:.3f}]{}", names[i], position_m[i],
+                                 ranges[i]->min, ranges[i]->max, where));
+}
+
+void rotaryStrokeViolations(const MachineModel& m, const Pose& pose, const std::string& pose_name,
+                            std::vector<std::string>* out) {
+  for (const auto& r : m.rotary) {
+    const double ang = r.name == 'A' ? pose.A : (r.name == 'B' ? pose.B : pose.C);
+    if (!r.continuous && !r.stroke_deg.contains(ang))
+      out->push_back(fmt::format("pose {}: {} = {:.3f} deg is outside the stroke [{:.3f}, {:.3f}]", pose_name, r.name, ang,
+                                 r.stroke_deg.min, r.stroke_deg.max));
   }
-  for (const auto& p : plan.poses) {
-    for (const auto& r : m.rotary) {
-      const double ang = r.name == 'A' ? p.pose.A : (r.name == 'B' ? p.pose.B : p.pose.C);
-      if (!r.continuous && !r.stroke_deg.contains(ang))
-        v.push_back(fmt::format("pose {}: {} = {:.3f} deg is outside the stroke [{:.3f}, {:.3f}]", p.name, r.name, ang,
-                                r.stroke_deg.min, r.stroke_deg.max));
-    }
-  }
+}
+
+std::vector<std::string> strokeViolations(const ProbePlan& plan) {
+  std::vector<std::string> v;
+  for (const auto& w : plannedPath(plan))
+    linearStrokeViolations(plan.machine, w.position_m, w.point_id ? fmt::format(" (point {})", w.point_id) : std::string(), &v);
+  for (const auto& p : plan.poses) rotaryStrokeViolations(plan.machine, p.pose, p.name, &v);
   return v;
+}
+
+double moveTime_s(const Waypoint& w, const Eigen::Vector3d& from_m, const Pose& pose_from, const Feeds& f) {
+  const double d = (w.position_m - from_m).norm();
+  switch (w.kind) {
+    case Waypoint::Kind::ClimbZ:
+    case Waypoint::Kind::Rapid: return 60.0 * d / f.rapid_mm_min;
+    case Waypoint::Kind::Position:
+    case Waypoint::Kind::Retract: return 60.0 * d / f.positioning_mm_min;
+    case Waypoint::Kind::Index:
+      return 60.0 *
+             std::max({std::abs(w.pose.A - pose_from.A), std::abs(w.pose.B - pose_from.B), std::abs(w.pose.C - pose_from.C)}) /
+             f.rotary_deg_min;
+    case Waypoint::Kind::Dwell: return w.seconds;
+    case Waypoint::Kind::Probe:
+    case Waypoint::Kind::Read: return 0.0;
+  }
+  return 0.0;
 }
 
 void estimateTimes(ProbePlan& plan) {
@@ -411,26 +424,14 @@ void estimateTimes(ProbePlan& plan) {
   Eigen::Vector3d cur = path.empty() ? Eigen::Vector3d::Zero() : path.front().position_m;
   Pose pose = path.empty() ? Pose{} : path.front().pose;
   for (const auto& w : path) {
-    const double d = (w.position_m - cur).norm();
-    switch (w.kind) {
-      case Waypoint::Kind::ClimbZ:
-      case Waypoint::Kind::Rapid: t += 60.0 * d / f.rapid_mm_min; break;
-      case Waypoint::Kind::Position:
-      case Waypoint::Kind::Retract: t += 60.0 * d / f.positioning_mm_min; break;
-      case Waypoint::Kind::Index: {
-        const double da = std::max({std::abs(w.pose.A - pose.A), std::abs(w.pose.B - pose.B), std::abs(w.pose.C - pose.C)});
-        t += 60.0 * da / f.rotary_deg_min;
-        pose = w.pose;
-        break;
-      }
-      case Waypoint::Kind::Probe: {
-        const double to_trigger = plan.machine.approach_mm;
-        t += 60.0 * to_trigger / f.probing_mm_min;
-        if (auto* p = const_cast<ProbePoint*>(plan.findPoint(w.point_id))) p->t_s = std::round(t * 1000.0) / 1000.0;
-        cur = w.position_m - (plan.machine.overtravel_mm) * plan.findPoint(w.point_id)->approach_m;
-        continue;  // the move stops at the trigger
-      }
+    t += moveTime_s(w, cur, pose, f);
+    if (w.kind == Waypoint::Kind::Probe) {
+      t += 60.0 * plan.machine.approach_mm / f.probing_mm_min;
+      if (auto* p = const_cast<ProbePoint*>(plan.findPoint(w.point_id))) p->t_s = std::round(t * 1000.0) / 1000.0;
+      cur = w.position_m - (plan.machine.overtravel_mm) * plan.findPoint(w.point_id)->approach_m;
+      continue;  // the move stops at the trigger
     }
+    if (w.kind == Waypoint::Kind::Index) pose = w.pose;
     cur = w.position_m;
   }
 }

@@ -77,18 +77,33 @@ struct PlanRules {
 ProbePlan planFromJson(const JsonDoc& doc, const PlanRules& rules = {});
 ProbePlan loadPlan(const std::string& path, const PlanRules& rules = {});
 
+/// One move of a cycle's path: the one move model of every cycle (the probing paths and the
+/// R-test's dwell-and-read path). ClimbZ moves Z alone; Position and Retract are G1 moves at the
+/// positioning feed; Dwell waits; Read takes the R-test's reading where it stands.
+struct Waypoint {
+  enum class Kind { ClimbZ, Rapid, Position, Index, Probe, Retract, Dwell, Read } kind;
+  Eigen::Vector3d position_m;  // ball (or R-test sphere) centre, machine frame, mm
+  Pose pose;                   // rotary pose in force (deg, papers' convention)
+  int point_id = 0;            // Probe/Retract/Read (Read: 0 = the R-test's reset reading)
+  double seconds = 0.0;        // Dwell
+};
 /// Positions the probe passes through, in order, for the whole plan (shared by the time
 /// estimate, the program writer and the stroke check).
-struct Waypoint {
-  enum class Kind { ClimbZ, Rapid, Position, Index, Probe, Retract } kind;  // ClimbZ: Z alone
-  Eigen::Vector3d position_m;  // ball centre, machine frame, mm
-  Pose pose;                   // rotary pose in force (deg, papers' convention)
-  int point_id = 0;            // for Probe/Retract
-};
 std::vector<Waypoint> plannedPath(const ProbePlan& plan);
+
+/// The time of one move from (from_m, pose_from) at the machine's feeds: rapid, positioning,
+/// indexing at the rotary feed (the largest angle), dwell. 0 for Probe and Read: how far a
+/// probing move runs is the cycle's to say.
+double moveTime_s(const Waypoint& move, const Eigen::Vector3d& from_m, const Pose& pose_from, const Feeds& feeds);
 
 /// Checks every waypoint and pose against the machine's strokes; returns the violations.
 std::vector<std::string> strokeViolations(const ProbePlan& plan);
+/// The one stroke check every path model uses: a linear-axis position (`where` is appended to
+/// each line) and a pose's rotary angles (continuous axes have none), one line per violation.
+void linearStrokeViolations(const MachineModel& machine, const Eigen::Vector3d& position_m, const std::string& where,
+                            std::vector<std::string>* out);
+void rotaryStrokeViolations(const MachineModel& machine, const Pose& pose, const std::string& pose_name,
+                            std::vector<std::string>* out);
 
 /// Fills t_s of every point from the path, the feeds and the rotary speed.
 void estimateTimes(ProbePlan& plan);

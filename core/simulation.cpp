@@ -135,15 +135,7 @@ MeasurementRun simulate(const ProbePlan& plan, const Truth& truth, const Simulat
 namespace {
 
 Eigen::Vector3d vec3Or(const JsonDoc& doc, const Json& obj, const char* key, const Limits& limits) {
-  if (!obj.contains(key)) return Eigen::Vector3d::Zero();
-  const Json& a = requireArray(doc, obj, key);
-  if (a.size() != 3) doc.fail(obj, key, std::string("'") + key + "' must be [x, y, z]");
-  Eigen::Vector3d v;
-  for (int i = 0; i < 3; ++i) {
-    if (!a[i].is_number()) doc.fail(obj, key, std::string("'") + key + "' must hold numbers");
-    v[i] = checkNumber(doc, obj, key, a[i].get<double>(), limits);
-  }
-  return v;
+  return obj.contains(key) ? requireVec3(doc, obj, key, limits) : Eigen::Vector3d::Zero();
 }
 
 // The plausible size of a simulated error in each unit a truth file may use. Limits keeps its

@@ -46,4 +46,26 @@ bool isRotation(Motion motion) {
   return motion == Motion::Rx || motion == Motion::Ry || motion == Motion::Rz;
 }
 
+Eigen::Matrix<double, 3, Eigen::Dynamic> chainPointDerivatives(const std::vector<ChainFactorValue>& chain,
+                                                               const Eigen::Vector3d& p) {
+  const size_t n = chain.size();
+  // prefix[i] = product of factors 0..i (inclusive); suffix[i] = product of factors i+1..n-1.
+  std::vector<Eigen::Matrix4d> prefix(n), suffix(n);
+  Eigen::Matrix4d acc = Eigen::Matrix4d::Identity();
+  for (size_t i = 0; i < n; ++i) {
+    acc = acc * elementary(chain[i].motion, chain[i].value).matrix();
+    prefix[i] = acc;
+  }
+  acc = Eigen::Matrix4d::Identity();
+  for (size_t i = n; i-- > 0;) {
+    suffix[i] = acc;
+    acc = elementary(chain[i].motion, chain[i].value).matrix() * acc;
+  }
+  const Eigen::Vector4d ph(p.x(), p.y(), p.z(), 1.0);
+  Eigen::Matrix<double, 3, Eigen::Dynamic> D(3, static_cast<Eigen::Index>(n));
+  for (size_t i = 0; i < n; ++i)
+    D.col(static_cast<Eigen::Index>(i)) = (prefix[i] * generator(chain[i].motion) * suffix[i] * ph).head<3>();
+  return D;
+}
+
 }  // namespace rotacal

@@ -2,6 +2,7 @@
 // Elementary homogeneous transforms of 000 Eq. (1): D_x, D_y, D_z translate; D_a, D_b, D_c rotate
 // about X, Y, Z (right hand, angle in rad). All exact: no small-angle forms here.
 #include <Eigen/Geometry>
+#include <vector>
 
 namespace rotacal {
 
@@ -22,5 +23,14 @@ Eigen::Isometry3d elementary(Motion motion, double value);
 Eigen::Matrix4d generator(Motion motion);
 
 bool isRotation(Motion motion);
+
+/// The chain T = D_m0(v0) D_m1(v1) ... applied to the point p, and its derivative with respect
+/// to each factor's value: column i = prefix_i G_i suffix_i p (exact, no small-angle form).
+struct ChainFactorValue {
+  Motion motion;
+  double value;
+};
+Eigen::Matrix<double, 3, Eigen::Dynamic> chainPointDerivatives(const std::vector<ChainFactorValue>& chain,
+                                                               const Eigen::Vector3d& p);
 
 }  // namespace rotacal

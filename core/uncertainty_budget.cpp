@@ -373,6 +373,28 @@ std::string typeBNotDeclared() {
          "u_c covers the data's scatter only";
 }
 
+std::vector<double> contributorResidualVariances(int draws, std::uint64_t budget_seed,
+                                                 const std::function<double(std::uint64_t seed, int draw)>& residual_um2) {
+  constexpr std::uint64_t kResidualStream = 0x5245534944ULL;  // "RESID"
+  std::vector<double> out;
+  out.reserve(static_cast<size_t>(std::max(draws, 0)));
+  for (int k = 0; k < draws; ++k) out.push_back(residual_um2(budget_seed ^ kResidualStream, k));
+  return out;
+}
+
+bool typeBToRun(UncertaintyBudget* b, bool declared, bool any_acting, std::string_view acts_on, std::string_view note) {
+  if (!declared) {
+    b->type_b_source = typeBNotDeclared();
+    return false;
+  }
+  if (!any_acting) {
+    b->type_b_evaluated = true;
+    b->type_b_source = fmt::format("no declared contributor acts on {} as Type B{}", acts_on, note);
+    return false;
+  }
+  return true;
+}
+
 std::string raiseToRepeatScatter(Eigen::MatrixXd* cov_a, const std::vector<Eigen::VectorXd>& per_repeat) {
   if (per_repeat.size() < 2) return {};
   const Eigen::Index n = cov_a->rows();

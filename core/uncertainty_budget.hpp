@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/contributors.hpp"
@@ -114,8 +115,21 @@ struct ReadingScatter {
 /// for the R-test's dx_CB.)
 ReadingScatter readingScatter(double declared_um2, double observed_um2, int dof, const std::vector<double>& systematic_um2);
 
+/// readingScatter's contributor samples: the residual variance (um^2 per reading) that each of
+/// `draws` noise-free draws of the Type B contributors leaves in the cycle's own fit.
+/// `residual_um2` gets the draw's seed (a stream of its own, apart from the Monte Carlo's draws
+/// under the same budget seed) and the draw's index.
+std::vector<double> contributorResidualVariances(int draws, std::uint64_t budget_seed,
+                                                 const std::function<double(std::uint64_t seed, int draw)>& residual_um2);
+
 /// u_B's sentence when the machine declares no contributors.
 std::string typeBNotDeclared();
+
+/// The two ways a budget has no Monte Carlo to run: no contributor declared (u_B not evaluated:
+/// typeBNotDeclared()) or none of them acting on `acts_on` as Type B (evaluated, u_B = 0; `note`
+/// is appended to the sentence). Fills type_b_source and returns false in both; true: run it.
+bool typeBToRun(UncertaintyBudget* budget, bool declared, bool any_acting, std::string_view acts_on,
+                std::string_view note = {});
 
 /// Repeats: a parameter whose repeats scatter significantly more than cov_a says (chi-square at
 /// kScatterExcessAlpha: drift between runs, a set-up that moved) takes the variance of the

@@ -2,12 +2,31 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <stdexcept>
 
 #include "core/errors.hpp"
 #include "core/simulation.hpp"
 
 namespace rotacal {
+
+Eigen::Vector3d parseVec3Option(const std::string& key, const std::string& text) {
+  const auto v = parseNumberList(key, text);
+  if (v.size() != 3) throw std::invalid_argument("option " + key + ": expected x,y,z in mm, got '" + text + "'");
+  return {v[0], v[1], v[2]};
+}
+
+std::string numberListOption(const std::vector<double>& v) {
+  std::string s;
+  for (size_t i = 0; i < v.size(); ++i) s += (i ? "," : "") + fmt::format("{:g}", v[i]);
+  return s;
+}
+
+Face faceOfNormal(const Eigen::Vector3d& n_m) {
+  if (n_m.z() > 0.5) return Face::Top;
+  if (std::abs(n_m.x()) > std::abs(n_m.y())) return n_m.x() > 0 ? Face::PosX : Face::NegX;
+  return n_m.y() > 0 ? Face::PosY : Face::NegY;
+}
 
 void finishTouchPlan(ProbePlan& plan) {
   const auto bad = strokeViolations(plan);

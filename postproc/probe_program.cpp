@@ -11,6 +11,28 @@ double controllerAngle(const MachineModel& machine, char axis, const std::string
   return a == 0.0 ? 0.0 : a;  // no "-0.000"
 }
 
+nc::Op pathMoveOp(const Waypoint& w, const MachineModel& m, double k) {
+  nc::Op op;
+  op.xyz = w.position_m * k;
+  switch (w.kind) {
+    case Waypoint::Kind::ClimbZ:
+      op.kind = nc::Op::Kind::Rapid;
+      op.z_only = true;
+      break;
+    case Waypoint::Kind::Rapid: op.kind = nc::Op::Kind::Rapid; break;
+    case Waypoint::Kind::Position:
+    case Waypoint::Kind::Retract:
+      op.kind = nc::Op::Kind::Linear;
+      op.feed = m.feeds.positioning_mm_min * k;
+      break;
+    case Waypoint::Kind::Index:
+    case Waypoint::Kind::Probe:
+    case Waypoint::Kind::Dwell:
+    case Waypoint::Kind::Read: break;
+  }
+  return op;
+}
+
 nc::Program probeProgram(const ProbePlan& plan, const std::string& dialect) {
   const MachineModel& m = plan.machine;
   nc::Program prog;
@@ -40,19 +62,14 @@ nc::Program probeProgram(const ProbePlan& plan, const std::string& dialect) {
   }
   const auto path = plannedPath(plan);
   for (const auto& w : path) {
-    nc::Op op;
-    op.xyz = w.position_m * k;
+    nc::Op op = pathMoveOp(w, m, k);
     switch (w.kind) {
       case Waypoint::Kind::ClimbZ:
-        op.kind = nc::Op::Kind::Rapid;
-        op.z_only = true;
-        break;
-      case Waypoint::Kind::Rapid: op.kind = nc::Op::Kind::Rapid; break;
+      case Waypoint::Kind::Rapid:
       case Waypoint::Kind::Position:
       case Waypoint::Kind::Retract:
-        op.kind = nc::Op::Kind::Linear;
-        op.feed = m.feeds.positioning_mm_min * k;
-        break;
+      case Waypoint::Kind::Dwell:  // not on a probing path
+      case Waypoint::Kind::Read: break;
       case Waypoint::Kind::Index: {
         op.kind = nc::Op::Kind::Index;
         for (const auto& r : m.rotary) {

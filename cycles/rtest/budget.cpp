@@ -140,16 +140,14 @@ UncertaintyBudget rtestBudget(const ProbePlan& plan, const RtestCycle& first, co
   // eight-error model cannot absorb (linear axes between poses, cross-talk), which u_B counts.
   std::vector<double> sys_um2;
   const int dof = fit.dof;
-  if (!type_b.items.empty() && dof > 0) {
-    constexpr int kResidualRuns = 200;
-    for (int r = 0; r < kResidualRuns; ++r) {
+  if (!type_b.items.empty() && dof > 0)
+    sys_um2 = contributorResidualVariances(200, options.seed, [&](std::uint64_t seed, int r) {
       RtestDraw d;
-      drawRtest(plan, type_b, options.seed ^ 0x5245534944ULL, r, -1, &d);
+      drawRtest(plan, type_b, seed, r, -1, &d);
       Eigen::VectorXd y;
       const Eigen::VectorXd x = estimate(d, &y);
-      sys_um2.push_back(mmToUm(1.0) * mmToUm(1.0) * (y - est.A * x).squaredNorm() / dof);
-    }
-  }
+      return mmToUm(1.0) * mmToUm(1.0) * (y - est.A * x).squaredNorm() / dof;
+    });
   const ReadingScatter scatter = readingScatter(mmToUm(1.0) * mmToUm(1.0) * declared_mm2,
                                                 fit.residual_sd_um * fit.residual_sd_um, dof, sys_um2);
   const double sigma2 = umToMm(1.0) * umToMm(1.0) * scatter.variance_um2;
@@ -158,15 +156,8 @@ UncertaintyBudget rtestBudget(const ProbePlan& plan, const RtestCycle& first, co
       "the per-reading scatter {:.3f} um ({}; declared: sensor noise and sphere form) through the location fit",
       std::sqrt(scatter.variance_um2), scatter.why);
   b.terms.push_back({"data", b.uA()});
-  if (!contributors) {
-    b.type_b_source = typeBNotDeclared();
+  if (!typeBToRun(&b, contributors != nullptr, !type_b.items.empty(), "the R-test", " (docs/uncertainty.md, rtest)"))
     return b;
-  }
-  if (type_b.items.empty()) {
-    b.type_b_evaluated = true;
-    b.type_b_source = "no declared contributor acts on the R-test as Type B (docs/uncertainty.md, rtest)";
-    return b;
-  }
   runTypeB(&b, type_b, options, [&](std::uint64_t seed, int run, int c) -> Eigen::VectorXd {
     RtestDraw d;
     drawRtest(plan, type_b, seed, run, c, &d);
@@ -239,15 +230,14 @@ RtestTiltBudget rtestTiltBudget(const ProbePlan& plan, const RtestCycle& first, 
       fit_options.sensor_sigma_um * fit_options.sensor_sigma_um + mmToUm(1.0) * mmToUm(1.0) * split.per_reading_mm2;
   std::vector<double> sys_um2;
   if (!split.type_b.items.empty() && fit.dof > 0) {
-    constexpr int kResidualRuns = 100;
-    for (int run = 0; run < kResidualRuns; ++run) {
+    sys_um2 = contributorResidualVariances(100, options.seed, [&](std::uint64_t seed, int run) {
       RtestDraw d;
-      drawRtest(plan, split.type_b, options.seed ^ 0x5245534944ULL, run, -1, &d);
+      drawRtest(plan, split.type_b, seed, run, -1, &d);
       Truth t = truth0;
       RtestTruthExtras x;
       applyRtestDraw(plan, d, &t, &x);
-      sys_um2.push_back(std::pow(fitOf(t, x).residual_sd_um, 2));
-    }
+      return std::pow(fitOf(t, x).residual_sd_um, 2);
+    });
   }
   const ReadingScatter scatter = readingScatter(declared_um2, fit.residual_sd_um * fit.residual_sd_um, fit.dof, sys_um2);
   const double sigma2 = umToMm(1.0) * umToMm(1.0) * scatter.variance_um2;
@@ -259,15 +249,9 @@ RtestTiltBudget rtestTiltBudget(const ProbePlan& plan, const RtestCycle& first, 
       "the first cycle's per-tilt fit (002 Eq. (6)): the per-reading scatter {:.3f} um ({}) through that fit",
       std::sqrt(scatter.variance_um2), scatter.why);
   b.terms.push_back({"data", b.uA()});
-  if (!contributors) {
-    b.type_b_source = typeBNotDeclared();
+  if (!typeBToRun(&b, contributors != nullptr, !split.type_b.items.empty(), "the R-test",
+                  " (docs/uncertainty.md, rtest)"))
     return out;
-  }
-  if (split.type_b.items.empty()) {
-    b.type_b_evaluated = true;
-    b.type_b_source = "no declared contributor acts on the R-test as Type B (docs/uncertainty.md, rtest)";
-    return out;
-  }
   const Eigen::VectorXd base = perTilt(truth0, RtestTruthExtras{});
   runTypeB(&b, split.type_b, options, [&](std::uint64_t seed, int run, int c) -> Eigen::VectorXd {
     RtestDraw d;

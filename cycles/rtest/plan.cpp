@@ -12,6 +12,7 @@
 #include "core/errors.hpp"
 #include "core/rng.hpp"
 #include "core/units.hpp"
+#include "cycles/probing.hpp"
 
 namespace rotacal {
 
@@ -56,18 +57,6 @@ namespace {
 std::string opt(const CycleOptions& o, const std::string& key, const std::string& fallback) {
   const auto it = o.find(key);
   return it == o.end() ? fallback : it->second;
-}
-
-Eigen::Vector3d parseVec3(const std::string& key, const std::string& text) {
-  const auto v = parseNumberList(key, text);
-  if (v.size() != 3) throw std::invalid_argument("option " + key + ": expected x,y,z");
-  return Eigen::Vector3d(v[0], v[1], v[2]);
-}
-
-std::string joinNumbers(const std::vector<double>& v) {
-  std::string s;
-  for (size_t i = 0; i < v.size(); ++i) s += (i ? "," : "") + fmt::format("{:g}", v[i]);
-  return s;
 }
 
 double optionNumber(const ProbePlan& plan, const std::string& key) {
@@ -118,7 +107,7 @@ ProbePlan makeRtestPlan(const MachineModel& m, const CycleOptions& options) {
   requirePlanSize(fmt::format("rtest: options {} ({} values) and c_list ({} values)", tilt_key, tilts.size(), cs.size()),
                   static_cast<double>(tilts.size() * cs.size()), static_cast<double>(tilts.size() * cs.size()));
   // 002 Sec. 4.1: the nest at [-0.448, -91.187, 40.567] mm in the workpiece frame.
-  const Eigen::Vector3d nest = parseVec3("nest_w_mm", opt(options, "nest_w_mm", "-0.448,-91.187,40.567"));
+  const Eigen::Vector3d nest = parseVec3Option("nest_w_mm", opt(options, "nest_w_mm", "-0.448,-91.187,40.567"));
   if (std::hypot(nest.x(), nest.y()) < 10.0)
     throw std::invalid_argument("rtest: nest_w_mm within 10 mm of the C axis: the C-axis tilt would not be seen");
   const double dwell = parseNumber("dwell_s", opt(options, "dwell_s", "2"));
@@ -155,15 +144,15 @@ ProbePlan makeRtestPlan(const MachineModel& m, const CycleOptions& options) {
   ProbePlan plan;
   plan.cycle = "rtest";
   plan.machine = m;
-  plan.options = {{tilt_key, joinNumbers(tilts)},
-                  {"c_list", joinNumbers(cs)},
+  plan.options = {{tilt_key, numberListOption(tilts)},
+                  {"c_list", numberListOption(cs)},
                   {"nest_w_mm", fmt::format("{:g},{:g},{:g}", nest.x(), nest.y(), nest.z())},
                   {"dwell_s", fmt::format("{:g}", dwell)},
                   {"retract_mm", fmt::format("{:g}", retract)},
                   {"thermal", thermal},
                   {"interval_min", fmt::format("{:g}", interval)},
                   {"duration_h", fmt::format("{:g}", duration)},
-                  {"recip_list", joinNumbers(recip)},
+                  {"recip_list", numberListOption(recip)},
                   {"recip_feed_deg_min", fmt::format("{:g}", rfeed)},
                   {"sensor_noise_um", fmt::format("{:g}", noise)},
                   {"reset_reads", reset_reads}};
@@ -227,7 +216,7 @@ void rtestCheckPlanOptions(const ProbePlan& plan) {
 
 Eigen::Vector3d rtestNest_w(const ProbePlan& plan) { return plan.points.front().contact_w_mm; }
 
-std::vector<RtestMove> rtestCycleMoves(const ProbePlan& plan) {
+std::vector<Waypoint> rtestCycleMoves(const ProbePlan& plan) {
   const double retract = optionNumber(plan, "retract_mm");
   const double dwell = optionNumber(plan, "dwell_s");
   // The visits of one cycle: with reset reads the reset pose first and last (read as pose 0:
@@ -238,25 +227,25 @@ std::vector<RtestMove> rtestCycleMoves(const ProbePlan& plan) {
   if (reset) visits.emplace_back(ref, 0);
   for (const auto& p : plan.points) visits.emplace_back(&p, p.id);
   if (reset) visits.emplace_back(ref, 0);
-  std::vector<RtestMove> out;
+  std::vector<Waypoint> out;
   bool first = true;
   Eigen::Vector3d cur = Eigen::Vector3d::Zero();
   for (const auto& [pp, id] : visits) {
     const ProbePoint& p = *pp;
     const Eigen::Vector3d entry = p.trigger_m_mm - retract * p.approach_m;
-    if (first) out.push_back({RtestMove::Kind::ClimbZ, Eigen::Vector3d(entry.x(), entry.y(), plan.index_z_mm), p.pose});
-    else out.push_back({RtestMove::Kind::Rapid, Eigen::Vector3d(cur.x(), cur.y(), plan.index_z_mm), out.back().pose});
-    out.push_back({RtestMove::Kind::Index, out.back().position_m, p.pose});
-    out.push_back({RtestMove::Kind::Rapid, Eigen::Vector3d(entry.x(), entry.y(), plan.index_z_mm), p.pose});
-    out.push_back({RtestMove::Kind::Rapid, entry, p.pose});
-    out.push_back({RtestMove::Kind::Linear, p.trigger_m_mm, p.pose});
-    out.push_back({RtestMove::Kind::Dwell, p.trigger_m_mm, p.pose, id, dwell});
-    out.push_back({RtestMove::Kind::Read, p.trigger_m_mm, p.pose, id});
-    out.push_back({RtestMove::Kind::Linear, entry, p.pose});
+    if (first) out.push_back({Waypoint::Kind::ClimbZ, Eigen::Vector3d(entry.x(), entry.y(), plan.index_z_mm), p.pose});
+    else out.push_back({Waypoint::Kind::Rapid, Eigen::Vector3d(cur.x(), cur.y(), plan.index_z_mm), out.back().pose});
+    out.push_back({Waypoint::Kind::Index, out.back().position_m, p.pose});
+    out.push_back({Waypoint::Kind::Rapid, Eigen::Vector3d(entry.x(), entry.y(), plan.index_z_mm), p.pose});
+    out.push_back({Waypoint::Kind::Rapid, entry, p.pose});
+    out.push_back({Waypoint::Kind::Position, p.trigger_m_mm, p.pose});
+    out.push_back({Waypoint::Kind::Dwell, p.trigger_m_mm, p.pose, id, dwell});
+    out.push_back({Waypoint::Kind::Read, p.trigger_m_mm, p.pose, id});
+    out.push_back({Waypoint::Kind::Position, entry, p.pose});
     cur = entry;
     first = false;
   }
-  out.push_back({RtestMove::Kind::Rapid, Eigen::Vector3d(cur.x(), cur.y(), plan.index_z_mm), out.back().pose});
+  out.push_back({Waypoint::Kind::Rapid, Eigen::Vector3d(cur.x(), cur.y(), plan.index_z_mm), out.back().pose});
   return out;
 }
 
@@ -268,20 +257,9 @@ std::vector<double> rtestReadTimes(const ProbePlan& plan) {
   const auto moves = rtestCycleMoves(plan);
   Pose pose = moves.front().pose;
   for (const auto& mv : moves) {
-    const double d = (mv.position_m - cur).norm();
-    switch (mv.kind) {
-      case RtestMove::Kind::ClimbZ:
-      case RtestMove::Kind::Rapid: t += 60.0 * d / m.feeds.rapid_mm_min; break;
-      case RtestMove::Kind::Linear: t += 60.0 * d / m.feeds.positioning_mm_min; break;
-      case RtestMove::Kind::Index: {
-        const double da = std::max({std::abs(mv.pose.A - pose.A), std::abs(mv.pose.B - pose.B), std::abs(mv.pose.C - pose.C)});
-        t += 60.0 * da / m.feeds.rotary_deg_min;
-        pose = mv.pose;
-        break;
-      }
-      case RtestMove::Kind::Dwell: t += mv.seconds; break;
-      case RtestMove::Kind::Read: out.push_back(std::round(t * 1000.0) / 1000.0); break;
-    }
+    t += moveTime_s(mv, cur, pose, m.feeds);
+    if (mv.kind == Waypoint::Kind::Index) pose = mv.pose;
+    if (mv.kind == Waypoint::Kind::Read) out.push_back(std::round(t * 1000.0) / 1000.0);
     cur = mv.position_m;
   }
   return out;
@@ -294,21 +272,8 @@ bool rtestResetReads(const ProbePlan& plan) {
 
 std::vector<std::string> rtestStrokeViolations(const ProbePlan& plan) {
   std::vector<std::string> v;
-  const MachineModel& m = plan.machine;
-  const char names[3] = {'X', 'Y', 'Z'};
-  const AxisRange* ranges[3] = {&m.x, &m.y, &m.z};
-  for (const auto& mv : rtestCycleMoves(plan))
-    for (int i = 0; i < 3; ++i)
-      if (!ranges[i]->contains(mv.position_m[i]))
-        v.push_back(fmt::format("{} = {:.3f} mm is outside the stroke [{:.3f}, {:.3f}]", names[i], mv.position_m[i],
-                                ranges[i]->min, ranges[i]->max));
-  for (const auto& p : plan.points)
-    for (const auto& r : m.rotary) {
-      const double a = r.name == 'A' ? p.pose.A : (r.name == 'B' ? p.pose.B : p.pose.C);
-      if (!r.continuous && !r.stroke_deg.contains(a))
-        v.push_back(fmt::format("pose {}: {} = {:g} deg is outside the stroke [{:g}, {:g}]", p.pose_name, r.name, a,
-                                r.stroke_deg.min, r.stroke_deg.max));
-    }
+  for (const auto& mv : rtestCycleMoves(plan)) linearStrokeViolations(plan.machine, mv.position_m, {}, &v);
+  for (const auto& p : plan.points) rotaryStrokeViolations(plan.machine, p.pose, p.pose_name, &v);
   return v;
 }
 

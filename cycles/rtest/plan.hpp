@@ -68,14 +68,9 @@ std::vector<double> rtestReadTimes(const ProbePlan& plan);
 /// index height, the table indexes, and the sphere enters the next pose's nest position along
 /// its axis (the program runs in joint kinematics: a joint-space move with the sphere in the
 /// nest would drag it through the sensors).
-struct RtestMove {
-  enum class Kind { ClimbZ, Rapid, Linear, Index, Dwell, Read } kind;
-  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();  // sphere centre, machine frame, mm
-  Pose pose;
-  int point_id = 0;      // Read: the plan point; 0 = the reset pose's reset or re-read
-  double seconds = 0.0;  // Dwell
-};
-std::vector<RtestMove> rtestCycleMoves(const ProbePlan& plan);
+/// The path of one measuring cycle in the one move model (Waypoint: Dwell and Read where the
+/// sphere sits in the nest; Read's point_id 0 is the reset pose's reading).
+std::vector<Waypoint> rtestCycleMoves(const ProbePlan& plan);
 std::vector<std::string> rtestStrokeViolations(const ProbePlan& plan);
 
 /// One sensor reading (contract: `pose,t_s,B_deg,C_deg,dx_um,dy_um,dz_um`).

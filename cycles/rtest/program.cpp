@@ -67,19 +67,14 @@ nc::Program rtestProgram(const ProbePlan& plan, const std::string& dialect) {
     comment(title);
     int reads_in_cycle = 0;
     for (const auto& mv : moves) {
-      nc::Op op;
-      op.xyz = mv.position_m * k;
+      nc::Op op = pathMoveOp(mv, m, k);
       switch (mv.kind) {
-        case RtestMove::Kind::ClimbZ:
-          op.kind = nc::Op::Kind::Rapid;
-          op.z_only = true;
-          break;
-        case RtestMove::Kind::Rapid: op.kind = nc::Op::Kind::Rapid; break;
-        case RtestMove::Kind::Linear:
-          op.kind = nc::Op::Kind::Linear;
-          op.feed = m.feeds.positioning_mm_min * k;
-          break;
-        case RtestMove::Kind::Index: {
+        case Waypoint::Kind::ClimbZ:
+        case Waypoint::Kind::Rapid:
+        case Waypoint::Kind::Position:
+        case Waypoint::Kind::Retract:
+        case Waypoint::Kind::Probe: break;  // no probing move: the sphere sits in the nest
+        case Waypoint::Kind::Index: {
           std::string name;
           for (const auto& p : plan.points)
             if (p.pose.A == mv.pose.A && p.pose.B == mv.pose.B && p.pose.C == mv.pose.C) name = p.pose_name;
@@ -88,11 +83,11 @@ nc::Program rtestProgram(const ProbePlan& plan, const std::string& dialect) {
           index(mv.pose, false, 0.0);
           continue;
         }
-        case RtestMove::Kind::Dwell:
+        case Waypoint::Kind::Dwell:
           op.kind = nc::Op::Kind::Dwell;
           op.seconds = mv.seconds;
           break;
-        case RtestMove::Kind::Read:
+        case Waypoint::Kind::Read:
           op.kind = nc::Op::Kind::Read;
           op.point_id = mv.point_id;
           if (mv.point_id == 0) {

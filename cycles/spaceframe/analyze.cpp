@@ -19,17 +19,6 @@ namespace rotacal {
 
 namespace {
 
-std::string listText(const std::vector<double>& v) {
-  std::string s;
-  for (size_t i = 0; i < v.size(); ++i) s += (i ? "," : "") + fmt::format("{:g}", v[i]);
-  return s;
-}
-
-Eigen::Vector3d vec3Option(const std::string& key, const std::string& text) {
-  const auto v = parseNumberList(key, text);
-  if (v.size() != 3) throw std::invalid_argument("option " + key + ": expected x,y,z");
-  return {v[0], v[1], v[2]};
-}
 
 Eigen::Isometry3d setupTransform(const Eigen::Vector3d& t, const Eigen::Vector3d& w, const Eigen::Vector3d& pivot) {
   return Eigen::Translation3d(t + pivot) * Da(w.x()) * Db(w.y()) * Dc(w.z()) * Eigen::Translation3d(-pivot);
@@ -42,7 +31,7 @@ SpaceframeLayout SpaceframeLayout::fromOptions(const CycleOptions& options) {
   for (const auto& [key, value] : options) {
     if (key == "theta_list") l.theta_deg = parseNumberList(key, value);
     else if (key == "phi_list") l.phi_deg = parseNumberList(key, value);
-    else if (key == "origin_w_mm") l.origin_w_mm = vec3Option(key, value);
+    else if (key == "origin_w_mm") l.origin_w_mm = parseVec3Option(key, value);
     else if (key == "sphere_diameter_mm") l.sphere_diameter_mm = parseNumber(key, value);
     else if (key == "mpe_a_um") l.spec.A_um = parseNumber(key, value);
     else if (key == "mpe_k_um_per_m") l.spec.K_um_per_m = parseNumber(key, value);
@@ -79,8 +68,8 @@ SpaceframeLayout SpaceframeLayout::fromOptions(const CycleOptions& options) {
 }
 
 CycleOptions SpaceframeLayout::toOptions() const {
-  CycleOptions o = {{"theta_list", listText(theta_deg)},
-          {"phi_list", listText(phi_deg)},
+  CycleOptions o = {{"theta_list", numberListOption(theta_deg)},
+          {"phi_list", numberListOption(phi_deg)},
           {"origin_w_mm", fmt::format("{:g},{:g},{:g}", origin_w_mm.x(), origin_w_mm.y(), origin_w_mm.z())},
           {"sphere_diameter_mm", fmt::format("{:g}", sphere_diameter_mm)},
           {"mpe_a_um", fmt::format("{:g}", spec.A_um)},

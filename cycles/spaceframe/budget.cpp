@@ -186,13 +186,11 @@ UncertaintyBudget spaceframeBudget(const ProbePlan& plan, const SpaceframeAnalys
   // Type A (readingScatter): the sphere fits' residual also holds what the Type B contributors
   // leave in it, which u_B counts.
   std::vector<double> sys_um2;
-  if ((nb > 0 || frame_term) && lin.stage1_dof > 0) {
-    constexpr int kResidualRuns = 100;
-    for (int k = 0; k < kResidualRuns; ++k)
-      sys_um2.push_back(mmToUm(1.0) * mmToUm(1.0) *
-                        (lin.residual * triggerShift(draw(options.seed ^ 0x5245534944ULL, k, -1).truth)).squaredNorm() /
-                        lin.stage1_dof);
-  }
+  if ((nb > 0 || frame_term) && lin.stage1_dof > 0)
+    sys_um2 = contributorResidualVariances(100, options.seed, [&](std::uint64_t seed, int k) {
+      return mmToUm(1.0) * mmToUm(1.0) * (lin.residual * triggerShift(draw(seed, k, -1).truth)).squaredNorm() /
+             lin.stage1_dof;
+    });
   const ReadingScatter scatter =
       readingScatter(mmToUm(1.0) * mmToUm(1.0) * declared_mm2, mmToUm(1.0) * mmToUm(1.0) * s_obs2, dof, sys_um2);
   const double sigma2 = umToMm(1.0) * umToMm(1.0) * scatter.variance_um2;
@@ -229,15 +227,7 @@ UncertaintyBudget spaceframeBudget(const ProbePlan& plan, const SpaceframeAnalys
 
   const std::string left_out_text =
       left_out.empty() ? std::string() : fmt::format("; not acting on the frame's spheres and left out: {}", fmt::join(left_out, ", "));
-  if (!contributors && !frame_term) {
-    b.type_b_source = typeBNotDeclared();
-    return b;
-  }
-  if (nb == 0 && !frame_term) {
-    b.type_b_evaluated = true;
-    b.type_b_source = "no declared contributor acts on the space frame as Type B" + left_out_text;
-    return b;
-  }
+  if (!typeBToRun(&b, contributors || frame_term, nb > 0 || frame_term, "the space frame", left_out_text)) return b;
   MonteCarloProblem p;
   p.parameters = n;
   for (const auto& c : type_b.items) p.contributors.emplace_back(c.info->id);

@@ -213,12 +213,11 @@ Spheres3Budget spheres3Budget(const ProbePlan& plan, const Spheres3Result& r, co
   } else {
     std::vector<double> sys_um2;
     if (!type_b.items.empty() && lin.stage1_dof > 0) {
-      constexpr int kResidualRuns = 200;
-      for (int k = 0; k < kResidualRuns; ++k) {
+      sys_um2 = contributorResidualVariances(200, options.seed, [&](std::uint64_t seed, int k) {
         Spheres3Draw d;
-        drawSpheres3(plan, type_b, options.seed ^ 0x5245534944ULL, k, -1, &d);
-        sys_um2.push_back(mmToUm(1.0) * mmToUm(1.0) * (lin.residual * triggerShift(d)).squaredNorm() / lin.stage1_dof);
-      }
+        drawSpheres3(plan, type_b, seed, k, -1, &d);
+        return mmToUm(1.0) * mmToUm(1.0) * (lin.residual * triggerShift(d)).squaredNorm() / lin.stage1_dof;
+      });
     }
     const ReadingScatter scatter = readingScatter(mmToUm(1.0) * mmToUm(1.0) * declared_mm2,
                                                   mmToUm(s_obs_mm) * mmToUm(s_obs_mm),
@@ -247,12 +246,7 @@ Spheres3Budget spheres3Budget(const ProbePlan& plan, const Spheres3Result& r, co
   const std::string left_out_text =
       left_out.empty() ? std::string()
                        : fmt::format("; not acting on three spheres and left out: {}", fmt::join(left_out, ", "));
-  if (!contributors) {
-    full.type_b_source = typeBNotDeclared();
-  } else if (type_b.items.empty()) {
-    full.type_b_evaluated = true;
-    full.type_b_source = "no declared contributor acts on the three-sphere cycle as Type B" + left_out_text;
-  } else {
+  if (typeBToRun(&full, contributors != nullptr, !type_b.items.empty(), "the three-sphere cycle", left_out_text)) {
     runTypeB(&full, type_b, options, [&](std::uint64_t seed, int run, int c) -> Eigen::VectorXd {
       Spheres3Draw d;
       drawSpheres3(plan, type_b, seed, run, c, &d);

@@ -10,22 +10,6 @@
 
 namespace rotacal {
 
-namespace {
-
-Eigen::Vector3d parseVec3(const std::string& key, const std::string& text) {
-  const auto v = parseNumberList(key, text);
-  if (v.size() != 3) throw std::invalid_argument("option " + key + ": expected x,y,z in mm, got '" + text + "'");
-  return {v[0], v[1], v[2]};
-}
-
-Face faceOfNormal(const Eigen::Vector3d& n_m) {
-  if (n_m.z() > 0.5) return Face::Top;
-  if (std::abs(n_m.x()) > std::abs(n_m.y())) return n_m.x() > 0 ? Face::PosX : Face::NegX;
-  return n_m.y() > 0 ? Face::PosY : Face::NegY;
-}
-
-}  // namespace
-
 Spheres3Layout Spheres3Layout::fromOptions(const MachineModel& machine, const CycleOptions& options) {
   Spheres3Layout l;
   const double rho = machine.table_diameter_mm / 2.0 - 30.0;
@@ -38,9 +22,9 @@ Spheres3Layout Spheres3Layout::fromOptions(const MachineModel& machine, const Cy
     if (key == "c_step_deg") l.c_step_deg = parseNumber(key, value);
     else if (key == "c_start_deg") l.c_start_deg = parseNumber(key, value);
     else if (key == "radius_mm") l.radius_mm = parseNumber(key, value);
-    else if (key == "sphere1_w_mm") l.centers_w_mm[0] = parseVec3(key, value);
-    else if (key == "sphere2_w_mm") l.centers_w_mm[1] = parseVec3(key, value);
-    else if (key == "sphere3_w_mm") l.centers_w_mm[2] = parseVec3(key, value);
+    else if (key == "sphere1_w_mm") l.centers_w_mm[0] = parseVec3Option(key, value);
+    else if (key == "sphere2_w_mm") l.centers_w_mm[1] = parseVec3Option(key, value);
+    else if (key == "sphere3_w_mm") l.centers_w_mm[2] = parseVec3Option(key, value);
     else
       throw std::invalid_argument("unknown option '" + key +
                                   "' for cycle spheres3 (known: c_step_deg, c_start_deg, radius_mm, sphere1_w_mm, "

@@ -236,13 +236,12 @@ UncertaintyBudget tooltipBudget(const ProbePlan& plan, const std::vector<Tooltip
   // model cannot absorb (the linear axes between poses), which u_B counts.
   std::vector<double> sys_um2;
   if (!type_b.items.empty() && fit.dof > 0) {
-    constexpr int kResidualRuns = 200;
-    for (int r = 0; r < kResidualRuns; ++r) {
+    sys_um2 = contributorResidualVariances(200, options.seed, [&](std::uint64_t seed, int r) {
       TooltipDraw d;
-      drawTooltip(plan, type_b, options.seed ^ 0x5245534944ULL, r, -1, &d);
+      drawTooltip(plan, type_b, seed, r, -1, &d);
       const TooltipFit e = estimate(d);
-      sys_um2.push_back(e.dof > 0 ? e.rss_um2 / e.dof : 0.0);
-    }
+      return e.dof > 0 ? e.rss_um2 / e.dof : 0.0;
+    });
   }
   const double s_obs = fit.dof > 0 ? fit.sigma_um : 0.0;
   const ReadingScatter scatter = readingScatter(declared_um2, s_obs * s_obs, fit.dof, sys_um2);
@@ -261,15 +260,9 @@ UncertaintyBudget tooltipBudget(const ProbePlan& plan, const std::vector<Tooltip
   b.cov_a = cov_a;
   b.cov_b = Eigen::MatrixXd::Zero(n, n);
   b.terms.push_back({"data", b.uA()});
-  if (!contributors) {
-    b.type_b_source = typeBNotDeclared();
+  if (!typeBToRun(&b, contributors != nullptr, !type_b.items.empty(), "the tool-tip readings",
+                  " (docs/uncertainty.md, tooltip)"))
     return b;
-  }
-  if (type_b.items.empty()) {
-    b.type_b_evaluated = true;
-    b.type_b_source = "no declared contributor acts on the tool-tip readings as Type B (docs/uncertainty.md, tooltip)";
-    return b;
-  }
   runTypeB(&b, type_b, options, [&](std::uint64_t seed, int run, int c) -> Eigen::VectorXd {
     TooltipDraw d;
     drawTooltip(plan, type_b, seed, run, c, &d);
