@@ -14,7 +14,8 @@
   X(spheres3)             \
   X(rtest)                \
   X(spaceframe)           \
-  X(tooltip)
+  X(tooltip)              \
+  X(one_sphere)
 
 namespace rotacal {
 

@@ -1,0 +1,249 @@
+#include "cycles/one_sphere/analyze.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <map>
+#include <stdexcept>
+
+#include "core/errors.hpp"
+#include "core/report_envelope.hpp"
+#include "core/units.hpp"
+#include "cycles/one_sphere/plan.hpp"
+
+namespace rotacal {
+
+namespace {
+
+// The papers' parameters of the machine and the ISO 230-7 parameter of the model each one is,
+// to first order (exactly where the factor orders coincide: tests/core/kinematic_model_test.cpp).
+const std::vector<std::pair<const char*, const char*>>& papersNames(Kinematics k) {
+  static const std::vector<std::pair<const char*, const char*>> ac = {
+      {"dx_AY", "X0C"}, {"dy_AY", "Y0A"}, {"dz_AY", "Z0A"}, {"dy_CA", "Y0C"},
+      {"a_AY", "A0A"},  {"b_AY", "B0A"},  {"c_AY", "C0A"},  {"b_CA", "B0C"}};
+  static const std::vector<std::pair<const char*, const char*>> bc = {
+      {"dx_BY", "X0B"}, {"dy_CB", "Y0C"}, {"dz_BY", "Z0B"}, {"a_BY", "A0B"},
+      {"b_BY", "B0B"},  {"c_BY", "C0B"},  {"a_CB", "A0C"},  {"dx_CB", "X0C"}};
+  return k == Kinematics::TableAC ? ac : bc;
+}
+
+// Held first where a direction involves them: the C zero (a sphere reads it as its own place on
+// the table, 000's "set-up rotation") and the tilt of the C axis about the tilt axis, which the
+// tilt axis's own zero does as well (000 keeps a_AY and drops a_CA).
+std::vector<int> holdFirst(const KinematicModel& m, Kinematics k) {
+  return {m.parameterIndex("C0C"), m.parameterIndex(k == Kinematics::TableAC ? "A0C" : "B0C")};
+}
+
+double toReport(ParamKind kind, double v) { return kind == ParamKind::Length ? mmToUm(v) : radToMdeg(v); }
+
+struct Trigger {
+  Eigen::Vector3d t_mm;
+  Pose pose;
+  int point_index;
+  int run;
+  double t_s;
+};
+
+}  // namespace
+
+SphereCycleResult identifySphereCycle(const ProbePlan& plan, const std::vector<MeasurementRun>& runs) {
+  const SphereLayout l = sphereLayoutOf(plan);
+  const Kinematics kin = plan.machine.kinematics;
+  SphereCycleResult out;
+  out.model = kinematicModel(kinematicsName(kin), l.center_w_mm);
+  const KinematicModel& m = out.model;
+  const int np = m.size();
+  for (const auto& q : m.parameters) out.names.push_back({q.name, q.kind});
+  out.names.push_back({"dR", ParamKind::Length});
+  const double rho = l.radius_mm + plan.machine.probe.ball_radius_mm();
+
+  std::vector<Trigger> triggers;
+  const double cycle_s = plan.points.empty() ? 0.0 : plan.points.back().t_s;
+  for (size_t k = 0; k < runs.size(); ++k) {
+    std::map<int, const TriggerPoint*> by_id;
+    for (const auto& t : runs[k].points) by_id[t.point_id] = &t;
+    for (size_t i = 0; i < plan.points.size(); ++i) {
+      const ProbePoint& p = plan.points[i];
+      const auto it = by_id.find(p.id);
+      if (it == by_id.end()) throw InputError(runs[k].source, 0, fmt::format("no trigger for plan point {}", p.id));
+      const double t = std::isfinite(it->second->t_s) ? it->second->t_s : static_cast<double>(k) * cycle_s + p.t_s;
+      triggers.push_back({it->second->position_m_mm, p.pose, static_cast<int>(i), static_cast<int>(k), t});
+    }
+  }
+  out.touches = static_cast<int>(triggers.size());
+
+  // What the plan can show, at nominal: the held parameters stay at 0, the others are fitted.
+  const auto jacobian = [&](const Eigen::VectorXd& x, Eigen::VectorXd& r, Eigen::MatrixXd* J) {
+    r.resize(static_cast<Eigen::Index>(triggers.size()));
+    if (J) J->resize(r.size(), np + 1);
+    for (size_t j = 0; j < triggers.size(); ++j) {
+      const auto jj = static_cast<Eigen::Index>(j);
+      const Eigen::Vector3d X = sphereCentreInAxes(m, x.head(np), triggers[j].pose);
+      const Eigen::Vector3d d = triggers[j].t_mm - X;
+      r[jj] = d.norm() - (rho + x[np]);
+      if (J) {
+        J->row(jj).head(np) = -(d.normalized().transpose() * J_X_p(m, x.head(np), triggers[j].pose));
+        (*J)(jj, np) = -1.0;
+      }
+    }
+  };
+  Eigen::VectorXd r0;
+  Eigen::MatrixXd J0;
+  jacobian(Eigen::VectorXd::Zero(np + 1), r0, &J0);
+  out.identifiability = identifiability(J0, out.names, holdFirst(m, kin));
+  std::vector<Eigen::Index> free;
+  for (int i = 0; i <= np; ++i)
+    if (!out.identifiability.held[static_cast<size_t>(i)]) free.push_back(i);
+  const auto nf = static_cast<Eigen::Index>(free.size());
+  const auto expand = [&](const Eigen::VectorXd& z) {
+    Eigen::VectorXd x = Eigen::VectorXd::Zero(np + 1);
+    for (Eigen::Index k = 0; k < nf; ++k) x[free[static_cast<size_t>(k)]] = z[k];
+    return x;
+  };
+  const LeastSquaresResult fit = solveLeastSquares(
+      [&](const Eigen::VectorXd& z, Eigen::VectorXd& r, Eigen::MatrixXd* J) {
+        Eigen::MatrixXd Jf;
+        jacobian(expand(z), r, J ? &Jf : nullptr);
+        if (J) {
+          J->resize(r.size(), nf);
+          for (Eigen::Index k = 0; k < nf; ++k) J->col(k) = Jf.col(free[static_cast<size_t>(k)]);
+        }
+      },
+      Eigen::VectorXd::Zero(nf));
+  out.summary = fit.summary;
+  if (!fit.summary.usable())
+    throw InputError(runs.empty() ? std::string("results") : runs.front().source, 0,
+                     "the sphere cycle's fit did not converge: " + fit.summary.briefReport());
+  out.x = expand(fit.x);
+  out.cov_per_sigma2 = Eigen::MatrixXd::Zero(np + 1, np + 1);
+  for (Eigen::Index a = 0; a < nf; ++a)
+    for (Eigen::Index b = 0; b < nf; ++b)
+      out.cov_per_sigma2(free[static_cast<size_t>(a)], free[static_cast<size_t>(b)]) = fit.covariance(a, b);
+  Eigen::VectorXd r;
+  jacobian(out.x, r, &out.J_r_x);
+  for (const auto& t : triggers) {
+    out.normals.push_back((t.t_mm - sphereCentreInAxes(m, out.x.head(np), t.pose)).normalized());
+    out.point_index.push_back(t.point_index);
+    out.run_index.push_back(t.run);
+    out.t_s.push_back(t.t_s);
+  }
+  out.dof = out.touches - fit.summary.rank;
+  out.residual_sd_um = out.dof > 0 ? mmToUm(std::sqrt(r.squaredNorm() / out.dof)) : 0.0;
+  for (Eigen::Index j = 0; j < r.size(); ++j) out.residuals_um.push_back(mmToUm(r[j]));
+
+  // The papers' parameters, for the offsets and the reports that speak them.
+  out.location.kinematics = kin;
+  const auto& pairs = papersNames(kin);
+  for (const auto& [paper, iso] : pairs) {
+    const int i = parameterIndex(kin, paper);
+    const int k = m.parameterIndex(iso);
+    out.location.values[i] = out.x[k];
+    out.location_index_in_x[static_cast<size_t>(i)] = k;
+  }
+  const Eigen::Vector3d setup(out.x[m.parameterIndex("dX_S")], out.x[m.parameterIndex("dY_S")],
+                              out.x[m.parameterIndex("dZ_S")]);
+  for (const auto& pose : plan.poses) {
+    const Eigen::Vector3d papers = T_m_w(out.location, pose.pose) * (l.center_w_mm + setup);
+    out.mapping_residual_um = std::max(out.mapping_residual_um,
+                                       mmToUm((papers - sphereCentreInAxes(m, out.x.head(np), pose.pose)).norm()));
+  }
+  return out;
+}
+
+UncertaintyBudget sphereBudget(const ProbePlan& plan, const SphereCycleResult& r, bool contributors_declared) {
+  UncertaintyBudget b;
+  std::vector<int> free;
+  for (size_t i = 0; i < r.names.size(); ++i)
+    if (!r.identifiability.held[i]) free.push_back(static_cast<int>(i));
+  const auto n = static_cast<Eigen::Index>(free.size());
+  Eigen::VectorXd f(n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const auto& q = r.names[static_cast<size_t>(free[static_cast<size_t>(k)])];
+    b.names.push_back(q.name);
+    b.units.emplace_back(reportUnit(q.kind));
+    f[k] = toReport(q.kind, 1.0);
+  }
+  const double declared = plan.machine.probe.repeatability_um;
+  const ReadingScatter scatter = readingScatter(declared * declared, r.residual_sd_um * r.residual_sd_um, r.dof, {});
+  Eigen::MatrixXd cov(n, n);
+  for (Eigen::Index a = 0; a < n; ++a)
+    for (Eigen::Index c = 0; c < n; ++c) cov(a, c) = r.cov_per_sigma2(free[static_cast<size_t>(a)], free[static_cast<size_t>(c)]);
+  b.cov_a = umToMm(1.0) * umToMm(1.0) * scatter.variance_um2 * f.asDiagonal() * cov * f.asDiagonal();
+  b.cov_b = Eigen::MatrixXd::Zero(n, n);
+  b.type_a_source = fmt::format("the per-touch scatter {:.3f} um ({}) through the one-stage fit of every touch",
+                                std::sqrt(scatter.variance_um2), scatter.why);
+  b.terms.push_back({"data", b.uA()});
+  b.type_b_source = contributors_declared
+                        ? "not evaluated: the sphere cycle does not yet propagate the declared contributors (issue 19); "
+                          "u_c covers the data's scatter only"
+                        : typeBNotDeclared();
+  return b;
+}
+
+Json sphereReportJson(const ProbePlan& plan, const SphereCycleResult& r, const UncertaintyBudget& b,
+                      const std::vector<std::string>& files) {
+  Json j = documentEnvelope("rotacal-report/1", plan, files);
+  j["method"] = "sphere_lsq";
+  ErrorVector u = ErrorVector::Zero();
+  const Eigen::VectorXd uc = b.uC();
+  for (int i = 0; i < kNumLocationErrors; ++i) {
+    const int k = r.location_index_in_x[static_cast<size_t>(i)];
+    for (int q = 0; q < b.size(); ++q)
+      if (b.names[static_cast<size_t>(q)] == r.names[static_cast<size_t>(k)].name) {
+        // back to mm / rad, as locationErrorsJson takes them
+        u[i] = r.names[static_cast<size_t>(k)].kind == ParamKind::Length ? umToMm(uc[q]) : mdegToRad(uc[q]);
+      }
+  }
+  j["location_errors"] = locationErrorsJson(r.location, u);
+  j["location_errors_note"] = fmt::format(
+      "the machine's papers' parameters ({}), each the ISO 230-7 parameter of kinematic_parameters it is to first "
+      "order; the two models' sphere positions differ by at most {:.6f} um over the plan's poses",
+      plan.machine.kinematics == Kinematics::TableAC ? "000 Eq. (1)" : "002 Eq. (2)", r.mapping_residual_um);
+  Json kp = Json::object();
+  for (size_t i = 0; i < r.names.size(); ++i) {
+    const auto& q = r.names[i];
+    Json e = {{"value", round6(toReport(q.kind, r.x[static_cast<Eigen::Index>(i)]))}, {"unit", reportUnit(q.kind)}};
+    if (r.identifiability.held[i]) e["held"] = true;
+    else e["separable"] = static_cast<bool>(r.identifiability.separable[i]);
+    e["description"] = i < r.model.parameters.size() ? r.model.parameters[i].description
+                                                      : std::string("the probe's effective radius on this sphere less R + r");
+    kp[q.name] = e;
+  }
+  j["kinematic_parameters"] = kp;
+  Json unseen = Json::array();
+  for (const auto& c : r.identifiability.combinations)
+    unseen.push_back({{"held", r.names[static_cast<size_t>(c.held)].name}, {"direction", c.text}});
+  j["unseparable"] = unseen;
+  j["fit"] = {{"touches", r.touches},
+              {"dof", r.dof},
+              {"residual_sd_um", round6(r.residual_sd_um)},
+              {"rank", r.summary.rank},
+              {"termination", std::string(terminationName(r.summary.termination))}};
+  Eigen::VectorXd values(b.size());
+  for (int q = 0; q < b.size(); ++q)
+    for (size_t i = 0; i < r.names.size(); ++i)
+      if (r.names[i].name == b.names[static_cast<size_t>(q)])
+        values[q] = toReport(r.names[i].kind, r.x[static_cast<Eigen::Index>(i)]);
+  j["uncertainty"] = budgetJson(b, values);
+  return j;
+}
+
+std::string sphereText(const SphereCycleResult& r, const UncertaintyBudget& b) {
+  std::string s = fmt::format("sphere cycle: {} touches, residual {:.3f} um rms ({} dof), rank {} of {}\n", r.touches,
+                              r.residual_sd_um, r.dof, r.summary.rank, r.names.size());
+  Eigen::VectorXd values(b.size());
+  for (int q = 0; q < b.size(); ++q)
+    for (size_t i = 0; i < r.names.size(); ++i)
+      if (r.names[i].name == b.names[static_cast<size_t>(q)])
+        values[q] = toReport(r.names[i].kind, r.x[static_cast<Eigen::Index>(i)]);
+  s += budgetText(b, values);
+  if (!r.identifiability.combinations.empty()) {
+    s += "not separable by one sphere (held at nominal; the others read relative to it):\n";
+    for (const auto& c : r.identifiability.combinations) s += "  " + c.text + "\n";
+  }
+  s += fmt::format("location errors in the papers' parameters: the model's to first order, {:.6f} um apart at most\n",
+                   r.mapping_residual_um);
+  return s;
+}
+
+}  // namespace rotacal

@@ -1,0 +1,63 @@
+#pragma once
+// The one-sphere cycle's identification: every trigger of every pose in one fit of the five-axis
+// model (core/kinematic_model.hpp) and the probe's effective radius, on the exact geometry:
+//   r_j = |t_j - X(p, pose_j)| - (R + r + dR),
+// t_j the trigger (ball centre), X the linear-axis position of the sphere centre. No per-pose
+// centre fit in between: a pose with four touches and a pretravel error would bias its centre
+// along its own touch directions, which change from pose to pose; here dR absorbs it once.
+// What the plan cannot separate (core/identifiability.hpp) is held at nominal and named.
+#include <Eigen/Core>
+#include <array>
+#include <string>
+#include <vector>
+
+#include "core/error_model.hpp"
+#include "core/identifiability.hpp"
+#include "core/json_io.hpp"
+#include "core/kinematic_model.hpp"
+#include "core/least_squares.hpp"
+#include "core/measurement.hpp"
+#include "core/probe_plan.hpp"
+#include "core/uncertainty_budget.hpp"
+
+namespace rotacal {
+
+struct SphereCycleResult {
+  KinematicModel model;
+  std::vector<IdentifiabilityParameter> names;  // the model's parameters, then dR
+  Eigen::VectorXd x;                            // mm, rad (held ones at 0), then dR in mm
+  Identifiability identifiability;
+  Eigen::MatrixXd cov_per_sigma2;               // covariance of x per unit reading variance (mm^2 per mm^2)
+  LeastSquaresSummary summary;
+  int touches = 0;
+  int dof = 0;
+  double residual_sd_um = 0.0;
+  std::vector<double> residuals_um;             // per trigger, in the runs' order
+  /// Per trigger: J_r_x at the solution (mm per mm / rad, every parameter, held ones included),
+  /// the unit normal from the fitted sphere centre, the plan point (index) and run, the time (s:
+  /// the controller's clock, else the plan's time from each run's start at the run's end).
+  Eigen::MatrixXd J_r_x;
+  std::vector<Eigen::Vector3d> normals;
+  std::vector<int> point_index, run_index;
+  std::vector<double> t_s;
+  /// The location errors in the papers' parameters of the machine (000 Eq. (1) / 002 Eq. (2)),
+  /// mapped from the fit, and the largest difference between the two models' sphere positions
+  /// over the plan's poses (the mapping is exact to first order; this is what the second order
+  /// leaves).
+  LocationErrors location;
+  std::array<int, kNumLocationErrors> location_index_in_x{};  // each papers parameter: its index in x
+  double mapping_residual_um = 0.0;
+};
+
+/// Throws std::invalid_argument naming the results file when a trigger is missing or the fit fails.
+SphereCycleResult identifySphereCycle(const ProbePlan& plan, const std::vector<MeasurementRun>& runs);
+
+/// The budget: u_A from the data by readingScatter (declared: the probe's repeatability), u_B not
+/// evaluated by this cycle yet (it says so).
+UncertaintyBudget sphereBudget(const ProbePlan& plan, const SphereCycleResult& r, bool contributors_declared);
+
+Json sphereReportJson(const ProbePlan& plan, const SphereCycleResult& r, const UncertaintyBudget& b,
+                      const std::vector<std::string>& files);
+std::string sphereText(const SphereCycleResult& r, const UncertaintyBudget& b);
+
+}  // namespace rotacal

@@ -1,0 +1,74 @@
+// one_sphere (issue 19): both rotary axes' ISO 230-7 location errors from one calibration sphere,
+// touched at a grid of tilt and C angles (the KinematicsOpt / CYCLE996 / AxiSet class).
+#include <fmt/format.h>
+
+#include "core/singleton.hpp"
+#include "core/units.hpp"
+#include "cycles/cycle.hpp"
+#include "cycles/probing.hpp"
+#include "cycles/one_sphere/analyze.hpp"
+#include "cycles/one_sphere/diagnose.hpp"
+#include "cycles/one_sphere/plan.hpp"
+#include "postproc/probe_program.hpp"
+
+namespace rotacal {
+namespace {
+
+class Sphere final : public Cycle {
+ public:
+  std::string_view name() const override { return "one_sphere"; }
+  std::string_view summary() const override {
+    return "issue 19: both rotary axes' ISO 230-7 location errors and the probe's radius from one sphere";
+  }
+  CycleExample example() const override { return {"examples/machines/ac_trunnion.json", {}}; }
+  ProbePlan plan(const MachineModel& machine, const CycleOptions& options) const override {
+    return makeSpherePlan(machine, options);
+  }
+  PlanRules planRules() const override {
+    PlanRules r;
+    r.spheres = 1;  // one sphere, at least 4 touches at every pose
+    r.check_options = [](const ProbePlan& p) { (void)sphereLayoutOf(p); };
+    return r;
+  }
+  int programNumber() const override { return 7019; }  // 7000 + the issue that specifies it (19)
+  nc::Program buildProgram(const ProbePlan& plan, const std::string& dialect) const override {
+    return probeProgram(plan, dialect);
+  }
+  Simulated simulate(const SimulateRequest& request) const override { return simulateProbing(request); }
+
+  CycleDocuments analyze(const AnalyzeRequest& r) const override {
+    const ProbePlan& plan = *r.plan;
+    const SphereCycleResult res = identifySphereCycle(plan, readProbeRuns(plan, r.results, *r.dialect));
+    const UncertaintyBudget b = sphereBudget(plan, res, r.contributors != nullptr);
+    std::vector<std::string> files;
+    for (const auto& f : r.results) files.push_back(f.path);
+    CycleDocuments out;
+    out.doc = sphereReportJson(plan, res, b, files);
+    out.text = sphereText(res, b);
+    LocationCorrection c;
+    c.identified = res.location;
+    const Eigen::VectorXd uc = b.uC();
+    for (int i = 0; i < kNumLocationErrors; ++i) {
+      const auto& q = res.names[static_cast<size_t>(res.location_index_in_x[static_cast<size_t>(i)])];
+      for (int k = 0; k < b.size(); ++k)
+        if (b.names[static_cast<size_t>(k)] == q.name)
+          c.u[i] = q.kind == ParamKind::Length ? umToMm(uc[k]) : mdegToRad(uc[k]);
+    }
+    out.offsets = c;
+    return out;
+  }
+
+  CycleDocuments diagnose(const DiagnoseRequest& r) const override {
+    const ProbePlan& plan = *r.plan;
+    JudgeOptions o;
+    o.alpha = r.alpha;
+    const SphereDiagnosis d = diagnoseSphere(plan, readProbeRuns(plan, r.results, *r.dialect), o);
+    return documents(sphereDiagnosisJson(d, plan), sphereDiagnosisText(d));
+  }
+};
+
+}  // namespace
+
+const Cycle& one_sphereCycle() { return singleton<Sphere>(); }
+
+}  // namespace rotacal

@@ -1,0 +1,119 @@
+#include "cycles/one_sphere/diagnose.hpp"
+
+#include <fmt/format.h>
+
+#include <stdexcept>
+
+#include "core/units.hpp"
+#include "cycles/judge_contract.hpp"
+#include "cycles/one_sphere/analyze.hpp"
+#include "cycles/one_sphere/plan.hpp"
+
+namespace rotacal {
+
+namespace {
+
+constexpr const char* kDrift = "thermal_drift";
+constexpr const char* kPretravel = "pretravel_by_direction";
+
+std::string separateWith(const JudgeConfounded& c) {
+  if (c.cause == kDrift)
+    return "repeat the cycle with the poses in another order (a drift follows the clock, a location error the pose)";
+  return "touch each pose from more directions (both sides of every axis where the stem allows)";
+}
+
+}  // namespace
+
+SphereDiagnosis diagnoseSphere(const ProbePlan& plan, const std::vector<MeasurementRun>& runs, const JudgeOptions& options) {
+  const SphereCycleResult fit = identifySphereCycle(plan, runs);
+  const auto n = static_cast<Eigen::Index>(fit.residuals_um.size());
+  JudgeProblem p;
+  p.y = Eigen::Map<const Eigen::VectorXd>(fit.residuals_um.data(), n);
+  p.sigma = Eigen::VectorXd::Constant(n, plan.machine.probe.repeatability_um);  // declared, never the fit's
+  p.unit = "um";
+  // The baseline at its solution: every parameter's column (held ones too: the judge finds
+  // them unidentifiable), in um per report unit.
+  p.J0.resize(n, static_cast<Eigen::Index>(fit.names.size()));
+  for (size_t i = 0; i < fit.names.size(); ++i) {
+    const double per = fit.names[i].kind == ParamKind::Length ? 1.0 : kUmPerMm / kMdegPerRad;  // um per um, um per mdeg
+    p.J0.col(static_cast<Eigen::Index>(i)) = fit.J_r_x.col(static_cast<Eigen::Index>(i)) * per;
+    p.baseline_parameters.push_back({fit.names[i].name, std::string(reportUnit(fit.names[i].kind))});
+  }
+  // Drift: the sphere moving by v (t - t_mid) in the machine frame; a trigger reads it along its
+  // normal (the residual falls by n . v dt).
+  double t_lo = 1e300, t_hi = -1e300;
+  for (double t : fit.t_s) t_lo = std::min(t_lo, t), t_hi = std::max(t_hi, t);
+  const double t_mid = 0.5 * (t_lo + t_hi);
+  JudgeCause drift{kDrift, "the sphere drifting linearly in time in X, Y, Z (thermal growth over the cycle)",
+                   Eigen::MatrixXd(n, 3), {{"vX", "um/h"}, {"vY", "um/h"}, {"vZ", "um/h"}}};
+  for (Eigen::Index j = 0; j < n; ++j)
+    drift.J.row(j) = -fit.normals[static_cast<size_t>(j)].transpose() * (fit.t_s[static_cast<size_t>(j)] - t_mid) / 3600.0;
+  p.causes.push_back(drift);
+  // Pretravel by direction: one trigger distance per approach beyond the first (the mean is the
+  // model's dR); a direction no pose used has no column.
+  const auto& approaches = sphereApproaches();
+  const char* dir_names[] = {"-X", "-Y", "+X", "+Y", "-Z"};
+  JudgeCause pre{kPretravel, "the probe's trigger distance differing by approach direction (lobing)", Eigen::MatrixXd(n, 0), {}};
+  for (size_t a = 1; a < approaches.size(); ++a) {
+    Eigen::VectorXd col = Eigen::VectorXd::Zero(n);
+    for (Eigen::Index j = 0; j < n; ++j)
+      if (plan.points[static_cast<size_t>(fit.point_index[static_cast<size_t>(j)])].target == static_cast<int>(a) + 1)
+        col[j] = -1.0;
+    if (col.cwiseAbs().sum() == 0) continue;
+    pre.J.conservativeResize(n, pre.J.cols() + 1);
+    pre.J.col(pre.J.cols() - 1) = col;
+    pre.parameters.push_back({fmt::format("pretravel_{}", dir_names[a]), "um"});
+  }
+  if (pre.J.cols() > 0) p.causes.push_back(pre);
+  p.group_name = "pose";
+  JudgeFactor pose{"pose", {}, {}, ""}, approach{"approach", {}, {}, ""}, time{"time", {}, {}, "s"};
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const ProbePoint& pt = plan.points[static_cast<size_t>(fit.point_index[static_cast<size_t>(j)])];
+    pose.levels.push_back(pt.pose_name);
+    approach.levels.push_back(dir_names[pt.target - 1]);
+    time.values.push_back(fit.t_s[static_cast<size_t>(j)]);
+  }
+  // Leave one pose out: the group is the pose's index among the plan's poses.
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const std::string& name = pose.levels[static_cast<size_t>(j)];
+    int g = 0;
+    for (size_t k = 0; k < plan.poses.size(); ++k)
+      if (plan.poses[k].name == name) g = static_cast<int>(k);
+    p.groups.push_back(g);
+  }
+  p.factors = {pose, approach};
+  if (t_hi > t_lo) p.factors.push_back(time);
+  SphereDiagnosis d;
+  d.runs = static_cast<int>(runs.size());
+  d.summary = judge(p, options);
+  return d;
+}
+
+Json sphereDiagnosisJson(const SphereDiagnosis& d, const ProbePlan& plan) {
+  const JudgeSummary& s = d.summary;
+  Json j;
+  stampDiagnosis(j, "one_sphere");
+  j["machine"] = plan.machine.name;
+  j["repeats"] = d.runs;
+  j["declared_sigma_um"] = s.declared_sigma_rms;
+  j["baseline"] = contractBaselineJson(
+      s, "both rotary axes' ISO 230-7 location errors (core/kinematic_model.hpp), the sphere's set-up and the probe's "
+         "effective radius");
+  j["baseline"]["holdout"] = fmt::format("leave one {} out", s.group_name);
+  verdictJson(j, s);
+  Json findings = Json::array();
+  for (const auto& f : s.findings) {
+    Json e = contractFindingJson(s, f);
+    e["cause"] = f.cause;
+    e["summary"] = f.description + ": " + findingParametersText(f);
+    findings.push_back(e);
+  }
+  j["findings"] = findings;
+  j["confounded"] = confoundedJson(s, separateWith);
+  j["judge"] = judgeToJson(s);
+  return j;
+}
+
+std::string sphereDiagnosisText(const SphereDiagnosis& d) { return judgeText(d.summary); }
+
+}  // namespace rotacal

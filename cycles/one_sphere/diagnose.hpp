@@ -1,0 +1,27 @@
+#pragma once
+// What the one-sphere model gets wrong: the shared judge (core/judge.hpp) on the fit's residual,
+// against the declared probe noise, with the causes a sphere cycle can show:
+//  - thermal_drift: the sphere (or the spindle) moving linearly in time in X, Y, Z over the cycle;
+//  - pretravel_by_direction: the probe's trigger distance differing between its approach
+//    directions (lobing), beyond the one effective radius the model fits.
+// Leave one pose out for the held-out test. Confounding comes from the Jacobians of this plan.
+#include <string>
+#include <vector>
+
+#include "core/json_io.hpp"
+#include "core/judge.hpp"
+#include "core/measurement.hpp"
+#include "core/probe_plan.hpp"
+
+namespace rotacal {
+
+struct SphereDiagnosis {
+  JudgeSummary summary;
+  int runs = 0;
+};
+
+SphereDiagnosis diagnoseSphere(const ProbePlan& plan, const std::vector<MeasurementRun>& runs, const JudgeOptions& options);
+Json sphereDiagnosisJson(const SphereDiagnosis& d, const ProbePlan& plan);
+std::string sphereDiagnosisText(const SphereDiagnosis& d);
+
+}  // namespace rotacal

@@ -1,0 +1,45 @@
+#pragma once
+// The one-sphere cycle (issue 19; the KinematicsOpt / CYCLE996 / AxiSet class): one calibration
+// sphere on the table, on a stem, touched at every pose of a grid of the tilt axis (A or B) and
+// C. At each pose the ball comes from above (the top) and from the sides of the four horizontal
+// directions whose contact lies on the sphere's half away from the stem (contact normal n with
+// n . s <= 0, s the stem's direction from the centre in the pose): the stylus never reaches round
+// to the stem side, and the ball's vertical way down to a side touch, its approach and its
+// stylus stay on that half as long as the tilt keeps the table below the sphere (|tilt| <= 90 deg).
+//
+// This version runs on the tilting-table machines (table_ac, table_bc), whose table chain the
+// exact simulator carries; the head kinematics follow (core/kinematic_model.hpp has them).
+#include <Eigen/Core>
+#include <vector>
+
+#include "core/probe_plan.hpp"
+
+namespace rotacal {
+
+struct SphereLayout {
+  Eigen::Vector3d center_w_mm = Eigen::Vector3d(120.0, 0.0, 80.0);  // on the table, workpiece frame
+  double radius_mm = 12.7;          // a 25.4 mm calibration sphere (Heidenhain KKH, Renishaw)
+  double stem_length_mm = 60.0;     // sphere centre to the table, along the table's -Z
+  double stem_diameter_mm = 8.0;
+  std::vector<double> tilt_deg;     // the tilt axis (A or B); default: 0 to 90 deg in 30 deg steps, within the stroke
+  std::vector<double> c_deg = {0.0, 90.0, 180.0, 270.0};
+
+  /// Defaults for a machine, overridden by the options center_w_mm ("x,y,z"), radius_mm,
+  /// stem_length_mm, stem_diameter_mm, tilt_list, c_list.
+  static SphereLayout fromOptions(const MachineModel& machine, const CycleOptions& options);
+  CycleOptions toOptions() const;
+};
+
+/// The tilt axis of a tilting-table machine ('A' for table_ac, 'B' for table_bc). Throws
+/// std::invalid_argument naming the kinematics for any other.
+char sphereTiltAxis(Kinematics kinematics);
+
+/// The four horizontal approach directions the side touches take, and the top's (-Z).
+const std::vector<Eigen::Vector3d>& sphereApproaches();
+
+ProbePlan makeSpherePlan(const MachineModel& machine, const CycleOptions& options);
+
+/// The plan's layout read back (the options a PLAN.json carries). Throws std::invalid_argument.
+SphereLayout sphereLayoutOf(const ProbePlan& plan);
+
+}  // namespace rotacal
