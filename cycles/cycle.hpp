@@ -149,20 +149,36 @@ struct CycleExample {
   CycleOptions options;
 };
 
+/// What a cycle is, as data: each cycle hands it to Cycle's constructor, and every verb reads it
+/// through the accessors below (no override to write for what is only a value).
+struct CycleIdentity {
+  std::string_view name;     // what `plan --cycle` takes and the plan's `cycle` field carries
+  std::string_view summary;  // one line for --help: the source and what the cycle identifies
+  CycleExample example;
+  /// The number of the cycle's programs in the control's memory (O-word): one per cycle, 1-9999
+  /// (docs/dialects.md), so that two cycles' programs never overwrite each other.
+  int program_number = 0;
+  /// The plan. Throws std::invalid_argument naming the option or the limit.
+  ProbePlan (*make_plan)(const MachineModel& machine, const CycleOptions& options) = nullptr;
+  /// The program's operations; Cycle::program() adds what every cycle's program carries.
+  nc::Program (*build_program)(const ProbePlan& plan, const std::string& dialect) = nullptr;
+};
+
 class Cycle {
  public:
+  explicit Cycle(CycleIdentity identity) : identity_(std::move(identity)) {}
   virtual ~Cycle() = default;
 
-  /// The name `plan --cycle` takes and the plan's `cycle` field carries.
-  virtual std::string_view name() const = 0;
+  std::string_view name() const { return identity_.name; }
   /// Other plan `cycle` values this cycle analyzes (plans written by other tools or commands).
   virtual std::vector<std::string> aliases() const { return {}; }
-  /// One line for --help: the source paper and what the cycle identifies.
-  virtual std::string_view summary() const = 0;
-  virtual CycleExample example() const = 0;
+  std::string_view summary() const { return identity_.summary; }
+  CycleExample example() const { return identity_.example; }
 
   /// The plan of the cycle. Throws std::invalid_argument naming the option or the limit.
-  virtual ProbePlan plan(const MachineModel& machine, const CycleOptions& options) const = 0;
+  ProbePlan plan(const MachineModel& machine, const CycleOptions& options) const {
+    return identity_.make_plan(machine, options);
+  }
   /// What a PLAN.json of this cycle must satisfy beyond the format (checked with FILE:LINE).
   virtual PlanRules planRules() const { return {}; }
 
@@ -170,9 +186,7 @@ class Cycle {
   /// selects only the controller's conventions the plan needs (rotary sign). Throws
   /// std::invalid_argument when it cannot be expressed.
   nc::Program program(const ProbePlan& plan, const std::string& dialect) const;
-  /// The number of the cycle's programs in the control's memory (O-word): one per cycle, 1-9999
-  /// (docs/dialects.md), so that two cycles' programs never overwrite each other.
-  virtual int programNumber() const = 0;
+  int programNumber() const { return identity_.program_number; }
   /// What one plan point is in a program, for the terminal ("probing moves").
   virtual std::string_view pointNoun() const { return "probing moves"; }
 
@@ -192,9 +206,8 @@ class Cycle {
   virtual bool hasDesign() const { return false; }
   virtual DesignedPlan design(const DesignRequest& request) const;
 
- protected:
-  /// The program's operations; program() adds what every cycle's program carries.
-  virtual nc::Program buildProgram(const ProbePlan& plan, const std::string& dialect) const = 0;
+ private:
+  CycleIdentity identity_;
 };
 
 /// Every cycle, in the registry's order.

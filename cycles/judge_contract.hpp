@@ -3,6 +3,7 @@
 // (core/judge.hpp): one form for every cycle that writes them.
 #include <fmt/format.h>
 
+#include <functional>
 #include <string>
 
 #include "core/json_io.hpp"
@@ -37,6 +38,21 @@ inline Json contractFindingJson(const JudgeSummary& s, const JudgeFinding& f) {
           {"gain_pct", f.holdout_rms_model > 0 ? 100.0 * (1.0 - f.holdout_rms_cause / f.holdout_rms_model) : 0.0},
           {"separability", f.separability},
           {"confidence", f.confidence}};
+}
+
+/// The contract's `findings`: each finding's fields (contractFindingJson), its cause and a one-line
+/// summary in the cycle's words; `extra` adds to an entry what only the cycle knows (may be empty).
+inline Json contractFindingsJson(const JudgeSummary& s, const std::function<std::string(const JudgeFinding&)>& summary,
+                                 const std::function<void(const JudgeFinding&, Json&)>& extra = {}) {
+  Json out = Json::array();
+  for (const auto& f : s.findings) {
+    Json e = contractFindingJson(s, f);
+    e["cause"] = f.cause;
+    e["summary"] = summary(f);
+    if (extra) extra(f, e);
+    out.push_back(e);
+  }
+  return out;
 }
 
 /// "name = value +- u unit" of each of a finding's parameters, comma-separated.

@@ -79,7 +79,7 @@ const Cycle& cycleOfPlan(const ProbePlan& plan) {
 }
 
 nc::Program Cycle::program(const ProbePlan& plan, const std::string& dialect) const {
-  nc::Program p = buildProgram(plan, dialect);
+  nc::Program p = identity_.build_program(plan, dialect);
   p.number = programNumber();
   return p;
 }

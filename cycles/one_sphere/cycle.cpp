@@ -16,23 +16,15 @@ namespace {
 
 class Sphere final : public Cycle {
  public:
-  std::string_view name() const override { return "one_sphere"; }
-  std::string_view summary() const override {
-    return "issue 19: both rotary axes' ISO 230-7 location errors and the probe's radius from one sphere";
-  }
-  CycleExample example() const override { return {"examples/machines/ac_trunnion.json", {}}; }
-  ProbePlan plan(const MachineModel& machine, const CycleOptions& options) const override {
-    return makeSpherePlan(machine, options);
-  }
+  Sphere() : Cycle({"one_sphere", "issue 19: both rotary axes' ISO 230-7 location errors and the probe's radius from one sphere",
+                     {"examples/machines/ac_trunnion.json", {}},
+                     7019,  // 7000 + the issue that specifies it (19)
+                     makeSpherePlan, probeProgram}) {}
   PlanRules planRules() const override {
     PlanRules r;
     r.spheres = 1;  // one sphere, at least 4 touches at every pose
     r.check_options = [](const ProbePlan& p) { (void)sphereLayoutOf(p); };
     return r;
-  }
-  int programNumber() const override { return 7019; }  // 7000 + the issue that specifies it (19)
-  nc::Program buildProgram(const ProbePlan& plan, const std::string& dialect) const override {
-    return probeProgram(plan, dialect);
   }
   Simulated simulate(const SimulateRequest& request) const override { return simulateProbing(request); }
 

@@ -101,14 +101,8 @@ Json sphereDiagnosisJson(const SphereDiagnosis& d, const ProbePlan& plan) {
          "effective radius");
   j["baseline"]["holdout"] = fmt::format("leave one {} out", s.group_name);
   verdictJson(j, s);
-  Json findings = Json::array();
-  for (const auto& f : s.findings) {
-    Json e = contractFindingJson(s, f);
-    e["cause"] = f.cause;
-    e["summary"] = f.description + ": " + findingParametersText(f);
-    findings.push_back(e);
-  }
-  j["findings"] = findings;
+  j["findings"] = contractFindingsJson(
+      s, [](const JudgeFinding& f) { return f.description + ": " + findingParametersText(f); });
   j["confounded"] = confoundedJson(s, separateWith);
   j["judge"] = judgeToJson(s);
   return j;

@@ -45,23 +45,15 @@ double sensorSigma(const ProbePlan& plan) {
 
 class Rtest final : public Cycle {
  public:
-  std::string_view name() const override { return "rtest"; }
-  std::string_view summary() const override {
-    return "002: the position-dependent errors of the tilt axis with an R-test, and their thermal drift";
-  }
-  CycleExample example() const override { return {"examples/machines/bc_trunnion.json", {}}; }
-  ProbePlan plan(const MachineModel& machine, const CycleOptions& options) const override {
-    return makeRtestPlan(machine, options);
-  }
+  Rtest() : Cycle({"rtest", "002: the position-dependent errors of the tilt axis with an R-test, and their thermal drift",
+                    {"examples/machines/bc_trunnion.json", {}},
+                    7002,  // 7000 + its source document (002)
+                    makeRtestPlan, rtestProgram}) {}
   PlanRules planRules() const override {
     PlanRules r;
     r.artefact_touched = false;  // the R-test's sphere sits in its nest, not on the machine's artefact
     r.check_options = rtestCheckPlanOptions;
     return r;
-  }
-  int programNumber() const override { return 7002; }  // 7000 + its source document (002).
-  nc::Program buildProgram(const ProbePlan& plan, const std::string& dialect) const override {
-    return rtestProgram(plan, dialect);
   }
   std::string_view pointNoun() const override { return "R-test poses"; }
 

@@ -13,18 +13,10 @@ namespace {
 
 class Spaceframe final : public Cycle {
  public:
-  std::string_view name() const override { return "spaceframe"; }
-  std::string_view summary() const override {
-    return "003: length errors of a 7-sphere frame against U = +-(A + K L), and what explains them";
-  }
-  CycleExample example() const override { return {"examples/machines/ac_trunnion.json", {{"phi_list", "-90,-45,0"}}}; }
-  ProbePlan plan(const MachineModel& machine, const CycleOptions& options) const override {
-    return makeSpaceframePlan(machine, options);
-  }
-  int programNumber() const override { return 7003; }  // 7000 + its source document (003).
-  nc::Program buildProgram(const ProbePlan& plan, const std::string& dialect) const override {
-    return probeProgram(plan, dialect);
-  }
+  Spaceframe() : Cycle({"spaceframe", "003: length errors of a 7-sphere frame against U = +-(A + K L), and what explains them",
+                         {"examples/machines/ac_trunnion.json", {{"phi_list", "-90,-45,0"}}},
+                         7003,  // 7000 + its source document (003)
+                         makeSpaceframePlan, probeProgram}) {}
   Simulated simulate(const SimulateRequest& request) const override { return simulateProbing(request); }
 
   std::string_view noOffsetsReason() const override {

@@ -23,22 +23,14 @@ std::vector<std::string> paths(const std::vector<InputFile>& files) {
 
 class Spheres3 final : public Cycle {
  public:
-  std::string_view name() const override { return "spheres3"; }
-  std::string_view summary() const override {
-    return "001: the 4 location and 6 component errors of the C axis from three spheres";
-  }
-  CycleExample example() const override { return {"examples/machines/ac_trunnion.json", {}}; }
-  ProbePlan plan(const MachineModel& machine, const CycleOptions& options) const override {
-    return makeSpheres3Plan(machine, options);
-  }
+  Spheres3() : Cycle({"spheres3", "001: the 4 location and 6 component errors of the C axis from three spheres",
+                       {"examples/machines/ac_trunnion.json", {}},
+                       7001,  // 7000 + its source document (001)
+                       makeSpheres3Plan, probeProgram}) {}
   PlanRules planRules() const override {
     PlanRules r;
     r.spheres = 3;  // 001 Fig. 2: three spheres, each fitted at every pose
     return r;
-  }
-  int programNumber() const override { return 7001; }  // 7000 + its source document (001).
-  nc::Program buildProgram(const ProbePlan& plan, const std::string& dialect) const override {
-    return probeProgram(plan, dialect);
   }
   Simulated simulate(const SimulateRequest& request) const override { return simulateProbing(request); }
 

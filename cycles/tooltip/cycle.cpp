@@ -26,23 +26,16 @@ std::vector<TooltipRun> readRuns(const ProbePlan& plan, const std::vector<InputF
 
 class Tooltip final : public Cycle {
  public:
-  std::string_view name() const override { return "tooltip"; }
-  std::string_view summary() const override {
-    return "004: angular positioning error and pivot length of a head's axis from a fixed-tool-tip program";
-  }
-  CycleExample example() const override { return {"examples/machines/head_ab.json", {}}; }
-  ProbePlan plan(const MachineModel& machine, const CycleOptions& options) const override {
-    return makeTooltipPlan(machine, options);
-  }
+  Tooltip() : Cycle({"tooltip",
+                      "004: angular positioning error and pivot length of a head's axis from a fixed-tool-tip program",
+                      {"examples/machines/head_ab.json", {}},
+                      7004,  // 7000 + its source document (004)
+                      makeTooltipPlan, tooltipProgram}) {}
   PlanRules planRules() const override {
     PlanRules r;
     r.heights = false;  // no probing moves: the tool tip stays at the laser's target
     r.check_options = [](const ProbePlan& p) { (void)tooltipOptionsFrom(p.options, p.machine); };
     return r;
-  }
-  int programNumber() const override { return 7004; }  // 7000 + its source document (004).
-  nc::Program buildProgram(const ProbePlan& plan, const std::string& dialect) const override {
-    return tooltipProgram(plan, dialect);
   }
   std::string_view pointNoun() const override { return "tool-tip poses"; }
 

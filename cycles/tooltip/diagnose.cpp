@@ -231,16 +231,10 @@ Json tooltipDiagnosisJson(const TooltipDiagnosis& d) {
   j["baseline"] = contractBaselineJson(s, "angular (004: one angular error per angle, pivot length as programmed)");
   j["baseline"]["holdout"] = fmt::format("leave one {} out", s.group_name);
   verdictJson(j, s);
-  Json findings = Json::array();
-  for (const auto& f : s.findings) {
-    Json e = contractFindingJson(s, f);
-    e["cause"] = f.cause;
-    e["summary"] = findingSummary(f);
+  j["findings"] = contractFindingsJson(s, findingSummary, [](const JudgeFinding& f, Json& e) {
     if (f.cause == kPivot)
       e["location_errors"] = {{"dR", {{"value", f.parameters[0].value}, {"unit", "um"}, {"u", f.parameters[0].u}}}};
-    findings.push_back(e);
-  }
-  j["findings"] = findings;
+  });
   j["confounded"] = confoundedJson(s, separateWith);
   j["judge"] = judgeToJson(s);
   return j;

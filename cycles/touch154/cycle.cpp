@@ -25,14 +25,12 @@ namespace {
 
 class Touch154 final : public Cycle {
  public:
-  std::string_view name() const override { return "touch154"; }
+  Touch154() : Cycle({"touch154", "000: the 8 location errors of an A/C table from 154 touches",
+                       {"examples/machines/ac_trunnion.json", {}},
+                       7154,  // the 154 touches of 000; the others are 7000 + their source document
+                       makeTouch154Plan, probeProgram}) {}
   std::vector<std::string> aliases() const override { return {"touch_designed"}; }
-  std::string_view summary() const override { return "000: the 8 location errors of an A/C table from 154 touches"; }
-  CycleExample example() const override { return {"examples/machines/ac_trunnion.json", {}}; }
 
-  ProbePlan plan(const MachineModel& machine, const CycleOptions& options) const override {
-    return makeTouch154Plan(machine, options);
-  }
   PlanRules planRules() const override {
     PlanRules r;
     // The layout options a touch154 plan records (a designed plan records its design instead).
@@ -40,10 +38,6 @@ class Touch154 final : public Cycle {
       if (p.cycle == "touch154") (void)Touch154Layout::fromOptions(p.options);
     };
     return r;
-  }
-  int programNumber() const override { return 7154; }  // 7154: the 154 touches of 000; the others are 7000 + their source document.
-  nc::Program buildProgram(const ProbePlan& plan, const std::string& dialect) const override {
-    return probeProgram(plan, dialect);
   }
   Simulated simulate(const SimulateRequest& request) const override { return simulateProbing(request); }
 
