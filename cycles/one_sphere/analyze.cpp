@@ -150,36 +150,6 @@ SphereCycleResult identifySphereCycle(const ProbePlan& plan, const std::vector<M
   return out;
 }
 
-UncertaintyBudget sphereBudget(const ProbePlan& plan, const SphereCycleResult& r, bool contributors_declared) {
-  UncertaintyBudget b;
-  std::vector<int> free;
-  for (size_t i = 0; i < r.names.size(); ++i)
-    if (!r.identifiability.held[i]) free.push_back(static_cast<int>(i));
-  const auto n = static_cast<Eigen::Index>(free.size());
-  Eigen::VectorXd f(n);
-  for (Eigen::Index k = 0; k < n; ++k) {
-    const auto& q = r.names[static_cast<size_t>(free[static_cast<size_t>(k)])];
-    b.names.push_back(q.name);
-    b.units.emplace_back(reportUnit(q.kind));
-    f[k] = toReport(q.kind, 1.0);
-  }
-  const double declared = plan.machine.probe.repeatability_um;
-  const ReadingScatter scatter = readingScatter(declared * declared, r.residual_sd_um * r.residual_sd_um, r.dof, {});
-  Eigen::MatrixXd cov(n, n);
-  for (Eigen::Index a = 0; a < n; ++a)
-    for (Eigen::Index c = 0; c < n; ++c) cov(a, c) = r.cov_per_sigma2(free[static_cast<size_t>(a)], free[static_cast<size_t>(c)]);
-  b.cov_a = umToMm(1.0) * umToMm(1.0) * scatter.variance_um2 * f.asDiagonal() * cov * f.asDiagonal();
-  b.cov_b = Eigen::MatrixXd::Zero(n, n);
-  b.type_a_source = fmt::format("the per-touch scatter {:.3f} um ({}) through the one-stage fit of every touch",
-                                std::sqrt(scatter.variance_um2), scatter.why);
-  b.terms.push_back({"data", b.uA()});
-  b.type_b_source = contributors_declared
-                        ? "not evaluated: the sphere cycle does not yet propagate the declared contributors (issue 19); "
-                          "u_c covers the data's scatter only"
-                        : typeBNotDeclared();
-  return b;
-}
-
 Json sphereReportJson(const ProbePlan& plan, const SphereCycleResult& r, const UncertaintyBudget& b,
                       const std::vector<std::string>& files) {
   Json j = documentEnvelope("rotacal-report/1", plan, files);

@@ -52,10 +52,6 @@ struct SphereCycleResult {
 /// Throws std::invalid_argument naming the results file when a trigger is missing or the fit fails.
 SphereCycleResult identifySphereCycle(const ProbePlan& plan, const std::vector<MeasurementRun>& runs);
 
-/// The budget: u_A from the data by readingScatter (declared: the probe's repeatability), u_B not
-/// evaluated by this cycle yet (it says so).
-UncertaintyBudget sphereBudget(const ProbePlan& plan, const SphereCycleResult& r, bool contributors_declared);
-
 Json sphereReportJson(const ProbePlan& plan, const SphereCycleResult& r, const UncertaintyBudget& b,
                       const std::vector<std::string>& files);
 std::string sphereText(const SphereCycleResult& r, const UncertaintyBudget& b);

@@ -7,6 +7,7 @@
 #include "cycles/cycle.hpp"
 #include "cycles/probing.hpp"
 #include "cycles/one_sphere/analyze.hpp"
+#include "cycles/one_sphere/budget.hpp"
 #include "cycles/one_sphere/diagnose.hpp"
 #include "cycles/one_sphere/plan.hpp"
 #include "postproc/probe_program.hpp"
@@ -31,7 +32,10 @@ class Sphere final : public Cycle {
   CycleDocuments analyze(const AnalyzeRequest& r) const override {
     const ProbePlan& plan = *r.plan;
     const SphereCycleResult res = identifySphereCycle(plan, readProbeRuns(plan, r.results, *r.dialect));
-    const UncertaintyBudget b = sphereBudget(plan, res, r.contributors != nullptr);
+    BudgetOptions bo;
+    bo.runs = r.mc_runs;
+    bo.seed = r.mc_seed;
+    const UncertaintyBudget b = sphereBudget(plan, res, r.contributors, bo);
     std::vector<std::string> files;
     for (const auto& f : r.results) files.push_back(f.path);
     CycleDocuments out;

@@ -11,9 +11,11 @@
 #include <cstdio>
 #include <random>
 
+#include "core/contributor_draw.hpp"
 #include "core/simulation.hpp"
 #include "cycles/cycle.hpp"
 #include "cycles/one_sphere/analyze.hpp"
+#include "cycles/one_sphere/budget.hpp"
 #include "cycles/one_sphere/diagnose.hpp"
 #include "cycles/one_sphere/plan.hpp"
 #include "test_util.hpp"
@@ -93,7 +95,7 @@ TEST_P(OneSphere, TheTruthLiesWithinTwiceTheUncertaintyAsOftenAsClaimed) {
   int inside = 0, all = 0;
   for (int seed = 1; seed <= 200; ++seed) {
     const SphereCycleResult r = identifySphereCycle(plan, {simulate(plan, truth, {static_cast<std::uint64_t>(seed)})});
-    const UncertaintyBudget b = sphereBudget(plan, r, false);
+    const UncertaintyBudget b = sphereBudget(plan, r, nullptr, BudgetOptions{});
     const Eigen::VectorXd u = b.uC();
     for (int i = 0; i < kNumLocationErrors; ++i) {
       const std::string iso = r.names[static_cast<size_t>(r.location_index_in_x[static_cast<size_t>(i)])].name;
@@ -144,6 +146,42 @@ TEST_P(OneSphere, TheJudgeFindsADriftNothingInCleanDataAndCallsLobingConfounded)
   bool confounded = false;
   for (const auto& c : d2.summary.confounded) confounded = confounded || c.cause == "pretravel_by_direction";
   EXPECT_TRUE(confounded) << judgeText(d2.summary);
+}
+
+TEST_P(OneSphere, TypeBMatchesExactRefitsOfDrawnContributors) {
+  // u_B propagates the drawn contributors through the fit linearised at its solution. Against
+  // the exact path: 150 draws of 000 Table 5's probe and linear-axis contributors applied to the
+  // truth, simulated without noise and identified anew; their sd per location error must match
+  // u_B within 20 % (sd of a 150-sample sd: 6 %).
+  const ContributorSet cs = loadContributors(test::sourcePath("examples/contributors/table5.json"));
+  const Truth truth = test::truthWith(truth_errors);
+  const SphereCycleResult base = identifySphereCycle(plan, {simulate(plan, truth, {1})});
+  BudgetOptions bo;
+  bo.runs = 2000;
+  bo.alone_runs = 0;
+  const UncertaintyBudget b = sphereBudget(plan, base, &cs, bo);
+  ASSERT_TRUE(b.type_b_evaluated) << b.type_b_source;
+  const Eigen::VectorXd ub = b.uB();
+  constexpr int kDraws = 150;
+  Eigen::MatrixXd dev(kNumLocationErrors, kDraws);
+  for (int k = 0; k < kDraws; ++k) {
+    ProbeAxesDraw d;
+    drawProbeAxes(plan, cs, isProbeAxesContributor, 99, k, -1, &d);
+    Truth t = truth;
+    applyProbeAxesDraw(d, &t);
+    const SphereCycleResult r = identifySphereCycle(plan, {simulate(plan, t, {1})});
+    for (int i = 0; i < kNumLocationErrors; ++i) dev(i, k) = r.location.reportValue(i) - base.location.reportValue(i);
+  }
+  for (int i = 0; i < kNumLocationErrors; ++i) {
+    const std::string iso = base.names[static_cast<size_t>(base.location_index_in_x[static_cast<size_t>(i)])].name;
+    int q = -1;
+    for (int k = 0; k < b.size(); ++k)
+      if (b.names[static_cast<size_t>(k)] == iso) q = k;
+    ASSERT_GE(q, 0);
+    const double sd = std::sqrt((dev.row(i).array() - dev.row(i).mean()).square().sum() / (kDraws - 1));
+    EXPECT_NEAR(sd / ub[q], 1.0, 0.2) << locationParameters(m.kinematics)[static_cast<size_t>(i)].name << ": exact " << sd
+                                      << ", u_B " << ub[q];
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(TiltingTables, OneSphere, ::testing::Values("ac_trunnion", "bc_trunnion"),

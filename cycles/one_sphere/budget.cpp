@@ -1,0 +1,93 @@
+#include "cycles/one_sphere/budget.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+
+#include "core/contributor_draw.hpp"
+#include "core/simulation.hpp"
+#include "core/units.hpp"
+#include "cycles/one_sphere/plan.hpp"
+
+namespace rotacal {
+
+UncertaintyBudget sphereBudget(const ProbePlan& plan, const SphereCycleResult& r, const ContributorSet* contributors,
+                               const BudgetOptions& options) {
+  options.validateOrThrow();
+  UncertaintyBudget b;
+  std::vector<Eigen::Index> free;
+  for (size_t i = 0; i < r.names.size(); ++i)
+    if (!r.identifiability.held[i]) free.push_back(static_cast<Eigen::Index>(i));
+  const auto n = static_cast<Eigen::Index>(free.size());
+  const auto touches = static_cast<Eigen::Index>(r.residuals_um.size());
+  Eigen::VectorXd f(n);
+  Eigen::MatrixXd Jf(touches, n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const auto& q = r.names[static_cast<size_t>(free[static_cast<size_t>(k)])];
+    b.names.push_back(q.name);
+    b.units.emplace_back(reportUnit(q.kind));
+    f[k] = q.kind == ParamKind::Length ? mmToUm(1.0) : radToMdeg(1.0);
+    Jf.col(k) = r.J_r_x.col(free[static_cast<size_t>(k)]);
+  }
+  // The fit linearised at its solution: a trigger moved by ds_j along its approach u_j changes
+  // its residual by (n_j . u_j) ds_j; x moves by -pinv(J) of that, the residual by (I - J pinv(J)).
+  const Eigen::MatrixXd pinv = Jf.completeOrthogonalDecomposition().pseudoInverse();
+  Eigen::VectorXd nu(touches);
+  for (Eigen::Index j = 0; j < touches; ++j)
+    nu[j] = r.normals[static_cast<size_t>(j)].dot(
+        plan.points[static_cast<size_t>(r.point_index[static_cast<size_t>(j)])].approach_m);
+  const Eigen::MatrixXd G = -(f.asDiagonal() * pinv * nu.asDiagonal());
+  const Eigen::MatrixXd residual_map = (Eigen::MatrixXd::Identity(touches, touches) - Jf * pinv) * nu.asDiagonal();
+
+  const ContributorSplit split = contributors ? splitContributors(*contributors, isPerTouchContributor, isProbeAxesContributor)
+                                              : ContributorSplit{};
+  const ContributorSet& type_b = split.type_b;
+  // Every trigger of every run moves as its plan point does: the contributors are the machine's.
+  Truth base;
+  base.errors = r.location;
+  const KinematicModel& m = r.model;
+  base.sphere_center_error_w_mm[1] = Eigen::Vector3d(r.x[m.parameterIndex("dX_S")], r.x[m.parameterIndex("dY_S")],
+                                                     r.x[m.parameterIndex("dZ_S")]);
+  const Eigen::VectorXd ideal = type_b.items.empty() ? Eigen::VectorXd() : triggersAlong(plan, base);
+  const auto shift = [&](std::uint64_t seed, int run, int only) {
+    ProbeAxesDraw d;
+    drawProbeAxes(plan, type_b, isProbeAxesContributor, seed, run, only, &d);
+    Truth t = base;
+    applyProbeAxesDraw(d, &t);
+    const Eigen::VectorXd s = triggersAlong(plan, t) - ideal;
+    Eigen::VectorXd stacked(touches);
+    for (Eigen::Index j = 0; j < touches; ++j) stacked[j] = s[r.point_index[static_cast<size_t>(j)]];
+    return stacked;
+  };
+
+  const double declared_um2 = contributors ? mmToUm(1.0) * mmToUm(1.0) * split.per_reading_mm2
+                                           : std::pow(plan.machine.probe.repeatability_um, 2);
+  std::vector<double> sys_um2;
+  if (!type_b.items.empty() && r.dof > 0)
+    sys_um2 = contributorResidualVariances(200, options.seed, [&](std::uint64_t seed, int k) {
+      return mmToUm(1.0) * mmToUm(1.0) * (residual_map * shift(seed, k, -1)).squaredNorm() / r.dof;
+    });
+  const ReadingScatter scatter = readingScatter(declared_um2, r.residual_sd_um * r.residual_sd_um, r.dof, sys_um2);
+  Eigen::MatrixXd cov(n, n);
+  for (Eigen::Index a = 0; a < n; ++a)
+    for (Eigen::Index c = 0; c < n; ++c) cov(a, c) = r.cov_per_sigma2(free[static_cast<size_t>(a)], free[static_cast<size_t>(c)]);
+  b.cov_a = umToMm(1.0) * umToMm(1.0) * scatter.variance_um2 * f.asDiagonal() * cov * f.asDiagonal();
+  b.cov_b = Eigen::MatrixXd::Zero(n, n);
+  b.type_a_source = fmt::format("the per-touch scatter {:.3f} um ({}; declared: {}) through the one-stage fit of every touch",
+                                std::sqrt(scatter.variance_um2), scatter.why,
+                                contributors ? "probe repeatability and surface roughness" : "the machine's probe repeatability");
+  b.terms.push_back({"data", b.uA()});
+  const std::string left_out =
+      split.left_out.empty() ? std::string() : fmt::format("; not acting on one sphere and left out: {}", fmt::join(split.left_out, ", "));
+  if (typeBToRun(&b, contributors != nullptr, !type_b.items.empty(), "the one-sphere cycle", left_out)) {
+    runTypeB(&b, type_b, options, [&](std::uint64_t seed, int run, int c) -> Eigen::VectorXd { return G * shift(seed, run, c); });
+    b.type_b_source = fmt::format(
+        "{} declared contributors (from {}) drawn on the exact simulator (full HTMs, exact ball-on-sphere contact) around "
+        "the identified errors, the triggers' deviations run through the fit linearised there, {} runs, seed {}{}",
+        type_b.items.size(), contributorsSource(*contributors), options.runs, options.seed, left_out);
+  }
+  return b;
+}
+
+}  // namespace rotacal
