@@ -167,7 +167,10 @@ int cmdSimulate(const Common& c, const std::string& plan_file, const std::string
     throw CLI::ValidationError("--start-s", fmt::format("must be a number of seconds from 0 to {:g} (got {})",
                                                         kMaxClockSeconds, *start_s));
   checkOutputs({{"-o", out}}, {plan_file, truth_file});
-  const auto& [plan, cycle, d, io] = PlanReader(plan_file, dialect_name);
+  const PlanReader in(plan_file, dialect_name);
+  const ProbePlan& plan = in.plan;
+  const Cycle& cycle = in.cycle;  // named, not a structured binding: C++17 lambdas cannot capture those (clang)
+  const DialectIO& io = in.io;
   SimulateRequest r;
   r.plan = &plan;
   r.truth = {truth_file, readTextFile(truth_file)};
@@ -285,7 +288,10 @@ int cmdDiagnose(const Common& c, const std::string& plan_file, const std::vector
   std::vector<std::string> inputs = results;
   inputs.push_back(plan_file);
   checkOutputs({{"--json", json_out}, {"--text", text_out}, {"--html", html_out}}, inputs);
-  const auto& [plan, cycle, d, io] = PlanReader(plan_file, dialect_name);
+  const PlanReader in(plan_file, dialect_name);
+  const ProbePlan& plan = in.plan;
+  const Cycle& cycle = in.cycle;  // named, not a structured binding: C++17 lambdas cannot capture those (clang)
+  const DialectIO& io = in.io;
   DiagnoseRequest r;
   r.plan = &plan;
   r.results = readInputs(results);

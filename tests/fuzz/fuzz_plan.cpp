@@ -1,7 +1,8 @@
 // PLAN.json loader (core/probe_plan.hpp: planFromJson) with the rules each cycle states
 // (Cycle::planRules, cycles/*/cycle.cpp; the first byte picks the cycle). The harness links the
-// cycles' option readers (touch154, rtest, tooltip plan.cpp) rather than the whole registry, whose
+// cycles' option readers (touch154, rtest, tooltip, one_sphere plan.cpp) rather than the whole registry, whose
 // analysis code takes most of the sanitizer build: keep the rules below as the cycles state them.
+#include "cycles/one_sphere/plan.hpp"
 #include "cycles/rtest/plan.hpp"
 #include "cycles/tooltip/plan.hpp"
 #include "cycles/touch154/plan.hpp"
@@ -11,7 +12,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace rotacal;
   if (size < 1) return 0;
   PlanRules rules;
-  switch (data[0] % 5) {
+  switch (data[0] % 6) {
     case 0:  // touch154
       rules.check_options = [](const ProbePlan& p) {
         if (p.cycle == "touch154") (void)Touch154Layout::fromOptions(p.options);
@@ -25,6 +26,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     case 3:  // tooltip
       rules.heights = false;
       rules.check_options = [](const ProbePlan& p) { (void)tooltipOptionsFrom(p.options, p.machine); };
+      break;
+    case 5:  // one_sphere
+      rules.spheres = 1;
+      rules.check_options = [](const ProbePlan& p) { (void)sphereLayoutOf(p); };
       break;
     default: break;  // spaceframe: the defaults
   }
