@@ -259,13 +259,19 @@ int tooltipCoverage(int machines) {
 // contributor (Type B through drawSpheres3 on the exact simulator; repeatability and roughness
 // per touch), and is analyzed as `analyze` does (identifySpheres3 + spheres3Budget, 1000 Monte
 // Carlo runs). Coverage per location error, and per component error over the 12 sampled angles.
+// The per-touch variance (mm^2) of the contributors a cycle takes as acting at every touch.
+double perTouchVariance_mm2(const ContributorSet& cs, bool (*per_touch)(const ContributorInfo&)) {
+  double v = 0.0;
+  for (const auto& c : cs.items)
+    if (per_touch(*c.info)) v += c.u[0] * c.u[0];
+  return v;
+}
+
 int spheres3Coverage(int machines, const std::string& contributors_file) {
   const MachineModel machine = loadMachine(ROTACAL_SOURCE_DIR "/examples/machines/ac_trunnion.json");
   const ProbePlan plan = makePlan("spheres3", machine, {});
   const ContributorSet cs = loadContributors(contributors_file);
-  double touch_mm2 = 0.0;
-  for (const auto& c : cs.items)
-    if (spheres3TypeA(*c.info)) touch_mm2 += c.u[0] * c.u[0];
+  const double touch_mm2 = perTouchVariance_mm2(cs, spheres3TypeA);
   const int n_angles = static_cast<int>(plan.poses.size());
   const std::vector<ComponentTerm> terms = componentTerms(ComponentModel::Full, n_angles);
   // 001: location errors of a few um and arcsec, volumetric error up to 12 um before
@@ -470,9 +476,7 @@ int oneSphereCoverage(int machines, const std::string& contributors_file) {
   const MachineModel machine = loadMachine(ROTACAL_SOURCE_DIR "/examples/machines/ac_trunnion.json");
   const ProbePlan plan = makePlan("one_sphere", machine, {});
   const ContributorSet cs = loadContributors(contributors_file);
-  double touch_mm2 = 0.0;
-  for (const auto& c : cs.items)
-    if (isPerTouchContributor(*c.info)) touch_mm2 += c.u[0] * c.u[0];
+  const double touch_mm2 = perTouchVariance_mm2(cs, isPerTouchContributor);
   const auto& params = locationParameters(machine.kinematics);
   const double sd_um = 20.0, sd_mdeg = 2.0, sphere_um = 50.0;
   int inside[kNumLocationErrors] = {}, inside_1u[kNumLocationErrors] = {};
