@@ -19,16 +19,6 @@ std::string PoseDesignOptions::validate() const {
 
 namespace {
 
-// The whitened, scaled rows of one pose over the free parameters.
-Eigen::MatrixXd poseRows(const KinematicModel& m, const Pose& pose, const std::vector<int>& free,
-                         const Eigen::Vector3d& sd_mm, const Eigen::VectorXd& scale) {
-  const auto J = J_X_p(m, Eigen::VectorXd::Zero(m.size()), pose);
-  Eigen::MatrixXd rows(3, static_cast<Eigen::Index>(free.size()));
-  for (size_t k = 0; k < free.size(); ++k)
-    rows.col(static_cast<Eigen::Index>(k)) = J.col(free[k]).cwiseQuotient(sd_mm) / scale[free[k]];
-  return rows;
-}
-
 double logDet(const Eigen::MatrixXd& M) {
   const Eigen::LLT<Eigen::MatrixXd> llt(M);
   if (llt.info() != Eigen::Success) return -std::numeric_limits<double>::infinity();
@@ -37,52 +27,84 @@ double logDet(const Eigen::MatrixXd& M) {
   return 2.0 * d.array().log().sum();
 }
 
-// The candidates' information per pose over the parameters they can separate.
+// The candidates' information per pose over the parameters they can separate, columns scaled by
+// their norms over all candidates.
 struct Prepared {
-  std::vector<IdentifiabilityParameter> names;
   Identifiability all;
   Eigen::Index nf = 0;
   std::vector<Eigen::MatrixXd> info;
 };
 
-Prepared prepare(const KinematicModel& m, const std::vector<Pose>& candidates, const PoseDesignOptions& o) {
+void checkRows(const std::vector<Eigen::MatrixXd>& rows, const std::vector<IdentifiabilityParameter>& names) {
+  for (const auto& R : rows)
+    if (R.cols() != static_cast<Eigen::Index>(names.size()))
+      throw std::invalid_argument(fmt::format("pose design: a candidate has {} columns for {} parameters", R.cols(), names.size()));
+}
+
+Prepared prepare(const std::vector<Eigen::MatrixXd>& rows, const std::vector<IdentifiabilityParameter>& names,
+                 const PoseDesignOptions& o) {
   if (const std::string bad = o.validate(); !bad.empty()) throw std::invalid_argument("pose design: " + bad);
+  checkRows(rows, names);
   Prepared p;
-  const auto nc = static_cast<Eigen::Index>(candidates.size());
-  for (const auto& q : m.parameters) p.names.push_back({q.name, q.kind});
-  Eigen::MatrixXd Jall(3 * nc, m.size());
-  for (Eigen::Index k = 0; k < nc; ++k)
-    Jall.middleRows(3 * k, 3) = J_X_p(m, Eigen::VectorXd::Zero(m.size()), candidates[static_cast<size_t>(k)]);
+  const auto np = static_cast<Eigen::Index>(names.size());
+  Eigen::Index total = 0;
+  for (const auto& R : rows) total += R.rows();
+  Eigen::MatrixXd Jall(total, np);
+  Eigen::Index at = 0;
+  for (const auto& R : rows) Jall.middleRows(at, R.rows()) = R, at += R.rows();
   // What no candidate set separates is held, as every fit of the model holds it.
-  p.all = identifiability(Jall, p.names, o.hold_first);
-  Eigen::VectorXd scale(m.size());
-  for (int i = 0; i < m.size(); ++i) scale[i] = Jall.col(i).norm() > 0 ? Jall.col(i).norm() : 1.0;
-  std::vector<int> free;
-  for (int i = 0; i < m.size(); ++i)
+  p.all = identifiability(Jall, names, o.hold_first);
+  Eigen::VectorXd scale(np);
+  for (Eigen::Index i = 0; i < np; ++i) scale[i] = Jall.col(i).norm() > 0 ? Jall.col(i).norm() : 1.0;
+  std::vector<Eigen::Index> free;
+  for (Eigen::Index i = 0; i < np; ++i)
     if (!p.all.held[static_cast<size_t>(i)]) free.push_back(i);
   p.nf = static_cast<Eigen::Index>(free.size());
-  for (const auto& pose : candidates) {
-    const Eigen::MatrixXd R = poseRows(m, pose, free, o.centre_sd_mm, scale);
-    p.info.push_back(R.transpose() * R);
+  for (const auto& R : rows) {
+    Eigen::MatrixXd Rf(R.rows(), p.nf);
+    for (Eigen::Index k = 0; k < p.nf; ++k) Rf.col(k) = R.col(free[static_cast<size_t>(k)]) / scale[free[static_cast<size_t>(k)]];
+    p.info.push_back(Rf.transpose() * Rf);
   }
   return p;
 }
 
+// A centre reading per pose: J_X_p whitened by the declared centre noise.
+std::vector<Eigen::MatrixXd> centreRows(const KinematicModel& m, const std::vector<Pose>& candidates,
+                                        const PoseDesignOptions& o) {
+  if (const std::string bad = o.validate(); !bad.empty()) throw std::invalid_argument("pose design: " + bad);
+  std::vector<Eigen::MatrixXd> rows;
+  for (const auto& pose : candidates)
+    rows.emplace_back(o.centre_sd_mm.cwiseInverse().asDiagonal() * J_X_p(m, Eigen::VectorXd::Zero(m.size()), pose));
+  return rows;
+}
+
+std::vector<IdentifiabilityParameter> modelNames(const KinematicModel& m) {
+  std::vector<IdentifiabilityParameter> names;
+  for (const auto& q : m.parameters) names.push_back({q.name, q.kind});
+  return names;
+}
+
 }  // namespace
 
-double poseSetLogDet(const KinematicModel& m, const std::vector<Pose>& candidates, const std::vector<int>& subset,
-                     const PoseDesignOptions& o) {
-  const Prepared p = prepare(m, candidates, o);
+double poseSetLogDet(const std::vector<Eigen::MatrixXd>& candidate_rows, const std::vector<IdentifiabilityParameter>& names,
+                     const std::vector<int>& subset, const PoseDesignOptions& o) {
+  const Prepared p = prepare(candidate_rows, names, o);
   Eigen::MatrixXd M = Eigen::MatrixXd::Zero(p.nf, p.nf);
   for (int k : subset) M += p.info.at(static_cast<size_t>(k));
   return logDet(M);
 }
 
-PoseDesign designPoses(const KinematicModel& m, const std::vector<Pose>& candidates, const PoseDesignOptions& o) {
-  const int nc = static_cast<int>(candidates.size());
+double poseSetLogDet(const KinematicModel& m, const std::vector<Pose>& candidates, const std::vector<int>& subset,
+                     const PoseDesignOptions& o) {
+  return poseSetLogDet(centreRows(m, candidates, o), modelNames(m), subset, o);
+}
+
+PoseDesign designPoses(const std::vector<Eigen::MatrixXd>& candidate_rows, const std::vector<IdentifiabilityParameter>& names,
+                       const PoseDesignOptions& o) {
+  const int nc = static_cast<int>(candidate_rows.size());
   if (nc < o.poses)
     throw std::invalid_argument(fmt::format("pose design: {} poses asked from {} candidates", o.poses, nc));
-  const Prepared p = prepare(m, candidates, o);
+  const Prepared p = prepare(candidate_rows, names, o);
   const Eigen::Index nf = p.nf;
   const std::vector<Eigen::MatrixXd>& info = p.info;
   // Greedy forward selection on the information regularised until it is of full rank, then
@@ -123,13 +145,21 @@ PoseDesign designPoses(const KinematicModel& m, const std::vector<Pose>& candida
     if (!improved) break;
   }
   d.log_det = current;
-  Eigen::MatrixXd Jc(3 * static_cast<Eigen::Index>(d.chosen.size()), m.size());
-  for (size_t k = 0; k < d.chosen.size(); ++k) {
-    const Eigen::Matrix<double, 3, Eigen::Dynamic> J = J_X_p(m, Eigen::VectorXd::Zero(m.size()), candidates[static_cast<size_t>(d.chosen[k])]);
-    Jc.middleRows(3 * static_cast<Eigen::Index>(k), 3) = o.centre_sd_mm.cwiseInverse().asDiagonal() * J;
+  Eigen::Index total = 0;
+  for (int k : d.chosen) total += candidate_rows[static_cast<size_t>(k)].rows();
+  Eigen::MatrixXd Jc(total, static_cast<Eigen::Index>(names.size()));
+  Eigen::Index at = 0;
+  for (int k : d.chosen) {
+    const Eigen::MatrixXd& R = candidate_rows[static_cast<size_t>(k)];
+    Jc.middleRows(at, R.rows()) = R;
+    at += R.rows();
   }
-  d.identifiability = identifiability(Jc, p.names, o.hold_first);
+  d.identifiability = identifiability(Jc, names, o.hold_first);
   return d;
+}
+
+PoseDesign designPoses(const KinematicModel& m, const std::vector<Pose>& candidates, const PoseDesignOptions& o) {
+  return designPoses(centreRows(m, candidates, o), modelNames(m), o);
 }
 
 }  // namespace rotacal

@@ -29,14 +29,22 @@ struct PoseDesign {
   Identifiability identifiability;  // of the chosen poses (u_report: um / mdeg for the declared noise)
 };
 
+/// Any model: candidate k's rows of the whitened Jacobian (residual per its sd, per parameter, in
+/// the model's units), over the named parameters (centre_sd_mm is then unused).
+///
 /// log det of the information of the parameters the candidates can separate, at the subset of
 /// the candidates (indices), with the columns scaled by their norms over all candidates (mm and
 /// rad weigh alike; D-optimality does not depend on the scale): what designPoses maximises.
 /// -inf when the subset does not fix them.
+double poseSetLogDet(const std::vector<Eigen::MatrixXd>& candidate_rows, const std::vector<IdentifiabilityParameter>& names,
+                     const std::vector<int>& subset, const PoseDesignOptions& options);
 double poseSetLogDet(const KinematicModel& model, const std::vector<Pose>& candidates, const std::vector<int>& subset,
                      const PoseDesignOptions& options);
 
 /// Throws std::invalid_argument for invalid options or fewer candidates than poses.
+PoseDesign designPoses(const std::vector<Eigen::MatrixXd>& candidate_rows, const std::vector<IdentifiabilityParameter>& names,
+                       const PoseDesignOptions& options);
+/// The same for centre readings of the kinematic model (rows: J_X_p whitened by centre_sd_mm).
 PoseDesign designPoses(const KinematicModel& model, const std::vector<Pose>& candidates, const PoseDesignOptions& options);
 
 }  // namespace rotacal

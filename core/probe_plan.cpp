@@ -104,19 +104,21 @@ void checkHeights(const JsonDoc& doc, const Json& j, const ProbePlan& plan, cons
     const PlanPose& pp = plan.poses[k];
     const Eigen::Isometry3d T = T_m_w_nominal(plan.machine.kinematics, pp.pose);
     double top = -std::numeric_limits<double>::infinity();
-    if (artefact)
-      for (const auto& corner : plan.machine.artefact->corners_w()) top = std::max(top, (T * corner).z());
     for (const auto& p : plan.points) {
       if (p.pose_name != pp.name) continue;
       top = std::max(top, (T * p.contact_w_mm).z());
       if (p.sphere) top = std::max(top, (T * p.sphere->center_w_mm).z() + p.sphere->radius_mm);
     }
+    const double touched_top = top;
+    if (artefact)
+      for (const auto& corner : plan.machine.artefact->corners_w()) top = std::max(top, (T * corner).z());
     if (!std::isfinite(top)) continue;
-    if (pp.safe_z_mm < top + r - 1e-6)
+    const double safe_top = rules.safe_height_over_artefact ? top : touched_top;
+    if (std::isfinite(safe_top) && pp.safe_z_mm < safe_top + r - 1e-6)
       doc.fail(j["poses"][k], "safe_z_mm",
                fmt::format("pose {}: safe_z_mm = {:g} mm is below what the probe moves over: the ball centre must stay "
                            "at z >= {:.3f} mm (the top of what is touched plus the ball radius)",
-                           pp.name, pp.safe_z_mm, top + r));
+                           pp.name, pp.safe_z_mm, safe_top + r));
     if (top > highest) {
       highest = top;
       highest_pose = pp.name;

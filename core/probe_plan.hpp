@@ -70,6 +70,10 @@ Json planToJson(const ProbePlan& plan);
 struct PlanRules {
   bool heights = true;           // safe heights clear what is touched (false: no probing moves)
   bool artefact_touched = true;  // the machine's artefact is what the probe moves over
+  /// false: a pose's safe height need clear only what is touched at it, the cycle keeping its
+  /// way clear of the artefact sideways (and the program verifier checking every move against
+  /// it); the index height still clears the artefact.
+  bool safe_height_over_artefact = true;
   int spheres = 0;               // > 0: every touch names sphere 1..spheres, >= 4 of each per pose
   std::function<void(const ProbePlan&)> check_options;  // the options the cycle reads back; throws
 };

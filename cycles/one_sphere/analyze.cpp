@@ -9,6 +9,7 @@
 #include "core/errors.hpp"
 #include "core/report_envelope.hpp"
 #include "core/units.hpp"
+#include "cycles/one_sphere/design.hpp"
 #include "cycles/one_sphere/plan.hpp"
 
 namespace rotacal {
@@ -27,11 +28,11 @@ const std::vector<std::pair<const char*, const char*>>& papersNames(Kinematics k
   return k == Kinematics::TableAC ? ac : bc;
 }
 
-// Held first where a direction involves them: the C zero (a sphere reads it as its own place on
-// the table, 000's "set-up rotation") and the tilt of the C axis about the tilt axis, which the
-// tilt axis's own zero does as well (000 keeps a_AY and drops a_CA).
-std::vector<int> holdFirst(const KinematicModel& m, Kinematics k) {
-  return {m.parameterIndex("C0C"), m.parameterIndex(k == Kinematics::TableAC ? "A0C" : "B0C")};
+std::string fitExtraDescription(const std::string& name) {
+  if (name == "dR") return "the probe's effective radius on this sphere less R + r";
+  if (name == "S_xy") return "out-of-squareness of the linear axes X and Y: X's error along Y (000 Eq. (23); mdeg, 1 mdeg = 17.45 um/m)";
+  if (name == "S_xz") return "out-of-squareness of the linear axes X and Z: X's error along Z (000 Eq. (23); mdeg, 1 mdeg = 17.45 um/m)";
+  return "out-of-squareness of the linear axes Y and Z: Y's error along Z (000 Eq. (23); mdeg, 1 mdeg = 17.45 um/m)";
 }
 
 double toReport(ParamKind kind, double v) { return kind == ParamKind::Length ? mmToUm(v) : radToMdeg(v); }
@@ -53,8 +54,9 @@ SphereCycleResult identifySphereCycle(const ProbePlan& plan, const std::vector<M
   out.model = kinematicModel(kinematicsName(kin), l.center_w_mm);
   const KinematicModel& m = out.model;
   const int np = m.size();
-  for (const auto& q : m.parameters) out.names.push_back({q.name, q.kind});
-  out.names.push_back({"dR", ParamKind::Length});
+  const bool sq = l.fit_squareness;
+  out.names = sphereFitParameters(m, sq);
+  const auto nx = static_cast<Eigen::Index>(out.names.size());
   const double rho = l.radius_mm + plan.machine.probe.ball_radius_mm();
 
   std::vector<Trigger> triggers;
@@ -75,28 +77,24 @@ SphereCycleResult identifySphereCycle(const ProbePlan& plan, const std::vector<M
   // What the plan can show, at nominal: the held parameters stay at 0, the others are fitted.
   const auto jacobian = [&](const Eigen::VectorXd& x, Eigen::VectorXd& r, Eigen::MatrixXd* J) {
     r.resize(static_cast<Eigen::Index>(triggers.size()));
-    if (J) J->resize(r.size(), np + 1);
+    if (J) J->resize(r.size(), nx);
+    Eigen::RowVectorXd row;
     for (size_t j = 0; j < triggers.size(); ++j) {
       const auto jj = static_cast<Eigen::Index>(j);
-      const Eigen::Vector3d X = sphereCentreInAxes(m, x.head(np), triggers[j].pose);
-      const Eigen::Vector3d d = triggers[j].t_mm - X;
-      r[jj] = d.norm() - (rho + x[np]);
-      if (J) {
-        J->row(jj).head(np) = -(d.normalized().transpose() * J_X_p(m, x.head(np), triggers[j].pose));
-        (*J)(jj, np) = -1.0;
-      }
+      r[jj] = sphereTouchResidual(m, sq, x, triggers[j].pose, triggers[j].t_mm, rho, J ? &row : nullptr);
+      if (J) J->row(jj) = row;
     }
   };
   Eigen::VectorXd r0;
   Eigen::MatrixXd J0;
-  jacobian(Eigen::VectorXd::Zero(np + 1), r0, &J0);
-  out.identifiability = identifiability(J0, out.names, holdFirst(m, kin));
+  jacobian(Eigen::VectorXd::Zero(nx), r0, &J0);
+  out.identifiability = identifiability(J0, out.names, sphereHeldFirst(m, kin));
   std::vector<Eigen::Index> free;
-  for (int i = 0; i <= np; ++i)
+  for (Eigen::Index i = 0; i < nx; ++i)
     if (!out.identifiability.held[static_cast<size_t>(i)]) free.push_back(i);
   const auto nf = static_cast<Eigen::Index>(free.size());
   const auto expand = [&](const Eigen::VectorXd& z) {
-    Eigen::VectorXd x = Eigen::VectorXd::Zero(np + 1);
+    Eigen::VectorXd x = Eigen::VectorXd::Zero(nx);
     for (Eigen::Index k = 0; k < nf; ++k) x[free[static_cast<size_t>(k)]] = z[k];
     return x;
   };
@@ -115,14 +113,14 @@ SphereCycleResult identifySphereCycle(const ProbePlan& plan, const std::vector<M
     throw InputError(runs.empty() ? std::string("results") : runs.front().source, 0,
                      "the sphere cycle's fit did not converge: " + fit.summary.briefReport());
   out.x = expand(fit.x);
-  out.cov_per_sigma2 = Eigen::MatrixXd::Zero(np + 1, np + 1);
+  out.cov_per_sigma2 = Eigen::MatrixXd::Zero(nx, nx);
   for (Eigen::Index a = 0; a < nf; ++a)
     for (Eigen::Index b = 0; b < nf; ++b)
       out.cov_per_sigma2(free[static_cast<size_t>(a)], free[static_cast<size_t>(b)]) = fit.covariance(a, b);
   Eigen::VectorXd r;
   jacobian(out.x, r, &out.J_r_x);
   for (const auto& t : triggers) {
-    out.normals.push_back((t.t_mm - sphereCentreInAxes(m, out.x.head(np), t.pose)).normalized());
+    out.normals.push_back(sphereTouchNormal(m, sq, out.x, t.pose, t.t_mm));
     out.point_index.push_back(t.point_index);
     out.run_index.push_back(t.run);
     out.t_s.push_back(t.t_s);
@@ -175,8 +173,7 @@ Json sphereReportJson(const ProbePlan& plan, const SphereCycleResult& r, const U
     Json e = {{"value", round6(toReport(q.kind, r.x[static_cast<Eigen::Index>(i)]))}, {"unit", reportUnit(q.kind)}};
     if (r.identifiability.held[i]) e["held"] = true;
     else e["separable"] = static_cast<bool>(r.identifiability.separable[i]);
-    e["description"] = i < r.model.parameters.size() ? r.model.parameters[i].description
-                                                      : std::string("the probe's effective radius on this sphere less R + r");
+    e["description"] = i < r.model.parameters.size() ? r.model.parameters[i].description : fitExtraDescription(q.name);
     kp[q.name] = e;
   }
   j["kinematic_parameters"] = kp;

@@ -50,9 +50,10 @@ UncertaintyBudget sphereBudget(const ProbePlan& plan, const SphereCycleResult& r
   base.sphere_center_error_w_mm[1] = Eigen::Vector3d(r.x[m.parameterIndex("dX_S")], r.x[m.parameterIndex("dY_S")],
                                                      r.x[m.parameterIndex("dZ_S")]);
   const Eigen::VectorXd ideal = type_b.items.empty() ? Eigen::VectorXd() : triggersAlong(plan, base);
-  const auto shift = [&](std::uint64_t seed, int run, int only) {
+  const auto shift = [&](std::uint64_t seed, int run, int only, ProbeAxesDraw* drawn = nullptr) {
     ProbeAxesDraw d;
     drawProbeAxes(plan, type_b, isProbeAxesContributor, seed, run, only, &d);
+    if (drawn) *drawn = d;
     Truth t = base;
     applyProbeAxesDraw(d, &t);
     const Eigen::VectorXd s = triggersAlong(plan, t) - ideal;
@@ -81,7 +82,25 @@ UncertaintyBudget sphereBudget(const ProbePlan& plan, const SphereCycleResult& r
   const std::string left_out =
       split.left_out.empty() ? std::string() : fmt::format("; not acting on one sphere and left out: {}", fmt::join(split.left_out, ", "));
   if (typeBToRun(&b, contributors != nullptr, !type_b.items.empty(), "the one-sphere cycle", left_out)) {
-    runTypeB(&b, type_b, options, [&](std::uint64_t seed, int run, int c) -> Eigen::VectorXd { return G * shift(seed, run, c); });
+    // A fitted squareness measures the drawn one: its error is what the fit leaves of the draw.
+    const Eigen::Index no = -1;
+    Eigen::Index s_xy = no, s_xz = no, s_yz = no;
+    for (Eigen::Index k = 0; k < n; ++k) {
+      const std::string& q = b.names[static_cast<size_t>(k)];
+      if (q == "S_xy") s_xy = k;
+      if (q == "S_xz") s_xz = k;
+      if (q == "S_yz") s_yz = k;
+    }
+    runTypeB(&b, type_b, options, [&](std::uint64_t seed, int run, int c) -> Eigen::VectorXd {
+      ProbeAxesDraw d;
+      Eigen::VectorXd dx = G * shift(seed, run, c, &d);
+      if (d.linear) {
+        if (s_xy != no) dx[s_xy] -= f[s_xy] * d.linear_errors.S_xy;
+        if (s_xz != no) dx[s_xz] -= f[s_xz] * d.linear_errors.S_xz;
+        if (s_yz != no) dx[s_yz] -= f[s_yz] * d.linear_errors.S_yz;
+      }
+      return dx;
+    });
     b.type_b_source = fmt::format(
         "{} declared contributors (from {}) drawn on the exact simulator (full HTMs, exact ball-on-sphere contact) around "
         "the identified errors, the triggers' deviations run through the fit linearised there, {} runs, seed {}{}",

@@ -24,6 +24,7 @@ class Sphere final : public Cycle {
   PlanRules planRules() const override {
     PlanRules r;
     r.spheres = 1;  // one sphere, at least 4 touches at every pose
+    r.safe_height_over_artefact = false;  // the plan keeps the test piece out of reach sideways (plan.cpp)
     r.check_options = [](const ProbePlan& p) { (void)sphereLayoutOf(p); };
     return r;
   }

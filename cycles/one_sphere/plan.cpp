@@ -8,12 +8,50 @@
 
 #include "core/identifiability.hpp"
 #include "core/kinematic_model.hpp"
+#include "core/pose_design.hpp"
+#include "core/units.hpp"
+#include "cycles/one_sphere/design.hpp"
 #include "cycles/probing.hpp"
 
 namespace rotacal {
 
 namespace {
 
+
+std::vector<std::pair<double, double>> parsePoseList(const std::string& key, const std::string& text) {
+  std::vector<std::pair<double, double>> out;
+  if (text.empty()) return out;
+  size_t at = 0;
+  while (at <= text.size()) {
+    const size_t comma = std::min(text.find(',', at), text.size());
+    const std::string item = text.substr(at, comma - at);
+    const size_t slash = item.find('/');
+    if (slash == std::string::npos)
+      throw std::invalid_argument(fmt::format("option {}: '{}' is not tilt/c (deg), e.g. -90/0,0/90", key, item));
+    out.emplace_back(parseNumber(key, item.substr(0, slash)), parseNumber(key, item.substr(slash + 1)));
+    at = comma + 1;
+  }
+  return out;
+}
+
+std::string poseListOption(const std::vector<std::pair<double, double>>& poses) {
+  std::string s;
+  for (const auto& [t, c] : poses) s += fmt::format("{}{:g}/{:g}", s.empty() ? "" : ",", t, c);
+  return s;
+}
+
+int parseCount(const std::string& key, const std::string& text) {
+  const double v = parseNumber(key, text);
+  if (!(v >= 0 && v <= 1000 && v == std::floor(v)))
+    throw std::invalid_argument(fmt::format("option {} must be a whole number from 0 to 1000, not '{}'", key, text));
+  return static_cast<int>(v);
+}
+
+bool parseSwitch(const std::string& key, const std::string& text) {
+  if (text == "1" || text == "true") return true;
+  if (text == "0" || text == "false") return false;
+  throw std::invalid_argument(fmt::format("option {} must be 0 or 1, not '{}'", key, text));
+}
 
 Pose poseOf(char axis, double tilt, double c) {
   Pose p;
@@ -43,8 +81,15 @@ const std::vector<Eigen::Vector3d>& sphereApproaches() {
 SphereLayout SphereLayout::fromOptions(const MachineModel& machine, const CycleOptions& options) {
   SphereLayout l;
   const RotaryAxis& tilt = machine.rotaryAxis(sphereTiltAxis(machine.kinematics));
-  for (double t : {-90.0, -60.0, -30.0, 0.0, 30.0, 60.0, 90.0})
+  const auto designing = options.find("poses");
+  const bool fine = designing != options.end() && designing->second != "0";
+  // The grid a design picks from is finer than the grid run whole.
+  for (double t = -90.0; t <= 90.0; t += fine ? 15.0 : 30.0)
     if (tilt.stroke_deg.contains(t)) l.tilt_deg.push_back(t);
+  if (fine) {
+    l.c_deg.clear();
+    for (double c = 0.0; c < 360.0; c += 30.0) l.c_deg.push_back(c);
+  }
   for (const auto& [key, value] : options) {
     if (key == "center_w_mm") l.center_w_mm = parseVec3Option(key, value);
     else if (key == "radius_mm") l.radius_mm = parseNumber(key, value);
@@ -52,11 +97,16 @@ SphereLayout SphereLayout::fromOptions(const MachineModel& machine, const CycleO
     else if (key == "stem_diameter_mm") l.stem_diameter_mm = parseNumber(key, value);
     else if (key == "tilt_list") l.tilt_deg = parseNumberList(key, value);
     else if (key == "c_list") l.c_deg = parseNumberList(key, value);
+    else if (key == "pose_list") l.pose_list = parsePoseList(key, value);
+    else if (key == "poses") l.design_poses = parseCount(key, value);
+    else if (key == "fit_squareness") l.fit_squareness = parseSwitch(key, value);
     else
       throw std::invalid_argument("unknown option '" + key +
                                   "' for cycle one_sphere (center_w_mm, radius_mm, stem_length_mm, stem_diameter_mm, "
-                                  "tilt_list, c_list)");
+                                  "tilt_list, c_list, pose_list, poses, fit_squareness)");
   }
+  if (!l.pose_list.empty() && l.design_poses > 0)
+    throw std::invalid_argument("options pose_list and poses exclude each other (poses designs a pose_list)");
   if (!(l.radius_mm > 0)) throw std::invalid_argument("option radius_mm must be > 0");
   if (!(l.stem_diameter_mm > 0 && l.stem_diameter_mm < l.radius_mm))
     throw std::invalid_argument("option stem_diameter_mm must be > 0 and below the sphere's radius");
@@ -65,24 +115,134 @@ SphereLayout SphereLayout::fromOptions(const MachineModel& machine, const CycleO
   requirePlanSize(fmt::format("options tilt_list and c_list ({} x {} poses)", l.tilt_deg.size(), l.c_deg.size()),
                   5.0 * static_cast<double>(l.tilt_deg.size() * l.c_deg.size()),
                   static_cast<double>(l.tilt_deg.size() * l.c_deg.size()));
+  requirePlanSize(fmt::format("option pose_list ({} poses)", l.pose_list.size()), 5.0 * static_cast<double>(l.pose_list.size()),
+                  static_cast<double>(l.pose_list.size()));
+  if (l.design_poses > 0 && static_cast<size_t>(l.design_poses) > l.tilt_deg.size() * l.c_deg.size())
+    throw std::invalid_argument(fmt::format("option poses = {} exceeds the {} x {} candidate poses of tilt_list x c_list",
+                                            l.design_poses, l.tilt_deg.size(), l.c_deg.size()));
   return l;
 }
 
 CycleOptions SphereLayout::toOptions() const {
-  return {{"center_w_mm", fmt::format("{:g},{:g},{:g}", center_w_mm.x(), center_w_mm.y(), center_w_mm.z())},
+  CycleOptions o = {{"center_w_mm", fmt::format("{:g},{:g},{:g}", center_w_mm.x(), center_w_mm.y(), center_w_mm.z())},
           {"radius_mm", fmt::format("{:g}", radius_mm)},
           {"stem_length_mm", fmt::format("{:g}", stem_length_mm)},
           {"stem_diameter_mm", fmt::format("{:g}", stem_diameter_mm)},
           {"tilt_list", numberListOption(tilt_deg)},
-          {"c_list", numberListOption(c_deg)}};
+          {"c_list", numberListOption(c_deg)},
+          {"fit_squareness", fit_squareness ? "1" : "0"}};
+  if (!pose_list.empty()) o["pose_list"] = poseListOption(pose_list);
+  return o;
+}
+
+std::vector<std::pair<double, double>> SphereLayout::poses() const {
+  if (!pose_list.empty()) return pose_list;
+  std::vector<std::pair<double, double>> grid;
+  for (double t : tilt_deg)
+    for (double c : c_deg) grid.emplace_back(t, c);
+  return grid;
 }
 
 SphereLayout sphereLayoutOf(const ProbePlan& plan) { return SphereLayout::fromOptions(plan.machine, plan.options); }
 
+namespace {
+
+// One pose's touches, or std::invalid_argument saying why the pose is refused.
+struct PoseTouches {
+  PlanPose pose;
+  std::vector<ProbePoint> points;
+};
+
+PoseTouches touchesAt(const MachineModel& machine, const SphereLayout& l, char tilt_axis, double tilt, double c) {
+  const double r = machine.probe.ball_radius_mm();
+  const double R = l.radius_mm;
+  const double reach = R + r + machine.approach_mm;  // the side touches' starts, from the centre
+  const Pose pose = poseOf(tilt_axis, tilt, c);
+  const std::string name = fmt::format("{}{:g}C{:g}", tilt_axis, tilt, c);
+  const Eigen::Isometry3d T = T_m_w_nominal(machine.kinematics, pose);
+  const Eigen::Vector3d c_m = T * l.center_w_mm;
+  const Eigen::Vector3d s_m = T.linear() * -Eigen::Vector3d::UnitZ();  // the stem, from the centre
+  if (s_m.z() > 1e-9)
+    throw std::invalid_argument(fmt::format(
+        "pose {}: {} = {:g} deg turns the table above the sphere: the probe would reach it past the table "
+        "(keep |tilt| <= 90 deg)",
+        name, tilt_axis, tilt));
+  if (machine.artefact) {
+    // The test piece stands within the probe's reach of its way round the sphere in no pose
+    // unless wholly below the lowest touch: every move of a pose (down from the index height
+    // at a start, from start to start, up again) stays within that reach, so the pose's safe
+    // height need only clear the sphere (PlanRules::safe_height_over_artefact; the program
+    // verifier checks every move against the piece).
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = Eigen::Vector3d::Constant(-1e300);
+    for (const auto& corner : machine.artefact->corners_w()) {
+      const Eigen::Vector3d q = T * corner;
+      lo = lo.cwiseMin(q);
+      hi = hi.cwiseMax(q);
+    }
+    const double dx = std::max({lo.x() - c_m.x(), 0.0, c_m.x() - hi.x()});
+    const double dy = std::max({lo.y() - c_m.y(), 0.0, c_m.y() - hi.y()});
+    if (std::hypot(dx, dy) < reach + r + machine.clearance_mm && hi.z() > c_m.z() - R - r - machine.clearance_mm)
+      throw std::invalid_argument(fmt::format(
+          "pose {}: the test piece stands within {:.1f} mm of the probe's way to the sphere (move the sphere with "
+          "center_w_mm or choose other angles with tilt_list, c_list)",
+          name, reach + r + machine.clearance_mm));
+  }
+  PoseTouches out{{name, pose, c_m.z() + R + r + machine.clearance_mm}, {}};
+  const auto& approaches = sphereApproaches();
+  for (size_t j = 0; j < approaches.size(); ++j) {
+    const Eigen::Vector3d u = approaches[j];
+    const Eigen::Vector3d n_m = -u;  // outward normal at the contact
+    if (n_m.dot(s_m) > 1e-9) continue;  // the stem's half: the stylus would reach round to the stem
+    ProbePoint p;
+    p.pose_name = name;
+    p.pose = pose;
+    p.target = static_cast<int>(j) + 1;
+    p.face = faceOfNormal(n_m);
+    p.contact_w_mm = T.inverse() * (c_m + R * n_m);
+    p.normal_w = T.linear().transpose() * n_m;
+    p.trigger_m_mm = c_m + (R + r) * n_m;
+    p.approach_m = u;
+    p.sphere = SphereTarget{1, l.center_w_mm, R};
+    out.points.push_back(p);
+  }
+  if (out.points.size() < 4) throw std::invalid_argument(fmt::format("pose {}: fewer than 4 touches clear the stem", name));
+  return out;
+}
+
+// Whether a pose's path (index, safe height, every approach and overtravel) stays in the strokes.
+bool withinStrokes(const MachineModel& machine, double index_z_mm, const PoseTouches& p) {
+  ProbePlan one;
+  one.machine = machine;
+  one.index_z_mm = index_z_mm;
+  one.poses = {p.pose};
+  one.points = p.points;
+  for (size_t k = 0; k < one.points.size(); ++k) one.points[k].id = static_cast<int>(k) + 1;
+  return strokeViolations(one).empty();
+}
+
+// The fit's Jacobian rows of a pose's touches at nominal, per unit repeatability.
+Eigen::MatrixXd touchRows(const KinematicModel& m, bool squareness, const PoseTouches& p, double rho) {
+  const auto names = sphereFitParameters(m, squareness);
+  const Eigen::VectorXd x0 = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(names.size()));
+  Eigen::MatrixXd rows(static_cast<Eigen::Index>(p.points.size()), x0.size());
+  for (size_t k = 0; k < p.points.size(); ++k) {
+    Eigen::RowVectorXd row;
+    sphereTouchResidual(m, squareness, x0, p.pose.pose, p.points[k].trigger_m_mm, rho, &row);
+    rows.row(static_cast<Eigen::Index>(k)) = row;
+  }
+  return rows;
+}
+
+}  // namespace
+
+std::vector<int> sphereHeldFirst(const KinematicModel& m, Kinematics k) {
+  return {m.parameterIndex("C0C"), m.parameterIndex(k == Kinematics::TableAC ? "A0C" : "B0C")};
+}
+
 ProbePlan makeSpherePlan(const MachineModel& machine, const CycleOptions& options) {
   const char tilt_axis = sphereTiltAxis(machine.kinematics);
   if (!machine.hasRotary('C')) throw std::invalid_argument("cycle one_sphere needs a C axis");
-  const SphereLayout l = SphereLayout::fromOptions(machine, options);
+  SphereLayout l = SphereLayout::fromOptions(machine, options);
   const double r = machine.probe.ball_radius_mm();
   const double R = l.radius_mm;
   if (machine.probe.stylus_length_mm < R + machine.probe.body_clearance_mm)
@@ -90,90 +250,84 @@ ProbePlan makeSpherePlan(const MachineModel& machine, const CycleOptions& option
         "the stylus ({:g} mm) is too short for a side touch at the equator of a {:g} mm sphere: the probe body would "
         "come within {:g} mm of its top",
         machine.probe.stylus_length_mm, 2 * R, machine.probe.body_clearance_mm));
+  const KinematicModel model = kinematicModel(kinematicsName(machine.kinematics), l.center_w_mm);
+  const auto names = sphereFitParameters(model, l.fit_squareness);
+
+  // The table indexes with the ball above everything it carries, whatever the pose.
+  double sweep = std::max(machine.table_diameter_mm / 2, l.center_w_mm.norm() + R);
+  if (machine.artefact)
+    for (const auto& corner : machine.artefact->corners_w()) sweep = std::max(sweep, corner.norm());
+  const double index_z_mm = sweep + r + machine.clearance_mm;
+
+  std::vector<PoseTouches> poses;
+  if (l.design_poses > 0) {
+    // The candidates the machine allows (a refused one is simply not a candidate), then the
+    // D-optimal n of them, run in the grid's order (tilt, then C: the shortest rotary moves).
+    std::vector<PoseTouches> candidates;
+    std::vector<Eigen::MatrixXd> rows;
+    const double sd_mm = umToMm(machine.probe.repeatability_um);
+    for (const auto& [t, c] : l.poses()) {
+      try {
+        candidates.push_back(touchesAt(machine, l, tilt_axis, t, c));
+      } catch (const std::invalid_argument&) {
+        continue;
+      }
+      if (!withinStrokes(machine, index_z_mm, candidates.back())) {
+        candidates.pop_back();
+        continue;
+      }
+      rows.push_back(touchRows(model, l.fit_squareness, candidates.back(), R + r) / sd_mm);
+    }
+    PoseDesignOptions o;
+    o.poses = l.design_poses;
+    o.hold_first = sphereHeldFirst(model, machine.kinematics);
+    if (static_cast<int>(candidates.size()) < o.poses)
+      throw std::invalid_argument(fmt::format("option poses = {}: only {} candidate poses of tilt_list x c_list are allowed",
+                                              o.poses, candidates.size()));
+    PoseDesign d = designPoses(rows, names, o);
+    std::sort(d.chosen.begin(), d.chosen.end());
+    for (int k : d.chosen) {
+      poses.push_back(candidates[static_cast<size_t>(k)]);
+      const Pose& q = poses.back().pose.pose;
+      l.pose_list.emplace_back(tilt_axis == 'A' ? q.A : q.B, q.C);
+    }
+    l.design_poses = 0;
+  } else {
+    for (const auto& [t, c] : l.poses()) poses.push_back(touchesAt(machine, l, tilt_axis, t, c));
+  }
 
   ProbePlan plan;
   plan.cycle = "one_sphere";
   plan.machine = machine;
   plan.options = l.toOptions();
-  // The table indexes with the ball above everything it carries, whatever the pose.
-  double sweep = std::max(machine.table_diameter_mm / 2, l.center_w_mm.norm() + R);
-  if (machine.artefact)
-    for (const auto& corner : machine.artefact->corners_w()) sweep = std::max(sweep, corner.norm());
-  plan.index_z_mm = sweep + r + machine.clearance_mm;
-
-  const double reach = R + r + machine.approach_mm;  // the side touches' starts, from the centre
+  plan.index_z_mm = index_z_mm;
   int id = 1;
-  for (double tilt : l.tilt_deg)
-    for (double c : l.c_deg) {
-      const Pose pose = poseOf(tilt_axis, tilt, c);
-      const std::string name = fmt::format("{}{:g}C{:g}", tilt_axis, tilt, c);
-      const Eigen::Isometry3d T = T_m_w_nominal(machine.kinematics, pose);
-      const Eigen::Vector3d c_m = T * l.center_w_mm;
-      const Eigen::Vector3d s_m = T.linear() * -Eigen::Vector3d::UnitZ();  // the stem, from the centre
-      if (s_m.z() > 1e-9)
-        throw std::invalid_argument(fmt::format(
-            "pose {}: {} = {:g} deg turns the table above the sphere: the probe would reach it past the table "
-            "(keep |tilt| <= 90 deg)",
-            name, tilt_axis, tilt));
-      double top_z = c_m.z() + R;
-      if (machine.artefact) {
-        // The test piece: above the sphere's probing region in no pose (the ball comes down from
-        // the safe height there), and below the safe height.
-        Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = Eigen::Vector3d::Constant(-1e300);
-        for (const auto& corner : machine.artefact->corners_w()) {
-          const Eigen::Vector3d q = T * corner;
-          lo = lo.cwiseMin(q);
-          hi = hi.cwiseMax(q);
-          top_z = std::max(top_z, q.z());
-        }
-        const double dx = std::max({lo.x() - c_m.x(), 0.0, c_m.x() - hi.x()});
-        const double dy = std::max({lo.y() - c_m.y(), 0.0, c_m.y() - hi.y()});
-        if (std::hypot(dx, dy) < reach + r + machine.clearance_mm && hi.z() > c_m.z() - R - r - machine.clearance_mm)
-          throw std::invalid_argument(fmt::format(
-              "pose {}: the test piece stands within {:.1f} mm of the probe's way to the sphere (move the sphere with "
-              "center_w_mm or choose other angles with tilt_list, c_list)",
-              name, reach + r + machine.clearance_mm));
-      }
-      plan.poses.push_back({name, pose, top_z + r + machine.clearance_mm});
-      const size_t before = plan.points.size();
-      const auto& approaches = sphereApproaches();
-      for (size_t j = 0; j < approaches.size(); ++j) {
-        const Eigen::Vector3d u = approaches[j];
-        const Eigen::Vector3d n_m = -u;  // outward normal at the contact
-        if (n_m.dot(s_m) > 1e-9) continue;  // the stem's half: the stylus would reach round to the stem
-        ProbePoint p;
-        p.id = id++;
-        p.pose_name = name;
-        p.pose = pose;
-        p.target = static_cast<int>(j) + 1;
-        p.face = faceOfNormal(n_m);
-        p.contact_w_mm = T.inverse() * (c_m + R * n_m);
-        p.normal_w = T.linear().transpose() * n_m;
-        p.trigger_m_mm = c_m + (R + r) * n_m;
-        p.approach_m = u;
-        p.sphere = SphereTarget{1, l.center_w_mm, R};
-        plan.points.push_back(p);
-      }
-      if (plan.points.size() - before < 4)
-        throw std::invalid_argument(fmt::format("pose {}: fewer than 4 touches clear the stem", name));
+  for (auto& p : poses) {
+    plan.poses.push_back(p.pose);
+    for (auto& q : p.points) {
+      q.id = id++;
+      plan.points.push_back(q);
     }
+  }
 
   // The plan must see every parameter the sphere can show (core/identifiability.hpp): the tilt
-  // axis needs two tilts and the C axis three angles, and some layouts lose more.
-  const KinematicModel model = kinematicModel(kinematicsName(machine.kinematics), l.center_w_mm);
-  Eigen::MatrixXd J(3 * static_cast<Eigen::Index>(plan.poses.size()), model.size());
-  for (size_t k = 0; k < plan.poses.size(); ++k)
-    J.middleRows(3 * static_cast<Eigen::Index>(k), 3) = J_X_p(model, Eigen::VectorXd::Zero(model.size()), plan.poses[k].pose);
-  std::vector<IdentifiabilityParameter> names;
-  for (const auto& q : model.parameters) names.push_back({q.name, q.kind});
-  const Identifiability id_ = identifiability(J, names);
-  if (id_.rank < model.size() - 2) {
+  // axis needs two tilts and the C axis three angles, and some layouts lose more; with the
+  // squareness fitted, the sphere's positions must span the shear too.
+  Eigen::MatrixXd J(static_cast<Eigen::Index>(plan.points.size()), static_cast<Eigen::Index>(names.size()));
+  Eigen::Index at = 0;
+  for (const auto& p : poses) {
+    const Eigen::MatrixXd rows = touchRows(model, l.fit_squareness, p, R + r);
+    J.middleRows(at, rows.rows()) = rows;
+    at += rows.rows();
+  }
+  const Identifiability id_ = identifiability(J, names, sphereHeldFirst(model, machine.kinematics));
+  if (id_.rank < static_cast<int>(names.size()) - 2) {
     std::string lost;
     for (const auto& c : id_.combinations) lost += (lost.empty() ? "" : "; ") + c.text;
     throw std::invalid_argument(fmt::format(
-        "the poses ({} {} x {} C angles) leave {} directions of the location errors unseen, beyond the 2 no sphere "
-        "shows: {}",
-        l.tilt_deg.size(), tilt_axis, l.c_deg.size(), model.size() - id_.rank, lost));
+        "the {} poses leave {} directions of the fit unseen, beyond the 2 no sphere shows: {}{}", poses.size(),
+        static_cast<int>(names.size()) - id_.rank, lost,
+        l.fit_squareness ? " (the linear axes' squareness is fitted: fit_squareness=0 drops it)" : ""));
   }
   finishTouchPlan(plan);
   return plan;

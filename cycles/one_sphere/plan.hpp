@@ -12,6 +12,7 @@
 #include <Eigen/Core>
 #include <vector>
 
+#include "core/kinematic_model.hpp"
 #include "core/probe_plan.hpp"
 
 namespace rotacal {
@@ -23,11 +24,22 @@ struct SphereLayout {
   double stem_diameter_mm = 8.0;
   std::vector<double> tilt_deg;     // the tilt axis (A or B); default: 0 to 90 deg in 30 deg steps, within the stroke
   std::vector<double> c_deg = {0.0, 90.0, 180.0, 270.0};
+  /// Explicit poses (tilt, C) in deg, in the order run; when set, the grid is not used.
+  std::vector<std::pair<double, double>> pose_list;
+  /// > 0: a pose design picks this many poses of the grid (D-optimal on the fit's touches,
+  /// cycles/one_sphere/design.hpp); the plan then carries them as pose_list. The grid it picks
+  /// from is tilt_list x c_list, by default the tilt axis every 15 deg and C every 30 deg.
+  int design_poses = 0;
+  /// Fit the linear axes' squareness S_xy S_xz S_yz alongside (design.hpp says why).
+  bool fit_squareness = true;
 
   /// Defaults for a machine, overridden by the options center_w_mm ("x,y,z"), radius_mm,
-  /// stem_length_mm, stem_diameter_mm, tilt_list, c_list.
+  /// stem_length_mm, stem_diameter_mm, tilt_list, c_list, pose_list ("tilt/c,tilt/c,..."),
+  /// poses (the design's n), fit_squareness (0 or 1).
   static SphereLayout fromOptions(const MachineModel& machine, const CycleOptions& options);
   CycleOptions toOptions() const;
+  /// The poses run (tilt, C in deg): pose_list, else the grid tilt_list x c_list.
+  std::vector<std::pair<double, double>> poses() const;
 };
 
 /// The tilt axis of a tilting-table machine ('A' for table_ac, 'B' for table_bc). Throws
@@ -36,6 +48,11 @@ char sphereTiltAxis(Kinematics kinematics);
 
 /// The four horizontal approach directions the side touches take, and the top's (-Z).
 const std::vector<Eigen::Vector3d>& sphereApproaches();
+
+/// Held first where a direction involves them: the C zero (a sphere reads it as its own place on
+/// the table, 000's "set-up rotation") and the tilt of the C axis about the tilt axis, which the
+/// tilt axis's own zero does as well (000 keeps a_AY and drops a_CA).
+std::vector<int> sphereHeldFirst(const KinematicModel& m, Kinematics k);
 
 ProbePlan makeSpherePlan(const MachineModel& machine, const CycleOptions& options);
 

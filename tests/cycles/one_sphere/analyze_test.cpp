@@ -65,7 +65,7 @@ TEST_P(OneSphere, NoiseFreeTriggersGiveTheTruthsSpherePositionsEverywhere) {
   const SphereCycleResult r = identifySphereCycle(plan, {simulate(plan, truth, {1})});
   ASSERT_TRUE(r.summary.usable()) << r.summary.briefReport();
   EXPECT_LT(r.residual_sd_um, 1e-6);
-  EXPECT_LT(std::abs(mmToUm(r.x[r.x.size() - 1])), 1e-6) << "dR";
+  EXPECT_LT(std::abs(mmToUm(r.x[r.model.size()])), 1e-6) << "dR";
   const SphereLayout l = sphereLayoutOf(plan);
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> tilt(-90, 0), c(0, 360);

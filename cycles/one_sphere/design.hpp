@@ -1,0 +1,37 @@
+#pragma once
+// The one-sphere cycle's measurement equation and its pose design (issue 19 item 2).
+//
+// One touch, ball centre read at t (machine frame) at pose q:
+//   r = |t + E_S(t) - X(p, q)| - (R + r_ball + dR),
+//   E_S(t) = (S_xy t_y + S_xz t_z, S_yz t_z, 0)            (000 Eq. (23), core/linear_axes.hpp)
+// X the sphere centre of the five-axis model (core/kinematic_model.hpp). The linear axes'
+// squareness is fitted alongside when the layout asks (option fit_squareness, default on): a
+// shear of the linear axes reads as a tilt of the rotary axes wherever the sphere's positions do
+// not span it, and 000 Table 5's squareness is the largest contributor to the angles otherwise
+// (S_yz 0.83 of a_AY's 0.99 mdeg on the bundled A/C machine). Only its symmetric part is seen:
+// the antisymmetric part is a rotation of the whole machine, which the location errors carry.
+//
+// The pose design picks n poses of a candidate grid for the largest determinant of the fit's
+// information (D-optimal, core/pose_design.hpp), from the touches each pose gets, every touch
+// weighted alike (the probe's repeatability): what a plan with option `poses` does.
+#include <Eigen/Core>
+#include <vector>
+
+#include "core/identifiability.hpp"
+#include "core/kinematic_model.hpp"
+
+namespace rotacal {
+
+/// The fit's parameters: the model's, then dR, then S_xy S_xz S_yz when squareness is fitted.
+std::vector<IdentifiabilityParameter> sphereFitParameters(const KinematicModel& m, bool squareness);
+
+/// One touch's residual and (when row is not null) its row of J_r_x, for x laid out as
+/// sphereFitParameters. rho = R + r_ball (mm).
+double sphereTouchResidual(const KinematicModel& m, bool squareness, const Eigen::VectorXd& x, const Pose& pose,
+                           const Eigen::Vector3d& t_m_mm, double rho, Eigen::RowVectorXd* row);
+
+/// The contact normal of that touch (from the fitted centre to the corrected trigger).
+Eigen::Vector3d sphereTouchNormal(const KinematicModel& m, bool squareness, const Eigen::VectorXd& x, const Pose& pose,
+                                  const Eigen::Vector3d& t_m_mm);
+
+}  // namespace rotacal
