@@ -78,14 +78,13 @@ UncertaintyBudget sphereBudget(const ProbePlan& plan, const SphereCycleResult& r
                                 std::sqrt(scatter.variance_um2), scatter.why,
                                 contributors ? "probe repeatability and surface roughness" : "the machine's probe repeatability");
   b.terms.push_back({"data", b.uA()});
-  const std::string left_out =
-      split.left_out.empty() ? std::string() : fmt::format("; not acting on one sphere and left out: {}", fmt::join(split.left_out, ", "));
+  const std::string left_out = leftOutNote("one sphere", split.left_out);
   if (typeBToRun(&b, contributors != nullptr, !type_b.items.empty(), "the one-sphere cycle", left_out)) {
     runTypeB(&b, type_b, options, [&](std::uint64_t seed, int run, int c) -> Eigen::VectorXd { return G * shift(seed, run, c); });
-    b.type_b_source = fmt::format(
-        "{} declared contributors (from {}) drawn on the exact simulator (full HTMs, exact ball-on-sphere contact) around "
-        "the identified errors, the triggers' deviations run through the fit linearised there, {} runs, seed {}{}",
-        type_b.items.size(), contributorsSource(*contributors), options.runs, options.seed, left_out);
+    b.type_b_source = typeBDrawnSource(type_b.items.size(), *contributors,
+                                       "the exact simulator (full HTMs, exact ball-on-sphere contact) around the "
+                                       "identified errors, the triggers' deviations run through the fit linearised there",
+                                       options, left_out);
   }
   return b;
 }
