@@ -69,6 +69,14 @@ struct PlanReader {
         cycle(cycleOfPlanFile(plan, plan_file)),
         dialect(dialectOrFail(dialect_name)),
         io(dialectIO(dialect)) {}
+  /// A request of the plan's cycle on this plan, its results in this dialect.
+  template <class Request>
+  Request request() const {
+    Request r;
+    r.plan = &plan;
+    r.dialect = &io;
+    return r;
+  }
   const ProbePlan plan;
   const Cycle& cycle;
   const Dialect& dialect;
@@ -168,19 +176,14 @@ int cmdSimulate(const Common& c, const std::string& plan_file, const std::string
                                                         kMaxClockSeconds, *start_s));
   checkOutputs({{"-o", out}}, {plan_file, truth_file});
   const PlanReader in(plan_file, dialect_name);
-  const ProbePlan& plan = in.plan;
-  const Cycle& cycle = in.cycle;  // named, not a structured binding: C++17 lambdas cannot capture those (clang)
-  const DialectIO& io = in.io;
-  SimulateRequest r;
-  r.plan = &plan;
+  auto r = in.request<SimulateRequest>();
   r.truth = {truth_file, readTextFile(truth_file)};
   r.noise_um = noise_um;
   r.start_s = start_s;
   r.seed = seed;
-  r.dialect = &io;
   Simulated s;
   try {
-    s = cycle.simulate(r);
+    s = in.cycle.simulate(r);
   } catch (const std::invalid_argument& e) {
     failFile(truth_file, e.what());
   }
@@ -289,13 +292,8 @@ int cmdDiagnose(const Common& c, const std::string& plan_file, const std::vector
   inputs.push_back(plan_file);
   checkOutputs({{"--json", json_out}, {"--text", text_out}, {"--html", html_out}}, inputs);
   const PlanReader in(plan_file, dialect_name);
-  const ProbePlan& plan = in.plan;
-  const Cycle& cycle = in.cycle;  // named, not a structured binding: C++17 lambdas cannot capture those (clang)
-  const DialectIO& io = in.io;
-  DiagnoseRequest r;
-  r.plan = &plan;
+  auto r = in.request<DiagnoseRequest>();
   r.results = readInputs(results);
-  r.dialect = &io;
   r.alpha = alpha;
   const auto progress = progressIndicator(c, "rotacal diagnose", "candidate fits");
   auto total = std::make_shared<int>(0);
@@ -304,7 +302,7 @@ int cmdDiagnose(const Common& c, const std::string& plan_file, const std::vector
       *total = all;
       progress(done, all);
     };
-  const CycleDocuments docs = onResults(results, [&] { return cycle.diagnose(r); });
+  const CycleDocuments docs = onResults(results, [&] { return in.cycle.diagnose(r); });
   if (progress && *total > 0) progress(*total, *total);  // ends the line
   writeDocuments(c, docs.doc, docs.text, json_out, text_out, html_out);
   warn(docs.warnings);

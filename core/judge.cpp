@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 
 #include "core/statistics.hpp"
+#include "core/require_valid.hpp"
 
 namespace rotacal {
 
@@ -593,8 +594,7 @@ const char* judgeVerdictName(JudgeVerdict v) {
 }
 
 JudgeSummary judge(const JudgeProblem& pb, const JudgeOptions& o) {
-  std::string why;
-  if (!o.validate(&why)) throw std::invalid_argument("judge options: " + why);
+  requireValid(o, "judge options");
   validateProblem(pb);
   const Eigen::Index n = pb.y.size();
   const size_t m_causes = pb.causes.size();

@@ -315,6 +315,16 @@ std::string contributorsSource(const ContributorSet& declared) {
   return declared.file.empty() ? std::string("the machine") : declared.file;
 }
 
+std::string leftOutNote(std::string_view acts_on, const std::vector<std::string>& left_out) {
+  return left_out.empty() ? std::string() : fmt::format("; not acting on {} and left out: {}", acts_on, fmt::join(left_out, ", "));
+}
+
+std::string typeBDrawnSource(size_t n, const ContributorSet& declared, std::string_view how, const BudgetOptions& options,
+                             std::string_view note) {
+  return fmt::format("{} declared contributors (from {}) drawn on {}, {} runs, seed {}{}", n, contributorsSource(declared),
+                     how, options.runs, options.seed, note);
+}
+
 bool variesBetweenCalibrations(const ContributorInfo& c) {
   switch (c.kind) {
     case ContributorKind::SetupPosition:

@@ -182,6 +182,14 @@ void runTypeB(UncertaintyBudget* budget, const ContributorSet& type_b, const Bud
               const std::function<Eigen::VectorXd(std::uint64_t seed, int run, int contributor)>& deviation);
 /// Where the declared contributors came from, for type_b_source: their file, or "the machine".
 std::string contributorsSource(const ContributorSet& declared);
+/// type_b_source's note on the declared contributors that do not act on `acts_on` (what the cycle
+/// reads) and were left out: "; not acting on <acts_on> and left out: a, b", "" when none was.
+std::string leftOutNote(std::string_view acts_on, const std::vector<std::string>& left_out);
+/// type_b_source of a cycle's Monte Carlo: "<n> declared contributors (from <file>) drawn on
+/// <how>, <runs> runs, seed <seed><note>", `how` saying on what they were drawn and through which
+/// estimator.
+std::string typeBDrawnSource(size_t n, const ContributorSet& declared, std::string_view how, const BudgetOptions& options,
+                             std::string_view note);
 
 /// Fills cov_b, the contributor terms and the coverage factors of `budget` from a Monte Carlo
 /// result. cov_a must already hold the Type A part: the coverage factor convolves it in.

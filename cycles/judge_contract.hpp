@@ -11,6 +11,17 @@
 
 namespace rotacal {
 
+/// What every probing cycle's diagnosis options must hold: valid judge options and a declared
+/// probe repeatability > 0 (the judge weighs the residuals by it). False with `why` otherwise.
+inline bool validJudgeAndProbe(const JudgeOptions& judge, double sigma_um, std::string* why) {
+  if (!judge.validate(why)) return false;
+  if (!(sigma_um > 0)) {
+    if (why) *why = "the declared probe repeatability must be > 0 um";
+    return false;
+  }
+  return true;
+}
+
 /// The contract's format and cycle of a diagnosis document.
 inline void stampDiagnosis(Json& j, const std::string& cycle) {
   j["format"] = "rotacal-diagnosis/1";

@@ -60,11 +60,14 @@ struct Stmt {
   ~Stmt() { sqlite3_finalize(s); }
 };
 
+// `sql` prepared into `st`; false when SQLite refuses it (the caller says what it was for).
+bool prepared(sqlite3* db, Stmt& st, const char* sql) { return sqlite3_prepare_v2(db, sql, -1, &st.s, nullptr) == SQLITE_OK; }
+
 // How many tables of the schema `where` selects; nullopt when the schema cannot be read.
 std::optional<int> tableCount(sqlite3* db, const std::string& where) {
   Stmt st;
   const std::string sql = "SELECT count(*) FROM sqlite_master WHERE type='table' AND " + where;
-  if (sqlite3_prepare_v2(db, sql.c_str(), -1, &st.s, nullptr) != SQLITE_OK) return std::nullopt;
+  if (!prepared(db, st, sql.c_str())) return std::nullopt;
   sqlite3_step(st.s);
   return sqlite3_column_int(st.s, 0);
 }
@@ -181,7 +184,7 @@ Database::Database(const std::string& path, bool create) : path_(path) {
   exec("PRAGMA foreign_keys=ON");
   {
     Stmt st;
-    if (sqlite3_prepare_v2(db_.get(), "PRAGMA journal_mode=WAL", -1, &st.s, nullptr) != SQLITE_OK) fail("cannot read");
+    if (!prepared(db_.get(), st, "PRAGMA journal_mode=WAL")) fail("cannot read");
     if (sqlite3_step(st.s) != SQLITE_ROW) fail("cannot set WAL mode");
   }
   exec("PRAGMA synchronous=NORMAL");
@@ -207,7 +210,7 @@ Database::Database(const std::string& path, bool create) : path_(path) {
     }
     {
       Stmt st;
-      if (sqlite3_prepare_v2(db_.get(), "SELECT value FROM meta WHERE key='schema_version'", -1, &st.s, nullptr) != SQLITE_OK ||
+      if (!prepared(db_.get(), st, "SELECT value FROM meta WHERE key='schema_version'") ||
           sqlite3_step(st.s) != SQLITE_ROW)
         fail("cannot read the schema version");
       const std::string v = reinterpret_cast<const char*>(sqlite3_column_text(st.s, 0));
@@ -220,7 +223,7 @@ Database::Database(const std::string& path, bool create) : path_(path) {
   }
   // A damaged page behind a valid header shows up only when read: check the whole file.
   Stmt st;
-  if (sqlite3_prepare_v2(db_.get(), "PRAGMA quick_check", -1, &st.s, nullptr) != SQLITE_OK) fail("cannot check");
+  if (!prepared(db_.get(), st, "PRAGMA quick_check")) fail("cannot check");
   if (sqlite3_step(st.s) != SQLITE_ROW) fail("integrity check failed");
   const std::string ok = reinterpret_cast<const char*>(sqlite3_column_text(st.s, 0));
   if (ok != "ok") fail("damaged (integrity check: " + ok + ")");
@@ -256,10 +259,9 @@ long long Database::add(const Calibration& c) {
   exec("BEGIN IMMEDIATE");
   try {
     Stmt st;
-    if (sqlite3_prepare_v2(db_.get(),
-                           "INSERT INTO calibration(machine_id, time_s, time_utc, added_utc, cycle, method, machine_name, "
-                           "source, residual_rms_um, points_used, plan_json) VALUES(?,?,?,?,?,?,?,?,?,?,?)",
-                           -1, &st.s, nullptr) != SQLITE_OK)
+    if (!prepared(db_.get(), st,
+                  "INSERT INTO calibration(machine_id, time_s, time_utc, added_utc, cycle, method, machine_name, "
+                  "source, residual_rms_um, points_used, plan_json) VALUES(?,?,?,?,?,?,?,?,?,?,?)"))
       fail("cannot prepare the insert");
     const std::string added = isoTime(static_cast<double>(std::time(nullptr)));
     sqlite3_bind_text(st.s, 1, c.machine_id.c_str(), -1, SQLITE_TRANSIENT);
@@ -276,8 +278,7 @@ long long Database::add(const Calibration& c) {
     if (sqlite3_step(st.s) != SQLITE_DONE) fail("cannot store the calibration");
     const long long id = sqlite3_last_insert_rowid(db_.get());
     Stmt ps;
-    if (sqlite3_prepare_v2(db_.get(), "INSERT INTO parameter(calibration_id, name, iso, unit, value, u) VALUES(?,?,?,?,?,?)", -1,
-                           &ps.s, nullptr) != SQLITE_OK)
+    if (!prepared(db_.get(), ps, "INSERT INTO parameter(calibration_id, name, iso, unit, value, u) VALUES(?,?,?,?,?,?)"))
       fail("cannot prepare the insert");
     for (const auto& p : c.parameters) {
       sqlite3_reset(ps.s);
@@ -342,10 +343,9 @@ class RowReader {
 std::vector<Calibration> Database::list(const std::string& machine_id) const {
   std::vector<Calibration> out;
   Stmt st;
-  if (sqlite3_prepare_v2(db_.get(),
-                         "SELECT id, time_s, time_utc, cycle, method, machine_name, source, residual_rms_um, points_used, "
-                         "plan_json FROM calibration WHERE machine_id = ? ORDER BY time_s, id",
-                         -1, &st.s, nullptr) != SQLITE_OK)
+  if (!prepared(db_.get(), st,
+                "SELECT id, time_s, time_utc, cycle, method, machine_name, source, residual_rms_um, points_used, "
+                "plan_json FROM calibration WHERE machine_id = ? ORDER BY time_s, id"))
     fail("cannot read the calibrations");
   sqlite3_bind_text(st.s, 1, machine_id.c_str(), -1, SQLITE_TRANSIENT);
   int rc;
@@ -368,8 +368,7 @@ std::vector<Calibration> Database::list(const std::string& machine_id) const {
   }
   if (rc != SQLITE_DONE) fail("cannot read the calibrations");
   Stmt ps;
-  if (sqlite3_prepare_v2(db_.get(), "SELECT name, iso, unit, value, u FROM parameter WHERE calibration_id = ? ORDER BY rowid", -1,
-                         &ps.s, nullptr) != SQLITE_OK)
+  if (!prepared(db_.get(), ps, "SELECT name, iso, unit, value, u FROM parameter WHERE calibration_id = ? ORDER BY rowid"))
     fail("cannot read the parameters");
   for (auto& c : out) {
     sqlite3_reset(ps.s);
@@ -394,7 +393,7 @@ std::vector<Calibration> Database::list(const std::string& machine_id) const {
 std::vector<std::string> Database::machines() const {
   std::vector<std::string> out;
   Stmt st;
-  if (sqlite3_prepare_v2(db_.get(), "SELECT DISTINCT machine_id FROM calibration ORDER BY machine_id", -1, &st.s, nullptr) != SQLITE_OK)
+  if (!prepared(db_.get(), st, "SELECT DISTINCT machine_id FROM calibration ORDER BY machine_id"))
     fail("cannot read the machines");
   while (sqlite3_step(st.s) == SQLITE_ROW) out.emplace_back(reinterpret_cast<const char*>(sqlite3_column_text(st.s, 0)));
   return out;

@@ -79,8 +79,7 @@ UncertaintyBudget sphereBudget(const ProbePlan& plan, const SphereCycleResult& r
                                 std::sqrt(scatter.variance_um2), scatter.why,
                                 contributors ? "probe repeatability and surface roughness" : "the machine's probe repeatability");
   b.terms.push_back({"data", b.uA()});
-  const std::string left_out =
-      split.left_out.empty() ? std::string() : fmt::format("; not acting on one sphere and left out: {}", fmt::join(split.left_out, ", "));
+  const std::string left_out = leftOutNote("one sphere", split.left_out);
   if (typeBToRun(&b, contributors != nullptr, !type_b.items.empty(), "the one-sphere cycle", left_out)) {
     // A fitted squareness measures the drawn one: its error is what the fit leaves of the draw.
     const Eigen::Index no = -1;
@@ -101,10 +100,10 @@ UncertaintyBudget sphereBudget(const ProbePlan& plan, const SphereCycleResult& r
       }
       return dx;
     });
-    b.type_b_source = fmt::format(
-        "{} declared contributors (from {}) drawn on the exact simulator (full HTMs, exact ball-on-sphere contact) around "
-        "the identified errors, the triggers' deviations run through the fit linearised there, {} runs, seed {}{}",
-        type_b.items.size(), contributorsSource(*contributors), options.runs, options.seed, left_out);
+    b.type_b_source = typeBDrawnSource(type_b.items.size(), *contributors,
+                                       "the exact simulator (full HTMs, exact ball-on-sphere contact) around the "
+                                       "identified errors, the triggers' deviations run through the fit linearised there",
+                                       options, left_out);
   }
   return b;
 }

@@ -164,12 +164,10 @@ UncertaintyBudget rtestBudget(const ProbePlan& plan, const RtestCycle& first, co
     const Eigen::VectorXd x = estimate(d, nullptr);
     return f.cwiseProduct(Eigen::VectorXd(x.head(n) - fit.value));
   });
-  b.type_b_source = fmt::format(
-      "{} declared contributors (from {}) drawn on the exact simulator of the cycle (full HTMs) around the identified "
-      "errors and run through the location fit (linear in the readings), {} runs, seed {}{}",
-      type_b.items.size(), contributorsSource(*contributors), options.runs, options.seed,
-      ignored.empty() ? std::string()
-                      : fmt::format("; not acting on an R-test and left out: {}", fmt::join(ignored, ", ")));
+  b.type_b_source = typeBDrawnSource(type_b.items.size(), *contributors,
+                                     "the exact simulator of the cycle (full HTMs) around the identified errors and run "
+                                     "through the location fit (linear in the readings)",
+                                     options, leftOutNote("an R-test", ignored));
   return b;
 }
 
@@ -261,12 +259,10 @@ RtestTiltBudget rtestTiltBudget(const ProbePlan& plan, const RtestCycle& first, 
     applyRtestDraw(plan, d, &t, &x);
     return perTilt(t, x) - base;
   });
-  b.type_b_source = fmt::format(
-      "{} declared contributors (from {}) drawn on the exact simulator of the cycle (full HTMs) around the identified "
-      "location errors, the first cycle's readings run through the per-tilt fit, {} runs, seed {}{}",
-      split.type_b.items.size(), contributorsSource(*contributors), options.runs, options.seed,
-      split.left_out.empty() ? std::string()
-                             : fmt::format("; not acting on an R-test and left out: {}", fmt::join(split.left_out, ", ")));
+  b.type_b_source = typeBDrawnSource(split.type_b.items.size(), *contributors,
+                                     "the exact simulator of the cycle (full HTMs) around the identified location errors, "
+                                     "the first cycle's readings run through the per-tilt fit",
+                                     options, leftOutNote("an R-test", split.left_out));
   return out;
 }
 

@@ -225,8 +225,7 @@ UncertaintyBudget spaceframeBudget(const ProbePlan& plan, const SpaceframeAnalys
   b.cov_b = Eigen::MatrixXd::Zero(n, n);
   b.terms.push_back({"data", b.uA()});
 
-  const std::string left_out_text =
-      left_out.empty() ? std::string() : fmt::format("; not acting on the frame's spheres and left out: {}", fmt::join(left_out, ", "));
+  const std::string left_out_text = leftOutNote("the frame's spheres", left_out);
   if (!typeBToRun(&b, contributors || frame_term, nb > 0 || frame_term, "the space frame", left_out_text)) return b;
   MonteCarloProblem p;
   p.parameters = n;

@@ -11,6 +11,7 @@
 #include "core/report_envelope.hpp"
 #include "core/units.hpp"
 #include "cycles/judge_contract.hpp"
+#include "core/require_valid.hpp"
 
 namespace rotacal {
 
@@ -130,8 +131,7 @@ std::vector<std::string> spaceframeCatalog() {
 
 SpaceframeDiagnosis diagnoseSpaceframe(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
                                        const SpaceframeDiagnosisOptions& options) {
-  std::string why;
-  if (!options.judge.validate(&why)) throw std::invalid_argument("diagnosis options: " + why);
+  requireValid(options.judge, "diagnosis options");
   if (!(options.sigma_um > 0)) throw std::invalid_argument("diagnosis options: the declared probe noise must be > 0 um");
   // The sphere fits and measured centres of the analysis (its own identification is not used).
   SpaceframeOptions so;

@@ -12,6 +12,7 @@
 #include "core/transforms.hpp"
 #include "core/report_envelope.hpp"
 #include "core/units.hpp"
+#include "core/require_valid.hpp"
 
 namespace rotacal {
 
@@ -151,8 +152,7 @@ struct Model {
 
 Spheres3Result identifySpheres3(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
                                 const Spheres3Options& opt) {
-  std::string why;
-  if (!opt.validate(&why)) throw std::invalid_argument("spheres3 options: " + why);
+  requireValid(opt, "spheres3 options");
   if (plan.cycle != "spheres3") throw std::invalid_argument("plan is not a spheres3 plan (cycle '" + plan.cycle + "')");
   if (runs.empty()) throw std::invalid_argument("no results");
   Spheres3Result r;

@@ -243,20 +243,18 @@ Spheres3Budget spheres3Budget(const ProbePlan& plan, const Spheres3Result& r, co
   full.cov_a = cov_a;
   full.cov_b = Eigen::MatrixXd::Zero(n, n);
   full.terms.push_back({"data", full.uA()});
-  const std::string left_out_text =
-      left_out.empty() ? std::string()
-                       : fmt::format("; not acting on three spheres and left out: {}", fmt::join(left_out, ", "));
+  const std::string left_out_text = leftOutNote("three spheres", left_out);
   if (typeBToRun(&full, contributors != nullptr, !type_b.items.empty(), "the three-sphere cycle", left_out_text)) {
     runTypeB(&full, type_b, options, [&](std::uint64_t seed, int run, int c) -> Eigen::VectorXd {
       Spheres3Draw d;
       drawSpheres3(plan, type_b, seed, run, c, &d);
       return G * triggerShift(d);
     });
-    full.type_b_source = fmt::format(
-        "{} declared contributors (from {}) drawn on the exact simulator (full HTMs, exact ball-on-sphere contact) around "
-        "the identified errors, the triggers' deviation run through the estimator linearised there (both stages), {} "
-        "runs, seed {}{}",
-        type_b.items.size(), contributorsSource(*contributors), options.runs, options.seed, left_out_text);
+    full.type_b_source = typeBDrawnSource(type_b.items.size(), *contributors,
+                                          "the exact simulator (full HTMs, exact ball-on-sphere contact) around the "
+                                          "identified errors, the triggers' deviation run through the estimator "
+                                          "linearised there (both stages)",
+                                          options, left_out_text);
   }
 
   Spheres3Budget out;

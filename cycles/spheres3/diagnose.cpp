@@ -8,15 +8,12 @@
 
 #include "core/units.hpp"
 #include "cycles/judge_contract.hpp"
+#include "core/require_valid.hpp"
 
 namespace rotacal {
 
 bool Spheres3DiagnosisOptions::validate(std::string* why) const {
-  if (!judge.validate(why)) return false;
-  if (!(sigma_um > 0)) {
-    if (why) *why = "the declared probe repeatability must be > 0 um";
-    return false;
-  }
+  if (!validJudgeAndProbe(judge, sigma_um, why)) return false;
   if (max_harmonic < 1) {
     if (why) *why = "max_harmonic must be at least 1";
     return false;
@@ -191,8 +188,7 @@ JudgeProblem spheres3JudgeProblem(const Spheres3Result& b, const std::vector<Mea
 
 Spheres3Diagnosis diagnoseSpheres3(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
                                    const Spheres3DiagnosisOptions& options) {
-  std::string why;
-  if (!options.validate(&why)) throw std::invalid_argument("diagnosis options: " + why);
+  requireValid(options, "diagnosis options");
   Spheres3Diagnosis d;
   Spheres3Options base;
   base.model = ComponentModel::None;

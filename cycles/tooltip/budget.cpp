@@ -268,12 +268,10 @@ UncertaintyBudget tooltipBudget(const ProbePlan& plan, const std::vector<Tooltip
     drawTooltip(plan, type_b, seed, run, c, &d);
     return valuesOf(l, estimate(d)) - truth_v;
   });
-  b.type_b_source = fmt::format(
-      "{} declared contributors (from {}) drawn on the exact head geometry around the identified errors (the pivot "
-      "where the linear axes put it, the beams as aligned) and run through the tooltip fit, {} runs, seed {}{}",
-      type_b.items.size(), contributorsSource(*contributors), options.runs, options.seed,
-      ignored.empty() ? std::string()
-                      : fmt::format("; not acting on the tool-tip readings and left out: {}", fmt::join(ignored, ", ")));
+  b.type_b_source = typeBDrawnSource(type_b.items.size(), *contributors,
+                                     "the exact head geometry around the identified errors (the pivot where the linear "
+                                     "axes put it, the beams as aligned) and run through the tooltip fit",
+                                     options, leftOutNote("the tool-tip readings", ignored));
   return b;
 }
 

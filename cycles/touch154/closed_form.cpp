@@ -93,21 +93,24 @@ std::vector<PatternEquation> touch154Patterns(const ProbePlan& plan, const Measu
   if (std::abs(pose_check.A + 90) > 1e-9) throw std::invalid_argument("closed form: pose V must be A = -90 deg");
   std::vector<PatternEquation> eqs;
 
-  {  // Pattern 1 (Eq. 6): top face, C 0 -> 180; z2 - z1 = 2 y~ a_AY (- 2 x~ (b_AY + b_CA)).
-    PatternEquation e{"1", "z2 - z1 = 2 y~ a_AY", 0, ErrorVector::Zero(), 0};
-    for (int k : S.targets("III")) {
-      const Sample* i = S.find("I", k);
-      const Sample* ii = S.find("III", k);
-      if (!facing(*i, 2, 1)) continue;
+  // Patterns 1 and 2-c: the top face at two poses C 180 deg apart, `to` after `from`;
+  // z2 - z1 = 2 y~ a_AY - 2 x~ (b_AY + b_CA), one of the two terms vanishing on each pair.
+  auto topFace = [&](PatternEquation e, const char* from, const char* to, const std::string& where) {
+    for (int k : S.targets(to)) {
+      const Sample* i = S.find(from, k);
+      const Sample* ii = S.find(to, k);
+      if (!i || !facing(*i, 2, 1)) continue;
       e.value_mm += ii->dp.z() - i->dp.z();
       e.row[kA] += ii->P.y() - i->P.y();
       e.row[kB] += -(ii->P.x() - i->P.x());
       e.row[kBCA] += -(ii->P.x() - i->P.x());
       ++e.points;
     }
-    finish(e, "top face at I and III");
+    finish(e, where);
     eqs.push_back(e);
-  }
+  };
+  // Pattern 1 (Eq. 6): top face, C 0 -> 180; z2 - z1 = 2 y~ a_AY (- 2 x~ (b_AY + b_CA)).
+  topFace({"1", "z2 - z1 = 2 y~ a_AY", 0, ErrorVector::Zero(), 0}, "I", "III", "top face at I and III");
   {  // Pattern 2-a (Eq. 7): faces facing +-X at IV and II; x1 + x2 = 2 dx_AY + 2 z~ (b_AY + b_CA).
     PatternEquation e{"2-a", "x1 + x2 = 2 dx_AY + 2 z~ (b_AY + b_CA)", 0, ErrorVector::Zero(), 0};
     for (int k : S.targets("II")) {
@@ -140,21 +143,8 @@ std::vector<PatternEquation> touch154Patterns(const ProbePlan& plan, const Measu
     finish(e, "faces facing Y at I and III");
     eqs.push_back(e);
   }
-  {  // Pattern 2-c (Eq. 9): top face, C 270 -> 90; z2 - z1 = 2 x~ (b_AY + b_CA) (- 2 y~ a_AY).
-    PatternEquation e{"2-c", "z2 - z1 = 2 x~ (b_AY + b_CA)", 0, ErrorVector::Zero(), 0};
-    for (int k : S.targets("II")) {
-      const Sample* i = S.find("IV", k);
-      const Sample* ii = S.find("II", k);
-      if (!i || !facing(*i, 2, 1)) continue;
-      e.value_mm += ii->dp.z() - i->dp.z();
-      e.row[kA] += ii->P.y() - i->P.y();
-      e.row[kB] += -(ii->P.x() - i->P.x());
-      e.row[kBCA] += -(ii->P.x() - i->P.x());
-      ++e.points;
-    }
-    finish(e, "top face at IV and II");
-    eqs.push_back(e);
-  }
+  // Pattern 2-c (Eq. 9): top face, C 270 -> 90; z2 - z1 = 2 x~ (b_AY + b_CA) (- 2 y~ a_AY).
+  topFace({"2-c", "z2 - z1 = 2 x~ (b_AY + b_CA)", 0, ErrorVector::Zero(), 0}, "IV", "II", "top face at IV and II");
   const std::vector<std::pair<std::string, std::string>> tilt_pairs = {{"II", "V"}, {"III", "VI"}, {"IV", "VII"}};
   {  // Pattern 3-a (Eq. 10): faces facing +-X at A = 0 and A = -90.
     PatternEquation e{"3-a", "x2 - x1 = (z~2 - z~1) b_AY + (y~1 - y~2) c_AY", 0, ErrorVector::Zero(), 0};

@@ -16,6 +16,7 @@
 #include "cycles/touch154/uncertainty.hpp"
 #include "core/units.hpp"
 #include "cycles/touch154/targets.hpp"
+#include "core/require_valid.hpp"
 
 namespace rotacal {
 
@@ -106,8 +107,7 @@ Candidates candidateTouches(const MachineModel& machine, const DesignOptions& o,
   if (machine.kinematics != Kinematics::TableAC)
     throw std::invalid_argument("plan design needs an A/C tilting table (kinematics table_ac)");
   if (!machine.artefact) throw std::invalid_argument("plan design needs a square_column artefact in the machine file");
-  std::string why;
-  if (!o.validate(&why)) throw std::invalid_argument("design options: " + why);
+  requireValid(o, "design options");
   const auto targets = designTargets(*machine.artefact, o);
   Candidates c;
   for (double a : o.a_deg)

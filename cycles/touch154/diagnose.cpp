@@ -12,17 +12,11 @@
 #include "core/units.hpp"
 #include "cycles/judge_contract.hpp"
 #include "cycles/touch154/causes.hpp"
+#include "core/require_valid.hpp"
 
 namespace rotacal {
 
-bool Touch154DiagnosisOptions::validate(std::string* why) const {
-  if (!judge.validate(why)) return false;
-  if (!(sigma_um > 0)) {
-    if (why) *why = "the declared probe repeatability must be > 0 um";
-    return false;
-  }
-  return true;
-}
+bool Touch154DiagnosisOptions::validate(std::string* why) const { return validJudgeAndProbe(judge, sigma_um, why); }
 
 namespace {
 
@@ -91,8 +85,7 @@ JudgeProblem touch154JudgeProblem(const ProbePlan& plan, const Linearisation& li
 
 Touch154Diagnosis diagnoseTouch154(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
                                    const Touch154DiagnosisOptions& options) {
-  std::string why;
-  if (!options.validate(&why)) throw std::invalid_argument("diagnosis options: " + why);
+  requireValid(options, "diagnosis options");
   Touch154Diagnosis d;
   d.candidates = options.candidates.empty() ? catalogFor(plan, static_cast<int>(runs.size())) : options.candidates;
   d.judge_names = judgeNames(d.candidates);

@@ -23,6 +23,7 @@
 #include "cycles/touch154/closed_form_map.hpp"
 #include "core/identification.hpp"
 #include "core/units.hpp"
+#include "core/require_valid.hpp"
 
 namespace rotacal {
 
@@ -580,8 +581,7 @@ constexpr int kBlockRuns = 32;
 
 UncertaintySummary runUncertainty(const ProbePlan& plan, const ContributorSet& contributors,
                                   const UncertaintyOptions& options) {
-  std::string why;
-  if (!options.validate(&why)) throw std::invalid_argument("uncertainty options: " + why);
+  requireValid(options, "uncertainty options");
   const auto t0 = std::chrono::steady_clock::now();
   const LinearChain chain = lineariseChain(plan, options.truth);
   const double setup = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -592,9 +592,8 @@ UncertaintySummary runUncertainty(const ProbePlan& plan, const ContributorSet& c
 
 UncertaintySummary runUncertainty(const ProbePlan& plan, const LinearChain& chain, const ContributorSet& contributors,
                                   const UncertaintyOptions& options) {
-  std::string why;
-  if (!options.validate(&why)) throw std::invalid_argument("uncertainty options: " + why);
-  if (!contributors.validate(&why)) throw std::invalid_argument("contributors: " + why);
+  requireValid(options, "uncertainty options");
+  requireValid(contributors, "contributors");
   if (chain.points != static_cast<int>(plan.points.size()))
     throw std::invalid_argument("the linear chain was built for another plan");
   const DrawModel model = drawModel(contributors);

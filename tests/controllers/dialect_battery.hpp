@@ -13,6 +13,7 @@
 #include <regex>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "controllers/dialects.hpp"
 #include "core/errors.hpp"
@@ -37,27 +38,33 @@ inline LocationErrors table4() {
 /// Time handling of a dialect's results.
 enum class Clock { None, Milliseconds, Seconds };
 
+/// `back` is `run` read back from a results text: the same ids in the same order, positions within
+/// `tol_mm`, times as the clock prints them (ms: within `ms_tol_s`).
+inline void expectReadBack(const MeasurementRun& back, const MeasurementRun& run, double tol_mm, Clock clock,
+                           double ms_tol_s = 0.5e-3 + 1e-6) {
+  ASSERT_EQ(back.points.size(), run.points.size());
+  for (size_t i = 0; i < back.points.size(); ++i) {
+    EXPECT_EQ(back.points[i].point_id, run.points[i].point_id);
+    EXPECT_LE((back.points[i].position_m_mm - run.points[i].position_m_mm).cwiseAbs().maxCoeff(), tol_mm)
+        << "point " << run.points[i].point_id;
+    switch (clock) {
+      case Clock::None: EXPECT_TRUE(std::isnan(back.points[i].t_s)); break;
+      case Clock::Milliseconds: EXPECT_NEAR(back.points[i].t_s, run.points[i].t_s, ms_tol_s); break;
+      // the control prints the current second: the floor of the true time.
+      case Clock::Seconds: EXPECT_EQ(back.points[i].t_s, std::floor(run.points[i].t_s)); break;
+    }
+  }
+}
+
 /// writeResults -> parseResults: same ids in the same order, positions within half a unit of
-/// the printed `decimals` (in the printed unit), times as the clock prints them.
+/// the printed `decimals` (in the printed unit), times as the clock prints them (ms printed as
+/// integers: within 0.5 ms, 1e-6 s more for the double sum near 7.5e8 s).
 inline void expectRoundTrip(const Dialect& d, const ProbePlan& plan, double printed_unit_mm, int decimals, Clock clock) {
   MeasurementRun run = displacedRun(plan);
   for (auto& p : run.points) p.t_s += 7.5e8;  // 2023-10-07: a real date on the common epoch
   const std::string text = d.writeResults(plan, run);
   const MeasurementRun back = d.parseResults(text, "res.txt", plan);
-  ASSERT_EQ(back.points.size(), run.points.size());
-  const double tol = 0.5 * std::pow(10.0, -decimals) * printed_unit_mm + 1e-12;
-  for (size_t i = 0; i < back.points.size(); ++i) {
-    EXPECT_EQ(back.points[i].point_id, run.points[i].point_id);
-    EXPECT_LE((back.points[i].position_m_mm - run.points[i].position_m_mm).cwiseAbs().maxCoeff(), tol)
-        << "point " << run.points[i].point_id;
-    switch (clock) {
-      case Clock::None: EXPECT_TRUE(std::isnan(back.points[i].t_s)); break;
-      // ms printed as integers: within 0.5 ms (1e-6 s more for the double sum near 7.5e8 s).
-      case Clock::Milliseconds: EXPECT_NEAR(back.points[i].t_s, run.points[i].t_s, 0.5e-3 + 1e-6); break;
-      // the control prints the current second: the floor of the true time.
-      case Clock::Seconds: EXPECT_EQ(back.points[i].t_s, std::floor(run.points[i].t_s)); break;
-    }
-  }
+  expectReadBack(back, run, 0.5 * std::pow(10.0, -decimals) * printed_unit_mm + 1e-12, clock);
 }
 
 /// plan -> simulate (000 Table 4 errors, setup error, no noise) -> writeResults -> parseResults
@@ -124,6 +131,31 @@ inline bool hasProblem(const std::vector<std::string>& ps, const std::string& wh
     if (p.find(what) != std::string::npos) return true;
   return false;
 }
+
+/// A dialect's results of the A/C plan (the displaced run) as lines, and what its parser says of
+/// a copy in which `edit` has planted a fault: the fault must be named at "res.txt:LINE: what".
+/// `eol` joins the edited lines (CR LF, as a Fanuc punch writes them, or LF).
+class WrittenResults : public ::testing::Test {
+ protected:
+  explicit WrittenResults(const std::string& dialect, std::string eol = "\n")
+      : d(dialectByName(dialect)), eol_(std::move(eol)) {}
+  /// `line` for "the edited copy's last line" (a missing point or END is reported there).
+  static constexpr size_t kLastLine = 0;
+  void expectAt(const std::function<void(std::vector<std::string>&)>& edit, size_t line, const std::string& what) const {
+    auto v = ls;
+    edit(v);
+    if (line == kLastLine) line = v.size();
+    const std::string e = parseError(d, join(v, eol_), plan);
+    EXPECT_NE(e.find(fmt::format("res.txt:{}: {}", line, what)), std::string::npos) << e;
+  }
+
+  const Dialect& d;
+  ProbePlan plan = acPlan();
+  std::vector<std::string> ls = lines(d.writeResults(plan, displacedRun(plan)));
+
+ private:
+  std::string eol_;
+};
 
 /// A dialect's touch154 program (the A/C plan) as lines, `g` the first line that matches
 /// `probing_move` (a regex), and what the dialect's checker finds once `edit` has planted a fault

@@ -53,13 +53,8 @@ TEST(FanucResults, RoundTripWithinThePrintedDigits) {
   EXPECT_NE(text.find("\r\n"), std::string::npos) << "CR LF like a Fanuc punch";
   EXPECT_TRUE(std::regex_match(ls[2], std::regex(R"(P1 X[ -]*\d+\.\d{4} Y[ -]*\d+\.\d{4} Z[ -]*\d+\.\d{4} T *\d+)")))
       << ls[2];
-  const MeasurementRun back = fc().parseResults(text, "res.txt", plan);
-  ASSERT_EQ(back.points.size(), plan.points.size());
-  for (size_t i = 0; i < back.points.size(); ++i) {
-    EXPECT_EQ(back.points[i].point_id, run.points[i].point_id);
-    EXPECT_LE((back.points[i].position_m_mm - run.points[i].position_m_mm).cwiseAbs().maxCoeff(), kDprntRoundingMm);
-    EXPECT_NEAR(back.points[i].t_s, run.points[i].t_s, kTimerRoundingS);
-  }
+  test::expectReadBack(fc().parseResults(text, "res.txt", plan), run, kDprntRoundingMm, test::Clock::Milliseconds,
+                       kTimerRoundingS);
 }
 
 TEST(FanucResults, ParserAcceptsTheFormsDprntMayPrint) {
@@ -95,61 +90,43 @@ TEST(FanucResults, InchMachinePrintsInchesAndParsesBackToMm) {
               kDprntRoundingInchInMm);
 }
 
-class FanucRejects : public ::testing::Test {
+class FanucRejects : public test::WrittenResults {
  protected:
-  ProbePlan plan = test::acPlan();
-  std::vector<std::string> ls = lines(fc().writeResults(plan, test::displacedRun(plan)));
-  void expectAt(const std::vector<std::string>& v, size_t line, const std::string& what) {
-    const std::string e = messageOf<InputError>([&] { fc().parseResults(test::join(v, "\r\n"), "res.txt", plan); });
-    EXPECT_NE(e.find(fmt::format("res.txt:{}: {}", line, what)), std::string::npos) << e;
-  }
+  FanucRejects() : WrittenResults("fanuc", "\r\n") {}
 };
 
 TEST_F(FanucRejects, MissingPointAtTheLastLine) {
-  auto v = ls;
-  v.erase(v.begin() + 45);  // lines: header, DATE, P1 ...
-  expectAt(v, v.size(), "point 44 is missing");
+  expectAt([](auto& v) { v.erase(v.begin() + 45); }, kLastLine, "point 44 is missing");  // lines: header, DATE, P1 ...
 }
 
 TEST_F(FanucRejects, ProgramThatStoppedEarlyHasNoEnd) {
-  auto v = ls;
-  v.resize(46);  // header + DATE + 44 points: the alarm stopped the program
-  expectAt(v, 46, "point 45 is missing and there is no END line");
-  v = ls;
-  v.pop_back();
-  expectAt(v, v.size(), "no END line");
+  // header + DATE + 44 points: the alarm stopped the program
+  expectAt([](auto& v) { v.resize(46); }, 46, "point 45 is missing and there is no END line");
+  expectAt([](auto& v) { v.pop_back(); }, kLastLine, "no END line");
 }
 
 TEST_F(FanucRejects, DuplicatedPointAtItsSecondLine) {
-  auto v = ls;
-  v.insert(v.begin() + 10, ls[9]);
-  expectAt(v, 11, "point 8 appears twice (first at line 10)");
+  expectAt([&](auto& v) { v.insert(v.begin() + 10, ls[9]); }, 11, "point 8 appears twice (first at line 10)");
 }
 
 TEST_F(FanucRejects, PointIdNotInThePlan) {
-  auto v = ls;
-  v.insert(v.end() - 1, "P200 X 1.0000 Y 2.0000 Z 3.0000 T 5");
-  expectAt(v, v.size() - 1, "point 200 is not in the plan");
+  // Before END: the edited file's last line but one.
+  expectAt([](auto& v) { v.insert(v.end() - 1, "P200 X 1.0000 Y 2.0000 Z 3.0000 T 5"); }, ls.size(),
+           "point 200 is not in the plan");
 }
 
 TEST_F(FanucRejects, CoordinateThatIsNotANumber) {
-  auto v = ls;
-  v[6] = "P6 X 12.3456 Y****.**** Z 1.0000 T 5";
-  expectAt(v, 7, "Y '****.****' of point 6 is not a number");
-  v[6] = "P6 X 1.2.3 Y 1.0000 Z 1.0000 T 5";
-  expectAt(v, 7, "X '1.2.3' of point 6 is not a number");
+  expectAt([](auto& v) { v[6] = "P6 X 12.3456 Y****.**** Z 1.0000 T 5"; }, 7, "Y '****.****' of point 6 is not a number");
+  expectAt([](auto& v) { v[6] = "P6 X 1.2.3 Y 1.0000 Z 1.0000 T 5"; }, 7, "X '1.2.3' of point 6 is not a number");
 }
 
 TEST_F(FanucRejects, HeaderWithTheWrongPointCount) {
-  auto v = ls;
-  v[0] = "ROTACAL-RESULTS DIALECT FANUC CYCLE TOUCH154 POINTS 150 UNIT MM";
-  expectAt(v, 1, "header says POINTS 150 but the plan has 154 points");
+  expectAt([](auto& v) { v[0] = "ROTACAL-RESULTS DIALECT FANUC CYCLE TOUCH154 POINTS 150 UNIT MM"; }, 1,
+           "header says POINTS 150 but the plan has 154 points");
 }
 
 TEST_F(FanucRejects, TextAfterEnd) {
-  auto v = ls;
-  v.push_back("P1 X 1.0000 Y 2.0000 Z 3.0000 T 5");
-  expectAt(v, v.size(), "text after END");
+  expectAt([](auto& v) { v.push_back("P1 X 1.0000 Y 2.0000 Z 3.0000 T 5"); }, kLastLine, "text after END");
 }
 
 TEST(FanucProgram, GeneratedProgramPassesTheChecker) {
@@ -307,14 +284,10 @@ TEST(FanucResults, RepeatsShareTheControlClock) {
 }
 
 TEST_F(FanucRejects, ClockLineMissingOrInvalid) {
-  auto v = ls;
-  v.erase(v.begin() + 1);
-  expectAt(v, 2, "expected 'DATE YYYYMMDD TIME HHMMSS' after the header");
-  v = ls;
-  v[1] = "DATE 20230230 TIME 120000";
-  expectAt(v, 2, "DATE 20230230 TIME 120000 is not a date YYYYMMDD and a time HHMMSS");
-  v[1] = "DATE 20230228 TIME 126000";
-  expectAt(v, 2, "DATE 20230228 TIME 126000 is not a date");
+  expectAt([](auto& v) { v.erase(v.begin() + 1); }, 2, "expected 'DATE YYYYMMDD TIME HHMMSS' after the header");
+  expectAt([](auto& v) { v[1] = "DATE 20230230 TIME 120000"; }, 2,
+           "DATE 20230230 TIME 120000 is not a date YYYYMMDD and a time HHMMSS");
+  expectAt([](auto& v) { v[1] = "DATE 20230228 TIME 126000"; }, 2, "DATE 20230228 TIME 126000 is not a date");
 }
 
 TEST(FanucProgram, ReadsTheClockBeforeZeroingTheTimer) {

@@ -37,13 +37,8 @@ TEST(LinuxCncResults, RoundTripWithinThePrintedDigits) {
   EXPECT_EQ(ls[0], "rotacal-results/1 dialect=linuxcnc cycle=touch154 points=154 unit=mm");
   EXPECT_TRUE(std::regex_match(ls[1], std::regex(R"(P1 -?\d+\.\d{6} -?\d+\.\d{6} -?\d+\.\d{6} -?\d+\.\d{4} -?\d+\.\d{4} 1)")))
       << ls[1];
-  const MeasurementRun back = lc().parseResults(text, "res.txt", plan);
-  ASSERT_EQ(back.points.size(), plan.points.size());
-  for (size_t i = 0; i < back.points.size(); ++i) {
-    EXPECT_EQ(back.points[i].point_id, run.points[i].point_id);
-    EXPECT_LE((back.points[i].position_m_mm - run.points[i].position_m_mm).cwiseAbs().maxCoeff(), kLogRoundingMm);
-    EXPECT_TRUE(std::isnan(back.points[i].t_s)) << "LinuxCNC records no time";
-  }
+  // LinuxCNC records no time.
+  test::expectReadBack(lc().parseResults(text, "res.txt", plan), run, kLogRoundingMm, test::Clock::None);
 }
 
 TEST(LinuxCncResults, AnglesAreTheControllersWithTheLinuxCncSign) {
@@ -81,67 +76,46 @@ TEST(LinuxCncResults, ParserAcceptsCrLfCrAndRepeatedSpaces) {
   EXPECT_EQ(lc().parseResults(text, "res.txt", plan).points.size(), plan.points.size());
 }
 
-class LinuxCncRejects : public ::testing::Test {
+class LinuxCncRejects : public test::WrittenResults {
  protected:
-  ProbePlan plan = test::acPlan();
-  std::vector<std::string> ls = lines(lc().writeResults(plan, test::displacedRun(plan)));
-  std::string err(const std::vector<std::string>& v) {
-    return messageOf<InputError>([&] { lc().parseResults(test::join(v), "res.txt", plan); });
-  }
-  void expectAt(const std::vector<std::string>& v, size_t line, const std::string& what) {
-    const std::string e = err(v);
-    EXPECT_NE(e.find(fmt::format("res.txt:{}: {}", line, what)), std::string::npos) << e;
-  }
+  LinuxCncRejects() : WrittenResults("linuxcnc") {}
 };
 
 TEST_F(LinuxCncRejects, MissingPointAtTheLastLine) {
-  auto v = ls;
-  v.erase(v.begin() + 17);  // P17
-  expectAt(v, v.size(), "point 17 is missing");
+  expectAt([](auto& v) { v.erase(v.begin() + 17); }, kLastLine, "point 17 is missing");  // P17
 }
 
 TEST_F(LinuxCncRejects, DuplicatedPointAtItsSecondLine) {
-  auto v = ls;
-  v.insert(v.begin() + 31, ls[5]);  // P5 again as line 32
-  expectAt(v, 32, "point 5 appears twice (first at line 6)");
+  // P5 again as line 32
+  expectAt([&](auto& v) { v.insert(v.begin() + 31, ls[5]); }, 32, "point 5 appears twice (first at line 6)");
 }
 
 TEST_F(LinuxCncRejects, PointIdNotInThePlan) {
-  auto v = ls;
-  v[40] = "P155 1.0 2.0 3.0 0.0 0.0 1";
-  expectAt(v, 41, "point 155 is not in the plan");
+  expectAt([](auto& v) { v[40] = "P155 1.0 2.0 3.0 0.0 0.0 1"; }, 41, "point 155 is not in the plan");
 }
 
 TEST_F(LinuxCncRejects, NonNumberNamingTheToken) {
-  auto v = ls;
-  v[12] = "P12 1.000000 2.0x0000 3.000000 0.0000 0.0000 1";
-  expectAt(v, 13, "'2.0x0000' (field 3 of point 12) is not a number");
+  expectAt([](auto& v) { v[12] = "P12 1.000000 2.0x0000 3.000000 0.0000 0.0000 1"; }, 13,
+           "'2.0x0000' (field 3 of point 12) is not a number");
 }
 
 TEST_F(LinuxCncRejects, UntriggeredPoint) {
-  auto v = ls;
-  v[9].back() = '0';
-  expectAt(v, 10, "point 9 was not triggered");
+  expectAt([](auto& v) { v[9].back() = '0'; }, 10, "point 9 was not triggered");
 }
 
 TEST_F(LinuxCncRejects, HeaderWithTheWrongPointCount) {
-  auto v = ls;
-  v[0] = "rotacal-results/1 dialect=linuxcnc cycle=touch154 points=153 unit=mm";
-  expectAt(v, 1, "header says points=153 but the plan has 154 points");
+  expectAt([](auto& v) { v[0] = "rotacal-results/1 dialect=linuxcnc cycle=touch154 points=153 unit=mm"; }, 1,
+           "header says points=153 but the plan has 154 points");
 }
 
 TEST_F(LinuxCncRejects, HeaderOfAnotherCycleOrMissing) {
-  auto v = ls;
-  v[0] = "rotacal-results/1 dialect=linuxcnc cycle=rtest points=154 unit=mm";
-  expectAt(v, 1, "results of cycle 'rtest'");
-  v.erase(v.begin());
-  expectAt(v, 1, "expected the header");
+  expectAt([](auto& v) { v[0] = "rotacal-results/1 dialect=linuxcnc cycle=rtest points=154 unit=mm"; }, 1,
+           "results of cycle 'rtest'");
+  expectAt([](auto& v) { v.erase(v.begin()); }, 1, "expected the header");
 }
 
 TEST_F(LinuxCncRejects, WrongFieldCount) {
-  auto v = ls;
-  v[3] = "P3 1.0 2.0 3.0 0.0 1";
-  expectAt(v, 4, "expected 7 fields");
+  expectAt([](auto& v) { v[3] = "P3 1.0 2.0 3.0 0.0 1"; }, 4, "expected 7 fields");
 }
 
 TEST(LinuxCncProgram, GeneratedProgramPassesTheChecker) {

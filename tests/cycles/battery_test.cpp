@@ -32,6 +32,21 @@ class CycleBattery : public ::testing::TestWithParam<std::string> {
     const CycleExample ex = cycle().example();
     return cycle().plan(loadMachine(test::sourcePath(ex.machine)), ex.options);
   }
+  /// A request of the cycle on plan `p`, its results in the csv dialect.
+  template <class Request>
+  Request on(const ProbePlan& p) const {
+    Request r;
+    r.plan = &p;
+    r.dialect = &csv;
+    return r;
+  }
+  /// The simulation of a machine whose truth file declares nothing (the defaults).
+  SimulateRequest simulation(const ProbePlan& p) const {
+    auto s = on<SimulateRequest>(p);
+    s.truth = {"truth.json", R"({"format": "rotacal-truth/1"})"};
+    return s;
+  }
+  const DialectIO csv = ioOf(dialectByName("csv"));
 };
 
 TEST_P(CycleBattery, PlanCarriesTheCycleAndFitsTheMachine) {
@@ -71,20 +86,14 @@ TEST_P(CycleBattery, ProgramInEveryDialectPassesItsCheckerOrIsRefusedWithAReason
 
 TEST_P(CycleBattery, SimulateAnalyzeDiagnoseAndReport) {
   const ProbePlan p = plan();
-  const DialectIO io = ioOf(dialectByName("csv"));
-  SimulateRequest s;
-  s.plan = &p;
-  s.truth = {"truth.json", R"({"format": "rotacal-truth/1"})"};
+  SimulateRequest s = simulation(p);
   s.noise_um = 0.3;
   s.seed = 7;
-  s.dialect = &io;
   const Simulated sim = cycle().simulate(s);
   ASSERT_FALSE(sim.results_text.empty());
 
-  AnalyzeRequest a;
-  a.plan = &p;
+  auto a = on<AnalyzeRequest>(p);
   a.results = {{"r1.txt", sim.results_text}};
-  a.dialect = &io;
   const CycleDocuments rep = cycle().analyze(a);
   EXPECT_FALSE(rep.text.empty());
   EXPECT_EQ(rep.doc.value("cycle", std::string()), p.cycle);
@@ -92,10 +101,8 @@ TEST_P(CycleBattery, SimulateAnalyzeDiagnoseAndReport) {
   const std::string html = report::reportHtml(rep.doc);
   EXPECT_NE(html.find("<html"), std::string::npos);
 
-  DiagnoseRequest dr;
-  dr.plan = &p;
+  auto dr = on<DiagnoseRequest>(p);
   dr.results = {{"r1.txt", sim.results_text}};
-  dr.dialect = &io;
   const CycleDocuments dg = cycle().diagnose(dr);
   EXPECT_FALSE(dg.text.empty());
   EXPECT_NE(report::reportHtml(dg.doc).find("<html"), std::string::npos);
@@ -103,20 +110,13 @@ TEST_P(CycleBattery, SimulateAnalyzeDiagnoseAndReport) {
 
 TEST_P(CycleBattery, MalformedResultsAreRejectedNamingTheFile) {
   const ProbePlan p = plan();
-  const DialectIO io = ioOf(dialectByName("csv"));
-  SimulateRequest s;
-  s.plan = &p;
-  s.truth = {"truth.json", R"({"format": "rotacal-truth/1"})"};
-  s.dialect = &io;
-  const std::string good = cycle().simulate(s).results_text;
+  const std::string good = cycle().simulate(simulation(p)).results_text;
   // Half the lines: points (or readings) are missing.
   size_t cut = good.size() / 2;
   cut = good.rfind('\n', cut) + 1;
   for (const std::string& bad : {good.substr(0, cut), good.substr(0, cut) + "1,2,three\n"}) {
-    AnalyzeRequest a;
-    a.plan = &p;
+    auto a = on<AnalyzeRequest>(p);
     a.results = {{"bad_results.txt", bad}};
-    a.dialect = &io;
     try {
       cycle().analyze(a);
       ADD_FAILURE() << "accepted a malformed results file";

@@ -18,4 +18,15 @@ inline const ProbePlan& basePlan(const std::string& file, const PlanRules& rules
   return it->second;
 }
 
+/// One input of a cycle's own results harness: the fuzzer's bytes read by `parse` (the cycle's
+/// parser: text, file name, plan) as `cycle`.csv against the corpus's `cycle`.plan.json, loaded with
+/// the cycle's `rules`; anything but an InputError is a finding.
+template <class Parse>
+int cycleResultsInput(const uint8_t* data, size_t size, const std::string& cycle, const PlanRules& rules, Parse parse) {
+  const ProbePlan& plan = basePlan(cycle + ".plan.json", rules);
+  const std::string file = cycle + ".csv";
+  expectInputErrorOnly(file, [&] { (void)parse(asText(data, size), file, plan); });
+  return 0;
+}
+
 }  // namespace rotacal::fuzz

@@ -51,6 +51,14 @@ const ProgramViolation* find(const ProgramCheckResult& r, const std::string& wha
   return nullptr;
 }
 
+// The checker's only violation is `what`, at line `line` (1-based); `context` names the case.
+void expectOnly(const ProgramCheckResult& r, const std::string& what, int line, const std::string& context = "") {
+  const ProgramViolation* v = find(r, what);
+  ASSERT_NE(v, nullptr) << context << "\n" << describe(r);
+  EXPECT_EQ(v->line, line) << context;
+  EXPECT_EQ(r.violations.size(), 1u) << context << "\n" << describe(r);
+}
+
 std::vector<std::string> split(const std::string& text) {
   std::vector<std::string> out;
   size_t start = 0;
@@ -249,10 +257,7 @@ TEST(ProgramCheckFault, MissingTriggerCheck) {
   ASSERT_EQ(ls[g31 + 4].rfind("IF[", 0), 0u) << ls[g31 + 4];
   ls.erase(ls.begin() + static_cast<long>(g31) + 1, ls.begin() + static_cast<long>(g31) + 6);
   const ProgramCheckResult r = verify(joined(ls), "fanuc", f.plan.machine, &f.plan);
-  const ProgramViolation* v = find(r, "without its no-trigger check");
-  ASSERT_NE(v, nullptr) << describe(r);
-  EXPECT_EQ(v->line, static_cast<int>(g31) + 1);
-  EXPECT_EQ(r.violations.size(), 1u) << describe(r);
+  expectOnly(r, "without its no-trigger check", static_cast<int>(g31) + 1);
 }
 
 TEST(ProgramCheckFault, StaleCheckEndPointInACompensatedProgram) {
@@ -276,10 +281,7 @@ TEST(ProgramCheckFault, StaleCheckEndPointInACompensatedProgram) {
     ASSERT_NE(ls[first_new], old_ls[first_old]) << d << ": compensation moves the first end point";
     ls[first_new] = old_ls[first_old];
     const ProgramCheckResult r = verify(joined(ls), d, plan.machine, &plan);
-    const ProgramViolation* v = find(r, "a stale check");
-    ASSERT_NE(v, nullptr) << d << "\n" << describe(r);
-    EXPECT_EQ(v->line, static_cast<int>(first_new) + 1) << d;
-    EXPECT_EQ(r.violations.size(), 1u) << d << "\n" << describe(r);
+    expectOnly(r, "a stale check", static_cast<int>(first_new) + 1, d);
   }
 }
 
@@ -332,10 +334,7 @@ TEST(ProgramCheckFault, InverseTimeBlockWithoutF) {
     ASSERT_LT(at, ls.size()) << d << ": no second G93 move";
     ls[at] = std::regex_replace(ls[at], std::regex(R"(F[0-9.]+)"), "");
     const ProgramCheckResult r = verify(joined(ls), d, plan.machine, &plan);
-    const ProgramViolation* v = find(r, "inverse-time (G93) move without F");
-    ASSERT_NE(v, nullptr) << d << "\n" << describe(r);
-    EXPECT_EQ(v->line, static_cast<int>(at) + 1) << d;
-    EXPECT_EQ(r.violations.size(), 1u) << d << "\n" << describe(r);
+    expectOnly(r, "inverse-time (G93) move without F", static_cast<int>(at) + 1, d);
   }
 }
 

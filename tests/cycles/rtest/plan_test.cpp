@@ -237,6 +237,17 @@ TEST(Rtest, AllEightLocationErrorsRecoveredOnBothTables) {
   EXPECT_FALSE(j.at("location_errors_fit").at("identifiable").get<bool>());
 }
 
+// The analysis of one simulated series of `truth` with sensor noise `noise_um` (draw `seed`), the
+// fit told the same noise.
+RtestAnalysis noisyAnalysis(const ProbePlan& plan, const Truth& truth, double noise_um, std::uint64_t seed) {
+  RtestSimOptions o;
+  o.seed = seed;
+  o.noise_um = noise_um;
+  RtestFitOptions fo;
+  fo.sensor_sigma_um = noise_um;
+  return analyzeRtest(plan, simulateRtest(plan, truth, {}, o).cycles, fo);
+}
+
 TEST(Rtest, NoisyLocationErrorsWithinTheirUncertainty) {
   const MachineModel m = bcMachine();
   const ProbePlan plan = makePlan("rtest", m, {});
@@ -246,12 +257,7 @@ TEST(Rtest, NoisyLocationErrorsWithinTheirUncertainty) {
   truth.errors.values[6] = mdegToRad(5.0);
   truth.errors.values[0] = umToMm(-3.0);
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {
-    RtestSimOptions o;
-    o.seed = seed;
-    o.noise_um = 0.3;
-    RtestFitOptions fo;
-    fo.sensor_sigma_um = 0.3;
-    const RtestAnalysis a = analyzeRtest(plan, simulateRtest(plan, truth, {}, o).cycles, fo);
+    const RtestAnalysis a = noisyAnalysis(plan, truth, 0.3, seed);
     ASSERT_TRUE(a.location.identifiable);
     for (int q = 0; q < 8; ++q) {
       EXPECT_GT(a.location.u[q], 0.0);
@@ -268,12 +274,7 @@ TEST(Rtest, NoisyRecoveryWithinReportedUncertainty) {
   applyTable(t, m.kinematics, truth);
   int within1 = 0, total = 0;
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {
-    RtestSimOptions o;
-    o.seed = seed;
-    o.noise_um = 0.5;
-    RtestFitOptions fo;
-    fo.sensor_sigma_um = 0.5;
-    const RtestAnalysis a = analyzeRtest(plan, simulateRtest(plan, truth, {}, o).cycles, fo);
+    const RtestAnalysis a = noisyAnalysis(plan, truth, 0.5, seed);
     const auto& f = a.cycles[0];
     for (int i = 0; i < 5; ++i)
       for (int p = 0; p < kRtestParams; ++p) {

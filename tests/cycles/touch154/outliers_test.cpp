@@ -12,6 +12,16 @@
 namespace rotacal {
 namespace {
 
+// The probe noise the runs are drawn with and the screen is told (k = 1).
+constexpr double kProbeNoiseUm = 0.7;
+
+// 000 Table 4 mean errors, touched with the probe noise.
+Truth noisyTable4() {
+  Truth t = test::truthWith(test::table4Mean());
+  t.noise_um = kProbeNoiseUm;
+  return t;
+}
+
 MeasurementRun simulated(const ProbePlan& plan, const Truth& t, std::uint64_t seed) {
   SimulationOptions o;
   o.seed = seed;
@@ -20,7 +30,7 @@ MeasurementRun simulated(const ProbePlan& plan, const Truth& t, std::uint64_t se
 
 OutlierScreen screen(const ProbePlan& plan, const MeasurementRun& run, IdentificationResult* fit = nullptr) {
   OutlierOptions oo;
-  oo.sigma_um = 0.7;
+  oo.sigma_um = kProbeNoiseUm;
   auto f = [&](const std::function<bool(int, const ProbePoint&)>& hold) {
     IdentificationOptions o;
     o.hold_out = hold;
@@ -40,8 +50,7 @@ MeasurementRun withChip(const ProbePlan& plan, MeasurementRun run, int point_id,
 
 TEST(OutlierScreen, AFiveMicrometreChipIsNamedAndTheEstimateAgreesWithTheCleanRun) {
   const ProbePlan plan = test::touch154Plan();
-  Truth t = test::truthWith(test::table4Mean());
-  t.noise_um = 0.7;
+  Truth t = noisyTable4();
   const MeasurementRun clean = simulated(plan, t, 5);
   IdentificationResult clean_fit, chip_fit;
   ASSERT_TRUE(screen(plan, clean, &clean_fit).excluded.empty());
@@ -65,8 +74,7 @@ TEST(OutlierScreen, AFiveMicrometreChipIsNamedAndTheEstimateAgreesWithTheCleanRu
 
 TEST(OutlierScreen, AFiveMillimetreValueIsLeftOutNotAveragedIn) {
   const ProbePlan plan = test::touch154Plan();
-  Truth t = test::truthWith(test::table4Mean());
-  t.noise_um = 0.7;
+  Truth t = noisyTable4();
   const MeasurementRun clean = simulated(plan, t, 6);
   IdentificationResult clean_fit, fit;
   screen(plan, clean, &clean_fit);
@@ -81,8 +89,7 @@ TEST(OutlierScreen, AFiveMillimetreValueIsLeftOutNotAveragedIn) {
 TEST(OutlierScreen, CleanRunsRarelyLoseATouch) {
   // alpha = 1 % family-wise: over 100 clean runs about one loses a touch; 5 would be a broken test.
   const ProbePlan plan = test::touch154Plan();
-  Truth t = test::truthWith(test::table4Mean());
-  t.noise_um = 0.7;
+  Truth t = noisyTable4();
   int runs_with_exclusion = 0;
   for (std::uint64_t seed = 100; seed < 200; ++seed) runs_with_exclusion += screen(plan, simulated(plan, t, seed)).excluded.empty() ? 0 : 1;
   std::printf("clean runs that lost a touch: %d of 100 (alpha 1 %%)\n", runs_with_exclusion);
@@ -93,8 +100,7 @@ TEST(OutlierScreen, AModelThatDoesNotFitIsNotCutIntoChips) {
   // A 150 um/m scale error of X: dozens of touches off by several um, a real effect. Nothing may
   // be left out (the adequacy test must see it), and the screen says why.
   const ProbePlan plan = test::touch154Plan();
-  Truth t = test::truthWith(test::table4Mean());
-  t.noise_um = 0.7;
+  Truth t = noisyTable4();
   t.linear_axis_error = [](const Eigen::Vector3d& c) { return Eigen::Vector3d(150e-6 * c.x(), 0.0, 0.0); };
   const OutlierScreen s = screen(plan, simulated(plan, t, 7));
   EXPECT_TRUE(s.too_many) << s.text();
