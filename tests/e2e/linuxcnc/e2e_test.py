@@ -19,27 +19,24 @@
       the same program with the piece moved 5 mm away from the first point's face: LinuxCNC
       must stop with rotacal's own message for point 1, with no point recorded.
 
-  e2e_test.py spheres3 --rotacal BIN --work DIR
-      plan spheres3 (001: three spheres, 12 C angles, 180 touches) on ac_trunnion_lcsim.json ->
-      generate --dialect linuxcnc -> run unchanged on LinuxCNC whose virtual probe carries the
-      plan's three spheres on the table of truth_table4.json -> the program's own LOG ->
-      analyze --dialect linuxcnc. Asserts: every trigger 0 .. F x 1 ms past the exact contact;
-      the C location errors Oxc = dx_AY, Oyc = dy_AY + dy_CA, Sxc = a_AY, Syc = b_AY + b_CA
-      (the 000 chain at A = 0) within 0.5 um / 0.05 mdeg; the component errors (none injected)
-      within the same bounds of zero at every angle; then the spheres3 program compensated for
-      that report, run unchanged, analyze --compensated-with it: Oxc Oyc Sxc Syc within the same
-      bounds of zero.
-
   e2e_test.py comp_table --rotacal BIN --work DIR
-      the third compensation route (docs/compensation.md): the spheres3 program on LinuxCNC whose
-      C axis carries an angular positioning error (truth_ecc.json: E_CC = 3 cos C - 1.2 sin C +
-      2 sin 2C mdeg, played by the virtual probe from the C motor's command) -> analyze: E_CC
-      identified within 0.05 mdeg of the injected -> rotacal comp-table --dialect linuxcnc -> the
-      same program again with the table loaded as joint 4's COMP_FILE (COMP_FILE_TYPE = 0) ->
-      analyze: the re-measured E_CC within 0.05 mdeg of zero at every angle and below a tenth of
-      what it was. A program turning C through a full revolution runs first in both sessions
-      (LinuxCNC follows a joint's table only once the joint has moved through a point where the
-      correction is small: docs/e2e-linuxcnc.md).
+      the spheres3 program (001: three spheres, 12 C angles, 180 touches) on LinuxCNC whose virtual
+      probe carries the plan's three spheres on the table of truth_table4_ecc.json: 000 Table 4's
+      location errors and setup error, and an angular positioning error of the C axis (E_CC = 3 cos C
+      - 1.2 sin C + 2 sin 2C mdeg, played from the C motor's command). Session 1 -> analyze: every
+      trigger 0 .. F x 1 ms past the exact contact; the C location errors Oxc = dx_AY, Oyc = dy_AY +
+      dy_CA, Sxc = a_AY, Syc = b_AY + b_CA (the 000 chain at A = 0) within 0.5 um / 0.05 mdeg; E_CC
+      within 0.05 mdeg of the injected; the other component errors (none injected) within the same
+      bounds of zero at every angle. Then the third compensation route (docs/compensation.md): rotacal
+      comp-table --dialect linuxcnc -> session 2 with the table loaded as joint 4's COMP_FILE
+      (COMP_FILE_TYPE = 0) -> analyze: the re-measured E_CC within 0.05 mdeg of zero at every angle and
+      below a tenth of what it was, the true residual from truth and table within 0.05 mdeg, the C
+      location unchanged. Then the post-processor route: the program compensated for session 1's
+      report, run unchanged (session 3, no table), analyze --compensated-with it: Oxc Oyc Sxc Syc and
+      E_CC within the same bounds of zero. A program turning C through a full revolution runs first in
+      every session (LinuxCNC follows a joint's table only once the joint has moved through a point
+      where the correction is small: docs/e2e-linuxcnc.md). This case carries the assertions of the
+      former spheres3 case, which ran the same program on truth_table4.json.
 
   e2e_test.py one_sphere_bc --rotacal BIN --work DIR
       the B/C table (bc_trunnion_lcsim.json, xyzbc-trt-kins): first the controller's conventions read
@@ -235,66 +232,7 @@ def run_touch154(a):
         json.dump(figures, f, indent=1)
 
 
-def run_spheres3(a):
-    work = a.work
-    plan, ngc = os.path.join(work, "plan.json"), os.path.join(work, "spheres3.ngc")
-    sh([a.rotacal, "plan", "--cycle", "spheres3", "--machine", MACHINE, "-o", plan])
-    sh([a.rotacal, "generate", "--plan", plan, "--dialect", "linuxcnc", "-o", ngc])
-    with open(plan) as f:
-        n_points = len(json.load(f)["points"])
-    w = injected()
-    # The 000 chain at A = 0, to first order (core/spheres3_identification.hpp).
-    want = {"Oxc": w["dx_AY"], "Oyc": w["dy_AY"] + w["dy_CA"], "Sxc": w["a_AY"], "Syc": w["b_AY"] + w["b_CA"]}
-    run = os.path.join(work, "run")
-    _, t = sh([RUN, "--ngc", ngc, "--truth", TRUTH, "--machine", MACHINE, "--plan", plan, "--out", run,
-               "--timeout", "1200"])
-    lat = lateness(work, run, plan, cycle="spheres3", points=n_points, across_um=ROUNDING_ACROSS_UM)
-    rep = os.path.join(work, "report.json")
-    sh([a.rotacal, "analyze", "--plan", plan, "--results", os.path.join(run, "rotacal_spheres3.txt"),
-        "--dialect", "linuxcnc", "--json", rep])
-    with open(rep) as f:
-        r = json.load(f)
-    print("C-axis location errors (identified - expected):")
-    for name, v in want.items():
-        e = r["location_errors"][name]
-        tol = LENGTH_TOL_UM if e["unit"] == "um" else ANGLE_TOL_MDEG
-        check(abs(e["value"] - v) <= tol, "%-4s identified %9.4f expected %9.4f diff %+8.4f %s (tol %g, u %.4f)"
-              % (name, e["value"], v, e["value"] - v, e["unit"], tol, e["u"]))
-    worst = {}
-    for name, c in r["component_errors"].items():
-        tol = LENGTH_TOL_UM if c["unit"] == "um" else ANGLE_TOL_MDEG
-        m = max(abs(v) for v in c["values"])
-        worst[name] = m
-        check(m <= tol, "%s: none injected, identified at most %.4f %s over the turn (tol %g)" % (name, m, c["unit"], tol))
-    # The spheres3 program compensated for its own report (the C axis's location and error motions),
-    # run unchanged, read back: the C axis's location must be gone.
-    comp = os.path.join(work, "spheres3_compensated.ngc")
-    sh([a.rotacal, "compensate", "--program", ngc, "--report", rep, "--dialect", "linuxcnc", "-o", comp])
-    run2 = os.path.join(work, "run2")
-    _, t2 = sh([RUN, "--ngc", comp, "--truth", TRUTH, "--machine", MACHINE, "--plan", plan, "--out", run2,
-                "--timeout", "1200"])
-    rep2 = os.path.join(work, "report2.json")
-    sh([a.rotacal, "analyze", "--plan", plan, "--results", os.path.join(run2, "rotacal_spheres3.txt"),
-        "--dialect", "linuxcnc", "--json", rep2, "--compensated-with", rep])
-    with open(rep2) as f:
-        r2 = json.load(f)
-    print("after the compensated program (what the compensation left):")
-    left = {}
-    for name in want:
-        e = r2["location_errors"][name]
-        tol = LENGTH_TOL_UM if e["unit"] == "um" else ANGLE_TOL_MDEG
-        left[name] = e["value"]
-        check(abs(e["value"]) <= tol, "%-4s %9.4f %s (tol %g)" % (name, e["value"], e["unit"], tol))
-    figures = {"run_s": t, "run2_s": t2, "left_after_compensation": left,
-               "lateness": lat, "identified": {k: r["location_errors"][k] for k in want},
-               "component_max": worst, "volumetric_error_um": r["volumetric_error_um"],
-               "sphere_fit": r["sphere_fit"]}
-    with open(os.path.join(work, "figures.json"), "w") as f:
-        json.dump(figures, f, indent=1)
-    print("spheres3 on LinuxCNC: %d touches, LinuxCNC session %.0f s" % (n_points, t))
-
-
-TRUTH_ECC = os.path.join(HERE, "truth_ecc.json")
+TRUTH_ECC = os.path.join(HERE, "truth_table4_ecc.json")
 QUEUE_RACE = "Queue is not empty after probing"
 
 
@@ -345,6 +283,21 @@ def table_residual_mdeg(table, c_list):
     return at_angles, over_turn
 
 
+def c_location_expected(w):
+    """The C axis's location (spheres3's Oxc Oyc Sxc Syc) from the 000 chain at A = 0, to first order
+    (core/spheres3_identification.hpp)."""
+    return {"Oxc": w["dx_AY"], "Oyc": w["dy_AY"] + w["dy_CA"], "Sxc": w["a_AY"], "Syc": w["b_AY"] + w["b_CA"]}
+
+
+def check_c_location(r, want, label):
+    print("%s: the C axis's location errors (identified - expected):" % label)
+    for name, v in want.items():
+        e = r["location_errors"][name]
+        tol = LENGTH_TOL_UM if e["unit"] == "um" else ANGLE_TOL_MDEG
+        check(abs(e["value"] - v) <= tol, "%s: %-4s identified %9.4f expected %9.4f diff %+8.4f %s (tol %g, u %.4f)"
+              % (label, name, e["value"], v, e["value"] - v, e["unit"], tol, e["u"]))
+
+
 def run_comp_table(a):
     work = a.work
     plan, ngc = os.path.join(work, "plan.json"), os.path.join(work, "spheres3.ngc")
@@ -361,9 +314,9 @@ def run_comp_table(a):
                 "G90 G0 C-360.0000\nG0 C0.0000\nM2\n")
     figures = {}
 
-    def measure(tag, extra):
+    def measure(tag, extra, program=ngc, compensated_with=None):
         run = os.path.join(work, tag)
-        cmd = [RUN, "--pre-ngc", turn, "--ngc", ngc, "--truth", TRUTH_ECC, "--machine", MACHINE, "--plan", plan,
+        cmd = [RUN, "--pre-ngc", turn, "--ngc", program, "--truth", TRUTH_ECC, "--machine", MACHINE, "--plan", plan,
                "--out", run, "--timeout", "1200"] + extra
         r, t = sh(cmd, expect=None)
         if r.returncode == 1 and lcsim_errors(run) == [QUEUE_RACE]:
@@ -376,7 +329,7 @@ def run_comp_table(a):
             raise SystemExit("FAIL: exit %d (expected 0): %s" % (r.returncode, " ".join(cmd)))
         rep = os.path.join(work, tag + "_report.json")
         sh([a.rotacal, "analyze", "--plan", plan, "--results", os.path.join(run, "rotacal_spheres3.txt"),
-            "--dialect", "linuxcnc", "--json", rep])
+            "--dialect", "linuxcnc", "--json", rep] + (["--compensated-with", compensated_with] if compensated_with else []))
         with open(rep) as f:
             r = json.load(f)
         figures[tag + "_s"] = t
@@ -394,6 +347,21 @@ def run_comp_table(a):
     check(d1 <= ANGLE_TOL_MDEG, "before: ECC identified - injected at most %.4f mdeg over %d angles (tol %g)"
           % (d1, len(want), ANGLE_TOL_MDEG))
     before = max(abs(v) for v in ecc1["values"])
+    # the C axis's location through the controller (the former spheres3 case's assertions): the truth's
+    # 000 Table 4 location errors, and every other component error (none injected) within the same
+    # bounds of zero at every angle
+    want_loc = c_location_expected(injected(TRUTH_ECC))
+    check_c_location(r1, want_loc, "before")
+    worst = {}
+    for name, c in r1["component_errors"].items():
+        if name == "ECC":
+            continue
+        tol = LENGTH_TOL_UM if c["unit"] == "um" else ANGLE_TOL_MDEG
+        worst[name] = max(abs(v) for v in c["values"])
+        check(worst[name] <= tol, "before: %s: none injected, identified at most %.4f %s over the turn (tol %g)"
+              % (name, worst[name], c["unit"], tol))
+    figures["component_max_before"] = worst
+    figures["c_location_before"] = {k: r1["location_errors"][k] for k in want_loc}
     # 2. the table, in LinuxCNC's form
     table = os.path.join(work, "c_axis.comp")
     if os.path.exists(table):
@@ -417,11 +385,30 @@ def run_comp_table(a):
           "(tol %g)" % (res_turn, ANGLE_TOL_MDEG))
     figures["true_residual_at_angles_mdeg"] = res_angles
     figures["true_residual_over_turn_mdeg"] = res_turn
-    for name in ("Oxc", "Oyc", "Sxc", "Syc"):
-        e = r2["location_errors"][name]
+    # the table turns C only: the C axis's location is what it was
+    check_c_location(r2, want_loc, "after")
+    # 4. the post-processor route (the former spheres3 case): the program compensated for session 1's
+    # report (the C axis's location and its component errors, E_CC included), run unchanged without
+    # the table, read back as the original program's: what the compensation left
+    comp = os.path.join(work, "spheres3_compensated.ngc")
+    if os.path.exists(comp):
+        os.remove(comp)
+    sh([a.rotacal, "compensate", "--program", ngc, "--report", rep1, "--dialect", "linuxcnc", "-o", comp])
+    _, _, r3 = measure("compensated", ["--c-from-motor"], program=comp, compensated_with=rep1)
+    print("after the compensated program (what the compensation left):")
+    left = {}
+    for name in want_loc:
+        e = r3["location_errors"][name]
         tol = LENGTH_TOL_UM if e["unit"] == "um" else ANGLE_TOL_MDEG
-        check(abs(e["value"]) <= tol, "after: %s %.4f %s (none injected, tol %g)" % (name, e["value"], e["unit"], tol))
-    vol = {"before": r1["volumetric_error_um"], "after": r2["volumetric_error_um"]}
+        left[name] = e["value"]
+        check(abs(e["value"]) <= tol, "compensated: %-4s %9.4f %s (tol %g)" % (name, e["value"], e["unit"], tol))
+    ecc3 = max(abs(v) for v in r3["component_errors"]["ECC"]["values"])
+    check(ecc3 <= ANGLE_TOL_MDEG, "compensated: E_CC left at most %.4f mdeg over the turn (tol %g)"
+          % (ecc3, ANGLE_TOL_MDEG))
+    figures["left_after_compensation"] = left
+    figures["ecc_left_after_compensation_mdeg"] = ecc3
+    vol = {"before": r1["volumetric_error_um"], "after": r2["volumetric_error_um"],
+           "compensated": r3["volumetric_error_um"]}
     figures.update({"ecc_before_mdeg": ecc1["values"], "ecc_after_mdeg": ecc2["values"], "c_deg": ecc1["c_deg"],
                     "ecc_max_before_mdeg": before, "ecc_max_after_mdeg": after, "identified_minus_injected_mdeg": d1,
                     "volumetric_error_um": vol})
@@ -597,8 +584,10 @@ def run_one_sphere_bc(a):
     want = injected(TRUTH_BC)
     check(sorted(want) == sorted(r["location_errors"]), "the report carries the 8 location errors of 002 Eq. (2): %s"
           % sorted(r["location_errors"]))
-    held = [u if isinstance(u, str) else json.dumps(u) for u in r.get("unseparable", [])]
-    print("unseparable (held at nominal): %s" % held)
+    # what one sphere cannot separate: C's zero (with the sphere's set-up) and C's tilt about B (with
+    # B's zero); 002 Eq. (2) carries neither, so the truth injects neither
+    held = sorted(u["held"] for u in r.get("unseparable", []))
+    check(held == ["B0C", "C0C"], "the report holds exactly B0C and C0C at nominal (unseparable): %s" % held)
     got = identified(rep)
     compare(got, want, "one_sphere on LinuxCNC (xyzbc-trt-kins), injected B and C location errors")
     figures.update({"identified": got, "injected": want, "unseparable": r.get("unseparable"),
@@ -631,7 +620,7 @@ def run_no_trigger(a):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("case", choices=("touch154", "no_trigger", "spheres3", "comp_table", "one_sphere_bc"))
+    ap.add_argument("case", choices=("touch154", "no_trigger", "comp_table", "one_sphere_bc"))
     ap.add_argument("--rotacal", required=True)
     ap.add_argument("--work", required=True)
     a = ap.parse_args()
@@ -640,8 +629,8 @@ def main():
         print("SKIP: " + why)
         sys.exit(77)
     os.makedirs(a.work, exist_ok=True)
-    {"touch154": run_touch154, "no_trigger": run_no_trigger, "spheres3": run_spheres3,
-     "comp_table": run_comp_table, "one_sphere_bc": run_one_sphere_bc}[a.case](a)
+    {"touch154": run_touch154, "no_trigger": run_no_trigger, "comp_table": run_comp_table,
+     "one_sphere_bc": run_one_sphere_bc}[a.case](a)
     if FAILURES:
         print("%d check(s) failed" % len(FAILURES))
         sys.exit(1)
