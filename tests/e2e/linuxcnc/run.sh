@@ -2,10 +2,12 @@
 # run.sh -- run one of rotacal's LinuxCNC programs, unchanged, on a real LinuxCNC 2.9
 # controller (headless, identity kinematics) whose virtual touch probe plays a machine with
 # the location errors of a rotacal TRUTH.json. Adapted from shared/tools/linuxcnc-sim/run.sh.
+# An A/C machine ("kinematics": "table_ac") runs on xyzac-trt-kins (config/lcsim_xyzac.ini), a
+# B/C machine ("table_bc") on xyzbc-trt-kins (config/lcsim_xyzbc.ini).
 #
 # Usage: run.sh --ngc PROGRAM --truth TRUTH.json --machine MACHINE.json --out DIR
 #               [--plan PLAN.json] [--pre-ngc OFFSETS.ngc] [--timeout S] [--comp-build DIR]
-#               [--c-from-motor] [--comp-file TABLE]
+#               [--c-from-motor] [--comp-file TABLE] [--kins-tcp] [--setp FILE]
 #   --ngc FILE        the program (rotacal generate --dialect linuxcnc); it runs as written
 #   --truth FILE      rotacal-truth/1: the true machine and piece (scripts/truth_params.py)
 #   --machine FILE    rotacal-machine/1: the nominal piece and probe ball
@@ -19,6 +21,10 @@
 #                     compensation table) instead of the joint command
 #   --comp-file TABLE joint 4 (C) loads TABLE: COMP_FILE = TABLE, COMP_FILE_TYPE = 0 in [JOINT_4]
 #                     (rotacal comp-table --dialect linuxcnc); implies --c-from-motor
+#   --kins-tcp        start in the trunnion (TCP) kinematics instead of identity (the INI
+#                     without sparm=identityfirst): for the conventions read-back only
+#   --setp FILE       'setp PIN VALUE' lines applied after the truth's (read-back: rot-point,
+#                     offsets of the kinematics and the probe's matching axis lines)
 # The program's (LOGOPEN,name) file is copied to DIR/name. Exit status: 0 ok, 1 program or
 # controller error (DIR/driver_status.json has the messages), 2 timeout, 3 setup problem.
 set -u -o pipefail
@@ -27,7 +33,7 @@ HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 PY=/usr/bin/python3          # Debian's interpreter: it has the linuxcnc and hal modules
 export PYTHONDONTWRITEBYTECODE=1   # no __pycache__ in the source tree
 
-NGC="" PRE="" TRUTH="" MACHINE="" PLAN="" OUT="" TIMEOUT=900 BUILD=/tmp/rotacal-e2e-comp C_MOTOR=0 COMP=""
+NGC="" PRE="" TRUTH="" MACHINE="" PLAN="" OUT="" TIMEOUT=900 BUILD=/tmp/rotacal-e2e-comp C_MOTOR=0 COMP="" TCP=0 SETP=""
 while [ $# -gt 0 ]; do
     case "$1" in
         --ngc) NGC="$2"; shift 2;;
@@ -40,14 +46,16 @@ while [ $# -gt 0 ]; do
         --comp-build) BUILD="$2"; shift 2;;
         --c-from-motor) C_MOTOR=1; shift;;
         --comp-file) COMP="$2"; C_MOTOR=1; shift 2;;
-        -h|--help) sed -n '2,20p' "$0" | sed 's/^# \{0,1\}//'; exit 0;;
+        --kins-tcp) TCP=1; shift;;
+        --setp) SETP="$2"; shift 2;;
+        -h|--help) sed -n '2,28p' "$0" | sed 's/^# \{0,1\}//'; exit 0;;
         *) echo "run.sh: unknown option $1 (see --help)" >&2; exit 3;;
     esac
 done
 die() { echo "run.sh: $*" >&2; exit 3; }
 abspath() { echo "$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"; }
 [ -n "$NGC" ] && [ -n "$TRUTH" ] && [ -n "$MACHINE" ] && [ -n "$OUT" ] || die "--ngc, --truth, --machine and --out are required"
-for f in "$NGC" "$TRUTH" "$MACHINE" ${PRE:+"$PRE"} ${PLAN:+"$PLAN"} ${COMP:+"$COMP"}; do [ -f "$f" ] || die "file not found: $f"; done
+for f in "$NGC" "$TRUTH" "$MACHINE" ${PRE:+"$PRE"} ${PLAN:+"$PLAN"} ${COMP:+"$COMP"} ${SETP:+"$SETP"}; do [ -f "$f" ] || die "file not found: $f"; done
 [[ "$TIMEOUT" =~ ^[0-9]+$ ]] || die "--timeout must be whole seconds"
 NGC="$(abspath "$NGC")" TRUTH="$(abspath "$TRUTH")" MACHINE="$(abspath "$MACHINE")"
 [ -n "$PRE" ] && PRE="$(abspath "$PRE")"
@@ -89,14 +97,28 @@ fi
 "$PY" "$HERE/scripts/truth_params.py" --truth "$TRUTH" --machine "$MACHINE" ${PLAN:+--plan "$PLAN"} -o "$OUT/params.json" \
     || die "cannot turn $TRUTH into the probe's parameters"
 "$PY" "$HERE/scripts/lcsim_params.py" "$OUT/params.json" "$OUT/params.hal" || die "bad parameters $OUT/params.json"
+if [ -n "$SETP" ]; then
+    grep -Evq '^[[:space:]]*(#.*)?$|^setp [A-Za-z0-9_.-]+ [-+0-9.eE]+[[:space:]]*$' "$SETP" \
+        && die "$SETP: only 'setp PIN VALUE' lines and comments"
+    { echo "# --setp $SETP"; cat "$SETP"; } >> "$OUT/params.hal"
+fi
 
 # ---------------------------------------------- per-run LinuxCNC configuration
-sed "s#@HARNESS@#$HERE#g" "$HERE/config/lcsim_xyzac.ini" > "$OUT/config/lcsim_xyzac.ini"
+# the kinematics: params.json machine.kins (truth_params.py: table_ac -> xyzac, table_bc -> xyzbc)
+KINS="$("$PY" -c 'import json, sys; print(json.load(open(sys.argv[1]))["machine"].get("kins", "xyzac"))' "$OUT/params.json")" \
+    || die "cannot read machine.kins from $OUT/params.json"
+INI="lcsim_$KINS.ini"
+[ -f "$HERE/config/$INI" ] || die "no LinuxCNC configuration config/$INI for kinematics $KINS"
+sed "s#@HARNESS@#$HERE#g" "$HERE/config/$INI" > "$OUT/config/$INI"
+if [ "$TCP" = 1 ]; then
+    sed -i 's#^\(KINEMATICS = [a-z-]*\) sparm=identityfirst$#\1#' "$OUT/config/$INI"
+    grep -q '^KINEMATICS = [a-z-]*$' "$OUT/config/$INI" || die "could not drop sparm=identityfirst from $INI"
+fi
 if [ -n "$COMP" ]; then
     # the C joint's compensation table (LinuxCNC ini-config: COMP_FILE, COMP_FILE_TYPE per joint)
     cp "$COMP" "$OUT/config/joint4.comp" || die "cannot copy $COMP"
-    sed -i "s#^\[JOINT_4\]\$#[JOINT_4]\nCOMP_FILE = $OUT/config/joint4.comp\nCOMP_FILE_TYPE = 0#" "$OUT/config/lcsim_xyzac.ini"
-    grep -q '^COMP_FILE = ' "$OUT/config/lcsim_xyzac.ini" || die "could not add COMP_FILE to [JOINT_4]"
+    sed -i "s#^\[JOINT_4\]\$#[JOINT_4]\nCOMP_FILE = $OUT/config/joint4.comp\nCOMP_FILE_TYPE = 0#" "$OUT/config/$INI"
+    grep -q '^COMP_FILE = ' "$OUT/config/$INI" || die "could not add COMP_FILE to [JOINT_4]"
 fi
 cp "$HERE/config/lcsim.tbl" "$OUT/config/"
 # the program's relative LOGOPEN file resolves in the INI's directory
@@ -112,7 +134,7 @@ tmp_before="$(ls -d /tmp/linuxcnc.debug.* /tmp/linuxcnc.print.* 2>/dev/null | so
 
 echo "run.sh: LinuxCNC starting (timeout ${TIMEOUT}s), run directory $OUT"
 # own session: the watchdog can address the whole tree by its process group
-HOME="$OUT" setsid linuxcnc -r "$OUT/config/lcsim_xyzac.ini" > "$OUT/linuxcnc.log" 2>&1 < /dev/null &
+HOME="$OUT" setsid linuxcnc -r "$OUT/config/$INI" > "$OUT/linuxcnc.log" 2>&1 < /dev/null &
 LPID=$!
 deadline=$(( SECONDS + TIMEOUT ))
 stage=0

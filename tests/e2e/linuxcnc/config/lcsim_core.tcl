@@ -1,10 +1,12 @@
-# lcsim_core.tcl -- HAL for the headless XYZAC trunnion simulation.
+# lcsim_core.tcl -- HAL for the headless XYZAC or XYZBC trunnion simulation
+# (lcsim_xyzac.ini, lcsim_xyzbc.ini: the kinematics module is the INI's).
 # Run by LinuxCNC (haltcl) with the INI sections available as ::SECTION(item)
 # and the environment as ::env().
 #
 # rotacal's copy: realtime probe only (the Python fallback of the shared
 # harness is late by whole servo periods, too coarse for the e2e tolerances),
-# and no kinematics switching (identity kinematics throughout).
+# and no kinematics switching (identity kinematics throughout; run.sh --kins-tcp
+# starts in the TCP kinematics instead, for the conventions read-back).
 #
 # Environment (exported by ../run.sh):
 #   LCSIM_PARAMS_HAL  setp file generated from the truth (truth_params.py + lcsim_params.py)
@@ -13,6 +15,7 @@
 # --- motion, kinematics ------------------------------------------------------
 # the INI value is a Tcl list (one element per occurrence): split "module sparm=..." into words
 eval loadrt [lindex $::KINS(KINEMATICS) 0]
+set kins [lindex [lindex $::KINS(KINEMATICS) 0] 0]   ;# xyzac-trt-kins or xyzbc-trt-kins
 loadrt [lindex $::EMCMOT(EMCMOT) 0] servo_period_nsec=$::EMCMOT(SERVO_PERIOD) num_joints=$::KINS(JOINTS)
 addf motion-command-handler servo-thread
 addf motion-controller      servo-thread
@@ -29,7 +32,7 @@ net tool-change-loop iocontrol.0.tool-change     => iocontrol.0.tool-changed
 
 # motion.switchkins-type stays unconnected at 0: identity kinematics
 # (sparm=identityfirst in the INI). G43 still reaches the kinematics module.
-net :tool-offset     motion.tooloffset.z  => xyzac-trt-kins.tool-offset
+net :tool-offset     motion.tooloffset.z  => $kins.tool-offset
 
 # --- virtual probe -----------------------------------------------------------
 loadrt vtouchprobe
@@ -40,6 +43,7 @@ addf vtouchprobe.0 servo-thread
 net :jx joint.0.pos-cmd => vtouchprobe.0.joint-x
 net :jy joint.1.pos-cmd => vtouchprobe.0.joint-y
 net :jz joint.2.pos-cmd => vtouchprobe.0.joint-z
+# joint 3 is the tilt axis, A (xyzac) or B (xyzbc): the probe's (pA, uA) line is that axis
 net :ja joint.3.pos-cmd => vtouchprobe.0.joint-a
 # C: the joint's command (default), or with LCSIM_C_FROM_MOTOR=1 the motor's command, which
 # carries the joint's compensation table (COMP_FILE: motor-pos-cmd = pos-cmd + correction); the

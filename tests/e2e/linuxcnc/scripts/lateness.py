@@ -9,7 +9,8 @@ The recorded touch moves along the plan's approach line through the nominal trig
 single and the double touch: the second touch starts on that line, retract_mm back from where
 the first stopped). The exact contact on that line is found by bisection (lcsim_geom.first_contact,
 ~1e-10 of the move), with joints A = -A*, C = -C* (the LinuxCNC sign of rotacal's machine
-file). With --offsets (rotacal's G10 L2 P1 work-offset program), machine = program + offset.
+file; B = -B* on a B/C table). With --offsets (rotacal's G10 L2 P1 work-offset program),
+machine = program + offset.
 Reported per point, in um: over = (recorded - contact) . approach (> 0: late) and across =
 the part perpendicular to the approach. Exit 1 on a missing point or a result file that is not
 rotacal's LinuxCNC LOG.
@@ -76,7 +77,9 @@ def main():
             continue
         u = pt["approach_m"]
         tr = G.add(pt["trigger_m_mm"], off)
-        ja, jc = -pt["pose"]["A"] + o["A"], -pt["pose"]["C"]
+        # joint 3 is the tilt axis: A on xyzac-trt-kins, B on xyzbc-trt-kins (the offsets' G10 has no B)
+        tilt = -pt["pose"]["B"] if p["machine"]["kins"] == "xyzbc" else -pt["pose"]["A"] + o["A"]
+        ja, jc = tilt, -pt["pose"]["C"]
         j0 = G.add(tr, G.scale(u, -before)) + [ja, jc]
         j1 = G.add(tr, G.scale(u, past)) + [ja, jc]
         hit = G.first_contact(j0, j1, p, step=0.01)

@@ -23,13 +23,20 @@ The mapping (docs/e2e-linuxcnc.md, "Truth -> component"):
   {"unit": "mdeg", "ECC_cos1C": .., "ECC_sin1C": .., "ECC_cos2C": .., "ECC_sin2C": ..}. E_CC turns
   the table about +Z; the component's true C angle is c + dc(c) with c the joint angle, and
   c = -C*, so dc(c) = E_CC(-c): C_e1c = cos1, C_e1s = -sin1, C_e2c = cos2, C_e2s = -sin2 (deg).
-  The component takes angle errors only beside ISO axis errors, not beside "eq1": a truth with
-  both location errors and this is refused.
+  It combines with the A/C location errors: they place the true C axis line, E_CC turns the
+  table about it (lcsim_geom: "eq1" with the angle harmonics).
+* B/C table (machine "kinematics": "table_bc", LinuxCNC's xyzbc-trt-kins: p_m = Ry(+B) Rz(+C) p_w,
+  docs/e2e-linuxcnc.md): rotacal's 002 Eq. (2) (docs/conventions.md)
+      T_m_w = Da(a_BY) Db(b_BY) Dc(c_BY) Dx(dx_BY) Dy(dy_CB) Dz(dz_BY) Db(-B*) Da(a_CB) Dx(dx_CB) Dc(-C*)
+  is the harness's "eq2" chain term by term, same names and signs, evaluated at B* = -B, C* = -C
+  (dialect_sign -1 for B and C, required). A B/C machine needs no test piece: without an
+  artefact the block is off and the plan's sphere is the piece.
 * form_error, probe_noise_um and drifts are not modelled by the component: refused.
-* --plan: a sphere cycle's plan (spheres3) puts its spheres (ids 1..3: the component's sphere,
-  sphere2, sphere3) at the plan's nominal centres and radius, workpiece frame, placed on the
-  true table like the block. The block stays: a path that strayed into the test piece trips
-  the probe and stops the program.
+* --plan: a sphere cycle's plan (spheres3, one_sphere) puts its spheres (ids 1..3: the
+  component's sphere, sphere2, sphere3) at the plan's nominal centres and radius, workpiece frame,
+  placed on the true table like the block; one_sphere's sphere stands on its stem (the plan's
+  options stem_length_mm, stem_diameter_mm; along the table's -Z). The block stays: a path that
+  strayed into the test piece (or the stem) trips the probe and stops the program.
 """
 import argparse
 import json
@@ -42,7 +49,9 @@ import lcsim_geom as G  # noqa: E402
 
 LENGTH = {"um": 1.0, "mm": 1000.0}                       # -> um
 ANGLE = {"mdeg": 1.0, "deg": 1000.0, "urad": 180.0 / math.pi * 1e-3}   # -> mdeg
-NAMES = ("dx_AY", "dy_AY", "dz_AY", "dy_CA", "a_AY", "b_AY", "c_AY", "b_CA")
+NAMES = {"table_ac": ("dx_AY", "dy_AY", "dz_AY", "dy_CA", "a_AY", "b_AY", "c_AY", "b_CA"),
+         "table_bc": ("dx_BY", "dy_CB", "dz_BY", "dx_CB", "a_BY", "b_BY", "c_BY", "a_CB")}
+KINS = {"table_ac": ("xyzac", "eq1", "AC"), "table_bc": ("xyzbc", "eq2", "BC")}
 KNOWN_TRUTH_KEYS = {"format", "location_errors", "setup_error", "probe_pretravel_um", "form_error",
                     "probe_noise_um", "start_time_s", "c_angular_positioning_error"}
 ECC_KEYS = {"ECC_cos1C": ("C_e1c", 1.0), "ECC_sin1C": ("C_e1s", -1.0), "ECC_cos2C": ("C_e2c", 1.0),
@@ -64,6 +73,9 @@ def spheres_from(plan, plan_path):
         if s["id"] not in keys:
             fail(plan_path, "the virtual probe models spheres 1..3, the plan has sphere %r" % s["id"])
         sec = {"enable": True, "center": [float(v) for v in s["center_w_mm"]], "radius": float(s["radius_mm"])}
+        if s["id"] == 1 and "stem_length_mm" in plan.get("options", {}):
+            o = plan["options"]
+            sec.update(stem_length=float(o["stem_length_mm"]), stem_radius=float(o["stem_diameter_mm"]) / 2.0)
         old = out.setdefault(keys[s["id"]], sec)
         if old != sec:
             fail(plan_path, "sphere %d has two different centres or radii" % s["id"])
@@ -81,20 +93,22 @@ def params_from(truth, truth_path, machine, machine_path, plan=None, plan_path=N
             fail(truth_path, "form_error is not modelled by the virtual probe (its block has flat, square faces)")
     if truth.get("probe_noise_um", 0) != 0:
         fail(truth_path, "probe_noise_um is not modelled (the virtual probe is deterministic)")
-    if machine.get("kinematics") != "table_ac":
-        fail(machine_path, "the harness models an A/C table (xyzac-trt-kins) only")
-    for ax in ("A", "C"):
+    kinematics = machine.get("kinematics")
+    if kinematics not in KINS:
+        fail(machine_path, "the harness models an A/C table (xyzac-trt-kins) or a B/C table (xyzbc-trt-kins) only")
+    kins, chain, axes = KINS[kinematics]
+    for ax in axes:
         sign = machine["rotary_axes"][ax].get("dialect_sign", {}).get(
             "linuxcnc", machine["rotary_axes"][ax].get("controller_sign", 1))
         if sign != -1:
-            fail(machine_path, "rotary axis %s: the linuxcnc sign must be -1 (xyzac-trt-kins turns the table "
-                 "as D_a(+A) D_c(+C), the opposite of 000 Eq. (1))" % ax)
+            fail(machine_path, "rotary axis %s: the linuxcnc sign must be -1 (%s-trt-kins turns the table "
+                 "as D_%s(+%s) D_c(+C), the opposite of the papers' chain)" % (ax, kins, ax.lower(), ax))
     if machine.get("units", "mm") != "mm":
         fail(machine_path, "the harness runs mm programs only")
     eq1 = {}
     for name, e in truth.get("location_errors", {}).items():
-        if name not in NAMES:
-            fail(truth_path, "unknown location error %r for an A/C table" % name)
+        if name not in NAMES[kinematics]:
+            fail(truth_path, "unknown location error %r for %s (known: %s)" % (name, kinematics, ", ".join(NAMES[kinematics])))
         unit, v = e.get("unit"), e.get("value")
         if not isinstance(v, (int, float)):
             fail(truth_path, "location error %r needs a numeric value" % name)
@@ -107,8 +121,16 @@ def params_from(truth, truth_path, machine, machine_path, plan=None, plan_path=N
                 fail(truth_path, "unit of %r must be mdeg, urad or deg" % name)
             eq1[name + "_mdeg"] = v * ANGLE[unit]
     art = machine.get("artefact")
-    if not art or art.get("type") != "square_column":
+    if art is None and kinematics == "table_bc":
+        # no test piece: the block is off, some harmless pose for its unused pins
+        art = {"type": "square_column", "top_centre_w_mm": [0.0, 0.0, 150.0], "size_mm": [100.0, 100.0, 150.0]}
+        block_on = False
+        if "setup_error" in truth:
+            fail(truth_path, "setup_error moves the test piece, and the machine has none")
+    elif not art or art.get("type") != "square_column":
         fail(machine_path, "needs a square_column artefact")
+    else:
+        block_on = True
     top = [float(v) for v in art["top_centre_w_mm"]]
     size = [float(v) for v in art["size_mm"]]
     centre0 = [top[0], top[1], top[2] - size[2] / 2.0]
@@ -121,18 +143,16 @@ def params_from(truth, truth_path, machine, machine_path, plan=None, plan_path=N
     out = {
         "_comment": "generated by truth_params.py from %s and %s" % (truth_path, machine_path),
         # the contract's machine frame: origin at the nominal intersection of the axes
-        "machine": {"x_rot_point": 0.0, "y_rot_point": 0.0, "z_rot_point": 0.0, "y_offset": 0.0, "z_offset": 0.0},
-        "eq1": eq1,
+        "machine": {"kins": kins, "x_rot_point": 0.0, "y_rot_point": 0.0, "z_rot_point": 0.0, "x_offset": 0.0,
+                    "y_offset": 0.0, "z_offset": 0.0},
+        chain: eq1,
         "probe": {"radius": float(machine["probe"]["ball_diameter_mm"]) / 2.0, "tool_length": 0.0,
                   "pretravel": float(truth.get("probe_pretravel_um", 0.0)) * 1e-3},
-        "block": {"enable": True, "center": centre, "size": size, "rpy_deg": rpy_deg},
+        "block": {"enable": block_on, "center": centre, "size": size, "rpy_deg": rpy_deg},
         "sphere": {"enable": False, "center": [0.0, 0.0, 0.0], "radius": 12.7},
     }
     ecc = truth.get("c_angular_positioning_error")
     if ecc is not None:
-        if any(v != 0 for v in eq1.values()):
-            fail(truth_path, "c_angular_positioning_error cannot be combined with location errors in the harness "
-                 "(its component takes angle errors beside ISO axis errors, not beside \"eq1\")")
         if ecc.get("unit") != "mdeg":
             fail(truth_path, "c_angular_positioning_error needs \"unit\": \"mdeg\"")
         errors = {}
@@ -144,8 +164,9 @@ def params_from(truth, truth_path, machine, machine_path, plan=None, plan_path=N
                      % (k, sorted(ECC_KEYS)))
             name, sign = ECC_KEYS[k]
             errors[name] = sign * v * 1e-3
+        if kinematics != "table_ac":
+            fail(truth_path, "c_angular_positioning_error is modelled on the A/C table only")
         out["errors"] = errors
-        del out["eq1"]
     if plan is not None:
         out.update(spheres_from(plan, plan_path))
     return out
