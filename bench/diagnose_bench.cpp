@@ -56,6 +56,32 @@ struct Tally {
   }
 };
 
+using Hide = std::function<void(Truth*)>;
+using Runner = std::function<JudgeSummary(const Hide&, int)>;
+
+/// One row of the figures: `seeds` simulations with `hide` applied, tallied and printed.
+void trial(const Runner& run, int seeds, const char* what, const Hide& hide, const std::string& cause = "",
+           int param = 0, double truth = 0.0) {
+  Tally t;
+  for (int s = 0; s < seeds; ++s) t.add(run(hide, s), cause, param, truth);
+  t.print(what);
+}
+
+/// A linear-axis error field E(c) in mm at the machine position c (mm).
+Hide linearAxisError(Eigen::Vector3d (*field)(const Eigen::Vector3d&)) {
+  return [field](Truth* t) { t->linear_axis_error = field; };
+}
+
+Hide driftDzAy(double um, double over_s) {
+  return [um, over_s](Truth* t) {
+    t->drift = [um, over_s](double ts) {
+      ErrorVector d = ErrorVector::Zero();
+      d[2] = umToMm(um) * ts / over_s;
+      return d;
+    };
+  };
+}
+
 void touch154(int clean_seeds, int effect_seeds) {
   const MachineModel m = loadMachine(std::string(ROTACAL_SOURCE_DIR) + "/examples/machines/ac_trunnion.json");
   const ProbePlan plan = makePlan("touch154", m, {});
@@ -77,56 +103,38 @@ void touch154(int clean_seeds, int effect_seeds) {
     return diagnoseTouch154(plan, runs, o).judged;
   };
   std::printf("touch154 x 4 repeats, 0.7 um probe noise declared and simulated, alpha %.2f\n", kAlpha);
-  Tally clean, scale, sq, drift, straight, backlash, motion, lobing;
-  for (int s = 0; s < clean_seeds; ++s) clean.add(run([](Truth*) {}, s), "", 0, 0.0);
-  clean.print("clean (location errors only)");
+  const Runner runner = run;
+  trial(runner, clean_seeds, "clean (location errors only)", [](Truth*) {});
   // 001's C axis: 3 um of second-order radial error motion (the spheres3 bench's size).
-  for (int s = 0; s < effect_seeds; ++s)
-    motion.add(run([](Truth* t) {
-                 t->pose_dependent = [](const Pose& p) {
-                   ErrorVector d = ErrorVector::Zero();
-                   d[0] = umToMm(3.0) * std::cos(2.0 * degToRad(p.C));
-                   return d;
-                 };
-               }, s),
-               "rotary_error_motion", 0, 3.0);
-  motion.print("radial error motion EXC = 3 cos 2C um");
+  trial(runner, effect_seeds, "radial error motion EXC = 3 cos 2C um",
+        [](Truth* t) {
+          t->pose_dependent = [](const Pose& p) {
+            ErrorVector d = ErrorVector::Zero();
+            d[0] = umToMm(3.0) * std::cos(2.0 * degToRad(p.C));
+            return d;
+          };
+        },
+        "rotary_error_motion", 0, 3.0);
   // Probe lobing: +X triggers 2 um late, -X 2 um early (a kinematic probe's lobing is of this
   // size; 000 calibrates it away, so no seed gives one).
-  for (int s = 0; s < effect_seeds; ++s)
-    lobing.add(run([](Truth* t) {
-                 t->pretravel_by_direction_um = [](const Eigen::Vector3d& u) {
-                   return std::abs(u.x()) > 0.9 ? 2.0 * u.x() : 0.0;
-                 };
-               }, s),
-               "probe_pretravel", 0, 2.0);
-  lobing.print("pretravel +X 2 um, -X -2 um (lobing)");
-  for (int s = 0; s < effect_seeds; ++s)
-    scale.add(run([](Truth* t) { t->linear_axis_error = [](const Eigen::Vector3d& c) { return Eigen::Vector3d(60e-6 * c.x(), 0, 0); }; }, s),
-              "linear_axis_scale", 0, 60.0);
-  scale.print("X scale 60 um/m (issue 16 reproduction)");
-  for (int s = 0; s < effect_seeds; ++s)
-    sq.add(run([](Truth* t) { t->linear_axis_error = [](const Eigen::Vector3d& c) { return Eigen::Vector3d(30e-6 * c.y(), 30e-6 * c.z(), 0); }; }, s),
-           "linear_axis_squareness", 0, 30.0);
-  sq.print("squareness S_xy = S_yz = 30 um/m (000 Table 5)");
+  trial(runner, effect_seeds, "pretravel +X 2 um, -X -2 um (lobing)",
+        [](Truth* t) {
+          t->pretravel_by_direction_um = [](const Eigen::Vector3d& u) { return std::abs(u.x()) > 0.9 ? 2.0 * u.x() : 0.0; };
+        },
+        "probe_pretravel", 0, 2.0);
+  trial(runner, effect_seeds, "X scale 60 um/m (issue 16 reproduction)",
+        linearAxisError([](const Eigen::Vector3d& c) { return Eigen::Vector3d(60e-6 * c.x(), 0, 0); }),
+        "linear_axis_scale", 0, 60.0);
+  trial(runner, effect_seeds, "squareness S_xy = S_yz = 30 um/m (000 Table 5)",
+        linearAxisError([](const Eigen::Vector3d& c) { return Eigen::Vector3d(30e-6 * c.y(), 30e-6 * c.z(), 0); }),
+        "linear_axis_squareness", 0, 30.0);
   const double span_s = 4 * cycle;
-  for (int s = 0; s < effect_seeds; ++s)
-    drift.add(run([span_s](Truth* t) {
-                t->drift = [span_s](double ts) {
-                  ErrorVector d = ErrorVector::Zero();
-                  d[2] = umToMm(12.0) * ts / span_s;
-                  return d;
-                };
-              }, s),
-              "thermal_drift", 2, 12.0 / span_s * 3600.0);
-  drift.print("drift dz_AY 12 um over 4 repeats");
-  for (int s = 0; s < effect_seeds; ++s)
-    straight.add(run([](Truth* t) { t->linear_axis_error = [](const Eigen::Vector3d& c) { return Eigen::Vector3d(0, 0, 4e-3 * (c.x() / 250) * (c.x() / 250)); }; }, s),
-                 "", 0, 0.0);
-  straight.print("straightness E_zx 4 um bow (outside the catalog)");
-  for (int s = 0; s < effect_seeds; ++s)
-    backlash.add(run([](Truth* t) { t->rotary_backlash_deg[0] = kTiltBacklashDeg; }, s), "", 0, 0.0);
-  backlash.print("A backlash 10 arcsec (outside the catalog)");
+  trial(runner, effect_seeds, "drift dz_AY 12 um over 4 repeats", driftDzAy(12.0, span_s), "thermal_drift", 2,
+        12.0 / span_s * 3600.0);
+  trial(runner, effect_seeds, "straightness E_zx 4 um bow (outside the catalog)",
+        linearAxisError([](const Eigen::Vector3d& c) { return Eigen::Vector3d(0, 0, 4e-3 * (c.x() / 250) * (c.x() / 250)); }));
+  trial(runner, effect_seeds, "A backlash 10 arcsec (outside the catalog)",
+        [](Truth* t) { t->rotary_backlash_deg[0] = kTiltBacklashDeg; });
 }
 
 void spaceframe(int clean_seeds, int effect_seeds) {
@@ -143,34 +151,19 @@ void spaceframe(int clean_seeds, int effect_seeds) {
     return diagnoseSpaceframe(plan, {simulate(plan, t, {static_cast<std::uint64_t>(200000 + seed)})}, o).judged;
   };
   std::printf("spaceframe (phi -90,-45,0), 0.7 um probe noise declared and simulated, alpha %.2f\n", kAlpha);
-  Tally clean, sq, drift, scale, straight, backlash;
-  for (int s = 0; s < clean_seeds; ++s) clean.add(run([](Truth*) {}, s), "", 0, 0.0);
-  clean.print("clean (location errors only)");
-  for (int s = 0; s < effect_seeds; ++s)
-    sq.add(run([](Truth* t) { t->linear_axis_error = [](const Eigen::Vector3d& c) { return Eigen::Vector3d(30e-6 * c.y(), 0, 0); }; }, s),
-           "linear_axis_squareness", 0, 30.0);
-  sq.print("squareness S_xy = 30 um/m");
-  for (int s = 0; s < effect_seeds; ++s)
-    drift.add(run([](Truth* t) {
-                t->drift = [](double ts) {
-                  ErrorVector d = ErrorVector::Zero();
-                  d[2] = umToMm(4.0) * ts / 3600.0;
-                  return d;
-                };
-              }, s),
-              "thermal_drift", 2, 4.0);
-  drift.print("drift dz_AY 4 um/h (issue 16)");
-  for (int s = 0; s < effect_seeds; ++s)
-    scale.add(run([](Truth* t) { t->linear_axis_error = [](const Eigen::Vector3d& c) { return Eigen::Vector3d(20e-6 * c.x(), 0, 0); }; }, s),
-              "linear_axis_scale", 0, 20.0);
-  scale.print("X scale 20 um/m (isotropic part = frame temperature)");
-  for (int s = 0; s < effect_seeds; ++s)
-    straight.add(run([](Truth* t) { t->linear_axis_error = [](const Eigen::Vector3d& c) { return Eigen::Vector3d(0, 0, 4e-3 * (c.x() / 103) * (c.x() / 103)); }; }, s),
-                 "", 0, 0.0);
-  straight.print("straightness E_zx 4 um bow over X +-103 mm (outside the catalog)");
-  for (int s = 0; s < effect_seeds; ++s)
-    backlash.add(run([](Truth* t) { t->rotary_backlash_deg[0] = kTiltBacklashDeg; }, s), "", 0, 0.0);
-  backlash.print("A backlash 10 arcsec (outside the catalog)");
+  const Runner runner = run;
+  trial(runner, clean_seeds, "clean (location errors only)", [](Truth*) {});
+  trial(runner, effect_seeds, "squareness S_xy = 30 um/m",
+        linearAxisError([](const Eigen::Vector3d& c) { return Eigen::Vector3d(30e-6 * c.y(), 0, 0); }),
+        "linear_axis_squareness", 0, 30.0);
+  trial(runner, effect_seeds, "drift dz_AY 4 um/h (issue 16)", driftDzAy(4.0, 3600.0), "thermal_drift", 2, 4.0);
+  trial(runner, effect_seeds, "X scale 20 um/m (isotropic part = frame temperature)",
+        linearAxisError([](const Eigen::Vector3d& c) { return Eigen::Vector3d(20e-6 * c.x(), 0, 0); }),
+        "linear_axis_scale", 0, 20.0);
+  trial(runner, effect_seeds, "straightness E_zx 4 um bow over X +-103 mm (outside the catalog)",
+        linearAxisError([](const Eigen::Vector3d& c) { return Eigen::Vector3d(0, 0, 4e-3 * (c.x() / 103) * (c.x() / 103)); }));
+  trial(runner, effect_seeds, "A backlash 10 arcsec (outside the catalog)",
+        [](Truth* t) { t->rotary_backlash_deg[0] = kTiltBacklashDeg; });
 }
 
 }  // namespace
