@@ -14,6 +14,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "test_util.hpp"
+
 namespace rotacal::test {
 
 namespace fs = std::filesystem;
@@ -57,6 +59,14 @@ class ScratchTest : public ::testing::Test {
   }
   std::string p(const std::string& name) const { return (dir / name).string(); }
   std::filesystem::path dir;
+};
+
+/// A scratch test on the bundled A/C trunnion, with 000 Table 4's mean errors as the truth (a
+/// test may point `truth` at a file of its own).
+class AcTrunnionTest : public ScratchTest {
+ protected:
+  const std::string machine = sourcePath("examples/machines/ac_trunnion.json");
+  std::string truth = sourcePath("examples/truth/table4_mean.json");
 };
 
 /// Whether a command was refused the contract's way: exit `code`, its output naming `what`, and

@@ -19,12 +19,11 @@
 namespace rotacal::test {
 namespace {
 
-class CompTableCli : public ScratchTest {
+class CompTableCli : public AcTrunnionTest {
  protected:
   void SetUp() override {
     ScratchTest::SetUp();
-    machine = test::sourcePath("examples/machines/ac_trunnion.json");
-    const std::string truth = test::sourcePath("examples/truth/table4_c_radial2.json");
+    truth = test::sourcePath("examples/truth/table4_c_radial2.json");
     ASSERT_EQ(sh("-q plan --cycle spheres3 --machine " + machine + " -o " + p("plan.json")).code, 0);
     ASSERT_EQ(sh("-q simulate --plan " + p("plan.json") + " --truth " + truth + " --noise-um 0 --dialect csv -o " +
                  p("run.csv")).code,
@@ -44,7 +43,6 @@ class CompTableCli : public ScratchTest {
     const double c = c_deg * 3.14159265358979323846 / 180.0;
     return 2.0 * std::cos(c) - 1.5 * std::sin(2 * c);
   }
-  std::string machine;
 };
 
 TEST_F(CompTableCli, WritesTheSpheres3ReportsEccAsALinuxcncTableAndKeepsTheOldOne) {

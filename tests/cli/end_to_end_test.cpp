@@ -25,11 +25,10 @@ namespace {
 
 using Run = test::CliRun;
 
-class Cli : public ScratchTest {
+class Cli : public AcTrunnionTest {
  protected:
   void SetUp() override {
     ScratchTest::SetUp();
-    machine = test::sourcePath("examples/machines/ac_trunnion.json");
     truth = (dir / "truth.json").string();
     // The Table 4 mean errors and nothing else (no setup or form error, no noise).
     std::ofstream(truth) << R"({"format": "rotacal-truth/1", "location_errors": {
@@ -61,7 +60,6 @@ class Cli : public ScratchTest {
     }
   }
 
-  std::string machine, truth;
 };
 
 TEST_F(Cli, CsvFullPrecisionLeastSquaresRecoversTable4ToRounding) {

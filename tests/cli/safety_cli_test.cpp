@@ -19,14 +19,8 @@
 namespace rotacal::test {
 namespace {
 
-class Safety : public ScratchTest {
+class Safety : public AcTrunnionTest {
  protected:
-  void SetUp() override {
-    ScratchTest::SetUp();
-    machine = test::sourcePath("examples/machines/ac_trunnion.json");
-    truth = test::sourcePath("examples/truth/table4_mean.json");
-  }
-
   void touch154Results() {
     ASSERT_EQ(sh("-q plan --cycle touch154 --machine " + machine + " -o " + p("plan.json")).code, 0);
     ASSERT_EQ(sh("-q simulate --plan " + p("plan.json") + " --truth " + truth + " --noise-um 0.7 --seed 1 --dialect csv -o " +
@@ -45,7 +39,6 @@ class Safety : public ScratchTest {
     return s;
   }
 
-  std::string machine, truth;
 };
 
 TEST_F(Safety, AFailingThirdOutputLeavesTheFirstTwoUntouched) {

@@ -21,15 +21,14 @@ namespace {
 
 using Run = test::CliRun;
 
-class UncertaintyCli : public ScratchTest {
+class UncertaintyCli : public AcTrunnionTest {
  protected:
   void SetUp() override {
     ScratchTest::SetUp();
-    machine = test::sourcePath("examples/machines/ac_trunnion.json");
     contrib = test::sourcePath("examples/contributors/table5.json");
     ASSERT_EQ(sh("plan --cycle touch154 --machine " + machine + " -o " + p("plan.json")).code, 0);
   }
-  std::string machine, contrib;
+  std::string contrib;
 };
 
 TEST_F(UncertaintyCli, WritesTheContractsOutJson) {
