@@ -19,11 +19,12 @@
 namespace rotacal::test {
 namespace {
 
-class CompTableCli : public AcTrunnionTest {
+class CompTableCli : public ScratchTest {
  protected:
   void SetUp() override {
     ScratchTest::SetUp();
-    truth = test::sourcePath("examples/truth/table4_c_radial2.json");
+    machine = test::sourcePath("examples/machines/ac_trunnion.json");
+    const std::string truth = test::sourcePath("examples/truth/table4_c_radial2.json");
     ASSERT_EQ(sh("-q plan --cycle spheres3 --machine " + machine + " -o " + p("plan.json")).code, 0);
     ASSERT_EQ(sh("-q simulate --plan " + p("plan.json") + " --truth " + truth + " --noise-um 0 --dialect csv -o " +
                  p("run.csv")).code,
@@ -43,6 +44,7 @@ class CompTableCli : public AcTrunnionTest {
     const double c = c_deg * 3.14159265358979323846 / 180.0;
     return 2.0 * std::cos(c) - 1.5 * std::sin(2 * c);
   }
+  std::string machine;
 };
 
 TEST_F(CompTableCli, WritesTheSpheres3ReportsEccAsALinuxcncTableAndKeepsTheOldOne) {

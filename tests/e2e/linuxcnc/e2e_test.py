@@ -72,14 +72,10 @@ SHIFTED = ("dx_AY", "dy_AY", "dz_AY", "a_AY")   # what the work offset corrects 
 TO_UM = {"um": 1.0, "mm": 1000.0}
 TO_MDEG = {"mdeg": 1.0, "deg": 1000.0, "urad": 0.18 / 3.141592653589793}
 
-FAILURES = []
 os.environ["PYTHONDONTWRITEBYTECODE"] = "1"   # the scripts import lcsim_geom: no __pycache__ in the source tree
-
-
-def check(ok, what):
-    print(("  ok    " if ok else "  FAIL  ") + what, flush=True)
-    if not ok:
-        FAILURES.append(what)
+sys.dont_write_bytecode = True
+sys.path.insert(0, os.path.join(HERE, "scripts"))
+from checks import check, finish  # noqa: E402
 
 
 def skip_reason():
@@ -631,10 +627,7 @@ def main():
     os.makedirs(a.work, exist_ok=True)
     {"touch154": run_touch154, "no_trigger": run_no_trigger, "comp_table": run_comp_table,
      "one_sphere_bc": run_one_sphere_bc}[a.case](a)
-    if FAILURES:
-        print("%d check(s) failed" % len(FAILURES))
-        sys.exit(1)
-    print("all checks passed")
+    finish()
 
 
 if __name__ == "__main__":

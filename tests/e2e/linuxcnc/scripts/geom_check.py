@@ -21,14 +21,7 @@ import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import lcsim_geom as G  # noqa: E402
-
-FAIL = []
-
-
-def check(ok, what):
-    print(("ok    " if ok else "FAIL  ") + what)
-    if not ok:
-        FAIL.append(what)
+from checks import check, finish  # noqa: E402
 
 
 def params(d):
@@ -48,8 +41,8 @@ def main():
     bc = params({"machine": {"kins": "xyzbc", "z_offset": 0},
                  "eq2": {"dx_BY_um": 12400, "dy_CB_um": -8600, "dz_BY_um": -15300, "dx_CB_um": 9700,
                          "a_BY_mdeg": 24000, "b_BY_mdeg": -31000, "c_BY_mdeg": 18000, "a_CB_mdeg": -27000}})
-    for name, p, chain, parts in (("A/C eq1", ac, G.eq1_transform, G._eq1_parts),
-                                  ("B/C eq2", bc, G.eq2_transform, G._eq2_parts)):
+    for name, p, chain, parts in (("A/C eq1", ac, G.eq1_transform, lambda p: G._eq_parts(p, "eq1")),
+                                  ("B/C eq2", bc, G.eq2_transform, lambda p: G._eq_parts(p, "eq2"))):
         R, _, _, Q, t0 = parts(p)
         worst = 0.0
         for _ in range(300):
@@ -80,10 +73,7 @@ def main():
                      ([0.0, 0.0, 5.0], 5.0), ([7.0, 0.0, -64.0], 5.0)):
         got = G.stem_distance(pt, s)
         check(abs(got - want) < 1e-12, "stem distance at %s: %g (expected %g)" % (pt, got, want))
-    if FAIL:
-        print("%d check(s) failed" % len(FAIL))
-        sys.exit(1)
-    print("all checks passed")
+    finish()
 
 
 if __name__ == "__main__":
