@@ -48,6 +48,8 @@ struct Pose {
   double A = 0.0;
   double B = 0.0;
   double C = 0.0;
+  /// The angle of rotary axis `axis` ('A', 'B', else C), deg.
+  double angle(char axis) const { return axis == 'A' ? A : (axis == 'B' ? B : C); }
 };
 
 /// Location errors of one machine: lengths in mm, angles in rad, order of locationParameters().

@@ -58,7 +58,7 @@ void addAxis(KinematicModel& m, std::vector<ModelFactor>& chain, char axis, doub
 
 double factorValue(const ModelFactor& f, const Eigen::VectorXd& p, const Pose& pose) {
   if (f.parameter >= 0) return f.sign * p[f.parameter];
-  const double deg = f.axis == 'A' ? pose.A : (f.axis == 'B' ? pose.B : pose.C);
+  const double deg = pose.angle(f.axis);
   return f.sign * degToRad(deg);
 }
 

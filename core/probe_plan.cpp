@@ -142,7 +142,7 @@ void checkPoseOnMachine(const JsonDoc& doc, const Json& obj, const MachineModel&
                                      std::string(kinematicsName(m.kinematics)) + ")");
   }
   for (const auto& r : m.rotary) {
-    const double ang = r.name == 'A' ? pose.A : (r.name == 'B' ? pose.B : pose.C);
+    const double ang = pose.angle(r.name);
     if (!r.continuous && !r.stroke_deg.contains(ang))
       doc.fail(j, std::string(1, r.name),
                fmt::format("{} = {:g} deg is outside the {} stroke [{:g}, {:g}] deg", r.name, ang, r.name,
@@ -386,7 +386,7 @@ void linearStrokeViolations(const MachineModel& m, const Eigen::Vector3d& positi
 void rotaryStrokeViolations(const MachineModel& m, const Pose& pose, const std::string& pose_name,
                             std::vector<std::string>* out) {
   for (const auto& r : m.rotary) {
-    const double ang = r.name == 'A' ? pose.A : (r.name == 'B' ? pose.B : pose.C);
+    const double ang = pose.angle(r.name);
     if (!r.continuous && !r.stroke_deg.contains(ang))
       out->push_back(fmt::format("pose {}: {} = {:.3f} deg is outside the stroke [{:.3f}, {:.3f}]", pose_name, r.name, ang,
                                  r.stroke_deg.min, r.stroke_deg.max));

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "core/limits.hpp"
+#include "core/rotary_backlash.hpp"
 
 #include "core/units.hpp"
 
@@ -48,14 +49,10 @@ std::vector<Pose> actualPoses(const ProbePlan& plan, const Truth& truth) {
   std::vector<Pose> out;
   out.reserve(plan.points.size());
   const Eigen::Vector3d& b = truth.rotary_backlash_deg;
-  Eigen::Vector3d last = Eigen::Vector3d::Zero();  // the program starts at A = B = C = 0, reached in +
-  Eigen::Vector3d dir = Eigen::Vector3d::Ones();
-  for (const auto& p : plan.points) {
-    const Eigen::Vector3d cmd(p.pose.A, p.pose.B, p.pose.C);
-    for (int k = 0; k < 3; ++k)
-      if (cmd[k] != last[k]) dir[k] = cmd[k] > last[k] ? 1.0 : -1.0;
-    last = cmd;
-    const Eigen::Vector3d a = cmd - 0.5 * dir.cwiseProduct(b);
+  const std::vector<Eigen::Vector3d> dirs = rotaryApproachDirections(plan, true);
+  for (size_t i = 0; i < plan.points.size(); ++i) {
+    const Pose& p = plan.points[i].pose;
+    const Eigen::Vector3d a = Eigen::Vector3d(p.A, p.B, p.C) - 0.5 * dirs[i].cwiseProduct(b);
     out.push_back(Pose{a[0], a[1], a[2]});
   }
   return out;

@@ -162,6 +162,10 @@ struct CycleIdentity {
   ProbePlan (*make_plan)(const MachineModel& machine, const CycleOptions& options) = nullptr;
   /// The program's operations; Cycle::program() adds what every cycle's program carries.
   nc::Program (*build_program)(const ProbePlan& plan, const std::string& dialect) = nullptr;
+  /// What a PLAN.json of this cycle must satisfy beyond the format (checked with FILE:LINE).
+  PlanRules plan_rules{};
+  /// What one plan point is in a program, for the terminal.
+  std::string_view point_noun = "probing moves";
 };
 
 class Cycle {
@@ -179,16 +183,14 @@ class Cycle {
   ProbePlan plan(const MachineModel& machine, const CycleOptions& options) const {
     return identity_.make_plan(machine, options);
   }
-  /// What a PLAN.json of this cycle must satisfy beyond the format (checked with FILE:LINE).
-  virtual PlanRules planRules() const { return {}; }
+  const PlanRules& planRules() const { return identity_.plan_rules; }
 
   /// The dialect-neutral program of a plan, carrying the cycle's program number; `dialect`
   /// selects only the controller's conventions the plan needs (rotary sign). Throws
   /// std::invalid_argument when it cannot be expressed.
   nc::Program program(const ProbePlan& plan, const std::string& dialect) const;
   int programNumber() const { return identity_.program_number; }
-  /// What one plan point is in a program, for the terminal ("probing moves").
-  virtual std::string_view pointNoun() const { return "probing moves"; }
+  std::string_view pointNoun() const { return identity_.point_noun; }
 
   /// What the controller records on a machine with known errors (exact simulation).
   virtual Simulated simulate(const SimulateRequest& request) const = 0;

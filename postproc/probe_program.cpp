@@ -11,6 +11,30 @@ double controllerAngle(const MachineModel& machine, char axis, const std::string
   return a == 0.0 ? 0.0 : a;  // no "-0.000"
 }
 
+nc::Op indexOp(const MachineModel& m, const Pose& pose, const std::string& dialect, char axis, double feed) {
+  nc::Op op;
+  op.kind = nc::Op::Kind::Index;
+  op.feed = feed;
+  for (const auto& r : m.rotary)
+    if (axis == 0 || r.name == axis) op.rotary.emplace_back(r.name, controllerAngle(m, r.name, dialect, pose.angle(r.name)));
+  return op;
+}
+
+nc::Op commentOp(const std::string& text) {
+  nc::Op c;
+  c.kind = nc::Op::Kind::Comment;
+  c.text = text;
+  return c;
+}
+
+std::vector<std::string> angleSignLines(const MachineModel& m, const std::string& dialect, const std::string& source) {
+  std::vector<std::string> out;
+  for (const auto& r : m.rotary)
+    out.push_back(fmt::format("{} angles: controller = {} x paper convention{}", r.name,
+                              m.controllerSign(r.name, dialect) > 0 ? "+1" : "-1", source.empty() ? "" : " (" + source + ")"));
+  return out;
+}
+
 nc::Op pathMoveOp(const Waypoint& w, const MachineModel& m, double k) {
   nc::Op op;
   op.xyz = w.position_m * k;
@@ -56,10 +80,7 @@ nc::Program probeProgram(const ProbePlan& plan, const std::string& dialect) {
   if (m.retract_mm > 0)
     prog.header.push_back(fmt::format("double touch: back off {:.3f} mm, second touch at {:.1f} mm/min is recorded",
                                       m.retract_mm, m.feeds.probing_slow_mm_min));
-  for (const auto& r : m.rotary) {
-    const int s = m.controllerSign(r.name, dialect);
-    prog.header.push_back(fmt::format("{} angles: controller = {} x paper convention (000 Eq. (1))", r.name, s > 0 ? "+1" : "-1"));
-  }
+  for (const auto& l : angleSignLines(m, dialect, "000 Eq. (1)")) prog.header.push_back(l);
   const auto path = plannedPath(plan);
   for (const auto& w : path) {
     nc::Op op = pathMoveOp(w, m, k);
@@ -71,18 +92,11 @@ nc::Program probeProgram(const ProbePlan& plan, const std::string& dialect) {
       case Waypoint::Kind::Dwell:  // not on a probing path
       case Waypoint::Kind::Read: break;
       case Waypoint::Kind::Index: {
-        op.kind = nc::Op::Kind::Index;
-        for (const auto& r : m.rotary) {
-          const double paper = r.name == 'A' ? w.pose.A : (r.name == 'B' ? w.pose.B : w.pose.C);
-          op.rotary.emplace_back(r.name, controllerAngle(m, r.name, dialect, paper));
-        }
+        op = indexOp(m, w.pose, dialect);
         std::string pose_name;
         for (const auto& p : plan.poses)
           if (p.pose.A == w.pose.A && p.pose.B == w.pose.B && p.pose.C == w.pose.C) pose_name = p.name;
-        nc::Op c;
-        c.kind = nc::Op::Kind::Comment;
-        c.text = fmt::format("pose {}", pose_name);
-        prog.ops.push_back(c);
+        prog.ops.push_back(commentOp(fmt::format("pose {}", pose_name)));
         break;
       }
       case Waypoint::Kind::Probe: {

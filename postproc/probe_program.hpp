@@ -19,4 +19,14 @@ nc::Op pathMoveOp(const Waypoint& move, const MachineModel& machine, double k);
 /// Controller rotary angle (deg) for a papers'-convention pose angle.
 double controllerAngle(const MachineModel& machine, char axis, const std::string& dialect, double paper_deg);
 
+/// An indexing move to `pose`: every rotary axis of the machine, or only `axis` when it is not
+/// 0, at its controller angle for `dialect`; `feed` deg/min (0: the control's rapid).
+nc::Op indexOp(const MachineModel& machine, const Pose& pose, const std::string& dialect, char axis = 0, double feed = 0.0);
+
+nc::Op commentOp(const std::string& text);
+
+/// The header's line per rotary axis: the controller's sign against the papers' convention
+/// (`source` names that convention's equation, may be empty).
+std::vector<std::string> angleSignLines(const MachineModel& machine, const std::string& dialect, const std::string& source);
+
 }  // namespace rotacal

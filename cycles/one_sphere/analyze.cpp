@@ -8,6 +8,7 @@
 
 #include "core/errors.hpp"
 #include "core/report_envelope.hpp"
+#include "core/rotary_backlash.hpp"
 #include "core/units.hpp"
 #include "cycles/one_sphere/design.hpp"
 #include "cycles/one_sphere/plan.hpp"
@@ -30,6 +31,14 @@ const std::vector<std::pair<const char*, const char*>>& papersNames(Kinematics k
 
 std::string fitExtraDescription(const std::string& name) {
   if (name == "dR") return "the probe's effective radius on this sphere less R + r";
+  if (name.rfind("backlash_", 0) == 0)
+    return fmt::format("lost motion of the {} axis: it stops half of it short of its command, in the direction it last "
+                       "moved (read from both sides of the plan's there-and-back poses)",
+                       name.back());
+  if (name.rfind("lead_in_", 0) == 0)
+    return fmt::format("offset of the {} axis at the touches before the plan first moves it (it came from wherever the "
+                       "machine stood): a nuisance parameter, so that the lost motion assumes nothing about the start",
+                       name.back());
   if (name == "S_xy") return "out-of-squareness of the linear axes X and Y: X's error along Y (000 Eq. (23); mdeg, 1 mdeg = 17.45 um/m)";
   if (name == "S_xz") return "out-of-squareness of the linear axes X and Z: X's error along Z (000 Eq. (23); mdeg, 1 mdeg = 17.45 um/m)";
   return "out-of-squareness of the linear axes Y and Z: Y's error along Z (000 Eq. (23); mdeg, 1 mdeg = 17.45 um/m)";
@@ -40,6 +49,7 @@ double toReport(ParamKind kind, double v) { return kind == ParamKind::Length ? m
 struct Trigger {
   Eigen::Vector3d t_mm;
   Pose pose;
+  Eigen::Vector3d direction;  // of each rotary axis's last move (rotaryApproachDirections)
   int point_index;
   int run;
   double t_s;
@@ -56,6 +66,9 @@ SphereCycleResult identifySphereCycle(const ProbePlan& plan, const std::vector<M
   const int np = m.size();
   const bool sq = l.fit_squareness;
   out.names = sphereFitParameters(m, sq);
+  const std::vector<Eigen::Vector3d> directions = rotaryApproachDirections(plan, false);
+  if (l.backlash) out.backlash = appendBacklashParameters(plan.machine, directions, &out.names);
+  const SphereBacklashTerms& terms = out.backlash;
   const auto nx = static_cast<Eigen::Index>(out.names.size());
   const double rho = l.radius_mm + plan.machine.probe.ball_radius_mm();
 
@@ -69,7 +82,7 @@ SphereCycleResult identifySphereCycle(const ProbePlan& plan, const std::vector<M
       const auto it = by_id.find(p.id);
       if (it == by_id.end()) throw InputError(runs[k].source, 0, fmt::format("no trigger for plan point {}", p.id));
       const double t = std::isfinite(it->second->t_s) ? it->second->t_s : static_cast<double>(k) * cycle_s + p.t_s;
-      triggers.push_back({it->second->position_m_mm, p.pose, static_cast<int>(i), static_cast<int>(k), t});
+      triggers.push_back({it->second->position_m_mm, p.pose, directions[i], static_cast<int>(i), static_cast<int>(k), t});
     }
   }
   out.touches = static_cast<int>(triggers.size());
@@ -81,7 +94,8 @@ SphereCycleResult identifySphereCycle(const ProbePlan& plan, const std::vector<M
     Eigen::RowVectorXd row;
     for (size_t j = 0; j < triggers.size(); ++j) {
       const auto jj = static_cast<Eigen::Index>(j);
-      r[jj] = sphereTouchResidual(m, sq, x, triggers[j].pose, triggers[j].t_mm, rho, J ? &row : nullptr);
+      r[jj] = sphereTouchResidual(m, sq, terms, x, triggers[j].pose, triggers[j].direction, triggers[j].t_mm, rho,
+                                  J ? &row : nullptr);
       if (J) J->row(jj) = row;
     }
   };
@@ -120,7 +134,7 @@ SphereCycleResult identifySphereCycle(const ProbePlan& plan, const std::vector<M
   Eigen::VectorXd r;
   jacobian(out.x, r, &out.J_r_x);
   for (const auto& t : triggers) {
-    out.normals.push_back(sphereTouchNormal(m, sq, out.x, t.pose, t.t_mm));
+    out.normals.push_back(sphereTouchNormal(m, sq, out.x, backlashPose(terms, out.x, t.pose, t.direction), t.t_mm));
     out.point_index.push_back(t.point_index);
     out.run_index.push_back(t.run);
     out.t_s.push_back(t.t_s);

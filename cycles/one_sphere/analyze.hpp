@@ -19,12 +19,14 @@
 #include "core/measurement.hpp"
 #include "core/probe_plan.hpp"
 #include "core/uncertainty_budget.hpp"
+#include "cycles/one_sphere/design.hpp"
 
 namespace rotacal {
 
 struct SphereCycleResult {
   KinematicModel model;
-  std::vector<IdentifiabilityParameter> names;  // the model's parameters, then dR
+  std::vector<IdentifiabilityParameter> names;  // the model's parameters, dR, squareness, backlash terms
+  SphereBacklashTerms backlash;                 // where the lost-motion terms sit in x (option backlash)
   Eigen::VectorXd x;                            // mm, rad (held ones at 0), then dR in mm
   Identifiability identifiability;
   Eigen::MatrixXd cov_per_sigma2;               // covariance of x per unit reading variance (mm^2 per mm^2)

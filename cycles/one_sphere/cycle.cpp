@@ -15,19 +15,20 @@
 namespace rotacal {
 namespace {
 
+PlanRules spherePlanRules() {
+  PlanRules r;
+  r.spheres = 1;  // one sphere, at least 4 touches at every pose
+  r.safe_height_over_artefact = false;  // the plan keeps the test piece out of reach sideways (plan.cpp)
+  r.check_options = [](const ProbePlan& p) { (void)sphereLayoutOf(p); };
+  return r;
+}
+
 class Sphere final : public Cycle {
  public:
   Sphere() : Cycle({"one_sphere", "issue 19: both rotary axes' ISO 230-7 location errors and the probe's radius from one sphere",
                      {"examples/machines/ac_trunnion.json", {}},
                      7019,  // 7000 + the issue that specifies it (19)
-                     makeSpherePlan, probeProgram}) {}
-  PlanRules planRules() const override {
-    PlanRules r;
-    r.spheres = 1;  // one sphere, at least 4 touches at every pose
-    r.safe_height_over_artefact = false;  // the plan keeps the test piece out of reach sideways (plan.cpp)
-    r.check_options = [](const ProbePlan& p) { (void)sphereLayoutOf(p); };
-    return r;
-  }
+                     makeSpherePlan, probeProgram, spherePlanRules()}) {}
   Simulated simulate(const SimulateRequest& request) const override { return simulateProbing(request); }
 
   CycleDocuments analyze(const AnalyzeRequest& r) const override {

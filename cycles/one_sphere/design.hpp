@@ -15,10 +15,12 @@
 // information (D-optimal, core/pose_design.hpp), from the touches each pose gets, every touch
 // weighted alike (the probe's repeatability): what a plan with option `poses` does.
 #include <Eigen/Core>
+#include <array>
 #include <vector>
 
 #include "core/identifiability.hpp"
 #include "core/kinematic_model.hpp"
+#include "core/probe_plan.hpp"
 
 namespace rotacal {
 
@@ -28,6 +30,32 @@ std::vector<IdentifiabilityParameter> sphereFitParameters(const KinematicModel& 
 /// One touch's residual and (when row is not null) its row of J_r_x, for x laid out as
 /// sphereFitParameters. rho = R + r_ball (mm).
 double sphereTouchResidual(const KinematicModel& m, bool squareness, const Eigen::VectorXd& x, const Pose& pose,
+                           const Eigen::Vector3d& t_m_mm, double rho, Eigen::RowVectorXd* row);
+
+/// The fit's lost-motion terms (option backlash, core/rotary_backlash.hpp): each rotary axis
+/// the plan moves stops d b / 2 short of its command, d the way it last moved, b its lost motion
+/// (rad, at x[lost_motion[k]]); the touches the plan reaches before it has moved an axis come
+/// from wherever the machine stood, so that axis's offset there is a parameter of its own
+/// (rad, at x[lead_in[k]]). k = 0, 1, 2 for A, B, C; -1: no such term.
+struct SphereBacklashTerms {
+  std::array<Eigen::Index, 3> lost_motion{{-1, -1, -1}};
+  std::array<Eigen::Index, 3> lead_in{{-1, -1, -1}};
+};
+
+/// The terms the plan's order of touches (directions per point, rotaryApproachDirections with
+/// from_start = false) supports, appended to `names` as backlash_A .. and lead_in_A .. (angles).
+SphereBacklashTerms appendBacklashParameters(const MachineModel& machine, const std::vector<Eigen::Vector3d>& directions,
+                                             std::vector<IdentifiabilityParameter>* names);
+
+/// The commanded pose moved as the terms say for a touch reached in `direction`.
+Pose backlashPose(const SphereBacklashTerms& terms, const Eigen::VectorXd& x, const Pose& commanded,
+                  const Eigen::Vector3d& direction);
+
+/// sphereTouchResidual at the pose the axes really reach, with the lost-motion terms' columns
+/// of the row (the residual's slope in each rotary angle by central differences: 1e-4 deg
+/// leaves a truncation error below 1e-12 of it on these smooth models).
+double sphereTouchResidual(const KinematicModel& m, bool squareness, const SphereBacklashTerms& terms,
+                           const Eigen::VectorXd& x, const Pose& pose, const Eigen::Vector3d& direction,
                            const Eigen::Vector3d& t_m_mm, double rho, Eigen::RowVectorXd* row);
 
 /// The contact normal of that touch (from the fitted centre to the corrected trigger).

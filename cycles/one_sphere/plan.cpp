@@ -9,6 +9,7 @@
 #include "core/identifiability.hpp"
 #include "core/kinematic_model.hpp"
 #include "core/pose_design.hpp"
+#include "core/rotary_backlash.hpp"
 #include "core/units.hpp"
 #include "cycles/one_sphere/design.hpp"
 #include "cycles/probing.hpp"
@@ -100,10 +101,11 @@ SphereLayout SphereLayout::fromOptions(const MachineModel& machine, const CycleO
     else if (key == "pose_list") l.pose_list = parsePoseList(key, value);
     else if (key == "poses") l.design_poses = parseCount(key, value);
     else if (key == "fit_squareness") l.fit_squareness = parseSwitch(key, value);
+    else if (key == "backlash") l.backlash = parseSwitch(key, value);
     else
       throw std::invalid_argument("unknown option '" + key +
                                   "' for cycle one_sphere (center_w_mm, radius_mm, stem_length_mm, stem_diameter_mm, "
-                                  "tilt_list, c_list, pose_list, poses, fit_squareness)");
+                                  "tilt_list, c_list, pose_list, poses, fit_squareness, backlash)");
   }
   if (!l.pose_list.empty() && l.design_poses > 0)
     throw std::invalid_argument("options pose_list and poses exclude each other (poses designs a pose_list)");
@@ -132,6 +134,7 @@ CycleOptions SphereLayout::toOptions() const {
           {"c_list", numberListOption(c_deg)},
           {"fit_squareness", fit_squareness ? "1" : "0"}};
   if (!pose_list.empty()) o["pose_list"] = poseListOption(pose_list);
+  if (backlash) o["backlash"] = "1";
   return o;
 }
 
@@ -251,7 +254,7 @@ ProbePlan makeSpherePlan(const MachineModel& machine, const CycleOptions& option
         "come within {:g} mm of its top",
         machine.probe.stylus_length_mm, 2 * R, machine.probe.body_clearance_mm));
   const KinematicModel model = kinematicModel(kinematicsName(machine.kinematics), l.center_w_mm);
-  const auto names = sphereFitParameters(model, l.fit_squareness);
+  auto names = sphereFitParameters(model, l.fit_squareness);
 
   // The table indexes with the ball above everything it carries, whatever the pose.
   double sweep = std::max(machine.table_diameter_mm / 2, l.center_w_mm.norm() + R);
@@ -296,6 +299,18 @@ ProbePlan makeSpherePlan(const MachineModel& machine, const CycleOptions& option
     for (const auto& [t, c] : l.poses()) poses.push_back(touchesAt(machine, l, tilt_axis, t, c));
   }
 
+  if (l.backlash) {
+    // There and back: each pose but the turning one is reached again with every moving axis
+    // coming the other way. The return visits are named with an R.
+    if (poses.size() < 2) throw std::invalid_argument("option backlash needs at least 2 poses to run there and back");
+    for (size_t k = poses.size() - 1; k-- > 0;) {
+      PoseTouches back = poses[k];
+      back.pose.name += "R";
+      for (auto& q : back.points) q.pose_name = back.pose.name;
+      poses.push_back(back);
+    }
+  }
+
   ProbePlan plan;
   plan.cycle = "one_sphere";
   plan.machine = machine;
@@ -313,12 +328,17 @@ ProbePlan makeSpherePlan(const MachineModel& machine, const CycleOptions& option
   // The plan must see every parameter the sphere can show (core/identifiability.hpp): the tilt
   // axis needs two tilts and the C axis three angles, and some layouts lose more; with the
   // squareness fitted, the sphere's positions must span the shear too.
-  Eigen::MatrixXd J(static_cast<Eigen::Index>(plan.points.size()), static_cast<Eigen::Index>(names.size()));
-  Eigen::Index at = 0;
-  for (const auto& p : poses) {
-    const Eigen::MatrixXd rows = touchRows(model, l.fit_squareness, p, R + r);
-    J.middleRows(at, rows.rows()) = rows;
-    at += rows.rows();
+  // A backlash plan's lost-motion terms come from its order of touches.
+  const std::vector<Eigen::Vector3d> directions = rotaryApproachDirections(plan, false);
+  const SphereBacklashTerms terms =
+      l.backlash ? appendBacklashParameters(machine, directions, &names) : SphereBacklashTerms{};
+  const Eigen::VectorXd x0 = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(names.size()));
+  Eigen::MatrixXd J(static_cast<Eigen::Index>(plan.points.size()), x0.size());
+  for (size_t k = 0; k < plan.points.size(); ++k) {
+    Eigen::RowVectorXd row;
+    sphereTouchResidual(model, l.fit_squareness, terms, x0, plan.points[k].pose, directions[k],
+                        plan.points[k].trigger_m_mm, R + r, &row);
+    J.row(static_cast<Eigen::Index>(k)) = row;
   }
   const Identifiability id_ = identifiability(J, names, sphereHeldFirst(model, machine.kinematics));
   if (id_.rank < static_cast<int>(names.size()) - 2) {

@@ -32,13 +32,18 @@ struct SphereLayout {
   int design_poses = 0;
   /// Fit the linear axes' squareness S_xy S_xz S_yz alongside (design.hpp says why).
   bool fit_squareness = true;
+  /// Measure the rotary axes' lost motion: the poses are run there and back (the list, then
+  /// the list reversed without its last pose), so that a pose is reached from both sides by
+  /// each axis that moves, and the fit carries each axis's backlash (design.hpp).
+  bool backlash = false;
 
   /// Defaults for a machine, overridden by the options center_w_mm ("x,y,z"), radius_mm,
   /// stem_length_mm, stem_diameter_mm, tilt_list, c_list, pose_list ("tilt/c,tilt/c,..."),
-  /// poses (the design's n), fit_squareness (0 or 1).
+  /// poses (the design's n), fit_squareness, backlash (0 or 1).
   static SphereLayout fromOptions(const MachineModel& machine, const CycleOptions& options);
   CycleOptions toOptions() const;
-  /// The poses run (tilt, C in deg): pose_list, else the grid tilt_list x c_list.
+  /// The poses (tilt, C in deg): pose_list, else the grid tilt_list x c_list (a backlash plan
+  /// runs them there and back).
   std::vector<std::pair<double, double>> poses() const;
 };
 

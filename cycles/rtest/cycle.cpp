@@ -43,19 +43,19 @@ double sensorSigma(const ProbePlan& plan) {
                      plan.options.count("sensor_noise_um") ? plan.options.at("sensor_noise_um") : std::string("0.2"));
 }
 
+PlanRules rtestPlanRules() {
+  PlanRules r;
+  r.artefact_touched = false;  // the R-test's sphere sits in its nest, not on the machine's artefact
+  r.check_options = rtestCheckPlanOptions;
+  return r;
+}
+
 class Rtest final : public Cycle {
  public:
   Rtest() : Cycle({"rtest", "002: the position-dependent errors of the tilt axis with an R-test, and their thermal drift",
                     {"examples/machines/bc_trunnion.json", {}},
                     7002,  // 7000 + its source document (002)
-                    makeRtestPlan, rtestProgram}) {}
-  PlanRules planRules() const override {
-    PlanRules r;
-    r.artefact_touched = false;  // the R-test's sphere sits in its nest, not on the machine's artefact
-    r.check_options = rtestCheckPlanOptions;
-    return r;
-  }
-  std::string_view pointNoun() const override { return "R-test poses"; }
+                    makeRtestPlan, rtestProgram, rtestPlanRules(), "R-test poses"}) {}
 
   Simulated simulate(const SimulateRequest& r) const override {
     const ProbePlan& plan = *r.plan;

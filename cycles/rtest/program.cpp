@@ -41,26 +41,10 @@ nc::Program rtestProgram(const ProbePlan& plan, const std::string& dialect) {
                                       "{:g} deg/min in between",
                                       sched.interval_s / 60.0, sched.duration_s / 3600.0, tilt, sched.recip_from_deg,
                                       sched.recip_to_deg, sched.recip_feed_deg_min));
-  for (const auto& r : m.rotary) {
-    const int s = m.controllerSign(r.name, dialect);
-    prog.header.push_back(fmt::format("{} angles: controller = {} x paper convention", r.name, s > 0 ? "+1" : "-1"));
-  }
-  auto comment = [&](const std::string& t) {
-    nc::Op c;
-    c.kind = nc::Op::Kind::Comment;
-    c.text = t;
-    prog.ops.push_back(c);
-  };
+  for (const auto& l : angleSignLines(m, dialect, "")) prog.header.push_back(l);
+  auto comment = [&](const std::string& t) { prog.ops.push_back(commentOp(t)); };
   auto index = [&](const Pose& pose, bool tilt_only, double feed) {
-    nc::Op op;
-    op.kind = nc::Op::Kind::Index;
-    op.feed = feed;
-    for (const auto& r : m.rotary) {
-      if (tilt_only && r.name != tilt) continue;
-      const double paper = r.name == 'A' ? pose.A : (r.name == 'B' ? pose.B : pose.C);
-      op.rotary.emplace_back(r.name, controllerAngle(m, r.name, dialect, paper));
-    }
-    prog.ops.push_back(op);
+    prog.ops.push_back(indexOp(m, pose, dialect, tilt_only ? tilt : 0, feed));
   };
   const auto moves = rtestCycleMoves(plan);
   auto cycle = [&](const std::string& title) {

@@ -21,17 +21,18 @@ std::vector<std::string> paths(const std::vector<InputFile>& files) {
   return p;
 }
 
+PlanRules spheres3PlanRules() {
+  PlanRules r;
+  r.spheres = 3;  // 001 Fig. 2: three spheres, each fitted at every pose
+  return r;
+}
+
 class Spheres3 final : public Cycle {
  public:
   Spheres3() : Cycle({"spheres3", "001: the 4 location and 6 component errors of the C axis from three spheres",
                        {"examples/machines/ac_trunnion.json", {}},
                        7001,  // 7000 + its source document (001)
-                       makeSpheres3Plan, probeProgram}) {}
-  PlanRules planRules() const override {
-    PlanRules r;
-    r.spheres = 3;  // 001 Fig. 2: three spheres, each fitted at every pose
-    return r;
-  }
+                       makeSpheres3Plan, probeProgram, spheres3PlanRules()}) {}
   Simulated simulate(const SimulateRequest& request) const override { return simulateProbing(request); }
 
   std::string_view noOffsetsReason() const override {

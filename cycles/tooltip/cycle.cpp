@@ -24,20 +24,20 @@ std::vector<TooltipRun> readRuns(const ProbePlan& plan, const std::vector<InputF
   return runs;
 }
 
+PlanRules tooltipPlanRules() {
+  PlanRules r;
+  r.heights = false;  // no probing moves: the tool tip stays at the laser's target
+  r.check_options = [](const ProbePlan& p) { (void)tooltipOptionsFrom(p.options, p.machine); };
+  return r;
+}
+
 class Tooltip final : public Cycle {
  public:
   Tooltip() : Cycle({"tooltip",
                       "004: angular positioning error and pivot length of a head's axis from a fixed-tool-tip program",
                       {"examples/machines/head_ab.json", {}},
                       7004,  // 7000 + its source document (004)
-                      makeTooltipPlan, tooltipProgram}) {}
-  PlanRules planRules() const override {
-    PlanRules r;
-    r.heights = false;  // no probing moves: the tool tip stays at the laser's target
-    r.check_options = [](const ProbePlan& p) { (void)tooltipOptionsFrom(p.options, p.machine); };
-    return r;
-  }
-  std::string_view pointNoun() const override { return "tool-tip poses"; }
+                      makeTooltipPlan, tooltipProgram, tooltipPlanRules(), "tool-tip poses"}) {}
 
   Simulated simulate(const SimulateRequest& r) const override {
     const ProbePlan& plan = *r.plan;

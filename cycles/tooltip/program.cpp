@@ -59,10 +59,7 @@ nc::Program tooltipProgram(const ProbePlan& plan, const std::string& dialect) {
     for (size_t q = i; q < end && !zero; ++q)
       if (std::abs(angleOf(plan.points[q].pose)) < 1e-9) zero = &plan.points[q];
     if (!zero) throw std::invalid_argument("tooltip program: sweep " + sweep + " has no pose at 0 deg");
-    nc::Op c;
-    c.kind = nc::Op::Kind::Comment;
-    c.text = fmt::format("sweep {}: {} axis with the tool tip fixed", sweep, o.axis);
-    prog.ops.push_back(c);
+    prog.ops.push_back(commentOp(fmt::format("sweep {}: {} axis with the tool tip fixed", sweep, o.axis)));
     nc::Op mode;
     mode.kind = nc::Op::Kind::Mode;
     prog.ops.push_back(mode);  // G90 G94

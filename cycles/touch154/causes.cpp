@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "core/rotary_backlash.hpp"
 #include "core/units.hpp"
 
 namespace rotacal {
@@ -203,19 +204,13 @@ class TiltPositioning : public ModelExtension {
 };
 
 /// Lost motion of the tilt axis: it stops b / 2 short of the command in the direction it last
-/// moved, read from the plan's order of points (the program starts at 0, reached in +; each
-/// probing pose reached straight from the one before: the simulator's own rule,
-/// core/simulation.hpp `rotary_backlash_deg`).
+/// moved, read from the plan's order of points as the simulator reads it (core/rotary_backlash.hpp).
 class TiltBacklash : public ModelExtension {
  public:
   explicit TiltBacklash(const ProbePlan& plan) : axis_(TiltPositioning::axisName(plan)) {
-    double last = 0.0, dir = 1.0;
-    for (const auto& pt : plan.points) {
-      const double a = tiltOf(plan, pt.pose);
-      if (a != last) dir = a > last ? 1.0 : -1.0;
-      last = a;
-      dir_[pt.id] = dir;
-    }
+    const int tilt = plan.machine.kinematics == Kinematics::TableBC ? 1 : 0;
+    const std::vector<Eigen::Vector3d> dirs = rotaryApproachDirections(plan, true);
+    for (size_t i = 0; i < plan.points.size(); ++i) dir_[plan.points[i].id] = dirs[i][tilt];
   }
   std::string cause() const override { return "tilt_axis_backlash"; }
   std::string variant() const override { return "lost_motion"; }

@@ -23,22 +23,23 @@
 namespace rotacal {
 namespace {
 
+PlanRules touch154PlanRules() {
+  PlanRules r;
+  // The layout options a touch154 plan records (a designed plan records its design instead).
+  r.check_options = [](const ProbePlan& p) {
+    if (p.cycle == "touch154") (void)Touch154Layout::fromOptions(p.options);
+  };
+  return r;
+}
+
 class Touch154 final : public Cycle {
  public:
   Touch154() : Cycle({"touch154", "000: the 8 location errors of an A/C table from 154 touches",
                        {"examples/machines/ac_trunnion.json", {}},
                        7154,  // the 154 touches of 000; the others are 7000 + their source document
-                       makeTouch154Plan, probeProgram}) {}
+                       makeTouch154Plan, probeProgram, touch154PlanRules()}) {}
   std::vector<std::string> aliases() const override { return {"touch_designed"}; }
 
-  PlanRules planRules() const override {
-    PlanRules r;
-    // The layout options a touch154 plan records (a designed plan records its design instead).
-    r.check_options = [](const ProbePlan& p) {
-      if (p.cycle == "touch154") (void)Touch154Layout::fromOptions(p.options);
-    };
-    return r;
-  }
   Simulated simulate(const SimulateRequest& request) const override { return simulateProbing(request); }
 
   std::vector<std::string> methods() const override {
