@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -55,6 +56,30 @@ Simulated simulateProbing(const SimulateRequest& r) {
   return {r.dialect->write_results(plan, run),
           fmt::format("simulated {} triggers (noise {:.3f} um, seed {}) as {} results", run.points.size(), truth.noise_um,
                       r.seed, r.dialect->name)};
+}
+
+std::string sphereReachRefusal(const MachineModel& machine, const Eigen::Isometry3d& T, const Eigen::Vector3d& c_m,
+                               double R, double reach) {
+  if (!machine.artefact) return "";
+  const double r = machine.probe.ball_radius_mm();
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = Eigen::Vector3d::Constant(-1e300);
+  for (const auto& corner : machine.artefact->corners_w()) {
+    const Eigen::Vector3d q = T * corner;
+    lo = lo.cwiseMin(q);
+    hi = hi.cwiseMax(q);
+  }
+  const double dx = std::max({lo.x() - c_m.x(), 0.0, c_m.x() - hi.x()});
+  const double dy = std::max({lo.y() - c_m.y(), 0.0, c_m.y() - hi.y()});
+  if (std::hypot(dx, dy) < reach + r + machine.clearance_mm && hi.z() > c_m.z() - R - r - machine.clearance_mm)
+    return fmt::format("the test piece stands within {:.1f} mm of the probe's way to the sphere", reach + r + machine.clearance_mm);
+  return "";
+}
+
+double tableSweepRadius(const MachineModel& machine, const Eigen::Vector3d& c_w, double R) {
+  double sweep = std::max(machine.table_diameter_mm / 2, c_w.norm() + R);
+  if (machine.artefact)
+    for (const auto& corner : machine.artefact->corners_w()) sweep = std::max(sweep, corner.norm());
+  return sweep;
 }
 
 }  // namespace rotacal

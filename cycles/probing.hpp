@@ -5,6 +5,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "cycles/cycle.hpp"
 
@@ -19,6 +20,20 @@ std::string numberListOption(const std::vector<double>& values);
 /// The face a contact with outward normal n_m (machine frame) reports: the top, or the side the
 /// normal points to most.
 Face faceOfNormal(const Eigen::Vector3d& n_m);
+
+/// Where a sphere on the table (centre c_m, radius R, machine frame at the pose T = T_m_w) has
+/// the machine's test piece within `reach` (the side starts' distance from the centre) plus the
+/// ball and the clearance, unless the piece lies wholly below the lowest touch: the reason, or ""
+/// when the piece is clear. Every move of a pose round such a sphere (down from the index height
+/// at a start, start to start, up again) stays within that reach, so the pose's safe height need
+/// only clear the sphere (PlanRules::safe_height_over_artefact; the program verifier still checks
+/// every move against the piece).
+std::string sphereReachRefusal(const MachineModel& machine, const Eigen::Isometry3d& T_m_w, const Eigen::Vector3d& c_m,
+                               double R, double reach);
+
+/// The radius about the rotary axes' intersection that everything on the table sweeps when it
+/// indexes: the table, a sphere at c_w with radius R, the test piece.
+double tableSweepRadius(const MachineModel& machine, const Eigen::Vector3d& c_w, double R);
 
 /// The last step of a touch cycle's plan: throws std::invalid_argument naming the first point
 /// beyond the machine's strokes, then estimates the points' times.

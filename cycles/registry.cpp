@@ -15,7 +15,8 @@
   X(rtest)                \
   X(spaceframe)           \
   X(tooltip)              \
-  X(one_sphere)
+  X(one_sphere)           \
+  X(probe_qual)
 
 namespace rotacal {
 

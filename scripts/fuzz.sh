@@ -71,10 +71,10 @@ cp "$W/rtest.csv" "$S/fuzz_rtest_results/"; cp $BASE/rtest.csv "$S/fuzz_rtest_re
 cp $BASE/tooltip.csv "$S/fuzz_tooltip_results/"
 # programs and plans of every cycle on its bundled example; fuzz_program's selector = dialect index
 declare -A MACHINE=([touch154]=ac_trunnion [spheres3]=ac_trunnion [spaceframe]=ac_trunnion [rtest]=bc_trunnion [tooltip]=head_ab
-                   [one_sphere]=ac_trunnion)
+                   [one_sphere]=ac_trunnion [probe_qual]=ac_trunnion)
 declare -A SETS=([spaceframe]="--set phi_list=-90,-45,0")
-declare -A RULES=([touch154]=0 [spheres3]=1 [rtest]=2 [tooltip]=3 [spaceframe]=4 [one_sphere]=5)  # fuzz_plan's selector
-for cycle in touch154 spheres3 spaceframe rtest tooltip one_sphere; do
+declare -A RULES=([touch154]=0 [spheres3]=1 [rtest]=2 [tooltip]=3 [spaceframe]=4 [one_sphere]=5 [probe_qual]=6)  # fuzz_plan's selector
+for cycle in touch154 spheres3 spaceframe rtest tooltip one_sphere probe_qual; do
   # shellcheck disable=SC2086
   "$RC" -q plan --cycle $cycle --machine examples/machines/${MACHINE[$cycle]}.json ${SETS[$cycle]:-} -o "$W/$cycle.plan.json"
   prefix "${RULES[$cycle]}" "$W/$cycle.plan.json" "$S/fuzz_plan/$cycle.json"

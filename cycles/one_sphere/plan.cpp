@@ -170,26 +170,10 @@ PoseTouches touchesAt(const MachineModel& machine, const SphereLayout& l, char t
         "pose {}: {} = {:g} deg turns the table above the sphere: the probe would reach it past the table "
         "(keep |tilt| <= 90 deg)",
         name, tilt_axis, tilt));
-  if (machine.artefact) {
-    // The test piece stands within the probe's reach of its way round the sphere in no pose
-    // unless wholly below the lowest touch: every move of a pose (down from the index height
-    // at a start, from start to start, up again) stays within that reach, so the pose's safe
-    // height need only clear the sphere (PlanRules::safe_height_over_artefact; the program
-    // verifier checks every move against the piece).
-    Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = Eigen::Vector3d::Constant(-1e300);
-    for (const auto& corner : machine.artefact->corners_w()) {
-      const Eigen::Vector3d q = T * corner;
-      lo = lo.cwiseMin(q);
-      hi = hi.cwiseMax(q);
-    }
-    const double dx = std::max({lo.x() - c_m.x(), 0.0, c_m.x() - hi.x()});
-    const double dy = std::max({lo.y() - c_m.y(), 0.0, c_m.y() - hi.y()});
-    if (std::hypot(dx, dy) < reach + r + machine.clearance_mm && hi.z() > c_m.z() - R - r - machine.clearance_mm)
-      throw std::invalid_argument(fmt::format(
-          "pose {}: the test piece stands within {:.1f} mm of the probe's way to the sphere (move the sphere with "
-          "center_w_mm or choose other angles with tilt_list, c_list)",
-          name, reach + r + machine.clearance_mm));
-  }
+  const std::string near = sphereReachRefusal(machine, T, c_m, R, reach);
+  if (!near.empty())
+    throw std::invalid_argument(fmt::format("pose {}: {} (move the sphere with center_w_mm or choose other angles with "
+                                            "tilt_list, c_list)", name, near));
   PoseTouches out{{name, pose, c_m.z() + R + r + machine.clearance_mm}, {}};
   const auto& approaches = sphereApproaches();
   for (size_t j = 0; j < approaches.size(); ++j) {
@@ -257,10 +241,7 @@ ProbePlan makeSpherePlan(const MachineModel& machine, const CycleOptions& option
   auto names = sphereFitParameters(model, l.fit_squareness);
 
   // The table indexes with the ball above everything it carries, whatever the pose.
-  double sweep = std::max(machine.table_diameter_mm / 2, l.center_w_mm.norm() + R);
-  if (machine.artefact)
-    for (const auto& corner : machine.artefact->corners_w()) sweep = std::max(sweep, corner.norm());
-  const double index_z_mm = sweep + r + machine.clearance_mm;
+  const double index_z_mm = tableSweepRadius(machine, l.center_w_mm, R) + r + machine.clearance_mm;
 
   std::vector<PoseTouches> poses;
   if (l.design_poses > 0) {

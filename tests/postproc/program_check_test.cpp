@@ -144,9 +144,10 @@ TEST(ProgramCheck, PassesEveryProgramOfEveryCycleAndDialect) {
     ++programs;
     probes += r.probing_moves;
   }
-  // touch154, spheres3, spaceframe and one_sphere in 6 dialects, tooltip in 4 (okuma and
-  // heidenhain refuse G93), rtest in linuxcnc only.
-  EXPECT_EQ(programs, 4 * 6 + 4 + 1);
+  // touch154, spheres3, spaceframe and one_sphere in 6 dialects, probe_qual in 5 (heidenhain's
+  // cycle 0 refuses its 45-degree approaches), tooltip in 4 (okuma and heidenhain refuse G93),
+  // rtest in linuxcnc only.
+  EXPECT_EQ(programs, 4 * 6 + 5 + 4 + 1);
   RecordProperty("programs", programs);
   RecordProperty("probing_moves", probes);
 }
@@ -186,7 +187,7 @@ TEST(ProgramCheck, PassesEveryCompensatedProgram) {
     }
     ++compensated;
   }
-  EXPECT_EQ(compensated, 4 * 5 + 1);  // touch154, spheres3, spaceframe, one_sphere x 5 word-address dialects; rtest
+  EXPECT_EQ(compensated, 5 * 5 + 1);  // touch154, spheres3, spaceframe, one_sphere, probe_qual x 5 word-address dialects; rtest
   RecordProperty("compensated_programs", compensated);
 }
 

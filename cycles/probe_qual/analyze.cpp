@@ -1,0 +1,217 @@
+#include "cycles/probe_qual/analyze.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "core/errors.hpp"
+#include "core/report_envelope.hpp"
+#include "core/least_squares.hpp"
+#include "core/statistics.hpp"
+#include "core/units.hpp"
+#include "cycles/probe_qual/plan.hpp"
+
+namespace rotacal {
+
+ProbeQualification qualifyProbe(const ProbePlan& plan, const std::vector<MeasurementRun>& runs) {
+  const ProbeQualLayout l = probeQualLayoutOf(plan);
+  const auto touches = l.touches();
+  const auto approaches = l.approaches();
+  const auto names = l.approachNames();
+  const auto G = static_cast<int>(touches.size());  // touches per repeat
+  const int A = l.azimuths;                         // horizontal approaches; approach A is the top
+  const std::string source = runs.empty() ? std::string("results") : runs.front().source;
+  ProbeQualification q;
+  q.directions = A + 1;
+  std::vector<Eigen::Vector3d> t, u;
+  std::vector<int> approach_of;
+  const double cycle_s = plan.points.empty() ? 0.0 : plan.points.back().t_s;
+  for (size_t k = 0; k < runs.size(); ++k) {
+    std::map<int, const TriggerPoint*> by_id;
+    for (const auto& tp : runs[k].points) by_id[tp.point_id] = &tp;
+    for (size_t i = 0; i < plan.points.size(); ++i) {
+      const ProbePoint& p = plan.points[i];
+      const auto it = by_id.find(p.id);
+      if (it == by_id.end()) throw InputError(runs[k].source, 0, fmt::format("no trigger for plan point {}", p.id));
+      t.push_back(it->second->position_m_mm);
+      u.push_back(p.approach_m);
+      q.touch_of.push_back(p.target - 1);
+      approach_of.push_back(touches[static_cast<size_t>(p.target - 1)].approach);
+      q.repeat_of.push_back(static_cast<int>(k) * l.repeats + static_cast<int>(i) / G);
+      q.t_s.push_back(std::isfinite(it->second->t_s) ? it->second->t_s : static_cast<double>(k) * cycle_s + p.t_s);
+    }
+  }
+  const auto N = static_cast<Eigen::Index>(t.size());
+  q.touches = static_cast<int>(N);
+
+  // The horizontal pretravel in the span that a centre offset cannot mimic: an orthonormal basis
+  // B of the azimuths' space less their cos and sin (the mean and the higher harmonics).
+  Eigen::MatrixXd CS(2, A);
+  for (int k = 0; k < A; ++k) {
+    const double th = degToRad(360.0 * k / A);
+    CS(0, k) = std::cos(th);
+    CS(1, k) = std::sin(th);
+  }
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(CS, Eigen::ComputeFullV);
+  const Eigen::MatrixXd B = svd.matrixV().rightCols(A - 2);
+  const Eigen::Index nb = A - 2, nx = 3 + nb + 1;
+  q.parameter_names = {"sphere X", "sphere Y", "sphere Z"};
+  for (Eigen::Index k = 0; k < nb; ++k) q.parameter_names.push_back(fmt::format("horizontal pretravel basis {}", k + 1));
+  q.parameter_names.push_back("top pretravel");
+  const double rho0 = l.radius_mm + plan.machine.probe.ball_radius_mm();
+  const auto pretravelOf = [&](const Eigen::VectorXd& x, int a) {
+    return a == A ? x[nx - 1] : B.row(a).dot(x.segment(3, nb));
+  };
+  // r_j = (|t_j - p u_j - c| - (R + r)) / |m_j . u_j|: exact (the trigger less its pretravel lies
+  // on the sphere grown by the ball), in mm along the approach.
+  const auto model = [&](const Eigen::VectorXd& x, Eigen::VectorXd& r, Eigen::MatrixXd* J) {
+    r.resize(N);
+    if (J) J->setZero(N, nx);
+    for (Eigen::Index j = 0; j < N; ++j) {
+      const auto js = static_cast<size_t>(j);
+      const int a = approach_of[js];
+      const Eigen::Vector3d d = t[js] - pretravelOf(x, a) * u[js] - x.head<3>();
+      const Eigen::Vector3d m = d.normalized();
+      const double w = 1.0 / std::max(1e-6, std::abs(m.dot(u[js])));
+      r[j] = w * (d.norm() - rho0);
+      if (J) {
+        J->row(j).head<3>() = -w * m.transpose();
+        const double dp = -w * m.dot(u[js]);
+        if (a == A) (*J)(j, nx - 1) = dp;
+        else J->row(j).segment(3, nb) = dp * B.row(a);
+      }
+    }
+  };
+  Eigen::VectorXd x0 = Eigen::VectorXd::Zero(nx);
+  x0.head<3>() = T_m_w_nominal(plan.machine.kinematics, Pose{}) * l.center_w_mm;
+  const LeastSquaresResult fit = solveLeastSquares(model, x0);
+  if (!fit.summary.usable())
+    throw InputError(source, 0, "the probe qualification's fit did not converge: " + fit.summary.briefReport());
+  Eigen::VectorXd r;
+  Eigen::MatrixXd J;
+  model(fit.x, r, &J);
+  q.J_weighted = J;
+  q.centre_m_mm = fit.x.head<3>();
+  for (Eigen::Index j = 0; j < N; ++j) {
+    q.residuals_um.push_back(mmToUm(r[j]));
+    q.normals.push_back((t[static_cast<size_t>(j)] - fit.x.head<3>()).normalized());
+  }
+
+  // Repeatability: each touch of the repeat against its own repeats (the fit is the same for
+  // all of them to within the pretravel's second order), in um along the approach.
+  std::vector<double> mean(static_cast<size_t>(G), 0.0);
+  std::vector<int> count(static_cast<size_t>(G), 0);
+  for (Eigen::Index j = 0; j < N; ++j) {
+    mean[static_cast<size_t>(q.touch_of[static_cast<size_t>(j)])] += r[j];
+    ++count[static_cast<size_t>(q.touch_of[static_cast<size_t>(j)])];
+  }
+  for (int g = 0; g < G; ++g) mean[static_cast<size_t>(g)] /= std::max(1, count[static_cast<size_t>(g)]);
+  double ss = 0.0;
+  for (Eigen::Index j = 0; j < N; ++j) ss += std::pow(r[j] - mean[static_cast<size_t>(q.touch_of[static_cast<size_t>(j)])], 2);
+  q.dof = static_cast<int>(N) - G;
+  if (q.dof < 1) throw InputError(source, 0, "every touch needs at least 2 repeats for a repeatability");
+  q.repeatability_um = mmToUm(std::sqrt(ss / q.dof));
+  q.repeatability_lo_um = q.repeatability_um * std::sqrt(q.dof / chiSquareUpperQuantile(0.025, q.dof));
+  q.repeatability_hi_um = q.repeatability_um * std::sqrt(q.dof / chiSquareUpperQuantile(0.975, q.dof));
+
+  // u: the repeatability through the fit's covariance (per unit variance of the weighted rows).
+  const Eigen::MatrixXd cov = std::pow(umToMm(q.repeatability_um), 2) * fit.covariance;
+  const auto uOf = [&](const Eigen::VectorXd& g) { return mmToUm(std::sqrt(std::max(0.0, g.dot(cov * g)))); };
+  double lo = 1e300, hi = -1e300, sum = 0.0, sum2 = 0.0;
+  Eigen::VectorXd g_mean = Eigen::VectorXd::Zero(nx);
+  for (int a = 0; a <= A; ++a) {
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(nx);
+    if (a == A) g[nx - 1] = 1.0;
+    else g.segment(3, nb) = B.row(a).transpose();
+    DirectionPretravel p;
+    p.name = names[static_cast<size_t>(a)];
+    p.approach = approaches[static_cast<size_t>(a)];
+    p.pretravel_um = mmToUm(pretravelOf(fit.x, a));
+    p.u_um = uOf(g);
+    for (int ap : approach_of) p.touches += ap == a;
+    if (a < A) {
+      lo = std::min(lo, p.pretravel_um);
+      hi = std::max(hi, p.pretravel_um);
+      sum += p.pretravel_um;
+      sum2 += p.pretravel_um * p.pretravel_um;
+      g_mean += g / A;
+    }
+    q.by_direction.push_back(p);
+  }
+  q.mean_pretravel_um = sum / A;
+  q.u_mean_pretravel_um = uOf(g_mean);
+  q.lobing_range_um = hi - lo;
+  q.lobing_rms_um = std::sqrt(std::max(0.0, sum2 / A - q.mean_pretravel_um * q.mean_pretravel_um));
+  // E[rms^2] of a probe without lobing: trace(H C H) / A, C the horizontal pretravels' covariance
+  // and H the centring.
+  const Eigen::MatrixXd C = B * cov.block(3, 3, nb, nb) * B.transpose();
+  const Eigen::MatrixXd H = Eigen::MatrixXd::Identity(A, A) - Eigen::MatrixXd::Constant(A, A, 1.0 / A);
+  q.lobing_rms_noise_um = mmToUm(std::sqrt(std::max(0.0, (H * C * H).trace() / A)));
+  q.lobing_rms_net_um = std::sqrt(std::max(0.0, q.lobing_rms_um * q.lobing_rms_um - q.lobing_rms_noise_um * q.lobing_rms_noise_um));
+  q.effective_ball_diameter_mm = plan.machine.probe.ball_diameter_mm - 2.0 * umToMm(q.mean_pretravel_um);
+  return q;
+}
+
+Json probeQualReportJson(const ProbePlan& plan, const ProbeQualification& q, const std::vector<std::string>& files) {
+  Json j = documentEnvelope("rotacal-report/1", plan, files);
+  j["method"] = "sphere_fit_by_direction";
+  j["repeatability"] = {{"value", round6(q.repeatability_um)},
+                        {"unit", "um"},
+                        {"dof", q.dof},
+                        {"interval_95", {round6(q.repeatability_lo_um), round6(q.repeatability_hi_um)}},
+                        {"description", "pooled sd of each direction's repeats about their own mean (ISO 230-10's "
+                                        "unidirectional repeatability of the probing system)"}};
+  j["mean_pretravel"] = {{"value", round6(q.mean_pretravel_um)},
+                         {"u", round6(q.u_mean_pretravel_um)},
+                         {"unit", "um"},
+                         {"description", "over the horizontal approaches: how much smaller the probe's effective "
+                                         "radius is than the nominal (the sphere's calibrated radius taken as exact)"}};
+  Json dirs = Json::array();
+  for (const auto& p : q.by_direction)
+    dirs.push_back({{"direction", p.name},
+                    {"approach", {round6(p.approach.x()), round6(p.approach.y()), round6(p.approach.z())}},
+                    {"pretravel", round6(p.pretravel_um)},
+                    {"u", round6(p.u_um)},
+                    {"unit", "um"},
+                    {"touches", p.touches}});
+  j["pretravel_by_direction"] = dirs;
+  j["pretravel_note"] = "along the approach, late triggers positive; the horizontal pattern's first harmonic (cos and "
+                        "sin of the azimuth) is a centre offset and is in the sphere's centre";
+  j["lobing"] = {{"range", round6(q.lobing_range_um)},
+                 {"rms", round6(q.lobing_rms_um)},
+                 {"rms_expected_from_noise", round6(q.lobing_rms_noise_um)},
+                 {"rms_net", round6(q.lobing_rms_net_um)},
+                 {"unit", "um"},
+                 {"description", "the horizontal approaches' pretravel about its mean; rms_net is the rms less what "
+                                 "the repeatability alone gives it (in quadrature)"}};
+  j["sphere_centre_m_mm"] = {round6(q.centre_m_mm.x()), round6(q.centre_m_mm.y()), round6(q.centre_m_mm.z())};
+  // What the qualification feeds: MACHINE.json's probe section and CONTRIB.json's probe entries.
+  j["machine_probe"] = {{"ball_diameter_mm", round6(q.effective_ball_diameter_mm)},
+                        {"repeatability_um", round6(q.repeatability_um)}};
+  j["contributors"] = {{"probe_repeatability", {{"u", round6(q.repeatability_um)}, {"unit", "um"},
+                                                {"note", "probe_qual: pooled repeatability"}}},
+                       {"probe_pretravel", {{"u", round6(q.lobing_rms_net_um)}, {"unit", "um"},
+                                            {"note", "probe_qual: rms of the pretravel by direction about its mean, "
+                                                     "less what the repeatability alone gives it"}}}};
+  j["fit"] = {{"touches", q.touches}, {"approach_directions", q.directions}, {"dof", q.dof}};
+  return j;
+}
+
+std::string probeQualText(const ProbeQualification& q) {
+  std::string s = fmt::format(
+      "probe qualification: {} touches, {} directions\n"
+      "repeatability {:.3f} um ({} dof; 95 % interval {:.3f} .. {:.3f} um)\n"
+      "mean pretravel {:+.3f} um (u {:.3f} um): effective ball diameter {:.4f} mm\n"
+      "pretravel by direction (um, u):\n",
+      q.touches, q.directions, q.repeatability_um, q.dof, q.repeatability_lo_um, q.repeatability_hi_um, q.mean_pretravel_um,
+      q.u_mean_pretravel_um, q.effective_ball_diameter_mm);
+  for (const auto& p : q.by_direction) s += fmt::format("  {:<16} {:+8.3f}  {:.3f}\n", p.name, p.pretravel_um, p.u_um);
+  s += fmt::format("lobing: range {:.3f} um, rms {:.3f} um (the repeatability alone gives {:.3f} um: net {:.3f} um)\n",
+                   q.lobing_range_um, q.lobing_rms_um, q.lobing_rms_noise_um, q.lobing_rms_net_um);
+  return s;
+}
+
+}  // namespace rotacal

@@ -1,0 +1,27 @@
+#pragma once
+// What the probe's qualification gets wrong: the shared judge (core/judge.hpp) on the touches'
+// scatter about each direction's mean, against the machine's declared probe repeatability (is it
+// what the data show?), with the one cause a qualification can show beyond it:
+//  - thermal_drift: the sphere (or the spindle) moving linearly in time in X, Y, Z over the
+//    cycle; the directions repeat in the same order, so a drift follows the clock.
+// Leave one repeat out for the held-out test.
+#include <string>
+#include <vector>
+
+#include "core/json_io.hpp"
+#include "core/judge.hpp"
+#include "core/measurement.hpp"
+#include "core/probe_plan.hpp"
+
+namespace rotacal {
+
+struct ProbeQualDiagnosis {
+  JudgeSummary summary;
+  int runs = 0;
+};
+
+ProbeQualDiagnosis diagnoseProbeQual(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
+                                     const JudgeOptions& options);
+Json probeQualDiagnosisJson(const ProbeQualDiagnosis& d, const ProbePlan& plan);
+
+}  // namespace rotacal
