@@ -3,11 +3,17 @@
 // (core/judge.hpp): one form for every cycle that writes them.
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <vector>
+
+#include <Eigen/Core>
+
 #include <functional>
 #include <string>
 
 #include "core/json_io.hpp"
 #include "core/judge.hpp"
+#include "core/probe_plan.hpp"
 
 namespace rotacal {
 
@@ -90,6 +96,50 @@ inline Json contractBaselineJson(const JudgeSummary& s, const std::string& model
           {"dof", s.baseline.dof},
           {"p_value", s.baseline.p_value},
           {"within_declared_noise", s.baseline.passes}};
+}
+
+/// thermal_drift of a sphere cycle: the sphere moving by v (t - t_mid) in the machine frame, v
+/// in um/h along X, Y, Z; a touch reads it along its normal n_j (its residual falls by
+/// n_j . v dt), times its row weight w_j (1 when empty).
+inline JudgeCause sphereDriftCause(const std::vector<Eigen::Vector3d>& normals, const std::vector<double>& t_s,
+                                   const std::vector<double>& weights = {}) {
+  double t_lo = 1e300, t_hi = -1e300;
+  for (double t : t_s) t_lo = std::min(t_lo, t), t_hi = std::max(t_hi, t);
+  const double t_mid = 0.5 * (t_lo + t_hi);
+  const auto n = static_cast<Eigen::Index>(normals.size());
+  JudgeCause drift{"thermal_drift", "the sphere drifting linearly in time in X, Y, Z (thermal growth over the cycle)",
+                   Eigen::MatrixXd(n, 3), {{"vX", "um/h"}, {"vY", "um/h"}, {"vZ", "um/h"}}};
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const auto js = static_cast<size_t>(j);
+    drift.J.row(j) = -(weights.empty() ? 1.0 : weights[js]) * normals[js].transpose() * (t_s[js] - t_mid) / 3600.0;
+  }
+  return drift;
+}
+
+/// The observations' time (s) as a factor of the problem, when they span any.
+inline void addTimeFactor(JudgeProblem& p, const std::vector<double>& t_s) {
+  if (t_s.empty() || *std::max_element(t_s.begin(), t_s.end()) <= *std::min_element(t_s.begin(), t_s.end())) return;
+  p.factors.push_back({"time", {}, t_s, "s"});
+}
+
+/// The DIAGNOSIS.json of a cycle whose baseline is one fit judged as a whole: the contract's
+/// fields, `model` the baseline in words, `separate_with` what would tell a confounded cause apart.
+inline Json judgedDiagnosisJson(const std::string& cycle, const ProbePlan& plan, int runs, const JudgeSummary& s,
+                                const std::string& model,
+                                const std::function<std::string(const JudgeConfounded&)>& separate_with) {
+  Json j;
+  stampDiagnosis(j, cycle);
+  j["machine"] = plan.machine.name;
+  j["repeats"] = runs;
+  j["declared_sigma_um"] = s.declared_sigma_rms;
+  j["baseline"] = contractBaselineJson(s, model);
+  j["baseline"]["holdout"] = fmt::format("leave one {} out", s.group_name);
+  verdictJson(j, s);
+  j["findings"] = contractFindingsJson(
+      s, [](const JudgeFinding& f) { return f.description + ": " + findingParametersText(f); });
+  j["confounded"] = confoundedJson(s, separate_with);
+  j["judge"] = judgeToJson(s);
+  return j;
 }
 
 }  // namespace rotacal

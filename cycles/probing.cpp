@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <stdexcept>
 
 #include "core/errors.hpp"
@@ -80,6 +81,23 @@ double tableSweepRadius(const MachineModel& machine, const Eigen::Vector3d& c_w,
   if (machine.artefact)
     for (const auto& corner : machine.artefact->corners_w()) sweep = std::max(sweep, corner.norm());
   return sweep;
+}
+
+std::vector<PlannedTrigger> triggersInPlanOrder(const ProbePlan& plan, const std::vector<MeasurementRun>& runs) {
+  std::vector<PlannedTrigger> out;
+  const double cycle_s = plan.points.empty() ? 0.0 : plan.points.back().t_s;
+  for (size_t k = 0; k < runs.size(); ++k) {
+    std::map<int, const TriggerPoint*> by_id;
+    for (const auto& t : runs[k].points) by_id[t.point_id] = &t;
+    for (size_t i = 0; i < plan.points.size(); ++i) {
+      const ProbePoint& p = plan.points[i];
+      const auto it = by_id.find(p.id);
+      if (it == by_id.end()) throw InputError(runs[k].source, 0, fmt::format("no trigger for plan point {}", p.id));
+      const double t = std::isfinite(it->second->t_s) ? it->second->t_s : static_cast<double>(k) * cycle_s + p.t_s;
+      out.push_back({i, static_cast<int>(k), it->second, t});
+    }
+  }
+  return out;
 }
 
 }  // namespace rotacal

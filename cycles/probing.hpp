@@ -39,6 +39,20 @@ double tableSweepRadius(const MachineModel& machine, const Eigen::Vector3d& c_w,
 /// beyond the machine's strokes, then estimates the points' times.
 void finishTouchPlan(ProbePlan& plan);
 
+/// A plan point's trigger in one results file.
+struct PlannedTrigger {
+  size_t point_index = 0;  // in plan.points
+  int run = 0;             // the results file's index
+  const TriggerPoint* trigger = nullptr;
+  /// The controller's clock, else the plan's time from the run's start, the runs taken back to
+  /// back (run x the plan's last time).
+  double t_s = 0.0;
+};
+
+/// Every plan point's trigger of every run, each run in plan order. Throws InputError naming the
+/// run's file when it has no trigger for some plan point.
+std::vector<PlannedTrigger> triggersInPlanOrder(const ProbePlan& plan, const std::vector<MeasurementRun>& runs);
+
 /// Every results file of the request, read by the dialect's reader against the plan.
 std::vector<MeasurementRun> readProbeRuns(const ProbePlan& plan, const std::vector<InputFile>& results,
                                           const DialectIO& dialect);

@@ -12,6 +12,7 @@
 #include "core/units.hpp"
 #include "cycles/one_sphere/design.hpp"
 #include "cycles/one_sphere/plan.hpp"
+#include "cycles/probing.hpp"
 
 namespace rotacal {
 
@@ -73,18 +74,9 @@ SphereCycleResult identifySphereCycle(const ProbePlan& plan, const std::vector<M
   const double rho = l.radius_mm + plan.machine.probe.ball_radius_mm();
 
   std::vector<Trigger> triggers;
-  const double cycle_s = plan.points.empty() ? 0.0 : plan.points.back().t_s;
-  for (size_t k = 0; k < runs.size(); ++k) {
-    std::map<int, const TriggerPoint*> by_id;
-    for (const auto& t : runs[k].points) by_id[t.point_id] = &t;
-    for (size_t i = 0; i < plan.points.size(); ++i) {
-      const ProbePoint& p = plan.points[i];
-      const auto it = by_id.find(p.id);
-      if (it == by_id.end()) throw InputError(runs[k].source, 0, fmt::format("no trigger for plan point {}", p.id));
-      const double t = std::isfinite(it->second->t_s) ? it->second->t_s : static_cast<double>(k) * cycle_s + p.t_s;
-      triggers.push_back({it->second->position_m_mm, p.pose, directions[i], static_cast<int>(i), static_cast<int>(k), t});
-    }
-  }
+  for (const PlannedTrigger& pt : triggersInPlanOrder(plan, runs))
+    triggers.push_back({pt.trigger->position_m_mm, plan.points[pt.point_index].pose, directions[pt.point_index],
+                        static_cast<int>(pt.point_index), pt.run, pt.t_s});
   out.touches = static_cast<int>(triggers.size());
 
   // What the plan can show, at nominal: the held parameters stay at 0, the others are fitted.

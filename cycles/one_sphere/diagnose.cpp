@@ -39,16 +39,8 @@ SphereDiagnosis diagnoseSphere(const ProbePlan& plan, const std::vector<Measurem
     p.J0.col(static_cast<Eigen::Index>(i)) = fit.J_r_x.col(static_cast<Eigen::Index>(i)) * per;
     p.baseline_parameters.push_back({fit.names[i].name, std::string(reportUnit(fit.names[i].kind))});
   }
-  // Drift: the sphere moving by v (t - t_mid) in the machine frame; a trigger reads it along its
-  // normal (the residual falls by n . v dt).
-  double t_lo = 1e300, t_hi = -1e300;
-  for (double t : fit.t_s) t_lo = std::min(t_lo, t), t_hi = std::max(t_hi, t);
-  const double t_mid = 0.5 * (t_lo + t_hi);
-  JudgeCause drift{kDrift, "the sphere drifting linearly in time in X, Y, Z (thermal growth over the cycle)",
-                   Eigen::MatrixXd(n, 3), {{"vX", "um/h"}, {"vY", "um/h"}, {"vZ", "um/h"}}};
-  for (Eigen::Index j = 0; j < n; ++j)
-    drift.J.row(j) = -fit.normals[static_cast<size_t>(j)].transpose() * (fit.t_s[static_cast<size_t>(j)] - t_mid) / 3600.0;
-  p.causes.push_back(drift);
+  // Drift: the sphere moving linearly in time in the machine frame.
+  p.causes.push_back(sphereDriftCause(fit.normals, fit.t_s));
   // Pretravel by direction: one trigger distance per approach beyond the first (the mean is the
   // model's dR); a direction no pose used has no column.
   const auto& approaches = sphereApproaches();
@@ -66,12 +58,11 @@ SphereDiagnosis diagnoseSphere(const ProbePlan& plan, const std::vector<Measurem
   }
   if (pre.J.cols() > 0) p.causes.push_back(pre);
   p.group_name = "pose";
-  JudgeFactor pose{"pose", {}, {}, ""}, approach{"approach", {}, {}, ""}, time{"time", {}, {}, "s"};
+  JudgeFactor pose{"pose", {}, {}, ""}, approach{"approach", {}, {}, ""};
   for (Eigen::Index j = 0; j < n; ++j) {
     const ProbePoint& pt = plan.points[static_cast<size_t>(fit.point_index[static_cast<size_t>(j)])];
     pose.levels.push_back(pt.pose_name);
     approach.levels.push_back(dir_names[pt.target - 1]);
-    time.values.push_back(fit.t_s[static_cast<size_t>(j)]);
   }
   // Leave one pose out: the group is the pose's index among the plan's poses.
   for (Eigen::Index j = 0; j < n; ++j) {
@@ -82,7 +73,7 @@ SphereDiagnosis diagnoseSphere(const ProbePlan& plan, const std::vector<Measurem
     p.groups.push_back(g);
   }
   p.factors = {pose, approach};
-  if (t_hi > t_lo) p.factors.push_back(time);
+  addTimeFactor(p, fit.t_s);
   SphereDiagnosis d;
   d.runs = static_cast<int>(runs.size());
   d.summary = judge(p, options);
@@ -90,22 +81,10 @@ SphereDiagnosis diagnoseSphere(const ProbePlan& plan, const std::vector<Measurem
 }
 
 Json sphereDiagnosisJson(const SphereDiagnosis& d, const ProbePlan& plan) {
-  const JudgeSummary& s = d.summary;
-  Json j;
-  stampDiagnosis(j, "one_sphere");
-  j["machine"] = plan.machine.name;
-  j["repeats"] = d.runs;
-  j["declared_sigma_um"] = s.declared_sigma_rms;
-  j["baseline"] = contractBaselineJson(
-      s, "both rotary axes' ISO 230-7 location errors (core/kinematic_model.hpp), the sphere's set-up and the probe's "
-         "effective radius");
-  j["baseline"]["holdout"] = fmt::format("leave one {} out", s.group_name);
-  verdictJson(j, s);
-  j["findings"] = contractFindingsJson(
-      s, [](const JudgeFinding& f) { return f.description + ": " + findingParametersText(f); });
-  j["confounded"] = confoundedJson(s, separateWith);
-  j["judge"] = judgeToJson(s);
-  return j;
+  return judgedDiagnosisJson("one_sphere", plan, d.runs, d.summary,
+                             "both rotary axes' ISO 230-7 location errors (core/kinematic_model.hpp), the sphere's set-up "
+                             "and the probe's effective radius",
+                             separateWith);
 }
 
 std::string sphereDiagnosisText(const SphereDiagnosis& d) { return judgeText(d.summary); }

@@ -13,6 +13,7 @@
 #include "core/statistics.hpp"
 #include "core/units.hpp"
 #include "cycles/probe_qual/plan.hpp"
+#include "cycles/probing.hpp"
 
 namespace rotacal {
 
@@ -28,21 +29,14 @@ ProbeQualification qualifyProbe(const ProbePlan& plan, const std::vector<Measure
   q.directions = A + 1;
   std::vector<Eigen::Vector3d> t, u;
   std::vector<int> approach_of;
-  const double cycle_s = plan.points.empty() ? 0.0 : plan.points.back().t_s;
-  for (size_t k = 0; k < runs.size(); ++k) {
-    std::map<int, const TriggerPoint*> by_id;
-    for (const auto& tp : runs[k].points) by_id[tp.point_id] = &tp;
-    for (size_t i = 0; i < plan.points.size(); ++i) {
-      const ProbePoint& p = plan.points[i];
-      const auto it = by_id.find(p.id);
-      if (it == by_id.end()) throw InputError(runs[k].source, 0, fmt::format("no trigger for plan point {}", p.id));
-      t.push_back(it->second->position_m_mm);
-      u.push_back(p.approach_m);
-      q.touch_of.push_back(p.target - 1);
-      approach_of.push_back(touches[static_cast<size_t>(p.target - 1)].approach);
-      q.repeat_of.push_back(static_cast<int>(k) * l.repeats + static_cast<int>(i) / G);
-      q.t_s.push_back(std::isfinite(it->second->t_s) ? it->second->t_s : static_cast<double>(k) * cycle_s + p.t_s);
-    }
+  for (const PlannedTrigger& pt : triggersInPlanOrder(plan, runs)) {
+    const ProbePoint& p = plan.points[pt.point_index];
+    t.push_back(pt.trigger->position_m_mm);
+    u.push_back(p.approach_m);
+    q.touch_of.push_back(p.target - 1);
+    approach_of.push_back(touches[static_cast<size_t>(p.target - 1)].approach);
+    q.repeat_of.push_back(pt.run * l.repeats + static_cast<int>(pt.point_index) / G);
+    q.t_s.push_back(pt.t_s);
   }
   const auto N = static_cast<Eigen::Index>(t.size());
   q.touches = static_cast<int>(N);

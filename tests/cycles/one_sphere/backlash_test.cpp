@@ -26,6 +26,7 @@
 #include "cycles/one_sphere/plan.hpp"
 #include "postproc/program_check.hpp"
 #include "test_util.hpp"
+#include "tests/cycles/verify_programs.hpp"
 
 namespace rotacal {
 namespace {
@@ -135,15 +136,7 @@ TEST(OneSphereBacklash, LostMotionIsWithinTwoUncertaintiesAsOftenAsClaimed) {
 
 TEST(OneSphereBacklash, ThereAndBackProgramsPassTheVerifier) {
   const MachineModel m = acMachine();
-  const ProbePlan plan = makePlan("one_sphere", m, {{"backlash", "1"}});
-  const Cycle& cycle = cycleOfPlan(plan);
-  for (const std::string d : {"linuxcnc", "fanuc", "haas", "siemens", "heidenhain", "okuma"}) {
-    const std::string text = dialectByName(d).writeProgram(cycle.program(plan, d));
-    const ProgramCheckSetup s = programCheckSetup(m, d, ctl::numbersPrograms(d), &plan, true);
-    const ProgramCheckResult r = checkProgram(ctl::readMotions(d, text), s);
-    EXPECT_TRUE(r.violations.empty()) << d << ": " << (r.violations.empty() ? "" : r.violations.front().problem);
-    EXPECT_EQ(static_cast<size_t>(r.probing_moves), plan.points.size()) << d;
-  }
+  EXPECT_EQ(test::expectEveryDialectProgramPasses(makePlan("one_sphere", m, {{"backlash", "1"}})), 6);
   EXPECT_THROW(makePlan("one_sphere", m, {{"backlash", "1"}, {"pose_list", "0/0"}}), std::invalid_argument);
   EXPECT_THROW(makePlan("one_sphere", m, {{"backlash", "2"}}), std::invalid_argument);
 }

@@ -23,6 +23,7 @@
 #include "cycles/one_sphere/plan.hpp"
 #include "postproc/program_check.hpp"
 #include "test_util.hpp"
+#include "tests/cycles/verify_programs.hpp"
 
 namespace rotacal {
 namespace {
@@ -148,18 +149,7 @@ TEST(OneSphereDesign, EveryProgramOfADesignedPlanPassesTheVerifier) {
   // verifier checks every move against the test piece, the table and the sphere.
   const MachineModel m = acMachine();
   for (const CycleOptions& o : std::vector<CycleOptions>{{{"poses", "12"}}, {{"poses", "14"}, {"center_w_mm", "200,0,80"}}}) {
-    const ProbePlan plan = makePlan("one_sphere", m, o);
-    const Cycle& cycle = cycleOfPlan(plan);
-    int written = 0;
-    for (const std::string d : {"linuxcnc", "fanuc", "haas", "siemens", "heidenhain", "okuma"}) {
-      const std::string text = dialectByName(d).writeProgram(cycle.program(plan, d));
-      const ProgramCheckSetup s = programCheckSetup(m, d, ctl::numbersPrograms(d), &plan, true);
-      const ProgramCheckResult r = checkProgram(ctl::readMotions(d, text), s);
-      EXPECT_TRUE(r.violations.empty()) << d << ": " << (r.violations.empty() ? "" : r.violations.front().problem);
-      EXPECT_EQ(static_cast<size_t>(r.probing_moves), plan.points.size()) << d;
-      ++written;
-    }
-    EXPECT_EQ(written, 6);
+    EXPECT_EQ(test::expectEveryDialectProgramPasses(makePlan("one_sphere", m, o)), 6);
   }
 }
 
