@@ -59,6 +59,13 @@ Simulated simulateProbing(const SimulateRequest& r) {
                       r.seed, r.dialect->name)};
 }
 
+int parseCountOption(const std::string& key, const std::string& text, int lo, int hi) {
+  const double v = parseNumber(key, text);
+  if (!(v >= lo && v <= hi && v == std::floor(v)))
+    throw std::invalid_argument(fmt::format("option {} must be a whole number from {} to {}, not '{}'", key, lo, hi, text));
+  return static_cast<int>(v);
+}
+
 std::string sphereReachRefusal(const MachineModel& machine, const Eigen::Isometry3d& T, const Eigen::Vector3d& c_m,
                                double R, double reach) {
   if (!machine.artefact) return "";

@@ -14,6 +14,9 @@ namespace rotacal {
 /// A plan option "x,y,z" (mm). Throws std::invalid_argument naming the option.
 Eigen::Vector3d parseVec3Option(const std::string& key, const std::string& text);
 
+/// A whole-number plan option from lo to hi. Throws std::invalid_argument naming the option.
+int parseCountOption(const std::string& key, const std::string& text, int lo, int hi);
+
 /// A list option "a,b,c" as parseNumberList reads it back ({:g} each).
 std::string numberListOption(const std::vector<double>& values);
 

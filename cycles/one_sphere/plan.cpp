@@ -41,13 +41,6 @@ std::string poseListOption(const std::vector<std::pair<double, double>>& poses) 
   return s;
 }
 
-int parseCount(const std::string& key, const std::string& text) {
-  const double v = parseNumber(key, text);
-  if (!(v >= 0 && v <= 1000 && v == std::floor(v)))
-    throw std::invalid_argument(fmt::format("option {} must be a whole number from 0 to 1000, not '{}'", key, text));
-  return static_cast<int>(v);
-}
-
 bool parseSwitch(const std::string& key, const std::string& text) {
   if (text == "1" || text == "true") return true;
   if (text == "0" || text == "false") return false;
@@ -99,7 +92,7 @@ SphereLayout SphereLayout::fromOptions(const MachineModel& machine, const CycleO
     else if (key == "tilt_list") l.tilt_deg = parseNumberList(key, value);
     else if (key == "c_list") l.c_deg = parseNumberList(key, value);
     else if (key == "pose_list") l.pose_list = parsePoseList(key, value);
-    else if (key == "poses") l.design_poses = parseCount(key, value);
+    else if (key == "poses") l.design_poses = parseCountOption(key, value, 0, 1000);
     else if (key == "fit_squareness") l.fit_squareness = parseSwitch(key, value);
     else if (key == "backlash") l.backlash = parseSwitch(key, value);
     else

@@ -5,7 +5,6 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-#include <map>
 
 #include "core/errors.hpp"
 #include "core/report_envelope.hpp"

@@ -12,17 +12,6 @@
 
 namespace rotacal {
 
-namespace {
-
-int parseCount(const std::string& key, const std::string& text, int lo, int hi) {
-  const double v = parseNumber(key, text);
-  if (!(v >= lo && v <= hi && v == std::floor(v)))
-    throw std::invalid_argument(fmt::format("option {} must be a whole number from {} to {}, not '{}'", key, lo, hi, text));
-  return static_cast<int>(v);
-}
-
-}  // namespace
-
 ProbeQualLayout ProbeQualLayout::fromOptions(const CycleOptions& options) {
   ProbeQualLayout l;
   for (const auto& [key, value] : options) {
@@ -30,9 +19,9 @@ ProbeQualLayout ProbeQualLayout::fromOptions(const CycleOptions& options) {
     else if (key == "radius_mm") l.radius_mm = parseNumber(key, value);
     else if (key == "stem_length_mm") l.stem_length_mm = parseNumber(key, value);
     else if (key == "stem_diameter_mm") l.stem_diameter_mm = parseNumber(key, value);
-    else if (key == "azimuths") l.azimuths = parseCount(key, value, 4, 36);
+    else if (key == "azimuths") l.azimuths = parseCountOption(key, value, 4, 36);
     else if (key == "latitude_list") l.latitude_deg = parseNumberList(key, value);
-    else if (key == "repeats") l.repeats = parseCount(key, value, 2, 100);
+    else if (key == "repeats") l.repeats = parseCountOption(key, value, 2, 100);
     else
       throw std::invalid_argument("unknown option '" + key +
                                   "' for cycle probe_qual (center_w_mm, radius_mm, stem_length_mm, stem_diameter_mm, "
