@@ -41,7 +41,9 @@ CycleOptions parseSets(const std::vector<std::string>& sets) {
 
 std::string cycleList() {
   std::string s;
-  for (const Cycle* c : cycles()) s += fmt::format("{}{} ({})", s.empty() ? "" : ", ", c->name(), c->summary().substr(0, 3));
+  // Each summary opens with its source: a paper's number ("000: ...") or the issue ("issue 19: ...").
+  for (const Cycle* c : cycles())
+    s += fmt::format("{}{} ({})", s.empty() ? "" : ", ", c->name(), c->summary().substr(0, c->summary().find(':')));
   return s;
 }
 
@@ -259,6 +261,10 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
   outputs.add("--json", json_out, docs.doc.dump(1) + "\n");
   addHtml(outputs, html_out, docs.doc);
   outputs.add("--text", text_out, docs.text);
+  // No corrections at all (a machine no offsets writer serves): --force cannot help.
+  if (!offsets_out.empty() && !docs.offsets)
+    failFile(offsets_out, "not written: " + (docs.offsets_refused.empty() ? std::string("this analysis has no offsets")
+                                                                          : docs.offsets_refused));
   if (!offsets_out.empty() && !docs.offsets_refused.empty() && !force)
     failFile(offsets_out, "not written: " + docs.offsets_refused + " (--force writes it)");
   if (!offsets_out.empty() && docs.offsets) {

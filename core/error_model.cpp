@@ -8,11 +8,13 @@ namespace rotacal {
 
 namespace {
 constexpr const char* kNoTableErrors =
-    "a spindle-head machine (head_ab) has no table location errors: use the fixed-tool-tip cycle (004)";
+    "a spindle-head machine (head_ab, head_table) has none of the papers' table location errors: head_ab is calibrated "
+    "at a fixed tool tip (004), head_table by its own ISO 230-7 parameters (core/kinematic_model.hpp)";
 }  // namespace
 
 std::string_view kinematicsName(Kinematics kinematics) {
   if (kinematics == Kinematics::HeadAB) return "head_ab";
+  if (kinematics == Kinematics::HeadTable) return "head_table";
   return kinematics == Kinematics::TableAC ? "table_ac" : "table_bc";
 }
 
@@ -20,8 +22,9 @@ Kinematics kinematicsFromName(std::string_view name) {
   if (name == "table_ac") return Kinematics::TableAC;
   if (name == "table_bc") return Kinematics::TableBC;
   if (name == "head_ab") return Kinematics::HeadAB;
+  if (name == "head_table") return Kinematics::HeadTable;
   throw std::invalid_argument("unknown kinematics '" + std::string(name) +
-                              "' (expected table_ac, table_bc or head_ab)");
+                              "' (expected table_ac, table_bc, head_ab or head_table)");
 }
 
 const std::vector<ParameterInfo>& locationParameters(Kinematics kinematics) {
@@ -46,7 +49,7 @@ const std::vector<ParameterInfo>& locationParameters(Kinematics kinematics) {
       {"a_CB", "A0C-A0B", K::Angle, "squareness of the C axis to the B axis around X (002: alpha_CB^0)"},
       {"dx_CB", "X0C-X0B", K::Length, "offset of the C axis from the B axis in X (002: dx_CB^0)"},
   };
-  if (kinematics == Kinematics::HeadAB) throw std::invalid_argument(kNoTableErrors);
+  if (!hasPapersLocationErrors(kinematics)) throw std::invalid_argument(kNoTableErrors);
   return kinematics == Kinematics::TableAC ? ac : bc;
 }
 
@@ -100,7 +103,7 @@ const std::vector<ChainFactor>& kinematicChain(Kinematics kinematics) {
       {M::Rx, S::Parameter, 6}, {M::Tx, S::Parameter, 7},
       {M::Rz, S::NegativeAxis, 2},
   };
-  if (kinematics == Kinematics::HeadAB) throw std::invalid_argument(kNoTableErrors);
+  if (!hasPapersLocationErrors(kinematics)) throw std::invalid_argument(kNoTableErrors);
   return kinematics == Kinematics::TableAC ? ac : bc;
 }
 
@@ -122,6 +125,8 @@ Eigen::Isometry3d T_m_w(const LocationErrors& errors, const Pose& pose) {
 }
 
 Eigen::Isometry3d T_m_w_nominal(Kinematics kinematics, const Pose& pose) {
+  // A head over a C table: the table turns C alone (by -C, as every table axis does).
+  if (kinematics == Kinematics::HeadTable) return elementary(Motion::Rz, -degToRad(pose.C));
   LocationErrors zero;
   zero.kinematics = kinematics;
   return T_m_w(zero, pose);

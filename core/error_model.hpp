@@ -21,9 +21,16 @@ namespace rotacal {
 
 // HeadAB: a spindle head tilting in A and B about a pivot, the tool tip at distance R from it
 // (004 Sec. IV); it has no table location errors and serves the fixed-tool-tip cycle (004).
-enum class Kinematics { TableAC, TableBC, HeadAB };
+// HeadTable: a B (or A) spindle head over a C table (MachineModel::head). Its location errors are
+// the ISO 230-7 parameters of core/kinematic_model.hpp, not the papers' eight: the tables and
+// offsets of the papers' machines do not apply to it. The table turns C only.
+enum class Kinematics { TableAC, TableBC, HeadAB, HeadTable };
 
-std::string_view kinematicsName(Kinematics kinematics);       // "table_ac", "table_bc", "head_ab"
+std::string_view kinematicsName(Kinematics kinematics);       // "table_ac", "table_bc", "head_ab", "head_table"
+/// Whether the machine's XYZ carry a spindle head (its XYZ are the pivot's, not the ball centre's).
+inline bool hasSpindleHead(Kinematics k) { return k == Kinematics::HeadAB || k == Kinematics::HeadTable; }
+/// Whether the papers' eight table location errors (000 / 002) describe the machine.
+inline bool hasPapersLocationErrors(Kinematics k) { return k == Kinematics::TableAC || k == Kinematics::TableBC; }
 Kinematics kinematicsFromName(std::string_view name);         // throws std::invalid_argument
 
 enum class ParamKind { Length, Angle };

@@ -7,6 +7,8 @@
 
 #include "core/errors.hpp"
 #include "core/limits.hpp"
+#include "core/transforms.hpp"
+#include "core/units.hpp"
 
 namespace rotacal {
 
@@ -78,7 +80,24 @@ MachineModel machineFrom(const JsonDoc& doc, const Json& j) {
   m.x = rangeFrom(doc, s, "X", kMaxCoordinateMm, "mm");
   m.y = rangeFrom(doc, s, "Y", kMaxCoordinateMm, "mm");
   m.z = rangeFrom(doc, s, "Z", kMaxCoordinateMm, "mm");
-  const std::string rot = m.kinematics == Kinematics::TableAC ? "AC" : m.kinematics == Kinematics::HeadAB ? "AB" : "BC";
+  if (m.kinematics == Kinematics::HeadTable) {
+    if (!j.contains("head"))
+      doc.fail(j, "kinematics", "kinematics head_table needs \"head\": {\"axis\": \"B\" or \"A\", \"pivot_to_ball_mm\": L}");
+    const Json& h = requireObject(doc, j, "head");
+    const std::string axis = requireString(doc, h, "axis");
+    if (axis != "A" && axis != "B") doc.fail(h, "axis", "the head axis must be \"A\" or \"B\"");
+    SpindleHead head;
+    head.axis = axis[0];
+    head.pivot_to_ball_mm = requireNumber(doc, h, "pivot_to_ball_mm", Limits::positive(kMaxCoordinateMm, "mm"));
+    m.head = head;
+  } else if (j.contains("head")) {
+    doc.fail(j, "head", "'head' describes a head_table machine's spindle head, not a " +
+                            std::string(kinematicsName(m.kinematics)) + " machine's");
+  }
+  const std::string rot = m.kinematics == Kinematics::TableAC  ? "AC"
+                          : m.kinematics == Kinematics::HeadAB ? "AB"
+                          : m.head                             ? std::string(1, m.head->axis) + "C"
+                                                               : "BC";
   const Json& axes = requireObject(doc, j, "rotary_axes");
   for (char axis : rot) {
     const std::string key(1, axis);
@@ -110,6 +129,9 @@ MachineModel machineFrom(const JsonDoc& doc, const Json& j) {
   m.probe.body_clearance_mm =
       numberOr(doc, p, "body_clearance_mm", m.probe.body_clearance_mm, Limits::nonNegative(kMaxProbeLengthMm, "mm"));
   m.probe.tool_number = intOr(doc, p, "tool_number", 0, 0, kMaxToolNumber);
+  if (m.head && m.probe.tool_number != 0)
+    doc.fail(p, "tool_number", "a head_table machine's X, Y and Z must read the head's pivot: tool_number must be 0 (a "
+                               "tool length offset moves Z, not the ball along the tilted spindle)");
   m.probe.repeatability_um =
       numberOr(doc, p, "repeatability_um", m.probe.repeatability_um, Limits::positive(kMaxRepeatabilityUm, "um"));
   if (j.contains("feeds")) {
@@ -163,6 +185,23 @@ MachineModel machineFrom(const JsonDoc& doc, const Json& j) {
 
 }  // namespace
 
+namespace {
+Eigen::Matrix3d headRotation(const MachineModel& m, const Pose& pose) {
+  if (!m.head) return Eigen::Matrix3d::Identity();
+  const char a = m.head->axis;
+  return elementary(a == 'A' ? Motion::Rx : Motion::Ry, degToRad(pose.angle(a))).linear();
+}
+}  // namespace
+
+Eigen::Vector3d ballFromAxes_m(const MachineModel& m, const Pose& pose) {
+  if (!m.head) return Eigen::Vector3d::Zero();
+  return headRotation(m, pose) * Eigen::Vector3d(0.0, 0.0, -m.head->pivot_to_ball_mm);
+}
+
+Eigen::Vector3d stylusAxis_m(const MachineModel& m, const Pose& pose) { return headRotation(m, pose).col(2); }
+
+double ballDropBelowAxes(const MachineModel& m) { return m.head ? m.head->pivot_to_ball_mm : 0.0; }
+
 MachineModel machineFromJson(const JsonDoc& doc, const Json& j) {
   return guardJson(doc, [&] { return machineFrom(doc, j); });
 }
@@ -211,6 +250,7 @@ Json machineToJson(const MachineModel& m) {
                      {"top_centre_w_mm", {m.artefact->top_centre_w.x(), m.artefact->top_centre_w.y(), m.artefact->top_centre_w.z()}},
                      {"size_mm", {m.artefact->size_mm.x(), m.artefact->size_mm.y(), m.artefact->size_mm.z()}}};
   }
+  if (m.head) j["head"] = {{"axis", std::string(1, m.head->axis)}, {"pivot_to_ball_mm", m.head->pivot_to_ball_mm}};
   if (m.contributors) j["contributors"] = contributorsToJson(*m.contributors);
   return j;
 }

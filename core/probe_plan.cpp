@@ -69,10 +69,11 @@ namespace {
 
 Json vec(const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()}); }
 
-Json poseJson(Kinematics k, const Pose& p) {
-  if (k == Kinematics::TableAC) return {{"A", p.A}, {"C", p.C}};
-  if (k == Kinematics::HeadAB) return {{"A", p.A}, {"B", p.B}};
-  return {{"B", p.B}, {"C", p.C}};
+// The machine's own rotary axes, by name.
+Json poseJson(const MachineModel& m, const Pose& p) {
+  Json j = Json::object();
+  for (const auto& r : m.rotary) j[std::string(1, r.name)] = p.angle(r.name);
+  return j;
 }
 
 
@@ -114,21 +115,27 @@ void checkHeights(const JsonDoc& doc, const Json& j, const ProbePlan& plan, cons
       for (const auto& corner : plan.machine.artefact->corners_w()) top = std::max(top, (T * corner).z());
     if (!std::isfinite(top)) continue;
     const double safe_top = rules.safe_height_over_artefact ? top : touched_top;
-    if (std::isfinite(safe_top) && pp.safe_z_mm < safe_top + r - 1e-6)
+    // On a head machine Z reads the pivot: the ball hangs below it by the head's offset.
+    const double ball_below = -ballFromAxes_m(plan.machine, pp.pose).z();
+    if (std::isfinite(safe_top) && pp.safe_z_mm - ball_below < safe_top + r - 1e-6)
       doc.fail(j["poses"][k], "safe_z_mm",
                fmt::format("pose {}: safe_z_mm = {:g} mm is below what the probe moves over: the ball centre must stay "
-                           "at z >= {:.3f} mm (the top of what is touched plus the ball radius)",
-                           pp.name, pp.safe_z_mm, safe_top + r));
+                           "at z >= {:.3f} mm (the top of what is touched plus the ball radius){}",
+                           pp.name, pp.safe_z_mm, safe_top + r,
+                           ball_below != 0 ? fmt::format(", {:.3f} mm below Z at this head angle", ball_below) : ""));
     if (top > highest) {
       highest = top;
       highest_pose = pp.name;
     }
   }
-  if (std::isfinite(highest) && plan.index_z_mm < highest + r - 1e-6)
+  // While the axes index, a head may pass through any angle between: the ball as low as L below Z.
+  const double drop = ballDropBelowAxes(plan.machine);
+  if (std::isfinite(highest) && plan.index_z_mm - drop < highest + r - 1e-6)
     doc.fail(j, "index_z_mm",
              fmt::format("index_z_mm = {:g} mm is below the artefact: the ball centre must stay at z >= {:.3f} mm (its "
-                         "top at pose {} plus the ball radius) while the table indexes",
-                         plan.index_z_mm, highest + r, highest_pose));
+                         "top at pose {} plus the ball radius) while the table indexes{}",
+                         plan.index_z_mm, highest + r, highest_pose,
+                         drop > 0 ? fmt::format(", and it hangs up to {:g} mm below Z", drop) : ""));
 }
 
 // A pose names only the machine's rotary axes, each inside its stroke (a hand-edited pose would
@@ -293,13 +300,13 @@ Json planToJson(const ProbePlan& plan) {
   j["index_z_mm"] = plan.index_z_mm;
   Json poses = Json::array();
   for (const auto& p : plan.poses)
-    poses.push_back({{"name", p.name}, {"pose", poseJson(plan.machine.kinematics, p.pose)}, {"safe_z_mm", p.safe_z_mm}});
+    poses.push_back({{"name", p.name}, {"pose", poseJson(plan.machine, p.pose)}, {"safe_z_mm", p.safe_z_mm}});
   j["poses"] = poses;
   Json pts = Json::array();
   for (const auto& p : plan.points) {
     pts.push_back({{"id", p.id},
                    {"pose_name", p.pose_name},
-                   {"pose", poseJson(plan.machine.kinematics, p.pose)},
+                   {"pose", poseJson(plan.machine, p.pose)},
                    {"target", p.target},
                    {"face", std::string(faceName(p.face))},
                    {"contact_w_mm", vec(p.contact_w_mm)},

@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "core/kinematic_model.hpp"
 #include "core/limits.hpp"
 #include "core/rotary_backlash.hpp"
 
@@ -99,13 +100,16 @@ MeasurementRun simulate(const ProbePlan& plan, const Truth& truth, const Simulat
       const Plane plane{T * w.point, T.linear() * w.normal};
       contact = [&p, r, plane](const Eigen::Vector3d& c0) { return ballPlaneContact(c0, p.approach_m, r, plane); };
     }
-    double s = contact(p.trigger_m_mm);
+    // A head carries the ball away from the reading: the ball is at reading + b.
+    const Eigen::Vector3d b =
+        truth.head_ball ? truth.head_ball(actual[i], truth.start_time_s + p.t_s) : Eigen::Vector3d::Zero();
+    double s = contact(p.trigger_m_mm + b);
     if (truth.linear_axis_error) {
       // The controller reads c(s) = c0 + s u while the ball is at c(s) + E(c(s)): solve
       // n.(c(s) + E(c(s)) - x) = r by fixed-point iteration (E varies by um per mm: contraction ~1e-3).
       for (int it = 0; it < 50; ++it) {
         const Eigen::Vector3d c = p.trigger_m_mm + s * p.approach_m;
-        const double next = contact(p.trigger_m_mm + truth.linear_axis_error(c));
+        const double next = contact(p.trigger_m_mm + truth.linear_axis_error(c) + b);
         const bool done = std::abs(next - s) < 1e-13;
         s = next;
         if (done) break;
@@ -163,29 +167,63 @@ int locationEntry(const JsonDoc& doc, const Json& obj, const std::string& name, 
 }
 }  // namespace
 
-Truth truthFrom(const JsonDoc& doc, Kinematics kinematics) {
+// One location error's value in mm or rad from {"value": v, "unit": u}.
+double locationValue(const JsonDoc& doc, const Json& entry, const std::string& name, ParamKind kind) {
+  const std::string unit = stringOr(doc, entry, "unit", "");
+  if (kind == ParamKind::Length) {
+    if (unit != "um" && unit != "mm") doc.fail(entry, "unit", "unit of '" + name + "' must be um or mm");
+    const double v = requireNumber(doc, entry, "value", lengthLimits(unit));
+    return unit == "um" ? umToMm(v) : v;
+  }
+  if (unit != "mdeg" && unit != "urad" && unit != "deg")
+    doc.fail(entry, "unit", "unit of '" + name + "' must be mdeg, urad or deg");
+  const double v = requireNumber(doc, entry, "value", angleLimits(unit));
+  return unit == "mdeg" ? mdegToRad(v) : unit == "urad" ? v * 1e-6 : degToRad(v);
+}
+
+// A head_table machine's location errors: the parameters of its exact model, by ISO 230-7 name.
+void headLocationErrors(const JsonDoc& doc, const Json& j, const MachineModel& machine, Truth* t) {
+  const KinematicModel model = kinematicModel("head_table", Eigen::Vector3d::Zero(), machine.head->pivot_to_ball_mm,
+                                              machine.head->axis);
+  Eigen::VectorXd p = Eigen::VectorXd::Zero(model.size());
+  if (j.contains("location_errors")) {
+    const Json& le = requireObject(doc, j, "location_errors");
+    for (const auto& [name, entry] : le.items()) {
+      const int i = model.parameterIndex(name);
+      if (i < 0) {
+        std::string known;
+        for (const auto& q : model.parameters) known += (known.empty() ? "" : ", ") + q.name;
+        doc.fail(le, name, "unknown location error '" + name + "' of a head_table machine (" + known + ")");
+      }
+      if (!entry.is_object() || !entry.contains("value") || !entry["value"].is_number())
+        doc.fail(le, name, "location error '" + name + "' needs {\"value\": number, \"unit\": ...}");
+      p[i] = locationValue(doc, entry, name, model.parameters[static_cast<size_t>(i)].kind);
+    }
+  }
+  t->table_transform = [model, p](const Pose& pose, double) { return T_m_w(model, p, pose); };
+  t->head_ball = [model, p](const Pose& pose, double) {
+    return Eigen::Vector3d(T_c_t(model, p, pose) * Eigen::Vector3d(0.0, 0.0, -model.pivot_to_ball_mm));
+  };
+}
+
+Truth truthFrom(const JsonDoc& doc, Kinematics kinematics, const MachineModel* machine) {
   const Json& j = doc.value;
   if (!j.is_object() || !j.contains("format") || j["format"] != "rotacal-truth/1")
     doc.fail(j, "format", "not a truth file (expected \"format\": \"rotacal-truth/1\")");
   Truth t;
   t.errors.kinematics = kinematics;
-  if (j.contains("location_errors")) {
+  if (kinematics == Kinematics::HeadTable) {
+    if (!machine || !machine->head) doc.fail(j, "format", "a head_table truth needs its machine's head (MACHINE.json \"head\")");
+    headLocationErrors(doc, j, *machine, &t);
+    for (const char* key : {"drift", "rotary_error_motion"})
+      if (j.contains(key))
+        doc.fail(j, key, std::string(key) + " is written in the papers' table location errors, which a head_table machine has not");
+  } else if (j.contains("location_errors")) {
     const Json& le = requireObject(doc, j, "location_errors");
     for (const auto& [name, entry] : le.items()) {
       const int i = locationEntry(doc, le, name, kinematics, "value", "for this machine",
                                   "location error '" + name + "' needs {\"value\": number, \"unit\": ...}");
-      const std::string unit = stringOr(doc, entry, "unit", "");
-      const ParamKind kind = locationParameters(kinematics)[i].kind;
-      if (kind == ParamKind::Length) {
-        if (unit != "um" && unit != "mm") doc.fail(entry, "unit", "unit of '" + name + "' must be um or mm");
-        const double v = requireNumber(doc, entry, "value", lengthLimits(unit));
-        t.errors.values[i] = unit == "um" ? umToMm(v) : v;
-      } else {
-        if (unit != "mdeg" && unit != "urad" && unit != "deg")
-          doc.fail(entry, "unit", "unit of '" + name + "' must be mdeg, urad or deg");
-        const double v = requireNumber(doc, entry, "value", angleLimits(unit));
-        t.errors.values[i] = unit == "mdeg" ? mdegToRad(v) : unit == "urad" ? v * 1e-6 : degToRad(v);
-      }
+      t.errors.values[i] = locationValue(doc, entry, name, locationParameters(kinematics)[i].kind);
     }
   }
   const Limits um = Limits::symmetric(kMaxLocationErrorUm, "um");
@@ -280,7 +318,11 @@ Truth truthFrom(const JsonDoc& doc, Kinematics kinematics) {
 }  // namespace
 
 Truth truthFromJson(const JsonDoc& doc, Kinematics kinematics) {
-  return guardJson(doc, [&] { return truthFrom(doc, kinematics); });
+  return guardJson(doc, [&] { return truthFrom(doc, kinematics, nullptr); });
+}
+
+Truth truthFromJson(const JsonDoc& doc, const MachineModel& machine) {
+  return guardJson(doc, [&] { return truthFrom(doc, machine.kinematics, &machine); });
 }
 
 Truth loadTruth(const std::string& path, Kinematics kinematics) { return truthFromJson(readJsonFile(path), kinematics); }
@@ -289,7 +331,9 @@ Json truthToJson(const Truth& t) {
   Json j;
   j["format"] = "rotacal-truth/1";
   Json le = Json::object();
-  const auto& params = locationParameters(t.errors.kinematics);
+  // A head_table truth keeps its model's parameters inside its transforms, not in errors.
+  const auto& params = hasPapersLocationErrors(t.errors.kinematics) ? locationParameters(t.errors.kinematics)
+                                                                      : std::vector<ParameterInfo>{};
   for (size_t i = 0; i < params.size(); ++i)
     le[std::string(params[i].name)] = {{"value", t.errors.reportValue(static_cast<int>(i))},
                                        {"unit", std::string(reportUnit(params[i].kind))}};

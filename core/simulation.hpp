@@ -47,6 +47,9 @@ struct Truth {
   /// the one before; the program starts at A = B = C = 0, reached in +). Outside every cycle's catalog: the test of
   /// `model_inadequate` (issue 16).
   Eigen::Vector3d rotary_backlash_deg = Eigen::Vector3d::Zero();
+  /// A spindle head: the true probe-ball centre less the X Y Z reading at a pose (machine frame,
+  /// mm), the head's exact chain. Empty: the reading is the ball centre (a table machine).
+  std::function<Eigen::Vector3d(const Pose& pose, double t_s)> head_ball;
 };
 
 /// Distance s (mm) along the approach from the nominal trigger at which the ball of radius r
@@ -71,6 +74,9 @@ struct SimulationOptions {
 MeasurementRun simulate(const ProbePlan& plan, const Truth& truth, const SimulationOptions& options);
 
 Truth truthFromJson(const JsonDoc& doc, Kinematics kinematics);
+/// The truth of a machine: for head_table its "location_errors" are the ISO 230-7 parameters of
+/// core/kinematic_model.hpp (X0C .. dL), which set table_transform and head_ball exactly.
+Truth truthFromJson(const JsonDoc& doc, const MachineModel& machine);
 Truth loadTruth(const std::string& path, Kinematics kinematics);
 Json truthToJson(const Truth& truth);
 

@@ -45,7 +45,7 @@ std::vector<MeasurementRun> readProbeRuns(const ProbePlan& plan, const std::vect
 
 Simulated simulateProbing(const SimulateRequest& r) {
   const ProbePlan& plan = *r.plan;
-  Truth truth = truthFromJson(parseJsonText(r.truth.text, r.truth.path), plan.machine.kinematics);
+  Truth truth = truthFromJson(parseJsonText(r.truth.text, r.truth.path), plan.machine);
   if (r.noise_um) truth.noise_um = *r.noise_um;
   if (r.start_s) truth.start_time_s = *r.start_s;
   MeasurementRun run;
@@ -84,6 +84,13 @@ std::string sphereReachRefusal(const MachineModel& machine, const Eigen::Isometr
 }
 
 double tableSweepRadius(const MachineModel& machine, const Eigen::Vector3d& c_w, double R) {
+  // A table that only turns in C keeps every height: the highest thing it carries.
+  if (hasSpindleHead(machine.kinematics)) {
+    double top = c_w.z() + R;
+    if (machine.artefact)
+      for (const auto& corner : machine.artefact->corners_w()) top = std::max(top, corner.z());
+    return top;
+  }
   double sweep = std::max(machine.table_diameter_mm / 2, c_w.norm() + R);
   if (machine.artefact)
     for (const auto& corner : machine.artefact->corners_w()) sweep = std::max(sweep, corner.norm());

@@ -35,7 +35,8 @@ std::string sphereReachRefusal(const MachineModel& machine, const Eigen::Isometr
                                double R, double reach);
 
 /// The radius about the rotary axes' intersection that everything on the table sweeps when it
-/// indexes: the table, a sphere at c_w with radius R, the test piece.
+/// indexes: the table, a sphere at c_w with radius R, the test piece. Under a spindle head the
+/// table turns C alone: the highest point of the sphere and the test piece.
 double tableSweepRadius(const MachineModel& machine, const Eigen::Vector3d& c_w, double R);
 
 /// The last step of a touch cycle's plan: throws std::invalid_argument naming the first point

@@ -127,12 +127,13 @@ class Simulator {
 
   // Gap between the probe (ball and stylus: a capsule of the ball's radius from the ball centre
   // up the tool axis, machine +Z on a table machine) and the nearest obstacle.
-  Gap gap(const Eigen::Vector3d& ball_m, const Pose& pose) const {
+  // `axes_m`: the X Y Z reading, which a head carries the ball away from.
+  Gap gap(const Eigen::Vector3d& axes_m, const Pose& pose) const {
     Gap best;
     if (obstacles_.empty()) return best;
     const Eigen::Isometry3d Tinv = T(pose).inverse();
-    const Eigen::Vector3d a = Tinv * ball_m;
-    const Eigen::Vector3d u = Tinv.linear() * Eigen::Vector3d::UnitZ();
+    const Eigen::Vector3d a = Tinv * (axes_m + ballFromAxes_m(m_, pose));
+    const Eigen::Vector3d u = Tinv.linear() * stylusAxis_m(m_, pose);
     for (const auto& o : obstacles_) {
       double d;
       if (o.shape == Obstacle::Shape::Sphere) d = segmentSphereDistance(a, u, len_, o.centre) - o.radius;
@@ -148,19 +149,25 @@ class Simulator {
   // From pose a to pose b (interpolated together), or at any angle when they are not known. The
   // top of an obstacle moves by at most reach x the rotary step (rad): sampled at steps of
   // kSweepResolutionMm in that bound, plus that resolution.
-  double gapBelow(double ball_z, const std::optional<Pose>& a, const std::optional<Pose>& b) const {
+  // On a head machine `axes_z` is the pivot's: the probe's lowest point hangs below it by the
+  // head's offset at the angle (any angle while it is not known; a stylus tilted past the
+  // horizontal reaches lower than its ball), sampled with the obstacles.
+  double gapBelow(double axes_z, const std::optional<Pose>& a, const std::optional<Pose>& b) const {
     double top = -std::numeric_limits<double>::infinity();
     double reach = 0.0;
     for (const auto& o : obstacles_) reach = std::max(reach, o.reach());
-    if (!a || !b) return ball_z - r_ - reach;
+    const double L = ballDropBelowAxes(m_);
+    if (!a || !b) return axes_z - L - len_ * (L > 0 ? 1.0 : 0.0) - r_ - reach;
     const double turn = (std::abs(b->A - a->A) + std::abs(b->B - a->B) + std::abs(b->C - a->C)) * 3.14159265358979323846 / 180.0;
-    const int n = std::min(200000, static_cast<int>(std::ceil(reach * turn / kSweepResolutionMm)));
+    const int n = std::min(200000, static_cast<int>(std::ceil((reach + L + len_ * (L > 0 ? 1.0 : 0.0)) * turn / kSweepResolutionMm)));
+    double drop = 0.0;
     for (int i = 0; i <= n; ++i) {
       const double s = n == 0 ? 0.0 : static_cast<double>(i) / n;
       const Pose p{(1 - s) * a->A + s * b->A, (1 - s) * a->B + s * b->B, (1 - s) * a->C + s * b->C};
       for (const auto& o : obstacles_) top = std::max(top, o.top(T(p)));
+      drop = std::max(drop, -(ballFromAxes_m(m_, p).z() + std::min(0.0, len_ * stylusAxis_m(m_, p).z())));
     }
-    return ball_z - r_ - top - (n > 0 ? kSweepResolutionMm : 0.0);
+    return axes_z - drop - r_ - top - (n > 0 ? kSweepResolutionMm : 0.0);
   }
 
   double stylus() const { return len_; }
@@ -177,6 +184,7 @@ std::vector<Obstacle> obstaclesOf(const ProgramCheckSetup& s) {
   const MachineModel& m = *s.machine;
   // A head machine's XYZ are its pivot's, not the ball centre's, and it declares no table:
   // nothing to model (strokes, guards, feeds and numbers are still checked).
+  // head_table's are modelled: Simulator::gap carries the ball by the head's offset.
   if (m.kinematics == Kinematics::HeadAB) return out;
   if (m.artefact) {
     const SquareColumn& c = *m.artefact;
@@ -250,7 +258,7 @@ ProgramCheckResult checkProgram(const std::vector<nc::Motion>& motions, const Pr
   const MachineModel& m = *setup.machine;
   ProgramCheckResult res;
   const Simulator sim(m, obstaclesOf(setup),
-                      setup.errors && m.kinematics != Kinematics::HeadAB ? setup.errors : std::nullopt);
+                      setup.errors && hasPapersLocationErrors(m.kinematics) ? setup.errors : std::nullopt);
   res.obstacles = static_cast<int>(sim.size());
   const double planned = std::min(m.clearance_mm, m.approach_mm);
   res.required_gap_mm = planned - std::min(kCompensationAllowanceMm, 0.5 * planned);
@@ -282,7 +290,7 @@ ProgramCheckResult checkProgram(const std::vector<nc::Motion>& motions, const Pr
     for (const auto& [ax, v] : a.rot) rot_rad += std::abs(*b.rot.at(ax) - *v) * kDegToRad;
     // Distance from the rotary axes; with location errors the axes are off the origin by their
     // offsets (at most the plausibility limit, 0.5 mm, unless forced): 10 mm covers them.
-    const double rho = std::max(p0.norm(), p1.norm()) + sim.stylus() + (setup.errors ? 10.0 : 0.0);
+    const double rho = std::max(p0.norm(), p1.norm()) + ballDropBelowAxes(m) + sim.stylus() + (setup.errors ? 10.0 : 0.0);
     const double D = (p1 - p0).norm() + rot_rad * rho;  // mm per unit s, for any point of the probe
     auto at = [&](double s) {
       Config c = a;

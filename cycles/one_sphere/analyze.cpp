@@ -62,7 +62,7 @@ SphereCycleResult identifySphereCycle(const ProbePlan& plan, const std::vector<M
   const SphereLayout l = sphereLayoutOf(plan);
   const Kinematics kin = plan.machine.kinematics;
   SphereCycleResult out;
-  out.model = kinematicModel(kinematicsName(kin), l.center_w_mm);
+  out.model = sphereModel(plan.machine, l.center_w_mm);
   const KinematicModel& m = out.model;
   const int np = m.size();
   const bool sq = l.fit_squareness;
@@ -91,10 +91,20 @@ SphereCycleResult identifySphereCycle(const ProbePlan& plan, const std::vector<M
       if (J) J->row(jj) = row;
     }
   };
-  Eigen::VectorXd r0;
-  Eigen::MatrixXd J0;
-  jacobian(Eigen::VectorXd::Zero(nx), r0, &J0);
-  out.identifiability = identifiability(J0, out.names, sphereHeldFirst(m, kin));
+  // The plan's Jacobian, at its nominal triggers: what this plan confounds, whatever the data.
+  // (At the measured triggers a direction the plan confounds exactly, such as the squareness
+  // under a head, is only nearly null, and its rounding leaks into the exact null directions.)
+  Eigen::MatrixXd J0(static_cast<Eigen::Index>(triggers.size()), nx);
+  {
+    const Eigen::VectorXd zero = Eigen::VectorXd::Zero(nx);
+    Eigen::RowVectorXd row;
+    for (size_t j = 0; j < triggers.size(); ++j) {
+      sphereTouchResidual(m, sq, terms, zero, triggers[j].pose, triggers[j].direction,
+                          plan.points[static_cast<size_t>(triggers[j].point_index)].trigger_m_mm, rho, &row);
+      J0.row(static_cast<Eigen::Index>(j)) = row;
+    }
+  }
+  out.identifiability = identifiability(J0, out.names, sphereHeldFirst(m));
   std::vector<Eigen::Index> free;
   for (Eigen::Index i = 0; i < nx; ++i)
     if (!out.identifiability.held[static_cast<size_t>(i)]) free.push_back(i);
@@ -135,8 +145,10 @@ SphereCycleResult identifySphereCycle(const ProbePlan& plan, const std::vector<M
   out.residual_sd_um = out.dof > 0 ? mmToUm(std::sqrt(r.squaredNorm() / out.dof)) : 0.0;
   for (Eigen::Index j = 0; j < r.size(); ++j) out.residuals_um.push_back(mmToUm(r[j]));
 
-  // The papers' parameters, for the offsets and the reports that speak them.
+  // The papers' parameters, for the offsets and the reports that speak them (tilting tables:
+  // a head machine's are its ISO 230-7 parameters alone).
   out.location.kinematics = kin;
+  if (!hasPapersLocationErrors(kin)) return out;
   const auto& pairs = papersNames(kin);
   for (const auto& [paper, iso] : pairs) {
     const int i = parameterIndex(kin, paper);
@@ -168,11 +180,18 @@ Json sphereReportJson(const ProbePlan& plan, const SphereCycleResult& r, const U
         u[i] = r.names[static_cast<size_t>(k)].kind == ParamKind::Length ? umToMm(uc[q]) : mdegToRad(uc[q]);
       }
   }
-  j["location_errors"] = locationErrorsJson(r.location, u);
-  j["location_errors_note"] = fmt::format(
-      "the machine's papers' parameters ({}), each the ISO 230-7 parameter of kinematic_parameters it is to first "
-      "order; the two models' sphere positions differ by at most {:.6f} um over the plan's poses",
-      plan.machine.kinematics == Kinematics::TableAC ? "000 Eq. (1)" : "002 Eq. (2)", r.mapping_residual_um);
+  if (hasPapersLocationErrors(plan.machine.kinematics)) {
+    j["location_errors"] = locationErrorsJson(r.location, u);
+    j["location_errors_note"] = fmt::format(
+        "the machine's papers' parameters ({}), each the ISO 230-7 parameter of kinematic_parameters it is to first "
+        "order; the two models' sphere positions differ by at most {:.6f} um over the plan's poses",
+        plan.machine.kinematics == Kinematics::TableAC ? "000 Eq. (1)" : "002 Eq. (2)", r.mapping_residual_um);
+  } else {
+    j["location_errors_note"] = fmt::format(
+        "a {} machine: its location errors are the ISO 230-7 parameters of kinematic_parameters (the papers' eight "
+        "describe tilting tables)",
+        kinematicsName(plan.machine.kinematics));
+  }
   Json kp = Json::object();
   for (size_t i = 0; i < r.names.size(); ++i) {
     const auto& q = r.names[i];
@@ -214,8 +233,9 @@ std::string sphereText(const SphereCycleResult& r, const UncertaintyBudget& b) {
     s += "not separable by one sphere (held at nominal; the others read relative to it):\n";
     for (const auto& c : r.identifiability.combinations) s += "  " + c.text + "\n";
   }
-  s += fmt::format("location errors in the papers' parameters: the model's to first order, {:.6f} um apart at most\n",
-                   r.mapping_residual_um);
+  if (hasPapersLocationErrors(r.location.kinematics))
+    s += fmt::format("location errors in the papers' parameters: the model's to first order, {:.6f} um apart at most\n",
+                     r.mapping_residual_um);
   return s;
 }
 

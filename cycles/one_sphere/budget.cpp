@@ -45,10 +45,19 @@ UncertaintyBudget sphereBudget(const ProbePlan& plan, const SphereCycleResult& r
   const ContributorSet& type_b = split.type_b;
   // Every trigger of every run moves as its plan point does: the contributors are the machine's.
   Truth base;
-  base.errors = r.location;
   const KinematicModel& m = r.model;
-  base.sphere_center_error_w_mm[1] = Eigen::Vector3d(r.x[m.parameterIndex("dX_S")], r.x[m.parameterIndex("dY_S")],
-                                                     r.x[m.parameterIndex("dZ_S")]);
+  if (hasPapersLocationErrors(plan.machine.kinematics)) {
+    base.errors = r.location;
+    base.sphere_center_error_w_mm[1] = Eigen::Vector3d(r.x[m.parameterIndex("dX_S")], r.x[m.parameterIndex("dY_S")],
+                                                       r.x[m.parameterIndex("dZ_S")]);
+  } else {
+    // A head: the identified model's own chains (its table chain ends with the set-up).
+    const Eigen::VectorXd p = r.x.head(m.size());
+    base.table_transform = [&m, p](const Pose& q, double) { return T_m_w(m, p, q); };
+    base.head_ball = [&m, p](const Pose& q, double) {
+      return Eigen::Vector3d(T_c_t(m, p, q) * Eigen::Vector3d(0.0, 0.0, -m.pivot_to_ball_mm));
+    };
+  }
   const Eigen::VectorXd ideal = type_b.items.empty() ? Eigen::VectorXd() : triggersAlong(plan, base);
   const auto shift = [&](std::uint64_t seed, int run, int only, ProbeAxesDraw* drawn = nullptr) {
     ProbeAxesDraw d;

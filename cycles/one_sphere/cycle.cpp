@@ -43,6 +43,15 @@ class Sphere final : public Cycle {
     CycleDocuments out;
     out.doc = sphereReportJson(plan, res, b, files);
     out.text = sphereText(res, b);
+    if (!hasPapersLocationErrors(plan.machine.kinematics)) {
+      // No writer takes a head's kinematics yet: controllers.md has no verified form of them.
+      out.offsets_refused = fmt::format(
+          "a {} machine's kinematic parameters go into the control's kinematics description (Heidenhain's kinematics "
+          "table, Siemens' $TC_CARR, Fanuc's TCP parameters), which rotacal does not write yet: none of these forms is "
+          "confirmed in shared/reference/controllers.md; enter REPORT.json's kinematic_parameters by hand",
+          kinematicsName(plan.machine.kinematics));
+      return out;
+    }
     LocationCorrection c;
     c.identified = res.location;
     const Eigen::VectorXd uc = b.uC();

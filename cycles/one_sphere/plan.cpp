@@ -56,13 +56,25 @@ Pose poseOf(char axis, double tilt, double c) {
 
 }  // namespace
 
-char sphereTiltAxis(Kinematics kinematics) {
-  if (kinematics == Kinematics::TableAC) return 'A';
-  if (kinematics == Kinematics::TableBC) return 'B';
+char sphereTiltAxis(const MachineModel& machine) {
+  if (machine.kinematics == Kinematics::TableAC) return 'A';
+  if (machine.kinematics == Kinematics::TableBC) return 'B';
+  if (machine.kinematics == Kinematics::HeadTable && machine.head) return machine.head->axis;
   throw std::invalid_argument(fmt::format(
-      "cycle one_sphere runs on tilting-table machines (table_ac, table_bc) in this version, not {}: the head kinematics "
-      "are modelled (core/kinematic_model.hpp) but not yet simulated",
-      kinematicsName(kinematics)));
+      "cycle one_sphere turns the sphere on a C table (table_ac, table_bc, head_table), which a {} machine has not: "
+      "its tool tip is calibrated by the tooltip cycle (004)",
+      kinematicsName(machine.kinematics)));
+}
+
+KinematicModel sphereModel(const MachineModel& machine, const Eigen::Vector3d& center_w_mm) {
+  if (machine.head)
+    return kinematicModel(kinematicsName(machine.kinematics), center_w_mm, machine.head->pivot_to_ball_mm, machine.head->axis);
+  return kinematicModel(kinematicsName(machine.kinematics), center_w_mm);
+}
+
+int sphereUnseenByAnyPlan(const KinematicModel& m, bool squareness) {
+  if (m.head_axes.empty()) return 2;
+  return squareness ? 6 : 5;
 }
 
 const std::vector<Eigen::Vector3d>& sphereApproaches() {
@@ -74,11 +86,14 @@ const std::vector<Eigen::Vector3d>& sphereApproaches() {
 
 SphereLayout SphereLayout::fromOptions(const MachineModel& machine, const CycleOptions& options) {
   SphereLayout l;
-  const RotaryAxis& tilt = machine.rotaryAxis(sphereTiltAxis(machine.kinematics));
+  const RotaryAxis& tilt = machine.rotaryAxis(sphereTiltAxis(machine));
   const auto designing = options.find("poses");
   const bool fine = designing != options.end() && designing->second != "0";
-  // The grid a design picks from is finer than the grid run whole.
-  for (double t = -90.0; t <= 90.0; t += fine ? 15.0 : 30.0)
+  // The grid a design picks from is finer than the grid run whole. A head tilts its spindle, and
+  // the spindle housing (not modelled, only the probe is) comes down towards the table as the
+  // tilt grows: by default a head stays within 60 deg (tilt_list goes further).
+  const double widest = machine.head ? 60.0 : 90.0;
+  for (double t = -widest; t <= widest; t += fine ? 15.0 : 30.0)
     if (tilt.stroke_deg.contains(t)) l.tilt_deg.push_back(t);
   if (fine) {
     l.c_deg.clear();
@@ -158,6 +173,8 @@ PoseTouches touchesAt(const MachineModel& machine, const SphereLayout& l, char t
   const Eigen::Isometry3d T = T_m_w_nominal(machine.kinematics, pose);
   const Eigen::Vector3d c_m = T * l.center_w_mm;
   const Eigen::Vector3d s_m = T.linear() * -Eigen::Vector3d::UnitZ();  // the stem, from the centre
+  const Eigen::Vector3d b_m = ballFromAxes_m(machine, pose);            // a head's ball, from the reading
+  const Eigen::Vector3d d_m = stylusAxis_m(machine, pose);              // from the ball to the probe body
   if (s_m.z() > 1e-9)
     throw std::invalid_argument(fmt::format(
         "pose {}: {} = {:g} deg turns the table above the sphere: the probe would reach it past the table "
@@ -167,12 +184,13 @@ PoseTouches touchesAt(const MachineModel& machine, const SphereLayout& l, char t
   if (!near.empty())
     throw std::invalid_argument(fmt::format("pose {}: {} (move the sphere with center_w_mm or choose other angles with "
                                             "tilt_list, c_list)", name, near));
-  PoseTouches out{{name, pose, c_m.z() + R + r + machine.clearance_mm}, {}};
+  PoseTouches out{{name, pose, c_m.z() + R + r + machine.clearance_mm - b_m.z()}, {}};
   const auto& approaches = sphereApproaches();
   for (size_t j = 0; j < approaches.size(); ++j) {
     const Eigen::Vector3d u = approaches[j];
     const Eigen::Vector3d n_m = -u;  // outward normal at the contact
     if (n_m.dot(s_m) > 1e-9) continue;  // the stem's half: the stylus would reach round to the stem
+    if (n_m.dot(d_m) < -1e-9) continue;  // the far half from a tilted stylus: it would reach round the sphere
     ProbePoint p;
     p.pose_name = name;
     p.pose = pose;
@@ -180,7 +198,7 @@ PoseTouches touchesAt(const MachineModel& machine, const SphereLayout& l, char t
     p.face = faceOfNormal(n_m);
     p.contact_w_mm = T.inverse() * (c_m + R * n_m);
     p.normal_w = T.linear().transpose() * n_m;
-    p.trigger_m_mm = c_m + (R + r) * n_m;
+    p.trigger_m_mm = c_m + (R + r) * n_m - b_m;
     p.approach_m = u;
     p.sphere = SphereTarget{1, l.center_w_mm, R};
     out.points.push_back(p);
@@ -215,12 +233,13 @@ Eigen::MatrixXd touchRows(const KinematicModel& m, bool squareness, const PoseTo
 
 }  // namespace
 
-std::vector<int> sphereHeldFirst(const KinematicModel& m, Kinematics k) {
-  return {m.parameterIndex("C0C"), m.parameterIndex(k == Kinematics::TableAC ? "A0C" : "B0C")};
+std::vector<int> sphereHeldFirst(const KinematicModel& m) {
+  if (!m.head_axes.empty()) return {m.parameterIndex("C0C")};
+  return {m.parameterIndex("C0C"), m.parameterIndex(m.table_axes.front() == 'A' ? "A0C" : "B0C")};
 }
 
 ProbePlan makeSpherePlan(const MachineModel& machine, const CycleOptions& options) {
-  const char tilt_axis = sphereTiltAxis(machine.kinematics);
+  const char tilt_axis = sphereTiltAxis(machine);
   if (!machine.hasRotary('C')) throw std::invalid_argument("cycle one_sphere needs a C axis");
   SphereLayout l = SphereLayout::fromOptions(machine, options);
   const double r = machine.probe.ball_radius_mm();
@@ -230,11 +249,13 @@ ProbePlan makeSpherePlan(const MachineModel& machine, const CycleOptions& option
         "the stylus ({:g} mm) is too short for a side touch at the equator of a {:g} mm sphere: the probe body would "
         "come within {:g} mm of its top",
         machine.probe.stylus_length_mm, 2 * R, machine.probe.body_clearance_mm));
-  const KinematicModel model = kinematicModel(kinematicsName(machine.kinematics), l.center_w_mm);
+  const KinematicModel model = sphereModel(machine, l.center_w_mm);
   auto names = sphereFitParameters(model, l.fit_squareness);
 
-  // The table indexes with the ball above everything it carries, whatever the pose.
-  const double index_z_mm = tableSweepRadius(machine, l.center_w_mm, R) + r + machine.clearance_mm;
+  // The axes index with the ball above everything the table carries, whatever the pose (a head
+  // may swing the ball down to L below Z on the way).
+  const double index_z_mm =
+      tableSweepRadius(machine, l.center_w_mm, R) + r + machine.clearance_mm + ballDropBelowAxes(machine);
 
   std::vector<PoseTouches> poses;
   if (l.design_poses > 0) {
@@ -257,7 +278,7 @@ ProbePlan makeSpherePlan(const MachineModel& machine, const CycleOptions& option
     }
     PoseDesignOptions o;
     o.poses = l.design_poses;
-    o.hold_first = sphereHeldFirst(model, machine.kinematics);
+    o.hold_first = sphereHeldFirst(model);
     if (static_cast<int>(candidates.size()) < o.poses)
       throw std::invalid_argument(fmt::format("option poses = {}: only {} candidate poses of tilt_list x c_list are allowed",
                                               o.poses, candidates.size()));
@@ -314,13 +335,14 @@ ProbePlan makeSpherePlan(const MachineModel& machine, const CycleOptions& option
                         plan.points[k].trigger_m_mm, R + r, &row);
     J.row(static_cast<Eigen::Index>(k)) = row;
   }
-  const Identifiability id_ = identifiability(J, names, sphereHeldFirst(model, machine.kinematics));
-  if (id_.rank < static_cast<int>(names.size()) - 2) {
+  const Identifiability id_ = identifiability(J, names, sphereHeldFirst(model));
+  const int unseen = sphereUnseenByAnyPlan(model, l.fit_squareness);
+  if (id_.rank < static_cast<int>(names.size()) - unseen) {
     std::string lost;
     for (const auto& c : id_.combinations) lost += (lost.empty() ? "" : "; ") + c.text;
     throw std::invalid_argument(fmt::format(
-        "the {} poses leave {} directions of the fit unseen, beyond the 2 no sphere shows: {}{}", poses.size(),
-        static_cast<int>(names.size()) - id_.rank, lost,
+        "the {} poses leave {} directions of the fit unseen, beyond the {} no sphere shows: {}{}", poses.size(),
+        static_cast<int>(names.size()) - id_.rank, unseen, lost,
         l.fit_squareness ? " (the linear axes' squareness is fitted: fit_squareness=0 drops it)" : ""));
   }
   finishTouchPlan(plan);

@@ -7,8 +7,12 @@
 // to the stem side, and the ball's vertical way down to a side touch, its approach and its
 // stylus stay on that half as long as the tilt keeps the table below the sphere (|tilt| <= 90 deg).
 //
-// This version runs on the tilting-table machines (table_ac, table_bc), whose table chain the
-// exact simulator carries; the head kinematics follow (core/kinematic_model.hpp has them).
+// It runs on the tilting-table machines (table_ac, table_bc) and on a B or A head over a C table
+// (head_table). On the head machine X Y Z read the head's pivot: every planned position is the
+// reading at which the ball, L along the tilted spindle, is where the touch needs it; a side touch
+// whose contact lies on the sphere's half away from the stylus (n . d < 0, d the stylus's
+// direction) is left out, as the stem's side is, so that the stylus never reaches round the
+// sphere. head_ab has no C table to carry the sphere round: its tool tip is the tooltip cycle's.
 #include <Eigen/Core>
 #include <vector>
 
@@ -47,17 +51,29 @@ struct SphereLayout {
   std::vector<std::pair<double, double>> poses() const;
 };
 
-/// The tilt axis of a tilting-table machine ('A' for table_ac, 'B' for table_bc). Throws
+/// The tilt axis: 'A' for table_ac, 'B' for table_bc, the head's axis for head_table. Throws
 /// std::invalid_argument naming the kinematics for any other.
-char sphereTiltAxis(Kinematics kinematics);
+char sphereTiltAxis(const MachineModel& machine);
+
+/// The exact model the cycle fits on this machine, the sphere at center_w_mm on the table.
+KinematicModel sphereModel(const MachineModel& machine, const Eigen::Vector3d& center_w_mm);
+
+/// How many directions of the fit no set of sphere poses shows (closed form in
+/// tests/core/kinematic_model_test.cpp): 2 on a tilting table, 5 with a head, and with a head one
+/// more when the squareness is fitted: the table never tilts the sphere, so its height stays and
+/// the shear across the head's axis (S_yz under a B head, S_xz under an A head) reads as the C
+/// axis's place plus the head axis's tilt times L cos(tilt).
+int sphereUnseenByAnyPlan(const KinematicModel& m, bool squareness);
 
 /// The four horizontal approach directions the side touches take, and the top's (-Z).
 const std::vector<Eigen::Vector3d>& sphereApproaches();
 
 /// Held first where a direction involves them: the C zero (a sphere reads it as its own place on
-/// the table, 000's "set-up rotation") and the tilt of the C axis about the tilt axis, which the
-/// tilt axis's own zero does as well (000 keeps a_AY and drops a_CA).
-std::vector<int> sphereHeldFirst(const KinematicModel& m, Kinematics k);
+/// the table, 000's "set-up rotation") and, on a tilting table, the tilt of the C axis about the
+/// tilt axis, which the tilt axis's own zero does as well (000 keeps a_AY and drops a_CA). With a
+/// head the others are held as core/identifiability.hpp chooses: the head pivot's X0B / Z0B (the
+/// frame's origin), the ball's dY_T (Y0C carries it) and dX_T (the head's zero carries it).
+std::vector<int> sphereHeldFirst(const KinematicModel& m);
 
 ProbePlan makeSpherePlan(const MachineModel& machine, const CycleOptions& options);
 

@@ -79,7 +79,8 @@ ProbeQualification qualifyProbe(const ProbePlan& plan, const std::vector<Measure
     }
   };
   Eigen::VectorXd x0 = Eigen::VectorXd::Zero(nx);
-  x0.head<3>() = T_m_w_nominal(plan.machine.kinematics, Pose{}) * l.center_w_mm;
+  // The centre as the axes read it (a head's reading is the pivot, the ball L below it).
+  x0.head<3>() = T_m_w_nominal(plan.machine.kinematics, Pose{}) * l.center_w_mm - ballFromAxes_m(plan.machine, Pose{});
   const LeastSquaresResult fit = solveLeastSquares(model, x0);
   if (!fit.summary.usable())
     throw InputError(source, 0, "the probe qualification's fit did not converge: " + fit.summary.briefReport());

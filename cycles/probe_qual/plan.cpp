@@ -125,9 +125,11 @@ ProbePlan makeProbeQualPlan(const MachineModel& machine, const CycleOptions& opt
   plan.cycle = "probe_qual";
   plan.machine = machine;
   plan.options = l.toOptions();
-  const double top_z = c_m.z() + R + r + machine.clearance_mm;
+  // A head's X Y Z read its pivot, the ball L below it at this pose.
+  const Eigen::Vector3d b_m = ballFromAxes_m(machine, pose);
+  const double top_z = c_m.z() + R + r + machine.clearance_mm - b_m.z();
   // The program indexes to the pose from wherever the axes stand: above all the table carries.
-  plan.index_z_mm = tableSweepRadius(machine, l.center_w_mm, R) + r + machine.clearance_mm;
+  plan.index_z_mm = tableSweepRadius(machine, l.center_w_mm, R) + r + machine.clearance_mm + ballDropBelowAxes(machine);
   int id = 1;
   for (int k = 0; k < l.repeats; ++k) {
     // Each repeat is a pose of its own (the same angles): a pose's touches are what a Macro B
@@ -144,7 +146,7 @@ ProbePlan makeProbeQualPlan(const MachineModel& machine, const CycleOptions& opt
       p.face = faceOfNormal(n_m);
       p.contact_w_mm = l.center_w_mm + R * touches[d].n;
       p.normal_w = touches[d].n;
-      p.trigger_m_mm = c_m + (R + r) * n_m;
+      p.trigger_m_mm = c_m + (R + r) * n_m - b_m;
       p.approach_m = approaches[static_cast<size_t>(touches[d].approach)];
       p.sphere = SphereTarget{1, l.center_w_mm, R};
       plan.points.push_back(p);

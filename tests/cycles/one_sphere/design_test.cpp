@@ -84,7 +84,7 @@ double planLogDet(const ProbePlan& plan, const Eigen::VectorXd& scale, Identifia
     sphereTouchResidual(model, l.fit_squareness, x0, plan.points[k].pose, plan.points[k].trigger_m_mm, rho, &row);
     J.row(static_cast<Eigen::Index>(k)) = row;
   }
-  const Identifiability id = identifiability(J, names, sphereHeldFirst(model, plan.machine.kinematics));
+  const Identifiability id = identifiability(J, names, sphereHeldFirst(model));
   if (id_out) *id_out = id;
   std::vector<Eigen::Index> free;
   for (Eigen::Index i = 0; i < J.cols(); ++i)
