@@ -73,6 +73,11 @@ Eigen::Vector3d nestAxis_m(Kinematics k, const Pose& pose) {
 }  // namespace
 
 ProbePlan makeRtestPlan(const MachineModel& m, const CycleOptions& options) {
+  // 002's index poses turn a tilting table; under a head the R-test sensors would read the
+  // head's chain, which this cycle's model has not.
+  if (!hasPapersLocationErrors(m.kinematics))
+    throw std::invalid_argument(fmt::format("cycle rtest calibrates a tilting table (table_bc, table_ac), not a {} machine",
+                                            kinematicsName(m.kinematics)));
   const std::string tilt_key = m.kinematics == Kinematics::TableBC ? "b_list" : "a_list";
   static const char* known[] = {"b_list", "a_list", "c_list", "nest_w_mm", "dwell_s", "retract_mm", "thermal",
                                 "interval_min", "duration_h", "recip_list", "recip_feed_deg_min", "sensor_noise_um",

@@ -76,6 +76,11 @@ const std::array<Eigen::Vector3d, 5>& spheres3Approaches() {
 
 ProbePlan makeSpheres3Plan(const MachineModel& machine, const CycleOptions& options) {
   if (!machine.hasRotary('C')) throw std::invalid_argument("cycle spheres3 needs a C axis");
+  // Its touches place the ball at the reading and its report speaks a tilting table's errors.
+  if (hasSpindleHead(machine.kinematics))
+    throw std::invalid_argument(fmt::format("cycle spheres3 runs on a tilting-table machine, not a {} one: it places the "
+                                            "ball at the axes' reading, which a head carries L away",
+                                            kinematicsName(machine.kinematics)));
   const Spheres3Layout layout = Spheres3Layout::fromOptions(machine, options);
   const int n_angles = layout.angleCount();
   const double r = machine.probe.ball_radius_mm();

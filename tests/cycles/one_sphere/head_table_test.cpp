@@ -207,5 +207,15 @@ TEST_F(HeadTable, ATruthFileInTheModelsNamesDrivesTheSimulator) {
   }
 }
 
+TEST_F(HeadTable, CyclesThatPlaceTheBallAtTheReadingRefuseTheHead) {
+  // Their touches and reports are a tilting table's: on a head they would be L off.
+  for (const char* c : {"touch154", "spheres3", "rtest", "spaceframe", "tooltip"})
+    EXPECT_THROW((void)makePlan(c, m, {}), std::invalid_argument) << c;
+  // probe_qual carries the head's offset (the head at 0): its touches reach the sphere.
+  const ProbePlan q = makePlan("probe_qual", m, {});
+  const MeasurementRun run = simulate(q, independentTruth(m, injected()), {1});
+  EXPECT_EQ(run.points.size(), q.points.size());
+}
+
 }  // namespace
 }  // namespace rotacal
