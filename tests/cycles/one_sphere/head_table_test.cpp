@@ -1,4 +1,5 @@
-// The one-sphere cycle on a B head over a C table (examples/machines/bc_head_table.json), closed on
+// The one-sphere cycle on a B head over a C table (examples/machines/bc_head_table.json) and on the
+// same machine with an A head, closed on
 // the exact simulator whose truth is written here with Eigen's own transforms (AngleAxis,
 // Translation), not the model's chains the fit uses:
 //  - the plan's touches clear the stem and the tilted stylus, and its programs pass the verifier
@@ -24,11 +25,25 @@
 namespace rotacal {
 namespace {
 
-MachineModel headMachine() { return loadMachine(test::sourcePath("examples/machines/bc_head_table.json")); }
+// The bundled B head, or the same machine with an A head (its Y stroke widened for the A head's
+// sideways reach).
+MachineModel headMachine(char axis) {
+  MachineModel m = loadMachine(test::sourcePath("examples/machines/bc_head_table.json"));
+  if (axis == 'A') {
+    m.head->axis = 'A';
+    for (auto& r : m.rotary)
+      if (r.name == 'B') r.name = 'A';
+    m.y = {-500.0, 500.0};
+  }
+  return m;
+}
 
-// The injected errors: um and mdeg, ISO 230-7 names. The 5 held directions' own parameters (C0C,
-// X0B, Z0B, dX_T, dY_T) stay 0 so that the truth is the one the fit reports.
-std::map<std::string, double> injected() {
+// The injected errors: um and mdeg, ISO 230-7 names. The held directions' own parameters (C0C,
+// the pivot's two translations, dX_T, dY_T) stay 0 so that the truth is the one the fit reports.
+std::map<std::string, double> injected(char axis) {
+  if (axis == 'A')
+    return {{"X0C", 15.0}, {"Y0C", -10.0}, {"A0C", 1.2}, {"B0C", -0.8}, {"B0A", 0.9}, {"C0A", -1.5},
+            {"A0A", 2.0},  {"dL", 25.0},   {"dX_S", 30.0}, {"dY_S", -20.0}, {"dZ_S", 15.0}};
   return {{"X0C", 15.0}, {"Y0C", -10.0}, {"A0C", 1.2}, {"B0C", -0.8}, {"A0B", 0.9}, {"C0B", -1.5},
           {"B0B", 2.0},  {"dL", 25.0},   {"dX_S", 30.0}, {"dY_S", -20.0}, {"dZ_S", 15.0}};
 }
@@ -52,19 +67,26 @@ Truth independentTruth(const MachineModel& m, const std::map<std::string, double
                              AngleAxisd(md("B0C"), Vector3d::UnitY()) *
                              AngleAxisd(md("C0C") - degToRad(p.C), Vector3d::UnitZ()));
   };
+  const char axis = m.head->axis;
   t.head_ball = [=](const Pose& p, double) {
-    const Eigen::Isometry3d H(Eigen::Translation3d(um("X0B"), 0.0, um("Z0B")) * AngleAxisd(md("A0B"), Vector3d::UnitX()) *
-                              AngleAxisd(md("C0B"), Vector3d::UnitZ()) *
-                              AngleAxisd(md("B0B") + degToRad(p.B), Vector3d::UnitY()));
+    // The head at its place (the two translations across its axis), tilted about the other two
+    // directions, at its zero, turned by +angle about its own axis.
+    const Eigen::Isometry3d H =
+        axis == 'B' ? Eigen::Isometry3d(Eigen::Translation3d(um("X0B"), 0.0, um("Z0B")) *
+                                        AngleAxisd(md("A0B"), Vector3d::UnitX()) * AngleAxisd(md("C0B"), Vector3d::UnitZ()) *
+                                        AngleAxisd(md("B0B") + degToRad(p.B), Vector3d::UnitY()))
+                    : Eigen::Isometry3d(Eigen::Translation3d(0.0, um("Y0A"), um("Z0A")) *
+                                        AngleAxisd(md("B0A"), Vector3d::UnitY()) * AngleAxisd(md("C0A"), Vector3d::UnitZ()) *
+                                        AngleAxisd(md("A0A") + degToRad(p.A), Vector3d::UnitX()));
     return Vector3d(H * Vector3d(um("dX_T"), um("dY_T"), -(L + um("dL"))));
   };
   t.sphere_center_error_w_mm[1] = Vector3d(um("dX_S"), um("dY_S"), um("dZ_S"));
   return t;
 }
 
-// What a B-head plan holds (plan.hpp): the C zero first, then the last parameter of each other
-// direction (the squareness's S_yz among them).
-const std::string kHeld = "C0C X0B Z0B dX_T dY_T S_yz";
+// What a head's plan holds (plan.hpp): the C zero first, then the last parameter of each other
+// direction (the squareness across the head's axis among them).
+std::string held(char axis) { return axis == 'B' ? "C0C X0B Z0B dX_T dY_T S_yz" : "C0C Y0A Z0A dX_T dY_T S_xz"; }
 
 std::string heldNames(const SphereCycleResult& r) {
   std::string s;
@@ -78,13 +100,14 @@ double reportValue(const SphereCycleResult& r, size_t i) {
   return r.names[i].kind == ParamKind::Length ? mmToUm(v) : radToMdeg(v);
 }
 
-class HeadTable : public ::testing::Test {
+class HeadTable : public ::testing::TestWithParam<char> {
  protected:
-  MachineModel m = headMachine();
+  char axis = GetParam();
+  MachineModel m = headMachine(axis);
   ProbePlan plan = makePlan("one_sphere", m, {});
 };
 
-TEST_F(HeadTable, TouchesClearTheStemAndTheTiltedStylusAndEveryProgramPassesTheVerifier) {
+TEST_P(HeadTable, TouchesClearTheStemAndTheTiltedStylusAndEveryProgramPassesTheVerifier) {
   const SphereLayout l = sphereLayoutOf(plan);
   const double rho = l.radius_mm + m.probe.ball_radius_mm();
   EXPECT_GE(plan.poses.size(), 8u);
@@ -92,7 +115,7 @@ TEST_F(HeadTable, TouchesClearTheStemAndTheTiltedStylusAndEveryProgramPassesTheV
   for (const auto& pose : plan.poses) {
     const Eigen::Vector3d c_m = T_m_w_nominal(m.kinematics, pose.pose) * l.center_w_mm;
     const Eigen::Vector3d d = stylusAxis_m(m, pose.pose);
-    tilted = tilted || std::abs(pose.pose.B) > 1.0;
+    tilted = tilted || std::abs(pose.pose.angle(axis)) > 1.0;
     // The ball L along the spindle from the pivot the axes read.
     const Eigen::Vector3d b = ballFromAxes_m(m, pose.pose);
     EXPECT_NEAR(b.norm(), m.head->pivot_to_ball_mm, 1e-9);
@@ -115,7 +138,7 @@ TEST_F(HeadTable, TouchesClearTheStemAndTheTiltedStylusAndEveryProgramPassesTheV
   EXPECT_EQ(test::expectEveryDialectProgramPasses(plan), 6);
 }
 
-TEST_F(HeadTable, TheVerifierCarriesTheBallAlongTheSpindle) {
+TEST_P(HeadTable, TheVerifierCarriesTheBallAlongTheSpindle) {
   // The same plan with its safe heights as a table machine's would be (the ball at the reading):
   // the head puts the ball L lower, through the sphere, and the verifier must say so.
   ProbePlan wrong = plan;
@@ -128,13 +151,13 @@ TEST_F(HeadTable, TheVerifierCarriesTheBallAlongTheSpindle) {
   EXPECT_NE(r.violations.front().problem.find("sphere"), std::string::npos) << r.violations.front().problem;
 }
 
-TEST_F(HeadTable, NoiseFreeTriggersGiveBackEverySeparableParameter) {
-  const auto e = injected();
+TEST_P(HeadTable, NoiseFreeTriggersGiveBackEverySeparableParameter) {
+  const auto e = injected(axis);
   const SphereCycleResult r = identifySphereCycle(plan, {simulate(plan, independentTruth(m, e), {1})});
   ASSERT_TRUE(r.summary.usable()) << r.summary.briefReport();
   EXPECT_LT(r.residual_sd_um, 1e-6);
   EXPECT_EQ(r.identifiability.combinations.size(), 6u);
-  EXPECT_EQ(heldNames(r), kHeld);
+  EXPECT_EQ(heldNames(r), held(axis));
   int checked = 0;
   for (size_t i = 0; i < r.names.size(); ++i) {
     const bool length = r.names[i].kind == ParamKind::Length;
@@ -150,12 +173,12 @@ TEST_F(HeadTable, NoiseFreeTriggersGiveBackEverySeparableParameter) {
   EXPECT_EQ(checked, static_cast<int>(r.names.size()) - 6);
 }
 
-TEST_F(HeadTable, TheTruthLiesWithinTwiceTheUncertaintyAsOftenAsClaimed) {
+TEST_P(HeadTable, TheTruthLiesWithinTwiceTheUncertaintyAsOftenAsClaimed) {
   // 200 noisy repeats at the declared repeatability; the 8 separable parameters of the head and
   // the table (sphere set-up aside) within 2 u in 95.45 % of cases: accepted 92.5-98.5 % (1600
   // cases: sd 0.5 %). Half the machines without a set-up error: what the plan holds must not
   // depend on the data (it once did, through the measured triggers' rounding).
-  const auto e = injected();
+  const auto e = injected(axis);
   auto no_setup = e;
   for (const char* k : {"dX_S", "dY_S", "dZ_S"}) no_setup.erase(k);
   int inside = 0, all = 0;
@@ -164,7 +187,7 @@ TEST_F(HeadTable, TheTruthLiesWithinTwiceTheUncertaintyAsOftenAsClaimed) {
     Truth truth = independentTruth(m, truth_errors);
     truth.noise_um = m.probe.repeatability_um;
     const SphereCycleResult r = identifySphereCycle(plan, {simulate(plan, truth, {static_cast<std::uint64_t>(seed)})});
-    ASSERT_EQ(heldNames(r), kHeld) << "seed " << seed;
+    ASSERT_EQ(heldNames(r), held(axis)) << "seed " << seed;
     const UncertaintyBudget b = sphereBudget(plan, r, nullptr, BudgetOptions{});
     const Eigen::VectorXd u = b.uC();
     for (int k = 0; k < b.size(); ++k) {
@@ -176,14 +199,14 @@ TEST_F(HeadTable, TheTruthLiesWithinTwiceTheUncertaintyAsOftenAsClaimed) {
     }
   }
   const double rate = static_cast<double>(inside) / all;
-  std::printf("one_sphere head_table: truth within 2u in %.1f %% of %d cases\n", 100.0 * rate, all);
+  std::printf("one_sphere head_table, %c head: truth within 2u in %.1f %% of %d cases\n", axis, 100.0 * rate, all);
   EXPECT_GE(all, 200 * 7);
   EXPECT_GT(rate, 0.925);
   EXPECT_LT(rate, 0.985);
 }
 
-TEST_F(HeadTable, ATruthFileInTheModelsNamesDrivesTheSimulator) {
-  const auto e = injected();
+TEST_P(HeadTable, ATruthFileInTheModelsNamesDrivesTheSimulator) {
+  const auto e = injected(axis);
   Json j = {{"format", "rotacal-truth/1"}};
   for (const auto& [k, v] : e) {
     const bool angle = k.size() == 3 && k[1] == '0' && (k[0] == 'A' || k[0] == 'B' || k[0] == 'C');
@@ -207,15 +230,18 @@ TEST_F(HeadTable, ATruthFileInTheModelsNamesDrivesTheSimulator) {
   }
 }
 
-TEST_F(HeadTable, CyclesThatPlaceTheBallAtTheReadingRefuseTheHead) {
+TEST_P(HeadTable, CyclesThatPlaceTheBallAtTheReadingRefuseTheHead) {
   // Their touches and reports are a tilting table's: on a head they would be L off.
   for (const char* c : {"touch154", "spheres3", "rtest", "spaceframe", "tooltip"})
     EXPECT_THROW((void)makePlan(c, m, {}), std::invalid_argument) << c;
   // probe_qual carries the head's offset (the head at 0): its touches reach the sphere.
   const ProbePlan q = makePlan("probe_qual", m, {});
-  const MeasurementRun run = simulate(q, independentTruth(m, injected()), {1});
+  const MeasurementRun run = simulate(q, independentTruth(m, injected(axis)), {1});
   EXPECT_EQ(run.points.size(), q.points.size());
 }
+
+INSTANTIATE_TEST_SUITE_P(BAndAHeads, HeadTable, ::testing::Values('B', 'A'),
+                         [](const auto& info) { return std::string(1, info.param) + "_head"; });
 
 }  // namespace
 }  // namespace rotacal
