@@ -23,6 +23,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -470,6 +471,30 @@ int spaceframeCoverage(int machines, double frame_u_um) {
 
 }  // namespace
 
+// One drawn one-sphere machine as `analyze` sees it: its declared contributors drawn into the
+// truth (draw_seed, machine m), the per-touch scatter as noise, the fit, the budget (1000 Monte
+// Carlo runs, each machine its own seed). Empty when the fit refuses the data.
+std::optional<UncertaintyBudget> drawnSphereMachine(const ProbePlan& plan, const ContributorSet& cs, Truth t, int m,
+                                                    std::uint64_t draw_seed, std::uint64_t mc_seed_base,
+                                                    SphereCycleResult* r, ProbeAxesDraw* drawn = nullptr) {
+  ProbeAxesDraw d;
+  drawProbeAxes(plan, cs, isProbeAxesContributor, draw_seed, m, -1, &d);
+  applyProbeAxesDraw(d, &t);
+  if (drawn) *drawn = d;
+  t.noise_um = mmToUm(std::sqrt(perTouchVariance_mm2(cs, isPerTouchContributor)));
+  try {
+    *r = identifySphereCycle(plan, {simulate(plan, t, {static_cast<std::uint64_t>(m) + 1})});
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "machine %d: %s\n", m, e.what());
+    return std::nullopt;
+  }
+  BudgetOptions bo;
+  bo.runs = 1000;
+  bo.alone_runs = 0;
+  bo.seed = mc_seed_base + static_cast<std::uint64_t>(m);
+  return sphereBudget(plan, *r, &cs, bo);
+}
+
 // The one sphere (issue 19): every machine draws the 8 location errors of its A/C table (000 Table
 // 4's size), the sphere's place on the table (50 um) and every declared contributor that acts on
 // one sphere (the probe's pretravel by direction and the linear axes through drawProbeAxes, on
@@ -506,22 +531,11 @@ int oneSphereCoverage(int machines, const std::string& contributors_file, const 
       t.errors.setReportValue(i, (params[static_cast<size_t>(i)].kind == ParamKind::Length ? sd_um : sd_mdeg) * rng.normal());
     t.sphere_center_error_w_mm[1] = Eigen::Vector3d(umToMm(sphere_um * rng.normal()), umToMm(sphere_um * rng.normal()),
                                                     umToMm(sphere_um * rng.normal()));
-    ProbeAxesDraw d;
-    drawProbeAxes(plan, cs, isProbeAxesContributor, 4646, m, -1, &d);
-    applyProbeAxesDraw(d, &t);
-    t.noise_um = mmToUm(std::sqrt(touch_mm2));
     SphereCycleResult r;
-    try {
-      r = identifySphereCycle(plan, {simulate(plan, t, {static_cast<std::uint64_t>(m) + 1})});
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "machine %d: %s\n", m, e.what());
-      continue;
-    }
-    BudgetOptions bo;
-    bo.runs = 1000;
-    bo.alone_runs = 0;
-    bo.seed = 0x4d43000000ULL + static_cast<std::uint64_t>(m);
-    const UncertaintyBudget b = sphereBudget(plan, r, &cs, bo);
+    ProbeAxesDraw d;
+    const auto b_or = drawnSphereMachine(plan, cs, t, m, 4646, 0x4d43000000ULL, &r, &d);
+    if (!b_or) continue;
+    const UncertaintyBudget& b = *b_or;
     const Eigen::VectorXd uc = b.uC(), ua = b.uA(), U = b.expanded(), kf = b.coverageFactors();
     for (int i = 0; i < kNumLocationErrors; ++i) {
       const std::string& iso = r.names[static_cast<size_t>(r.location_index_in_x[static_cast<size_t>(i)])].name;
@@ -604,28 +618,12 @@ int headTableCoverage(int machines, const std::string& contributors_file) {
       truth_report[i] = sd * rng.normal();
       p[k] = length ? umToMm(truth_report[i]) : mdegToRad(truth_report[i]);
     }
-    Truth t;
+    Truth t = truthOfModel(model, p);
     t.errors.kinematics = machine.kinematics;
-    t.table_transform = [&model, p](const Pose& q, double) { return T_m_w(model, p, q); };
-    t.head_ball = [&model, p](const Pose& q, double) {
-      return Eigen::Vector3d(T_c_t(model, p, q) * Eigen::Vector3d(0.0, 0.0, -model.pivot_to_ball_mm));
-    };
-    ProbeAxesDraw d;
-    drawProbeAxes(plan, cs, isProbeAxesContributor, 1919, m, -1, &d);
-    applyProbeAxesDraw(d, &t);
-    t.noise_um = mmToUm(std::sqrt(touch_mm2));
     SphereCycleResult r;
-    try {
-      r = identifySphereCycle(plan, {simulate(plan, t, {static_cast<std::uint64_t>(m) + 1})});
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "machine %d: %s\n", m, e.what());
-      continue;
-    }
-    BudgetOptions bo;
-    bo.runs = 1000;
-    bo.alone_runs = 0;
-    bo.seed = 0x4854000000ULL + static_cast<std::uint64_t>(m);
-    const UncertaintyBudget b = sphereBudget(plan, r, &cs, bo);
+    const auto b_or = drawnSphereMachine(plan, cs, t, m, 1919, 0x4854000000ULL, &r);
+    if (!b_or) continue;
+    const UncertaintyBudget& b = *b_or;
     const Eigen::VectorXd uc = b.uC(), ua = b.uA(), U = b.expanded();
     for (size_t i = 0; i < drawn.size(); ++i) {
       int q = -1;

@@ -200,10 +200,9 @@ void headLocationErrors(const JsonDoc& doc, const Json& j, const MachineModel& m
       p[i] = locationValue(doc, entry, name, model.parameters[static_cast<size_t>(i)].kind);
     }
   }
-  t->table_transform = [model, p](const Pose& pose, double) { return T_m_w(model, p, pose); };
-  t->head_ball = [model, p](const Pose& pose, double) {
-    return Eigen::Vector3d(T_c_t(model, p, pose) * Eigen::Vector3d(0.0, 0.0, -model.pivot_to_ball_mm));
-  };
+  const Truth chains = truthOfModel(model, p);
+  t->table_transform = chains.table_transform;
+  t->head_ball = chains.head_ball;
 }
 
 Truth truthFrom(const JsonDoc& doc, Kinematics kinematics, const MachineModel* machine) {
@@ -316,6 +315,15 @@ Truth truthFrom(const JsonDoc& doc, Kinematics kinematics, const MachineModel* m
 }
 
 }  // namespace
+
+Truth truthOfModel(const KinematicModel& model, const Eigen::VectorXd& p) {
+  Truth t;
+  t.table_transform = [model, p](const Pose& pose, double) { return T_m_w(model, p, pose); };
+  t.head_ball = [model, p](const Pose& pose, double) {
+    return Eigen::Vector3d(T_c_t(model, p, pose) * Eigen::Vector3d(0.0, 0.0, -model.pivot_to_ball_mm));
+  };
+  return t;
+}
 
 Truth truthFromJson(const JsonDoc& doc, Kinematics kinematics) {
   return guardJson(doc, [&] { return truthFrom(doc, kinematics, nullptr); });

@@ -73,6 +73,11 @@ struct SimulationOptions {
 /// probe would not trigger within [-approach_mm, +overtravel_mm] (the program would alarm).
 MeasurementRun simulate(const ProbePlan& plan, const Truth& truth, const SimulationOptions& options);
 
+struct KinematicModel;
+/// A truth whose table and head are a kinematic model's exact chains at parameters p (mm, rad):
+/// table_transform and head_ball set, nothing else.
+Truth truthOfModel(const KinematicModel& model, const Eigen::VectorXd& p);
+
 Truth truthFromJson(const JsonDoc& doc, Kinematics kinematics);
 /// The truth of a machine: for head_table its "location_errors" are the ISO 230-7 parameters of
 /// core/kinematic_model.hpp (X0C .. dL), which set table_transform and head_ball exactly.

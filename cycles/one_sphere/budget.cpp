@@ -52,11 +52,7 @@ UncertaintyBudget sphereBudget(const ProbePlan& plan, const SphereCycleResult& r
                                                        r.x[m.parameterIndex("dZ_S")]);
   } else {
     // A head: the identified model's own chains (its table chain ends with the set-up).
-    const Eigen::VectorXd p = r.x.head(m.size());
-    base.table_transform = [&m, p](const Pose& q, double) { return T_m_w(m, p, q); };
-    base.head_ball = [&m, p](const Pose& q, double) {
-      return Eigen::Vector3d(T_c_t(m, p, q) * Eigen::Vector3d(0.0, 0.0, -m.pivot_to_ball_mm));
-    };
+    base = truthOfModel(m, r.x.head(m.size()));
   }
   const Eigen::VectorXd ideal = type_b.items.empty() ? Eigen::VectorXd() : triggersAlong(plan, base);
   const auto shift = [&](std::uint64_t seed, int run, int only, ProbeAxesDraw* drawn = nullptr) {
