@@ -226,10 +226,11 @@ ReportErrors errorsFromReports(const std::vector<JsonDoc>& reports, Kinematics k
     guardJson(doc, [&] {
       checkFormat(doc);
       const Json& j = doc.value;
-      if (k == Kinematics::HeadAB)
+      if (!hasPapersLocationErrors(k))
         doc.fail(j, j.contains("machine_model") ? "machine_model" : "location_errors",
-                 "a spindle-head machine (head_ab) has no table location errors to compensate: compensate rewrites "
-                 "programs of table machines (table_ac, table_bc)");
+                 fmt::format("a spindle-head machine ({}) has no table location errors to compensate: compensate "
+                             "rewrites programs of table machines (table_ac, table_bc)",
+                             kinematicsName(k)));
       if (!j.contains("location_errors") || !j["location_errors"].is_object())
         doc.fail(j, "location_errors", "the report has no 'location_errors'");
       const Json& errs = j["location_errors"];

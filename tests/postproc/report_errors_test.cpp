@@ -110,5 +110,23 @@ TEST(ReportErrors, AmbiguousIncompleteOrImplausibleReportsAreRefused) {
   EXPECT_NO_THROW((void)errorsFromReports({doc("big.json", big)}, Kinematics::TableAC, true));
 }
 
+// A head machine's report, even one carrying location_errors, is refused at its line: neither head
+// kinematics has the papers' table errors that compensate rewrites programs with (before head_table
+// was refused here, its location-error lookup threw std::invalid_argument without a file).
+TEST(ReportErrors, AHeadMachinesReportIsRefusedAtItsLine) {
+  for (const Kinematics k : {Kinematics::HeadAB, Kinematics::HeadTable}) {
+    const std::string text = std::string(R"({"format": "rotacal-report/1", "cycle": "x",
+ "machine_model": ")") + std::string(kinematicsName(k)) + R"(",
+ "location_errors": {"dx_AY": {"value": 3.0, "u": 0.2, "unit": "um"}}})";
+    try {
+      (void)errorsFromReports({parseJsonText(text, "r.json")}, k, false);
+      FAIL() << kinematicsName(k) << " was compensated";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.line(), 2) << e.what();
+      EXPECT_NE(std::string(e.what()).find(kinematicsName(k)), std::string::npos) << e.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace rotacal
