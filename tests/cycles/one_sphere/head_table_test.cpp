@@ -151,6 +151,23 @@ TEST_P(HeadTable, TheVerifierCarriesTheBallAlongTheSpindle) {
   EXPECT_NE(r.violations.front().problem.find("sphere"), std::string::npos) << r.violations.front().problem;
 }
 
+TEST_P(HeadTable, APlanFileWhoseSafeHeightForgetsTheHeadIsRefusedAtItsLine) {
+  // The plan file reads back whole; with one pose's safe height as a table's (the ball at the
+  // reading) it is refused where that height stands, naming the head's offset.
+  const Cycle& cycle = cycleOfPlan(plan);
+  Json j = planToJson(plan);
+  EXPECT_NO_THROW((void)planFromJson(parseJsonText(j.dump(1), "plan.json"), cycle.planRules()));
+  const double below = -ballFromAxes_m(m, plan.poses.front().pose).z();
+  j["poses"][0]["safe_z_mm"] = plan.poses.front().safe_z_mm - below;
+  try {
+    (void)planFromJson(parseJsonText(j.dump(1), "plan.json"), cycle.planRules());
+    FAIL() << "a safe height " << below << " mm too low was accepted";
+  } catch (const InputError& e) {
+    EXPECT_GT(e.line(), 1) << e.what();
+    EXPECT_NE(std::string(e.what()).find("below Z at this head angle"), std::string::npos) << e.what();
+  }
+}
+
 TEST_P(HeadTable, NoiseFreeTriggersGiveBackEverySeparableParameter) {
   const auto e = injected(axis);
   const SphereCycleResult r = identifySphereCycle(plan, {simulate(plan, independentTruth(m, e), {1})});
