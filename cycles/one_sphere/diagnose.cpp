@@ -31,12 +31,17 @@ SphereDiagnosis diagnoseSphere(const ProbePlan& plan, const std::vector<Measurem
   p.y = Eigen::Map<const Eigen::VectorXd>(fit.residuals_um.data(), n);
   p.sigma = Eigen::VectorXd::Constant(n, plan.machine.probe.repeatability_um);  // declared, never the fit's
   p.unit = "um";
-  // The baseline at its solution: every parameter's column (held ones too: the judge finds
-  // them unidentifiable), in um per report unit.
-  p.J0.resize(n, static_cast<Eigen::Index>(fit.names.size()));
+  // The baseline at its solution: the columns of the parameters the fit frees, in um per report
+  // unit. The held ones (the plan's unseen directions, analyze's `unseparable`) stay out: their
+  // columns add nothing to the span, but with them a cause confounded with the model was read as
+  // a minimum-norm mix along the unseen directions (pretravel +-Y as S_yz = -33 mdeg with
+  // A0B = +33 mdeg under a head), and at the measured triggers a nearly unseen direction could
+  // count in the judge's rank when the fit held it.
   for (size_t i = 0; i < fit.names.size(); ++i) {
+    if (fit.identifiability.held[i]) continue;
     const double per = fit.names[i].kind == ParamKind::Length ? 1.0 : kUmPerMm / kMdegPerRad;  // um per um, um per mdeg
-    p.J0.col(static_cast<Eigen::Index>(i)) = fit.J_r_x.col(static_cast<Eigen::Index>(i)) * per;
+    p.J0.conservativeResize(n, p.J0.cols() + 1);
+    p.J0.col(p.J0.cols() - 1) = fit.J_r_x.col(static_cast<Eigen::Index>(i)) * per;
     p.baseline_parameters.push_back({fit.names[i].name, std::string(reportUnit(fit.names[i].kind))});
   }
   // Drift: the sphere moving linearly in time in the machine frame.
