@@ -44,16 +44,10 @@ UncertaintyBudget sphereBudget(const ProbePlan& plan, const SphereCycleResult& r
                                               : ContributorSplit{};
   const ContributorSet& type_b = split.type_b;
   // Every trigger of every run moves as its plan point does: the contributors are the machine's.
-  Truth base;
+  // The identified machine: the fitted model's own exact chains (its table chain ends with the
+  // sphere's set-up), the same on a tilting table and under a head.
   const KinematicModel& m = r.model;
-  if (hasPapersLocationErrors(plan.machine.kinematics)) {
-    base.errors = r.location;
-    base.sphere_center_error_w_mm[1] = Eigen::Vector3d(r.x[m.parameterIndex("dX_S")], r.x[m.parameterIndex("dY_S")],
-                                                       r.x[m.parameterIndex("dZ_S")]);
-  } else {
-    // A head: the identified model's own chains (its table chain ends with the set-up).
-    base = truthOfModel(m, r.x.head(m.size()));
-  }
+  const Truth base = truthOfModel(m, r.x.head(m.size()));
   const Eigen::VectorXd ideal = type_b.items.empty() ? Eigen::VectorXd() : triggersAlong(plan, base);
   const auto shift = [&](std::uint64_t seed, int run, int only, ProbeAxesDraw* drawn = nullptr) {
     ProbeAxesDraw d;
