@@ -15,6 +15,8 @@
 //      cycle on ac_trunnion, default examples/contributors/spheres3_001.json; spheres3Budget)
 //      build/bench/rotacal_coverage_bench one_sphere_head [machines] [CONTRIB.json]   (the one-sphere
 //        cycle on examples/machines/bc_head_table.json, a B head over a C table)
+//      build/bench/rotacal_coverage_bench one_sphere_head_ab [machines] [CONTRIB.json]   (the same
+//        on examples/machines/ab_head.json, an A head carrying a B head)
 //      build/bench/rotacal_coverage_bench one_sphere [machines] [CONTRIB.json]   (the one-sphere
 //      cycle on ac_trunnion, default examples/contributors/table5.json; sphereBudget)
 //      build/bench/rotacal_coverage_bench spaceframe [machines] [frame_u_um]   (the space frame
@@ -587,14 +589,16 @@ int oneSphereCoverage(int machines, const std::string& contributors_file, const 
   return 0;
 }
 
-// The one sphere under a B head (issue 19, examples/machines/bc_head_table.json): every machine
-// draws the 8 separable location errors of its C table and B head and the pivot-to-ball length's
-// deviation (20 um / 2 mdeg), the sphere's set-up (50 um; the 5 held directions' own parameters
-// stay 0, so that the truth is what the fit reports), and every declared contributor that acts on
-// one sphere (drawProbeAxes on the exact simulator, whose head carries the model's true chain),
-// and is analyzed as `analyze` does (identifySphereCycle + sphereBudget, 1000 Monte Carlo runs).
-int headTableCoverage(int machines, const std::string& contributors_file) {
-  const MachineModel machine = loadMachine(ROTACAL_SOURCE_DIR "/examples/machines/bc_head_table.json");
+// The one sphere under a spindle head (issue 19): a B head over a C table
+// (examples/machines/bc_head_table.json) or an A head carrying a B head (ab_head.json). Every
+// machine draws the separable location errors of its axes and the pivot-to-ball length's deviation
+// (`drawn`: 20 um / 2 mdeg), the sphere's set-up (50 um; the 5 held directions' own parameters stay
+// 0, so that the truth is what the fit reports), and every declared contributor that acts on one
+// sphere (drawProbeAxes on the exact simulator, whose head carries the model's true chain), and is
+// analyzed as `analyze` does (identifySphereCycle + sphereBudget, 1000 Monte Carlo runs).
+int headCoverage(const std::string& machine_file, const std::vector<std::string>& drawn, int machines,
+                 const std::string& contributors_file) {
+  const MachineModel machine = loadMachine(machine_file);
   const ProbePlan plan = makePlan("one_sphere", machine, {});
   std::printf("plan: %zu poses, %zu touches, %.0f s of machine time\n", plan.poses.size(), plan.points.size(),
               plan.points.back().t_s);
@@ -602,7 +606,6 @@ int headTableCoverage(int machines, const std::string& contributors_file) {
   const double touch_mm2 = perTouchVariance_mm2(cs, isPerTouchContributor);
   const SphereLayout layout = sphereLayoutOf(plan);
   const KinematicModel model = sphereModel(machine, Eigen::Vector3d::Zero());
-  const std::vector<std::string> drawn = {"X0C", "Y0C", "A0C", "B0C", "A0B", "C0B", "B0B", "dL", "dX_S", "dY_S", "dZ_S"};
   const double sd_um = 20.0, sd_mdeg = 2.0, sphere_um = 50.0;
   std::vector<int> inside(drawn.size(), 0), inside_1u(drawn.size(), 0);
   std::vector<double> e2(drawn.size(), 0.0), uc2(drawn.size(), 0.0), ua2(drawn.size(), 0.0);
@@ -643,9 +646,9 @@ int headTableCoverage(int machines, const std::string& contributors_file) {
     ++done;
     if (done % 50 == 0) std::fprintf(stderr, "%d machines\n", done);
   }
-  std::printf("one_sphere on a B head (L %.0f mm, sphere at %.0f, %.0f, %.0f mm): %d machines drawn from %s (location "
+  std::printf("one_sphere on %s (L %.0f mm, sphere at %.0f, %.0f, %.0f mm): %d machines drawn from %s (location "
               "errors sd %.0f um / %.0f mdeg, sphere %.0f um, per-touch scatter %.3f um)\n",
-              machine.head->pivot_to_ball_mm, layout.center_w_mm.x(), layout.center_w_mm.y(), layout.center_w_mm.z(), done,
+              machine.name.c_str(), machine.head->pivot_to_ball_mm, layout.center_w_mm.x(), layout.center_w_mm.y(), layout.center_w_mm.z(), done,
               cs.file.c_str(), sd_um, sd_mdeg, sphere_um, mmToUm(std::sqrt(touch_mm2)));
   std::printf("%-8s %12s %12s %10s %10s %10s\n", "param", "within U", "within u", "rms e", "rms u_c", "rms u_A");
   for (size_t i = 0; i < drawn.size(); ++i)
@@ -659,8 +662,15 @@ int headTableCoverage(int machines, const std::string& contributors_file) {
 
 int main(int argc, char** argv) {
   if (argc > 1 && std::string(argv[1]) == "one_sphere_head")
-    return headTableCoverage(argc > 2 ? std::atoi(argv[2]) : 500,
-                             argc > 3 ? argv[3] : ROTACAL_SOURCE_DIR "/examples/contributors/table5.json");
+    return headCoverage(ROTACAL_SOURCE_DIR "/examples/machines/bc_head_table.json",
+                        {"X0C", "Y0C", "A0C", "B0C", "A0B", "C0B", "B0B", "dL", "dX_S", "dY_S", "dZ_S"},
+                        argc > 2 ? std::atoi(argv[2]) : 500,
+                        argc > 3 ? argv[3] : ROTACAL_SOURCE_DIR "/examples/contributors/table5.json");
+  if (argc > 1 && std::string(argv[1]) == "one_sphere_head_ab")
+    return headCoverage(ROTACAL_SOURCE_DIR "/examples/machines/ab_head.json",
+                        {"B0A", "C0A", "A0A", "Z0B", "C0B", "B0B", "dY_T", "dL", "dX_S", "dY_S", "dZ_S"},
+                        argc > 2 ? std::atoi(argv[2]) : 500,
+                        argc > 3 ? argv[3] : ROTACAL_SOURCE_DIR "/examples/contributors/table5.json");
   if (argc > 1 && std::string(argv[1]) == "one_sphere")
     return oneSphereCoverage(argc > 2 ? std::atoi(argv[2]) : 500,
                              argc > 3 ? argv[3] : ROTACAL_SOURCE_DIR "/examples/contributors/table5.json",

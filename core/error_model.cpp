@@ -127,6 +127,8 @@ Eigen::Isometry3d T_m_w(const LocationErrors& errors, const Pose& pose) {
 Eigen::Isometry3d T_m_w_nominal(Kinematics kinematics, const Pose& pose) {
   // A head over a C table: the table turns C alone (by -C, as every table axis does).
   if (kinematics == Kinematics::HeadTable) return elementary(Motion::Rz, -degToRad(pose.C));
+  // Two head axes: the table does not move.
+  if (kinematics == Kinematics::HeadAB) return Eigen::Isometry3d::Identity();
   LocationErrors zero;
   zero.kinematics = kinematics;
   return T_m_w(zero, pose);

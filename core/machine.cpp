@@ -90,8 +90,18 @@ MachineModel machineFrom(const JsonDoc& doc, const Json& j) {
     head.axis = axis[0];
     head.pivot_to_ball_mm = requireNumber(doc, h, "pivot_to_ball_mm", Limits::positive(kMaxCoordinateMm, "mm"));
     m.head = head;
+  } else if (m.kinematics == Kinematics::HeadAB && j.contains("head")) {
+    // Optional here: 004's head_ab machine carries a tester's sphere at a radius its cycle sets,
+    // not a touch probe; a touch-probe cycle needs the pivot-to-ball length.
+    const Json& h = requireObject(doc, j, "head");
+    if (h.contains("axis"))
+      doc.fail(h, "axis", "a head_ab head turns in A and, on it, B: it has no single 'axis' (only pivot_to_ball_mm)");
+    SpindleHead head;
+    head.axis = 0;
+    head.pivot_to_ball_mm = requireNumber(doc, h, "pivot_to_ball_mm", Limits::positive(kMaxCoordinateMm, "mm"));
+    m.head = head;
   } else if (j.contains("head")) {
-    doc.fail(j, "head", "'head' describes a head_table machine's spindle head, not a " +
+    doc.fail(j, "head", "'head' describes a head_table or head_ab machine's spindle head, not a " +
                             std::string(kinematicsName(m.kinematics)) + " machine's");
   }
   const std::string rot = m.kinematics == Kinematics::TableAC  ? "AC"
@@ -130,7 +140,7 @@ MachineModel machineFrom(const JsonDoc& doc, const Json& j) {
       numberOr(doc, p, "body_clearance_mm", m.probe.body_clearance_mm, Limits::nonNegative(kMaxProbeLengthMm, "mm"));
   m.probe.tool_number = intOr(doc, p, "tool_number", 0, 0, kMaxToolNumber);
   if (m.head && m.probe.tool_number != 0)
-    doc.fail(p, "tool_number", "a head_table machine's X, Y and Z must read the head's pivot: tool_number must be 0 (a "
+    doc.fail(p, "tool_number", "a spindle head's X, Y and Z must read its pivot: tool_number must be 0 (a "
                                "tool length offset moves Z, not the ball along the tilted spindle)");
   m.probe.repeatability_um =
       numberOr(doc, p, "repeatability_um", m.probe.repeatability_um, Limits::positive(kMaxRepeatabilityUm, "um"));
@@ -188,6 +198,9 @@ MachineModel machineFrom(const JsonDoc& doc, const Json& j) {
 namespace {
 Eigen::Matrix3d headRotation(const MachineModel& m, const Pose& pose) {
   if (!m.head) return Eigen::Matrix3d::Identity();
+  // head_ab: the A head carries the B head (core/kinematic_model.hpp), both turning by +angle.
+  if (m.kinematics == Kinematics::HeadAB)
+    return (elementary(Motion::Rx, degToRad(pose.A)) * elementary(Motion::Ry, degToRad(pose.B))).linear();
   const char a = m.head->axis;
   return elementary(a == 'A' ? Motion::Rx : Motion::Ry, degToRad(pose.angle(a))).linear();
 }
@@ -250,7 +263,10 @@ Json machineToJson(const MachineModel& m) {
                      {"top_centre_w_mm", {m.artefact->top_centre_w.x(), m.artefact->top_centre_w.y(), m.artefact->top_centre_w.z()}},
                      {"size_mm", {m.artefact->size_mm.x(), m.artefact->size_mm.y(), m.artefact->size_mm.z()}}};
   }
-  if (m.head) j["head"] = {{"axis", std::string(1, m.head->axis)}, {"pivot_to_ball_mm", m.head->pivot_to_ball_mm}};
+  if (m.head) {
+    j["head"] = {{"pivot_to_ball_mm", m.head->pivot_to_ball_mm}};
+    if (m.head->axis != 0) j["head"]["axis"] = std::string(1, m.head->axis);
+  }
   if (m.contributors) j["contributors"] = contributorsToJson(*m.contributors);
   return j;
 }

@@ -165,12 +165,14 @@ ProbePlan planFrom(const JsonDoc& doc, const PlanRules& rules) {
   plan.cycle = requireString(doc, j, "cycle");
   if (!j.contains("machine")) doc.fail(j, "", "plan lacks 'machine'");
   plan.machine = machineFromJson(doc, requireObject(doc, j, "machine"));
-  // Planned probing moves turn a workpiece on a rotary table (safe heights, surfaces at poses):
-  // a spindle-head machine has none, and its transforms would throw far from this file's lines.
-  if (rules.heights && plan.machine.kinematics == Kinematics::HeadAB)
+  // Planned probing moves need the probe ball's place: a head_ab machine declares it in "head"
+  // (without, its tool tip is a tester's sphere, and its transforms would throw far from this
+  // file's lines).
+  if (rules.heights && plan.machine.kinematics == Kinematics::HeadAB && !plan.machine.head)
     doc.fail(j["machine"], "kinematics",
-             fmt::format("cycle '{}' probes a workpiece turned by a rotary table; a spindle-head machine (head_ab) has "
-                         "none (a head is calibrated at a fixed tool tip, 004)",
+             fmt::format("cycle '{}' probes with a touch probe, whose place on a spindle-head machine (head_ab) "
+                         "MACHINE.json declares in \"head\": {{\"pivot_to_ball_mm\": L}}; this one has none (its "
+                         "tool tip is calibrated at a fixed point, 004)",
                          plan.cycle));
   if (j.contains("options")) {
     const Json& o = requireObject(doc, j, "options");

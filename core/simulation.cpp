@@ -181,10 +181,10 @@ double locationValue(const JsonDoc& doc, const Json& entry, const std::string& n
   return unit == "mdeg" ? mdegToRad(v) : unit == "urad" ? v * 1e-6 : degToRad(v);
 }
 
-// A head_table machine's location errors: the parameters of its exact model, by ISO 230-7 name.
+// A spindle head machine's location errors: the parameters of its exact model, by ISO 230-7 name.
 void headLocationErrors(const JsonDoc& doc, const Json& j, const MachineModel& machine, Truth* t) {
-  const KinematicModel model = kinematicModel("head_table", Eigen::Vector3d::Zero(), machine.head->pivot_to_ball_mm,
-                                              machine.head->axis);
+  const KinematicModel model = kinematicModel(kinematicsName(machine.kinematics), Eigen::Vector3d::Zero(),
+                                              machine.head->pivot_to_ball_mm, machine.head->axis ? machine.head->axis : 'B');
   Eigen::VectorXd p = Eigen::VectorXd::Zero(model.size());
   if (j.contains("location_errors")) {
     const Json& le = requireObject(doc, j, "location_errors");
@@ -193,7 +193,7 @@ void headLocationErrors(const JsonDoc& doc, const Json& j, const MachineModel& m
       if (i < 0) {
         std::string known;
         for (const auto& q : model.parameters) known += (known.empty() ? "" : ", ") + q.name;
-        doc.fail(le, name, "unknown location error '" + name + "' of a head_table machine (" + known + ")");
+        doc.fail(le, name, "unknown location error '" + name + "' of a " + model.name + " machine (" + known + ")");
       }
       if (!entry.is_object() || !entry.contains("value") || !entry["value"].is_number())
         doc.fail(le, name, "location error '" + name + "' needs {\"value\": number, \"unit\": ...}");
@@ -211,12 +211,13 @@ Truth truthFrom(const JsonDoc& doc, Kinematics kinematics, const MachineModel* m
     doc.fail(j, "format", "not a truth file (expected \"format\": \"rotacal-truth/1\")");
   Truth t;
   t.errors.kinematics = kinematics;
-  if (kinematics == Kinematics::HeadTable) {
+  if (kinematics == Kinematics::HeadTable || (kinematics == Kinematics::HeadAB && machine && machine->head)) {
     if (!machine || !machine->head) doc.fail(j, "format", "a head_table truth needs its machine's head (MACHINE.json \"head\")");
     headLocationErrors(doc, j, *machine, &t);
+    const std::string kin(kinematicsName(kinematics));
     for (const char* key : {"drift", "rotary_error_motion"})
       if (j.contains(key))
-        doc.fail(j, key, std::string(key) + " is written in the papers' table location errors, which a head_table machine has not");
+        doc.fail(j, key, std::string(key) + " is written in the papers' table location errors, which a " + kin + " machine has not");
   } else if (j.contains("location_errors")) {
     const Json& le = requireObject(doc, j, "location_errors");
     for (const auto& [name, entry] : le.items()) {

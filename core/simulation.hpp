@@ -79,8 +79,9 @@ struct KinematicModel;
 Truth truthOfModel(const KinematicModel& model, const Eigen::VectorXd& p);
 
 Truth truthFromJson(const JsonDoc& doc, Kinematics kinematics);
-/// The truth of a machine: for head_table its "location_errors" are the ISO 230-7 parameters of
-/// core/kinematic_model.hpp (X0C .. dL), which set table_transform and head_ball exactly.
+/// The truth of a machine: for head_table (and head_ab with a "head") its "location_errors" are
+/// the ISO 230-7 parameters of core/kinematic_model.hpp (X0C .. dL, Y0A .. dL), which set
+/// table_transform and head_ball exactly.
 Truth truthFromJson(const JsonDoc& doc, const MachineModel& machine);
 Truth loadTruth(const std::string& path, Kinematics kinematics);
 Json truthToJson(const Truth& truth);

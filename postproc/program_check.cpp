@@ -182,10 +182,11 @@ class Simulator {
 std::vector<Obstacle> obstaclesOf(const ProgramCheckSetup& s) {
   std::vector<Obstacle> out;
   const MachineModel& m = *s.machine;
-  // A head machine's XYZ are its pivot's, not the ball centre's, and it declares no table:
-  // nothing to model (strokes, guards, feeds and numbers are still checked).
-  // head_table's are modelled: Simulator::gap carries the ball by the head's offset.
-  if (m.kinematics == Kinematics::HeadAB) return out;
+  // A head machine's XYZ are its pivot's, not the ball centre's: without its "head" (004's
+  // head_ab carries a tester's sphere, not a probe) there is no ball to model (strokes,
+  // guards, feeds and numbers are still checked). With it, Simulator::gap carries the ball by
+  // the head's offset.
+  if (m.kinematics == Kinematics::HeadAB && !m.head) return out;
   if (m.artefact) {
     const SquareColumn& c = *m.artefact;
     if (s.artefact_on_table) {

@@ -85,9 +85,11 @@ for cycle in touch154 spheres3 spaceframe rtest tooltip one_sphere probe_qual; d
     fi
   done
 done
-# one_sphere under a spindle head (MACHINE.json "head", the ball carried along the spindle)
+# one_sphere under a spindle head and a head/head (MACHINE.json "head", the ball carried along the spindle)
 "$RC" -q plan --cycle one_sphere --machine examples/machines/bc_head_table.json -o "$W/one_sphere_head.plan.json"
 prefix "${RULES[one_sphere]}" "$W/one_sphere_head.plan.json" "$S/fuzz_plan/one_sphere_head.json"
+"$RC" -q plan --cycle one_sphere --machine examples/machines/ab_head.json -o "$W/one_sphere_ab_head.plan.json"
+prefix "${RULES[one_sphere]}" "$W/one_sphere_ab_head.plan.json" "$S/fuzz_plan/one_sphere_ab_head.json"
 for f in $BASE/small.*.prog; do
   d=$(basename "$f" .prog); d=${d#small.}
   for pi in "${!PROGRAM_DIALECTS[@]}"; do

@@ -48,14 +48,23 @@ SphereDiagnosis diagnoseSphere(const ProbePlan& plan, const std::vector<Measurem
   p.causes.push_back(sphereDriftCause(fit.normals, fit.t_s));
   // Pretravel by direction: one trigger distance per approach beyond the first (the mean is the
   // model's dR); a direction no pose used has no column.
+  // A touch is classed by the nearest of the five approaches: a head leaning diagonally turns its
+  // sides off the axes (plan.cpp), and a class per turned direction would leave one touch each.
   const auto& approaches = sphereApproaches();
   const char* dir_names[] = {"-X", "-Y", "+X", "+Y", "-Z"};
+  std::vector<int> class_of(static_cast<size_t>(n));
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const Eigen::Vector3d& u = plan.points[static_cast<size_t>(fit.point_index[static_cast<size_t>(j)])].approach_m;
+    size_t best = 0;
+    for (size_t c = 1; c < approaches.size(); ++c)
+      if (approaches[c].dot(u) > approaches[best].dot(u) + 1e-9) best = c;
+    class_of[static_cast<size_t>(j)] = static_cast<int>(best);
+  }
   JudgeCause pre{kPretravel, "the probe's trigger distance differing by approach direction (lobing)", Eigen::MatrixXd(n, 0), {}};
   for (size_t a = 1; a < approaches.size(); ++a) {
     Eigen::VectorXd col = Eigen::VectorXd::Zero(n);
     for (Eigen::Index j = 0; j < n; ++j)
-      if (plan.points[static_cast<size_t>(fit.point_index[static_cast<size_t>(j)])].target == static_cast<int>(a) + 1)
-        col[j] = -1.0;
+      if (class_of[static_cast<size_t>(j)] == static_cast<int>(a)) col[j] = -1.0;
     if (col.cwiseAbs().sum() == 0) continue;
     pre.J.conservativeResize(n, pre.J.cols() + 1);
     pre.J.col(pre.J.cols() - 1) = col;
@@ -67,7 +76,7 @@ SphereDiagnosis diagnoseSphere(const ProbePlan& plan, const std::vector<Measurem
   for (Eigen::Index j = 0; j < n; ++j) {
     const ProbePoint& pt = plan.points[static_cast<size_t>(fit.point_index[static_cast<size_t>(j)])];
     pose.levels.push_back(pt.pose_name);
-    approach.levels.push_back(dir_names[pt.target - 1]);
+    approach.levels.push_back(dir_names[class_of[static_cast<size_t>(j)]]);
   }
   // Leave one pose out: the group is the pose's index among the plan's poses.
   for (Eigen::Index j = 0; j < n; ++j) {

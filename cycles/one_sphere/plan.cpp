@@ -28,7 +28,7 @@ std::vector<std::pair<double, double>> parsePoseList(const std::string& key, con
     const std::string item = text.substr(at, comma - at);
     const size_t slash = item.find('/');
     if (slash == std::string::npos)
-      throw std::invalid_argument(fmt::format("option {}: '{}' is not tilt/c (deg), e.g. -90/0,0/90", key, item));
+      throw std::invalid_argument(fmt::format("option {}: '{}' is not tilt/turn (deg), e.g. -90/0,0/90", key, item));
     out.emplace_back(parseNumber(key, item.substr(0, slash)), parseNumber(key, item.substr(slash + 1)));
     at = comma + 1;
   }
@@ -47,10 +47,10 @@ bool parseSwitch(const std::string& key, const std::string& text) {
   throw std::invalid_argument(fmt::format("option {} must be 0 or 1, not '{}'", key, text));
 }
 
-Pose poseOf(char axis, double tilt, double c) {
+Pose poseOf(char tilt_axis, char turn_axis, double tilt, double turn) {
   Pose p;
-  (axis == 'A' ? p.A : p.B) = tilt;
-  p.C = c;
+  (tilt_axis == 'A' ? p.A : p.B) = tilt;
+  (turn_axis == 'B' ? p.B : p.C) = turn;
   return p;
 }
 
@@ -60,20 +60,25 @@ char sphereTiltAxis(const MachineModel& machine) {
   if (machine.kinematics == Kinematics::TableAC) return 'A';
   if (machine.kinematics == Kinematics::TableBC) return 'B';
   if (machine.kinematics == Kinematics::HeadTable && machine.head) return machine.head->axis;
+  if (machine.kinematics == Kinematics::HeadAB && machine.head) return 'A';
   throw std::invalid_argument(fmt::format(
-      "cycle one_sphere turns the sphere on a C table (table_ac, table_bc, head_table), which a {} machine has not: "
-      "its tool tip is calibrated by the tooltip cycle (004)",
+      "cycle one_sphere needs the touch probe's place on a {} machine: MACHINE.json \"head\": {{\"pivot_to_ball_mm\": "
+      "L}} (without it the tooltip cycle (004) calibrates a tester's sphere at its radius_mm)",
       kinematicsName(machine.kinematics)));
 }
 
+char sphereTurnAxis(const MachineModel& machine) { return machine.kinematics == Kinematics::HeadAB ? 'B' : 'C'; }
+
 KinematicModel sphereModel(const MachineModel& machine, const Eigen::Vector3d& center_w_mm) {
   if (machine.head)
-    return kinematicModel(kinematicsName(machine.kinematics), center_w_mm, machine.head->pivot_to_ball_mm, machine.head->axis);
+    return kinematicModel(kinematicsName(machine.kinematics), center_w_mm, machine.head->pivot_to_ball_mm,
+                          machine.head->axis ? machine.head->axis : 'B');
   return kinematicModel(kinematicsName(machine.kinematics), center_w_mm);
 }
 
 int sphereUnseenByAnyPlan(const KinematicModel& m, bool squareness) {
   if (m.head_axes.empty()) return 2;
+  if (m.table_axes.empty()) return 5;  // head_ab: the ball's readings span a sphere of radius L, which shows the shear
   return squareness ? 6 : 5;
 }
 
@@ -87,6 +92,7 @@ const std::vector<Eigen::Vector3d>& sphereApproaches() {
 SphereLayout SphereLayout::fromOptions(const MachineModel& machine, const CycleOptions& options) {
   SphereLayout l;
   const RotaryAxis& tilt = machine.rotaryAxis(sphereTiltAxis(machine));
+  l.turn_axis = sphereTurnAxis(machine);
   const auto designing = options.find("poses");
   const bool fine = designing != options.end() && designing->second != "0";
   // The grid a design picks from is finer than the grid run whole. A head tilts its spindle, and
@@ -95,25 +101,32 @@ SphereLayout SphereLayout::fromOptions(const MachineModel& machine, const CycleO
   const double widest = machine.head ? 60.0 : 90.0;
   for (double t = -widest; t <= widest; t += fine ? 15.0 : 30.0)
     if (tilt.stroke_deg.contains(t)) l.tilt_deg.push_back(t);
-  if (fine) {
+  if (l.turn_axis != 'C') {
+    // head_ab's second head axis tilts the spindle too: the same range as the first.
+    const RotaryAxis& turn = machine.rotaryAxis(l.turn_axis);
+    l.c_deg.clear();
+    for (double t = -widest; t <= widest; t += fine ? 15.0 : 30.0)
+      if (turn.stroke_deg.contains(t)) l.c_deg.push_back(t);
+  } else if (fine) {
     l.c_deg.clear();
     for (double c = 0.0; c < 360.0; c += 30.0) l.c_deg.push_back(c);
   }
+  const std::string turn_key = l.turnListOption();
   for (const auto& [key, value] : options) {
     if (key == "center_w_mm") l.center_w_mm = parseVec3Option(key, value);
     else if (key == "radius_mm") l.radius_mm = parseNumber(key, value);
     else if (key == "stem_length_mm") l.stem_length_mm = parseNumber(key, value);
     else if (key == "stem_diameter_mm") l.stem_diameter_mm = parseNumber(key, value);
     else if (key == "tilt_list") l.tilt_deg = parseNumberList(key, value);
-    else if (key == "c_list") l.c_deg = parseNumberList(key, value);
+    else if (key == turn_key) l.c_deg = parseNumberList(key, value);
     else if (key == "pose_list") l.pose_list = parsePoseList(key, value);
     else if (key == "poses") l.design_poses = parseCountOption(key, value, 0, 1000);
     else if (key == "fit_squareness") l.fit_squareness = parseSwitch(key, value);
     else if (key == "backlash") l.backlash = parseSwitch(key, value);
     else
       throw std::invalid_argument("unknown option '" + key +
-                                  "' for cycle one_sphere (center_w_mm, radius_mm, stem_length_mm, stem_diameter_mm, "
-                                  "tilt_list, c_list, pose_list, poses, fit_squareness, backlash)");
+                                  "' for cycle one_sphere on this machine (center_w_mm, radius_mm, stem_length_mm, "
+                                  "stem_diameter_mm, tilt_list, " + turn_key + ", pose_list, poses, fit_squareness, backlash)");
   }
   if (!l.pose_list.empty() && l.design_poses > 0)
     throw std::invalid_argument("options pose_list and poses exclude each other (poses designs a pose_list)");
@@ -122,14 +135,14 @@ SphereLayout SphereLayout::fromOptions(const MachineModel& machine, const CycleO
     throw std::invalid_argument("option stem_diameter_mm must be > 0 and below the sphere's radius");
   if (!(l.stem_length_mm > l.radius_mm))
     throw std::invalid_argument("option stem_length_mm must exceed the sphere's radius (the sphere stands on its stem)");
-  requirePlanSize(fmt::format("options tilt_list and c_list ({} x {} poses)", l.tilt_deg.size(), l.c_deg.size()),
+  requirePlanSize(fmt::format("options tilt_list and {} ({} x {} poses)", turn_key, l.tilt_deg.size(), l.c_deg.size()),
                   5.0 * static_cast<double>(l.tilt_deg.size() * l.c_deg.size()),
                   static_cast<double>(l.tilt_deg.size() * l.c_deg.size()));
   requirePlanSize(fmt::format("option pose_list ({} poses)", l.pose_list.size()), 5.0 * static_cast<double>(l.pose_list.size()),
                   static_cast<double>(l.pose_list.size()));
   if (l.design_poses > 0 && static_cast<size_t>(l.design_poses) > l.tilt_deg.size() * l.c_deg.size())
-    throw std::invalid_argument(fmt::format("option poses = {} exceeds the {} x {} candidate poses of tilt_list x c_list",
-                                            l.design_poses, l.tilt_deg.size(), l.c_deg.size()));
+    throw std::invalid_argument(fmt::format("option poses = {} exceeds the {} x {} candidate poses of tilt_list x {}",
+                                            l.design_poses, l.tilt_deg.size(), l.c_deg.size(), turn_key));
   return l;
 }
 
@@ -139,7 +152,7 @@ CycleOptions SphereLayout::toOptions() const {
           {"stem_length_mm", fmt::format("{:g}", stem_length_mm)},
           {"stem_diameter_mm", fmt::format("{:g}", stem_diameter_mm)},
           {"tilt_list", numberListOption(tilt_deg)},
-          {"c_list", numberListOption(c_deg)},
+          {turnListOption(), numberListOption(c_deg)},
           {"fit_squareness", fit_squareness ? "1" : "0"}};
   if (!pose_list.empty()) o["pose_list"] = poseListOption(pose_list);
   if (backlash) o["backlash"] = "1";
@@ -165,11 +178,12 @@ struct PoseTouches {
 };
 
 PoseTouches touchesAt(const MachineModel& machine, const SphereLayout& l, char tilt_axis, double tilt, double c) {
+  const char turn_axis = l.turn_axis;
   const double r = machine.probe.ball_radius_mm();
   const double R = l.radius_mm;
   const double reach = R + r + machine.approach_mm;  // the side touches' starts, from the centre
-  const Pose pose = poseOf(tilt_axis, tilt, c);
-  const std::string name = fmt::format("{}{:g}C{:g}", tilt_axis, tilt, c);
+  const Pose pose = poseOf(tilt_axis, turn_axis, tilt, c);
+  const std::string name = fmt::format("{}{:g}{}{:g}", tilt_axis, tilt, turn_axis, c);
   const Eigen::Isometry3d T = T_m_w_nominal(machine.kinematics, pose);
   const Eigen::Vector3d c_m = T * l.center_w_mm;
   const Eigen::Vector3d s_m = T.linear() * -Eigen::Vector3d::UnitZ();  // the stem, from the centre
@@ -183,11 +197,18 @@ PoseTouches touchesAt(const MachineModel& machine, const SphereLayout& l, char t
   const std::string near = sphereReachRefusal(machine, T, c_m, R, reach);
   if (!near.empty())
     throw std::invalid_argument(fmt::format("pose {}: {} (move the sphere with center_w_mm or choose other angles with "
-                                            "tilt_list, c_list)", name, near));
+                                            "tilt_list, {})", name, near, l.turnListOption()));
   PoseTouches out{{name, pose, c_m.z() + R + r + machine.clearance_mm - b_m.z()}, {}};
+  // The side approaches turned about Z until one faces the stylus's lean: a head tilted in two
+  // axes leans it diagonally, and of four axis-parallel sides only two would face it. A lean along
+  // X or Y (a table, one head axis) turns nothing.
+  double turn = 0.0;
+  if (std::hypot(d_m.x(), d_m.y()) > 1e-9) turn = std::remainder(std::atan2(d_m.y(), d_m.x()), kPi / 2);
+  if (std::abs(turn) < 1e-9) turn = 0.0;
+  const Eigen::Matrix3d R_turn = Eigen::AngleAxisd(turn, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   const auto& approaches = sphereApproaches();
   for (size_t j = 0; j < approaches.size(); ++j) {
-    const Eigen::Vector3d u = approaches[j];
+    const Eigen::Vector3d u = turn == 0.0 ? approaches[j] : Eigen::Vector3d(R_turn * approaches[j]);
     const Eigen::Vector3d n_m = -u;  // outward normal at the contact
     if (n_m.dot(s_m) > 1e-9) continue;  // the stem's half: the stylus would reach round to the stem
     if (n_m.dot(d_m) < -1e-9) continue;  // the far half from a tilted stylus: it would reach round the sphere
@@ -234,14 +255,16 @@ Eigen::MatrixXd touchRows(const KinematicModel& m, bool squareness, const PoseTo
 }  // namespace
 
 std::vector<int> sphereHeldFirst(const KinematicModel& m) {
+  if (m.table_axes.empty()) return {};  // head_ab: the rule's own choice (plan.hpp)
   if (!m.head_axes.empty()) return {m.parameterIndex("C0C")};
   return {m.parameterIndex("C0C"), m.parameterIndex(m.table_axes.front() == 'A' ? "A0C" : "B0C")};
 }
 
 ProbePlan makeSpherePlan(const MachineModel& machine, const CycleOptions& options) {
   const char tilt_axis = sphereTiltAxis(machine);
-  if (!machine.hasRotary('C')) throw std::invalid_argument("cycle one_sphere needs a C axis");
   SphereLayout l = SphereLayout::fromOptions(machine, options);
+  if (!machine.hasRotary(l.turn_axis))
+    throw std::invalid_argument(fmt::format("cycle one_sphere needs a {} axis on this machine", l.turn_axis));
   const double r = machine.probe.ball_radius_mm();
   const double R = l.radius_mm;
   if (machine.probe.stylus_length_mm < R + machine.probe.body_clearance_mm)
@@ -280,14 +303,14 @@ ProbePlan makeSpherePlan(const MachineModel& machine, const CycleOptions& option
     o.poses = l.design_poses;
     o.hold_first = sphereHeldFirst(model);
     if (static_cast<int>(candidates.size()) < o.poses)
-      throw std::invalid_argument(fmt::format("option poses = {}: only {} candidate poses of tilt_list x c_list are allowed",
-                                              o.poses, candidates.size()));
+      throw std::invalid_argument(fmt::format("option poses = {}: only {} candidate poses of tilt_list x {} are allowed",
+                                              o.poses, candidates.size(), l.turnListOption()));
     PoseDesign d = designPoses(rows, names, o);
     std::sort(d.chosen.begin(), d.chosen.end());
     for (int k : d.chosen) {
       poses.push_back(candidates[static_cast<size_t>(k)]);
       const Pose& q = poses.back().pose.pose;
-      l.pose_list.emplace_back(tilt_axis == 'A' ? q.A : q.B, q.C);
+      l.pose_list.emplace_back(q.angle(tilt_axis), q.angle(l.turn_axis));
     }
     l.design_poses = 0;
   } else {

@@ -7,12 +7,13 @@
 // to the stem side, and the ball's vertical way down to a side touch, its approach and its
 // stylus stay on that half as long as the tilt keeps the table below the sphere (|tilt| <= 90 deg).
 //
-// It runs on the tilting-table machines (table_ac, table_bc) and on a B or A head over a C table
-// (head_table). On the head machine X Y Z read the head's pivot: every planned position is the
-// reading at which the ball, L along the tilted spindle, is where the touch needs it; a side touch
-// whose contact lies on the sphere's half away from the stylus (n . d < 0, d the stylus's
-// direction) is left out, as the stem's side is, so that the stylus never reaches round the
-// sphere. head_ab has no C table to carry the sphere round: its tool tip is the tooltip cycle's.
+// It runs on the tilting-table machines (table_ac, table_bc), on a B or A head over a C table
+// (head_table) and on an A head carrying a B head over a fixed table (head_ab, whose grid is A x B:
+// the sphere stays, the probe turns round it). On a head machine X Y Z read the head's pivot: every
+// planned position is the reading at which the ball, L along the tilted spindle, is where the
+// touch needs it; a side touch whose contact lies on the sphere's half away from the stylus
+// (n . d < 0, d the stylus's direction) is left out, as the stem's side is, so that the stylus
+// never reaches round the sphere.
 #include <Eigen/Core>
 #include <vector>
 
@@ -27,8 +28,11 @@ struct SphereLayout {
   double stem_length_mm = 60.0;     // sphere centre to the table, along the table's -Z
   double stem_diameter_mm = 8.0;
   std::vector<double> tilt_deg;     // the tilt axis (A or B); default: 0 to 90 deg in 30 deg steps, within the stroke
+  /// The second axis's angles: the C table's (option c_list), or on head_ab the B head's (b_list,
+  /// by default -60 to 60 deg in 30 deg steps, within the stroke).
   std::vector<double> c_deg = {0.0, 90.0, 180.0, 270.0};
-  /// Explicit poses (tilt, C) in deg, in the order run; when set, the grid is not used.
+  char turn_axis = 'C';
+  /// Explicit poses (tilt, C; on head_ab A, B) in deg, in the order run; when set, the grid is not used.
   std::vector<std::pair<double, double>> pose_list;
   /// > 0: a pose design picks this many poses of the grid (D-optimal on the fit's touches,
   /// cycles/one_sphere/design.hpp); the plan then carries them as pose_list. The grid it picks
@@ -46,23 +50,29 @@ struct SphereLayout {
   /// poses (the design's n), fit_squareness, backlash (0 or 1).
   static SphereLayout fromOptions(const MachineModel& machine, const CycleOptions& options);
   CycleOptions toOptions() const;
+  /// The option that lists the second axis's angles: c_list, or b_list on head_ab.
+  std::string turnListOption() const { return turn_axis == 'C' ? "c_list" : "b_list"; }
   /// The poses (tilt, C in deg): pose_list, else the grid tilt_list x c_list (a backlash plan
   /// runs them there and back).
   std::vector<std::pair<double, double>> poses() const;
 };
 
-/// The tilt axis: 'A' for table_ac, 'B' for table_bc, the head's axis for head_table. Throws
-/// std::invalid_argument naming the kinematics for any other.
+/// The tilt axis: 'A' for table_ac and head_ab, 'B' for table_bc, the head's axis for head_table.
+/// Throws std::invalid_argument naming the kinematics when the machine has no touch probe's place
+/// (head_ab without its "head").
 char sphereTiltAxis(const MachineModel& machine);
+/// The pose grid's second axis: C, or the B head that the A head carries on head_ab.
+char sphereTurnAxis(const MachineModel& machine);
 
 /// The exact model the cycle fits on this machine, the sphere at center_w_mm on the table.
 KinematicModel sphereModel(const MachineModel& machine, const Eigen::Vector3d& center_w_mm);
 
 /// How many directions of the fit no set of sphere poses shows (closed form in
-/// tests/core/kinematic_model_test.cpp): 2 on a tilting table, 5 with a head, and with a head one
+/// tests/core/kinematic_model_test.cpp): 2 on a tilting table, 5 with a head, and on head_table one
 /// more when the squareness is fitted: the table never tilts the sphere, so its height stays and
 /// the shear across the head's axis (S_yz under a B head, S_xz under an A head) reads as the C
-/// axis's place plus the head axis's tilt times L cos(tilt).
+/// axis's place plus the head axis's tilt times L cos(tilt). head_ab's two head axes swing the
+/// reading over a sphere of radius L round the ball, which shows all three shears: 5 either way.
 int sphereUnseenByAnyPlan(const KinematicModel& m, bool squareness);
 
 /// The four horizontal approach directions the side touches take, and the top's (-Z).
@@ -72,7 +82,9 @@ const std::vector<Eigen::Vector3d>& sphereApproaches();
 /// the table, 000's "set-up rotation") and, on a tilting table, the tilt of the C axis about the
 /// tilt axis, which the tilt axis's own zero does as well (000 keeps a_AY and drops a_CA). With a
 /// head the others are held as core/identifiability.hpp chooses: the head pivot's X0B / Z0B (the
-/// frame's origin), the ball's dY_T (Y0C carries it) and dX_T (the head's zero carries it).
+/// frame's origin), the ball's dY_T (Y0C carries it) and dX_T (the head's zero carries it). On
+/// head_ab (no table axis) all five are its choice: the head's place X0B Y0A Z0A (the sphere's
+/// set-up carries it), dX_T (B0B carries it) and A0B (A0A carries the spindle's tilt about X).
 std::vector<int> sphereHeldFirst(const KinematicModel& m);
 
 ProbePlan makeSpherePlan(const MachineModel& machine, const CycleOptions& options);

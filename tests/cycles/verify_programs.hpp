@@ -14,11 +14,22 @@
 
 namespace rotacal::test {
 
-/// The number of programs written (each dialect's).
-inline int expectEveryDialectProgramPasses(const ProbePlan& plan) {
+/// The number of programs written (each dialect's). `refused`: a dialect that must refuse the
+/// plan instead (with a reason containing the given text).
+inline int expectEveryDialectProgramPasses(const ProbePlan& plan, const std::string& refused = "",
+                                           const std::string& reason = "") {
   const Cycle& cycle = cycleOfPlan(plan);
   int written = 0;
   for (const std::string d : {"linuxcnc", "fanuc", "haas", "siemens", "heidenhain", "okuma"}) {
+    if (d == refused) {
+      try {
+        (void)dialectByName(d).writeProgram(cycle.program(plan, d));
+        ADD_FAILURE() << d << " wrote a program it should refuse (" << reason << ")";
+      } catch (const std::exception& e) {
+        EXPECT_NE(std::string(e.what()).find(reason), std::string::npos) << d << ": " << e.what();
+      }
+      continue;
+    }
     const std::string text = dialectByName(d).writeProgram(cycle.program(plan, d));
     const ProgramCheckSetup s = programCheckSetup(plan.machine, d, ctl::numbersPrograms(d), &plan, true);
     const ProgramCheckResult r = checkProgram(ctl::readMotions(d, text), s);
