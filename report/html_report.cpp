@@ -414,6 +414,10 @@ std::string analyzeBody(const Json& doc) {
     for (const auto& [name, o] : doc["other_methods"].items())
       if (o.contains("location_errors")) others.push_back({name, &o["location_errors"]});
   if (doc.contains("location_errors")) s += locationTable(doc["location_errors"], others);
+  // Where the cycle's location errors are other parameters (a head's ISO 230-7 set), its note says
+  // where they stand.
+  if (doc.contains("location_errors_note") && !doc.contains("location_errors"))
+    s += "<p>" + escape(str(doc, "location_errors_note")) + "</p>\n";
   s += uncertaintySection(doc);
   if (doc.contains("runs") && doc["runs"].is_array() && doc["runs"].size() > 1) {
     s += "<h3>Per repeat (000 Table 4 layout)</h3>";

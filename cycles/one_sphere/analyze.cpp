@@ -188,8 +188,8 @@ Json sphereReportJson(const ProbePlan& plan, const SphereCycleResult& r, const U
         plan.machine.kinematics == Kinematics::TableAC ? "000 Eq. (1)" : "002 Eq. (2)", r.mapping_residual_um);
   } else {
     j["location_errors_note"] = fmt::format(
-        "a {} machine: its location errors are the ISO 230-7 parameters of kinematic_parameters (the papers' eight "
-        "describe tilting tables)",
+        "a {} machine: its location errors are the ISO 230-7 parameters of kinematic_parameters, in the uncertainty "
+        "table (the papers' eight describe tilting tables)",
         kinematicsName(plan.machine.kinematics));
   }
   Json kp = Json::object();
@@ -206,6 +206,9 @@ Json sphereReportJson(const ProbePlan& plan, const SphereCycleResult& r, const U
   for (const auto& c : r.identifiability.combinations)
     unseen.push_back({{"held", r.names[static_cast<size_t>(c.held)].name}, {"direction", c.text}});
   j["unseparable"] = unseen;
+  // The envelope's figures every report shows (the fit's own below): rms over the touches.
+  j["points_used"] = r.touches;
+  j["residual_rms_um"] = round6(r.touches > 0 ? r.residual_sd_um * std::sqrt(static_cast<double>(r.dof) / r.touches) : 0.0);
   j["fit"] = {{"touches", r.touches},
               {"dof", r.dof},
               {"residual_sd_um", round6(r.residual_sd_um)},
