@@ -139,9 +139,15 @@ Calibration calibrationFromReport(const JsonDoc& doc, const std::string& machine
     Json plan = {{"cycle", c.cycle}};
     if (j.contains("machine_model")) plan["machine"] = j["machine_model"];
     c.plan_json = plan.dump();
-    if (!j.contains("location_errors") || !j["location_errors"].is_object() || j["location_errors"].empty())
+    // A head machine's report carries its ISO 230-7 parameters as kinematic_parameters (no
+    // location_errors in the papers' sense): the fitted ones, with their budget, are its history.
+    const bool head = !j.contains("location_errors") && j.contains("kinematic_parameters");
+    const char* key = head ? "kinematic_parameters" : "location_errors";
+    if (!j.contains(key) || !j[key].is_object() || j[key].empty())
       doc.fail(j, "location_errors", "no location_errors in the report");
-    for (const auto& [name, e] : j["location_errors"].items()) {
+    for (const auto& [name, e] : j[key].items()) {
+      // Held, the sphere's set-up (new at every calibration) or not budgeted: no trend.
+      if (head && (!e.is_object() || e.value("held", false) || e.value("set_up", false) || !e.contains("u_c"))) continue;
       StoredParameter p;
       p.name = name;
       p.value = requireNumber(doc, e, "value", Limits::symmetric(kMaxStoredValue));
@@ -150,6 +156,8 @@ Calibration calibrationFromReport(const JsonDoc& doc, const std::string& machine
       p.u = e.contains("u_between") ? requireNumber(doc, e, "u_between", Limits::nonNegative(kMaxStoredValue))
                                     : requireNumber(doc, e, "u", Limits::nonNegative(kMaxStoredValue));
       p.unit = requireString(doc, e, "unit");
+      if (head && p.unit != "um" && p.unit != "mdeg")
+        doc.fail(e, "unit", fmt::format("unit of '{}' must be um or mdeg (got '{}')", name, p.unit));
       // The trend compares values of one parameter across reports: each in the unit analyze
       // writes for its kind (um for lengths, mdeg for angles).
       for (const Kinematics k : {Kinematics::TableAC, Kinematics::TableBC}) {  // head_ab has no location errors
@@ -159,7 +167,7 @@ Calibration calibrationFromReport(const JsonDoc& doc, const std::string& machine
         if (p.unit != want) doc.fail(e, "unit", fmt::format("unit of '{}' must be {} (got '{}')", name, want, p.unit));
         break;
       }
-      p.iso = stringOr(doc, e, "iso", "");
+      p.iso = head ? name : stringOr(doc, e, "iso", "");
       c.parameters.push_back(p);
     }
     return c;

@@ -197,10 +197,14 @@ Json sphereReportJson(const ProbePlan& plan, const SphereCycleResult& r, const U
     const auto& q = r.names[i];
     Json e = {{"value", round6(toReport(q.kind, r.x[static_cast<Eigen::Index>(i)]))}, {"unit", reportUnit(q.kind)}};
     if (r.identifiability.held[i]) e["held"] = true;
+    // The sphere's place on the table: a new set-up every calibration (history leaves it out).
+    if (q.name == "dX_S" || q.name == "dY_S" || q.name == "dZ_S") e["set_up"] = true;
     else e["separable"] = static_cast<bool>(r.identifiability.separable[i]);
     e["description"] = i < r.model.parameters.size() ? r.model.parameters[i].description : fitExtraDescription(q.name);
     kp[q.name] = e;
   }
+  // Each fitted parameter's budget beside its value (u_between: what history trends with).
+  addBudgetFields(&kp, b);
   j["kinematic_parameters"] = kp;
   Json unseen = Json::array();
   for (const auto& c : r.identifiability.combinations)

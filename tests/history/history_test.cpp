@@ -259,6 +259,42 @@ TEST(HistoryCli, Table4SeriesDriftThenAStep) {
   EXPECT_EQ(Json::parse(piped.out)["trends"], t);
 }
 
+TEST(HistoryCli, AHeadMachinesGrowingSpindleIsADrift) {
+  // A head/head machine (issue 19: examples/machines/ab_head.json) calibrated with one_sphere on
+  // days 0-4 while its spindle grows 3 um/day (dL) and the sphere is set up anew each day. Its
+  // report carries the head's ISO 230-7 parameters as kinematic_parameters: history trends the
+  // fitted ones (dL: a drift of 3 um/day; the axes' errors stable) and leaves the sphere's set-up
+  // and the held parameters out.
+  const fs::path d = freshDir();
+  const std::string db = (d / "h.sqlite").string(), plan = (d / "plan.json").string();
+  ASSERT_EQ(sh(kCli + " plan --cycle one_sphere --machine " + test::sourcePath("examples/machines/ab_head.json") + " -o " + plan).code, 0);
+  for (int day = 0; day <= 4; ++day) {
+    const std::string tr = (d / fmt::format("truth{}.json", day)).string(), res = (d / fmt::format("r{}.txt", day)).string(),
+                      rep = (d / fmt::format("REPORT{}.json", day)).string();
+    std::ofstream(tr) << fmt::format(
+        R"({{"format": "rotacal-truth/1", "location_errors": {{"B0A": {{"value": 15, "unit": "mdeg"}},
+           "C0A": {{"value": -9, "unit": "mdeg"}}, "Z0B": {{"value": -11, "unit": "um"}}, "dL": {{"value": {}, "unit": "um"}},
+           "dX_S": {{"value": {}, "unit": "um"}}, "dY_S": {{"value": {}, "unit": "um"}}}}, "probe_noise_um": 0.7}})",
+        14.0 + 3.0 * day, 40.0 * day - 50.0, 25.0 - 30.0 * day);
+    ASSERT_EQ(sh(kCli + " simulate --plan " + plan + " --truth " + tr + " --seed " + std::to_string(day + 21) +
+                 " --dialect linuxcnc -o " + res).code, 0);
+    ASSERT_EQ(sh(kCli + " -q analyze --plan " + plan + " --results " + res + " --dialect linuxcnc --json " + rep).code, 0);
+    const ShellRun add = sh(kCli + " history add " + rep + " --machine-id head1 --db " + db +
+                            fmt::format(" --time 2026-06-{:02d}T08:00:00Z", 1 + day));
+    ASSERT_EQ(add.code, 0) << add.out;
+  }
+  const std::string trend = (d / "TREND.json").string();
+  const ShellRun show = sh(kCli + " history show --machine-id head1 --db " + db + " --json " + trend);
+  ASSERT_EQ(show.code, 0) << show.out;
+  std::ifstream in(trend);
+  const Json t = Json::parse(in)["trends"];
+  EXPECT_EQ(t["dL"]["verdict"], "drift") << t["dL"].dump();
+  EXPECT_NEAR(t["dL"]["drift_per_day"].get<double>(), 3.0, 3 * t["dL"]["drift_u_per_day"].get<double>());
+  for (const char* name : {"B0A", "C0A", "A0A", "Z0B", "C0B", "B0B", "dY_T"})
+    EXPECT_EQ(t[name]["verdict"], "stable") << name << " " << t[name].dump();
+  for (const char* name : {"dX_S", "dY_S", "dZ_S", "Y0A", "X0B", "dX_T"}) EXPECT_FALSE(t.contains(name)) << name;
+}
+
 // ---- Issue 14: damaged rows, strict dates, the handle of a file that fails to open ----------
 
 /// Runs SQL on a history file behind the store's back (what a damaged or hand-edited file holds).
