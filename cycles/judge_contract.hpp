@@ -122,6 +122,19 @@ inline void addTimeFactor(JudgeProblem& p, const std::vector<double>& t_s) {
   p.factors.push_back({"time", {}, t_s, "s"});
 }
 
+/// The diagnosis of a cycle whose baseline is one fit judged as a whole: the judge's summary
+/// over how many repeats.
+struct JudgedFit {
+  JudgeSummary summary;
+  int runs = 0;
+};
+
+/// The tail such a diagnosis shares: the observations' time as a factor, then the judge.
+inline JudgedFit judgeWithTime(JudgeProblem& p, const std::vector<double>& t_s, size_t runs, const JudgeOptions& o) {
+  addTimeFactor(p, t_s);
+  return {judge(p, o), static_cast<int>(runs)};
+}
+
 /// The DIAGNOSIS.json of a cycle whose baseline is one fit judged as a whole: the contract's
 /// fields, `model` the baseline in words, `separate_with` what would tell a confounded cause apart.
 inline Json judgedDiagnosisJson(const std::string& cycle, const ProbePlan& plan, int runs, const JudgeSummary& s,

@@ -87,11 +87,7 @@ SphereDiagnosis diagnoseSphere(const ProbePlan& plan, const std::vector<Measurem
     p.groups.push_back(g);
   }
   p.factors = {pose, approach};
-  addTimeFactor(p, fit.t_s);
-  SphereDiagnosis d;
-  d.runs = static_cast<int>(runs.size());
-  d.summary = judge(p, options);
-  return d;
+  return judgeWithTime(p, fit.t_s, runs.size(), options);
 }
 
 Json sphereDiagnosisJson(const SphereDiagnosis& d, const ProbePlan& plan) {

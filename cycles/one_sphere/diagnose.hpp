@@ -12,13 +12,11 @@
 #include "core/judge.hpp"
 #include "core/measurement.hpp"
 #include "core/probe_plan.hpp"
+#include "cycles/judge_contract.hpp"
 
 namespace rotacal {
 
-struct SphereDiagnosis {
-  JudgeSummary summary;
-  int runs = 0;
-};
+using SphereDiagnosis = JudgedFit;
 
 SphereDiagnosis diagnoseSphere(const ProbePlan& plan, const std::vector<MeasurementRun>& runs, const JudgeOptions& options);
 Json sphereDiagnosisJson(const SphereDiagnosis& d, const ProbePlan& plan);

@@ -46,11 +46,7 @@ ProbeQualDiagnosis diagnoseProbeQual(const ProbePlan& plan, const std::vector<Me
     repeat.levels.push_back(std::to_string(q.repeat_of[static_cast<size_t>(j)] + 1));
   }
   p.factors = {touch, repeat};
-  addTimeFactor(p, q.t_s);
-  ProbeQualDiagnosis d;
-  d.runs = static_cast<int>(runs.size());
-  d.summary = judge(p, options);
-  return d;
+  return judgeWithTime(p, q.t_s, runs.size(), options);
 }
 
 Json probeQualDiagnosisJson(const ProbeQualDiagnosis& d, const ProbePlan& plan) {

@@ -12,13 +12,11 @@
 #include "core/judge.hpp"
 #include "core/measurement.hpp"
 #include "core/probe_plan.hpp"
+#include "cycles/judge_contract.hpp"
 
 namespace rotacal {
 
-struct ProbeQualDiagnosis {
-  JudgeSummary summary;
-  int runs = 0;
-};
+using ProbeQualDiagnosis = JudgedFit;
 
 ProbeQualDiagnosis diagnoseProbeQual(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
                                      const JudgeOptions& options);
