@@ -12,18 +12,6 @@
 
 namespace rotacal {
 
-Eigen::Vector3d parseVec3Option(const std::string& key, const std::string& text) {
-  const auto v = parseNumberList(key, text);
-  if (v.size() != 3) throw std::invalid_argument("option " + key + ": expected x,y,z in mm, got '" + text + "'");
-  return {v[0], v[1], v[2]};
-}
-
-std::string numberListOption(const std::vector<double>& v) {
-  std::string s;
-  for (size_t i = 0; i < v.size(); ++i) s += (i ? "," : "") + fmt::format("{:g}", v[i]);
-  return s;
-}
-
 Face faceOfNormal(const Eigen::Vector3d& n_m) {
   if (n_m.z() > 0.5) return Face::Top;
   if (std::abs(n_m.x()) > std::abs(n_m.y())) return n_m.x() > 0 ? Face::PosX : Face::NegX;
@@ -57,13 +45,6 @@ Simulated simulateProbing(const SimulateRequest& r) {
   return {r.dialect->write_results(plan, run),
           fmt::format("simulated {} triggers (noise {:.3f} um, seed {}) as {} results", run.points.size(), truth.noise_um,
                       r.seed, r.dialect->name)};
-}
-
-int parseCountOption(const std::string& key, const std::string& text, int lo, int hi) {
-  const double v = parseNumber(key, text);
-  if (!(v >= lo && v <= hi && v == std::floor(v)))
-    throw std::invalid_argument(fmt::format("option {} must be a whole number from {} to {}, not '{}'", key, lo, hi, text));
-  return static_cast<int>(v);
 }
 
 std::string sphereReachRefusal(const MachineModel& machine, const Eigen::Isometry3d& T, const Eigen::Vector3d& c_m,

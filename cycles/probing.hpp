@@ -8,17 +8,9 @@
 #include <Eigen/Geometry>
 
 #include "cycles/cycle.hpp"
+#include "cycles/options.hpp"
 
 namespace rotacal {
-
-/// A plan option "x,y,z" (mm). Throws std::invalid_argument naming the option.
-Eigen::Vector3d parseVec3Option(const std::string& key, const std::string& text);
-
-/// A whole-number plan option from lo to hi. Throws std::invalid_argument naming the option.
-int parseCountOption(const std::string& key, const std::string& text, int lo, int hi);
-
-/// A list option "a,b,c" as parseNumberList reads it back ({:g} each).
-std::string numberListOption(const std::vector<double>& values);
 
 /// The face a contact with outward normal n_m (machine frame) reports: the top, or the side the
 /// normal points to most.

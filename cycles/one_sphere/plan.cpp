@@ -112,22 +112,20 @@ SphereLayout SphereLayout::fromOptions(const MachineModel& machine, const CycleO
     for (double c = 0.0; c < 360.0; c += 30.0) l.c_deg.push_back(c);
   }
   const std::string turn_key = l.turnListOption();
-  for (const auto& [key, value] : options) {
-    if (key == "center_w_mm") l.center_w_mm = parseVec3Option(key, value);
-    else if (key == "radius_mm") l.radius_mm = parseNumber(key, value);
-    else if (key == "stem_length_mm") l.stem_length_mm = parseNumber(key, value);
-    else if (key == "stem_diameter_mm") l.stem_diameter_mm = parseNumber(key, value);
-    else if (key == "tilt_list") l.tilt_deg = parseNumberList(key, value);
-    else if (key == turn_key) l.c_deg = parseNumberList(key, value);
-    else if (key == "pose_list") l.pose_list = parsePoseList(key, value);
-    else if (key == "poses") l.design_poses = parseCountOption(key, value, 0, 1000);
-    else if (key == "fit_squareness") l.fit_squareness = parseSwitch(key, value);
-    else if (key == "backlash") l.backlash = parseSwitch(key, value);
-    else
-      throw std::invalid_argument("unknown option '" + key +
-                                  "' for cycle one_sphere on this machine (center_w_mm, radius_mm, stem_length_mm, "
-                                  "stem_diameter_mm, tilt_list, " + turn_key + ", pose_list, poses, fit_squareness, backlash)");
-  }
+  // The turning axis's list is named for the axis (c_list, or b_list on head_ab): another
+  // axis's list is unknown on this machine.
+  OptionTable("one_sphere")
+      .vec3("center_w_mm", &l.center_w_mm)
+      .number("radius_mm", &l.radius_mm)
+      .number("stem_length_mm", &l.stem_length_mm)
+      .number("stem_diameter_mm", &l.stem_diameter_mm)
+      .list("tilt_list", &l.tilt_deg)
+      .list(turn_key, &l.c_deg)
+      .on("pose_list", [&](const std::string& k, const std::string& v) { l.pose_list = parsePoseList(k, v); })
+      .count("poses", &l.design_poses, 0, 1000)
+      .on("fit_squareness", [&](const std::string& k, const std::string& v) { l.fit_squareness = parseSwitch(k, v); })
+      .on("backlash", [&](const std::string& k, const std::string& v) { l.backlash = parseSwitch(k, v); })
+      .read(options);
   if (!l.pose_list.empty() && l.design_poses > 0)
     throw std::invalid_argument("options pose_list and poses exclude each other (poses designs a pose_list)");
   if (!(l.radius_mm > 0)) throw std::invalid_argument("option radius_mm must be > 0");

@@ -14,19 +14,15 @@ namespace rotacal {
 
 ProbeQualLayout ProbeQualLayout::fromOptions(const CycleOptions& options) {
   ProbeQualLayout l;
-  for (const auto& [key, value] : options) {
-    if (key == "center_w_mm") l.center_w_mm = parseVec3Option(key, value);
-    else if (key == "radius_mm") l.radius_mm = parseNumber(key, value);
-    else if (key == "stem_length_mm") l.stem_length_mm = parseNumber(key, value);
-    else if (key == "stem_diameter_mm") l.stem_diameter_mm = parseNumber(key, value);
-    else if (key == "azimuths") l.azimuths = parseCountOption(key, value, 4, 36);
-    else if (key == "latitude_list") l.latitude_deg = parseNumberList(key, value);
-    else if (key == "repeats") l.repeats = parseCountOption(key, value, 2, 100);
-    else
-      throw std::invalid_argument("unknown option '" + key +
-                                  "' for cycle probe_qual (center_w_mm, radius_mm, stem_length_mm, stem_diameter_mm, "
-                                  "azimuths, latitude_list, repeats)");
-  }
+  OptionTable("probe_qual")
+      .vec3("center_w_mm", &l.center_w_mm)
+      .number("radius_mm", &l.radius_mm)
+      .number("stem_length_mm", &l.stem_length_mm)
+      .number("stem_diameter_mm", &l.stem_diameter_mm)
+      .count("azimuths", &l.azimuths, 4, 36)
+      .list("latitude_list", &l.latitude_deg)
+      .count("repeats", &l.repeats, 2, 100)
+      .read(options);
   if (!(l.radius_mm > 0)) throw std::invalid_argument("option radius_mm must be > 0");
   if (!(l.stem_diameter_mm > 0 && l.stem_diameter_mm < l.radius_mm))
     throw std::invalid_argument("option stem_diameter_mm must be > 0 and below the sphere's radius");

@@ -79,18 +79,10 @@ ProbePlan makeRtestPlan(const MachineModel& m, const CycleOptions& options) {
     throw std::invalid_argument(fmt::format("cycle rtest calibrates a tilting table (table_bc, table_ac), not a {} machine",
                                             kinematicsName(m.kinematics)));
   const std::string tilt_key = m.kinematics == Kinematics::TableBC ? "b_list" : "a_list";
-  static const char* known[] = {"b_list", "a_list", "c_list", "nest_w_mm", "dwell_s", "retract_mm", "thermal",
-                                "interval_min", "duration_h", "recip_list", "recip_feed_deg_min", "sensor_noise_um",
-                                "reset_reads"};
-  for (const auto& [k, v] : options) {
-    bool ok = false;
-    for (const char* n : known) ok = ok || k == n;
-    if (!ok || (k == "a_list" && tilt_key != "a_list") || (k == "b_list" && tilt_key != "b_list"))
-      throw std::invalid_argument(fmt::format(
-          "rtest: unknown option '{}' (expected {}, c_list, nest_w_mm, dwell_s, retract_mm, thermal, interval_min, "
-          "duration_h, recip_list, recip_feed_deg_min, sensor_noise_um, reset_reads)",
-          k, tilt_key));
-  }
+  // The tilt axis's list is named for the axis (a_list or b_list): the other axis's is unknown.
+  requireKnownOptions("rtest", options,
+                      {tilt_key, "c_list", "nest_w_mm", "dwell_s", "retract_mm", "thermal", "interval_min", "duration_h",
+                       "recip_list", "recip_feed_deg_min", "sensor_noise_um", "reset_reads"});
   if (!m.hasRotary(tiltAxis(m.kinematics)) || !m.hasRotary('C'))
     throw std::invalid_argument(fmt::format("rtest needs the {} and C axes", tiltAxis(m.kinematics)));
   // 002 Sec. 4.1: B = -60..60 step 30, C = 0..288 step 72. An A/C table (ac_trunnion: A in

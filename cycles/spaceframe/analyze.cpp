@@ -28,27 +28,25 @@ Eigen::Isometry3d setupTransform(const Eigen::Vector3d& t, const Eigen::Vector3d
 
 SpaceframeLayout SpaceframeLayout::fromOptions(const CycleOptions& options) {
   SpaceframeLayout l;
-  for (const auto& [key, value] : options) {
-    if (key == "theta_list") l.theta_deg = parseNumberList(key, value);
-    else if (key == "phi_list") l.phi_deg = parseNumberList(key, value);
-    else if (key == "origin_w_mm") l.origin_w_mm = parseVec3Option(key, value);
-    else if (key == "sphere_diameter_mm") l.sphere_diameter_mm = parseNumber(key, value);
-    else if (key == "mpe_a_um") l.spec.A_um = parseNumber(key, value);
-    else if (key == "mpe_k_um_per_m") l.spec.K_um_per_m = parseNumber(key, value);
-    else if (key == "min_touch_angle_deg") l.min_touch_angle_deg = parseNumber(key, value);
-    else if (key == "nominal_from") l.nominal_from = value;
-    else if (key == "frame_file") l.frame = loadFrameCalibration(value);
-    else if (key == "frame_u_um") l.frame.u_um = parseNumber(key, value);
-    else if (key == "frame_source") l.frame.source = value;
-    else if (key == "frame_spheres_mm") {
-      const auto v = parseNumberList(key, value);
-      if (v.size() != 21) throw std::invalid_argument("option frame_spheres_mm: expected 7 x (x,y,z), 21 numbers");
-      for (size_t i = 0; i < 7; ++i) l.frame.spheres_mm[i] = Eigen::Vector3d(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
-    } else
-      throw std::invalid_argument("unknown option '" + key +
-                                  "' for cycle spaceframe (known: theta_list, phi_list, origin_w_mm, sphere_diameter_mm, "
-                                  "mpe_a_um, mpe_k_um_per_m, min_touch_angle_deg, nominal_from, frame_file)");
-  }
+  OptionTable("spaceframe")
+      .list("theta_list", &l.theta_deg)
+      .list("phi_list", &l.phi_deg)
+      .vec3("origin_w_mm", &l.origin_w_mm)
+      .number("sphere_diameter_mm", &l.sphere_diameter_mm)
+      .number("mpe_a_um", &l.spec.A_um)
+      .number("mpe_k_um_per_m", &l.spec.K_um_per_m)
+      .number("min_touch_angle_deg", &l.min_touch_angle_deg)
+      .text("nominal_from", &l.nominal_from)
+      .on("frame_file", [&](const std::string&, const std::string& v) { l.frame = loadFrameCalibration(v); })
+      .number("frame_u_um", &l.frame.u_um)
+      .text("frame_source", &l.frame.source)
+      .on("frame_spheres_mm",
+          [&](const std::string& k, const std::string& value) {
+            const auto v = parseNumberList(k, value);
+            if (v.size() != 21) throw std::invalid_argument("option frame_spheres_mm: expected 7 x (x,y,z), 21 numbers");
+            for (size_t i = 0; i < 7; ++i) l.frame.spheres_mm[i] = Eigen::Vector3d(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
+          })
+      .read(options);
   if (options.count("frame_file") && (options.count("frame_spheres_mm") || options.count("frame_u_um")))
     throw std::invalid_argument("option frame_file cannot be combined with frame_spheres_mm or frame_u_um");
   if (!(l.frame.u_um >= 0 && l.frame.u_um <= 1000)) throw std::invalid_argument("option frame_u_um must lie in [0, 1000] um");

@@ -18,18 +18,10 @@ Spheres3Layout Spheres3Layout::fromOptions(const MachineModel& machine, const Cy
   for (int i = 0; i < 3; ++i)
     l.centers_w_mm[i] = Eigen::Vector3d(rho * std::cos(degToRad(angles_deg[i])), rho * std::sin(degToRad(angles_deg[i])),
                                         heights[i]);
-  for (const auto& [key, value] : options) {
-    if (key == "c_step_deg") l.c_step_deg = parseNumber(key, value);
-    else if (key == "c_start_deg") l.c_start_deg = parseNumber(key, value);
-    else if (key == "radius_mm") l.radius_mm = parseNumber(key, value);
-    else if (key == "sphere1_w_mm") l.centers_w_mm[0] = parseVec3Option(key, value);
-    else if (key == "sphere2_w_mm") l.centers_w_mm[1] = parseVec3Option(key, value);
-    else if (key == "sphere3_w_mm") l.centers_w_mm[2] = parseVec3Option(key, value);
-    else
-      throw std::invalid_argument("unknown option '" + key +
-                                  "' for cycle spheres3 (known: c_step_deg, c_start_deg, radius_mm, sphere1_w_mm, "
-                                  "sphere2_w_mm, sphere3_w_mm)");
-  }
+  OptionTable table("spheres3");
+  table.number("c_step_deg", &l.c_step_deg).number("c_start_deg", &l.c_start_deg).number("radius_mm", &l.radius_mm);
+  for (int i = 0; i < 3; ++i) table.vec3(fmt::format("sphere{}_w_mm", i + 1), &l.centers_w_mm[i]);
+  table.read(options);
   if (!(l.radius_mm > 0)) throw std::invalid_argument("option radius_mm must be positive");
   l.angleCount();
   // The three centres must span a plane (a rigid pose per angle) and the spheres must not overlap.

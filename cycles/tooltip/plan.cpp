@@ -14,13 +14,10 @@
 #include "core/errors.hpp"
 #include "core/rng.hpp"
 #include "core/units.hpp"
+#include "cycles/options.hpp"
 
 namespace rotacal {
 namespace {
-
-const std::set<std::string> kKnownOptions = {"axis",  "radius_mm", "step_deg", "start_deg", "end_deg", "other_deg",
-                                             "units", "move_s",    "dwell_s",  "sweeps",
-                                             "laser_noise_um", "max_sag_um"};
 
 Eigen::Matrix3d rx(double a) {
   Eigen::Matrix3d m;
@@ -64,43 +61,33 @@ int transverseIndex(char axis) { return axis == 'A' ? 1 : 0; }
 }  // namespace
 
 TooltipOptions tooltipOptionsFrom(const CycleOptions& options, const MachineModel& machine) {
-  for (const auto& [k, v] : options)
-    if (!kKnownOptions.count(k))
-      throw std::invalid_argument("tooltip: unknown option '" + k +
-                                  "' (expected axis, radius_mm, step_deg, end_deg, other_deg, units, move_s, dwell_s, "
-                                  "sweeps, laser_noise_um, max_sag_um)");
   if (machine.kinematics != Kinematics::HeadAB)
     throw std::invalid_argument("tooltip: the fixed-tool-tip cycle needs a spindle-head machine (kinematics head_ab, "
                                 "e.g. examples/machines/head_ab.json)");
   TooltipOptions o;
   o.inch = machine.units == LengthUnit::Inch;
-  auto get = [&](const char* k) -> const std::string* {
-    const auto it = options.find(k);
-    return it == options.end() ? nullptr : &it->second;
-  };
-  if (auto* v = get("axis")) {
-    if (*v != "A" && *v != "B") throw std::invalid_argument("tooltip: option axis must be A or B, got '" + *v + "'");
-    o.axis = (*v)[0];
-  }
-  if (auto* v = get("radius_mm")) o.radius_mm = parseNumber("radius_mm", *v);
-  if (auto* v = get("step_deg")) o.step_deg = parseNumber("step_deg", *v);
-  if (auto* v = get("end_deg")) o.end_deg = parseNumber("end_deg", *v);
-  if (auto* v = get("start_deg")) o.start_deg = parseNumber("start_deg", *v);
-  if (auto* v = get("other_deg")) o.other_deg = parseNumberList("other_deg", *v);
-  if (auto* v = get("move_s")) o.move_s = parseNumber("move_s", *v);
-  if (auto* v = get("dwell_s")) o.dwell_s = parseNumber("dwell_s", *v);
-  if (auto* v = get("laser_noise_um")) o.noise_um = parseNumber("laser_noise_um", *v);
-  if (auto* v = get("max_sag_um")) o.max_sag_um = parseNumber("max_sag_um", *v);
-  if (auto* v = get("units")) {
-    if (*v != "inch" && *v != "mm") throw std::invalid_argument("tooltip: option units must be inch or mm, got '" + *v + "'");
-    o.inch = *v == "inch";
-  }
-  if (auto* v = get("sweeps")) {
-    const double s = parseNumber("sweeps", *v);
-    if (s < 0 || s != std::floor(s) || s > kMaxRepeats)
-      throw std::invalid_argument(fmt::format("tooltip: option sweeps must be a whole number 0..{}", kMaxRepeats));
-    o.sweeps = static_cast<int>(s);
-  }
+  OptionTable("tooltip")
+      .on("axis",
+          [&](const std::string&, const std::string& v) {
+            if (v != "A" && v != "B") throw std::invalid_argument("tooltip: option axis must be A or B, got '" + v + "'");
+            o.axis = v[0];
+          })
+      .number("radius_mm", &o.radius_mm)
+      .number("step_deg", &o.step_deg)
+      .number("start_deg", &o.start_deg)
+      .number("end_deg", &o.end_deg)
+      .list("other_deg", &o.other_deg)
+      .on("units",
+          [&](const std::string&, const std::string& v) {
+            if (v != "inch" && v != "mm") throw std::invalid_argument("tooltip: option units must be inch or mm, got '" + v + "'");
+            o.inch = v == "inch";
+          })
+      .number("move_s", &o.move_s)
+      .number("dwell_s", &o.dwell_s)
+      .count("sweeps", &o.sweeps, 0, kMaxRepeats)
+      .number("laser_noise_um", &o.noise_um)
+      .number("max_sag_um", &o.max_sag_um)
+      .read(options);
   if (!(o.radius_mm > 0)) throw std::invalid_argument("tooltip: option radius_mm must be positive");
   if (!(o.step_deg > 0) || !(o.end_deg > 0)) throw std::invalid_argument("tooltip: step_deg and end_deg must be positive");
   const double n = o.end_deg / o.step_deg;

@@ -13,15 +13,12 @@ namespace rotacal {
 
 Touch154Layout Touch154Layout::fromOptions(const CycleOptions& options) {
   Touch154Layout l;
-  for (const auto& [key, value] : options) {
-    if (key == "top_offsets_mm") l.top_offsets_mm = parseNumberList(key, value);
-    else if (key == "side_offsets_mm") l.side_offsets_mm = parseNumberList(key, value);
-    else if (key == "side_depth_mm") l.side_depth_mm = parseNumber(key, value);
-    else if (key == "top_ring") l.top_ring = parseNumber(key, value) != 0.0;
-    else
-      throw std::invalid_argument("unknown option '" + key +
-                                  "' for cycle touch154 (known: top_offsets_mm, top_ring, side_offsets_mm, side_depth_mm)");
-  }
+  OptionTable("touch154")
+      .list("top_offsets_mm", &l.top_offsets_mm)
+      .on("top_ring", [&](const std::string& k, const std::string& v) { l.top_ring = parseNumber(k, v) != 0.0; })
+      .list("side_offsets_mm", &l.side_offsets_mm)
+      .number("side_depth_mm", &l.side_depth_mm)
+      .read(options);
   if (l.side_depth_mm <= 0) throw std::invalid_argument("option side_depth_mm must be positive");
   // Seven poses, each touching up to four sides and the whole top grid: refuse before building.
   const double top = static_cast<double>(l.top_offsets_mm.size());

@@ -3,7 +3,9 @@
 // and a malformed results file rejected naming the file. A new cycle is tested by being listed.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <map>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -127,6 +129,39 @@ TEST_P(CycleBattery, MalformedResultsAreRejectedNamingTheFile) {
     }
   }
 }
+
+TEST_P(CycleBattery, AnUnknownOptionIsRefusedWithTheCyclesKeys) {
+  // One rule for every cycle (cycles/options.hpp): the refusal names the key and the cycle, and
+  // lists keys the cycle reads; each listed key gets past the rule (its value may still be refused).
+  const CycleExample ex = cycle().example();
+  const MachineModel m = loadMachine(test::sourcePath(ex.machine));
+  CycleOptions o = ex.options;
+  o["no_such_option"] = "1";
+  std::string why;
+  try {
+    (void)cycle().plan(m, o);
+  } catch (const std::invalid_argument& e) {
+    why = e.what();
+  }
+  const std::string head = "unknown option 'no_such_option' for cycle " + std::string(cycle().name()) + " (known: ";
+  ASSERT_EQ(why.rfind(head, 0), 0u) << why;
+  ASSERT_EQ(why.back(), ')');
+  const std::string listed = why.substr(head.size(), why.size() - head.size() - 1);
+  size_t keys = 0;
+  for (size_t at = 0; at <= listed.size(); ++keys) {
+    const size_t comma = std::min(listed.find(", ", at), listed.size());
+    CycleOptions one = ex.options;
+    one[listed.substr(at, comma - at)] = "7";
+    try {
+      (void)cycle().plan(m, one);
+    } catch (const std::exception& e) {  // a file option (frame_file) fails to open "7": not the rule
+      EXPECT_EQ(std::string(e.what()).find("unknown option"), std::string::npos) << e.what();
+    }
+    at = comma + 2;
+  }
+  EXPECT_GE(keys, 4u) << listed;
+}
+
 
 INSTANTIATE_TEST_SUITE_P(EveryCycle, CycleBattery, ::testing::ValuesIn(cycleNames()),
                          [](const ::testing::TestParamInfo<std::string>& i) { return i.param; });
