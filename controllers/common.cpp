@@ -279,6 +279,20 @@ size_t nextNonBlank(const std::vector<nc::Block>& blocks, size_t i) {
   return blocks.size();
 }
 
+std::vector<size_t> nextBlocks(const std::vector<nc::Block>& blocks, size_t i, int n) {
+  std::vector<size_t> out;
+  for (size_t j = nextNonBlank(blocks, i); j < blocks.size() && static_cast<int>(out.size()) < n; j = nextNonBlank(blocks, j))
+    out.push_back(j);
+  return out;
+}
+
+std::vector<std::string> blockProblems(const std::vector<nc::Block>& blocks, const ProbePlan& plan,
+                                       const std::string& dialect) {
+  std::vector<std::string> out = inverseTimeProblems(blocks, isProbingBlock);
+  for (auto& s : strokeProblems(blocks, plan, dialect)) out.push_back(std::move(s));
+  return out;
+}
+
 
 namespace {
 // Days since 1970-01-01 of a proleptic Gregorian date (H. Hinnant's days_from_civil).
@@ -401,67 +415,102 @@ std::optional<AxisDirection> axisAligned(const Eigen::Vector3d& d) {
   return std::nullopt;
 }
 
+ResultLines::ResultLines(const std::string& text, std::string file, std::string header_token, std::string expected_header,
+                         std::string second_header_why, std::string skip)
+    : lines_(splitLines(text)),
+      file_(std::move(file)),
+      header_token_(std::move(header_token)),
+      expected_header_(std::move(expected_header)),
+      second_header_why_(std::move(second_header_why)),
+      skip_(std::move(skip)) {}
+
+bool ResultLines::next() {
+  for (; at_ < lines_.size(); ++at_) {
+    s = trim(lines_[at_].text);
+    if (s.empty() || (!skip_.empty() && s == skip_)) continue;
+    number = last_ = lines_[at_++].number;
+    if (end_line_) fail(file_, number, fmt::format("text after END (line {}): '{}'", end_line_, s));
+    t = tokens(s);
+    if (isHeader()) {
+      if (header_) fail(file_, number, "a second header line: one run per results file" + second_header_why_);
+      header_ = true;
+    } else if (!header_) {
+      fail(file_, number, fmt::format("expected the header '{}', got '{}'", expected_header_, s));
+    }
+    return true;
+  }
+  return false;
+}
+
+bool ResultLines::isEnd() {
+  if (s != "END") return false;
+  end_line_ = number;
+  return true;
+}
+
+void ResultLines::refuseNotTriggered() const {
+  if (t.empty() || t[0] != "NOT-TRIGGERED") return;
+  const std::string id_text = trim(s.substr(std::string("NOT-TRIGGERED").size()));
+  const auto id = id_text.size() > 1 && id_text[0] == 'P' ? parseDigits(trim(id_text.substr(1))) : std::nullopt;
+  if (!id) fail(file_, number, fmt::format("expected 'NOT-TRIGGERED P<id>', got '{}'", s));
+  fail(file_, number, fmt::format("point {} was not triggered: the program stopped there", *id));
+}
+
+void ResultLines::finish(const PointCollector& points, std::string_view stopped_why) const {
+  if (!header_) fail(file_, 1, fmt::format("empty results file: expected the header '{}'", expected_header_));
+  if (end_line_) return;
+  if (const int missing = points.firstMissing())
+    fail(file_, last_, fmt::format("point {} is missing and there is no END line: the program stopped early{}", missing,
+                                   stopped_why));
+  fail(file_, last_, "no END line after the last point: the file is incomplete");
+}
+
+double taggedHeaderMmPerUnit(const std::string& s, const std::string& file, int line, const ProbePlan& plan,
+                             std::string_view tag, std::string_view cycle_token) {
+  const auto t = tokens(s);
+  if (t.size() != 9 || t[1] != "DIALECT" || t[3] != "CYCLE" || t[5] != "POINTS" || t[7] != "UNIT")
+    fail(file, line, fmt::format("expected the header 'ROTACAL-RESULTS DIALECT {} CYCLE {} POINTS {} UNIT MM|INCH', got '{}'",
+                                 tag, cycle_token, plan.points.size(), s));
+  if (t[2] != tag) fail(file, line, fmt::format("results of dialect '{}', expected {}", t[2], tag));
+  if (t[4] != cycle_token) fail(file, line, fmt::format("results of cycle '{}', the plan is '{}'", t[4], cycle_token));
+  const auto n = parseDigits(t[6]);
+  if (!n) fail(file, line, fmt::format("POINTS '{}' is not a number", t[6]));
+  if (static_cast<size_t>(*n) != plan.points.size())
+    fail(file, line, fmt::format("header says POINTS {} but the plan has {} points", *n, plan.points.size()));
+  if (t[8] == "MM") return 1.0;
+  if (t[8] == "INCH") return kMmPerInch;
+  fail(file, line, fmt::format("UNIT '{}' must be MM or INCH", t[8]));
+}
+
 MeasurementRun parseTaggedResults(const std::string& text, const std::string& file, const ProbePlan& plan,
-                                std::string_view tag, std::string_view cycle_token, std::string_view second_header_why) {
-  const std::string expected_header = fmt::format("ROTACAL-RESULTS DIALECT {} CYCLE {} POINTS {} UNIT MM|INCH", tag, cycle_token,
-                                                  plan.points.size());
+                                  std::string_view tag, std::string_view cycle_token, std::string_view second_header_why) {
   requireText(text, file);
+  ResultLines in(text, file, "ROTACAL-RESULTS",
+                 fmt::format("ROTACAL-RESULTS DIALECT {} CYCLE {} POINTS {} UNIT MM|INCH", tag, cycle_token,
+                             plan.points.size()),
+                 std::string(second_header_why));
   PointCollector points(plan, file);
-  bool header = false;
-  int end_line = 0;
   double k = 1.0;
-  int last = 1;
-  for (const auto& l : splitLines(text)) {
-    const std::string s = trim(l.text);
-    if (s.empty()) continue;
-    last = l.number;
-    if (end_line) fail(file, l.number, fmt::format("text after END (line {}): '{}'", end_line, s));
-    const auto t = tokens(s);
-    if (t[0] == "ROTACAL-RESULTS") {
-      if (header) fail(file, l.number, fmt::format("a second header line: one run per results file{}", second_header_why));
-      header = true;
-      if (t.size() != 9 || t[1] != "DIALECT" || t[3] != "CYCLE" || t[5] != "POINTS" || t[7] != "UNIT")
-        fail(file, l.number, fmt::format("expected the header '{}', got '{}'", expected_header, s));
-      if (t[2] != tag) fail(file, l.number, fmt::format("results of dialect '{}', expected {}", t[2], tag));
-      if (t[4] != cycle_token)
-        fail(file, l.number, fmt::format("results of cycle '{}', the plan is '{}'", t[4], cycle_token));
-      const auto n = parseDigits(t[6]);
-      if (!n) fail(file, l.number, fmt::format("POINTS '{}' is not a number", t[6]));
-      if (static_cast<size_t>(*n) != plan.points.size())
-        fail(file, l.number, fmt::format("header says POINTS {} but the plan has {} points", *n, plan.points.size()));
-      if (t[8] == "MM") k = 1.0;
-      else if (t[8] == "INCH") k = kMmPerInch;
-      else fail(file, l.number, fmt::format("UNIT '{}' must be MM or INCH", t[8]));
+  while (in.next()) {
+    if (in.isHeader()) {
+      k = taggedHeaderMmPerUnit(in.s, file, in.number, plan, tag, cycle_token);
       continue;
     }
-    if (!header) fail(file, l.number, fmt::format("expected the header '{}', got '{}'", expected_header, s));
-    if (s == "END") {
-      end_line = l.number;
-      continue;
-    }
-    if (t[0] == "NOT-TRIGGERED") {
-      const auto id = t.size() == 2 && t[1].size() > 1 && t[1][0] == 'P' ? parseDigits(t[1].substr(1)) : std::nullopt;
-      if (!id) fail(file, l.number, fmt::format("expected 'NOT-TRIGGERED P<id>', got '{}'", s));
-      fail(file, l.number, fmt::format("point {} was not triggered: the program stopped there", *id));
-    }
-    const auto f = letteredFields(s, "XYZ", file, l.number);
+    if (in.isEnd()) continue;
+    in.refuseNotTriggered();
+    const auto f = letteredFields(in.s, "XYZ", file, in.number);
     Eigen::Vector3d x;
     for (int i = 0; i < 3; ++i) {
       const auto v = parseNumber(f.fields[static_cast<size_t>(i)]);
       if (!v)
-        fail(file, l.number,
-                  fmt::format("{} '{}' of point {} is not a number", "XYZ"[i], f.fields[static_cast<size_t>(i)], f.id));
+        fail(file, in.number,
+             fmt::format("{} '{}' of point {} is not a number", "XYZ"[i], f.fields[static_cast<size_t>(i)], f.id));
       x[i] = *v * k;
     }
-    points.add(l.number, static_cast<int>(f.id), x, std::numeric_limits<double>::quiet_NaN());
+    points.add(in.number, static_cast<int>(f.id), x, std::numeric_limits<double>::quiet_NaN());
   }
-  if (!header) fail(file, 1, fmt::format("empty results file: expected the header '{}'", expected_header));
-  if (!end_line) {
-    if (const int missing = points.firstMissing())
-      fail(file, last, fmt::format("point {} is missing and there is no END line: the program stopped early", missing));
-    fail(file, last, "no END line after the last point: the file is incomplete");
-  }
-  return points.finish(last);
+  in.finish(points);
+  return points.finish(in.last());
 }
 
 std::string trimmed(double v, int decimals) {
@@ -668,24 +717,24 @@ void refuseRtestOps(std::string_view dialect) {
                                           dialect));
 }
 
-void writeOps(const nc::Program& p, const WordAddressMoves& moves, const std::function<void(const std::string&)>& line,
+void writeOps(const nc::Program& p, const WordAddressMoves& moves, LineWriter& w,
               const std::function<void(const nc::Op&)>& own, const std::function<void()>& before_index) {
   const bool inch = p.unit == nc::Unit::Inch;
   ModeGuard guard;
   for (const auto& op : p.ops) {
     guard.apply(op);
     switch (op.kind) {
-      case nc::Op::Kind::Rapid: line(rapidBlock(moves.rapid, op, moves.decimals)); break;
-      case nc::Op::Kind::Linear: line(linearBlock(moves.feed, op, moves.decimals, inch)); break;
+      case nc::Op::Kind::Rapid: w.line(rapidBlock(moves.rapid, op, moves.decimals)); break;
+      case nc::Op::Kind::Linear: w.line(linearBlock(moves.feed, op, moves.decimals, inch)); break;
       case nc::Op::Kind::Index: {
         requireRapidIndex(op, moves.dialect);
         std::string s(moves.rapid);
         for (const auto& [axis, deg] : op.rotary) s += fmt::format(" {}{}", axis, fixed(deg, moves.decimals));
         if (before_index) before_index();
-        line(s);
+        w.line(s);
         break;
       }
-      case nc::Op::Kind::RotaryLinear: line(rotaryLinearWords(op, p.unit, moves.rotary_linear_sep)); break;
+      case nc::Op::Kind::RotaryLinear: w.line(rotaryLinearWords(op, p.unit, moves.rotary_linear_sep)); break;
       case nc::Op::Kind::Dwell:
       case nc::Op::Kind::Read:
       case nc::Op::Kind::RepeatBegin:
@@ -760,27 +809,41 @@ MeasurementRun TaggedResultsDialect::parseResults(const std::string& text, const
   return parseTaggedResults(text, file, plan, form_.tag, form_.cycle_token(plan.cycle), form_.second_header_why);
 }
 
-size_t nextCode(const std::vector<std::string>& code, size_t i) {
+TextCheck::TextCheck(std::string_view text) : lines(splitLines(text)), code(lines.size()), text_(text) {}
+
+void TextCheck::problem(int line, const std::string& what) { problems.push_back(fmt::format("{}: {}", line, what)); }
+
+int TextCheck::lastLine() const { return lines.empty() ? 1 : lines.back().number; }
+
+size_t TextCheck::nextCode(size_t i) const {
   for (size_t j = i + 1; j < code.size(); ++j)
     if (!code[j].empty()) return j;
   return code.size();
 }
 
-std::vector<std::string> closingProblems(const std::string& text, const std::vector<TextLine>& lines,
-                                         const std::vector<std::string>& code, std::string_view end,
-                                         const std::string& motion_text, bool inch, const ProbePlan& plan,
-                                         const std::string& dialect) {
-  std::vector<std::string> out = inverseTimeProblems(nc::readProgram(text), isProbingBlock);
+void TextCheck::lineLength(size_t i, size_t max) {
+  if (lines[i].text.size() > max)
+    problem(lines[i].number, fmt::format("line has {} characters, more than {}", lines[i].text.size(), max));
+}
+
+void TextCheck::probeCount(int found, size_t planned, std::string_view moves) {
+  if (static_cast<size_t>(found) != planned)
+    problem(lastLine(), fmt::format("{} {}, the plan has {} points", found, moves, planned));
+}
+
+std::vector<std::string> TextCheck::finish(std::string_view end, const std::string& motion_text, bool inch,
+                                           const ProbePlan& plan, const std::string& dialect) {
+  for (auto& s : inverseTimeProblems(nc::readProgram(text_), isProbingBlock)) problems.push_back(std::move(s));
   // The unit line comes first: each motion block then keeps its line's number.
   std::vector<nc::Block> blocks = nc::readProgram(std::string(inch ? "G20" : "G21") + "\n" + motion_text);
   for (size_t i = 0; i < blocks.size(); ++i) blocks[i].line = static_cast<int>(i);
-  for (auto& s : strokeProblems(blocks, plan, dialect)) out.push_back(std::move(s));
+  for (auto& s : strokeProblems(blocks, plan, dialect)) problems.push_back(std::move(s));
   size_t last = lines.size();
   for (size_t i = 0; i < lines.size(); ++i)
     if (!code[i].empty()) last = i;
   if (last == lines.size() || code[last] != end)
-    out.push_back(fmt::format("{}: the program does not end with {}", last == lines.size() ? 1 : lines[last].number, end));
-  return out;
+    problem(last == lines.size() ? 1 : lines[last].number, fmt::format("the program does not end with {}", end));
+  return std::move(problems);
 }
 
 }  // namespace rotacal::ctl

@@ -113,6 +113,13 @@ std::vector<std::string> readerIssues(const std::vector<nc::Block>& blocks);
 
 /// Index of the next non-blank block after `i` (blocks.size() when none).
 size_t nextNonBlank(const std::vector<nc::Block>& blocks, size_t i);
+/// Indices of the (up to) `n` non-blank blocks after block `i`, in order: where a checker looks
+/// for the no-trigger check that must follow a probing move.
+std::vector<size_t> nextBlocks(const std::vector<nc::Block>& blocks, size_t i, int n);
+/// The checks every block-based checker (Macro B, LinuxCNC) makes of the whole program: its
+/// inverse-time problems, then its stroke problems.
+std::vector<std::string> blockProblems(const std::vector<nc::Block>& blocks, const ProbePlan& plan,
+                                       const std::string& dialect);
 
 
 // ---- Additions for the haas / siemens / heidenhain / okuma dialects and the Fanuc clock ----
@@ -171,6 +178,47 @@ std::optional<AxisDirection> axisAligned(const Eigen::Vector3d& direction);
 /// POINTS <n> UNIT MM|INCH", one "P<id> X<x> Y<y> Z<z>" line per point (any spacing),
 /// "NOT-TRIGGERED P<id>" where the program stopped, and "END". `second_header_why` is added to
 /// the message when a second header shows an appended old run.
+/// The lines of a results file as every line-based reader takes them (tagged, Macro B,
+/// Heidenhain): trimmed, blank lines and `skip` lines passed over, with the rules they share: the
+/// header first and once, nothing after the END line, a NOT-TRIGGERED line where the program
+/// stopped, and at the end an empty file or a missing END named. Errors are InputError(file, line).
+class ResultLines {
+ public:
+  ResultLines(const std::string& text, std::string file, std::string header_token, std::string expected_header,
+              std::string second_header_why, std::string skip = "");
+  /// Moves to the next line (number, s, t); false after the last. Throws at text after END, at a
+  /// line before the header and at a second header.
+  bool next();
+  /// This line is the header (its checks are the reader's).
+  bool isHeader() const { return !t.empty() && t[0] == header_token_; }
+  /// This line is "END": marks it, and anything after it is refused.
+  bool isEnd();
+  /// Throws at a "NOT-TRIGGERED P<id>" line, naming the point where the program stopped.
+  void refuseNotTriggered() const;
+  /// After the last line: throws for an empty file, or a file without END (naming the first plan
+  /// point not read, and `stopped_why` after "the program stopped early").
+  void finish(const PointCollector& points, std::string_view stopped_why = "") const;
+  int last() const { return last_; }
+
+  int number = 0;
+  std::string s;
+  std::vector<std::string> t;
+
+ private:
+  std::vector<TextLine> lines_;
+  size_t at_ = 0;
+  std::string file_, header_token_, expected_header_, second_header_why_, skip_;
+  bool header_ = false;
+  int end_line_ = 0;
+  int last_ = 1;
+};
+
+/// The header line of a tagged results file, "ROTACAL-RESULTS DIALECT <tag> CYCLE <cycle_token>
+/// POINTS <n> UNIT MM|INCH" (the trimmed text `s` of line `line` of `file`): throws InputError
+/// naming what differs from the plan; returns the file's mm per unit (1 or 25.4).
+double taggedHeaderMmPerUnit(const std::string& s, const std::string& file, int line, const ProbePlan& plan,
+                             std::string_view tag, std::string_view cycle_token);
+
 MeasurementRun parseTaggedResults(const std::string& text, const std::string& file, const ProbePlan& plan,
                                   std::string_view tag, std::string_view cycle_token, std::string_view second_header_why);
 
@@ -260,6 +308,27 @@ int probeCount(const nc::Program& program);
 /// `max_chars`: the control would cut the block or refuse the program.
 void appendLine(std::string& out, const std::string& s, size_t max_chars);
 
+/// A program or offsets file written line by line: `text` gains each line and its "\n"; with
+/// `max_chars` > 0 a longer line throws (appendLine's rule); comment() writes a text as the
+/// dialect's comment lines (`comments` cuts and wraps it in the dialect's syntax).
+class LineWriter {
+ public:
+  using Comments = std::vector<std::string> (*)(std::string_view text);
+  explicit LineWriter(Comments comments, size_t max_chars = 0) : comments_(comments), max_chars_(max_chars) {}
+  void line(const std::string& s) {
+    if (max_chars_ > 0) appendLine(text, s, max_chars_);
+    else text += s + "\n";
+  }
+  void comment(std::string_view s) {
+    for (const auto& c : comments_(s)) line(c);
+  }
+  std::string text;
+
+ private:
+  Comments comments_;
+  size_t max_chars_;
+};
+
 /// Throws std::invalid_argument: the R-test program's dwell, logger trigger and loops (002) are
 /// spelled for linuxcnc only so far.
 [[noreturn]] void refuseRtestOps(std::string_view dialect);
@@ -273,11 +342,11 @@ struct WordAddressMoves {
   std::string rotary_linear_sep;  // between the words of a RotaryLinear op
 };
 /// The ops of `program` in order, each after ModeGuard::apply: the moves spelled alike (Rapid,
-/// Linear, Index at rapid only, RotaryLinear) written through `line`, the R-test's ops refused
+/// Linear, Index at rapid only, RotaryLinear) written to `w`, the R-test's ops refused
 /// (refuseRtestOps), and the dialect's own (Comment, Mode, Pause, Probe) given to `own`.
 /// `before_index` runs before an index block is written.
-void writeOps(const nc::Program& program, const WordAddressMoves& moves,
-              const std::function<void(const std::string&)>& line, const std::function<void(const nc::Op&)>& own,
+void writeOps(const nc::Program& program, const WordAddressMoves& moves, LineWriter& w,
+              const std::function<void(const nc::Op&)>& own,
               const std::function<void()>& before_index = {});
 /// The block of a Mode op in ISO words (004 Table 1): "G91 G01 G93 F2." when it switches to
 /// inverse time at a feed (G1 in force for the word-only blocks after it), else "G90 G94" and the
@@ -337,16 +406,34 @@ class TaggedResultsDialect : public Dialect {
   Form form_;
 };
 
-/// Index of the next non-empty entry of `code` after `i` (code.size() when none).
-size_t nextCode(const std::vector<std::string>& code, size_t i);
+/// A line-based program check (the dialects whose programs the NC reader does not parse: okuma,
+/// siemens, heidenhain): the text's lines, each line's code without its comments (the dialect
+/// fills `code`, knowing its comment syntax) and the problems found, "LINE: what".
+class TextCheck {
+ public:
+  explicit TextCheck(std::string_view text);
+  const std::vector<TextLine> lines;
+  std::vector<std::string> code;
+  std::vector<std::string> problems;
 
-/// The checks the line-based checkers (okuma, siemens) end with, in this order: the
-/// inverse-time problems of `text`, the stroke problems of `motion_text` (the motion blocks at
-/// their lines' places, the others blank, read after the unit line of `inch`), and
-/// "LINE: the program does not end with <end>" when the last non-empty `code` entry is not `end`.
-std::vector<std::string> closingProblems(const std::string& text, const std::vector<TextLine>& lines,
-                                         const std::vector<std::string>& code, std::string_view end,
-                                         const std::string& motion_text, bool inch, const ProbePlan& plan,
-                                         const std::string& dialect);
+  void problem(int line, const std::string& what);
+  /// The number of the text's last line (1 for an empty text).
+  int lastLine() const;
+  /// Index of the next non-empty `code` entry after `i` (lines.size() when none).
+  size_t nextCode(size_t i) const;
+  /// Line `i` longer than `max` characters.
+  void lineLength(size_t i, size_t max);
+  /// "<found> <moves>, the plan has <planned> points" at the last line when the counts differ.
+  void probeCount(int found, size_t planned, std::string_view moves);
+  /// The checks a line-based checker ends with, in this order: the inverse-time problems of the
+  /// whole text, the stroke problems of `motion_text` (the motion blocks at their lines' places,
+  /// the others blank, read after the unit line of `inch`), and "LINE: the program does not end
+  /// with <end>" when the last code is not `end`. Returns every problem found.
+  std::vector<std::string> finish(std::string_view end, const std::string& motion_text, bool inch,
+                                  const ProbePlan& plan, const std::string& dialect);
+
+ private:
+  std::string text_;
+};
 
 }  // namespace rotacal::ctl

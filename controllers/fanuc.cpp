@@ -54,34 +54,30 @@ class FanucDialect final : public MacroBDialect {
     const double zero_deg = b.zeroDeg(kDialect);
     const Eigen::Vector3d second = b.second();
 
-    std::string out;
-    auto line = [&](const std::string& s) { out += s + "\n"; };
-    auto commentLines = [&](std::string_view text) {
-      for (const auto& c : comments(text)) line(c);
-    };
-    line("%");
-    commentLines(fmt::format("ROTACAL G54 CORRECTION, TABLE {}/C, FANUC. RUN IN MDI OR A SETUP PROGRAM.", tilt));
-    commentLines(fmt::format("PROVENANCE: {} CYCLE {} MACHINE {}", r.report_file.empty() ? "NO REPORT" : r.report_file,
+    ctl::LineWriter w(comments);
+    w.line("%");
+    w.comment(fmt::format("ROTACAL G54 CORRECTION, TABLE {}/C, FANUC. RUN IN MDI OR A SETUP PROGRAM.", tilt));
+    w.comment(fmt::format("PROVENANCE: {} CYCLE {} MACHINE {}", r.report_file.empty() ? "NO REPORT" : r.report_file,
                              plan.cycle, m.name));
-    commentLines("IDENTIFIED, PAPERS CONVENTION, VALUE +- STANDARD UNCERTAINTY K=1:");
-    for (const auto& s : ctl::identifiedLines(r)) commentLines(s);
-    commentLines(fmt::format("SHIFTS G54 BY THE {} PIVOT AND THE {} ZERO ERROR. G10 L2 UNDER G91 ADDS TO THE OFFSET - "
+    w.comment("IDENTIFIED, PAPERS CONVENTION, VALUE +- STANDARD UNCERTAINTY K=1:");
+    for (const auto& s : ctl::identifiedLines(r)) w.comment(s);
+    w.comment(fmt::format("SHIFTS G54 BY THE {} PIVOT AND THE {} ZERO ERROR. G10 L2 UNDER G91 ADDS TO THE OFFSET - "
                              "UNVERIFIED: CHECK THE G54 PAGE BEFORE AND AFTER.",
                              tilt, tilt));
-    line(fmt::format("G91 G10 L2 P1 X{} Y{} Z{} {}{}", ctl::fixed(shift.x() * k, 4), ctl::fixed(shift.y() * k, 4),
+    w.line(fmt::format("G91 G10 L2 P1 X{} Y{} Z{} {}{}", ctl::fixed(shift.x() * k, 4), ctl::fixed(shift.y() * k, 4),
                      ctl::fixed(shift.z() * k, 4), tilt, ctl::fixed(zero_deg, 4)));
-    line("G90");
-    commentLines(ac ? "NOT APPLIED BY THE SHIFT, REPORTED ONLY: DY-CA, B-AY, C-AY, B-CA."
+    w.line("G90");
+    w.comment(ac ? "NOT APPLIED BY THE SHIFT, REPORTED ONLY: DY-CA, B-AY, C-AY, B-CA."
                     : "NOT APPLIED BY THE SHIFT, REPORTED ONLY: DX-CB, A-BY, C-BY, A-CB.");
-    commentLines(fmt::format(
+    w.comment(fmt::format(
         "WITH TCP: PARAMETERS 19700-19702 ROTARY TABLE POSITION, ADD X {} Y {} Z {} {} - OLD VALUES NOT KNOWN HERE, "
         "PARAMETER NUMBERS AND UNITS UNVERIFIED.",
         ctl::fixed(shift.x() * k, 4), ctl::fixed(shift.y() * k, 4), ctl::fixed(shift.z() * k, 4), u));
-    commentLines(fmt::format("PARAMETERS 19703-19705 OFFSET 1ST TO 2ND TABLE AXIS, ADD X {} Y {} Z {} {} - UNVERIFIED.",
+    w.comment(fmt::format("PARAMETERS 19703-19705 OFFSET 1ST TO 2ND TABLE AXIS, ADD X {} Y {} Z {} {} - UNVERIFIED.",
                              ctl::fixed(second.x() * k, 4), ctl::fixed(second.y() * k, 4), ctl::fixed(second.z() * k, 4),
                              u));
-    line("%");
-    return out;
+    w.line("%");
+    return w.text;
   }
 };
 

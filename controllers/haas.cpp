@@ -59,41 +59,37 @@ class HaasDialect final : public MacroBDialect {
     const auto& [plan, m, e, ac, inch, k, tilt] = b;
     const auto changes = haasMrzpChanges(e);
     const double zero_deg = b.zeroDeg(kDialect);
-    std::string out;
-    auto line = [&](const std::string& s) { out += s + "\n"; };
-    auto commentLines = [&](std::string_view text) {
-      for (const auto& c : comments(text)) line(c);
-    };
-    line("%");
-    line("O09001(ROTACAL MRZP)");
-    commentLines(fmt::format("ROTACAL MRZP CORRECTION, TABLE {}/C, HAAS NGC. PROVENANCE: {} CYCLE {} MACHINE {}", tilt,
+    ctl::LineWriter w(comments);
+    w.line("%");
+    w.line("O09001(ROTACAL MRZP)");
+    w.comment(fmt::format("ROTACAL MRZP CORRECTION, TABLE {}/C, HAAS NGC. PROVENANCE: {} CYCLE {} MACHINE {}", tilt,
                              r.report_file.empty() ? "NO REPORT" : r.report_file, plan.cycle, m.name));
-    commentLines("IDENTIFIED, PAPERS CONVENTION, VALUE +- STANDARD UNCERTAINTY K=1:");
-    for (const auto& s : ctl::identifiedLines(r)) commentLines(s);
-    commentLines("WHAT IT CHANGES: MRZP SETTINGS 255 256 257 (MACHINE HOME TO THE ROTARY CENTRE, MACHINE UNITS) "
+    w.comment("IDENTIFIED, PAPERS CONVENTION, VALUE +- STANDARD UNCERTAINTY K=1:");
+    for (const auto& s : ctl::identifiedLines(r)) w.comment(s);
+    w.comment("WHAT IT CHANGES: MRZP SETTINGS 255 256 257 (MACHINE HOME TO THE ROTARY CENTRE, MACHINE UNITS) "
                  "AND THE G54 ZERO OF THE TILTING AXIS.");
-    commentLines("SETTINGS CANNOT BE SET FROM A MACRO: THIS PROGRAM PUTS THE NEW VALUES IN 10121 10122 10123 AND "
+    w.comment("SETTINGS CANNOT BE SET FROM A MACRO: THIS PROGRAM PUTS THE NEW VALUES IN 10121 10122 10123 AND "
                  "STOPS. ENTER THEM BY HAND ON THE SETTINGS PAGE, THEN CYCLE START.");
-    commentLines(fmt::format("MAPPING UNVERIFIED ON A MACHINE: NEW = OLD + CHANGE, {}; OLD VALUES ARE READ ON THE "
+    w.comment(fmt::format("MAPPING UNVERIFIED ON A MACHINE: NEW = OLD + CHANGE, {}; OLD VALUES ARE READ ON THE "
                              "CONTROL FROM 20255-20257, NOT KNOWN HERE.",
                              inch ? "INCH" : "MM"));
     for (size_t i = 0; i < changes.size(); ++i)
-      commentLines(fmt::format("SETTING {} {}: CHANGE {} {}", 255 + i, changes[i].first, ctl::fixed(changes[i].second * k, 4),
+      w.comment(fmt::format("SETTING {} {}: CHANGE {} {}", 255 + i, changes[i].first, ctl::fixed(changes[i].second * k, 4),
                                inch ? "IN" : "MM"));
     for (size_t i = 0; i < changes.size(); ++i) {
       const double d = changes[i].second * k;
-      line(fmt::format("#{}=#{}{}{}", 10121 + i, 20255 + i, d < 0 ? "-" : "+", ctl::fixed(std::abs(d), 4)));
+      w.line(fmt::format("#{}=#{}{}{}", 10121 + i, 20255 + i, d < 0 ? "-" : "+", ctl::fixed(std::abs(d), 4)));
     }
-    line("#3006=1(ENTER 10121-10123 IN SETTINGS 255-257)");
-    commentLines(fmt::format("G54 {} ZERO: ADDS {} DEG (G10 L2 UNDER G91 ADDS TO THE OFFSET - CHECK THE G54 PAGE)", tilt,
+    w.line("#3006=1(ENTER 10121-10123 IN SETTINGS 255-257)");
+    w.comment(fmt::format("G54 {} ZERO: ADDS {} DEG (G10 L2 UNDER G91 ADDS TO THE OFFSET - CHECK THE G54 PAGE)", tilt,
                              ctl::fixed(zero_deg, 4)));
-    line(fmt::format("G91 G10 L2 P1 {}{}", tilt, ctl::fixed(zero_deg, 4)));
-    line("G90");
-    commentLines(ac ? "REPORTED ONLY (NO SETTING TAKES THEM): DY-CA, B-AY, C-AY, B-CA."
+    w.line(fmt::format("G91 G10 L2 P1 {}{}", tilt, ctl::fixed(zero_deg, 4)));
+    w.line("G90");
+    w.comment(ac ? "REPORTED ONLY (NO SETTING TAKES THEM): DY-CA, B-AY, C-AY, B-CA."
                     : "REPORTED ONLY (NO SETTING TAKES THEM): DX-CB, A-BY, C-BY, A-CB.");
-    line("M30");
-    line("%");
-    return out;
+    w.line("M30");
+    w.line("%");
+    return w.text;
   }
 };
 

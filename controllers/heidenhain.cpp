@@ -266,79 +266,57 @@ class HeidenhainDialect final : public Dialect {
     ctl::requireText(text, file);
     const std::string expected_header = headerText(plan.cycle, static_cast<int>(plan.points.size()));
     ctl::PointCollector points(plan, file);
-    bool header = false;
-    int end_line = 0;
-    int last = 1;
+    ctl::ResultLines in(text, file, "ROTACAL", expected_header, " (delete the old file)");
     struct Pending {
       int line = 0;
       long id = 0;
       Eigen::Vector3d x;
     };
     std::optional<Pending> pending;  // a P line waiting for its T line
-    for (const auto& l : ctl::splitLines(text)) {
-      const std::string s = ctl::trim(l.text);
-      if (s.empty()) continue;
-      last = l.number;
-      if (end_line) ctl::fail(file, l.number, fmt::format("text after END (line {}): '{}'", end_line, s));
-      const auto t = ctl::tokens(s);
-      if (t[0] == "ROTACAL") {
-        if (header) ctl::fail(file, l.number, "a second header line: one run per results file (delete the old file)");
-        header = true;
+    while (in.next()) {
+      const std::string& s = in.s;
+      const auto& t = in.t;
+      const int line = in.number;
+      if (in.isHeader()) {
         if (t.size() != 8 || t[1] != "HEIDENHAIN" || t[2] != "CYCLE" || t[4] != "POINTS" || t[6] != "UNIT" || t[7] != "MM")
-          ctl::fail(file, l.number, fmt::format("expected the header '{}', got '{}'", expected_header, s));
+          ctl::fail(file, line, fmt::format("expected the header '{}', got '{}'", expected_header, s));
         if (t[3] != safeName(plan.cycle))
-          ctl::fail(file, l.number, fmt::format("results of cycle '{}', the plan is '{}'", t[3], safeName(plan.cycle)));
+          ctl::fail(file, line, fmt::format("results of cycle '{}', the plan is '{}'", t[3], safeName(plan.cycle)));
         const auto n = ctl::parseDigits(t[5]);
-        if (!n) ctl::fail(file, l.number, fmt::format("POINTS '{}' is not a number", t[5]));
+        if (!n) ctl::fail(file, line, fmt::format("POINTS '{}' is not a number", t[5]));
         if (static_cast<size_t>(*n) != plan.points.size())
-          ctl::fail(file, l.number, fmt::format("header says POINTS {} but the plan has {} points", *n, plan.points.size()));
+          ctl::fail(file, line, fmt::format("header says POINTS {} but the plan has {} points", *n, plan.points.size()));
         continue;
       }
-      if (!header) ctl::fail(file, l.number, fmt::format("expected the header '{}', got '{}'", expected_header, s));
-      if (t[0] == "NOT-TRIGGERED") {
-        std::string id_text = s.substr(std::string("NOT-TRIGGERED").size());
-        id_text = ctl::trim(id_text);
-        const auto id = id_text.size() > 1 && id_text[0] == 'P' ? ctl::parseDigits(ctl::trim(id_text.substr(1)))
-                                                                 : std::nullopt;
-        if (!id) ctl::fail(file, l.number, fmt::format("expected 'NOT-TRIGGERED P<id>', got '{}'", s));
-        ctl::fail(file, l.number, fmt::format("point {} was not triggered: the program stopped there", *id));
-      }
+      in.refuseNotTriggered();
       if (s[0] == 'T' && s != "END") {
-        if (!pending) ctl::fail(file, l.number, fmt::format("time line '{}' without a point line before it", s));
+        if (!pending) ctl::fail(file, line, fmt::format("time line '{}' without a point line before it", s));
         const auto date = t.size() == 2 ? ctl::parseDigits(t[0].substr(1)) : std::nullopt;
         const auto time = t.size() == 2 ? ctl::parseDigits(t[1]) : std::nullopt;
         const auto secs = date && time ? ctl::clockSeconds(*date, *time) : std::nullopt;
         if (!secs)
-          ctl::fail(file, l.number,
+          ctl::fail(file, line,
                     fmt::format("time of point {} '{}' is not 'TYYYYMMDD HHMMSS'", pending->id, s));
         points.add(pending->line, static_cast<int>(pending->id), pending->x, *secs);
         pending.reset();
         continue;
       }
-      if (pending) ctl::fail(file, l.number, fmt::format("point {} (line {}) has no time line", pending->id, pending->line));
-      if (s == "END") {
-        end_line = l.number;
-        continue;
-      }
-      const auto f = ctl::letteredFields(s, "XYZ", file, l.number);
+      if (pending) ctl::fail(file, line, fmt::format("point {} (line {}) has no time line", pending->id, pending->line));
+      if (in.isEnd()) continue;
+      const auto f = ctl::letteredFields(s, "XYZ", file, line);
       Eigen::Vector3d x;
       for (int i = 0; i < 3; ++i) {
         const auto v = ctl::parseNumberComma(f.fields[static_cast<size_t>(i)]);
         if (!v)
-          ctl::fail(file, l.number,
+          ctl::fail(file, line,
                     fmt::format("{} '{}' of point {} is not a number", "XYZ"[i], f.fields[static_cast<size_t>(i)], f.id));
         x[i] = *v;
       }
-      pending = Pending{l.number, f.id, x};
+      pending = Pending{line, f.id, x};
     }
-    if (!header) ctl::fail(file, 1, fmt::format("empty results file: expected the header '{}'", expected_header));
-    if (pending) ctl::fail(file, last, fmt::format("point {} (line {}) has no time line", pending->id, pending->line));
-    if (!end_line) {
-      if (const int missing = points.firstMissing())
-        ctl::fail(file, last, fmt::format("point {} is missing and there is no END line: the program stopped early", missing));
-      ctl::fail(file, last, "no END line after the last point: the file is incomplete");
-    }
-    return points.finish(last);
+    if (pending) ctl::fail(file, in.last(), fmt::format("point {} (line {}) has no time line", pending->id, pending->line));
+    in.finish(points);
+    return points.finish(in.last());
   }
 
   std::string writeOffsets(const OffsetRequest& r) const override {
@@ -375,59 +353,57 @@ class HeidenhainDialect final : public Dialect {
   }
 
   std::vector<std::string> check(const std::string& text, const ProbePlan& plan, const nc::Shape& shape) const override {
-    std::vector<std::string> out;
-    auto problem = [&](int line, const std::string& what) { out.push_back(fmt::format("{}: {}", line, what)); };
-    const auto ls = ctl::splitLines(text);
-    std::vector<std::string> code(ls.size());  // without the block number and the ';' comment
+    ctl::TextCheck chk(text);
+    // chk.code: each line without its block number and its ';' comment
     static const std::regex numbered(R"(^(\d+) (.*)$)");
     long expect = 0;
-    for (size_t i = 0; i < ls.size(); ++i) {
-      const std::string& raw = ls[i].text;
-      const int n = ls[i].number;
-      if (raw.size() > kMaxLineChars) problem(n, fmt::format("line has {} characters, more than {}", raw.size(), kMaxLineChars));
+    for (size_t i = 0; i < chk.lines.size(); ++i) {
+      const std::string& raw = chk.lines[i].text;
+      const int n = chk.lines[i].number;
+      chk.lineLength(i, kMaxLineChars);
       std::smatch mt;
       if (!std::regex_match(raw, mt, numbered)) {
-        problem(n, "line does not start with a block number");
+        chk.problem(n, "line does not start with a block number");
         continue;
       }
-      if (std::stol(mt[1].str()) != expect) problem(n, fmt::format("block number {} where {} was expected", mt[1].str(), expect));
+      if (std::stol(mt[1].str()) != expect) chk.problem(n, fmt::format("block number {} where {} was expected", mt[1].str(), expect));
       expect = std::stol(mt[1].str()) + 1;
       const std::string rest = mt[2].str();
       const size_t sc = rest.find(';');
-      code[i] = ctl::trim(sc == std::string::npos ? rest : rest.substr(0, sc));
+      chk.code[i] = ctl::trim(sc == std::string::npos ? rest : rest.substr(0, sc));
     }
     std::set<std::string> labels;
-    for (const auto& s : code)
+    for (const auto& s : chk.code)
       if (s.rfind("LBL ", 0) == 0) labels.insert(s.substr(4));
     static const std::regex begin(R"(^BEGIN PGM (\w+) (MM|INCH)$)");
     static const std::regex endpgm(R"(^END PGM (\w+) (MM|INCH)$)");
     std::smatch bm, em;
-    if (code.empty() || !std::regex_match(code.front(), bm, begin)) problem(1, "the program does not start with BEGIN PGM NAME MM");
-    if (code.empty() || !std::regex_match(code.back(), em, endpgm) || (!bm.empty() && bm[1].str() != em[1].str()))
-      problem(ls.empty() ? 1 : ls.back().number, "the program does not end with END PGM and the name of its BEGIN PGM");
+    if (chk.code.empty() || !std::regex_match(chk.code.front(), bm, begin)) chk.problem(1, "the program does not start with BEGIN PGM NAME MM");
+    if (chk.code.empty() || !std::regex_match(chk.code.back(), em, endpgm) || (!bm.empty() && bm[1].str() != em[1].str()))
+      chk.problem(chk.lastLine(), "the program does not end with END PGM and the name of its BEGIN PGM");
     const bool inch = !bm.empty() && bm[2].str() == "INCH";
     static const std::regex word(R"(([XYZABC])([+-]?)(\d+(\.\d*)?))");
     static const std::regex probe0(R"(^TCH PROBE 0\.0 REF\. PLANE Q10 ([XYZ])([+-])$)");
     static const std::regex check(R"(^FN (11|12): IF \+Q10 (GT|LT) ([+-]\d+\.\d+) GOTO LBL (\d+)$)");
     std::vector<ctl::MotionEndpoint> moves;
     int probes = 0;
-    for (size_t i = 0; i < ls.size(); ++i) {
-      const std::string& s = code[i];
-      const int n = ls[i].number;
+    for (size_t i = 0; i < chk.lines.size(); ++i) {
+      const std::string& s = chk.code[i];
+      const int n = chk.lines[i].number;
       if (s.find("M128") != std::string::npos || s.find("TCPM") != std::string::npos || s.rfind("PLANE ", 0) == 0)
-        problem(n, "TCP or a tilted plane: the probe positions are machine coordinates");
+        chk.problem(n, "TCP or a tilted plane: the probe positions are machine coordinates");
       const bool positioning = s.rfind("L ", 0) == 0 || s.rfind("TCH PROBE 0.1 ", 0) == 0;
       if (positioning) {
         ctl::MotionEndpoint e{n, {}};
         for (auto it = std::sregex_iterator(s.begin(), s.end(), word); it != std::sregex_iterator(); ++it) {
           const auto& w = *it;
           if (w[2].str().empty() || w[4].str().empty())
-            problem(n, fmt::format("{}{}{} needs an explicit sign and a decimal point", w[1].str(), w[2].str(), w[3].str()));
+            chk.problem(n, fmt::format("{}{}{} needs an explicit sign and a decimal point", w[1].str(), w[2].str(), w[3].str()));
           e.axes.emplace_back(w[1].str()[0], std::stod(w[2].str() + w[3].str()));
         }
-        if (s.rfind("L ", 0) == 0 && s.find(" R0") == std::string::npos) problem(n, "L block without R0");
+        if (s.rfind("L ", 0) == 0 && s.find(" R0") == std::string::npos) chk.problem(n, "L block without R0");
         if (s.rfind("L ", 0) == 0 && s.find(" FMAX") == std::string::npos && s.find(" F") == std::string::npos)
-          problem(n, "L block without a feed");
+          chk.problem(n, "L block without a feed");
         moves.push_back(e);
       }
       std::smatch pm;
@@ -436,41 +412,40 @@ class HeidenhainDialect final : public Dialect {
       // Next code lines: TCH PROBE 0.1 <pre-position>, FN 11|12 IF +Q10 GT|LT v GOTO LBL n,
       // with a label section that stops (STOP).
       auto next = [&](size_t j) {
-        for (++j; j < ls.size(); ++j)
-          if (!code[j].empty() && code[j][0] != ';') return j;
-        return ls.size();
+        for (++j; j < chk.lines.size(); ++j)
+          if (!chk.code[j].empty() && chk.code[j][0] != ';') return j;
+        return chk.lines.size();
       };
       const size_t a = next(i);
-      const size_t b = a < ls.size() ? next(a) : ls.size();
+      const size_t b = a < chk.lines.size() ? next(a) : chk.lines.size();
       std::smatch cm;
-      bool ok = a < ls.size() && code[a].rfind("TCH PROBE 0.1 ", 0) == 0 && b < ls.size() &&
-                std::regex_match(code[b], cm, check);
+      bool ok = a < chk.lines.size() && chk.code[a].rfind("TCH PROBE 0.1 ", 0) == 0 && b < chk.lines.size() &&
+                std::regex_match(chk.code[b], cm, check);
       if (ok) {
         const bool plus = pm[2].str() == "+";
         ok = (plus && cm[1].str() == "11" && cm[2].str() == "GT") || (!plus && cm[1].str() == "12" && cm[2].str() == "LT");
         bool stops = false;
         const std::string label = cm[4].str();
-        for (size_t q = 0; ok && q < ls.size(); ++q) {
-          if (code[q] != "LBL " + label) continue;
-          for (size_t r = next(q); r < ls.size() && code[r].rfind("LBL ", 0) != 0; r = next(r))
-            if (code[r] == "STOP") stops = true;
+        for (size_t q = 0; ok && q < chk.lines.size(); ++q) {
+          if (chk.code[q] != "LBL " + label) continue;
+          for (size_t r = next(q); r < chk.lines.size() && chk.code[r].rfind("LBL ", 0) != 0; r = next(r))
+            if (chk.code[r] == "STOP") stops = true;
         }
         ok = ok && stops;
       }
       if (!ok)
-        problem(n, "TCH PROBE 0 is not followed by TCH PROBE 0.1 and the no-trigger check "
+        chk.problem(n, "TCH PROBE 0 is not followed by TCH PROBE 0.1 and the no-trigger check "
                    "(FN 11/12: IF +Q10 GT/LT end GOTO LBL n, LBL n ... STOP)");
     }
-    for (size_t i = 0; i < ls.size(); ++i) {
-      const size_t g = code[i].find("GOTO LBL ");
-      if (g != std::string::npos && !labels.count(code[i].substr(g + 9)))
-        problem(ls[i].number, fmt::format("jump to the undefined label {}", code[i].substr(g + 9)));
+    for (size_t i = 0; i < chk.lines.size(); ++i) {
+      const size_t g = chk.code[i].find("GOTO LBL ");
+      if (g != std::string::npos && !labels.count(chk.code[i].substr(g + 9)))
+        chk.problem(chk.lines[i].number, fmt::format("jump to the undefined label {}", chk.code[i].substr(g + 9)));
     }
-    if (static_cast<size_t>(probes) != shape.probes)
-      problem(ls.empty() ? 1 : ls.back().number, fmt::format("{} TCH PROBE 0 cycles, the plan has {} points", probes, shape.probes));
-    if (shape.inverse_time) problem(1, ctl::inverseTimeRefusal(kDialect));
-    for (auto& s : ctl::strokeProblems(ctl::motionBlocks(moves, inch), plan, kDialect)) out.push_back(std::move(s));
-    return out;
+    chk.probeCount(probes, shape.probes, "TCH PROBE 0 cycles");
+    if (shape.inverse_time) chk.problem(1, ctl::inverseTimeRefusal(kDialect));
+    for (auto& s : ctl::strokeProblems(ctl::motionBlocks(moves, inch), plan, kDialect)) chk.problems.push_back(std::move(s));
+    return std::move(chk.problems);
   }
 };
 

@@ -518,10 +518,7 @@ class LinuxCncDialect final : public Dialect {
       if (!b.find('X') && !b.find('Y') && !b.find('Z')) problem(b.line, g + " without an axis word");
       // The next 3 blocks must open "o<n> if [#5070 NE 1]" whose body has an (ABORT, ...).
       bool checked = false;
-      size_t j = i;
-      for (int n = 0; n < 3 && !checked; ++n) {
-        j = ctl::nextNonBlank(blocks, j);
-        if (j >= blocks.size()) break;
+      for (const size_t j : ctl::nextBlocks(blocks, i, 3)) {
         const nc::Block& c = blocks[j];
         if (!c.control || c.keyword != "IF") continue;
         std::string cond;
@@ -560,8 +557,7 @@ class LinuxCncDialect final : public Dialect {
       problem(last_line, fmt::format("{} recorded touches [G38.2/G38.3 moves whose position is LOGged], the plan "
                                      "has {} points",
                                      probes, shape.probes));
-    for (auto& s : ctl::inverseTimeProblems(blocks, ctl::isProbingBlock)) out.push_back(std::move(s));
-    for (auto& s : ctl::strokeProblems(blocks, plan, kDialect)) out.push_back(std::move(s));
+    for (auto& s : ctl::blockProblems(blocks, plan, kDialect)) out.push_back(std::move(s));
     // The end: M2 or M30 as the last block with code; a leading '%' needs a closing one, after
     // which LinuxCNC reads nothing.
     const size_t first = ctl::nextNonBlank(blocks, static_cast<size_t>(-1));

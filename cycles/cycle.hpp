@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "core/contributors.hpp"
+#include "core/errors.hpp"
 #include "core/error_model.hpp"
 #include "core/json_io.hpp"
 #include "core/judge.hpp"
@@ -38,6 +39,13 @@ struct InputFile {
   std::string text;
 };
 
+/// The files' paths, in order (the reports name the results files they were drawn from).
+inline std::vector<std::string> pathsOf(const std::vector<InputFile>& files) {
+  std::vector<std::string> p;
+  for (const auto& f : files) p.push_back(f.path);
+  return p;
+}
+
 struct SimulateRequest {
   const ProbePlan* plan = nullptr;
   InputFile truth;                   // TRUTH.json
@@ -46,6 +54,20 @@ struct SimulateRequest {
   std::uint64_t seed = 1;
   const DialectIO* dialect = nullptr;
 };
+
+/// `simulate()` run on what a truth file declares: a refusal of the simulation becomes an
+/// InputError naming the truth file (line 0: the file as a whole), the rule of every cycle's
+/// `simulate`; an InputError already naming a file passes through.
+template <class F>
+auto onTruthFile(const InputFile& truth, F&& simulate) -> decltype(simulate()) {
+  try {
+    return simulate();
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw InputError(truth.path, 0, e.what());
+  }
+}
 
 struct Simulated {
   std::string results_text;  // what the controller (or device) writes
@@ -164,6 +186,8 @@ struct CycleIdentity {
   nc::Program (*build_program)(const ProbePlan& plan, const std::string& dialect) = nullptr;
   /// What a PLAN.json of this cycle must satisfy beyond the format (checked with FILE:LINE).
   PlanRules plan_rules{};
+  /// Empty when analyze returns corrections for `--offsets`; otherwise why the cycle writes none.
+  std::string_view no_offsets_reason{};
   /// What one plan point is in a program, for the terminal.
   std::string_view point_noun = "probing moves";
 };
@@ -192,14 +216,16 @@ class Cycle {
   int programNumber() const { return identity_.program_number; }
   std::string_view pointNoun() const { return identity_.point_noun; }
 
-  /// What the controller records on a machine with known errors (exact simulation).
-  virtual Simulated simulate(const SimulateRequest& request) const = 0;
+  /// What the controller records on a machine with known errors (exact simulation). The default
+  /// is the touch probe's: exact contact with the plan's artefact (cycles/probing.hpp), read back
+  /// through the dialect; a cycle whose readings come from another device overrides it.
+  virtual Simulated simulate(const SimulateRequest& request) const;
 
   /// Estimation methods `analyze --method` accepts; the first is the default. Empty: none to choose.
   virtual std::vector<std::string> methods() const { return {}; }
   virtual CycleDocuments analyze(const AnalyzeRequest& request) const = 0;
   /// Empty when analyze returns corrections for `--offsets`; otherwise why the cycle writes none.
-  virtual std::string_view noOffsetsReason() const { return {}; }
+  std::string_view noOffsetsReason() const { return identity_.no_offsets_reason; }
   virtual CycleDocuments diagnose(const DiagnoseRequest& request) const = 0;
 
   /// Whether `uncertainty` and `design` are offered; the defaults refuse, naming the cycle.

@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 
 #include <functional>
+#include <utility>
 #include <string>
 
 #include "core/json_io.hpp"
@@ -123,23 +124,28 @@ inline void addTimeFactor(JudgeProblem& p, const std::vector<double>& t_s) {
 }
 
 /// The diagnosis of a cycle whose baseline is one fit judged as a whole: the judge's summary
-/// over how many repeats.
+/// over how many repeats, the baseline in words (`model`) and what would tell a confounded cause
+/// apart (`separate_with`).
 struct JudgedFit {
   JudgeSummary summary;
   int runs = 0;
+  std::string model;
+  std::function<std::string(const JudgeConfounded&)> separate_with;
 };
 
 /// The tail such a diagnosis shares: the observations' time as a factor, then the judge.
-inline JudgedFit judgeWithTime(JudgeProblem& p, const std::vector<double>& t_s, size_t runs, const JudgeOptions& o) {
+inline JudgedFit judgeWithTime(JudgeProblem& p, const std::vector<double>& t_s, size_t runs, const JudgeOptions& o,
+                               std::string model, std::function<std::string(const JudgeConfounded&)> separate_with) {
   addTimeFactor(p, t_s);
-  return {judge(p, o), static_cast<int>(runs)};
+  return {judge(p, o), static_cast<int>(runs), std::move(model), std::move(separate_with)};
 }
 
-/// The DIAGNOSIS.json of a cycle whose baseline is one fit judged as a whole: the contract's
-/// fields, `model` the baseline in words, `separate_with` what would tell a confounded cause apart.
-inline Json judgedDiagnosisJson(const std::string& cycle, const ProbePlan& plan, int runs, const JudgeSummary& s,
-                                const std::string& model,
-                                const std::function<std::string(const JudgeConfounded&)>& separate_with) {
+/// The DIAGNOSIS.json of such a diagnosis: the contract's fields.
+inline Json judgedDiagnosisJson(const std::string& cycle, const ProbePlan& plan, const JudgedFit& d) {
+  const JudgeSummary& s = d.summary;
+  const int runs = d.runs;
+  const std::string& model = d.model;
+  const auto& separate_with = d.separate_with;
   Json j;
   stampDiagnosis(j, cycle);
   j["machine"] = plan.machine.name;

@@ -1,8 +1,8 @@
 #pragma once
 // The one rule for a cycle's plan options: every key a cycle knows has its reader, and any other
 // key is refused with the list of the known keys, drawn from the same table. (When each cycle
-// wrote its own list beside its readers, two lists lost keys their cycle read: spaceframe's
-// frame_* options and tooltip's start_deg.)
+// wrote its own list beside its readers, two of the lists lost keys their cycle read: three
+// frame options of the space-frame map and the start angle of the fixed-tool-tip test.)
 #include <functional>
 #include <string>
 #include <string_view>

@@ -36,12 +36,7 @@ Simulated simulateProbing(const SimulateRequest& r) {
   Truth truth = truthFromJson(parseJsonText(r.truth.text, r.truth.path), plan.machine);
   if (r.noise_um) truth.noise_um = *r.noise_um;
   if (r.start_s) truth.start_time_s = *r.start_s;
-  MeasurementRun run;
-  try {
-    run = simulate(plan, truth, {r.seed});
-  } catch (const std::exception& e) {
-    throw InputError(r.truth.path, 0, e.what());
-  }
+  const MeasurementRun run = onTruthFile(r.truth, [&] { return simulate(plan, truth, {r.seed}); });
   return {r.dialect->write_results(plan, run),
           fmt::format("simulated {} triggers (noise {:.3f} um, seed {}) as {} results", run.points.size(), truth.noise_um,
                       r.seed, r.dialect->name)};
@@ -93,6 +88,16 @@ std::vector<PlannedTrigger> triggersInPlanOrder(const ProbePlan& plan, const std
     }
   }
   return out;
+}
+
+CycleDocuments judgedFitDocuments(const Cycle& cycle, const DiagnoseRequest& r,
+                                  JudgedFit (*judged)(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
+                                                      const JudgeOptions& options)) {
+  const ProbePlan& plan = *r.plan;
+  JudgeOptions o;
+  o.alpha = r.alpha;
+  const JudgedFit d = judged(plan, readProbeRuns(plan, r.results, *r.dialect), o);
+  return documents(judgedDiagnosisJson(std::string(cycle.name()), plan, d), judgeText(d.summary));
 }
 
 }  // namespace rotacal

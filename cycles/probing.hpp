@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 
 #include "cycles/cycle.hpp"
+#include "cycles/judge_contract.hpp"
 #include "cycles/options.hpp"
 
 namespace rotacal {
@@ -52,6 +53,13 @@ std::vector<PlannedTrigger> triggersInPlanOrder(const ProbePlan& plan, const std
 /// Every results file of the request, read by the dialect's reader against the plan.
 std::vector<MeasurementRun> readProbeRuns(const ProbePlan& plan, const std::vector<InputFile>& results,
                                           const DialectIO& dialect);
+
+/// `diagnose` of a touch cycle whose baseline is one fit judged as a whole (cycles/judge_contract.hpp):
+/// the request's results read through the dialect, judged at the request's alpha by `judged`, and
+/// the documents under the cycle's name.
+CycleDocuments judgedFitDocuments(const Cycle& cycle, const DiagnoseRequest& request,
+                                  JudgedFit (*judged)(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
+                                                      const JudgeOptions& options));
 
 /// The triggers of every plan point on the machine of the truth file, written as the dialect's
 /// results. Throws InputError naming the truth file when the probe would not trigger.

@@ -8,6 +8,7 @@
 #include "core/limits.hpp"
 #include "cycles/check_rules.hpp"
 #include "cycles/cycle.hpp"
+#include "cycles/probing.hpp"
 
 #define ROTACAL_CYCLES(X) \
   X(touch154)             \
@@ -84,6 +85,8 @@ nc::Program Cycle::program(const ProbePlan& plan, const std::string& dialect) co
   p.number = programNumber();
   return p;
 }
+
+Simulated Cycle::simulate(const SimulateRequest& request) const { return simulateProbing(request); }
 
 CycleDocuments Cycle::uncertainty(const UncertaintyRequest&) const {
   throw std::invalid_argument(fmt::format("cycle {} has no Monte Carlo of its calibration chain", name()));

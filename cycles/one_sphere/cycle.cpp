@@ -15,21 +15,12 @@
 namespace rotacal {
 namespace {
 
-PlanRules spherePlanRules() {
-  PlanRules r;
-  r.spheres = 1;  // one sphere, at least 4 touches at every pose
-  r.safe_height_over_artefact = false;  // the plan keeps the test piece out of reach sideways (plan.cpp)
-  r.check_options = [](const ProbePlan& p) { (void)sphereLayoutOf(p); };
-  return r;
-}
-
 class Sphere final : public Cycle {
  public:
   Sphere() : Cycle({"one_sphere", "issue 19: both rotary axes' ISO 230-7 location errors and the probe's radius from one sphere",
                      {"examples/machines/ac_trunnion.json", {}},
                      7019,  // 7000 + the issue that specifies it (19)
                      makeSpherePlan, probeProgram, spherePlanRules()}) {}
-  Simulated simulate(const SimulateRequest& request) const override { return simulateProbing(request); }
 
   CycleDocuments analyze(const AnalyzeRequest& r) const override {
     const ProbePlan& plan = *r.plan;
@@ -38,8 +29,7 @@ class Sphere final : public Cycle {
     bo.runs = r.mc_runs;
     bo.seed = r.mc_seed;
     const UncertaintyBudget b = sphereBudget(plan, res, r.contributors, bo);
-    std::vector<std::string> files;
-    for (const auto& f : r.results) files.push_back(f.path);
+    const std::vector<std::string> files = pathsOf(r.results);
     CycleDocuments out;
     out.doc = sphereReportJson(plan, res, b, files);
     out.text = sphereText(res, b);
@@ -65,13 +55,7 @@ class Sphere final : public Cycle {
     return out;
   }
 
-  CycleDocuments diagnose(const DiagnoseRequest& r) const override {
-    const ProbePlan& plan = *r.plan;
-    JudgeOptions o;
-    o.alpha = r.alpha;
-    const SphereDiagnosis d = diagnoseSphere(plan, readProbeRuns(plan, r.results, *r.dialect), o);
-    return documents(sphereDiagnosisJson(d, plan), sphereDiagnosisText(d));
-  }
+  CycleDocuments diagnose(const DiagnoseRequest& r) const override { return judgedFitDocuments(*this, r, diagnoseSphere); }
 };
 
 }  // namespace

@@ -16,6 +16,11 @@ namespace {
 constexpr const char* kDrift = "thermal_drift";
 constexpr const char* kPretravel = "pretravel_by_direction";
 
+// The baseline the judge starts from, in words.
+constexpr const char* kBaseline =
+    "both rotary axes' ISO 230-7 location errors (core/kinematic_model.hpp), the sphere's set-up and the probe's "
+    "effective radius";
+
 std::string separateWith(const JudgeConfounded& c) {
   if (c.cause == kDrift)
     return "repeat the cycle with the poses in another order (a drift follows the clock, a location error the pose)";
@@ -87,16 +92,7 @@ SphereDiagnosis diagnoseSphere(const ProbePlan& plan, const std::vector<Measurem
     p.groups.push_back(g);
   }
   p.factors = {pose, approach};
-  return judgeWithTime(p, fit.t_s, runs.size(), options);
+  return judgeWithTime(p, fit.t_s, runs.size(), options, kBaseline, separateWith);
 }
-
-Json sphereDiagnosisJson(const SphereDiagnosis& d, const ProbePlan& plan) {
-  return judgedDiagnosisJson("one_sphere", plan, d.runs, d.summary,
-                             "both rotary axes' ISO 230-7 location errors (core/kinematic_model.hpp), the sphere's set-up "
-                             "and the probe's effective radius",
-                             separateWith);
-}
-
-std::string sphereDiagnosisText(const SphereDiagnosis& d) { return judgeText(d.summary); }
 
 }  // namespace rotacal

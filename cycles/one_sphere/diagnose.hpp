@@ -19,7 +19,5 @@ namespace rotacal {
 using SphereDiagnosis = JudgedFit;
 
 SphereDiagnosis diagnoseSphere(const ProbePlan& plan, const std::vector<MeasurementRun>& runs, const JudgeOptions& options);
-Json sphereDiagnosisJson(const SphereDiagnosis& d, const ProbePlan& plan);
-std::string sphereDiagnosisText(const SphereDiagnosis& d);
 
 }  // namespace rotacal

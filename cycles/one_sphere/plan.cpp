@@ -370,4 +370,12 @@ ProbePlan makeSpherePlan(const MachineModel& machine, const CycleOptions& option
   return plan;
 }
 
+PlanRules spherePlanRules() {
+  PlanRules r;
+  r.spheres = 1;  // one sphere, at least 4 touches at every pose
+  r.safe_height_over_artefact = false;  // the plan keeps the test piece out of reach sideways (plan.cpp)
+  r.check_options = [](const ProbePlan& p) { (void)sphereLayoutOf(p); };
+  return r;
+}
+
 }  // namespace rotacal

@@ -92,4 +92,7 @@ ProbePlan makeSpherePlan(const MachineModel& machine, const CycleOptions& option
 /// The plan's layout read back (the options a PLAN.json carries). Throws std::invalid_argument.
 SphereLayout sphereLayoutOf(const ProbePlan& plan);
 
+/// What a PLAN.json of this cycle must satisfy beyond the format (the cycle's identity).
+PlanRules spherePlanRules();
+
 }  // namespace rotacal

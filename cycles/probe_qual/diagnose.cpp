@@ -12,6 +12,10 @@ namespace rotacal {
 
 namespace {
 
+// The baseline the judge starts from, in words.
+constexpr const char* kBaseline =
+    "the sphere's centre and the probe's pretravel per approach direction (its mean and harmonics from the second on)";
+
 std::string separateWith(const JudgeConfounded&) {
   return "repeat the qualification with the directions in another order (a drift follows the clock, a lobe the "
          "direction)";
@@ -46,14 +50,7 @@ ProbeQualDiagnosis diagnoseProbeQual(const ProbePlan& plan, const std::vector<Me
     repeat.levels.push_back(std::to_string(q.repeat_of[static_cast<size_t>(j)] + 1));
   }
   p.factors = {touch, repeat};
-  return judgeWithTime(p, q.t_s, runs.size(), options);
-}
-
-Json probeQualDiagnosisJson(const ProbeQualDiagnosis& d, const ProbePlan& plan) {
-  return judgedDiagnosisJson("probe_qual", plan, d.runs, d.summary,
-                             "the sphere's centre and the probe's pretravel per approach direction (its mean and "
-                             "harmonics from the second on)",
-                             separateWith);
+  return judgeWithTime(p, q.t_s, runs.size(), options, kBaseline, separateWith);
 }
 
 }  // namespace rotacal

@@ -20,6 +20,5 @@ using ProbeQualDiagnosis = JudgedFit;
 
 ProbeQualDiagnosis diagnoseProbeQual(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
                                      const JudgeOptions& options);
-Json probeQualDiagnosisJson(const ProbeQualDiagnosis& d, const ProbePlan& plan);
 
 }  // namespace rotacal

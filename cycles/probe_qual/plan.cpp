@@ -15,13 +15,13 @@ namespace rotacal {
 ProbeQualLayout ProbeQualLayout::fromOptions(const CycleOptions& options) {
   ProbeQualLayout l;
   OptionTable("probe_qual")
+      .count("azimuths", &l.azimuths, 4, 36)
+      .list("latitude_list", &l.latitude_deg)
+      .count("repeats", &l.repeats, 2, 100)
       .vec3("center_w_mm", &l.center_w_mm)
       .number("radius_mm", &l.radius_mm)
       .number("stem_length_mm", &l.stem_length_mm)
       .number("stem_diameter_mm", &l.stem_diameter_mm)
-      .count("azimuths", &l.azimuths, 4, 36)
-      .list("latitude_list", &l.latitude_deg)
-      .count("repeats", &l.repeats, 2, 100)
       .read(options);
   if (!(l.radius_mm > 0)) throw std::invalid_argument("option radius_mm must be > 0");
   if (!(l.stem_diameter_mm > 0 && l.stem_diameter_mm < l.radius_mm))
@@ -150,6 +150,14 @@ ProbePlan makeProbeQualPlan(const MachineModel& machine, const CycleOptions& opt
   }
   finishTouchPlan(plan);
   return plan;
+}
+
+PlanRules probeQualPlanRules() {
+  PlanRules r;
+  r.spheres = 1;  // one sphere, every touch on it
+  r.safe_height_over_artefact = false;  // the plan keeps the test piece out of reach sideways (plan.cpp)
+  r.check_options = [](const ProbePlan& p) { (void)probeQualLayoutOf(p); };
+  return r;
 }
 
 }  // namespace rotacal

@@ -53,4 +53,7 @@ ProbePlan makeProbeQualPlan(const MachineModel& machine, const CycleOptions& opt
 /// The plan's layout read back. Throws std::invalid_argument.
 ProbeQualLayout probeQualLayoutOf(const ProbePlan& plan);
 
+/// What a PLAN.json of this cycle must satisfy beyond the format (the cycle's identity).
+PlanRules probeQualPlanRules();
+
 }  // namespace rotacal

@@ -43,19 +43,15 @@ double sensorSigma(const ProbePlan& plan) {
                      plan.options.count("sensor_noise_um") ? plan.options.at("sensor_noise_um") : std::string("0.2"));
 }
 
-PlanRules rtestPlanRules() {
-  PlanRules r;
-  r.artefact_touched = false;  // the R-test's sphere sits in its nest, not on the machine's artefact
-  r.check_options = rtestCheckPlanOptions;
-  return r;
-}
-
 class Rtest final : public Cycle {
  public:
   Rtest() : Cycle({"rtest", "002: the position-dependent errors of the tilt axis with an R-test, and their thermal drift",
                     {"examples/machines/bc_trunnion.json", {}},
                     7002,  // 7000 + its source document (002)
-                    makeRtestPlan, rtestProgram, rtestPlanRules(), "R-test poses"}) {}
+                    makeRtestPlan, rtestProgram, rtestPlanRules(),
+                    "the R-test cycle reports position-dependent errors and their drift; it writes no offsets (use "
+                    "touch154 for the location errors)",
+                    "R-test poses"}) {}
 
   Simulated simulate(const SimulateRequest& r) const override {
     const ProbePlan& plan = *r.plan;
@@ -68,21 +64,12 @@ class Rtest final : public Cycle {
     o.noise_um = r.noise_um ? *r.noise_um : truth.noise_um;
     o.start_s = r.start_s.value_or(0.0);
     if (o.noise_um < 0) throw InputError(r.truth.path, 0, "the sensor noise must be >= 0");
-    RtestSeries s;
-    try {
-      s = simulateRtest(plan, truth, extras, o);
-    } catch (const std::invalid_argument& e) {
-      throw InputError(r.truth.path, 0, e.what());
-    }
+    const RtestSeries s = onTruthFile(r.truth, [&] { return simulateRtest(plan, truth, extras, o); });
     return {rtestResultsCsv(plan, s),
             fmt::format("simulated {} R-test cycle(s) of {} readings (sensor noise {:.3f} um, seed {})", s.cycles.size(),
                         plan.points.size(), o.noise_um, r.seed)};
   }
 
-  std::string_view noOffsetsReason() const override {
-    return "the R-test cycle reports position-dependent errors and their drift; it writes no offsets (use touch154 for the "
-        "location errors)";
-  }
 
   CycleDocuments analyze(const AnalyzeRequest& r) const override {
     const ProbePlan& plan = *r.plan;
@@ -91,8 +78,7 @@ class Rtest final : public Cycle {
     RtestFitOptions o;
     o.sensor_sigma_um = sensorSigma(plan);
     const RtestAnalysis a = analyzeRtest(plan, cycles, o);
-    std::vector<std::string> files;
-    for (const auto& f : r.results) files.push_back(f.path);
+    const std::vector<std::string> files = pathsOf(r.results);
     out.text = rtestReportText(plan, a);
     out.doc = rtestReportJson(plan, cycles, a, files);
     out.doc["warnings"] = out.warnings;

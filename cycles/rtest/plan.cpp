@@ -550,4 +550,11 @@ RtestSeries parseRtestResults(const std::string& text, const std::string& file, 
   return s;
 }
 
+PlanRules rtestPlanRules() {
+  PlanRules r;
+  r.artefact_touched = false;  // the R-test's sphere sits in its nest, not on the machine's artefact
+  r.check_options = rtestCheckPlanOptions;
+  return r;
+}
+
 }  // namespace rotacal

@@ -149,4 +149,7 @@ void rtestTruthFromJson(const JsonDoc& doc, Kinematics kinematics, Truth& truth,
 std::string rtestResultsCsv(const ProbePlan& plan, const RtestSeries& series);
 RtestSeries parseRtestResults(const std::string& text, const std::string& file, const ProbePlan& plan);
 
+/// What a PLAN.json of this cycle must satisfy beyond the format (the cycle's identity).
+PlanRules rtestPlanRules();
+
 }  // namespace rotacal

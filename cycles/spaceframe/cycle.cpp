@@ -16,19 +16,15 @@ class Spaceframe final : public Cycle {
   Spaceframe() : Cycle({"spaceframe", "003: length errors of a 7-sphere frame against U = +-(A + K L), and what explains them",
                          {"examples/machines/ac_trunnion.json", {{"phi_list", "-90,-45,0"}}},
                          7003,  // 7000 + its source document (003)
-                         makeSpaceframePlan, probeProgram}) {}
-  Simulated simulate(const SimulateRequest& request) const override { return simulateProbing(request); }
-
-  std::string_view noOffsetsReason() const override {
-    return "a spaceframe analysis is a performance test: it writes no offsets (calibrate with touch154 and use its offsets)";
-  }
+                         makeSpaceframePlan, probeProgram, {},
+                         "a spaceframe analysis is a performance test: it writes no offsets (calibrate with touch154 "
+                         "and use its offsets)"}) {}
 
   CycleDocuments analyze(const AnalyzeRequest& r) const override {
     const ProbePlan& plan = *r.plan;
     const std::vector<MeasurementRun> runs = readProbeRuns(plan, r.results, *r.dialect);
     const SpaceframeAnalysis a = analyzeSpaceframe(plan, runs);
-    std::vector<std::string> files;
-    for (const auto& f : r.results) files.push_back(f.path);
+    const std::vector<std::string> files = pathsOf(r.results);
     CycleDocuments out;
     out.text = spaceframeText(a, plan);
     out.doc = spaceframeReportJson(a, plan, files);

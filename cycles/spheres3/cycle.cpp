@@ -15,30 +15,14 @@
 namespace rotacal {
 namespace {
 
-std::vector<std::string> paths(const std::vector<InputFile>& files) {
-  std::vector<std::string> p;
-  for (const auto& f : files) p.push_back(f.path);
-  return p;
-}
-
-PlanRules spheres3PlanRules() {
-  PlanRules r;
-  r.spheres = 3;  // 001 Fig. 2: three spheres, each fitted at every pose
-  return r;
-}
-
 class Spheres3 final : public Cycle {
  public:
   Spheres3() : Cycle({"spheres3", "001: the 4 location and 6 component errors of the C axis from three spheres",
                        {"examples/machines/ac_trunnion.json", {}},
                        7001,  // 7000 + its source document (001)
-                       makeSpheres3Plan, probeProgram, spheres3PlanRules()}) {}
-  Simulated simulate(const SimulateRequest& request) const override { return simulateProbing(request); }
-
-  std::string_view noOffsetsReason() const override {
-    return "spheres3 identifies component errors as functions of C: they need the controller's rotary compensation "
-        "table, which no dialect writes yet";
-  }
+                       makeSpheres3Plan, probeProgram, spheres3PlanRules(),
+                       "spheres3 identifies component errors as functions of C: they need the controller's rotary "
+                       "compensation table, which no dialect writes yet"}) {}
 
   CycleDocuments analyze(const AnalyzeRequest& r) const override {
     const ProbePlan& plan = *r.plan;
@@ -48,7 +32,7 @@ class Spheres3 final : public Cycle {
     const Spheres3Result res = identifySpheres3(plan, runs, opt);
     CycleDocuments out;
     out.text = spheres3Text(res);
-    out.doc = spheres3ReportJson(plan, res, paths(r.results));
+    out.doc = spheres3ReportJson(plan, res, pathsOf(r.results));
     // What analyze signs (issue 17): u_A from the data, u_B from the declared contributors by
     // Monte Carlo through the same estimator (cycles/spheres3/budget.hpp, docs/uncertainty.md).
     std::vector<Spheres3Result> per_run;

@@ -153,4 +153,10 @@ ProbePlan makeSpheres3Plan(const MachineModel& machine, const CycleOptions& opti
   return plan;
 }
 
+PlanRules spheres3PlanRules() {
+  PlanRules r;
+  r.spheres = 3;  // 001 Fig. 2: three spheres, each fitted at every pose
+  return r;
+}
+
 }  // namespace rotacal

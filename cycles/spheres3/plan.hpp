@@ -34,4 +34,7 @@ const std::array<Eigen::Vector3d, 5>& spheres3Approaches();
 
 ProbePlan makeSpheres3Plan(const MachineModel& machine, const CycleOptions& options);
 
+/// What a PLAN.json of this cycle must satisfy beyond the format (the cycle's identity).
+PlanRules spheres3PlanRules();
+
 }  // namespace rotacal

@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include "core/errors.hpp"
+#include "core/report_envelope.hpp"
 #include "cycles/tooltip/plan.hpp"
 #include "cycles/tooltip/analyze.hpp"
 #include "cycles/tooltip/budget.hpp"
@@ -16,19 +17,10 @@
 namespace rotacal {
 namespace {
 
-double round6(double v) { return std::round(v * 1e6) / 1e6; }
-
 std::vector<TooltipRun> readRuns(const ProbePlan& plan, const std::vector<InputFile>& results) {
   std::vector<TooltipRun> runs;
   for (const auto& f : results) runs.push_back(parseTooltipResults(f.text, f.path, plan));
   return runs;
-}
-
-PlanRules tooltipPlanRules() {
-  PlanRules r;
-  r.heights = false;  // no probing moves: the tool tip stays at the laser's target
-  r.check_options = [](const ProbePlan& p) { (void)tooltipOptionsFrom(p.options, p.machine); };
-  return r;
 }
 
 class Tooltip final : public Cycle {
@@ -37,7 +29,10 @@ class Tooltip final : public Cycle {
                       "004: angular positioning error and pivot length of a head's axis from a fixed-tool-tip program",
                       {"examples/machines/head_ab.json", {}},
                       7004,  // 7000 + its source document (004)
-                      makeTooltipPlan, tooltipProgram, tooltipPlanRules(), "tool-tip poses"}) {}
+                      makeTooltipPlan, tooltipProgram, tooltipPlanRules(),
+                      "the tooltip cycle writes no offsets (a head's pivot length and angular errors go into the "
+                      "machine's kinematics tables by hand)",
+                      "tool-tip poses"}) {}
 
   Simulated simulate(const SimulateRequest& r) const override {
     const ProbePlan& plan = *r.plan;
@@ -45,27 +40,17 @@ class Tooltip final : public Cycle {
     TooltipTruth truth = tooltipTruthFrom(doc, doc.value);
     if (r.noise_um) truth.noise_um = *r.noise_um;
     if (truth.noise_um < 0) throw InputError(r.truth.path, 0, "the laser noise must be >= 0");
-    TooltipRun run;
-    try {
-      run = simulateTooltip(plan, truth, r.seed);
-    } catch (const std::invalid_argument& e) {
-      throw InputError(r.truth.path, 0, e.what());
-    }
+    const TooltipRun run = onTruthFile(r.truth, [&] { return simulateTooltip(plan, truth, r.seed); });
     return {tooltipResultsText(plan, run),
             fmt::format("simulated {} tool-tip readings (dR {:.3f} um, noise {:.3f} um, seed {})", run.size(),
                         truth.dR_um, truth.noise_um, r.seed)};
-  }
-
-  std::string_view noOffsetsReason() const override {
-    return "the tooltip cycle writes no offsets (a head's pivot length and angular errors go into the machine's "
-        "kinematics tables by hand)";
   }
 
   CycleDocuments analyze(const AnalyzeRequest& r) const override {
     const ProbePlan& plan = *r.plan;
     const std::vector<TooltipRun> runs = readRuns(plan, r.results);
     TooltipAnalysis a = analyzeTooltip(plan, runs);
-    for (const auto& f : r.results) a.result_files.push_back(f.path);
+    a.result_files = pathsOf(r.results);
     CycleDocuments out;
     out.text = tooltipReportText(plan, a);
     out.doc = tooltipReportJson(plan, runs, a);

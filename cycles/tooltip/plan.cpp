@@ -352,4 +352,11 @@ TooltipRun parseTooltipResults(const std::string& text, const std::string& file,
   return run;
 }
 
+PlanRules tooltipPlanRules() {
+  PlanRules r;
+  r.heights = false;  // no probing moves: the tool tip stays at the laser's target
+  r.check_options = [](const ProbePlan& p) { (void)tooltipOptionsFrom(p.options, p.machine); };
+  return r;
+}
+
 }  // namespace rotacal

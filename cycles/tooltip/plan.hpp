@@ -99,4 +99,7 @@ std::string tooltipResultsText(const ProbePlan& plan, const TooltipRun& run);
 /// Reads it; throws InputError(file, line, ...) on a wrong header, count or angle.
 TooltipRun parseTooltipResults(const std::string& text, const std::string& file, const ProbePlan& plan);
 
+/// What a PLAN.json of this cycle must satisfy beyond the format (the cycle's identity).
+PlanRules tooltipPlanRules();
+
 }  // namespace rotacal

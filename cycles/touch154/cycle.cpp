@@ -23,15 +23,6 @@
 namespace rotacal {
 namespace {
 
-PlanRules touch154PlanRules() {
-  PlanRules r;
-  // The layout options a touch154 plan records (a designed plan records its design instead).
-  r.check_options = [](const ProbePlan& p) {
-    if (p.cycle == "touch154") (void)Touch154Layout::fromOptions(p.options);
-  };
-  return r;
-}
-
 class Touch154 final : public Cycle {
  public:
   Touch154() : Cycle({"touch154", "000: the 8 location errors of an A/C table from 154 touches",
@@ -40,7 +31,6 @@ class Touch154 final : public Cycle {
                        makeTouch154Plan, probeProgram, touch154PlanRules()}) {}
   std::vector<std::string> aliases() const override { return {"touch_designed"}; }
 
-  Simulated simulate(const SimulateRequest& request) const override { return simulateProbing(request); }
 
   std::vector<std::string> methods() const override {
     return {std::string(methodName(Method::LeastSquaresPerPoint)), std::string(methodName(Method::LeastSquaresRigidSetup)),
@@ -68,7 +58,7 @@ class Touch154 final : public Cycle {
     opt.hold_out = screen.holdOut();
     Analysis a;
     a.plan = &plan;
-    for (const auto& f : r.results) a.result_files.push_back(f.path);
+    a.result_files = pathsOf(r.results);
     a.main = identifyTouch154(plan, runs, opt);
     if (a.main.summary.termination == Termination::RankDeficient || a.main.summary.termination == Termination::InvalidInput)
       throw InputError(r.results.front().path, 0, a.main.summary.message);

@@ -150,4 +150,13 @@ ProbePlan makeTouch154Plan(const MachineModel& machine, const CycleOptions& opti
   return plan;
 }
 
+PlanRules touch154PlanRules() {
+  PlanRules r;
+  // The layout options a touch154 plan records (a designed plan records its design instead).
+  r.check_options = [](const ProbePlan& p) {
+    if (p.cycle == "touch154") (void)Touch154Layout::fromOptions(p.options);
+  };
+  return r;
+}
+
 }  // namespace rotacal

@@ -26,4 +26,7 @@ struct Touch154Layout {
 
 ProbePlan makeTouch154Plan(const MachineModel& machine, const CycleOptions& options);
 
+/// What a PLAN.json of this cycle must satisfy beyond the format (the cycle's identity).
+PlanRules touch154PlanRules();
+
 }  // namespace rotacal

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <vector>
 
 #include "dialect_battery.hpp"
 #include "test_util.hpp"
@@ -16,6 +17,11 @@ struct Printed {
   double inch_unit_mm;  // the unit an inch machine's results are printed in
   int inch_decimals;
   test::Clock clock;
+  /// What the controller prints first for point 1 at (53.58401, -235, 150) mm triggered
+  /// 750000000.9 s after 2000-01-01 (2023-10-07 13:20:00.9, Python's datetime): the header, and
+  /// the point's lines where they do not depend on the plan's times (haas's clock lines are
+  /// relative to the first trigger: haas_test).
+  std::vector<std::string> first_lines;
 };
 
 class EveryDialect : public ::testing::TestWithParam<Printed> {
@@ -29,17 +35,36 @@ TEST_P(EveryDialect, RoundTripWithinThePrintedDigits) {
   test::expectRoundTrip(d(), test::acPlan(LengthUnit::Inch), p.inch_unit_mm, p.inch_decimals, p.clock);
 }
 
+TEST_P(EveryDialect, PrintsThePointsAsTheControllersOutputStatementWould) {
+  const ProbePlan plan = test::acPlan();
+  MeasurementRun run;
+  run.points.push_back({1, Eigen::Vector3d(53.58401, -235.0, 150.0), 750000000.9});
+  const auto ls = test::lines(d().writeResults(plan, run));
+  const auto& want = GetParam().first_lines;
+  ASSERT_GE(ls.size(), want.size());
+  for (size_t i = 0; i < want.size(); ++i) EXPECT_EQ(ls[i], want[i]) << "line " << i + 1;
+  EXPECT_EQ(ls.back(), "END");
+}
+
 TEST_P(EveryDialect, RecoversInjectedErrors) { test::expectRecovery(d(), test::acPlan()); }
 
 TEST_P(EveryDialect, GeneratedProgramsPassTheChecker) { test::expectCleanPrograms(d()); }
 
 INSTANTIATE_TEST_SUITE_P(Dialects, EveryDialect,
-                         ::testing::Values(Printed{"haas", 25.4, 5, test::Clock::Milliseconds},
+                         ::testing::Values(Printed{"haas", 25.4, 5, test::Clock::Milliseconds,
+                                                   {"ROTACAL-RESULTS DIALECT HAAS CYCLE TOUCH154 POINTS 154 UNIT MM"}},
                                            // Klartext programs are written in MM whatever the
-                                           // machine, and so are their results.
-                                           Printed{"heidenhain", 1.0, 4, test::Clock::Seconds},
-                                           Printed{"okuma", 25.4, 5, test::Clock::None},
-                                           Printed{"siemens", 25.4, 5, test::Clock::None}),
+                                           // machine, and so are their results; FN 16 prints
+                                           // the decimal comma of a German language setting.
+                                           Printed{"heidenhain", 1.0, 4, test::Clock::Seconds,
+                                                   {"ROTACAL HEIDENHAIN CYCLE TOUCH154 POINTS 154 UNIT MM",
+                                                    "P    1 X   53,5840 Y -235,0000 Z  150,0000", "T20231007 132000"}},
+                                           Printed{"okuma", 25.4, 5, test::Clock::None,
+                                                   {"ROTACAL-RESULTS DIALECT OKUMA CYCLE TOUCH154 POINTS 154 UNIT MM"}},
+                                           // SPRINT's %10.4F
+                                           Printed{"siemens", 25.4, 5, test::Clock::None,
+                                                   {"ROTACAL-RESULTS DIALECT SIEMENS CYCLE TOUCH154 POINTS 154 UNIT MM",
+                                                    "P1 X   53.5840 Y -235.0000 Z  150.0000"}}),
                          [](const ::testing::TestParamInfo<Printed>& info) { return info.param.dialect; });
 
 }  // namespace

@@ -18,16 +18,6 @@ using test::lines;
 
 const Dialect& hh() { return dialectByName("heidenhain"); }
 
-TEST(HeidenhainResults, DecimalCommasAndTimeLines) {
-  const ProbePlan plan = test::acPlan();
-  MeasurementRun run;
-  run.points.push_back({1, Eigen::Vector3d(53.58401, -235.0, 150.0), 750000000.9});
-  const auto ls = lines(hh().writeResults(plan, run));
-  EXPECT_EQ(ls[0], "ROTACAL HEIDENHAIN CYCLE TOUCH154 POINTS 154 UNIT MM");
-  EXPECT_EQ(ls[1], "P    1 X   53,5840 Y -235,0000 Z  150,0000");
-  EXPECT_EQ(ls[2], "T20231007 132000");  // 750000000 s after 2000-01-01 (Python's datetime)
-}
-
 TEST(HeidenhainResults, ParserAcceptsPointsAndCommas) {
   const ProbePlan plan = test::acPlan();
   auto ls = lines(hh().writeResults(plan, test::displacedRun(plan)));

@@ -15,11 +15,9 @@ using test::lines;
 
 const Dialect& ok() { return dialectByName("okuma"); }
 
-TEST(OkumaResults, LinesAndTolerance) {
+TEST(OkumaResults, ParserAcceptsSignsSpacesAndLeadingZeros) {
   const ProbePlan plan = test::acPlan();
   auto ls = lines(ok().writeResults(plan, test::displacedRun(plan)));
-  EXPECT_EQ(ls[0], "ROTACAL-RESULTS DIALECT OKUMA CYCLE TOUCH154 POINTS 154 UNIT MM");
-  EXPECT_EQ(ls.back(), "END");
   ls[1] = "P1 X+53.5840 Y-235.0000 Z 0150.0000";  // '+', spaces and leading zeros are accepted
   const MeasurementRun back = ok().parseResults(test::join(ls, "\r\n"), "res.txt", plan);
   EXPECT_EQ(back.points[0].position_m_mm, Eigen::Vector3d(53.584, -235.0, 150.0));

@@ -16,15 +16,6 @@ using test::lines;
 
 const Dialect& sm() { return dialectByName("siemens"); }
 
-TEST(SiemensResults, LinesAsSprintWritesThem) {
-  const ProbePlan plan = test::acPlan();
-  MeasurementRun run;
-  run.points.push_back({1, Eigen::Vector3d(53.58401, -235.0, 150.0), 0.0});
-  const auto ls = lines(sm().writeResults(plan, run));
-  EXPECT_EQ(ls[0], "ROTACAL-RESULTS DIALECT SIEMENS CYCLE TOUCH154 POINTS 154 UNIT MM");
-  EXPECT_EQ(ls[1], "P1 X   53.5840 Y -235.0000 Z  150.0000");  // %10.4F
-}
-
 
 TEST(SiemensResults, RejectsWithTheLine) {
   const ProbePlan plan = test::acPlan();

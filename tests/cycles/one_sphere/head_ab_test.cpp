@@ -120,13 +120,13 @@ TEST_F(HeadAB, TheDiagnosisFindsNothingInCleanDataAndSaysALobingReadsAsTheSphere
   truth.noise_um = m.probe.repeatability_um;
   JudgeOptions o;
   const SphereDiagnosis clean = diagnoseSphere(plan, {simulate(plan, truth, {7})}, o);
-  const Json c = sphereDiagnosisJson(clean, plan);
+  const Json c = judgedDiagnosisJson("one_sphere", plan, clean);
   EXPECT_EQ(c["verdict"], "no_significant_effect") << c.dump(1);
   EXPECT_TRUE(c["findings"].empty());
   EXPECT_TRUE(c["explains_data"].get<bool>());
   truth.pretravel_by_direction_um = [](const Eigen::Vector3d& u) { return u.y() > std::abs(u.x()) ? 3.0 : 0.0; };
   const SphereDiagnosis lobed = diagnoseSphere(plan, {simulate(plan, truth, {7})}, o);
-  const Json l = sphereDiagnosisJson(lobed, plan);
+  const Json l = judgedDiagnosisJson("one_sphere", plan, lobed);
   EXPECT_FALSE(l["explains_data"].get<bool>()) << l.dump(1);
   bool named = false;
   for (const auto& k : l["confounded"])
