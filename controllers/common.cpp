@@ -281,7 +281,8 @@ size_t nextNonBlank(const std::vector<nc::Block>& blocks, size_t i) {
 
 std::vector<size_t> nextBlocks(const std::vector<nc::Block>& blocks, size_t i, int n) {
   std::vector<size_t> out;
-  for (size_t j = nextNonBlank(blocks, i); j < blocks.size() && static_cast<int>(out.size()) < n; j = nextNonBlank(blocks, j))
+  for (size_t j = nextNonBlank(blocks, i); j < blocks.size() && static_cast<int>(out.size()) < n;
+       j = nextNonBlank(blocks, j))
     out.push_back(j);
   return out;
 }
@@ -415,8 +416,8 @@ std::optional<AxisDirection> axisAligned(const Eigen::Vector3d& d) {
   return std::nullopt;
 }
 
-ResultLines::ResultLines(const std::string& text, std::string file, std::string header_token, std::string expected_header,
-                         std::string second_header_why, std::string skip)
+ResultLines::ResultLines(const std::string& text, std::string file, std::string header_token,
+                         std::string expected_header, std::string second_header_why, std::string skip)
     : lines_(splitLines(text)),
       file_(std::move(file)),
       header_token_(std::move(header_token)),
@@ -469,8 +470,9 @@ double taggedHeaderMmPerUnit(const std::string& s, const std::string& file, int 
                              std::string_view tag, std::string_view cycle_token) {
   const auto t = tokens(s);
   if (t.size() != 9 || t[1] != "DIALECT" || t[3] != "CYCLE" || t[5] != "POINTS" || t[7] != "UNIT")
-    fail(file, line, fmt::format("expected the header 'ROTACAL-RESULTS DIALECT {} CYCLE {} POINTS {} UNIT MM|INCH', got '{}'",
-                                 tag, cycle_token, plan.points.size(), s));
+    fail(file, line,
+         fmt::format("expected the header 'ROTACAL-RESULTS DIALECT {} CYCLE {} POINTS {} UNIT MM|INCH', got '{}'", tag,
+                     cycle_token, plan.points.size(), s));
   if (t[2] != tag) fail(file, line, fmt::format("results of dialect '{}', expected {}", t[2], tag));
   if (t[4] != cycle_token) fail(file, line, fmt::format("results of cycle '{}', the plan is '{}'", t[4], cycle_token));
   const auto n = parseDigits(t[6]);
@@ -483,7 +485,8 @@ double taggedHeaderMmPerUnit(const std::string& s, const std::string& file, int 
 }
 
 MeasurementRun parseTaggedResults(const std::string& text, const std::string& file, const ProbePlan& plan,
-                                  std::string_view tag, std::string_view cycle_token, std::string_view second_header_why) {
+                                  std::string_view tag, std::string_view cycle_token,
+                                  std::string_view second_header_why) {
   requireText(text, file);
   ResultLines in(text, file, "ROTACAL-RESULTS",
                  fmt::format("ROTACAL-RESULTS DIALECT {} CYCLE {} POINTS {} UNIT MM|INCH", tag, cycle_token,

@@ -58,14 +58,14 @@ class FanucDialect final : public MacroBDialect {
     w.line("%");
     w.comment(fmt::format("ROTACAL G54 CORRECTION, TABLE {}/C, FANUC. RUN IN MDI OR A SETUP PROGRAM.", tilt));
     w.comment(fmt::format("PROVENANCE: {} CYCLE {} MACHINE {}", r.report_file.empty() ? "NO REPORT" : r.report_file,
-                             plan.cycle, m.name));
+                          plan.cycle, m.name));
     w.comment("IDENTIFIED, PAPERS CONVENTION, VALUE +- STANDARD UNCERTAINTY K=1:");
     for (const auto& s : ctl::identifiedLines(r)) w.comment(s);
     w.comment(fmt::format("SHIFTS G54 BY THE {} PIVOT AND THE {} ZERO ERROR. G10 L2 UNDER G91 ADDS TO THE OFFSET - "
-                             "UNVERIFIED: CHECK THE G54 PAGE BEFORE AND AFTER.",
-                             tilt, tilt));
+                          "UNVERIFIED: CHECK THE G54 PAGE BEFORE AND AFTER.",
+                          tilt, tilt));
     w.line(fmt::format("G91 G10 L2 P1 X{} Y{} Z{} {}{}", ctl::fixed(shift.x() * k, 4), ctl::fixed(shift.y() * k, 4),
-                     ctl::fixed(shift.z() * k, 4), tilt, ctl::fixed(zero_deg, 4)));
+                       ctl::fixed(shift.z() * k, 4), tilt, ctl::fixed(zero_deg, 4)));
     w.line("G90");
     w.comment(ac ? "NOT APPLIED BY THE SHIFT, REPORTED ONLY: DY-CA, B-AY, C-AY, B-CA."
                     : "NOT APPLIED BY THE SHIFT, REPORTED ONLY: DX-CB, A-BY, C-BY, A-CB.");
@@ -74,8 +74,8 @@ class FanucDialect final : public MacroBDialect {
         "PARAMETER NUMBERS AND UNITS UNVERIFIED.",
         ctl::fixed(shift.x() * k, 4), ctl::fixed(shift.y() * k, 4), ctl::fixed(shift.z() * k, 4), u));
     w.comment(fmt::format("PARAMETERS 19703-19705 OFFSET 1ST TO 2ND TABLE AXIS, ADD X {} Y {} Z {} {} - UNVERIFIED.",
-                             ctl::fixed(second.x() * k, 4), ctl::fixed(second.y() * k, 4), ctl::fixed(second.z() * k, 4),
-                             u));
+                          ctl::fixed(second.x() * k, 4), ctl::fixed(second.y() * k, 4), ctl::fixed(second.z() * k, 4),
+                          u));
     w.line("%");
     return w.text;
   }

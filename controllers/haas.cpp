@@ -63,26 +63,26 @@ class HaasDialect final : public MacroBDialect {
     w.line("%");
     w.line("O09001(ROTACAL MRZP)");
     w.comment(fmt::format("ROTACAL MRZP CORRECTION, TABLE {}/C, HAAS NGC. PROVENANCE: {} CYCLE {} MACHINE {}", tilt,
-                             r.report_file.empty() ? "NO REPORT" : r.report_file, plan.cycle, m.name));
+                          r.report_file.empty() ? "NO REPORT" : r.report_file, plan.cycle, m.name));
     w.comment("IDENTIFIED, PAPERS CONVENTION, VALUE +- STANDARD UNCERTAINTY K=1:");
     for (const auto& s : ctl::identifiedLines(r)) w.comment(s);
     w.comment("WHAT IT CHANGES: MRZP SETTINGS 255 256 257 (MACHINE HOME TO THE ROTARY CENTRE, MACHINE UNITS) "
-                 "AND THE G54 ZERO OF THE TILTING AXIS.");
+              "AND THE G54 ZERO OF THE TILTING AXIS.");
     w.comment("SETTINGS CANNOT BE SET FROM A MACRO: THIS PROGRAM PUTS THE NEW VALUES IN 10121 10122 10123 AND "
-                 "STOPS. ENTER THEM BY HAND ON THE SETTINGS PAGE, THEN CYCLE START.");
+              "STOPS. ENTER THEM BY HAND ON THE SETTINGS PAGE, THEN CYCLE START.");
     w.comment(fmt::format("MAPPING UNVERIFIED ON A MACHINE: NEW = OLD + CHANGE, {}; OLD VALUES ARE READ ON THE "
-                             "CONTROL FROM 20255-20257, NOT KNOWN HERE.",
-                             inch ? "INCH" : "MM"));
+                          "CONTROL FROM 20255-20257, NOT KNOWN HERE.",
+                          inch ? "INCH" : "MM"));
     for (size_t i = 0; i < changes.size(); ++i)
       w.comment(fmt::format("SETTING {} {}: CHANGE {} {}", 255 + i, changes[i].first, ctl::fixed(changes[i].second * k, 4),
-                               inch ? "IN" : "MM"));
+                            inch ? "IN" : "MM"));
     for (size_t i = 0; i < changes.size(); ++i) {
       const double d = changes[i].second * k;
       w.line(fmt::format("#{}=#{}{}{}", 10121 + i, 20255 + i, d < 0 ? "-" : "+", ctl::fixed(std::abs(d), 4)));
     }
     w.line("#3006=1(ENTER 10121-10123 IN SETTINGS 255-257)");
     w.comment(fmt::format("G54 {} ZERO: ADDS {} DEG (G10 L2 UNDER G91 ADDS TO THE OFFSET - CHECK THE G54 PAGE)", tilt,
-                             ctl::fixed(zero_deg, 4)));
+                          ctl::fixed(zero_deg, 4)));
     w.line(fmt::format("G91 G10 L2 P1 {}{}", tilt, ctl::fixed(zero_deg, 4)));
     w.line("G90");
     w.comment(ac ? "REPORTED ONLY (NO SETTING TAKES THEM): DY-CA, B-AY, C-AY, B-CA."

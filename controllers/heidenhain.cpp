@@ -366,7 +366,8 @@ class HeidenhainDialect final : public Dialect {
         chk.problem(n, "line does not start with a block number");
         continue;
       }
-      if (std::stol(mt[1].str()) != expect) chk.problem(n, fmt::format("block number {} where {} was expected", mt[1].str(), expect));
+      if (std::stol(mt[1].str()) != expect)
+        chk.problem(n, fmt::format("block number {} where {} was expected", mt[1].str(), expect));
       expect = std::stol(mt[1].str()) + 1;
       const std::string rest = mt[2].str();
       const size_t sc = rest.find(';');
@@ -378,7 +379,8 @@ class HeidenhainDialect final : public Dialect {
     static const std::regex begin(R"(^BEGIN PGM (\w+) (MM|INCH)$)");
     static const std::regex endpgm(R"(^END PGM (\w+) (MM|INCH)$)");
     std::smatch bm, em;
-    if (chk.code.empty() || !std::regex_match(chk.code.front(), bm, begin)) chk.problem(1, "the program does not start with BEGIN PGM NAME MM");
+    if (chk.code.empty() || !std::regex_match(chk.code.front(), bm, begin))
+      chk.problem(1, "the program does not start with BEGIN PGM NAME MM");
     if (chk.code.empty() || !std::regex_match(chk.code.back(), em, endpgm) || (!bm.empty() && bm[1].str() != em[1].str()))
       chk.problem(chk.lastLine(), "the program does not end with END PGM and the name of its BEGIN PGM");
     const bool inch = !bm.empty() && bm[2].str() == "INCH";
@@ -435,7 +437,7 @@ class HeidenhainDialect final : public Dialect {
       }
       if (!ok)
         chk.problem(n, "TCH PROBE 0 is not followed by TCH PROBE 0.1 and the no-trigger check "
-                   "(FN 11/12: IF +Q10 GT/LT end GOTO LBL n, LBL n ... STOP)");
+                       "(FN 11/12: IF +Q10 GT/LT end GOTO LBL n, LBL n ... STOP)");
     }
     for (size_t i = 0; i < chk.lines.size(); ++i) {
       const size_t g = chk.code[i].find("GOTO LBL ");

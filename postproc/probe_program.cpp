@@ -20,6 +20,13 @@ nc::Op indexOp(const MachineModel& m, const Pose& pose, const std::string& diale
   return op;
 }
 
+std::string poseNameAt(const ProbePlan& plan, const Pose& pose) {
+  std::string name;
+  for (const auto& p : plan.poses)
+    if (p.pose.A == pose.A && p.pose.B == pose.B && p.pose.C == pose.C) name = p.name;
+  return name;
+}
+
 nc::Op commentOp(const std::string& text) {
   nc::Op c;
   c.kind = nc::Op::Kind::Comment;
@@ -93,10 +100,7 @@ nc::Program probeProgram(const ProbePlan& plan, const std::string& dialect) {
       case Waypoint::Kind::Read: break;
       case Waypoint::Kind::Index: {
         op = indexOp(m, w.pose, dialect);
-        std::string pose_name;
-        for (const auto& p : plan.poses)
-          if (p.pose.A == w.pose.A && p.pose.B == w.pose.B && p.pose.C == w.pose.C) pose_name = p.name;
-        prog.ops.push_back(commentOp(fmt::format("pose {}", pose_name)));
+        prog.ops.push_back(commentOp(fmt::format("pose {}", poseNameAt(plan, w.pose))));
         break;
       }
       case Waypoint::Kind::Probe: {

@@ -25,6 +25,10 @@ nc::Op indexOp(const MachineModel& machine, const Pose& pose, const std::string&
 
 nc::Op commentOp(const std::string& text);
 
+/// The name of the plan's pose at exactly these angles (the last listed), "" when none: what a
+/// program's comment before an index move calls the pose.
+std::string poseNameAt(const ProbePlan& plan, const Pose& pose);
+
 /// The header's line per rotary axis: the controller's sign against the papers' convention
 /// (`source` names that convention's equation, may be empty).
 std::vector<std::string> angleSignLines(const MachineModel& machine, const std::string& dialect, const std::string& source);

@@ -59,9 +59,7 @@ nc::Program rtestProgram(const ProbePlan& plan, const std::string& dialect) {
         case Waypoint::Kind::Retract:
         case Waypoint::Kind::Probe: break;  // no probing move: the sphere sits in the nest
         case Waypoint::Kind::Index: {
-          std::string name;
-          for (const auto& p : plan.points)
-            if (p.pose.A == mv.pose.A && p.pose.B == mv.pose.B && p.pose.C == mv.pose.C) name = p.pose_name;
+          const std::string name = poseNameAt(plan, mv.pose);
           const bool reset_visit = rtestResetReads(plan) && (reads_in_cycle == 0 || reads_in_cycle == static_cast<int>(plan.points.size()) + 1);
           comment((reset_visit ? (reads_in_cycle == 0 ? "reset pose " : "re-read of the reset pose ") : "pose ") + name);
           index(mv.pose, false, 0.0);
