@@ -79,6 +79,75 @@ struct MeanCoverageFactor {
   }
 };
 
+// The coverage test's tally (docs/uncertainty.md), the one rule every cycle's section below
+// applies: per parameter, how often the error lies within U and within u_c over the machines
+// drawn, and the rms of the error, of u_c and of u_A (each in the parameter's unit). A row pools
+// the parameters lo..hi-1; a parameter given without u_A leaves "within u" and "rms u_A" blank.
+class Coverage {
+ public:
+  explicit Coverage(size_t parameters = 0) { resize(parameters); }
+  void resize(size_t parameters) {
+    for (auto* v : {&in_U_, &in_u_, &e2_, &uc2_, &ua2_, &n_}) v->assign(parameters, 0.0);
+  }
+  size_t size() const { return n_.size(); }
+  double count(size_t i) const { return n_[i]; }
+  void add(size_t i, double err, double U, double uc, double ua = 0.0) {
+    in_U_[i] += err <= U;
+    in_u_[i] += err <= uc;
+    e2_[i] += err * err;
+    uc2_[i] += uc * uc;
+    ua2_[i] += ua * ua;
+    ++n_[i];
+  }
+  std::string columns(size_t lo, size_t hi, bool with_u = true) const {
+    double in_U = 0, in_u = 0, e2 = 0, uc2 = 0, ua2 = 0, n = 0;
+    for (size_t i = lo; i < hi; ++i) {
+      in_U += in_U_[i], in_u += in_u_[i], e2 += e2_[i], uc2 += uc2_[i], ua2 += ua2_[i];
+      n += n_[i];
+    }
+    n = std::max(n, 1.0);
+    if (!with_u)
+      return fmt::format("{:11.1f}% {:>12} {:10.3f} {:10.3f} {:>10}", 100.0 * in_U / n, "", std::sqrt(e2 / n),
+                         std::sqrt(uc2 / n), "");
+    return fmt::format("{:11.1f}% {:11.1f}% {:10.3f} {:10.3f} {:10.3f}", 100.0 * in_U / n, 100.0 * in_u / n,
+                       std::sqrt(e2 / n), std::sqrt(uc2 / n), std::sqrt(ua2 / n));
+  }
+  std::string columns(size_t i, bool with_u = true) const { return columns(i, i + 1, with_u); }
+  /// One row: the name in `width` characters, the columns, then `tail`.
+  std::string row(const std::string& name, size_t i, const std::string& tail, int width = 8) const {
+    return fmt::format("{:<{}} {}{}", name, width, columns(i), tail);
+  }
+
+ private:
+  std::vector<double> in_U_, in_u_, e2_, uc2_, ua2_, n_;
+};
+
+/// A machine's true location errors, of 000 Table 4's size: sd_um per length, sd_mdeg per angle.
+LocationErrors drawLocationErrors(Kinematics kinematics, Rng& rng, double sd_um, double sd_mdeg) {
+  LocationErrors e;
+  e.kinematics = kinematics;
+  const auto& params = locationParameters(kinematics);
+  for (int i = 0; i < kNumLocationErrors; ++i)
+    e.setReportValue(i, (params[static_cast<size_t>(i)].kind == ParamKind::Length ? sd_um : sd_mdeg) * rng.normal());
+  return e;
+}
+
+/// One more machine analyzed; every 50th is counted on stderr (runs of thousands take minutes).
+void countMachine(int& done) {
+  ++done;
+  if (done % 50 == 0) std::fprintf(stderr, "%d machines\n", done);
+}
+
+std::string coverageHeader(int width) {
+  return fmt::format("{:<{}} {:>12} {:>12} {:>10} {:>10} {:>10}", "param", width, "within U", "within u", "rms e", "rms u_c",
+                     "rms u_A");
+}
+
+void printClaimed() {
+  std::printf("claimed: 95.4 %% within U (k from the Monte Carlo, JCGM 101), 68.3 %% within u (if normal); accepted 93-97 %% "
+              "(docs/uncertainty.md)\n");
+}
+
 // The R-test: every machine draws its location errors and every declared contributor (the Type
 // B ones through drawRtest, on the exact simulator; sensor noise and sphere form per reading),
 // and is analyzed as `analyze` does (analyzeRtest + rtestBudget, 1000 Monte Carlo runs).
@@ -90,18 +159,13 @@ int rtestCoverage(int machines) {
   const double form_um = cs.find("rtest_sphere_form") ? mmToUm(cs.find("rtest_sphere_form")->u[0]) : 0.0;
   const auto& params = locationParameters(machine.kinematics);
   const double sd_um = 20.0, sd_mdeg = 2.0;
-  int inside[kNumLocationErrors] = {}, inside_1u[kNumLocationErrors] = {};
-  double e2[kNumLocationErrors] = {}, uc2[kNumLocationErrors] = {}, ua2[kNumLocationErrors] = {};
-  int tilt_inside[kRtestParams] = {}, tilt_count[kRtestParams] = {};
-  double tilt_e2[kRtestParams] = {}, tilt_uc2[kRtestParams] = {};
+  Coverage cov(kNumLocationErrors), tilt_cov(kRtestParams);
   MeanCoverageFactor mean_k;
   int done = 0;
   for (int m = 0; m < machines; ++m) {
     Rng rng(778, static_cast<std::uint64_t>(m));
     Truth t;
-    t.errors.kinematics = machine.kinematics;
-    for (int i = 0; i < kNumLocationErrors; ++i)
-      t.errors.setReportValue(i, (params[i].kind == ParamKind::Length ? sd_um : sd_mdeg) * rng.normal());
+    t.errors = drawLocationErrors(machine.kinematics, rng, sd_um, sd_mdeg);
     RtestDraw d;
     drawRtest(plan, cs, 4343, m, -1, &d);
     RtestTruthExtras x;
@@ -126,12 +190,7 @@ int rtestCoverage(int machines) {
     est.kinematics = machine.kinematics;
     est.values = a.location.value;
     for (int i = 0; i < kNumLocationErrors; ++i) {
-      const double err = std::abs(est.reportValue(i) - t.errors.reportValue(i));
-      inside[i] += err <= U[i];
-      inside_1u[i] += err <= uc[i];
-      e2[i] += err * err;
-      uc2[i] += uc[i] * uc[i];
-      ua2[i] += ua[i] * ua[i];
+      cov.add(i, std::abs(est.reportValue(i) - t.errors.reportValue(i)), U[i], uc[i], ua[i]);
     }
     // The per-tilt errors: their truth is the per-tilt fit of the machine's own readings without
     // noise or contributors (the six errors per tilt that the location errors make, as the fit
@@ -153,30 +212,22 @@ int rtestCoverage(int machines) {
           if (uc_t(p, i) == 0.0) continue;  // fixed by the reset
           const double f = rtestParameterIsLength(p) ? kUmPerMm : kMdegPerRad;
           const double err = f * std::abs(a.cycles.front().value(p, i) - truth_tilt(p, i));
-          tilt_inside[p] += err <= U_t(p, i);
-          ++tilt_count[p];
-          tilt_e2[p] += err * err;
-          tilt_uc2[p] += uc_t(p, i) * uc_t(p, i);
+          tilt_cov.add(p, err, U_t(p, i), uc_t(p, i));
         }
     }
-    ++done;
-    if (done % 50 == 0) std::fprintf(stderr, "%d machines\n", done);
+    countMachine(done);
   }
   std::printf("rtest: %d machines drawn from %s (true errors sd %.0f um / %.0f mdeg, sensor noise %.2f um, form %.2f um)\n",
               done, cs.file.c_str(), sd_um, sd_mdeg, sensor_um, form_um);
-  std::printf("%-8s %12s %12s %10s %10s %10s\n", "param", "within U", "within u", "rms e", "rms u_c", "rms u_A");
+  std::printf("%s\n", coverageHeader(8).c_str());
   for (int i = 0; i < kNumLocationErrors; ++i)
-    std::printf("%-8s %11.1f%% %11.1f%% %10.3f %10.3f %10.3f  %s\n", std::string(params[i].name).c_str(),
-                100.0 * inside[i] / done, 100.0 * inside_1u[i] / done, std::sqrt(e2[i] / done), std::sqrt(uc2[i] / done),
-                std::sqrt(ua2[i] / done), std::string(reportUnit(params[i].kind)).c_str());
+    std::printf("%s\n", cov.row(std::string(params[i].name), i, "  " + std::string(reportUnit(params[i].kind))).c_str());
   std::printf("per-tilt errors of the first cycle (pooled over the tilts; dz and c at the reset's tilt are fixed):\n");
   for (int p = 0; p < kRtestParams; ++p)
-    std::printf("%-8s %11.1f%% %12s %10.3f %10.3f %10s  %s\n", rtestParameterName(machine.kinematics, p).c_str(),
-                100.0 * tilt_inside[p] / std::max(1, tilt_count[p]), "", std::sqrt(tilt_e2[p] / std::max(1, tilt_count[p])),
-                std::sqrt(tilt_uc2[p] / std::max(1, tilt_count[p])), "", rtestParameterIsLength(p) ? "um" : "mdeg");
+    std::printf("%-8s %s  %s\n", rtestParameterName(machine.kinematics, p).c_str(), tilt_cov.columns(p, false).c_str(),
+                rtestParameterIsLength(p) ? "um" : "mdeg");
   mean_k.print();
-  std::printf("claimed: 95.4 %% within U (k from the Monte Carlo, JCGM 101), 68.3 %% within u (if normal); accepted 93-97 %% "
-              "(docs/uncertainty.md)\n");
+  printClaimed();
   return 0;
 }
 
@@ -199,8 +250,7 @@ int tooltipCoverage(int machines) {
   for (const auto& p : plan.points)
     if (head.angles_deg.empty() || std::abs(p.pose.A - head.angles_deg.back()) > 1e-9) head.angles_deg.push_back(p.pose.A);
   const int J = static_cast<int>(head.angles_deg.size());
-  std::vector<int> inside(J + 1, 0), inside_1u(J + 1, 0);
-  std::vector<double> e2(J + 1, 0.0), uc2(J + 1, 0.0), ua2(J + 1, 0.0);
+  Coverage cov(static_cast<size_t>(J) + 1);
   MeanCoverageFactor mean_k;
   int done = 0;
   for (int m = 0; m < machines; ++m) {
@@ -229,34 +279,22 @@ int tooltipCoverage(int machines) {
     for (int i = 0; i <= J; ++i) {  // e_k in angle order, then dR (the budget's order)
       const double est = i < J ? a.joint.e_mdeg[static_cast<size_t>(i)] : a.joint.dR_um;
       const double tru = i < J ? head.e_mdeg[static_cast<size_t>(i)] : head.dR_um;
-      const double err = std::abs(est - tru);
-      inside[i] += err <= U[i];
-      inside_1u[i] += err <= uc[i];
-      e2[i] += err * err;
-      uc2[i] += uc[i] * uc[i];
-      ua2[i] += ua[i] * ua[i];
+      cov.add(static_cast<size_t>(i), std::abs(est - tru), U[i], uc[i], ua[i]);
     }
-    ++done;
-    if (done % 50 == 0) std::fprintf(stderr, "%d machines\n", done);
+    countMachine(done);
   }
   std::printf("tooltip: %d machines drawn from %s (true dR sd %.0f um, e sd %.0f mdeg per shape term + %.0f mdeg per "
               "angle, per-reading noise %.3f um)\n",
               done, cs.file.c_str(), sd_dR_um, sd_e_mdeg, sd_e_angle_mdeg, noise_um);
-  std::printf("%-8s %12s %12s %10s %10s %10s\n", "param", "within U", "within u", "rms e", "rms u_c", "rms u_A");
+  std::printf("%s\n", coverageHeader(8).c_str());
   auto row = [&](const std::string& name, int lo, int hi, const char* unit) {
-    int in = 0, in1 = 0;
-    double se = 0, su = 0, sa = 0;
-    for (int i = lo; i < hi; ++i) in += inside[i], in1 += inside_1u[i], se += e2[i], su += uc2[i], sa += ua2[i];
-    const double cnt = static_cast<double>(done) * (hi - lo);
-    std::printf("%-8s %11.1f%% %11.1f%% %10.3f %10.3f %10.3f  %s\n", name.c_str(), 100.0 * in / cnt, 100.0 * in1 / cnt,
-                std::sqrt(se / cnt), std::sqrt(su / cnt), std::sqrt(sa / cnt), unit);
+    std::printf("%-8s %s  %s\n", name.c_str(), cov.columns(static_cast<size_t>(lo), static_cast<size_t>(hi)).c_str(), unit);
   };
   row("e (all)", 0, J, "mdeg (pooled over the angles)");
   for (int i = 0; i < J; ++i) row(fmt::format("e_A{:g}", head.angles_deg[static_cast<size_t>(i)]), i, i + 1, "mdeg");
   row("dR", J, J + 1, "um");
   mean_k.print();
-  std::printf("claimed: 95.4 %% within U (k from the Monte Carlo, JCGM 101), 68.3 %% within u (if normal); accepted 93-97 %% "
-              "(docs/uncertainty.md)\n");
+  printClaimed();
   return 0;
 }
 
@@ -284,10 +322,7 @@ int spheres3Coverage(int machines, const std::string& contributors_file) {
   // compensation; drawn larger for the location errors (000 Table 4's size, as the other cycles).
   const double sd_um = 20.0, sd_mdeg = 2.0, comp_um = 1.0, comp_mdeg = 0.5, sphere_um = 50.0;
   const char* names[4] = {"Oxc", "Oyc", "Sxc", "Syc"};
-  int inside[4] = {}, inside_1u[4] = {};
-  double e2[4] = {}, uc2[4] = {}, ua2[4] = {};
-  int c_inside[kNumComponentErrors] = {}, c_count[kNumComponentErrors] = {};
-  double c_e2[kNumComponentErrors] = {}, c_uc2[kNumComponentErrors] = {};
+  Coverage cov(4), c_cov(kNumComponentErrors);
   MeanCoverageFactor mean_k;
   int done = 0;
   for (int m = 0; m < machines; ++m) {
@@ -334,12 +369,7 @@ int spheres3Coverage(int machines, const std::string& contributors_file) {
     mean_k.add(b.location);
     for (int i = 0; i < 4; ++i) {
       const double f = i < 2 ? kUmPerMm : kMdegPerRad;
-      const double err = f * std::abs(r.location[i] - L[i]);
-      inside[i] += err <= U[i];
-      inside_1u[i] += err <= uc[i];
-      e2[i] += err * err;
-      uc2[i] += uc[i] * uc[i];
-      ua2[i] += ua[i] * ua[i];
+      cov.add(i, f * std::abs(r.location[i] - L[i]), U[i], uc[i], ua[i]);
     }
     for (int a = 0; a < n_angles; ++a) {
       const ComponentVector truth = componentAt(degToRad(r.c_deg[static_cast<size_t>(a)]));
@@ -347,31 +377,22 @@ int spheres3Coverage(int machines, const std::string& contributors_file) {
         const double f = k >= 3 ? kMdegPerRad : kUmPerMm;
         const double err = f * std::abs(r.values(a, k) - truth[k]);
         const double u = b.component_u_c(a, k);
-        c_inside[k] += err <= b.component_k(a, k) * u;
-        ++c_count[k];
-        c_e2[k] += err * err;
-        c_uc2[k] += u * u;
+        c_cov.add(k, err, b.component_k(a, k) * u, u);
       }
     }
-    ++done;
-    if (done % 50 == 0) std::fprintf(stderr, "%d machines\n", done);
+    countMachine(done);
   }
   std::printf("spheres3: %d machines drawn from %s (location errors sd %.0f um / %.0f mdeg, component terms up to 3C sd "
               "%.1f um / %.1f mdeg, spheres %.0f um, per-touch scatter %.3f um)\n",
               done, cs.file.c_str(), sd_um, sd_mdeg, comp_um, comp_mdeg, sphere_um, mmToUm(std::sqrt(touch_mm2)));
-  std::printf("%-8s %12s %12s %10s %10s %10s\n", "param", "within U", "within u", "rms e", "rms u_c", "rms u_A");
-  for (int i = 0; i < 4; ++i)
-    std::printf("%-8s %11.1f%% %11.1f%% %10.3f %10.3f %10.3f  %s\n", names[i], 100.0 * inside[i] / done,
-                100.0 * inside_1u[i] / done, std::sqrt(e2[i] / done), std::sqrt(uc2[i] / done), std::sqrt(ua2[i] / done),
-                i < 2 ? "um" : "mdeg");
+  std::printf("%s\n", coverageHeader(8).c_str());
+  for (int i = 0; i < 4; ++i) std::printf("%s\n", cov.row(names[i], i, i < 2 ? "  um" : "  mdeg").c_str());
   std::printf("component errors at the %d sampled angles:\n", n_angles);
   for (int k = 0; k < kNumComponentErrors; ++k)
-    std::printf("%-8s %11.1f%% %12s %10.3f %10.3f %10s  %s\n", componentNames()[static_cast<size_t>(k)],
-                100.0 * c_inside[k] / c_count[k], "", std::sqrt(c_e2[k] / c_count[k]), std::sqrt(c_uc2[k] / c_count[k]),
-                "", k >= 3 ? "mdeg" : "um");
+    std::printf("%-8s %s  %s\n", componentNames()[static_cast<size_t>(k)], c_cov.columns(k, false).c_str(),
+                k >= 3 ? "mdeg" : "um");
   mean_k.print();
-  std::printf("claimed: 95.4 %% within U (k from the Monte Carlo, JCGM 101), 68.3 %% within u (if normal); accepted 93-97 %% "
-              "(docs/uncertainty.md)\n");
+  printClaimed();
   return 0;
 }
 
@@ -388,20 +409,16 @@ int spaceframeCoverage(int machines, double frame_u_um) {
   double touch_mm2 = 0.0;
   for (const auto& c : cs.items)
     if (spaceframeTypeA(*c.info)) touch_mm2 += c.u[0] * c.u[0];
-  const auto& params = locationParameters(machine.kinematics);
   const SpaceframeLayout layout = SpaceframeLayout::fromOptions(plan.options);
   const double sd_um = 20.0, sd_mdeg = 2.0, setup_um = 50.0, setup_mdeg = 5.0;
   std::vector<std::string> names;
-  std::vector<int> inside, inside_1u;
-  std::vector<double> e2, uc2, ua2;
+  Coverage cov;
   MeanCoverageFactor mean_k;
   int done = 0;
   for (int m = 0; m < machines; ++m) {
     Rng rng(991, static_cast<std::uint64_t>(m));
     FrameModel truth_model;
-    truth_model.errors.kinematics = machine.kinematics;
-    for (int i = 0; i < kNumLocationErrors; ++i)
-      truth_model.errors.values[i] = params[i].kind == ParamKind::Length ? umToMm(sd_um * rng.normal()) : mdegToRad(sd_mdeg * rng.normal());
+    truth_model.errors = drawLocationErrors(machine.kinematics, rng, sd_um, sd_mdeg);
     for (int i = 0; i < 3; ++i) {
       truth_model.setup_translation_mm[i] = umToMm(setup_um * rng.normal());
       truth_model.setup_rotation_rad[i] = mdegToRad(setup_mdeg * rng.normal());
@@ -440,34 +457,18 @@ int spaceframeCoverage(int machines, double frame_u_um) {
     mean_k.add(b);
     if (names.empty()) {
       names = b.names;
-      inside.assign(names.size(), 0);
-      inside_1u.assign(names.size(), 0);
-      e2.assign(names.size(), 0.0);
-      uc2.assign(names.size(), 0.0);
-      ua2.assign(names.size(), 0.0);
+      cov.resize(names.size());
     }
-    for (int i = 0; i < b.size(); ++i) {
-      const double err = std::abs(est[i] - tru[i]);
-      inside[static_cast<size_t>(i)] += err <= U[i];
-      inside_1u[static_cast<size_t>(i)] += err <= uc[i];
-      e2[static_cast<size_t>(i)] += err * err;
-      uc2[static_cast<size_t>(i)] += uc[i] * uc[i];
-      ua2[static_cast<size_t>(i)] += ua[i] * ua[i];
-    }
-    ++done;
-    if (done % 50 == 0) std::fprintf(stderr, "%d machines\n", done);
+    for (int i = 0; i < b.size(); ++i) cov.add(static_cast<size_t>(i), std::abs(est[i] - tru[i]), U[i], uc[i], ua[i]);
+    countMachine(done);
   }
   std::printf("spaceframe: %d machines, contributors %s, frame calibrated to %g um per coordinate (location errors sd "
               "%.0f um / %.0f mdeg, set-up %.0f um / %.0f mdeg, per-touch scatter %.3f um)\n",
               done, cs.file.c_str(), frame_u_um, sd_um, sd_mdeg, setup_um, setup_mdeg, mmToUm(std::sqrt(touch_mm2)));
-  std::printf("%-14s %12s %12s %10s %10s %10s\n", "param", "within U", "within u", "rms e", "rms u_c", "rms u_A");
-  for (size_t i = 0; i < names.size(); ++i)
-    std::printf("%-14s %11.1f%% %11.1f%% %10.3f %10.3f %10.3f\n", names[i].c_str(), 100.0 * inside[i] / std::max(done, 1),
-                100.0 * inside_1u[i] / std::max(done, 1), std::sqrt(e2[i] / std::max(done, 1)),
-                std::sqrt(uc2[i] / std::max(done, 1)), std::sqrt(ua2[i] / std::max(done, 1)));
+  std::printf("%s\n", coverageHeader(14).c_str());
+  for (size_t i = 0; i < names.size(); ++i) std::printf("%s\n", cov.row(names[i], i, "", 14).c_str());
   mean_k.print();
-  std::printf("claimed: 95.4 %% within U (k from the Monte Carlo, JCGM 101), 68.3 %% within u (if normal); accepted 93-97 %% "
-              "(docs/uncertainty.md)\n");
+  printClaimed();
   return 0;
 }
 
@@ -518,19 +519,16 @@ int oneSphereCoverage(int machines, const std::string& contributors_file, const 
   const double touch_mm2 = perTouchVariance_mm2(cs, isPerTouchContributor);
   const auto& params = locationParameters(machine.kinematics);
   const double sd_um = 20.0, sd_mdeg = 2.0, sphere_um = 50.0;
-  int inside[kNumLocationErrors] = {}, inside_1u[kNumLocationErrors] = {};
-  double e2[kNumLocationErrors] = {}, uc2[kNumLocationErrors] = {}, ua2[kNumLocationErrors] = {}, k_sum[kNumLocationErrors] = {};
+  Coverage cov(kNumLocationErrors);
+  double k_sum[kNumLocationErrors] = {};
   // The linear axes' squareness, where the plan fits it: its truth is the drawn one.
   const char* sq_names[3] = {"S_xy", "S_xz", "S_yz"};
-  int sq_inside[3] = {}, sq_seen = 0;
-  double sq_e2[3] = {}, sq_uc2[3] = {};
+  Coverage sq_cov(3);
   int done = 0;
   for (int m = 0; m < machines; ++m) {
     Rng rng(780, static_cast<std::uint64_t>(m));
     Truth t;
-    t.errors.kinematics = machine.kinematics;
-    for (int i = 0; i < kNumLocationErrors; ++i)
-      t.errors.setReportValue(i, (params[static_cast<size_t>(i)].kind == ParamKind::Length ? sd_um : sd_mdeg) * rng.normal());
+    t.errors = drawLocationErrors(machine.kinematics, rng, sd_um, sd_mdeg);
     t.sphere_center_error_w_mm[1] = Eigen::Vector3d(umToMm(sphere_um * rng.normal()), umToMm(sphere_um * rng.normal()),
                                                     umToMm(sphere_um * rng.normal()));
     SphereCycleResult r;
@@ -544,17 +542,11 @@ int oneSphereCoverage(int machines, const std::string& contributors_file, const 
       int q = 0;
       for (int k = 0; k < b.size(); ++k)
         if (b.names[static_cast<size_t>(k)] == iso) q = k;
-      const double err = std::abs(r.location.reportValue(i) - t.errors.reportValue(i));
-      inside[i] += err <= U[q];
-      inside_1u[i] += err <= uc[q];
-      e2[i] += err * err;
-      uc2[i] += uc[q] * uc[q];
-      ua2[i] += ua[q] * ua[q];
+      cov.add(i, std::abs(r.location.reportValue(i) - t.errors.reportValue(i)), U[q], uc[q], ua[q]);
       k_sum[i] += kf[q];
     }
     if (d.linear) {
       const double drawn[3] = {d.linear_errors.S_xy, d.linear_errors.S_xz, d.linear_errors.S_yz};
-      bool any = false;
       for (int s = 0; s < 3; ++s)
         for (int k = 0; k < b.size(); ++k)
           if (b.names[static_cast<size_t>(k)] == sq_names[s]) {
@@ -562,30 +554,24 @@ int oneSphereCoverage(int machines, const std::string& contributors_file, const 
             for (size_t i = 0; i < r.names.size(); ++i)
               if (r.names[i].name == sq_names[s]) xi = i;
             const double err = std::abs(radToMdeg(r.x[static_cast<Eigen::Index>(xi)] - drawn[s]));
-            sq_inside[s] += err <= U[k];
-            sq_e2[s] += err * err;
-            sq_uc2[s] += uc[k] * uc[k];
-            any = true;
+            sq_cov.add(s, err, U[k], uc[k]);
           }
-      sq_seen += any;
     }
-    ++done;
-    if (done % 50 == 0) std::fprintf(stderr, "%d machines\n", done);
+    countMachine(done);
   }
   std::printf("one_sphere: %d machines drawn from %s (location errors sd %.0f um / %.0f mdeg, sphere %.0f um, per-touch "
               "scatter %.3f um)\n",
               done, cs.file.c_str(), sd_um, sd_mdeg, sphere_um, mmToUm(std::sqrt(touch_mm2)));
-  std::printf("%-8s %12s %12s %10s %10s %10s %8s\n", "param", "within U", "within u", "rms e", "rms u_c", "rms u_A", "mean k");
+  std::printf("%s %8s\n", coverageHeader(8).c_str(), "mean k");
   for (int i = 0; i < kNumLocationErrors; ++i)
-    std::printf("%-8s %11.1f%% %11.1f%% %10.3f %10.3f %10.3f %8.2f  %s\n", std::string(params[static_cast<size_t>(i)].name).c_str(),
-                100.0 * inside[i] / done, 100.0 * inside_1u[i] / done, std::sqrt(e2[i] / done), std::sqrt(uc2[i] / done),
-                std::sqrt(ua2[i] / done), k_sum[i] / done,
-                params[static_cast<size_t>(i)].kind == ParamKind::Length ? "um" : "mdeg");
-  for (int s = 0; s < 3 && sq_seen > 0; ++s)
-    std::printf("%-8s %11.1f%% %12s %10.3f %10.3f %10s %8s  mdeg (the linear axes' squareness, fitted)\n", sq_names[s],
-                100.0 * sq_inside[s] / sq_seen, "", std::sqrt(sq_e2[s] / sq_seen), std::sqrt(sq_uc2[s] / sq_seen), "", "");
-  std::printf("claimed: 95.4 %% within U (k from the Monte Carlo, JCGM 101), 68.3 %% within u (if normal); accepted 93-97 %% "
-              "(docs/uncertainty.md)\n");
+    std::printf("%s\n", cov.row(std::string(params[static_cast<size_t>(i)].name), i,
+                                fmt::format(" {:8.2f}  {}", k_sum[i] / done,
+                                            params[static_cast<size_t>(i)].kind == ParamKind::Length ? "um" : "mdeg"))
+                            .c_str());
+  for (int s = 0; s < 3 && sq_cov.count(s) > 0; ++s)
+    std::printf("%-8s %s %8s  mdeg (the linear axes' squareness, fitted)\n", sq_names[s], sq_cov.columns(s, false).c_str(),
+                "");
+  printClaimed();
   return 0;
 }
 
@@ -607,8 +593,7 @@ int headCoverage(const std::string& machine_file, const std::vector<std::string>
   const SphereLayout layout = sphereLayoutOf(plan);
   const KinematicModel model = sphereModel(machine, Eigen::Vector3d::Zero());
   const double sd_um = 20.0, sd_mdeg = 2.0, sphere_um = 50.0;
-  std::vector<int> inside(drawn.size(), 0), inside_1u(drawn.size(), 0);
-  std::vector<double> e2(drawn.size(), 0.0), uc2(drawn.size(), 0.0), ua2(drawn.size(), 0.0);
+  Coverage cov(drawn.size());
   int done = 0;
   for (int m = 0; m < machines; ++m) {
     Rng rng(1919, static_cast<std::uint64_t>(m));
@@ -636,27 +621,20 @@ int headCoverage(const std::string& machine_file, const std::vector<std::string>
       if (q < 0 || x < 0) continue;
       const double v = r.x[x];
       const double est = r.model.parameters[static_cast<size_t>(x)].kind == ParamKind::Length ? mmToUm(v) : radToMdeg(v);
-      const double err = std::abs(est - truth_report[i]);
-      inside[i] += err <= U[q];
-      inside_1u[i] += err <= uc[q];
-      e2[i] += err * err;
-      uc2[i] += uc[q] * uc[q];
-      ua2[i] += ua[q] * ua[q];
+      cov.add(i, std::abs(est - truth_report[i]), U[q], uc[q], ua[q]);
     }
-    ++done;
-    if (done % 50 == 0) std::fprintf(stderr, "%d machines\n", done);
+    countMachine(done);
   }
   std::printf("one_sphere on %s (L %.0f mm, sphere at %.0f, %.0f, %.0f mm): %d machines drawn from %s (location "
               "errors sd %.0f um / %.0f mdeg, sphere %.0f um, per-touch scatter %.3f um)\n",
               machine.name.c_str(), machine.head->pivot_to_ball_mm, layout.center_w_mm.x(), layout.center_w_mm.y(), layout.center_w_mm.z(), done,
               cs.file.c_str(), sd_um, sd_mdeg, sphere_um, mmToUm(std::sqrt(touch_mm2)));
-  std::printf("%-8s %12s %12s %10s %10s %10s\n", "param", "within U", "within u", "rms e", "rms u_c", "rms u_A");
-  for (size_t i = 0; i < drawn.size(); ++i)
-    std::printf("%-8s %11.1f%% %11.1f%% %10.3f %10.3f %10.3f  %s\n", drawn[i].c_str(), 100.0 * inside[i] / done,
-                100.0 * inside_1u[i] / done, std::sqrt(e2[i] / done), std::sqrt(uc2[i] / done), std::sqrt(ua2[i] / done),
-                model.parameters[static_cast<size_t>(model.parameterIndex(drawn[i]))].kind == ParamKind::Length ? "um" : "mdeg");
-  std::printf("claimed: 95.4 %% within U (k from the Monte Carlo, JCGM 101), 68.3 %% within u (if normal); accepted 93-97 %% "
-              "(docs/uncertainty.md)\n");
+  std::printf("%s\n", coverageHeader(8).c_str());
+  for (size_t i = 0; i < drawn.size(); ++i) {
+    const bool length = model.parameters[static_cast<size_t>(model.parameterIndex(drawn[i]))].kind == ParamKind::Length;
+    std::printf("%s\n", cov.row(drawn[i], i, length ? "  um" : "  mdeg").c_str());
+  }
+  printClaimed();
   return 0;
 }
 
@@ -697,17 +675,13 @@ int main(int argc, char** argv) {
   // every machine, so the chain is never linearised at the truth.
   const double sd_um = 20.0, sd_mdeg = 2.0;
 
-  int inside[kNumLocationErrors] = {}, inside_1u[kNumLocationErrors] = {};
+  Coverage cov(kNumLocationErrors);
   MeanCoverageFactor mean_k;
-  double ratio_sum[kNumLocationErrors] = {}, e2[kNumLocationErrors] = {}, uc2[kNumLocationErrors] = {},
-         ua2[kNumLocationErrors] = {};
+  double ratio_sum[kNumLocationErrors] = {};
   int done = 0;
   for (int m = 0; m < machines; ++m) {
     Rng rng(777, static_cast<std::uint64_t>(m));
-    LocationErrors truth;
-    truth.kinematics = machine.kinematics;
-    for (int i = 0; i < kNumLocationErrors; ++i)
-      truth.setReportValue(i, (params[i].kind == ParamKind::Length ? sd_um : sd_mdeg) * rng.normal());
+    const LocationErrors truth = drawLocationErrors(machine.kinematics, rng, sd_um, sd_mdeg);
     RunDraw d;
     drawRun(all, chain0, 4242, m, &d);
     MeasurementRun run = simulate(plan, truthOfDraw(truth, d), {1});
@@ -726,26 +700,18 @@ int main(int argc, char** argv) {
     mean_k.add(b);
     for (int i = 0; i < kNumLocationErrors; ++i) {
       const double err = std::abs(r.estimate.reportValue(i) - truth.reportValue(i));
-      inside[i] += err <= U[i];
-      inside_1u[i] += err <= uc[i];
+      cov.add(i, err, U[i], uc[i], b.uA()[i]);
       ratio_sum[i] += err / uc[i];
-      e2[i] += err * err;
-      uc2[i] += uc[i] * uc[i];
-      ua2[i] += b.uA()[i] * b.uA()[i];
     }
-    ++done;
-    if (done % 100 == 0) std::fprintf(stderr, "%d machines\n", done);
+    countMachine(done);
   }
   std::printf("touch154 %s: %d machines drawn from %s (true errors sd %.0f um / %.0f mdeg)\n", method_name.c_str(), done,
               contributors.file.c_str(), sd_um, sd_mdeg);
-  std::printf("%-8s %12s %12s %14s %10s %10s %10s\n", "param", "within U", "within u", "mean |e|/u_c", "rms e",
-              "rms u_c", "rms u_A");
+  std::printf("%s %14s\n", coverageHeader(8).c_str(), "mean |e|/u_c");
   for (int i = 0; i < kNumLocationErrors; ++i)
-    std::printf("%-8s %11.1f%% %11.1f%% %14.2f %10.3f %10.3f %10.3f  %s\n", std::string(params[i].name).c_str(),
-                100.0 * inside[i] / done, 100.0 * inside_1u[i] / done, ratio_sum[i] / done, std::sqrt(e2[i] / done),
-                std::sqrt(uc2[i] / done), std::sqrt(ua2[i] / done), std::string(reportUnit(params[i].kind)).c_str());
+    std::printf("%s %14.2f  %s\n", cov.row(std::string(params[i].name), i, "").c_str(), ratio_sum[i] / done,
+                std::string(reportUnit(params[i].kind)).c_str());
   mean_k.print();
-  std::printf("claimed: 95.4 %% within U (k from the Monte Carlo, JCGM 101), 68.3 %% within u (if normal); accepted 93-97 %% "
-              "(docs/uncertainty.md)\n");
+  printClaimed();
   return 0;
 }
