@@ -3,7 +3,10 @@
 // checker on the generated programs.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "dialect_battery.hpp"
@@ -22,6 +25,10 @@ struct Printed {
   /// the point's lines where they do not depend on the plan's times (haas's clock lines are
   /// relative to the first trigger: haas_test).
   std::vector<std::string> first_lines;
+  /// Point 1's lines as the control may also print them (index in the file, text), read back as
+  /// (53.584, -235, 150) mm at `accepted_t_s` (NaN: the dialect prints no clock).
+  std::vector<std::pair<size_t, std::string>> accepted = {};
+  double accepted_t_s = std::numeric_limits<double>::quiet_NaN();
 };
 
 class EveryDialect : public ::testing::TestWithParam<Printed> {
@@ -46,6 +53,20 @@ TEST_P(EveryDialect, PrintsThePointsAsTheControllersOutputStatementWould) {
   EXPECT_EQ(ls.back(), "END");
 }
 
+TEST_P(EveryDialect, ReadsTheFormsTheControlMayPrint) {
+  const Printed& p = GetParam();
+  // Macro B's other DPRNT forms are read in fanuc_test (haas shares the reader).
+  if (p.accepted.empty()) GTEST_SKIP() << "the written form is the only one";
+  const ProbePlan plan = test::acPlan();
+  auto ls = test::lines(d().writeResults(plan, test::displacedRun(plan)));
+  for (const auto& [i, text] : p.accepted) ls[i] = text;
+  const MeasurementRun back = d().parseResults(test::join(ls, "\r\n"), "res.txt", plan);
+  EXPECT_EQ(back.points[0].position_m_mm, Eigen::Vector3d(53.584, -235.0, 150.0));
+  if (!std::isnan(p.accepted_t_s)) {
+    EXPECT_EQ(back.points[0].t_s, p.accepted_t_s);
+  }
+}
+
 TEST_P(EveryDialect, RecoversInjectedErrors) { test::expectRecovery(d(), test::acPlan()); }
 
 TEST_P(EveryDialect, GeneratedProgramsPassTheChecker) { test::expectCleanPrograms(d()); }
@@ -58,13 +79,21 @@ INSTANTIATE_TEST_SUITE_P(Dialects, EveryDialect,
                                            // the decimal comma of a German language setting.
                                            Printed{"heidenhain", 1.0, 4, test::Clock::Seconds,
                                                    {"ROTACAL HEIDENHAIN CYCLE TOUCH154 POINTS 154 UNIT MM",
-                                                    "P    1 X   53,5840 Y -235,0000 Z  150,0000", "T20231007 132000"}},
+                                                    "P    1 X   53,5840 Y -235,0000 Z  150,0000", "T20231007 132000"},
+                                                   // a point or a comma, an explicit sign; 2024-02-29
+                                                   // 23:59:59 (Python's datetime)
+                                                   {{1, "P1 X53.5840 Y-235,0000 Z +150.0000"}, {2, "T20240229 235959"}},
+                                                   762566399.0},
                                            Printed{"okuma", 25.4, 5, test::Clock::None,
-                                                   {"ROTACAL-RESULTS DIALECT OKUMA CYCLE TOUCH154 POINTS 154 UNIT MM"}},
+                                                   {"ROTACAL-RESULTS DIALECT OKUMA CYCLE TOUCH154 POINTS 154 UNIT MM"},
+                                                   // '+', spaces and leading zeros
+                                                   {{1, "P1 X+53.5840 Y-235.0000 Z 0150.0000"}}},
                                            // SPRINT's %10.4F
                                            Printed{"siemens", 25.4, 5, test::Clock::None,
                                                    {"ROTACAL-RESULTS DIALECT SIEMENS CYCLE TOUCH154 POINTS 154 UNIT MM",
-                                                    "P1 X   53.5840 Y -235.0000 Z  150.0000"}}),
+                                                    "P1 X   53.5840 Y -235.0000 Z  150.0000"},
+                                                   // %F without a width
+                                                   {{1, "P1 X53.5840 Y-235.0000 Z150.0000"}}}),
                          [](const ::testing::TestParamInfo<Printed>& info) { return info.param.dialect; });
 
 }  // namespace

@@ -31,22 +31,6 @@ TEST(HaasResults, HeaderClockAndPointLines) {
 }
 
 
-TEST(HaasResults, RejectsWithTheLine) {
-  const ProbePlan plan = test::acPlan();
-  const auto ls = lines(hs().writeResults(plan, test::displacedRun(plan)));
-  auto v = ls;
-  v[0] = "ROTACAL-RESULTS DIALECT FANUC CYCLE TOUCH154 POINTS 154 UNIT MM";
-  EXPECT_NE(test::parseError(hs(), test::join(v), plan).find("res.txt:1: results of dialect 'FANUC', expected HAAS"),
-            std::string::npos);
-  v = ls;
-  v[5] = "P4 X 12.3456 Y 1.0000 Z 1.0000 T-5";
-  EXPECT_NE(test::parseError(hs(), test::join(v), plan).find("res.txt:6: T -5 of point 4 is negative"), std::string::npos);
-  v = ls;
-  v.erase(v.begin() + 10);  // P9
-  EXPECT_NE(test::parseError(hs(), test::join(v), plan).find(fmt::format("res.txt:{}: point 9 is missing", v.size())),
-            std::string::npos);
-}
-
 TEST(HaasProgram, HaasFrameAndStorage) {
   const ProbePlan plan = test::acPlan();
   const std::string text = hs().writeProgram(test::cycleProgram(plan, "haas"));

@@ -18,44 +18,6 @@ using test::lines;
 
 const Dialect& hh() { return dialectByName("heidenhain"); }
 
-TEST(HeidenhainResults, ParserAcceptsPointsAndCommas) {
-  const ProbePlan plan = test::acPlan();
-  auto ls = lines(hh().writeResults(plan, test::displacedRun(plan)));
-  ls[1] = "P1 X53.5840 Y-235,0000 Z +150.0000";
-  ls[2] = "T20240229 235959";
-  const MeasurementRun back = hh().parseResults(test::join(ls, "\r\n"), "res.txt", plan);
-  EXPECT_EQ(back.points[0].position_m_mm, Eigen::Vector3d(53.584, -235.0, 150.0));
-  EXPECT_EQ(back.points[0].t_s, 762566399.0);  // 2024-02-29 23:59:59 (Python's datetime)
-}
-
-
-TEST(HeidenhainResults, RejectsWithTheLine) {
-  const ProbePlan plan = test::acPlan();
-  const auto ls = lines(hh().writeResults(plan, test::displacedRun(plan)));
-  auto v = ls;
-  v.resize(7);  // header + 3 points with their time lines
-  v.push_back("NOT-TRIGGERED P    4");
-  EXPECT_NE(test::parseError(hh(), test::join(v), plan).find("res.txt:8: point 4 was not triggered"), std::string::npos);
-  v = ls;
-  v[3] = "P    2 X   53,54,41 Y -215,0000 Z  150,0000";
-  EXPECT_NE(test::parseError(hh(), test::join(v), plan).find("res.txt:4: X '53,54,41' of point 2 is not a number"),
-            std::string::npos);
-  v = ls;
-  v.erase(v.begin() + 4);  // the time line of point 2
-  EXPECT_NE(test::parseError(hh(), test::join(v), plan).find("res.txt:5: point 2 (line 4) has no time line"),
-            std::string::npos);
-  v = ls;
-  v[2] = "T20231307 132000";
-  EXPECT_NE(test::parseError(hh(), test::join(v), plan).find("res.txt:3: time of point 1"), std::string::npos);
-  v = ls;
-  v.insert(v.begin() + 1, ls[0]);
-  EXPECT_NE(test::parseError(hh(), test::join(v), plan).find("res.txt:2: a second header line"), std::string::npos);
-  v = ls;
-  v.erase(v.begin() + 5, v.begin() + 7);  // point 3 and its time
-  EXPECT_NE(test::parseError(hh(), test::join(v), plan).find(fmt::format("res.txt:{}: point 3 is missing", v.size())),
-            std::string::npos);
-}
-
 TEST(HeidenhainProgram, KlartextFrameAndCycle0) {
   const ProbePlan plan = test::acPlan();
   nc::Program prog = test::cycleProgram(plan, "heidenhain");

@@ -255,6 +255,22 @@ std::vector<Case> Malformed::cases() const {
     v = ls;
     v.insert(v.begin() + static_cast<long>(lay.at(20)), h);
     c.push_back({"second header (appended run)", join(v), lineOf(20), "a second header line"});
+    // Every point there, the END line not: the file was cut just before its end.
+    v = ls;
+    v.pop_back();
+    c.push_back({"END line missing", join(v), lastLine(v), "no END line after the last point: the file is incomplete"});
+    if (n != "heidenhain") {
+      // Another control's tagged results under this dialect's reader.
+      const std::string tag = ctl::upper(n), other = n == "fanuc" ? "HAAS" : "FANUC";
+      header("DIALECT " + tag, "DIALECT " + other, "another dialect's tag",
+             fmt::format("results of dialect '{}', expected {}", other, tag));
+    }
+    if (n == "siemens" || n == "okuma") {
+      // Their point lines end after Z: anything further is not what the program wrote.
+      v = ls;
+      v[lay.at(2)] += " T5";
+      c.push_back({"text after the last field", join(v), lineOf(2), "point 2: unexpected text"});
+    }
     // A point that does not trigger: what the program writes before it stops.
     v = ls;
     v.resize(lay.at(30));
@@ -264,7 +280,8 @@ std::vector<Case> Malformed::cases() const {
                    "point 30 is missing and there is no END line: the program stopped early (a point that does not "
                    "trigger raises alarm 3000)"});
     } else {
-      v.push_back("NOT-TRIGGERED P30");
+      // Heidenhain's F-PRINT pads the id as it pads the point lines' ("P%5d").
+      v.push_back(n == "heidenhain" ? "NOT-TRIGGERED P   30" : "NOT-TRIGGERED P30");
       c.push_back({"point marked as not triggered", join(v), lastLine(v),
                    "point 30 was not triggered: the program stopped there"});
     }

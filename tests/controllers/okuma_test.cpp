@@ -15,36 +15,6 @@ using test::lines;
 
 const Dialect& ok() { return dialectByName("okuma"); }
 
-TEST(OkumaResults, ParserAcceptsSignsSpacesAndLeadingZeros) {
-  const ProbePlan plan = test::acPlan();
-  auto ls = lines(ok().writeResults(plan, test::displacedRun(plan)));
-  ls[1] = "P1 X+53.5840 Y-235.0000 Z 0150.0000";  // '+', spaces and leading zeros are accepted
-  const MeasurementRun back = ok().parseResults(test::join(ls, "\r\n"), "res.txt", plan);
-  EXPECT_EQ(back.points[0].position_m_mm, Eigen::Vector3d(53.584, -235.0, 150.0));
-}
-
-
-TEST(OkumaResults, RejectsWithTheLine) {
-  const ProbePlan plan = test::acPlan();
-  const auto ls = lines(ok().writeResults(plan, test::displacedRun(plan)));
-  auto v = ls;
-  v.resize(30);
-  v.push_back("NOT-TRIGGERED P30");
-  EXPECT_NE(test::parseError(ok(), test::join(v), plan).find("res.txt:31: point 30 was not triggered"), std::string::npos);
-  v = ls;
-  v[2] = "P2 X53.5441 Y-215.0000";
-  EXPECT_NE(test::parseError(ok(), test::join(v), plan).find("res.txt:3: point 2: expected 'Z'"), std::string::npos);
-  v = ls;
-  v[2] = "P2 X53.5441 Y-215.0000 Z150.0000 T5";
-  EXPECT_NE(test::parseError(ok(), test::join(v), plan).find("res.txt:3: point 2: unexpected text"), std::string::npos);
-  v = ls;
-  v.insert(v.begin() + 2, "P999 X1.0000 Y2.0000 Z3.0000");
-  EXPECT_NE(test::parseError(ok(), test::join(v), plan).find("res.txt:3: point 999 is not in the plan"), std::string::npos);
-  v = ls;
-  v.insert(v.begin() + 3, ls[0]);
-  EXPECT_NE(test::parseError(ok(), test::join(v), plan).find("res.txt:4: a second header line"), std::string::npos);
-}
-
 TEST(OkumaProgram, ProbeBlockCheckAndOutput) {
   const ProbePlan plan = test::acPlan();
   const std::string text = ok().writeProgram(test::cycleProgram(plan, "okuma"));

@@ -17,30 +17,6 @@ using test::lines;
 const Dialect& sm() { return dialectByName("siemens"); }
 
 
-TEST(SiemensResults, RejectsWithTheLine) {
-  const ProbePlan plan = test::acPlan();
-  const auto ls = lines(sm().writeResults(plan, test::displacedRun(plan)));
-  auto v = ls;
-  v.resize(12);
-  v.push_back("NOT-TRIGGERED P12");
-  EXPECT_NE(test::parseError(sm(), test::join(v), plan).find("res.txt:13: point 12 was not triggered"), std::string::npos);
-  v = ls;
-  v[3] = "P3 X   53.5840 Y -185,0000 Z  150.0000";
-  EXPECT_NE(test::parseError(sm(), test::join(v), plan).find("res.txt:4: Y '-185,0000' of point 3 is not a number"),
-            std::string::npos);
-  v = ls;
-  v.insert(v.begin() + 5, ls[4]);
-  EXPECT_NE(test::parseError(sm(), test::join(v), plan).find("res.txt:6: point 4 appears twice (first at line 5)"),
-            std::string::npos);
-  v = ls;
-  v[0] = "ROTACAL-RESULTS DIALECT SIEMENS CYCLE TOUCH154 POINTS 28 UNIT MM";
-  EXPECT_NE(test::parseError(sm(), test::join(v), plan).find("res.txt:1: header says POINTS 28"), std::string::npos);
-  v = ls;
-  v.pop_back();
-  EXPECT_NE(test::parseError(sm(), test::join(v), plan).find(fmt::format("res.txt:{}: no END line", v.size())),
-            std::string::npos);
-}
-
 TEST(SiemensProgram, ProbeBlockAndCheck) {
   const ProbePlan plan = test::acPlan();
   const std::string text = sm().writeProgram(test::cycleProgram(plan, "siemens"));
