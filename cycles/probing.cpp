@@ -90,14 +90,14 @@ std::vector<PlannedTrigger> triggersInPlanOrder(const ProbePlan& plan, const std
   return out;
 }
 
-CycleDocuments judgedFitDocuments(const Cycle& cycle, const DiagnoseRequest& r,
+CycleDocuments judgedFitDocuments(std::string_view cycle, const DiagnoseRequest& r,
                                   JudgedFit (*judged)(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
                                                       const JudgeOptions& options)) {
   const ProbePlan& plan = *r.plan;
   JudgeOptions o;
   o.alpha = r.alpha;
   const JudgedFit d = judged(plan, readProbeRuns(plan, r.results, *r.dialect), o);
-  return documents(judgedDiagnosisJson(std::string(cycle.name()), plan, d), judgeText(d.summary));
+  return documents(judgedDiagnosisJson(std::string(cycle), plan, d), judgeText(d.summary));
 }
 
 }  // namespace rotacal

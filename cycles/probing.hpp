@@ -2,6 +2,7 @@
 // What the touch-probe cycles share between them: the controller's results are read through the
 // dialect, and simulated by the exact simulator (full HTMs, ball-on-surface contact).
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -56,8 +57,9 @@ std::vector<MeasurementRun> readProbeRuns(const ProbePlan& plan, const std::vect
 
 /// `diagnose` of a touch cycle whose baseline is one fit judged as a whole (cycles/judge_contract.hpp):
 /// the request's results read through the dialect, judged at the request's alpha by `judged`, and
-/// the documents under the cycle's name.
-CycleDocuments judgedFitDocuments(const Cycle& cycle, const DiagnoseRequest& request,
+/// the documents under the cycle's name. (A name, not the Cycle: the fuzz harnesses link this file
+/// without the registry, and the sanitizer's vptr check would need Cycle's type information.)
+CycleDocuments judgedFitDocuments(std::string_view cycle, const DiagnoseRequest& request,
                                   JudgedFit (*judged)(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
                                                       const JudgeOptions& options));
 

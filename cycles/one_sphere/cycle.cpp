@@ -55,7 +55,7 @@ class Sphere final : public Cycle {
     return out;
   }
 
-  CycleDocuments diagnose(const DiagnoseRequest& r) const override { return judgedFitDocuments(*this, r, diagnoseSphere); }
+  CycleDocuments diagnose(const DiagnoseRequest& r) const override { return judgedFitDocuments(name(), r, diagnoseSphere); }
 };
 
 }  // namespace

@@ -30,7 +30,7 @@ class ProbeQual final : public Cycle {
   }
 
   CycleDocuments diagnose(const DiagnoseRequest& r) const override {
-    return judgedFitDocuments(*this, r, diagnoseProbeQual);
+    return judgedFitDocuments(name(), r, diagnoseProbeQual);
   }
 };
 
