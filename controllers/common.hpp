@@ -322,6 +322,12 @@ class LineWriter {
   void comment(std::string_view s) {
     for (const auto& c : comments_(s)) line(c);
   }
+  /// The comments every offsets file carries: `heading`, then each identified location error with
+  /// its standard uncertainty (identifiedLines).
+  void identified(const OffsetRequest& r, std::string_view heading) {
+    comment(heading);
+    for (const auto& s : identifiedLines(r)) comment(s);
+  }
   /// The comments every program opens with: what generated it, for which dialect, then the
   /// program's own header lines.
   void provenance(const nc::Program& p, std::string_view dialect) {

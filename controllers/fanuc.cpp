@@ -59,8 +59,7 @@ class FanucDialect final : public MacroBDialect {
     w.comment(fmt::format("ROTACAL G54 CORRECTION, TABLE {}/C, FANUC. RUN IN MDI OR A SETUP PROGRAM.", tilt));
     w.comment(fmt::format("PROVENANCE: {} CYCLE {} MACHINE {}", r.report_file.empty() ? "NO REPORT" : r.report_file,
                           plan.cycle, m.name));
-    w.comment("IDENTIFIED, PAPERS CONVENTION, VALUE +- STANDARD UNCERTAINTY K=1:");
-    for (const auto& s : ctl::identifiedLines(r)) w.comment(s);
+    w.identified(r, "IDENTIFIED, PAPERS CONVENTION, VALUE +- STANDARD UNCERTAINTY K=1:");
     w.comment(fmt::format("SHIFTS G54 BY THE {} PIVOT AND THE {} ZERO ERROR. G10 L2 UNDER G91 ADDS TO THE OFFSET - "
                           "UNVERIFIED: CHECK THE G54 PAGE BEFORE AND AFTER.",
                           tilt, tilt));

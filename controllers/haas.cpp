@@ -64,8 +64,7 @@ class HaasDialect final : public MacroBDialect {
     w.line("O09001(ROTACAL MRZP)");
     w.comment(fmt::format("ROTACAL MRZP CORRECTION, TABLE {}/C, HAAS NGC. PROVENANCE: {} CYCLE {} MACHINE {}", tilt,
                           r.report_file.empty() ? "NO REPORT" : r.report_file, plan.cycle, m.name));
-    w.comment("IDENTIFIED, PAPERS CONVENTION, VALUE +- STANDARD UNCERTAINTY K=1:");
-    for (const auto& s : ctl::identifiedLines(r)) w.comment(s);
+    w.identified(r, "IDENTIFIED, PAPERS CONVENTION, VALUE +- STANDARD UNCERTAINTY K=1:");
     w.comment("WHAT IT CHANGES: MRZP SETTINGS 255 256 257 (MACHINE HOME TO THE ROTARY CENTRE, MACHINE UNITS) "
               "AND THE G54 ZERO OF THE TILTING AXIS.");
     w.comment("SETTINGS CANNOT BE SET FROM A MACRO: THIS PROGRAM PUTS THE NEW VALUES IN 10121 10122 10123 AND "

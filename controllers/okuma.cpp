@@ -157,8 +157,7 @@ class OkumaDialect final : public ctl::TaggedResultsDialect {
     w.comment(fmt::format("ROTACAL WORK OFFSET CORRECTION, TABLE {}/C, OKUMA OSP-P300. PROVENANCE: {} CYCLE {} "
                           "MACHINE {}",
                           tilt, r.report_file.empty() ? "NO REPORT" : r.report_file, plan.cycle, m.name));
-    w.comment("IDENTIFIED, PAPERS CONVENTION, VALUE +- STANDARD UNCERTAINTY K=1:");
-    for (const auto& s : ctl::identifiedLines(r)) w.comment(s);
+    w.identified(r, "IDENTIFIED, PAPERS CONVENTION, VALUE +- STANDARD UNCERTAINTY K=1:");
     w.comment(fmt::format("WHAT IT CHANGES: WORK OFFSET 1 (G15 H1) X Y Z SHIFTED BY THE {} PIVOT, {} BY THE ZERO "
                           "ERROR. NEW = OLD + CHANGE; OLD VALUES ARE ON THE CONTROL. {} - UNVERIFIED SIGN: CHECK "
                           "THE WORK OFFSET PAGE BEFORE AND AFTER.",

@@ -170,8 +170,7 @@ class SiemensDialect final : public ctl::TaggedResultsDialect {
     w.comment(fmt::format("rotacal toolcarrier correction, table {}/C, Sinumerik 840D sl / ONE. Provenance: {}, "
                           "cycle {}, machine {}.",
                           tilt, r.report_file.empty() ? "(no report)" : r.report_file, plan.cycle, m.name));
-    w.comment("identified location errors (papers' convention), value +- standard uncertainty (k = 1):");
-    for (const auto& s : ctl::identifiedLines(r)) w.comment(s);
+    w.identified(r, "identified location errors (papers' convention), value +- standard uncertainty (k = 1):");
     w.comment("what it changes: toolcarrier 1 (edit the index if yours differs): fine offsets of l2 "
               "($TC_CARR44-46, pivot of the tilting axis) and l3 ($TC_CARR55-57, second axis to first) are "
               "increased by the changes below; the axis vectors v1 ($TC_CARR7-9) and v2 ($TC_CARR10-12) "
