@@ -123,4 +123,55 @@ void applyProbeAxesDraw(const ProbeAxesDraw& d, Truth* truth) {
   }
 }
 
+Eigen::MatrixXd probeAxesCovariance(const ContributorSet& set, const std::function<bool(const ContributorInfo&)>& acts,
+                                    const std::vector<Eigen::Vector3d>& t, const std::vector<Eigen::Vector3d>& u) {
+  if (t.size() != u.size()) throw std::invalid_argument("probeAxesCovariance: as many approaches as triggers needed");
+  const auto n = static_cast<Eigen::Index>(t.size());
+  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(n, n);
+  ContributorSet linear;
+  linear.node_spacing_min_mm = set.node_spacing_min_mm;
+  linear.node_spacing_max_mm = set.node_spacing_max_mm;
+  double pretravel_mm = 0.0, per_touch_mm2 = 0.0;
+  for (const Contributor& c : set.items) {
+    if (!acts(*c.info)) continue;
+    if (c.info->kind == ContributorKind::ProbePretravel) pretravel_mm = c.u[0];
+    else if (isPerTouchContributor(*c.info)) per_touch_mm2 += c.u[0] * c.u[0];
+    else if (isLinearAxisContributor(*c.info)) linear.items.push_back(c);
+    else throw std::logic_error("probeAxesCovariance: contributor " + std::string(c.info->id) + " is neither probe nor axis");
+  }
+  C.diagonal().array() += per_touch_mm2;
+  if (pretravel_mm > 0) {
+    // pretravelAlong's weight of each of the six directional values, per touch.
+    Eigen::MatrixXd W = Eigen::MatrixXd::Zero(n, 6);
+    for (Eigen::Index i = 0; i < n; ++i)
+      for (int k = 0; k < 3; ++k) W(i, 2 * k + (u[static_cast<size_t>(i)][k] < 0 ? 1 : 0)) = u[static_cast<size_t>(i)][k] * u[static_cast<size_t>(i)][k];
+    C += pretravel_mm * pretravel_mm * W * W.transpose();
+  }
+  if (linear.items.empty()) return C;
+  const LinearAxisModel m = linear.linearAxisModel();
+  // e(c) = scale . c + (S_xy c_y + S_xz c_z, S_yz c_z, 0) + sum_a nodes_a(c_a), read along u.
+  Eigen::MatrixXd G(n, 6);  // the slopes' coefficients per touch
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Eigen::Vector3d& c = t[static_cast<size_t>(i)];
+    const Eigen::Vector3d& a = u[static_cast<size_t>(i)];
+    G.row(i) << m.u_scale.x() * c.x() * a.x(), m.u_scale.y() * c.y() * a.y(), m.u_scale.z() * c.z() * a.z(),
+        m.u_S_xy * c.y() * a.x(), m.u_S_xz * c.z() * a.x(), m.u_S_yz * c.z() * a.y();
+  }
+  C += G * G.transpose();
+  for (int ax = 0; ax < 3; ++ax) {
+    if (m.u_rand.col(ax).maxCoeff() <= 0) continue;
+    const Eigen::Vector3d var = m.u_rand.col(ax).cwiseAbs2();
+    for (Eigen::Index i = 0; i < n; ++i)
+      for (Eigen::Index j = i; j < n; ++j) {
+        const double w = (u[static_cast<size_t>(i)].cwiseProduct(var)).dot(u[static_cast<size_t>(j)]);
+        if (w == 0.0) continue;
+        const double k = nodeCorrelation(t[static_cast<size_t>(i)][ax], t[static_cast<size_t>(j)][ax], m.spacing_min_mm,
+                                         m.spacing_max_mm);
+        C(i, j) += w * k;
+        if (j != i) C(j, i) += w * k;
+      }
+  }
+  return C;
+}
+
 }  // namespace rotacal

@@ -69,6 +69,16 @@ struct ProbeAxesDraw {
 /// contributor but set.items[only] is zero. The linear axes cover the plan's trigger span.
 void drawProbeAxes(const ProbePlan& plan, const ContributorSet& set, const std::function<bool(const ContributorInfo&)>& acts,
                    std::uint64_t seed, int run, int only, ProbeAxesDraw* out);
+/// The covariance (mm^2) of the triggers' displacements along their approaches that drawProbeAxes
+/// draws from the contributors `acts` accepts, to first order: touch i read at trigger_m_mm[i]
+/// (machine frame) approaching along approach_m[i] (unit). The pretravel by pretravelAlong's
+/// weights; the linear axes' scale, squareness and random parts (nodeCorrelation); and, where
+/// `acts` accepts them, the per-touch contributors (repeatability, roughness) on the diagonal.
+/// What a design weighs a plan's touches by; checked against a Monte Carlo of drawProbeAxes.
+Eigen::MatrixXd probeAxesCovariance(const ContributorSet& set, const std::function<bool(const ContributorInfo&)>& acts,
+                                    const std::vector<Eigen::Vector3d>& trigger_m_mm,
+                                    const std::vector<Eigen::Vector3d>& approach_m);
+
 /// Adds a draw to a truth (to its linear_axis_error and pretravel, if it has them).
 void applyProbeAxesDraw(const ProbeAxesDraw& draw, Truth* truth);
 

@@ -34,6 +34,30 @@ Eigen::Vector3d AxisNodes::at(double q) const {
   return v;
 }
 
+double nodeCorrelation(double x, double y, double lo, double hi) {
+  if (std::abs(x - y) >= 2.0 * hi) return 0.0;  // no node's hat covers both
+  const int steps = lo == hi ? 1 : 256;
+  double sum = 0.0;
+  for (int q = 0; q < steps; ++q) {
+    const double p = lo + (hi - lo) * (q + 0.5) / steps;
+    const double fx = x / p, fy = y / p;
+    const double kx = std::floor(fx), ky = std::floor(fy);
+    if (std::abs(kx - ky) > 1.0) continue;
+    const double tx = fx - kx, ty = fy - ky;
+    double v = 0.0;
+    for (double k : {kx, kx + 1.0}) {
+      const double wx = k == kx ? 1.0 - tx : tx;
+      double wy = 0.0;
+      if (k == ky) wy = 1.0 - ty;
+      else if (k == ky + 1.0) wy = ty;
+      v += wx * wy;
+    }
+    sum += v;
+  }
+  return sum / steps;
+}
+
+
 Eigen::Vector3d LinearAxisErrors::error(const Eigen::Vector3d& c) const {
   Eigen::Vector3d e = scale.cwiseProduct(c);
   e.x() += S_xy * c.y() + S_xz * c.z();

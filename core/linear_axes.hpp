@@ -61,6 +61,12 @@ struct LinearAxisModel {
   bool validate(std::string* why) const;
 };
 
+/// The correlation of one axis's random part at coordinates x and y (mm): E_p[sum_k phi_k(x)
+/// phi_k(y)] for the hat functions on the nodes p k, p uniform in [spacing_min, spacing_max] as
+/// drawAxisNodes draws it (000 Eq. (22)); by the midpoint rule over p (256 intervals: the
+/// integrand is piecewise smooth in p; error below 1e-3). u_ba^2 times it is the covariance.
+double nodeCorrelation(double x_mm, double y_mm, double spacing_min_mm, double spacing_max_mm);
+
 /// Draws the node spacing and the node values of one axis covering [lo, hi] with one node to
 /// spare on each side (interpolation never leaves the drawn nodes for positions within um of the
 /// range). An axis whose three random uncertainties are zero draws nothing (spacing 0).

@@ -162,4 +162,150 @@ PoseDesign designPoses(const KinematicModel& m, const std::vector<Pose>& candida
   return designPoses(centreRows(m, candidates, o), modelNames(m), o);
 }
 
+std::string PoseBudgetOptions::validate(Eigen::Index parameters) const {
+  if (exchange_passes < 0) return "exchange_passes must be >= 0";
+  if (weight.size() != parameters) return fmt::format("weight has {} entries for {} parameters", weight.size(), parameters);
+  if (!(weight.minCoeff() >= 0) || !(weight.maxCoeff() > 0)) return "weight must be >= 0 and count some parameter";
+  return {};
+}
+
+namespace {
+
+// The candidates stacked once: the free columns (scaled by their norms, so that mm and rad
+// condition alike), each candidate's first row, and the held parameters.
+struct BudgetProblem {
+  Eigen::MatrixXd J;  // every candidate's rows, free columns, scaled
+  Eigen::VectorXd scale;
+  std::vector<Eigen::Index> free;
+  std::vector<Eigen::Index> first, count;
+  Eigen::Index np = 0;
+};
+
+BudgetProblem prepareBudget(const std::vector<Eigen::MatrixXd>& rows, const std::vector<IdentifiabilityParameter>& names,
+                            const Eigen::MatrixXd& covariance, const PoseBudgetOptions& o) {
+  BudgetProblem b;
+  b.np = static_cast<Eigen::Index>(names.size());
+  if (const std::string bad = o.validate(b.np); !bad.empty()) throw std::invalid_argument("pose design: " + bad);
+  checkRows(rows, names);
+  Eigen::Index total = 0;
+  for (const auto& R : rows) b.first.push_back(total), b.count.push_back(R.rows()), total += R.rows();
+  if (covariance.rows() != total || covariance.cols() != total)
+    throw std::invalid_argument(fmt::format("pose design: a {} x {} covariance for {} touches", covariance.rows(),
+                                            covariance.cols(), total));
+  Eigen::MatrixXd Jall(total, b.np);
+  for (size_t k = 0; k < rows.size(); ++k) Jall.middleRows(b.first[k], b.count[k]) = rows[k];
+  const Identifiability all = identifiability(Jall, names, o.hold_first);
+  for (Eigen::Index i = 0; i < b.np; ++i)
+    if (!all.held[static_cast<size_t>(i)]) b.free.push_back(i);
+  b.scale.resize(static_cast<Eigen::Index>(b.free.size()));
+  b.J.resize(total, b.scale.size());
+  for (Eigen::Index k = 0; k < b.scale.size(); ++k) {
+    const double n = Jall.col(b.free[static_cast<size_t>(k)]).norm();
+    b.scale[k] = n > 0 ? n : 1.0;
+    b.J.col(k) = Jall.col(b.free[static_cast<size_t>(k)]) / b.scale[k];
+  }
+  return b;
+}
+
+// The free parameters' covariance (scaled units) at the subset; false when it does not fix them.
+bool subsetCovariance(const BudgetProblem& b, const Eigen::MatrixXd& C, const std::vector<int>& subset,
+                      Eigen::MatrixXd* out) {
+  std::vector<Eigen::Index> idx;
+  for (int k : subset)
+    for (Eigen::Index r = 0; r < b.count.at(static_cast<size_t>(k)); ++r) idx.push_back(b.first[static_cast<size_t>(k)] + r);
+  const auto m = static_cast<Eigen::Index>(idx.size());
+  Eigen::MatrixXd J(m, b.J.cols()), Cs(m, m);
+  for (Eigen::Index r = 0; r < m; ++r) {
+    J.row(r) = b.J.row(idx[static_cast<size_t>(r)]);
+    for (Eigen::Index q = 0; q < m; ++q) Cs(r, q) = C(idx[static_cast<size_t>(r)], idx[static_cast<size_t>(q)]);
+  }
+  const Eigen::MatrixXd M = J.transpose() * J;
+  const Eigen::LLT<Eigen::MatrixXd> llt(M);
+  if (llt.info() != Eigen::Success) return false;
+  const Eigen::VectorXd d = llt.matrixL().toDenseMatrix().diagonal();
+  if (d.minCoeff() <= 1e-6 * d.maxCoeff()) return false;
+  const Eigen::MatrixXd A = llt.solve(J.transpose());  // (J^T J)^-1 J^T
+  *out = A * Cs * A.transpose();
+  return true;
+}
+
+double budgetOf(const BudgetProblem& b, const Eigen::MatrixXd& cov_scaled, const Eigen::VectorXd& weight) {
+  double f = 0.0;
+  for (Eigen::Index k = 0; k < b.scale.size(); ++k)
+    f += weight[b.free[static_cast<size_t>(k)]] * cov_scaled(k, k) / (b.scale[k] * b.scale[k]);
+  return f;
+}
+
+}  // namespace
+
+Eigen::MatrixXd poseSetCovariance(const std::vector<Eigen::MatrixXd>& rows, const std::vector<IdentifiabilityParameter>& names,
+                                  const Eigen::MatrixXd& covariance, const std::vector<int>& subset,
+                                  const PoseBudgetOptions& o) {
+  const BudgetProblem b = prepareBudget(rows, names, covariance, o);
+  Eigen::MatrixXd cov;
+  if (!subsetCovariance(b, covariance, subset, &cov))
+    throw std::invalid_argument("pose design: the subset does not fix the parameters the candidates separate");
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(b.np, b.np);
+  for (Eigen::Index i = 0; i < b.scale.size(); ++i)
+    for (Eigen::Index j = 0; j < b.scale.size(); ++j)
+      out(b.free[static_cast<size_t>(i)], b.free[static_cast<size_t>(j)]) = cov(i, j) / (b.scale[i] * b.scale[j]);
+  return out;
+}
+
+double poseSetBudget(const std::vector<Eigen::MatrixXd>& rows, const std::vector<IdentifiabilityParameter>& names,
+                     const Eigen::MatrixXd& covariance, const std::vector<int>& subset, const PoseBudgetOptions& o) {
+  const BudgetProblem b = prepareBudget(rows, names, covariance, o);
+  Eigen::MatrixXd cov;
+  if (!subsetCovariance(b, covariance, subset, &cov)) return std::numeric_limits<double>::infinity();
+  return budgetOf(b, cov, o.weight);
+}
+
+PoseDesign refinePosesForBudget(const std::vector<Eigen::MatrixXd>& rows, const std::vector<IdentifiabilityParameter>& names,
+                                const Eigen::MatrixXd& covariance, const std::vector<int>& start,
+                                const PoseBudgetOptions& o) {
+  const BudgetProblem b = prepareBudget(rows, names, covariance, o);
+  const int nc = static_cast<int>(rows.size());
+  std::vector<bool> in(static_cast<size_t>(nc), false);
+  for (int k : start) {
+    if (k < 0 || k >= nc || in[static_cast<size_t>(k)])
+      throw std::invalid_argument(fmt::format("pose design: start pose {} is not a distinct candidate of {}", k, nc));
+    in[static_cast<size_t>(k)] = true;
+  }
+  auto value = [&](const std::vector<int>& S) {
+    Eigen::MatrixXd cov;
+    return subsetCovariance(b, covariance, S, &cov) ? budgetOf(b, cov, o.weight) : std::numeric_limits<double>::infinity();
+  };
+  PoseDesign d;
+  d.chosen = start;
+  double current = value(d.chosen);
+  if (!std::isfinite(current))
+    throw std::invalid_argument("pose design: the start poses do not fix the parameters the candidates separate");
+  for (int pass = 0; pass < o.exchange_passes; ++pass) {
+    bool improved = false;
+    for (size_t c = 0; c < d.chosen.size(); ++c)
+      for (int k = 0; k < nc; ++k) {
+        if (in[static_cast<size_t>(k)]) continue;
+        std::vector<int> trial = d.chosen;
+        trial[c] = k;
+        const double v = value(trial);
+        if (v < current * (1.0 - 1e-12)) {
+          in[static_cast<size_t>(d.chosen[c])] = false;
+          in[static_cast<size_t>(k)] = true;
+          d.chosen = trial;
+          current = v;
+          improved = true;
+        }
+      }
+    if (!improved) break;
+  }
+  d.budget = current;
+  Eigen::Index total = 0;
+  for (int k : d.chosen) total += rows[static_cast<size_t>(k)].rows();
+  Eigen::MatrixXd Jc(total, b.np);
+  Eigen::Index at = 0;
+  for (int k : d.chosen) Jc.middleRows(at, rows[static_cast<size_t>(k)].rows()) = rows[static_cast<size_t>(k)], at += rows[static_cast<size_t>(k)].rows();
+  d.identifiability = identifiability(Jc, names, o.hold_first);
+  return d;
+}
+
 }  // namespace rotacal

@@ -26,6 +26,7 @@ struct PoseDesignOptions {
 struct PoseDesign {
   std::vector<int> chosen;      // indices into the candidates, in the order chosen
   double log_det = 0.0;         // of the free parameters' information, scaled columns
+  double budget = 0.0;          // refinePosesForBudget's criterion at the chosen poses (0 for designPoses)
   Identifiability identifiability;  // of the chosen poses (u_report: um / mdeg for the declared noise)
 };
 
@@ -46,5 +47,36 @@ PoseDesign designPoses(const std::vector<Eigen::MatrixXd>& candidate_rows, const
                        const PoseDesignOptions& options);
 /// The same for centre readings of the kinematic model (rows: J_X_p whitened by centre_sd_mm).
 PoseDesign designPoses(const KinematicModel& model, const std::vector<Pose>& candidates, const PoseDesignOptions& options);
+
+/// The A-optimal design for the declared errors: D-optimality weighs every parameter alike and
+/// every touch by the probe alone, while the linear axes' random errors are shared by the touches
+/// of nearby poses and the reference of one parameter may be far tighter than another's (000
+/// Table 6: a_AY 0.3 mdeg). The criterion is sum_k weight_k Var(p_k) of the unweighted least
+/// squares (every touch alike, as the fits do) under the touches' covariance C:
+/// Var = (J^T J)^-1 J^T C J (J^T J)^-1 over the parameters the candidates separate (the others
+/// held, as designPoses holds them).
+struct PoseBudgetOptions {
+  int exchange_passes = 3;
+  Eigen::VectorXd weight;  // per parameter, 1 / its reference u^2 (model units); 0: not counted
+  std::vector<int> hold_first;
+  /// Empty when valid; otherwise what is wrong, naming the field.
+  std::string validate(Eigen::Index parameters) const;
+};
+
+/// rows_mm: candidate k's rows of J_r_p (mm per model unit, not whitened); covariance: of every
+/// candidate's touches (mm^2), stacked in candidate order. The parameters' covariance (model
+/// units; held ones 0) for the subset, and the criterion (+inf when the subset does not fix the
+/// parameters the candidates separate).
+Eigen::MatrixXd poseSetCovariance(const std::vector<Eigen::MatrixXd>& rows_mm, const std::vector<IdentifiabilityParameter>& names,
+                                  const Eigen::MatrixXd& covariance, const std::vector<int>& subset,
+                                  const PoseBudgetOptions& options);
+double poseSetBudget(const std::vector<Eigen::MatrixXd>& rows_mm, const std::vector<IdentifiabilityParameter>& names,
+                     const Eigen::MatrixXd& covariance, const std::vector<int>& subset, const PoseBudgetOptions& options);
+
+/// Exchange passes from `start` (designPoses' choice, which fixes every parameter): a chosen pose
+/// is swapped for another candidate whenever that lowers poseSetBudget. The same number of poses.
+PoseDesign refinePosesForBudget(const std::vector<Eigen::MatrixXd>& rows_mm, const std::vector<IdentifiabilityParameter>& names,
+                                const Eigen::MatrixXd& covariance, const std::vector<int>& start,
+                                const PoseBudgetOptions& options);
 
 }  // namespace rotacal

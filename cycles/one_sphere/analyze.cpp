@@ -18,18 +18,6 @@ namespace rotacal {
 
 namespace {
 
-// The papers' parameters of the machine and the ISO 230-7 parameter of the model each one is,
-// to first order (exactly where the factor orders coincide: tests/core/kinematic_model_test.cpp).
-const std::vector<std::pair<const char*, const char*>>& papersNames(Kinematics k) {
-  static const std::vector<std::pair<const char*, const char*>> ac = {
-      {"dx_AY", "X0C"}, {"dy_AY", "Y0A"}, {"dz_AY", "Z0A"}, {"dy_CA", "Y0C"},
-      {"a_AY", "A0A"},  {"b_AY", "B0A"},  {"c_AY", "C0A"},  {"b_CA", "B0C"}};
-  static const std::vector<std::pair<const char*, const char*>> bc = {
-      {"dx_BY", "X0B"}, {"dy_CB", "Y0C"}, {"dz_BY", "Z0B"}, {"a_BY", "A0B"},
-      {"b_BY", "B0B"},  {"c_BY", "C0B"},  {"a_CB", "A0C"},  {"dx_CB", "X0C"}};
-  return k == Kinematics::TableAC ? ac : bc;
-}
-
 std::string fitExtraDescription(const std::string& name) {
   if (name == "dR") return "the probe's effective radius on this sphere less R + r";
   if (name.rfind("backlash_", 0) == 0)
@@ -149,7 +137,7 @@ SphereCycleResult identifySphereCycle(const ProbePlan& plan, const std::vector<M
   // a head machine's are its ISO 230-7 parameters alone).
   out.location.kinematics = kin;
   if (!hasPapersLocationErrors(kin)) return out;
-  const auto& pairs = papersNames(kin);
+  const auto& pairs = spherePapersNames(kin);
   for (const auto& [paper, iso] : pairs) {
     const int i = parameterIndex(kin, paper);
     const int k = m.parameterIndex(iso);

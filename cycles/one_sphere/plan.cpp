@@ -6,6 +6,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "core/contributor_draw.hpp"
 #include "core/identifiability.hpp"
 #include "core/kinematic_model.hpp"
 #include "core/pose_design.hpp"
@@ -55,6 +56,16 @@ Pose poseOf(char tilt_axis, char turn_axis, double tilt, double turn) {
 }
 
 }  // namespace
+
+const std::vector<std::pair<const char*, const char*>>& spherePapersNames(Kinematics k) {
+  static const std::vector<std::pair<const char*, const char*>> ac = {
+      {"dx_AY", "X0C"}, {"dy_AY", "Y0A"}, {"dz_AY", "Z0A"}, {"dy_CA", "Y0C"},
+      {"a_AY", "A0A"},  {"b_AY", "B0A"},  {"c_AY", "C0A"},  {"b_CA", "B0C"}};
+  static const std::vector<std::pair<const char*, const char*>> bc = {
+      {"dx_BY", "X0B"}, {"dy_CB", "Y0C"}, {"dz_BY", "Z0B"}, {"a_BY", "A0B"},
+      {"b_BY", "B0B"},  {"c_BY", "C0B"},  {"a_CB", "A0C"},  {"dx_CB", "X0C"}};
+  return k == Kinematics::TableAC ? ac : bc;
+}
 
 char sphereTiltAxis(const MachineModel& machine) {
   if (machine.kinematics == Kinematics::TableAC) return 'A';
@@ -123,9 +134,17 @@ SphereLayout SphereLayout::fromOptions(const MachineModel& machine, const CycleO
       .list(turn_key, &l.c_deg)
       .on("pose_list", [&](const std::string& k, const std::string& v) { l.pose_list = parsePoseList(k, v); })
       .count("poses", &l.design_poses, 0, 1000)
+      .on("design",
+          [&](const std::string& k, const std::string& v) {
+            if (v != "D" && v != "A")
+              throw std::invalid_argument(fmt::format("option {} must be D or A, not '{}'", k, v));
+            l.design_criterion = v[0];
+          })
       .on("fit_squareness", [&](const std::string& k, const std::string& v) { l.fit_squareness = parseSwitch(k, v); })
       .on("backlash", [&](const std::string& k, const std::string& v) { l.backlash = parseSwitch(k, v); })
       .read(options);
+  if (l.design_criterion != 'D' && l.design_poses == 0)
+    throw std::invalid_argument("option design chooses how option poses designs: it needs poses");
   if (!l.pose_list.empty() && l.design_poses > 0)
     throw std::invalid_argument("options pose_list and poses exclude each other (poses designs a pose_list)");
   if (!(l.radius_mm > 0)) throw std::invalid_argument("option radius_mm must be > 0");
@@ -250,6 +269,44 @@ Eigen::MatrixXd touchRows(const KinematicModel& m, bool squareness, const PoseTo
   return rows;
 }
 
+// Option design=A: from the D-optimal poses, the exchange that lowers the location errors'
+// variances under the machine's declared contributors, each weighed by its reference (the
+// contributors' file's, else 1 um and 1 mdeg). The touches' covariance is the contributors' first
+// order (probeAxesCovariance): the linear axes' random errors shared by nearby touches, which
+// D-optimality, counting the probe alone, takes for independent.
+PoseDesign refineForContributors(const MachineModel& machine, const KinematicModel& model, const SphereLayout& l,
+                                 const std::vector<PoseTouches>& candidates,
+                                 const std::vector<IdentifiabilityParameter>& names, const std::vector<int>& start,
+                                 const std::vector<int>& hold_first) {
+  if (!machine.contributors)
+    throw std::invalid_argument(
+        "option design=A weighs the poses by the machine's declared contributors: MACHINE.json has no \"contributors\"");
+  const ContributorSet& cs = *machine.contributors;
+  std::vector<Eigen::MatrixXd> rows;
+  std::vector<Eigen::Vector3d> t, u;
+  for (const auto& c : candidates) {
+    rows.push_back(touchRows(model, l.fit_squareness, c, l.radius_mm + machine.probe.ball_radius_mm()));
+    for (const auto& p : c.points) t.push_back(p.trigger_m_mm), u.push_back(p.approach_m);
+  }
+  const Eigen::MatrixXd C = probeAxesCovariance(
+      cs, [](const ContributorInfo& i) { return isPerTouchContributor(i) || isProbeAxesContributor(i); }, t, u);
+  PoseBudgetOptions o;
+  o.hold_first = hold_first;
+  o.weight = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(names.size()));
+  for (Eigen::Index k = 0; k < static_cast<Eigen::Index>(model.parameters.size()); ++k) {
+    const bool length = names[static_cast<size_t>(k)].kind == ParamKind::Length;
+    double ref = length ? umToMm(1.0) : mdegToRad(1.0);
+    if (cs.reference && hasPapersLocationErrors(machine.kinematics))
+      for (const auto& [papers, iso] : spherePapersNames(machine.kinematics)) {
+        if (names[static_cast<size_t>(k)].name != iso) continue;
+        const auto it = cs.reference->combined.find(papers);
+        if (it != cs.reference->combined.end() && it->second > 0) ref = length ? umToMm(it->second) : mdegToRad(it->second);
+      }
+    o.weight[k] = 1.0 / (ref * ref);
+  }
+  return refinePosesForBudget(rows, names, C, start, o);
+}
+
 }  // namespace
 
 std::vector<int> sphereHeldFirst(const KinematicModel& m) {
@@ -304,6 +361,7 @@ ProbePlan makeSpherePlan(const MachineModel& machine, const CycleOptions& option
       throw std::invalid_argument(fmt::format("option poses = {}: only {} candidate poses of tilt_list x {} are allowed",
                                               o.poses, candidates.size(), l.turnListOption()));
     PoseDesign d = designPoses(rows, names, o);
+    if (l.design_criterion == 'A') d = refineForContributors(machine, model, l, candidates, names, d.chosen, o.hold_first);
     std::sort(d.chosen.begin(), d.chosen.end());
     for (int k : d.chosen) {
       poses.push_back(candidates[static_cast<size_t>(k)]);

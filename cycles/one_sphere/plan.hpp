@@ -22,6 +22,11 @@
 
 namespace rotacal {
 
+/// The papers' parameters of a tilting table (000 Eq. (1) for A/C, 002 Eq. (2) for B/C) and the
+/// ISO 230-7 parameter of the model each one is, to first order (exactly where the factor orders
+/// coincide: tests/core/kinematic_model_test.cpp).
+const std::vector<std::pair<const char*, const char*>>& spherePapersNames(Kinematics k);
+
 struct SphereLayout {
   Eigen::Vector3d center_w_mm = Eigen::Vector3d(120.0, 0.0, 80.0);  // on the table, workpiece frame
   double radius_mm = 12.7;          // a 25.4 mm calibration sphere (Heidenhain KKH, Renishaw)
@@ -38,6 +43,11 @@ struct SphereLayout {
   /// cycles/one_sphere/design.hpp); the plan then carries them as pose_list. The grid it picks
   /// from is tilt_list x c_list, by default the tilt axis every 15 deg and C every 30 deg.
   int design_poses = 0;
+  /// The design's criterion (option `design`): 'D' D-optimal for the probe's repeatability (the
+  /// default); 'A' then refines it for the machine's declared contributors, the sum of the
+  /// location errors' variances each in its reference uncertainty (core/pose_design.hpp,
+  /// refinePosesForBudget).
+  char design_criterion = 'D';
   /// Fit the linear axes' squareness S_xy S_xz S_yz alongside (design.hpp says why).
   bool fit_squareness = true;
   /// Measure the rotary axes' lost motion: the poses are run there and back (the list, then
@@ -47,7 +57,7 @@ struct SphereLayout {
 
   /// Defaults for a machine, overridden by the options center_w_mm ("x,y,z"), radius_mm,
   /// stem_length_mm, stem_diameter_mm, tilt_list, c_list, pose_list ("tilt/c,tilt/c,..."),
-  /// poses (the design's n), fit_squareness, backlash (0 or 1).
+  /// poses (the design's n), design (D or A), fit_squareness, backlash (0 or 1).
   static SphereLayout fromOptions(const MachineModel& machine, const CycleOptions& options);
   CycleOptions toOptions() const;
   /// The option that lists the second axis's angles: c_list, or b_list on head_ab.

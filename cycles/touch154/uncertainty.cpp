@@ -844,39 +844,6 @@ std::string uncertaintyText(const UncertaintySummary& s, const ContributorSet& c
   return t;
 }
 
-}  // namespace rotacal
-
-namespace rotacal {
-
-namespace {
-
-/// E_p[ sum_k phi_k(x) phi_k(y) ] for hat functions on the nodes p * k, p uniform in [lo, hi]:
-/// the correlation of the interpolated node values at x and y (000 Eq. (22)), by the midpoint rule
-/// over p (256 intervals: the integrand is piecewise smooth in p; error below 1e-3).
-double nodeKernel(double x, double y, double lo, double hi) {
-  const int steps = lo == hi ? 1 : 256;
-  double sum = 0.0;
-  for (int q = 0; q < steps; ++q) {
-    const double p = lo + (hi - lo) * (q + 0.5) / steps;
-    const double fx = x / p, fy = y / p;
-    const double kx = std::floor(fx), ky = std::floor(fy);
-    if (std::abs(kx - ky) > 1.0) continue;
-    const double tx = fx - kx, ty = fy - ky;
-    double v = 0.0;
-    for (double k : {kx, kx + 1.0}) {
-      const double wx = k == kx ? 1.0 - tx : tx;
-      double wy = 0.0;
-      if (k == ky) wy = 1.0 - ty;
-      else if (k == ky + 1.0) wy = ty;
-      v += wx * wy;
-    }
-    sum += v;
-  }
-  return sum / steps;
-}
-
-}  // namespace
-
 Eigen::MatrixXd triggerCovariance(const LinearChain& c, const ContributorSet& cs) {
   namespace fv = fixed_var;
   const DrawModel m = drawModel(cs);
@@ -914,7 +881,7 @@ Eigen::MatrixXd triggerCovariance(const LinearChain& c, const ContributorSet& cs
     Eigen::MatrixXd K(nx, nx);
     for (long i = 0; i < nx; ++i)
       for (long j = i; j < nx; ++j)
-        K(i, j) = K(j, i) = nodeKernel(xs[static_cast<size_t>(i)], xs[static_cast<size_t>(j)], m.linear.spacing_min_mm,
+        K(i, j) = K(j, i) = nodeCorrelation(xs[static_cast<size_t>(i)], xs[static_cast<size_t>(j)], m.linear.spacing_min_mm,
                                        m.linear.spacing_max_mm);
     // C_ij += sum_b dsdE(i, b) dsdE(j, b) u_ba^2 K(x_i, x_j)
     Eigen::MatrixXd W = c.dsdE * m.linear.u_rand.col(a).cwiseAbs2().asDiagonal() * c.dsdE.transpose();

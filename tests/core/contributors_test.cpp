@@ -2,6 +2,11 @@
 // errors for bad input.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <utility>
+#include <vector>
+
+#include "core/contributor_draw.hpp"
 #include "core/contributors.hpp"
 #include "core/errors.hpp"
 #include "test_util.hpp"
@@ -70,6 +75,57 @@ TEST(Contributors, BadInputNamesTheFileLineAndProblem) {
                    2, "min <= max");
   expectInputError("{\"format\": \"rotacal-contributors/1\",\n \"contributors\": {\n  \"form_error\": {\"offset\": {\"u\": 1, \"unit\": \"um\"}}}}",
                    3, "'form_error' needs");
+}
+
+TEST(Contributors, ProbeAxesCovarianceIsWhatTheDrawsShow) {
+  // probeAxesCovariance (first order, node correlation by quadrature) against the sample
+  // covariance of 20000 runs of drawProbeAxes on 000 Table 5 (pretravel set to 1 um so that it
+  // acts): touches 8 mm apart (one node span), 60 mm apart, and oblique, in all three axes.
+  ContributorSet cs = loadContributors(test::sourcePath("examples/contributors/table5.json"));
+  for (auto& c : cs.items)
+    if (c.info->kind == ContributorKind::ProbePretravel) c.u[0] = 1e-3;
+  ProbePlan plan;
+  const std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> touches = {
+      {{10.0, -80.0, 40.0}, {0, 0, -1}},
+      {{18.0, -80.0, 40.0}, {0, 0, -1}},
+      {{10.0, -20.0, 100.0}, {-1, 0, 0}},
+      {{70.0, -75.0, 35.0}, Eigen::Vector3d(1, 1, -1).normalized()},
+      {{-30.0, 40.0, 40.0}, {0, 1, 0}},
+      {{12.0, -78.0, 44.0}, {1, 0, 0}}};
+  std::vector<Eigen::Vector3d> t, u;
+  for (const auto& [at, along] : touches) {
+    ProbePoint p;
+    p.trigger_m_mm = at;
+    p.approach_m = along;
+    plan.points.push_back(p);
+    t.push_back(at);
+    u.push_back(along);
+  }
+  const Eigen::MatrixXd C = probeAxesCovariance(cs, isProbeAxesContributor, t, u);
+  const int runs = 20000;
+  const auto n = static_cast<Eigen::Index>(t.size());
+  Eigen::MatrixXd S = Eigen::MatrixXd::Zero(n, n);
+  ProbeAxesDraw d;
+  for (int run = 0; run < runs; ++run) {
+    drawProbeAxes(plan, cs, isProbeAxesContributor, 5, run, -1, &d);
+    Eigen::VectorXd x(n);
+    for (Eigen::Index i = 0; i < n; ++i)
+      x[i] = pretravelAlong(d.pretravel_mm, u[static_cast<size_t>(i)]) -
+             d.linear_errors.error(t[static_cast<size_t>(i)]).dot(u[static_cast<size_t>(i)]);
+    S += x * x.transpose();
+  }
+  S /= runs;
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (Eigen::Index j = 0; j <= i; ++j) {
+      const double se = std::sqrt((C(i, i) * C(j, j) + C(i, j) * C(i, j)) / runs);
+      EXPECT_NEAR(S(i, j), C(i, j), 5 * se) << i << "," << j;
+    }
+  EXPECT_GT(C(0, 1), 0.3 * C(0, 0));  // 8 mm apart: mostly the same random errors
+  // The per-touch contributors add 0.7^2 + 1^2 um^2 on the diagonal and nothing else.
+  const Eigen::MatrixXd A = probeAxesCovariance(
+      cs, [](const ContributorInfo& c) { return isProbeAxesContributor(c) || isPerTouchContributor(c); }, t, u);
+  const Eigen::MatrixXd diff = A - C;
+  EXPECT_NEAR((diff - 1.49e-6 * Eigen::MatrixXd::Identity(n, n)).cwiseAbs().maxCoeff(), 0.0, 1e-18);
 }
 
 }  // namespace

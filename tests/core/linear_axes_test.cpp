@@ -2,8 +2,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <utility>
+#include <vector>
 
 #include "core/linear_axes.hpp"
+#include "core/rng.hpp"
 
 namespace rotacal {
 namespace {
@@ -59,6 +62,33 @@ TEST(LinearAxes, DrawnNodesHaveTheStatedSpreadAndSpacing) {
   EXPECT_NEAR(mean, 35.0, 5 * 8.66 / std::sqrt(n));
   EXPECT_NEAR(sd, 8.66, 0.3);
   EXPECT_NEAR(std::sqrt(v2 / static_cast<double>(values)), 2e-3, 5 * 2e-3 / std::sqrt(2.0 * values));
+}
+
+TEST(LinearAxes, NodeCorrelationIsWhatTheDrawnNodesShow) {
+  // nodeCorrelation by quadrature against the sample correlation of 20000 drawn axes (unit node
+  // values): at one place, 10 mm and 30 mm apart (within a spacing), across a node at 0, and
+  // 120 mm apart (no shared node: exactly 0). Tolerance 5 standard errors of a product of unit
+  // normals (sd <= sqrt(2)).
+  LinearAxisModel m;
+  m.u_rand(1, 2) = 1.0;
+  Rng rng(11, 0);
+  const int n = 20000;
+  const std::vector<std::pair<double, double>> at = {{17.0, 17.0}, {17.0, 27.0}, {-12.0, 18.0}, {63.0, 33.0}, {-40.0, 80.0}};
+  std::vector<double> sum(at.size(), 0.0);
+  AxisNodes nodes;
+  for (int k = 0; k < n; ++k) {
+    drawAxisNodes(m, 2, -60.0, 100.0, rng, &nodes);
+    for (size_t i = 0; i < at.size(); ++i) sum[i] += nodes.at(at[i].first).y() * nodes.at(at[i].second).y();
+  }
+  for (size_t i = 0; i < at.size(); ++i) {
+    const double k = nodeCorrelation(at[i].first, at[i].second, 20.0, 50.0);
+    EXPECT_NEAR(sum[i] / n, k, 5 * std::sqrt(2.0 / n)) << at[i].first << " " << at[i].second;
+  }
+  EXPECT_EQ(nodeCorrelation(-40.0, 80.0, 20.0, 50.0), 0.0);
+  // At a node of every spacing (0) the value is the node's: correlation 1; between nodes less.
+  EXPECT_NEAR(nodeCorrelation(0.0, 0.0, 20.0, 50.0), 1.0, 1e-12);
+  EXPECT_LT(nodeCorrelation(17.0, 17.0, 20.0, 50.0), 1.0);
+  EXPECT_NEAR(nodeCorrelation(17.0, 27.0, 20.0, 50.0), nodeCorrelation(27.0, 17.0, 20.0, 50.0), 1e-15);
 }
 
 TEST(LinearAxes, ModelIsValidated) {
