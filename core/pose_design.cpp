@@ -41,17 +41,54 @@ void checkRows(const std::vector<Eigen::MatrixXd>& rows, const std::vector<Ident
       throw std::invalid_argument(fmt::format("pose design: a candidate has {} columns for {} parameters", R.cols(), names.size()));
 }
 
+// The subset's candidates' rows, stacked in the subset's order.
+Eigen::MatrixXd stackRows(const std::vector<Eigen::MatrixXd>& rows, const std::vector<int>& subset, Eigen::Index columns) {
+  Eigen::Index total = 0;
+  for (int k : subset) total += rows.at(static_cast<size_t>(k)).rows();
+  Eigen::MatrixXd J(total, columns);
+  Eigen::Index at = 0;
+  for (int k : subset) {
+    const Eigen::MatrixXd& R = rows[static_cast<size_t>(k)];
+    J.middleRows(at, R.rows()) = R;
+    at += R.rows();
+  }
+  return J;
+}
+
+std::vector<int> everyCandidate(size_t n) {
+  std::vector<int> all(n);
+  for (size_t k = 0; k < n; ++k) all[k] = static_cast<int>(k);
+  return all;
+}
+
+// Fedorov exchange passes: for every chosen pose c and every candidate k not chosen,
+// try_swap(c, k) says whether swapping them gains (and then keeps its own state for the swap);
+// the passes end when one gains nothing or after `passes`.
+template <class TrySwap>
+void exchangePasses(int candidates, int passes, std::vector<int>* chosen, TrySwap try_swap) {
+  std::vector<bool> in(static_cast<size_t>(candidates), false);
+  for (int k : *chosen) in[static_cast<size_t>(k)] = true;
+  for (int pass = 0; pass < passes; ++pass) {
+    bool improved = false;
+    for (size_t c = 0; c < chosen->size(); ++c)
+      for (int k = 0; k < candidates; ++k) {
+        if (in[static_cast<size_t>(k)] || !try_swap(c, k)) continue;
+        in[static_cast<size_t>((*chosen)[c])] = false;
+        in[static_cast<size_t>(k)] = true;
+        (*chosen)[c] = k;
+        improved = true;
+      }
+    if (!improved) break;
+  }
+}
+
 Prepared prepare(const std::vector<Eigen::MatrixXd>& rows, const std::vector<IdentifiabilityParameter>& names,
                  const PoseDesignOptions& o) {
   if (const std::string bad = o.validate(); !bad.empty()) throw std::invalid_argument("pose design: " + bad);
   checkRows(rows, names);
   Prepared p;
   const auto np = static_cast<Eigen::Index>(names.size());
-  Eigen::Index total = 0;
-  for (const auto& R : rows) total += R.rows();
-  Eigen::MatrixXd Jall(total, np);
-  Eigen::Index at = 0;
-  for (const auto& R : rows) Jall.middleRows(at, R.rows()) = R, at += R.rows();
+  const Eigen::MatrixXd Jall = stackRows(rows, everyCandidate(rows.size()), np);
   // What no candidate set separates is held, as every fit of the model holds it.
   p.all = identifiability(Jall, names, o.hold_first);
   Eigen::VectorXd scale(np);
@@ -126,34 +163,16 @@ PoseDesign designPoses(const std::vector<Eigen::MatrixXd>& candidate_rows, const
     M += info[static_cast<size_t>(best)];
   }
   double current = logDet(M);
-  for (int pass = 0; pass < o.exchange_passes; ++pass) {
-    bool improved = false;
-    for (size_t c = 0; c < d.chosen.size(); ++c)
-      for (int k = 0; k < nc; ++k) {
-        if (in[static_cast<size_t>(k)]) continue;
-        const Eigen::MatrixXd trial = M - info[static_cast<size_t>(d.chosen[c])] + info[static_cast<size_t>(k)];
-        const double v = logDet(trial);
-        if (v > current + 1e-12 * std::max(1.0, std::abs(current))) {
-          in[static_cast<size_t>(d.chosen[c])] = false;
-          in[static_cast<size_t>(k)] = true;
-          d.chosen[c] = k;
-          M = trial;
-          current = v;
-          improved = true;
-        }
-      }
-    if (!improved) break;
-  }
+  exchangePasses(nc, o.exchange_passes, &d.chosen, [&](size_t c, int k) {
+    const Eigen::MatrixXd trial = M - info[static_cast<size_t>(d.chosen[c])] + info[static_cast<size_t>(k)];
+    const double v = logDet(trial);
+    if (!(v > current + 1e-12 * std::max(1.0, std::abs(current)))) return false;
+    M = trial;
+    current = v;
+    return true;
+  });
   d.log_det = current;
-  Eigen::Index total = 0;
-  for (int k : d.chosen) total += candidate_rows[static_cast<size_t>(k)].rows();
-  Eigen::MatrixXd Jc(total, static_cast<Eigen::Index>(names.size()));
-  Eigen::Index at = 0;
-  for (int k : d.chosen) {
-    const Eigen::MatrixXd& R = candidate_rows[static_cast<size_t>(k)];
-    Jc.middleRows(at, R.rows()) = R;
-    at += R.rows();
-  }
+  const Eigen::MatrixXd Jc = stackRows(candidate_rows, d.chosen, static_cast<Eigen::Index>(names.size()));
   d.identifiability = identifiability(Jc, names, o.hold_first);
   return d;
 }
@@ -192,8 +211,7 @@ BudgetProblem prepareBudget(const std::vector<Eigen::MatrixXd>& rows, const std:
   if (covariance.rows() != total || covariance.cols() != total)
     throw std::invalid_argument(fmt::format("pose design: a {} x {} covariance for {} touches", covariance.rows(),
                                             covariance.cols(), total));
-  Eigen::MatrixXd Jall(total, b.np);
-  for (size_t k = 0; k < rows.size(); ++k) Jall.middleRows(b.first[k], b.count[k]) = rows[k];
+  const Eigen::MatrixXd Jall = stackRows(rows, everyCandidate(rows.size()), b.np);
   const Identifiability all = identifiability(Jall, names, o.hold_first);
   for (Eigen::Index i = 0; i < b.np; ++i)
     if (!all.held[static_cast<size_t>(i)]) b.free.push_back(i);
@@ -265,11 +283,11 @@ PoseDesign refinePosesForBudget(const std::vector<Eigen::MatrixXd>& rows, const 
                                 const PoseBudgetOptions& o) {
   const BudgetProblem b = prepareBudget(rows, names, covariance, o);
   const int nc = static_cast<int>(rows.size());
-  std::vector<bool> in(static_cast<size_t>(nc), false);
+  std::vector<bool> seen(static_cast<size_t>(nc), false);
   for (int k : start) {
-    if (k < 0 || k >= nc || in[static_cast<size_t>(k)])
+    if (k < 0 || k >= nc || seen[static_cast<size_t>(k)])
       throw std::invalid_argument(fmt::format("pose design: start pose {} is not a distinct candidate of {}", k, nc));
-    in[static_cast<size_t>(k)] = true;
+    seen[static_cast<size_t>(k)] = true;
   }
   auto value = [&](const std::vector<int>& S) {
     Eigen::MatrixXd cov;
@@ -280,30 +298,16 @@ PoseDesign refinePosesForBudget(const std::vector<Eigen::MatrixXd>& rows, const 
   double current = value(d.chosen);
   if (!std::isfinite(current))
     throw std::invalid_argument("pose design: the start poses do not fix the parameters the candidates separate");
-  for (int pass = 0; pass < o.exchange_passes; ++pass) {
-    bool improved = false;
-    for (size_t c = 0; c < d.chosen.size(); ++c)
-      for (int k = 0; k < nc; ++k) {
-        if (in[static_cast<size_t>(k)]) continue;
-        std::vector<int> trial = d.chosen;
-        trial[c] = k;
-        const double v = value(trial);
-        if (v < current * (1.0 - 1e-12)) {
-          in[static_cast<size_t>(d.chosen[c])] = false;
-          in[static_cast<size_t>(k)] = true;
-          d.chosen = trial;
-          current = v;
-          improved = true;
-        }
-      }
-    if (!improved) break;
-  }
+  exchangePasses(nc, o.exchange_passes, &d.chosen, [&](size_t c, int k) {
+    std::vector<int> trial = d.chosen;
+    trial[c] = k;
+    const double v = value(trial);
+    if (!(v < current * (1.0 - 1e-12))) return false;
+    current = v;
+    return true;
+  });
   d.budget = current;
-  Eigen::Index total = 0;
-  for (int k : d.chosen) total += rows[static_cast<size_t>(k)].rows();
-  Eigen::MatrixXd Jc(total, b.np);
-  Eigen::Index at = 0;
-  for (int k : d.chosen) Jc.middleRows(at, rows[static_cast<size_t>(k)].rows()) = rows[static_cast<size_t>(k)], at += rows[static_cast<size_t>(k)].rows();
+  const Eigen::MatrixXd Jc = stackRows(rows, d.chosen, b.np);
   d.identifiability = identifiability(Jc, names, o.hold_first);
   return d;
 }
