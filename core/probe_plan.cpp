@@ -15,9 +15,6 @@
 
 namespace rotacal {
 
-}  // namespace rotacal
-namespace rotacal {
-
 const ProbePoint* ProbePlan::findPoint(int id) const {
   if (id >= 1 && id <= static_cast<int>(points.size()) && points[id - 1].id == id) return &points[id - 1];
   for (const auto& p : points)

@@ -101,11 +101,6 @@ TEST(Simulation, OutOfRangeSurfaceIsANoTrigger) {
   EXPECT_THROW(simulate(plan, t, {}), std::runtime_error);
 }
 
-}  // namespace
-}  // namespace rotacal
-
-namespace rotacal {
-namespace {
 
 // Ball on sphere against bisection of the centre distance along the approach line.
 TEST(Simulation, BallSphereContactIsTheFirstTouchOnTheWayIn) {

@@ -270,11 +270,6 @@ TEST(CompensateProgram, FanucHeaderGoesAfterTheProgramNumber) {
   EXPECT_NE(c.text.find(")\n(HELLO)\nG21 G90\n"), std::string::npos) << c.text;
 }
 
-}  // namespace
-}  // namespace rotacal
-
-namespace rotacal {
-namespace {
 
 // Every word-address dialect's own touch154 program, rewritten, probes the same compensated end
 // points as the LinuxCNC one (whose end points the exact simulator checks above): the statements
@@ -303,11 +298,6 @@ TEST(CompensateProgram, EveryWordAddressDialectGetsTheSameGuardedEndPoints) {
   }
 }
 
-}  // namespace
-}  // namespace rotacal
-
-namespace rotacal {
-namespace {
 
 NcSyntax syntaxFor(const std::string& dialect) {
   return NcSyntax{dialect, 4, 5, 4, dialect == "siemens" ? NcSyntax::Comment::Semicolon : NcSyntax::Comment::Parentheses};
@@ -435,11 +425,6 @@ TEST(CompensateProgram, ProbingMoveWithoutItsCheckOrWithAnotherEndPointIsRefused
   EXPECT_EQ(other.rfind("p.nc:7: this no-trigger check compares X with 52", 0), 0u) << other;
 }
 
-}  // namespace
-}  // namespace rotacal
-
-namespace rotacal {
-namespace {
 
 // Issue 14: compensated Fanuc/Haas/Okuma programs carried lower-case comments of up to 130
 // characters that rotacal's own checkers reject. Every dialect's compensated touch154 program,
@@ -514,11 +499,6 @@ TEST(CompensateProgram, ACompensatedProgramIsMarkedAndNotCompensatedAgain) {
   }
 }
 
-}  // namespace
-}  // namespace rotacal
-
-namespace rotacal {
-namespace {
 
 // The loop closed through the program (issue 18, item 5): the compensated program's probing moves
 // run on the true machine (the simulator, with the true test piece), the controller's records

@@ -351,11 +351,6 @@ TEST(SpaceframeAnalysis, WithNoiseTheErrorsLieWithinTheirUncertainty) {
               a.summary.sigma_um, expected, mmToUm(a.u[0]), a.u[kNumLocationErrors] * 1e6);
 }
 
-}  // namespace
-}  // namespace rotacal
-
-namespace rotacal {
-namespace {
 
 // 003 Sec. 3.1 takes the nominal frame from the centres the machine itself measured at
 // theta = phi = 0. A frame whose spheres are not where Table 1 says, on a perfect machine: with
@@ -393,11 +388,6 @@ TEST(SpaceframeAnalysis, SelfCalibrationFromTheInitialPose) {
   EXPECT_THROW(makePlan("spaceframe", a120(), {{"nominal_from", "initial"}, {"phi_list", "-45,45"}}), std::invalid_argument);
 }
 
-}  // namespace
-}  // namespace rotacal
-
-namespace rotacal {
-namespace {
 
 // Several results files are repeats (contract): each centre is the mean of the repeats' fits.
 TEST(SpaceframeAnalysis, RepeatsAverageTheCentres) {
@@ -414,11 +404,6 @@ TEST(SpaceframeAnalysis, RepeatsAverageTheCentres) {
   EXPECT_EQ(both.triggers, 2 * a1.triggers);
 }
 
-}  // namespace
-}  // namespace rotacal
-
-namespace rotacal {
-namespace {
 
 // The fitted radius is the sphere fits' plausibility check: a 10 um pretravel (every trigger
 // 10 um late along its approach) makes every sphere 10 um smaller; without it the fits agree with
@@ -438,11 +423,6 @@ TEST(SpaceframeAnalysis, FittedRadiusRevealsPretravel) {
   EXPECT_EQ(late.radius_outside, static_cast<int>(late.points.size()));
 }
 
-}  // namespace
-}  // namespace rotacal
-
-namespace rotacal {
-namespace {
 
 // Self-calibration identification (nominal_from=initial): the frame's spheres are unknowns. A
 // frame whose spheres 3 and 5 are off, on a machine with location errors and an anisotropic

@@ -204,11 +204,6 @@ TEST(TooltipResults, RoundTripAndErrors) {
   EXPECT_THROW(parseTooltipResults("a,b\n", "hdr.csv", plan), InputError);
 }
 
-}  // namespace
-}  // namespace rotacal
-
-namespace rotacal {
-namespace {
 
 // 004's laser reads one direction (issue 17): a results file of the transverse column alone is
 // analyzed, and what it cannot identify is said, not guessed.
