@@ -38,8 +38,8 @@ class Tooltip final : public Cycle {
     const ProbePlan& plan = *r.plan;
     const JsonDoc doc = parseJsonText(r.truth.text, r.truth.path);
     TooltipTruth truth = tooltipTruthFrom(doc, doc.value);
+    // Both are >= 0: the truth file's reader and --noise-um's check refuse a negative noise.
     if (r.noise_um) truth.noise_um = *r.noise_um;
-    if (truth.noise_um < 0) throw InputError(r.truth.path, 0, "the laser noise must be >= 0");
     const TooltipRun run = onTruthFile(r.truth, [&] { return simulateTooltip(plan, truth, r.seed); });
     return {tooltipResultsText(plan, run),
             fmt::format("simulated {} tool-tip readings (dR {:.3f} um, noise {:.3f} um, seed {})", run.size(),
