@@ -209,7 +209,7 @@ void tooltipBench() {
       const TooltipDiagnosis d = tipDiag({&a}, t, 60000 + static_cast<std::uint64_t>(seed));
       for (const auto& c : d.summary.confounded)
         confounded += !c.with_model && c.signal && (c.cause == "pivot_length" || c.with[0] == "pivot_length");
-      for (const auto& f : d.summary.findings) pivot_found += f.cause == "pivot_length";
+      pivot_found += d.summary.finding("pivot_length") != nullptr;
     }
     std::printf("  issue 16 reproduction (30 um/m isotropic scale, no pivot error, one tool): confounded pair with a signal "
                 "in %d / 50, pivot_length found in %d / 50\n",

@@ -593,6 +593,18 @@ const char* judgeVerdictName(JudgeVerdict v) {
   return "?";
 }
 
+const JudgeEstimate* JudgeFinding::parameter(std::string_view name) const {
+  for (const auto& p : parameters)
+    if (p.name == name) return &p;
+  return nullptr;
+}
+
+const JudgeFinding* JudgeSummary::finding(std::string_view cause) const {
+  for (const auto& f : findings)
+    if (f.cause == cause) return &f;
+  return nullptr;
+}
+
 JudgeSummary judge(const JudgeProblem& pb, const JudgeOptions& o) {
   requireValid(o, "judge options");
   validateProblem(pb);

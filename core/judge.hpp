@@ -58,6 +58,7 @@
 #include <Eigen/Core>
 #include <functional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/json_io.hpp"
@@ -177,6 +178,9 @@ struct JudgeFinding {
   double separability = 1.0;
   std::vector<std::string> overlaps;
   std::string confidence;  // "full", or why lowered
+
+  /// The estimate of the named parameter (nullptr when the cause has none of that name).
+  const JudgeEstimate* parameter(std::string_view name) const;
 };
 
 struct JudgeTerm {
@@ -216,6 +220,8 @@ struct JudgeSummary {
   std::vector<JudgeConfounded> confounded;
 
   bool effectFound() const { return verdict == JudgeVerdict::EffectFound; }
+  /// The finding of the named cause (nullptr when it was not accepted).
+  const JudgeFinding* finding(std::string_view cause) const;
   /// True only when the final model passes the adequacy test against the declared noise.
   bool explainsData() const { return final_model.passes && verdict != JudgeVerdict::ModelInadequate; }
 };

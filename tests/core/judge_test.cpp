@@ -48,12 +48,6 @@ double ksUniform(std::vector<double> p) {
   return d;
 }
 
-const JudgeEstimate* param(const JudgeFinding& f, const std::string& name) {
-  for (const auto& p : f.parameters)
-    if (p.name == name) return &p;
-  return nullptr;
-}
-
 // ---------------------------------------------------------------------------------------------
 
 TEST(Judge, OptionsValidateRejectsBadValues) {
@@ -191,7 +185,7 @@ int detections(const Hidden& h, int seeds = 50) {
     if (s.verdict != JudgeVerdict::EffectFound || s.findings.size() != 1 || s.findings[0].cause != h.cause) continue;
     bool within = true;
     for (const auto& [name, v] : h.truth) {
-      const JudgeEstimate* e = param(s.findings[0], name);
+      const JudgeEstimate* e = s.findings[0].parameter(name);
       within = within && e && std::abs(e->value - v) <= 3.0 * e->u;
     }
     ok += within;

@@ -42,12 +42,6 @@ RtestDiagnosis diagnose(const ProbePlan& plan, const std::vector<RtestCycle>& c,
   return diagnoseRtest(plan, c, o);
 }
 
-const JudgeEstimate* param(const JudgeFinding& f, const std::string& name) {
-  for (const auto& p : f.parameters)
-    if (p.name == name) return &p;
-  return nullptr;
-}
-
 const RtestConfound* confound(const RtestDiagnosis& d, const std::string& cause) {
   for (const auto& c : d.confounds)
     if (c.entry.cause == cause) return &c;
@@ -134,7 +128,7 @@ TEST(RtestDiagnosis, Reproduction002DriftIsThermalDrift) {
     const JudgeFinding& f = d.summary.findings[0];
     EXPECT_EQ(f.cause, "thermal_drift");
     for (double b : {-60, -30, 0, 30, 60}) {
-      const JudgeEstimate* e = param(f, fmt::format("dy_CB(B={:g})/h", b));
+      const JudgeEstimate* e = f.parameter(fmt::format("dy_CB(B={:g})/h", b));
       ASSERT_NE(e, nullptr);
       // 20 slopes over the 4 seeds: 3.8 u keeps the family's chance of a false failure at 0.27 %.
       EXPECT_LE(std::abs(e->value + 2.0), 3.8 * e->u) << b;
@@ -227,9 +221,9 @@ TEST(RtestDiagnosis, SensorStepMidSeriesIsFlagged) {
       EXPECT_EQ(f.cause, where == 'b' ? "sensor_step_in_cycle_7" : "sensor_step_cycle_7") << rtestDiagnosisText(plan, d);
       EXPECT_EQ(j["findings"][0]["variant"], where == 'b' ? "during cycle 7" : "from cycle 7");
       EXPECT_EQ(d.summary.verdict, JudgeVerdict::EffectFound) << rtestDiagnosisText(plan, d);
-      EXPECT_LE(std::abs(param(f, "dx")->value - 1.0), 3.0 * param(f, "dx")->u);
-      EXPECT_LE(std::abs(param(f, "dy")->value), 3.0 * param(f, "dy")->u);
-      EXPECT_LE(std::abs(param(f, "dz")->value), 3.0 * param(f, "dz")->u);
+      EXPECT_LE(std::abs(f.parameter("dx")->value - 1.0), 3.0 * f.parameter("dx")->u);
+      EXPECT_LE(std::abs(f.parameter("dy")->value), 3.0 * f.parameter("dy")->u);
+      EXPECT_LE(std::abs(f.parameter("dz")->value), 3.0 * f.parameter("dz")->u);
     }
   }
 }
@@ -349,7 +343,7 @@ TEST(RtestDiagnosis, RealSpindleHeatingIsWordedAsTheSpindle) {
   const double bend_rate = bend / 3.0;  // the largest departure from the line over the 3 h, per hour
   std::printf("SJTU first 3 h: injected slope %.3f um/h, bend %.3f um\n", slope, bend);
   for (double b : {-60, -30, 0, 30, 60}) {
-    const JudgeEstimate* e = param(f, fmt::format("dz_BY(B={:g})/h", b));
+    const JudgeEstimate* e = f.parameter(fmt::format("dz_BY(B={:g})/h", b));
     ASSERT_NE(e, nullptr);
     EXPECT_LE(std::abs(e->value - slope), 3.0 * e->u + bend_rate) << b;
   }

@@ -71,12 +71,6 @@ bool confounded(const JudgeSummary& s, const std::string& a, const std::string& 
   return false;
 }
 
-const JudgeFinding* findingOf(const JudgeSummary& s, const std::string& cause) {
-  for (const auto& f : s.findings)
-    if (f.cause == cause) return &f;
-  return nullptr;
-}
-
 TEST(SpaceframeDiagnosis, HiddenXScaleIsNeverNoSignificantEffect) {
   const ProbePlan plan = framePlan();
   const double s_x = 20e-6;  // 20 um/m: 2 um over 100 mm, a typical uncompensated ball screw
@@ -89,7 +83,7 @@ TEST(SpaceframeDiagnosis, HiddenXScaleIsNeverNoSignificantEffect) {
   if (d.judged.verdict == JudgeVerdict::ModelInadequate)
     EXPECT_TRUE(confounded(d.judged, "frame_temperature", "linear_axis_scale")) << text;
   else
-    EXPECT_NE(findingOf(d.judged, "linear_axis_scale"), nullptr) << text;
+    EXPECT_NE(d.judged.finding("linear_axis_scale"), nullptr) << text;
   const Json j = spaceframeDiagnosisJson(d, plan);
   EXPECT_EQ(j["format"], "rotacal-diagnosis/1");
   EXPECT_EQ(j["verdict"], judgeVerdictName(d.judged.verdict));
@@ -106,7 +100,7 @@ TEST(SpaceframeDiagnosis, HiddenSquarenessIsFoundWithItsParametersWithin3u) {
   const std::string text = spaceframeDiagnosisText(d);
   EXPECT_FALSE(d.judged.baseline.passes) << text;
   ASSERT_EQ(d.judged.verdict, JudgeVerdict::EffectFound) << text;
-  const JudgeFinding* f = findingOf(d.judged, "linear_axis_squareness");
+  const JudgeFinding* f = d.judged.finding("linear_axis_squareness");
   ASSERT_NE(f, nullptr) << text;
   EXPECT_NEAR(f->parameters[0].value, 30.0, 3 * f->parameters[0].u) << text;
   EXPECT_NEAR(f->parameters[1].value, 0.0, 3 * f->parameters[1].u) << text;
@@ -125,7 +119,7 @@ TEST(SpaceframeDiagnosis, HiddenDriftIsThermalDrift) {
   const SpaceframeDiagnosis d = diagnoseSpaceframe(plan, {simulate(plan, t, {10})}, optionsFor(plan));
   const std::string text = spaceframeDiagnosisText(d);
   ASSERT_NE(d.judged.verdict, JudgeVerdict::NoSignificantEffect) << text;
-  const JudgeFinding* f = findingOf(d.judged, "thermal_drift");
+  const JudgeFinding* f = d.judged.finding("thermal_drift");
   ASSERT_NE(f, nullptr) << text;
   EXPECT_NEAR(f->parameters[2].value, 4.0, 3 * f->parameters[2].u) << text;
 }

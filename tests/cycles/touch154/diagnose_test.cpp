@@ -46,12 +46,6 @@ Truth clean() {
   return t;
 }
 
-const JudgeFinding* findingOf(const Touch154Diagnosis& d, const std::string& cause) {
-  for (const auto& f : d.judged.findings)
-    if (f.cause == cause) return &f;
-  return nullptr;
-}
-
 TEST(Touch154Diagnose, IssueReproductionXScale60umPerMIsNeverNoSignificantEffect) {
   // issue 16: 4 repeats, X positioning (scale) error 60 um/m, 0.7 um probe noise; the old code
   // said "no significant effect" because its noise was the fit's own sigma.
@@ -63,7 +57,7 @@ TEST(Touch154Diagnose, IssueReproductionXScale60umPerMIsNeverNoSignificantEffect
     const std::string text = touch154DiagnosisText(d);
     ASSERT_NE(d.judged.verdict, JudgeVerdict::NoSignificantEffect) << text;
     if (d.judged.verdict == JudgeVerdict::EffectFound)
-      EXPECT_NE(findingOf(d, "linear_axis_scale"), nullptr) << text;
+      EXPECT_NE(d.judged.finding("linear_axis_scale"), nullptr) << text;
     else
       EXPECT_EQ(text.find("explains the data"), std::string::npos) << text;
     EXPECT_FALSE(d.judged.baseline.passes);
@@ -94,7 +88,7 @@ TEST(Touch154Diagnose, HiddenSquarenessIsFoundWithItsParametersWithin3u) {
   constexpr int kSeeds = 6;
   for (int seed = 31; seed < 31 + kSeeds; ++seed) {
     const Touch154Diagnosis d = diagnoseTouch154(plan, repeats(plan, t, seed), options());
-    const JudgeFinding* f = findingOf(d, "linear_axis_squareness");
+    const JudgeFinding* f = d.judged.finding("linear_axis_squareness");
     if (d.judged.verdict != JudgeVerdict::EffectFound || f == nullptr) continue;
     const double truth[3] = {30.0, 0.0, 30.0};
     bool within = true;
@@ -118,7 +112,7 @@ TEST(Touch154Diagnose, HiddenLinearDriftIsThermalDriftWithItsRate) {
   for (int seed : {5, 6}) {
     const Touch154Diagnosis d = diagnoseTouch154(plan, repeats(plan, t, seed), options());
     ASSERT_EQ(d.judged.verdict, JudgeVerdict::EffectFound) << touch154DiagnosisText(d);
-    const JudgeFinding* f = findingOf(d, "thermal_drift");
+    const JudgeFinding* f = d.judged.finding("thermal_drift");
     ASSERT_NE(f, nullptr) << touch154DiagnosisText(d);
     EXPECT_NEAR(f->parameters[2].value, rate, 3.0 * f->parameters[2].u) << "dz_AY/h";
     EXPECT_NEAR(f->parameters[0].value, 0.0, 3.0 * f->parameters[0].u) << "dx_AY/h";
