@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 
 namespace rotacal {
 
@@ -82,24 +83,40 @@ void exchangePasses(int candidates, int passes, std::vector<int>* chosen, TrySwa
   }
 }
 
+// What no candidate set separates is held, as every fit of the model holds it; the others are
+// the free columns, each with its norm over all candidates (its scale: mm and rad weigh alike).
+struct FreeColumns {
+  Identifiability all;
+  std::vector<Eigen::Index> index;
+  Eigen::VectorXd scale;
+};
+
+FreeColumns freeColumns(const Eigen::MatrixXd& Jall, const std::vector<IdentifiabilityParameter>& names,
+                        const std::vector<int>& hold_first) {
+  FreeColumns f;
+  f.all = identifiability(Jall, names, hold_first);
+  for (Eigen::Index i = 0; i < Jall.cols(); ++i)
+    if (!f.all.held[static_cast<size_t>(i)]) f.index.push_back(i);
+  f.scale.resize(static_cast<Eigen::Index>(f.index.size()));
+  for (Eigen::Index k = 0; k < f.scale.size(); ++k) {
+    const double n = Jall.col(f.index[static_cast<size_t>(k)]).norm();
+    f.scale[k] = n > 0 ? n : 1.0;
+  }
+  return f;
+}
+
 Prepared prepare(const std::vector<Eigen::MatrixXd>& rows, const std::vector<IdentifiabilityParameter>& names,
                  const PoseDesignOptions& o) {
   if (const std::string bad = o.validate(); !bad.empty()) throw std::invalid_argument("pose design: " + bad);
   checkRows(rows, names);
   Prepared p;
-  const auto np = static_cast<Eigen::Index>(names.size());
-  const Eigen::MatrixXd Jall = stackRows(rows, everyCandidate(rows.size()), np);
-  // What no candidate set separates is held, as every fit of the model holds it.
-  p.all = identifiability(Jall, names, o.hold_first);
-  Eigen::VectorXd scale(np);
-  for (Eigen::Index i = 0; i < np; ++i) scale[i] = Jall.col(i).norm() > 0 ? Jall.col(i).norm() : 1.0;
-  std::vector<Eigen::Index> free;
-  for (Eigen::Index i = 0; i < np; ++i)
-    if (!p.all.held[static_cast<size_t>(i)]) free.push_back(i);
-  p.nf = static_cast<Eigen::Index>(free.size());
+  const FreeColumns f = freeColumns(stackRows(rows, everyCandidate(rows.size()), static_cast<Eigen::Index>(names.size())),
+                                    names, o.hold_first);
+  p.all = f.all;
+  p.nf = f.scale.size();
   for (const auto& R : rows) {
     Eigen::MatrixXd Rf(R.rows(), p.nf);
-    for (Eigen::Index k = 0; k < p.nf; ++k) Rf.col(k) = R.col(free[static_cast<size_t>(k)]) / scale[free[static_cast<size_t>(k)]];
+    for (Eigen::Index k = 0; k < p.nf; ++k) Rf.col(k) = R.col(f.index[static_cast<size_t>(k)]) / f.scale[k];
     p.info.push_back(Rf.transpose() * Rf);
   }
   return p;
@@ -190,8 +207,8 @@ std::string PoseBudgetOptions::validate(Eigen::Index parameters) const {
 
 namespace {
 
-// The candidates stacked once: the free columns (scaled by their norms, so that mm and rad
-// condition alike), each candidate's first row, and the held parameters.
+// The candidates stacked once: the free columns, scaled (freeColumns), and each candidate's first
+// row and count of rows.
 struct BudgetProblem {
   Eigen::MatrixXd J;  // every candidate's rows, free columns, scaled
   Eigen::VectorXd scale;
@@ -212,16 +229,11 @@ BudgetProblem prepareBudget(const std::vector<Eigen::MatrixXd>& rows, const std:
     throw std::invalid_argument(fmt::format("pose design: a {} x {} covariance for {} touches", covariance.rows(),
                                             covariance.cols(), total));
   const Eigen::MatrixXd Jall = stackRows(rows, everyCandidate(rows.size()), b.np);
-  const Identifiability all = identifiability(Jall, names, o.hold_first);
-  for (Eigen::Index i = 0; i < b.np; ++i)
-    if (!all.held[static_cast<size_t>(i)]) b.free.push_back(i);
-  b.scale.resize(static_cast<Eigen::Index>(b.free.size()));
+  FreeColumns f = freeColumns(Jall, names, o.hold_first);
+  b.free = std::move(f.index);
+  b.scale = std::move(f.scale);
   b.J.resize(total, b.scale.size());
-  for (Eigen::Index k = 0; k < b.scale.size(); ++k) {
-    const double n = Jall.col(b.free[static_cast<size_t>(k)]).norm();
-    b.scale[k] = n > 0 ? n : 1.0;
-    b.J.col(k) = Jall.col(b.free[static_cast<size_t>(k)]) / b.scale[k];
-  }
+  for (Eigen::Index k = 0; k < b.scale.size(); ++k) b.J.col(k) = Jall.col(b.free[static_cast<size_t>(k)]) / b.scale[k];
   return b;
 }
 
