@@ -17,6 +17,7 @@ namespace {
 
 struct Printed {
   std::string dialect;
+  int mm_decimals;      // the decimals of a mm machine's results
   double inch_unit_mm;  // the unit an inch machine's results are printed in
   int inch_decimals;
   test::Clock clock;
@@ -25,6 +26,8 @@ struct Printed {
   /// the point's lines where they do not depend on the plan's times (haas's clock lines are
   /// relative to the first trigger: haas_test).
   std::vector<std::string> first_lines;
+  /// The file's last line ("": none after the last point's).
+  std::string last_line = "END";
   /// Point 1's lines as the control may also print them (index in the file, text), read back as
   /// (53.584, -235, 150) mm at `accepted_t_s` (NaN: the dialect prints no clock).
   std::vector<std::pair<size_t, std::string>> accepted = {};
@@ -38,7 +41,7 @@ class EveryDialect : public ::testing::TestWithParam<Printed> {
 
 TEST_P(EveryDialect, RoundTripWithinThePrintedDigits) {
   const Printed& p = GetParam();
-  test::expectRoundTrip(d(), test::acPlan(), 1.0, 4, p.clock);
+  test::expectRoundTrip(d(), test::acPlan(), 1.0, p.mm_decimals, p.clock);
   test::expectRoundTrip(d(), test::acPlan(LengthUnit::Inch), p.inch_unit_mm, p.inch_decimals, p.clock);
 }
 
@@ -50,12 +53,15 @@ TEST_P(EveryDialect, PrintsThePointsAsTheControllersOutputStatementWould) {
   const auto& want = GetParam().first_lines;
   ASSERT_GE(ls.size(), want.size());
   for (size_t i = 0; i < want.size(); ++i) EXPECT_EQ(ls[i], want[i]) << "line " << i + 1;
-  EXPECT_EQ(ls.back(), "END");
+  if (!GetParam().last_line.empty()) {
+    EXPECT_EQ(ls.back(), GetParam().last_line);
+  }
 }
 
 TEST_P(EveryDialect, ReadsTheFormsTheControlMayPrint) {
   const Printed& p = GetParam();
-  // Macro B's other DPRNT forms are read in fanuc_test (haas shares the reader).
+  // Haas shares Macro B's reader (its other forms: fanuc_test); LOG prints one form (line ends
+  // and spaces a hand edit may leave: linuxcnc_test).
   if (p.accepted.empty()) GTEST_SKIP() << "the written form is the only one";
   const ProbePlan plan = test::acPlan();
   auto ls = test::lines(d().writeResults(plan, test::displacedRun(plan)));
@@ -72,28 +78,48 @@ TEST_P(EveryDialect, RecoversInjectedErrors) { test::expectRecovery(d(), test::a
 TEST_P(EveryDialect, GeneratedProgramsPassTheChecker) { test::expectCleanPrograms(d()); }
 
 INSTANTIATE_TEST_SUITE_P(Dialects, EveryDialect,
-                         ::testing::Values(Printed{"haas", 25.4, 5, test::Clock::Milliseconds,
-                                                   {"ROTACAL-RESULTS DIALECT HAAS CYCLE TOUCH154 POINTS 154 UNIT MM"}},
-                                           // Klartext programs are written in MM whatever the
-                                           // machine, and so are their results; FN 16 prints
-                                           // the decimal comma of a German language setting.
-                                           Printed{"heidenhain", 1.0, 4, test::Clock::Seconds,
-                                                   {"ROTACAL HEIDENHAIN CYCLE TOUCH154 POINTS 154 UNIT MM",
-                                                    "P    1 X   53,5840 Y -235,0000 Z  150,0000", "T20231007 132000"},
-                                                   // a point or a comma, an explicit sign; 2024-02-29
-                                                   // 23:59:59 (Python's datetime)
-                                                   {{1, "P1 X53.5840 Y-235,0000 Z +150.0000"}, {2, "T20240229 235959"}},
-                                                   762566399.0},
-                                           Printed{"okuma", 25.4, 5, test::Clock::None,
-                                                   {"ROTACAL-RESULTS DIALECT OKUMA CYCLE TOUCH154 POINTS 154 UNIT MM"},
-                                                   // '+', spaces and leading zeros
-                                                   {{1, "P1 X+53.5840 Y-235.0000 Z 0150.0000"}}},
-                                           // SPRINT's %10.4F
-                                           Printed{"siemens", 25.4, 5, test::Clock::None,
-                                                   {"ROTACAL-RESULTS DIALECT SIEMENS CYCLE TOUCH154 POINTS 154 UNIT MM",
-                                                    "P1 X   53.5840 Y -235.0000 Z  150.0000"},
-                                                   // %F without a width
-                                                   {{1, "P1 X53.5840 Y-235.0000 Z150.0000"}}}),
+                         ::testing::Values(
+                             // DPRNT [44] and [35] (000's units), #3001 in whole ms; CR LF like
+                             // a punch.
+                             Printed{"fanuc", 4, 25.4, 5, test::Clock::Milliseconds,
+                                     {"ROTACAL-RESULTS DIALECT FANUC CYCLE TOUCH154 POINTS 154 UNIT MM",
+                                      "DATE 20231007 TIME 132000", "P1 X  53.5840 Y-235.0000 Z 150.0000 T     900"},
+                                     "END",
+                                     // leading zeros (parameter 6001) and [80]'s trailing point;
+                                     // 2026-11-22 01:41:19 + 12.345 s (Python's datetime)
+                                     {{1, "DATE 20261122 TIME 014119"}, {2, "P1 X0053.5840 Y-0235.0000 Z  150.0000 T 12345."}},
+                                     848626879.0 + 12.345},
+                             Printed{"haas", 4, 25.4, 5, test::Clock::Milliseconds,
+                                     {"ROTACAL-RESULTS DIALECT HAAS CYCLE TOUCH154 POINTS 154 UNIT MM"}},
+                             // Klartext programs are written in MM whatever the machine, and so
+                             // are their results; FN 16 prints the decimal comma of a German
+                             // language setting.
+                             Printed{"heidenhain", 4, 1.0, 4, test::Clock::Seconds,
+                                     {"ROTACAL HEIDENHAIN CYCLE TOUCH154 POINTS 154 UNIT MM",
+                                      "P    1 X   53,5840 Y -235,0000 Z  150,0000", "T20231007 132000"},
+                                     "END",
+                                     // a point or a comma, an explicit sign; 2024-02-29 23:59:59
+                                     // (Python's datetime)
+                                     {{1, "P1 X53.5840 Y-235,0000 Z +150.0000"}, {2, "T20240229 235959"}},
+                                     762566399.0},
+                             // LOG's %.6f, the angles of point 1's pose with LinuxCNC's sign, the
+                             // probe's state; no clock, nothing after the last point.
+                             Printed{"linuxcnc", 6, 25.4, 6, test::Clock::None,
+                                     {"rotacal-results/1 dialect=linuxcnc cycle=touch154 points=154 unit=mm",
+                                      "P1 53.584010 -235.000000 150.000000 0.0000 0.0000 1"},
+                                     ""},
+                             Printed{"okuma", 4, 25.4, 5, test::Clock::None,
+                                     {"ROTACAL-RESULTS DIALECT OKUMA CYCLE TOUCH154 POINTS 154 UNIT MM"},
+                                     "END",
+                                     // '+', spaces and leading zeros
+                                     {{1, "P1 X+53.5840 Y-235.0000 Z 0150.0000"}}},
+                             // SPRINT's %10.4F
+                             Printed{"siemens", 4, 25.4, 5, test::Clock::None,
+                                     {"ROTACAL-RESULTS DIALECT SIEMENS CYCLE TOUCH154 POINTS 154 UNIT MM",
+                                      "P1 X   53.5840 Y -235.0000 Z  150.0000"},
+                                     "END",
+                                     // %F without a width
+                                     {{1, "P1 X53.5840 Y-235.0000 Z150.0000"}}}),
                          [](const ::testing::TestParamInfo<Printed>& info) { return info.param.dialect; });
 
 }  // namespace

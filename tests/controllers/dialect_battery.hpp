@@ -157,32 +157,47 @@ class WrittenResults : public ::testing::Test {
   std::string eol_;
 };
 
-/// A dialect's touch154 program (the A/C plan) as lines, `g` the first line that matches
-/// `probing_move` (a regex), and what the dialect's checker finds once `edit` has planted a fault
-/// in a copy.
-class PlantedFaults : public ::testing::Test {
- protected:
-  PlantedFaults(const std::string& dialect, const std::string& probing_move)
-      : dialect_(dialect),
-        ls(lines(dialectByName(dialect).writeProgram(cycleProgram(plan, dialect)))),
+/// A dialect's touch154 program for the A/C plan: its text, its lines and `g`, the first line
+/// that matches `probing_move` (a regex). What each dialect's program tests read, and what
+/// `PlantedFaults` edits.
+struct WrittenProgram {
+  WrittenProgram(const std::string& dialect, const std::string& probing_move,
+                 LengthUnit units = LengthUnit::Millimetre)
+      : plan(acPlan(units)),
+        text(dialectByName(dialect).writeProgram(cycleProgram(plan, dialect))),
+        ls(lines(text)),
         g(firstMatch(ls, std::regex(probing_move))) {}
-  std::vector<std::string> with(const std::function<void(std::vector<std::string>&)>& edit) const {
-    auto v = ls;
-    edit(v);
-    return dialectByName(dialect_).check(join(v), plan, shapeOf(plan, dialect_));
-  }
   static size_t firstMatch(const std::vector<std::string>& ls, const std::regex& re) {
     for (size_t i = 0; i < ls.size(); ++i)
       if (std::regex_search(ls[i], re)) return i;
     throw std::runtime_error("no line of the program matches");
   }
 
+  ProbePlan plan;
+  std::string text;
+  std::vector<std::string> ls;
+  size_t g;
+};
+
+/// What the dialect's checker finds once `edit` has planted a fault in a copy of the program's
+/// lines.
+class PlantedFaults : public ::testing::Test {
+ protected:
+  PlantedFaults(const std::string& dialect, const std::string& probing_move)
+      : dialect_(dialect), p(dialect, probing_move), plan(p.plan), ls(p.ls), g(p.g) {}
+  std::vector<std::string> with(const std::function<void(std::vector<std::string>&)>& edit) const {
+    auto v = ls;
+    edit(v);
+    return dialectByName(dialect_).check(join(v), plan, shapeOf(plan, dialect_));
+  }
+
  private:
   std::string dialect_;
+  WrittenProgram p;
 
  protected:
-  ProbePlan plan = acPlan();
-  std::vector<std::string> ls;
+  const ProbePlan& plan;
+  const std::vector<std::string>& ls;
   size_t g;
 };
 

@@ -1,6 +1,7 @@
-// The Fanuc Macro B dialect: DPRNT results round-trip within [44]'s digits and the ms timer,
-// the parser accepts the forms DPRNT may print and names the line of every fault, the checker
-// passes the generated program and catches planted faults, and the G54 correction is written.
+// The Fanuc Macro B dialect (its round trip, recovery and clean programs: battery_test): the
+// date on the 2000 epoch and CR LF, the parser accepts the forms DPRNT may print and names the
+// line of every fault, the probing block and the #700 storage, the checker catches planted
+// faults, and the G54 correction is written.
 #include <gtest/gtest.h>
 
 #include <fmt/format.h>
@@ -22,8 +23,6 @@ namespace {
 using test::lines;
 using test::messageOf;
 
-// DPRNT [44] prints 4 decimals: half a unit of the 4th decimal (mm).
-constexpr double kDprntRoundingMm = 0.5e-4 + 1e-12;
 // #3001 is printed in whole ms.
 constexpr double kTimerRoundingS = 0.5e-3 + 1e-12;
 
@@ -38,23 +37,15 @@ TEST(FanucResults, DprntNumberIsRightAlignedWithTheSignBeforeTheDigits) {
   EXPECT_EQ(fanucDprntNumber(-1234.5, 4, 4), "-1234.5000") << "widened when it does not fit";
 }
 
-TEST(FanucResults, RoundTripWithinThePrintedDigits) {
+TEST(FanucResults, DateOfTheFirstTriggerOnThe2000EpochAndCrLf) {
   const ProbePlan plan = test::acPlan();
-  const MeasurementRun run = test::displacedRun(plan);
-  const std::string text = fc().writeResults(plan, run);
-  const auto ls = lines(text);
-  EXPECT_EQ(ls[0], "ROTACAL-RESULTS DIALECT FANUC CYCLE TOUCH154 POINTS 154 UNIT MM");
-  // The first trigger's second on the 2000-01-01 epoch: the run starts at 0 s, the first point
-  // is probed at the plan's t_s + 0.25 s (< 60 s, so HHMMSS is that many seconds).
+  const std::string text = fc().writeResults(plan, test::displacedRun(plan));
+  // The run starts at 0 s, the first point is probed at the plan's t_s + 0.25 s (< 60 s, so
+  // HHMMSS is that many seconds).
   const long first_s = static_cast<long>(std::floor(plan.points[0].t_s + 0.25));
   ASSERT_LT(first_s, 60);
-  EXPECT_EQ(ls[1], fmt::format("DATE 20000101 TIME {:>6}", first_s));
-  EXPECT_EQ(ls.back(), "END");
+  EXPECT_EQ(lines(text)[1], fmt::format("DATE 20000101 TIME {:>6}", first_s));
   EXPECT_NE(text.find("\r\n"), std::string::npos) << "CR LF like a Fanuc punch";
-  EXPECT_TRUE(std::regex_match(ls[2], std::regex(R"(P1 X[ -]*\d+\.\d{4} Y[ -]*\d+\.\d{4} Z[ -]*\d+\.\d{4} T *\d+)")))
-      << ls[2];
-  test::expectReadBack(fc().parseResults(text, "res.txt", plan), run, kDprntRoundingMm, test::Clock::Milliseconds,
-                       kTimerRoundingS);
 }
 
 TEST(FanucResults, ParserAcceptsTheFormsDprntMayPrint) {
@@ -75,19 +66,6 @@ TEST(FanucResults, ParserAcceptsTheFormsDprntMayPrint) {
   EXPECT_EQ(back.points[1].position_m_mm.y(), -215.0);
   EXPECT_DOUBLE_EQ(back.points[1].t_s, 848626879.0 + 12.346);
   EXPECT_DOUBLE_EQ(back.points[2].t_s, 848626879.0 + 12.347);
-}
-
-TEST(FanucResults, InchMachinePrintsInchesAndParsesBackToMm) {
-  const ProbePlan plan = test::acPlan(LengthUnit::Inch);
-  const MeasurementRun run = test::displacedRun(plan);
-  const std::string text = fc().writeResults(plan, run);
-  EXPECT_NE(lines(text)[0].find("UNIT INCH"), std::string::npos);
-  const MeasurementRun back = fc().parseResults(text, "res.txt", plan);
-  // [35] in inch: half a unit of the 5th decimal of an inch, in mm.
-  constexpr double kDprntRoundingInchInMm = 0.5e-5 * 25.4 + 1e-12;
-  for (size_t i = 0; i < back.points.size(); ++i)
-    EXPECT_LE((back.points[i].position_m_mm - run.points[i].position_m_mm).cwiseAbs().maxCoeff(),
-              kDprntRoundingInchInMm);
 }
 
 class FanucRejects : public test::WrittenResults {
@@ -129,58 +107,51 @@ TEST_F(FanucRejects, TextAfterEnd) {
   expectAt([](auto& v) { v.push_back("P1 X 1.0000 Y 2.0000 Z 3.0000 T 5"); }, kLastLine, "text after END");
 }
 
-TEST(FanucProgram, GeneratedProgramPassesTheChecker) {
-  const ProbePlan plan = test::acPlan();
-  const std::string text = fc().writeProgram(test::cycleProgram(plan, "fanuc"));
-  EXPECT_EQ(fc().check(text, plan, test::shapeOf(plan, "fanuc")), std::vector<std::string>{});
-  const auto ls = lines(text);
-  EXPECT_EQ(ls[0], "%");
-  EXPECT_EQ(ls[1], "O7154(ROTACAL TOUCH154)");
-  EXPECT_EQ(ls[ls.size() - 2], "M30");
-  EXPECT_EQ(text.find("-0.0000"), std::string::npos);
-  for (const auto& l : ls) {
+TEST(FanucProgram, FrameAndProbeBlock) {
+  const test::WrittenProgram p("fanuc", "^G31");
+  EXPECT_EQ(p.ls[0], "%");
+  EXPECT_EQ(p.ls[1], "O7154(ROTACAL TOUCH154)");
+  EXPECT_EQ(p.ls[p.ls.size() - 2], "M30");
+  EXPECT_EQ(p.text.find("-0.0000"), std::string::npos);
+  for (const auto& l : p.ls) {
     EXPECT_LE(l.size(), 80u) << l;
     EXPECT_EQ(l.find_first_of("abcdefghijklmnopqrstuvwxyz"), std::string::npos) << l;
   }
-  const size_t g = test::lineStarting(ls, "G31");
-  EXPECT_EQ(ls[g], "G31 X51.0000 Y-235.0000 Z150.0000 F100.0");
-  EXPECT_EQ(ls[g + 1], "#1=#5061-51.0000");
-  EXPECT_EQ(ls[g + 2], "#2=#5062+235.0000");
-  EXPECT_EQ(ls[g + 4], "IF[[#1*#1+#2*#2+#3*#3]GT0.0001]GOTO1001");
-  EXPECT_EQ(ls[g + 5], "#3000=1(POINT 1 NOT TRIGGERED)");
-  EXPECT_EQ(ls[g + 6], "N1001");
-  EXPECT_EQ(ls[g + 7], "#700=#5061");
-  EXPECT_EQ(ls[g + 10], "#703=#3001");
-  EXPECT_NE(text.find("\nDPRNT[P1*X#700[44]*Y#701[44]*Z#702[44]*T#703[80]]\n"), std::string::npos);
-  EXPECT_NE(text.find("\nDPRNT[END]\nPCLOS\nM30\n%\n"), std::string::npos);
+  EXPECT_EQ(p.ls[p.g], "G31 X51.0000 Y-235.0000 Z150.0000 F100.0");
+  EXPECT_EQ(p.ls[p.g + 1], "#1=#5061-51.0000");
+  EXPECT_EQ(p.ls[p.g + 2], "#2=#5062+235.0000");
+  EXPECT_EQ(p.ls[p.g + 4], "IF[[#1*#1+#2*#2+#3*#3]GT0.0001]GOTO1001");
+  EXPECT_EQ(p.ls[p.g + 5], "#3000=1(POINT 1 NOT TRIGGERED)");
+  EXPECT_EQ(p.ls[p.g + 6], "N1001");
+  EXPECT_EQ(p.ls[p.g + 7], "#700=#5061");
+  EXPECT_EQ(p.ls[p.g + 10], "#703=#3001");
+  EXPECT_NE(p.text.find("\nDPRNT[P1*X#700[44]*Y#701[44]*Z#702[44]*T#703[80]]\n"), std::string::npos);
+  EXPECT_NE(p.text.find("\nDPRNT[END]\nPCLOS\nM30\n%\n"), std::string::npos);
 }
 
-TEST(FanucProgram, InchProgramUsesG20AndPassesTheChecker) {
-  const ProbePlan plan = test::acPlan(LengthUnit::Inch);
-  const std::string text = fc().writeProgram(test::cycleProgram(plan, "fanuc"));
-  EXPECT_NE(text.find("\nG20\n"), std::string::npos);
-  EXPECT_NE(text.find("]GT0.000001]GOTO1001\n"), std::string::npos) << "(0.001 in)^2 no-trigger threshold";
-  EXPECT_NE(text.find("\nDPRNT[P1*X#700[35]*Y#701[35]*Z#702[35]*T#703[80]]\n"), std::string::npos) << "5 inch decimals";
-  EXPECT_EQ(fc().check(text, plan, test::shapeOf(plan, "fanuc")), std::vector<std::string>{});
+TEST(FanucProgram, InchProgramUsesG20AndFiveInchDecimals) {
+  const test::WrittenProgram p("fanuc", "^G31", LengthUnit::Inch);
+  EXPECT_NE(p.text.find("\nG20\n"), std::string::npos);
+  EXPECT_NE(p.text.find("]GT0.000001]GOTO1001\n"), std::string::npos) << "(0.001 in)^2 no-trigger threshold";
+  EXPECT_NE(p.text.find("\nDPRNT[P1*X#700[35]*Y#701[35]*Z#702[35]*T#703[80]]\n"), std::string::npos) << "5 inch decimals";
 }
 
 TEST(FanucProgram, StoredVariablesRestartAtEachPose) {
-  const ProbePlan plan = test::acPlan();
-  const std::string text = fc().writeProgram(test::cycleProgram(plan, "fanuc"));
+  const test::WrittenProgram p("fanuc", "^G31");
   // The first point of every pose is stored at #700 and printed before the next index move.
   int first_of_pose = 0;
-  for (size_t i = 0; i < plan.points.size(); ++i)
-    first_of_pose += i == 0 || plan.points[i].pose_name != plan.points[i - 1].pose_name;
+  for (size_t i = 0; i < p.plan.points.size(); ++i)
+    first_of_pose += i == 0 || p.plan.points[i].pose_name != p.plan.points[i - 1].pose_name;
   const std::regex store(R"(\n#700=#5061\n)");
-  EXPECT_EQ(std::distance(std::sregex_iterator(text.begin(), text.end(), store), std::sregex_iterator()), first_of_pose);
+  EXPECT_EQ(std::distance(std::sregex_iterator(p.text.begin(), p.text.end(), store), std::sregex_iterator()), first_of_pose);
   // The largest pose uses #700 .. #700 + 4 n - 1 and nothing beyond.
   std::map<std::string, int> per_pose;
-  for (const auto& p : plan.points) ++per_pose[p.pose_name];
+  for (const auto& pt : p.plan.points) ++per_pose[pt.pose_name];
   int most = 0;
   for (const auto& [name, n] : per_pose) most = std::max(most, n);
   const int top = 700 + 4 * most - 1;
-  EXPECT_NE(text.find(fmt::format("\n#{}=#3001\n", top)), std::string::npos);
-  EXPECT_EQ(text.find(fmt::format("\n#{}=", top + 1)), std::string::npos);
+  EXPECT_NE(p.text.find(fmt::format("\n#{}=#3001\n", top)), std::string::npos);
+  EXPECT_EQ(p.text.find(fmt::format("\n#{}=", top + 1)), std::string::npos);
   EXPECT_LE(most, 28) << "touch154: at most 28 points per pose, #700-#811";
 }
 
@@ -291,11 +262,10 @@ TEST_F(FanucRejects, ClockLineMissingOrInvalid) {
 }
 
 TEST(FanucProgram, ReadsTheClockBeforeZeroingTheTimer) {
-  const ProbePlan plan = test::acPlan();
-  const std::string text = fc().writeProgram(test::cycleProgram(plan, "fanuc"));
-  EXPECT_NE(text.find("\nPOPEN\n#1=#3011\n#2=#3012\n#3001=0\n"
-                      "DPRNT[ROTACAL-RESULTS*DIALECT*FANUC*CYCLE*TOUCH154*POINTS*154*UNIT*MM]\n"
-                      "DPRNT[DATE*#1[80]*TIME*#2[60]]\n"),
+  const test::WrittenProgram p("fanuc", "^G31");
+  EXPECT_NE(p.text.find("\nPOPEN\n#1=#3011\n#2=#3012\n#3001=0\n"
+                        "DPRNT[ROTACAL-RESULTS*DIALECT*FANUC*CYCLE*TOUCH154*POINTS*154*UNIT*MM]\n"
+                        "DPRNT[DATE*#1[80]*TIME*#2[60]]\n"),
             std::string::npos);
 }
 

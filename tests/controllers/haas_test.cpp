@@ -11,15 +11,13 @@
 namespace rotacal {
 namespace {
 
-using test::lines;
-
 const Dialect& hs() { return dialectByName("haas"); }
 
 TEST(HaasResults, HeaderClockAndPointLines) {
   const ProbePlan plan = test::acPlan();
   MeasurementRun run = test::displacedRun(plan);
   for (auto& p : run.points) p.t_s += 750000000.0;  // 2023-10-07 13:20:00 + plan time + 0.25 s
-  const auto ls = lines(hs().writeResults(plan, run));
+  const auto ls = test::lines(hs().writeResults(plan, run));
   // The header holds the first trigger's second (13:20:00 + plan t_s + 0.25 s, < 60 s); T = ms
   // since that second, right-aligned in 8 characters ([80]).
   const double first = plan.points[0].t_s + 0.25;
@@ -32,17 +30,14 @@ TEST(HaasResults, HeaderClockAndPointLines) {
 
 
 TEST(HaasProgram, HaasFrameAndStorage) {
-  const ProbePlan plan = test::acPlan();
-  const std::string text = hs().writeProgram(test::cycleProgram(plan, "haas"));
-  const auto ls = lines(text);
-  EXPECT_EQ(ls[1], "O07154(ROTACAL TOUCH154)");
-  EXPECT_NE(text.find("\nG54\nG103 P1\nPOPEN\n"), std::string::npos);
-  EXPECT_NE(text.find("\nPCLOS\nG103\nM30\n%\n"), std::string::npos);
-  const size_t g = test::lineStarting(ls, "G31");
-  EXPECT_EQ(ls[g + 7], "#10700=#5061");
-  EXPECT_EQ(ls[g + 10], "#10703=#3001");
-  EXPECT_NE(text.find("\nDPRNT[P1*X#10700[44]*Y#10701[44]*Z#10702[44]*T#10703[80]]\n"), std::string::npos);
-  EXPECT_EQ(text.find("#10980"), std::string::npos) << "retained globals end at #10999";
+  const test::WrittenProgram p("haas", "^G31");
+  EXPECT_EQ(p.ls[1], "O07154(ROTACAL TOUCH154)");
+  EXPECT_NE(p.text.find("\nG54\nG103 P1\nPOPEN\n"), std::string::npos);
+  EXPECT_NE(p.text.find("\nPCLOS\nG103\nM30\n%\n"), std::string::npos);
+  EXPECT_EQ(p.ls[p.g + 7], "#10700=#5061");
+  EXPECT_EQ(p.ls[p.g + 10], "#10703=#3001");
+  EXPECT_NE(p.text.find("\nDPRNT[P1*X#10700[44]*Y#10701[44]*Z#10702[44]*T#10703[80]]\n"), std::string::npos);
+  EXPECT_EQ(p.text.find("#10980"), std::string::npos) << "retained globals end at #10999";
 }
 
 
@@ -74,7 +69,7 @@ TEST(HaasOffsets, MrzpValuesToEnterAndTheZeroShift) {
   EXPECT_NE(text.find("#3006=1(ENTER 10121-10123 IN SETTINGS 255-257)"), std::string::npos);
   EXPECT_NE(text.find("\nG91 G10 L2 P1 A-0.0005\n"), std::string::npos) << "a_AY = -0.5 mdeg";
   EXPECT_NE(text.find("CANNOT BE SET FROM A MACRO"), std::string::npos);
-  for (const auto& l : lines(text)) EXPECT_LE(l.size(), 80u) << l;
+  for (const auto& l : test::lines(text)) EXPECT_LE(l.size(), 80u) << l;
   test::expectPlausibilityLimit(hs(), plan, "#10121=#20255+0.7000");
 }
 

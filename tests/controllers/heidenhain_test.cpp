@@ -14,38 +14,27 @@
 namespace rotacal {
 namespace {
 
-using test::lines;
-
 const Dialect& hh() { return dialectByName("heidenhain"); }
 
 TEST(HeidenhainProgram, KlartextFrameAndCycle0) {
-  const ProbePlan plan = test::acPlan();
-  nc::Program prog = test::cycleProgram(plan, "heidenhain");
-  const std::string text = hh().writeProgram(prog);
-  const auto ls = lines(text);
-  EXPECT_EQ(ls[0], "0 BEGIN PGM ROTACAL_TOUCH154 MM");
-  EXPECT_EQ(ls.back(), fmt::format("{} END PGM ROTACAL_TOUCH154 MM", ls.size() - 1));
-  for (size_t i = 0; i < ls.size(); ++i) {
-    EXPECT_EQ(ls[i].rfind(std::to_string(i) + " ", 0), 0u) << ls[i];
-    EXPECT_LE(ls[i].size(), 80u) << ls[i];
+  const test::WrittenProgram p("heidenhain", "TCH PROBE 0\\.0");
+  EXPECT_EQ(p.ls[0], "0 BEGIN PGM ROTACAL_TOUCH154 MM");
+  EXPECT_EQ(p.ls.back(), fmt::format("{} END PGM ROTACAL_TOUCH154 MM", p.ls.size() - 1));
+  for (size_t i = 0; i < p.ls.size(); ++i) {
+    EXPECT_EQ(p.ls[i].rfind(std::to_string(i) + " ", 0), 0u) << p.ls[i];
+    EXPECT_LE(p.ls[i].size(), 80u) << p.ls[i];
   }
   // Point 1: +X face, probed in -X from the approach start 58 to the end 51 (trigger 53.584).
-  size_t g = 0;
-  for (size_t i = 0; i < ls.size(); ++i)
-    if (ls[i].find("TCH PROBE 0.0") != std::string::npos) {
-      g = i;
-      break;
-    }
-  auto body = [&](size_t i) { return ls[i].substr(ls[i].find(' ') + 1); };
-  EXPECT_EQ(body(g), "TCH PROBE 0.0 REF. PLANE Q10 X-");
-  EXPECT_EQ(body(g + 1), "TCH PROBE 0.1 X+58.0000 Y-235.0000 Z+150.0000");
-  EXPECT_EQ(body(g + 2), "FN 12: IF +Q10 LT +51.0100 GOTO LBL 1001");
-  EXPECT_EQ(body(g + 4), "FN 0: QR2 = +Q10");
-  EXPECT_EQ(body(g + 5), "FN 0: QR3 = -235.0000");
-  EXPECT_EQ(body(g + 7), "FN 16: F-PRINT TNC:\\ROTACAL\\RCP.A / TNC:\\ROTACAL\\ROTACAL_TOUCH154.TXT");
+  auto body = [&](size_t i) { return p.ls[i].substr(p.ls[i].find(' ') + 1); };
+  EXPECT_EQ(body(p.g), "TCH PROBE 0.0 REF. PLANE Q10 X-");
+  EXPECT_EQ(body(p.g + 1), "TCH PROBE 0.1 X+58.0000 Y-235.0000 Z+150.0000");
+  EXPECT_EQ(body(p.g + 2), "FN 12: IF +Q10 LT +51.0100 GOTO LBL 1001");
+  EXPECT_EQ(body(p.g + 4), "FN 0: QR2 = +Q10");
+  EXPECT_EQ(body(p.g + 5), "FN 0: QR3 = -235.0000");
+  EXPECT_EQ(body(p.g + 7), "FN 16: F-PRINT TNC:\\ROTACAL\\RCP.A / TNC:\\ROTACAL\\ROTACAL_TOUCH154.TXT");
   // The format files are in the header comments, verbatim.
   for (const auto& [file, content] : heidenhainFormatFiles("touch154", 154))
-    EXPECT_NE(text.find(fmt::format(" ; {}={}\n", file, content)), std::string::npos) << file;
+    EXPECT_NE(p.text.find(fmt::format(" ; {}={}\n", file, content)), std::string::npos) << file;
 }
 
 
@@ -90,7 +79,7 @@ TEST(HeidenhainOffsets, KinematicsAndPresetValuesToEnter) {
   EXPECT_NE(text.find("; kinematics, transformation A axis to C axis: X +0.0000 Y +0.0039 Z +0.0000\n"),
             std::string::npos);
   EXPECT_NE(text.find("; preset table, A axis of the active preset: -0.0005 deg\n"), std::string::npos);
-  const auto ls = lines(text);
+  const auto ls = test::lines(text);
   EXPECT_EQ(ls[0], "0 BEGIN PGM ROTACAL_KIN MM");
   for (size_t i = 0; i < ls.size(); ++i) {
     EXPECT_EQ(ls[i].rfind(std::to_string(i) + " ", 0), 0u) << ls[i];

@@ -1,6 +1,7 @@
-// The LinuxCNC dialect: the program's LOG results round-trip within the printed digits, the
-// parser names the line of every fault, the checker passes the generated program and catches
-// planted faults, and the HAL offsets follow the documented pin mapping.
+// The LinuxCNC dialect (its round trip, recovery and clean programs: battery_test): the logged
+// angles carry LinuxCNC's sign, the parser reads hand-edited line ends and names the line of
+// every fault, the probing block, the checker catches planted faults, the double touch, and the
+// HAL offsets follow the documented pin mapping.
 #include <gtest/gtest.h>
 
 #include <fmt/format.h>
@@ -22,24 +23,7 @@ namespace {
 using test::lines;
 using test::messageOf;
 
-// LOG prints %.6f: a value read back differs by at most half a unit of the 6th decimal.
-constexpr double kLogRoundingMm = 0.5e-6 + 1e-12;
-// Inch: the same 6 decimals of an inch, expressed in mm.
-constexpr double kLogRoundingInchInMm = 0.5e-6 * 25.4 + 1e-12;
-
 const Dialect& lc() { return dialectByName("linuxcnc"); }
-
-TEST(LinuxCncResults, RoundTripWithinThePrintedDigits) {
-  const ProbePlan plan = test::acPlan();
-  const MeasurementRun run = test::displacedRun(plan);
-  const std::string text = lc().writeResults(plan, run);
-  const auto ls = lines(text);
-  EXPECT_EQ(ls[0], "rotacal-results/1 dialect=linuxcnc cycle=touch154 points=154 unit=mm");
-  EXPECT_TRUE(std::regex_match(ls[1], std::regex(R"(P1 -?\d+\.\d{6} -?\d+\.\d{6} -?\d+\.\d{6} -?\d+\.\d{4} -?\d+\.\d{4} 1)")))
-      << ls[1];
-  // LinuxCNC records no time.
-  test::expectReadBack(lc().parseResults(text, "res.txt", plan), run, kLogRoundingMm, test::Clock::None);
-}
 
 TEST(LinuxCncResults, AnglesAreTheControllersWithTheLinuxCncSign) {
   const ProbePlan plan = test::acPlan();
@@ -51,16 +35,6 @@ TEST(LinuxCncResults, AnglesAreTheControllersWithTheLinuxCncSign) {
     return;
   }
   FAIL() << "no point at A* = -90, C* = 90";
-}
-
-TEST(LinuxCncResults, InchMachineLogsInchesAndParsesBackToMm) {
-  const ProbePlan plan = test::acPlan(LengthUnit::Inch);
-  const MeasurementRun run = test::displacedRun(plan);
-  const std::string text = lc().writeResults(plan, run);
-  EXPECT_NE(lines(text)[0].find("unit=inch"), std::string::npos);
-  const MeasurementRun back = lc().parseResults(text, "res.txt", plan);
-  for (size_t i = 0; i < back.points.size(); ++i)
-    EXPECT_LE((back.points[i].position_m_mm - run.points[i].position_m_mm).cwiseAbs().maxCoeff(), kLogRoundingInchInMm);
 }
 
 TEST(LinuxCncResults, ParserAcceptsCrLfCrAndRepeatedSpaces) {
@@ -118,31 +92,25 @@ TEST_F(LinuxCncRejects, WrongFieldCount) {
   expectAt([](auto& v) { v[3] = "P3 1.0 2.0 3.0 0.0 1"; }, 4, "expected 7 fields");
 }
 
-TEST(LinuxCncProgram, GeneratedProgramPassesTheChecker) {
-  const ProbePlan plan = test::acPlan();
-  const std::string text = lc().writeProgram(test::cycleProgram(plan, "linuxcnc"));
-  EXPECT_EQ(lc().check(text, plan, test::shapeOf(plan, "linuxcnc")), std::vector<std::string>{});
-  EXPECT_EQ(text.find("-0.0000"), std::string::npos);
-  const auto ls = lines(text);
-  EXPECT_EQ(ls.front(), "%");
-  EXPECT_EQ(ls[ls.size() - 2], "M2");
-  const size_t open = test::lineStarting(ls, "(LOGOPEN");
-  EXPECT_EQ(ls[open], "(LOGOPEN,rotacal_touch154.txt)");
-  EXPECT_EQ(ls[open + 1], "(LOG,rotacal-results/1 dialect=linuxcnc cycle=touch154 points=154 unit=mm)");
-  const size_t probe = test::lineStarting(ls, "G38.2");
-  EXPECT_EQ(ls[probe + 1], "o1001 if [#5070 NE 1]");
-  EXPECT_EQ(ls[probe + 2], "(ABORT, rotacal: point 1 did not trigger)");
-  EXPECT_EQ(ls[probe + 3], "o1001 endif");
-  EXPECT_EQ(ls[probe + 4], "(LOG,P1 %.6f#5061 %.6f#5062 %.6f#5063 %.4f#5064 %.4f#5066 %d#5070)");
-  for (const auto& l : ls) EXPECT_LE(l.size(), 252u) << l;
+TEST(LinuxCncProgram, FrameLogAndProbeBlock) {
+  const test::WrittenProgram p("linuxcnc", "^G38\\.2");
+  EXPECT_EQ(p.text.find("-0.0000"), std::string::npos);
+  EXPECT_EQ(p.ls.front(), "%");
+  EXPECT_EQ(p.ls[p.ls.size() - 2], "M2");
+  const size_t open = test::lineStarting(p.ls, "(LOGOPEN");
+  EXPECT_EQ(p.ls[open], "(LOGOPEN,rotacal_touch154.txt)");
+  EXPECT_EQ(p.ls[open + 1], "(LOG,rotacal-results/1 dialect=linuxcnc cycle=touch154 points=154 unit=mm)");
+  EXPECT_EQ(p.ls[p.g + 1], "o1001 if [#5070 NE 1]");
+  EXPECT_EQ(p.ls[p.g + 2], "(ABORT, rotacal: point 1 did not trigger)");
+  EXPECT_EQ(p.ls[p.g + 3], "o1001 endif");
+  EXPECT_EQ(p.ls[p.g + 4], "(LOG,P1 %.6f#5061 %.6f#5062 %.6f#5063 %.4f#5064 %.4f#5066 %d#5070)");
+  for (const auto& l : p.ls) EXPECT_LE(l.size(), 252u) << l;
 }
 
 TEST(LinuxCncProgram, InchProgramUsesG20AndFiveDecimals) {
-  const ProbePlan plan = test::acPlan(LengthUnit::Inch);
-  const std::string text = lc().writeProgram(test::cycleProgram(plan, "linuxcnc"));
-  EXPECT_NE(text.find("\nG20\n"), std::string::npos);
-  EXPECT_TRUE(std::regex_search(text, std::regex(R"(\nG38\.2 X-?\d+\.\d{5} Y-?\d+\.\d{5} Z-?\d+\.\d{5} F)")));
-  EXPECT_EQ(lc().check(text, plan, test::shapeOf(plan, "linuxcnc")), std::vector<std::string>{});
+  const test::WrittenProgram p("linuxcnc", "^G38\\.2", LengthUnit::Inch);
+  EXPECT_NE(p.text.find("\nG20\n"), std::string::npos);
+  EXPECT_TRUE(std::regex_search(p.text, std::regex(R"(\nG38\.2 X-?\d+\.\d{5} Y-?\d+\.\d{5} Z-?\d+\.\d{5} F)")));
 }
 
 TEST(LinuxCncProgram, BcMachineLogsTheBAxisParameter) {

@@ -11,31 +11,26 @@
 namespace rotacal {
 namespace {
 
-using test::lines;
-
 const Dialect& ok() { return dialectByName("okuma"); }
 
 TEST(OkumaProgram, ProbeBlockCheckAndOutput) {
-  const ProbePlan plan = test::acPlan();
-  const std::string text = ok().writeProgram(test::cycleProgram(plan, "okuma"));
-  const auto ls = lines(text);
-  EXPECT_EQ(ls[0], "O7154 (ROTACAL)");
-  EXPECT_NE(text.find("\nFWRITC MD1:ROTACAL-TOUCH154.TXT;A\n"
-                      "PUT 'ROTACAL-RESULTS DIALECT OKUMA CYCLE TOUCH154 POINTS 154 UNIT MM'\nWRITE C\n"),
+  const test::WrittenProgram p("okuma", "^G31");
+  EXPECT_EQ(p.ls[0], "O7154 (ROTACAL)");
+  EXPECT_NE(p.text.find("\nFWRITC MD1:ROTACAL-TOUCH154.TXT;A\n"
+                        "PUT 'ROTACAL-RESULTS DIALECT OKUMA CYCLE TOUCH154 POINTS 154 UNIT MM'\nWRITE C\n"),
             std::string::npos);
-  const size_t g = test::lineStarting(ls, "G31");
-  EXPECT_EQ(ls[g], "G31 X51.0000 Y-235.0000 Z150.0000 F100.0");
-  EXPECT_EQ(ls[g + 1], "VC1=VSKPX");
-  EXPECT_EQ(ls[g + 4], "VC4=VC1-51.0000");
-  EXPECT_EQ(ls[g + 5], "VC5=VC2+235.0000");
-  EXPECT_EQ(ls[g + 7], "IF [VC4*VC4+VC5*VC5+VC6*VC6 GT 0.0001] N1001");
-  EXPECT_EQ(ls[g + 8], "PUT 'NOT-TRIGGERED P1'");
-  EXPECT_EQ(ls[g + 11], "VUACM[1]='PT1 NO TRIGGER'");
-  EXPECT_EQ(ls[g + 12], "VDOUT[992]=1001");
-  EXPECT_EQ(ls[g + 13], "N1001 PUT 'P1 X'");
-  EXPECT_EQ(ls[g + 14], "PUT VC1,4");
-  EXPECT_EQ(ls[g + 19], "WRITE C");
-  EXPECT_EQ(ls.back(), "M02");
+  EXPECT_EQ(p.ls[p.g], "G31 X51.0000 Y-235.0000 Z150.0000 F100.0");
+  EXPECT_EQ(p.ls[p.g + 1], "VC1=VSKPX");
+  EXPECT_EQ(p.ls[p.g + 4], "VC4=VC1-51.0000");
+  EXPECT_EQ(p.ls[p.g + 5], "VC5=VC2+235.0000");
+  EXPECT_EQ(p.ls[p.g + 7], "IF [VC4*VC4+VC5*VC5+VC6*VC6 GT 0.0001] N1001");
+  EXPECT_EQ(p.ls[p.g + 8], "PUT 'NOT-TRIGGERED P1'");
+  EXPECT_EQ(p.ls[p.g + 11], "VUACM[1]='PT1 NO TRIGGER'");
+  EXPECT_EQ(p.ls[p.g + 12], "VDOUT[992]=1001");
+  EXPECT_EQ(p.ls[p.g + 13], "N1001 PUT 'P1 X'");
+  EXPECT_EQ(p.ls[p.g + 14], "PUT VC1,4");
+  EXPECT_EQ(p.ls[p.g + 19], "WRITE C");
+  EXPECT_EQ(p.ls.back(), "M02");
 }
 
 
@@ -65,7 +60,7 @@ TEST(OkumaOffsets, WorkOffsetShift) {
                       "VZOFA[1]=VZOFA[1]-0.0005\n"),
             std::string::npos)
       << text;
-  for (const auto& l : lines(text)) EXPECT_LE(l.size(), 80u) << l;
+  for (const auto& l : test::lines(text)) EXPECT_LE(l.size(), 80u) << l;
   test::expectPlausibilityLimit(ok(), plan, "VZOFX[1]=VZOFX[1]+0.7000");
 }
 

@@ -12,30 +12,25 @@
 namespace rotacal {
 namespace {
 
-using test::lines;
-
 const Dialect& sm() { return dialectByName("siemens"); }
 
 
 TEST(SiemensProgram, ProbeBlockAndCheck) {
-  const ProbePlan plan = test::acPlan();
-  const std::string text = sm().writeProgram(test::cycleProgram(plan, "siemens"));
-  const auto ls = lines(text);
-  EXPECT_EQ(ls[0], "; %_N_ROTACAL_TOUCH154_MPF");
-  const size_t g = test::lineStarting(ls, "MEAS=1");
-  EXPECT_EQ(ls[g], "MEAS=1 G1 X51.0000 Y-235.0000 Z150.0000 F100.0");
-  EXPECT_EQ(ls[g + 1], "STOPRE");
-  EXPECT_EQ(ls[g + 2], "R90=$AA_MW[X]");
-  EXPECT_EQ(ls[g + 5], "R93=R90-51.0000");
-  EXPECT_EQ(ls[g + 6], "R94=R91+235.0000");
-  EXPECT_EQ(ls[g + 8], "IF ($AC_MEA[1]==0) OR (R93*R93+R94*R94+R95*R95<0.0001) GOTOF NOHIT1");
-  EXPECT_EQ(ls[g + 9], "TXT=SPRINT(\"P1 X%10.4F Y%10.4F Z%10.4F\",R90,R91,R92)");
-  EXPECT_EQ(ls[g + 10], "WRITE(ERR,\"ROTACAL_TOUCH154\",TXT)");
-  const size_t nohit = test::lineStarting(ls, "NOHIT1:");
-  EXPECT_EQ(ls[nohit + 1], "TXT=\"NOT-TRIGGERED P1\"");
-  EXPECT_EQ(ls[nohit + 3], "MSG(\"ROTACAL: POINT 1 NOT TRIGGERED\")");
-  EXPECT_EQ(ls[nohit + 4], "M0");
-  EXPECT_EQ(ls.back(), "M30");
+  const test::WrittenProgram p("siemens", "^MEAS=1");
+  EXPECT_EQ(p.ls[0], "; %_N_ROTACAL_TOUCH154_MPF");
+  EXPECT_EQ(p.ls[p.g], "MEAS=1 G1 X51.0000 Y-235.0000 Z150.0000 F100.0");
+  EXPECT_EQ(p.ls[p.g + 1], "STOPRE");
+  EXPECT_EQ(p.ls[p.g + 2], "R90=$AA_MW[X]");
+  EXPECT_EQ(p.ls[p.g + 5], "R93=R90-51.0000");
+  EXPECT_EQ(p.ls[p.g + 6], "R94=R91+235.0000");
+  EXPECT_EQ(p.ls[p.g + 8], "IF ($AC_MEA[1]==0) OR (R93*R93+R94*R94+R95*R95<0.0001) GOTOF NOHIT1");
+  EXPECT_EQ(p.ls[p.g + 9], "TXT=SPRINT(\"P1 X%10.4F Y%10.4F Z%10.4F\",R90,R91,R92)");
+  EXPECT_EQ(p.ls[p.g + 10], "WRITE(ERR,\"ROTACAL_TOUCH154\",TXT)");
+  const size_t nohit = test::lineStarting(p.ls, "NOHIT1:");
+  EXPECT_EQ(p.ls[nohit + 1], "TXT=\"NOT-TRIGGERED P1\"");
+  EXPECT_EQ(p.ls[nohit + 3], "MSG(\"ROTACAL: POINT 1 NOT TRIGGERED\")");
+  EXPECT_EQ(p.ls[nohit + 4], "M0");
+  EXPECT_EQ(p.ls.back(), "M30");
 }
 
 
@@ -74,7 +69,7 @@ TEST(SiemensOffsets, ToolcarrierFineOffsetsAndAxisVectors) {
   // v1 = A axis direction (1, c_AY, -b_AY) normalized; c_AY = -0.5 mdeg = -8.727e-6 rad.
   EXPECT_NE(text.find("\n$TC_CARR8[1]=-0.000009\n"), std::string::npos) << text;
   EXPECT_NE(text.find("\n$TC_CARR24[1]=$TC_CARR24[1]-0.0005\n"), std::string::npos);
-  for (const auto& l : lines(text)) EXPECT_LE(l.size(), 80u) << l;
+  for (const auto& l : test::lines(text)) EXPECT_LE(l.size(), 80u) << l;
   test::expectPlausibilityLimit(sm(), plan, "$TC_CARR44[1]=$TC_CARR44[1]+0.7000");
 }
 
