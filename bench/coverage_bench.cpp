@@ -122,13 +122,17 @@ class Coverage {
   std::vector<double> in_U_, in_u_, e2_, uc2_, ua2_, n_;
 };
 
-/// A machine's true location errors, of 000 Table 4's size: sd_um per length, sd_mdeg per angle.
-LocationErrors drawLocationErrors(Kinematics kinematics, Rng& rng, double sd_um, double sd_mdeg) {
+/// The spread every machine's true location errors are drawn from, of 000 Table 4's size: per
+/// length (um), per angle (mdeg). Every cycle's coverage is measured over the same population.
+constexpr double kTruthSdUm = 20.0, kTruthSdMdeg = 2.0;
+
+/// A machine's true location errors, drawn with kTruthSdUm and kTruthSdMdeg.
+LocationErrors drawLocationErrors(Kinematics kinematics, Rng& rng) {
   LocationErrors e;
   e.kinematics = kinematics;
   const auto& params = locationParameters(kinematics);
   for (int i = 0; i < kNumLocationErrors; ++i)
-    e.setReportValue(i, (params[static_cast<size_t>(i)].kind == ParamKind::Length ? sd_um : sd_mdeg) * rng.normal());
+    e.setReportValue(i, (params[static_cast<size_t>(i)].kind == ParamKind::Length ? kTruthSdUm : kTruthSdMdeg) * rng.normal());
   return e;
 }
 
@@ -158,14 +162,13 @@ int rtestCoverage(int machines) {
   const double sensor_um = 0.2;  // the plan's sensor_noise_um (002 Table 1)
   const double form_um = cs.find("rtest_sphere_form") ? mmToUm(cs.find("rtest_sphere_form")->u[0]) : 0.0;
   const auto& params = locationParameters(machine.kinematics);
-  const double sd_um = 20.0, sd_mdeg = 2.0;
   Coverage cov(kNumLocationErrors), tilt_cov(kRtestParams);
   MeanCoverageFactor mean_k;
   int done = 0;
   for (int m = 0; m < machines; ++m) {
     Rng rng(778, static_cast<std::uint64_t>(m));
     Truth t;
-    t.errors = drawLocationErrors(machine.kinematics, rng, sd_um, sd_mdeg);
+    t.errors = drawLocationErrors(machine.kinematics, rng);
     RtestDraw d;
     drawRtest(plan, cs, 4343, m, -1, &d);
     RtestTruthExtras x;
@@ -218,7 +221,7 @@ int rtestCoverage(int machines) {
     countMachine(done);
   }
   std::printf("rtest: %d machines drawn from %s (true errors sd %.0f um / %.0f mdeg, sensor noise %.2f um, form %.2f um)\n",
-              done, cs.file.c_str(), sd_um, sd_mdeg, sensor_um, form_um);
+              done, cs.file.c_str(), kTruthSdUm, kTruthSdMdeg, sensor_um, form_um);
   std::printf("%s\n", coverageHeader(8).c_str());
   for (int i = 0; i < kNumLocationErrors; ++i)
     std::printf("%s\n", cov.row(std::string(params[i].name), i, "  " + std::string(reportUnit(params[i].kind))).c_str());
@@ -320,15 +323,15 @@ int spheres3Coverage(int machines, const std::string& contributors_file) {
   const std::vector<ComponentTerm> terms = componentTerms(ComponentModel::Full, n_angles);
   // 001: location errors of a few um and arcsec, volumetric error up to 12 um before
   // compensation; drawn larger for the location errors (000 Table 4's size, as the other cycles).
-  const double sd_um = 20.0, sd_mdeg = 2.0, comp_um = 1.0, comp_mdeg = 0.5, sphere_um = 50.0;
+  const double comp_um = 1.0, comp_mdeg = 0.5, sphere_um = 50.0;
   const char* names[4] = {"Oxc", "Oyc", "Sxc", "Syc"};
   Coverage cov(4), c_cov(kNumComponentErrors);
   MeanCoverageFactor mean_k;
   int done = 0;
   for (int m = 0; m < machines; ++m) {
     Rng rng(779, static_cast<std::uint64_t>(m));
-    const Eigen::Vector4d L(umToMm(sd_um * rng.normal()), umToMm(sd_um * rng.normal()),
-                            mdegToRad(sd_mdeg * rng.normal()), mdegToRad(sd_mdeg * rng.normal()));
+    const Eigen::Vector4d L(umToMm(kTruthSdUm * rng.normal()), umToMm(kTruthSdUm * rng.normal()),
+                            mdegToRad(kTruthSdMdeg * rng.normal()), mdegToRad(kTruthSdMdeg * rng.normal()));
     Eigen::VectorXd h = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(terms.size()));
     for (size_t k = 0; k < terms.size(); ++k)
       if (terms[k].k <= 3)
@@ -384,7 +387,7 @@ int spheres3Coverage(int machines, const std::string& contributors_file) {
   }
   std::printf("spheres3: %d machines drawn from %s (location errors sd %.0f um / %.0f mdeg, component terms up to 3C sd "
               "%.1f um / %.1f mdeg, spheres %.0f um, per-touch scatter %.3f um)\n",
-              done, cs.file.c_str(), sd_um, sd_mdeg, comp_um, comp_mdeg, sphere_um, mmToUm(std::sqrt(touch_mm2)));
+              done, cs.file.c_str(), kTruthSdUm, kTruthSdMdeg, comp_um, comp_mdeg, sphere_um, mmToUm(std::sqrt(touch_mm2)));
   std::printf("%s\n", coverageHeader(8).c_str());
   for (int i = 0; i < 4; ++i) std::printf("%s\n", cov.row(names[i], i, i < 2 ? "  um" : "  mdeg").c_str());
   std::printf("component errors at the %d sampled angles:\n", n_angles);
@@ -410,7 +413,7 @@ int spaceframeCoverage(int machines, double frame_u_um) {
   for (const auto& c : cs.items)
     if (spaceframeTypeA(*c.info)) touch_mm2 += c.u[0] * c.u[0];
   const SpaceframeLayout layout = SpaceframeLayout::fromOptions(plan.options);
-  const double sd_um = 20.0, sd_mdeg = 2.0, setup_um = 50.0, setup_mdeg = 5.0;
+  const double setup_um = 50.0, setup_mdeg = 5.0;
   std::vector<std::string> names;
   Coverage cov;
   MeanCoverageFactor mean_k;
@@ -418,7 +421,7 @@ int spaceframeCoverage(int machines, double frame_u_um) {
   for (int m = 0; m < machines; ++m) {
     Rng rng(991, static_cast<std::uint64_t>(m));
     FrameModel truth_model;
-    truth_model.errors = drawLocationErrors(machine.kinematics, rng, sd_um, sd_mdeg);
+    truth_model.errors = drawLocationErrors(machine.kinematics, rng);
     for (int i = 0; i < 3; ++i) {
       truth_model.setup_translation_mm[i] = umToMm(setup_um * rng.normal());
       truth_model.setup_rotation_rad[i] = mdegToRad(setup_mdeg * rng.normal());
@@ -464,7 +467,7 @@ int spaceframeCoverage(int machines, double frame_u_um) {
   }
   std::printf("spaceframe: %d machines, contributors %s, frame calibrated to %g um per coordinate (location errors sd "
               "%.0f um / %.0f mdeg, set-up %.0f um / %.0f mdeg, per-touch scatter %.3f um)\n",
-              done, cs.file.c_str(), frame_u_um, sd_um, sd_mdeg, setup_um, setup_mdeg, mmToUm(std::sqrt(touch_mm2)));
+              done, cs.file.c_str(), frame_u_um, kTruthSdUm, kTruthSdMdeg, setup_um, setup_mdeg, mmToUm(std::sqrt(touch_mm2)));
   std::printf("%s\n", coverageHeader(14).c_str());
   for (size_t i = 0; i < names.size(); ++i) std::printf("%s\n", cov.row(names[i], i, "", 14).c_str());
   mean_k.print();
@@ -518,7 +521,7 @@ int oneSphereCoverage(int machines, const std::string& contributors_file, const 
   const ContributorSet cs = loadContributors(contributors_file);
   const double touch_mm2 = perTouchVariance_mm2(cs, isPerTouchContributor);
   const auto& params = locationParameters(machine.kinematics);
-  const double sd_um = 20.0, sd_mdeg = 2.0, sphere_um = 50.0;
+  const double sphere_um = 50.0;
   Coverage cov(kNumLocationErrors);
   double k_sum[kNumLocationErrors] = {};
   // The linear axes' squareness, where the plan fits it: its truth is the drawn one.
@@ -528,7 +531,7 @@ int oneSphereCoverage(int machines, const std::string& contributors_file, const 
   for (int m = 0; m < machines; ++m) {
     Rng rng(780, static_cast<std::uint64_t>(m));
     Truth t;
-    t.errors = drawLocationErrors(machine.kinematics, rng, sd_um, sd_mdeg);
+    t.errors = drawLocationErrors(machine.kinematics, rng);
     t.sphere_center_error_w_mm[1] = Eigen::Vector3d(umToMm(sphere_um * rng.normal()), umToMm(sphere_um * rng.normal()),
                                                     umToMm(sphere_um * rng.normal()));
     SphereCycleResult r;
@@ -561,7 +564,7 @@ int oneSphereCoverage(int machines, const std::string& contributors_file, const 
   }
   std::printf("one_sphere: %d machines drawn from %s (location errors sd %.0f um / %.0f mdeg, sphere %.0f um, per-touch "
               "scatter %.3f um)\n",
-              done, cs.file.c_str(), sd_um, sd_mdeg, sphere_um, mmToUm(std::sqrt(touch_mm2)));
+              done, cs.file.c_str(), kTruthSdUm, kTruthSdMdeg, sphere_um, mmToUm(std::sqrt(touch_mm2)));
   std::printf("%s %8s\n", coverageHeader(8).c_str(), "mean k");
   for (int i = 0; i < kNumLocationErrors; ++i)
     std::printf("%s\n", cov.row(std::string(params[static_cast<size_t>(i)].name), i,
@@ -592,7 +595,7 @@ int headCoverage(const std::string& machine_file, const std::vector<std::string>
   const double touch_mm2 = perTouchVariance_mm2(cs, isPerTouchContributor);
   const SphereLayout layout = sphereLayoutOf(plan);
   const KinematicModel model = sphereModel(machine, Eigen::Vector3d::Zero());
-  const double sd_um = 20.0, sd_mdeg = 2.0, sphere_um = 50.0;
+  const double sphere_um = 50.0;
   Coverage cov(drawn.size());
   int done = 0;
   for (int m = 0; m < machines; ++m) {
@@ -602,7 +605,7 @@ int headCoverage(const std::string& machine_file, const std::vector<std::string>
     for (size_t i = 0; i < drawn.size(); ++i) {
       const int k = model.parameterIndex(drawn[i]);
       const bool length = model.parameters[static_cast<size_t>(k)].kind == ParamKind::Length;
-      const double sd = drawn[i].back() == 'S' ? sphere_um : (length ? sd_um : sd_mdeg);
+      const double sd = drawn[i].back() == 'S' ? sphere_um : (length ? kTruthSdUm : kTruthSdMdeg);
       truth_report[i] = sd * rng.normal();
       p[k] = length ? umToMm(truth_report[i]) : mdegToRad(truth_report[i]);
     }
@@ -628,7 +631,7 @@ int headCoverage(const std::string& machine_file, const std::vector<std::string>
   std::printf("one_sphere on %s (L %.0f mm, sphere at %.0f, %.0f, %.0f mm): %d machines drawn from %s (location "
               "errors sd %.0f um / %.0f mdeg, sphere %.0f um, per-touch scatter %.3f um)\n",
               machine.name.c_str(), machine.head->pivot_to_ball_mm, layout.center_w_mm.x(), layout.center_w_mm.y(), layout.center_w_mm.z(), done,
-              cs.file.c_str(), sd_um, sd_mdeg, sphere_um, mmToUm(std::sqrt(touch_mm2)));
+              cs.file.c_str(), kTruthSdUm, kTruthSdMdeg, sphere_um, mmToUm(std::sqrt(touch_mm2)));
   std::printf("%s\n", coverageHeader(8).c_str());
   for (size_t i = 0; i < drawn.size(); ++i) {
     const bool length = model.parameters[static_cast<size_t>(model.parameterIndex(drawn[i]))].kind == ParamKind::Length;
@@ -673,7 +676,6 @@ int main(int argc, char** argv) {
   const auto& params = locationParameters(machine.kinematics);
   // True location errors: 000 Table 4's size (tens of um, a fraction of a mdeg) drawn anew for
   // every machine, so the chain is never linearised at the truth.
-  const double sd_um = 20.0, sd_mdeg = 2.0;
 
   Coverage cov(kNumLocationErrors);
   MeanCoverageFactor mean_k;
@@ -681,7 +683,7 @@ int main(int argc, char** argv) {
   int done = 0;
   for (int m = 0; m < machines; ++m) {
     Rng rng(777, static_cast<std::uint64_t>(m));
-    const LocationErrors truth = drawLocationErrors(machine.kinematics, rng, sd_um, sd_mdeg);
+    const LocationErrors truth = drawLocationErrors(machine.kinematics, rng);
     RunDraw d;
     drawRun(all, chain0, 4242, m, &d);
     MeasurementRun run = simulate(plan, truthOfDraw(truth, d), {1});
@@ -706,7 +708,7 @@ int main(int argc, char** argv) {
     countMachine(done);
   }
   std::printf("touch154 %s: %d machines drawn from %s (true errors sd %.0f um / %.0f mdeg)\n", method_name.c_str(), done,
-              contributors.file.c_str(), sd_um, sd_mdeg);
+              contributors.file.c_str(), kTruthSdUm, kTruthSdMdeg);
   std::printf("%s %14s\n", coverageHeader(8).c_str(), "mean |e|/u_c");
   for (int i = 0; i < kNumLocationErrors; ++i)
     std::printf("%s %14.2f  %s\n", cov.row(std::string(params[i].name), i, "").c_str(), ratio_sum[i] / done,

@@ -36,6 +36,26 @@ struct Case {
   std::function<ComponentVector(double)> component;  // component errors at C (rad), when set
 };
 
+/// Component error `k` of ComponentVector (EXC EYC EZC EAC EBC ECC) = `size` cos(order C), size in
+/// mm or rad.
+std::function<ComponentVector(double)> cosineOfC(int k, double size, int order) {
+  return [k, size, order](double cr) {
+    ComponentVector e = ComponentVector::Zero();
+    e[k] = size * std::cos(order * cr);
+    return e;
+  };
+}
+
+/// Linear axis `moved`'s error proportional to the position along `along`: a scale error where
+/// they are the same axis, a squareness where not (um/m).
+std::function<void(Truth&, std::uint64_t)> linearError(int moved, int along, double um_per_m) {
+  return [moved, along, um_per_m](Truth& t, std::uint64_t) {
+    t.linear_axis_error = [moved, along, um_per_m](const Eigen::Vector3d& p) {
+      return Eigen::Vector3d(Eigen::Vector3d::Unit(moved) * um_per_m * 1e-6 * p[along]);
+    };
+  };
+}
+
 void run(const ProbePlan& plan, const Case& c, int seeds, std::uint64_t seed0) {
   int found = 0, inadequate = 0, none = 0, named = 0;
   for (int s = 0; s < seeds; ++s) {
@@ -55,14 +75,6 @@ void run(const ProbePlan& plan, const Case& c, int seeds, std::uint64_t seed0) {
     if (c.hide) c.hide(t, seed);
     if (c.component) E = c.component;
     if (c.name.find("drift") != std::string::npos) drift = Eigen::Vector3d(umToMm(c.truth) / 3600.0, 0, 0);
-    if (c.name.find("radial") != std::string::npos) {
-      const int order = c.name.find("5C") != std::string::npos ? 5 : 2;
-      E = [order](double cr) {
-        ComponentVector e = ComponentVector::Zero();
-        e[0] = umToMm(3.0) * std::cos(order * cr);
-        return e;
-      };
-    }
     std::vector<MeasurementRun> runs;
     for (int r = 0; r < c.runs; ++r) {
       t.start_time_s = 1800.0 * r;
@@ -96,32 +108,22 @@ int main(int argc, char** argv) {
   fmt::print("| hidden in the simulation (size) | seeds | effect_found | model_inadequate | no_significant_effect | named within 3 u |\n|---|---|---|---|---|---|\n");
   run(plan, {"nothing (001-size location errors)", "", "", 0.0, 1, nullptr, nullptr}, clean, 1000);
   run(plan, {"nothing, 4 repeats 30 min apart", "", "", 0.0, 4, nullptr, nullptr}, clean, 5000);
-  run(plan, {"radial error motion EXC = 3 cos 2C um", kSpheres3Radial, "EXC_cos2C", 3.0, 1, nullptr, nullptr}, hidden, 2000);
-  run(plan, {"squareness S_xy = 30 um/m", kSpheres3Squareness, "S_xy", 30.0, 1,
-             [](Truth& t, std::uint64_t) {
-               t.linear_axis_error = [](const Eigen::Vector3d& p) { return Eigen::Vector3d(30e-6 * p.y(), 0, 0); };
-             },
-             nullptr},
-      hidden, 3000);
+  run(plan, {"radial error motion EXC = 3 cos 2C um", kSpheres3Radial, "EXC_cos2C", 3.0, 1, nullptr, cosineOfC(0, umToMm(3.0), 2)},
+      hidden, 2000);
+  run(plan, {"squareness S_xy = 30 um/m", kSpheres3Squareness, "S_xy", 30.0, 1, linearError(0, 1, 30.0), nullptr}, hidden, 3000);
   run(plan, {"drift 3 um/h in X, 4 repeats 30 min apart", kSpheres3Drift, "X/h", 3.0, 4, nullptr, nullptr}, hidden, 4000);
-  run(plan, {"X scale 30 um/m", kSpheres3Scale, "X_scale", 30.0, 1,
-             [](Truth& t, std::uint64_t) {
-               t.linear_axis_error = [](const Eigen::Vector3d& p) { return Eigen::Vector3d(30e-6 * p.x(), 0, 0); };
-             },
-             nullptr},
-      hidden, 6000);
+  run(plan, {"X scale 30 um/m", kSpheres3Scale, "X_scale", 30.0, 1, linearError(0, 0, 30.0), nullptr}, hidden, 6000);
   // The other families of the catalog, at sizes of 001's order (its component errors move the
   // spheres by up to 12 um; 3 arcsec over the ~100 mm sphere radius is 1.5 um): assumed.
   const double arcsec3 = mdegToRad(3.0 / 3.6);
-  run(plan, {"axial error motion EZC = 3 cos 2C um", kSpheres3Axial, "EZC_cos2C", 3.0, 1, nullptr,
-             [](double cr) { ComponentVector e = ComponentVector::Zero(); e[2] = umToMm(3.0) * std::cos(2 * cr); return e; }},
+  run(plan, {"axial error motion EZC = 3 cos 2C um", kSpheres3Axial, "EZC_cos2C", 3.0, 1, nullptr, cosineOfC(2, umToMm(3.0), 2)},
       hidden, 8000);
-  run(plan, {"tilt error motion EAC = 3 arcsec cos 2C", kSpheres3Tilt, "EAC_cos2C", 3.0 / 3.6, 1, nullptr,
-             [arcsec3](double cr) { ComponentVector e = ComponentVector::Zero(); e[3] = arcsec3 * std::cos(2 * cr); return e; }},
+  run(plan, {"tilt error motion EAC = 3 arcsec cos 2C", kSpheres3Tilt, "EAC_cos2C", 3.0 / 3.6, 1, nullptr, cosineOfC(3, arcsec3, 2)},
       hidden, 9000);
   run(plan, {"angular positioning error ECC = 3 arcsec cos 2C", kSpheres3Angular, "ECC_cos2C", 3.0 / 3.6, 1, nullptr,
-             [arcsec3](double cr) { ComponentVector e = ComponentVector::Zero(); e[5] = arcsec3 * std::cos(2 * cr); return e; }},
+             cosineOfC(5, arcsec3, 2)},
       hidden, 10000);
-  run(plan, {"radial waviness EXC = 3 cos 5C um (outside the catalog)", "", "", 0.0, 1, nullptr, nullptr}, hidden, 7000);
+  run(plan, {"radial waviness EXC = 3 cos 5C um (outside the catalog)", "", "", 0.0, 1, nullptr, cosineOfC(0, umToMm(3.0), 5)},
+      hidden, 7000);
   return 0;
 }
