@@ -13,12 +13,13 @@
 //      with examples/contributors/tooltip_004.json; analyze's tooltipBudget)
 //      build/bench/rotacal_coverage_bench spheres3 [machines] [CONTRIB.json]   (the three-sphere
 //      cycle on ac_trunnion, default examples/contributors/spheres3_001.json; spheres3Budget)
-//      build/bench/rotacal_coverage_bench one_sphere_head [machines] [CONTRIB.json]   (the one-sphere
-//        cycle on examples/machines/bc_head_table.json, a B head over a C table)
-//      build/bench/rotacal_coverage_bench one_sphere_head_ab [machines] [CONTRIB.json]   (the same
-//        on examples/machines/ab_head.json, an A head carrying a B head)
-//      build/bench/rotacal_coverage_bench one_sphere [machines] [CONTRIB.json]   (the one-sphere
-//      cycle on ac_trunnion, default examples/contributors/table5.json; sphereBudget)
+//      build/bench/rotacal_coverage_bench one_sphere_head [machines] [CONTRIB.json] ["OPTIONS"]   (the
+//        one-sphere cycle on examples/machines/bc_head_table.json, a B head over a C table)
+//      build/bench/rotacal_coverage_bench one_sphere_head_ab [machines] [CONTRIB.json] ["OPTIONS"]   (the
+//        same on examples/machines/ab_head.json, an A head carrying a B head)
+//      build/bench/rotacal_coverage_bench one_sphere [machines] [CONTRIB.json] ["OPTIONS"]   (the
+//        one-sphere cycle on ac_trunnion, default examples/contributors/table5.json; sphereBudget)
+//      OPTIONS: the plan's options as `plan --set` takes them, e.g. "poses=14 design=A"
 //      build/bench/rotacal_coverage_bench spaceframe [machines] [frame_u_um]   (the space frame
 //      on ac_trunnion, phi -90 -45 0, with its declared contributors, 000 Table 5, and a frame
 //      calibrated to frame_u_um per coordinate, default 1; spaceframeBudget)
@@ -501,13 +502,9 @@ std::optional<UncertaintyBudget> drawnSphereMachine(const ProbePlan& plan, const
   return sphereBudget(plan, *r, &cs, bo);
 }
 
-// The one sphere (issue 19): every machine draws the 8 location errors of its A/C table (000 Table
-// 4's size), the sphere's place on the table (50 um) and every declared contributor that acts on
-// one sphere (the probe's pretravel by direction and the linear axes through drawProbeAxes, on
-// the exact simulator; repeatability and roughness per touch), and is analyzed as `analyze` does
-// (identifySphereCycle + sphereBudget, 1000 Monte Carlo runs, each machine its own seed).
-int oneSphereCoverage(int machines, const std::string& contributors_file, const std::string& plan_options) {
-  const MachineModel machine = loadMachine(ROTACAL_SOURCE_DIR "/examples/machines/ac_trunnion.json");
+/// The one-sphere plan of `machine` with `plan_options` ("key=value key=value", as `plan --set`
+/// takes them), its size printed.
+ProbePlan oneSpherePlan(const MachineModel& machine, const std::string& plan_options) {
   CycleOptions options;
   for (size_t at = 0; at < plan_options.size();) {
     const size_t end = std::min(plan_options.find(' ', at), plan_options.size());
@@ -518,6 +515,17 @@ int oneSphereCoverage(int machines, const std::string& contributors_file, const 
   const ProbePlan plan = makePlan("one_sphere", machine, options);
   std::printf("plan: %zu poses, %zu touches, %.0f s of machine time (options: %s)\n", plan.poses.size(), plan.points.size(),
               plan.points.back().t_s, plan_options.empty() ? "none" : plan_options.c_str());
+  return plan;
+}
+
+// The one sphere (issue 19): every machine draws the 8 location errors of its A/C table (000 Table
+// 4's size), the sphere's place on the table (50 um) and every declared contributor that acts on
+// one sphere (the probe's pretravel by direction and the linear axes through drawProbeAxes, on
+// the exact simulator; repeatability and roughness per touch), and is analyzed as `analyze` does
+// (identifySphereCycle + sphereBudget, 1000 Monte Carlo runs, each machine its own seed).
+int oneSphereCoverage(int machines, const std::string& contributors_file, const std::string& plan_options) {
+  const MachineModel machine = loadMachine(ROTACAL_SOURCE_DIR "/examples/machines/ac_trunnion.json");
+  const ProbePlan plan = oneSpherePlan(machine, plan_options);
   const ContributorSet cs = loadContributors(contributors_file);
   const double touch_mm2 = perTouchVariance_mm2(cs, isPerTouchContributor);
   const auto& params = locationParameters(machine.kinematics);
@@ -586,12 +594,13 @@ int oneSphereCoverage(int machines, const std::string& contributors_file, const 
 // sphere (drawProbeAxes on the exact simulator, whose head carries the model's true chain), and is
 // analyzed as `analyze` does (identifySphereCycle + sphereBudget, 1000 Monte Carlo runs).
 int headCoverage(const std::string& machine_file, const std::vector<std::string>& drawn, int machines,
-                 const std::string& contributors_file) {
-  const MachineModel machine = loadMachine(machine_file);
-  const ProbePlan plan = makePlan("one_sphere", machine, {});
-  std::printf("plan: %zu poses, %zu touches, %.0f s of machine time\n", plan.poses.size(), plan.points.size(),
-              plan.points.back().t_s);
+                 const std::string& contributors_file, const std::string& plan_options) {
+  MachineModel machine = loadMachine(machine_file);
   const ContributorSet cs = loadContributors(contributors_file);
+  // The head machines declare no contributors: the ones the machines are drawn from are what a
+  // design for them (design=A) weighs.
+  if (!machine.contributors) machine.contributors = cs;
+  const ProbePlan plan = oneSpherePlan(machine, plan_options);
   const double touch_mm2 = perTouchVariance_mm2(cs, isPerTouchContributor);
   const SphereLayout layout = sphereLayoutOf(plan);
   const KinematicModel model = sphereModel(machine, Eigen::Vector3d::Zero());
@@ -646,12 +655,14 @@ int main(int argc, char** argv) {
     return headCoverage(ROTACAL_SOURCE_DIR "/examples/machines/bc_head_table.json",
                         {"X0C", "Y0C", "A0C", "B0C", "A0B", "C0B", "B0B", "dL", "dX_S", "dY_S", "dZ_S"},
                         argc > 2 ? std::atoi(argv[2]) : 500,
-                        argc > 3 ? argv[3] : ROTACAL_SOURCE_DIR "/examples/contributors/table5.json");
+                        argc > 3 ? argv[3] : ROTACAL_SOURCE_DIR "/examples/contributors/table5.json",
+                        argc > 4 ? argv[4] : "");
   if (argc > 1 && std::string(argv[1]) == "one_sphere_head_ab")
     return headCoverage(ROTACAL_SOURCE_DIR "/examples/machines/ab_head.json",
                         {"B0A", "C0A", "A0A", "Z0B", "C0B", "B0B", "dY_T", "dL", "dX_S", "dY_S", "dZ_S"},
                         argc > 2 ? std::atoi(argv[2]) : 500,
-                        argc > 3 ? argv[3] : ROTACAL_SOURCE_DIR "/examples/contributors/table5.json");
+                        argc > 3 ? argv[3] : ROTACAL_SOURCE_DIR "/examples/contributors/table5.json",
+                        argc > 4 ? argv[4] : "");
   if (argc > 1 && std::string(argv[1]) == "one_sphere")
     return oneSphereCoverage(argc > 2 ? std::atoi(argv[2]) : 500,
                              argc > 3 ? argv[3] : ROTACAL_SOURCE_DIR "/examples/contributors/table5.json",
