@@ -651,18 +651,20 @@ int headCoverage(const std::string& machine_file, const std::vector<std::string>
 }
 
 int main(int argc, char** argv) {
-  if (argc > 1 && std::string(argv[1]) == "one_sphere_head")
-    return headCoverage(ROTACAL_SOURCE_DIR "/examples/machines/bc_head_table.json",
-                        {"X0C", "Y0C", "A0C", "B0C", "A0B", "C0B", "B0B", "dL", "dX_S", "dY_S", "dZ_S"},
-                        argc > 2 ? std::atoi(argv[2]) : 500,
-                        argc > 3 ? argv[3] : ROTACAL_SOURCE_DIR "/examples/contributors/table5.json",
-                        argc > 4 ? argv[4] : "");
-  if (argc > 1 && std::string(argv[1]) == "one_sphere_head_ab")
-    return headCoverage(ROTACAL_SOURCE_DIR "/examples/machines/ab_head.json",
-                        {"B0A", "C0A", "A0A", "Z0B", "C0B", "B0B", "dY_T", "dL", "dX_S", "dY_S", "dZ_S"},
-                        argc > 2 ? std::atoi(argv[2]) : 500,
-                        argc > 3 ? argv[3] : ROTACAL_SOURCE_DIR "/examples/contributors/table5.json",
-                        argc > 4 ? argv[4] : "");
+  // The one-sphere cycle's head machines and the parameters each machine draws.
+  const struct {
+    const char* bench;
+    const char* machine;
+    std::vector<std::string> drawn;
+  } heads[] = {{"one_sphere_head", "/examples/machines/bc_head_table.json",
+                {"X0C", "Y0C", "A0C", "B0C", "A0B", "C0B", "B0B", "dL", "dX_S", "dY_S", "dZ_S"}},
+               {"one_sphere_head_ab", "/examples/machines/ab_head.json",
+                {"B0A", "C0A", "A0A", "Z0B", "C0B", "B0B", "dY_T", "dL", "dX_S", "dY_S", "dZ_S"}}};
+  for (const auto& h : heads)
+    if (argc > 1 && std::string(argv[1]) == h.bench)
+      return headCoverage(std::string(ROTACAL_SOURCE_DIR) + h.machine, h.drawn, argc > 2 ? std::atoi(argv[2]) : 500,
+                          argc > 3 ? argv[3] : ROTACAL_SOURCE_DIR "/examples/contributors/table5.json",
+                          argc > 4 ? argv[4] : "");
   if (argc > 1 && std::string(argv[1]) == "one_sphere")
     return oneSphereCoverage(argc > 2 ? std::atoi(argv[2]) : 500,
                              argc > 3 ? argv[3] : ROTACAL_SOURCE_DIR "/examples/contributors/table5.json",
