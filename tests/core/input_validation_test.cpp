@@ -118,6 +118,16 @@ void expectRefusedAt(const std::string& text, int line, const std::string& says,
   }
 }
 
+/// Every mutation of `base` is refused at the line of the value it replaced, naming what it says.
+template <class Load>
+void expectEachRefusedAt(const std::string& base, const std::vector<Mutation>& cases, const std::string& file, Load load) {
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.to);
+    const auto [text, line] = mutate(base, c);
+    expectRefusedAt(text, line, c.says, file, load);
+  }
+}
+
 MachineModel machineOf(const JsonDoc& doc) { return machineFromJson(doc, doc.value); }
 
 TEST(MachineValidation, TheFixtureIsValid) {
@@ -165,11 +175,7 @@ TEST(MachineValidation, EveryBadFieldIsRefusedAtItsLine) {
       {"\"probing_mm_min\": 100.0", 0, "\"probing_mm_min\": \"fast\"", "probing_mm_min"},
       {"\"strokes\": {", 0, "\"strokes\": [], \"x\": {", "strokes"},
   };
-  for (const auto& c : cases) {
-    SCOPED_TRACE(c.to);
-    const auto [text, line] = mutate(kMachine, c);
-    expectRefusedAt(text, line, c.says, "m.json", machineOf);
-  }
+  expectEachRefusedAt(kMachine, cases, "m.json", machineOf);
 }
 
 TEST(JsonValidation, ANumberBeyondADoubleNamesItsLine) {
@@ -388,11 +394,7 @@ TEST(TruthValidation, ImplausibleOrIllTypedErrorsAreRefusedAtTheirLine) {
       {"\"probe_noise_um\": 0.7", 0, "\"probe_noise_um\": -0.7", "probe_noise_um"},
       {"\"start_time_s\": 0", 0, "\"start_time_s\": 1e300", "start_time_s"},
   };
-  for (const auto& c : cases) {
-    SCOPED_TRACE(c.to);
-    const auto [text, line] = mutate(base, c);
-    expectRefusedAt(text, line, c.says, "t.json", load);
-  }
+  expectEachRefusedAt(base, cases, "t.json", load);
 }
 
 // fuzz_truth (AddressSanitizer, stack-use-after-scope): the limits of rotation_mrad kept their
