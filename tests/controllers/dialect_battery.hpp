@@ -93,12 +93,33 @@ inline void expectRecovery(const Dialect& d, const ProbePlan& plan) {
   }
 }
 
+/// A dialect's touch154 program for the A/C plan: its text, its lines and `g`, the first line
+/// that matches `probing_move` (a regex; "" for line 0). What each dialect's program tests read,
+/// what `PlantedFaults` edits and what `expectCleanPrograms` checks.
+struct WrittenProgram {
+  WrittenProgram(const std::string& dialect, const std::string& probing_move = "",
+                 LengthUnit units = LengthUnit::Millimetre)
+      : plan(acPlan(units)),
+        text(dialectByName(dialect).writeProgram(cycleProgram(plan, dialect))),
+        ls(lines(text)),
+        g(firstMatch(ls, std::regex(probing_move))) {}
+  static size_t firstMatch(const std::vector<std::string>& ls, const std::regex& re) {
+    for (size_t i = 0; i < ls.size(); ++i)
+      if (std::regex_search(ls[i], re)) return i;
+    throw std::runtime_error("no line of the program matches");
+  }
+
+  ProbePlan plan;
+  std::string text;
+  std::vector<std::string> ls;
+  size_t g;
+};
+
 inline void expectCleanPrograms(const Dialect& d) {
   for (LengthUnit u : {LengthUnit::Millimetre, LengthUnit::Inch}) {
-    const ProbePlan plan = acPlan(u);
-    const std::string text = d.writeProgram(test::cycleProgram(plan, std::string(d.name())));
-    EXPECT_EQ(d.check(text, plan, test::shapeOf(plan, std::string(d.name()))), std::vector<std::string>{}) << d.name();
-    EXPECT_EQ(text.find("-0.0000"), std::string::npos);
+    const WrittenProgram p(std::string(d.name()), "", u);
+    EXPECT_EQ(d.check(p.text, p.plan, test::shapeOf(p.plan, std::string(d.name()))), std::vector<std::string>{}) << d.name();
+    EXPECT_EQ(p.text.find("-0.0000"), std::string::npos);
   }
 }
 
@@ -155,28 +176,6 @@ class WrittenResults : public ::testing::Test {
 
  private:
   std::string eol_;
-};
-
-/// A dialect's touch154 program for the A/C plan: its text, its lines and `g`, the first line
-/// that matches `probing_move` (a regex). What each dialect's program tests read, and what
-/// `PlantedFaults` edits.
-struct WrittenProgram {
-  WrittenProgram(const std::string& dialect, const std::string& probing_move,
-                 LengthUnit units = LengthUnit::Millimetre)
-      : plan(acPlan(units)),
-        text(dialectByName(dialect).writeProgram(cycleProgram(plan, dialect))),
-        ls(lines(text)),
-        g(firstMatch(ls, std::regex(probing_move))) {}
-  static size_t firstMatch(const std::vector<std::string>& ls, const std::regex& re) {
-    for (size_t i = 0; i < ls.size(); ++i)
-      if (std::regex_search(ls[i], re)) return i;
-    throw std::runtime_error("no line of the program matches");
-  }
-
-  ProbePlan plan;
-  std::string text;
-  std::vector<std::string> ls;
-  size_t g;
 };
 
 /// What the dialect's checker finds once `edit` has planted a fault in a copy of the program's
