@@ -216,7 +216,9 @@ struct JudgeSummary {
   int observations = 0, groups = 0, baseline_rank = 0, candidates = 0;
   double alpha = 0.0, per_test_alpha = 0.0, holdout_margin = 0.0;
   double exact_angle_deg = 0.0, partial_angle_deg = 0.0;
-  double declared_sigma_rms = 0.0;  // rms of the declared sigma_i
+  /// rms of the declared sigma_i; with a full covariance, the declared scatter the baseline leaves
+  /// in its ordinary residual per degree of freedom (what rms_residual is compared with)
+  double declared_sigma_rms = 0.0;
   std::string declaration;          // JudgeProblem::declaration
   bool correlated = false;          // tested against a full declared covariance
   JudgeAdequacy baseline;

@@ -1,5 +1,7 @@
 // touch154 (000): the 8 location errors of an A/C table from 154 touches on a square column.
 // Plans written by `rotacal design` (cycle "touch_designed") are analyzed the same way.
+#include <fmt/format.h>
+
 #include <optional>
 #include <stdexcept>
 
@@ -112,8 +114,15 @@ class Touch154 final : public Cycle {
         if (!lp && other.method == Method::LeastSquaresPerPoint) lp = &other;
       if (lp) {
         const FittedReadings f = fittedProblem(noise, lp->residuals);
-        out.doc["declared_noise"] = declaredNoiseJson(noise.noise, testAgainstDeclared(f.residual_um, f.J, f.covariance_um2),
-                                                      static_cast<int>(plan.points.size()));
+        const DeclaredNoiseTest test = testAgainstDeclared(f.residual_um, f.J, f.covariance_um2);
+        out.doc["declared_noise"] = declaredNoiseJson(noise.noise, test);
+        if (test.p_value < kOffsetsAdequacyAlpha && out.offsets_refused.empty()) {
+          out.offsets_refused = fmt::format(
+              "the data exceed the declared noise: the residual is {:.2f} x it (chi2 {:.1f} on {} dof, p {:.2g} < {:g}; {}): "
+              "the model does not explain this machine (rotacal diagnose names what it misses)",
+              test.ratio, test.chi2, test.dof, test.p_value, kOffsetsAdequacyAlpha, noise.noise.declaration);
+          out.warnings.push_back(out.offsets_refused);
+        }
       }
     }
     if (!screen.excluded.empty() || screen.too_many) out.warnings.push_back(screen.text());

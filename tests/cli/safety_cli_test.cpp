@@ -251,7 +251,10 @@ TEST_F(Safety, DataBeyondAFewChipsWriteNoOffsetsWithoutForce) {
             0);
   const auto r = sh("analyze --plan " + p("plan.json") + " --results " + p("r.csv") + " --dialect csv --offsets " +
                     p("off.csv") + " --mc-runs 100");
-  EXPECT_TRUE(refused(r, 1, "none excluded", p("off.csv")));
+  // Not chips: the screen leaves every touch in (the shared linear-axis part of the declared
+  // noise predicts each touch from its neighbours), and the test of the whole residual against
+  // the declared noise holds the offsets back.
+  EXPECT_TRUE(refused(r, 1, "exceed the declared noise", p("off.csv")));
   const auto f = sh("analyze --plan " + p("plan.json") + " --results " + p("r.csv") + " --dialect csv --offsets " +
                     p("off.csv") + " --mc-runs 100 --force");
   EXPECT_EQ(f.code, 0) << f.out;

@@ -74,7 +74,7 @@ TEST(Touch154RealMachine, TheScreenAndTheJudgeKeepTheirRatesAndCatchAChip) {
   ASSERT_GT(noise.basis.size(), 0);
   ASSERT_GT(noise.noise.structured_um2.size(), 0);
   EXPECT_NEAR(noise.noise.white_um2, 0.7 * 0.7 + 1.0 * 1.0, 1e-9);
-  int screened = 0, too_many = 0, inadequate = 0, caught = 0, old_flagged = 0;
+  int screened = 0, too_many = 0, inadequate = 0, named = 0, caught = 0, old_flagged = 0;
   for (int m = 0; m < kMachines; ++m) {
     const Truth t = drawnMachine(plan, chain, model, 5000 + static_cast<std::uint64_t>(m));
     const MeasurementRun run = simulate(plan, t, {static_cast<std::uint64_t>(700 + m)});
@@ -88,6 +88,10 @@ TEST(Touch154RealMachine, TheScreenAndTheJudgeKeepTheirRatesAndCatchAChip) {
     o.noise = &noise;
     const Touch154Diagnosis dg = diagnoseTouch154(plan, {run}, o);
     ASSERT_TRUE(dg.lin.ok);
+    if (dg.judged.verdict == JudgeVerdict::EffectFound) {
+      ++named;
+      std::printf("machine %d: %s\n", m, dg.judged.message.c_str());
+    }
     if (dg.judged.verdict == JudgeVerdict::ModelInadequate) {
       ++inadequate;
       std::printf("machine %d: %s\n", m, dg.judged.message.c_str());
@@ -99,13 +103,14 @@ TEST(Touch154RealMachine, TheScreenAndTheJudgeKeepTheirRatesAndCatchAChip) {
     for (const auto& e : chip.excluded) found = found || e.point_id == point;
     caught += found ? 1 : 0;
   }
-  std::printf("%d drawn machines: screen removed a touch on %d (too many on %d), model_inadequate on %d, 20 um chip "
-              "caught on %d; against the repeatability alone %d were flagged\n",
-              kMachines, screened, too_many, inadequate, caught, old_flagged);
+  std::printf("%d drawn machines: screen removed a touch on %d (too many on %d), model_inadequate on %d, a cause named "
+              "on %d, 20 um chip caught on %d; against the repeatability alone %d were flagged\n",
+              kMachines, screened, too_many, inadequate, named, caught, old_flagged);
   // alpha = 1 % each: Binomial(20, 0.01) exceeds 2 with probability 0.001.
   EXPECT_LE(screened, 2);
   EXPECT_EQ(too_many, 0);
   EXPECT_LE(inadequate, 2);
+  EXPECT_LE(named, 2);
   EXPECT_GE(caught, kMachines - 1);
   // The defect replaced: the repeatability alone takes these machines for chips or misfits.
   EXPECT_GE(old_flagged, kMachines / 2);
