@@ -5,6 +5,7 @@
 #include "bench/independent_machine.hpp"
 
 #include <cmath>
+#include <functional>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -246,21 +247,39 @@ MeasurementRun measure(const ProbePlan& plan, const Machine& m, const std::optio
   for (const ProbePoint& p : plan.points) {
     // Two draws per touch whatever is declared, so every touch keeps its draws across options.
     const double n_rep = touch(), n_rough = touch();
-    const FacePlane plane = facePlane_m(plan, p, m);
     double h = m.roughness_mm * n_rough;
     if (chip && chip->point_id == p.id) h += chip->height_mm;
     const Eigen::Vector3d u = p.approach_m.normalized();
     const Eigen::Vector3d& c0 = p.trigger_m_mm;
-    const double nu = plane.normal_m.dot(u);
-    if (std::abs(nu) < 1e-6) throw std::runtime_error("point " + std::to_string(p.id) + ": approach along its face");
-    // The actual ball is the read position plus the linear axes' error there: solve
-    // n.(c0 + s u + E(c0 + s u) - x) = r + h for s. E varies by well under 1e-3 mm per mm, so the
-    // fixed point converges geometrically within a few steps.
+    // Where along the move the actual ball, at c0 + e when the reading is c0, first touches the
+    // surface raised by h: a face plane, or a sphere (its centre placed by the set-up's translation;
+    // a turn of the set-up moves a sphere's centre by nothing a sphere cycle does not fit).
+    std::function<double(const Eigen::Vector3d&)> contact;
+    if (p.sphere) {
+      const Eigen::Matrix4d T = tableTransform(m.location, p.pose.A, p.pose.C);
+      const Eigen::Vector3d x = apply(T, p.sphere->center_w_mm + m.setup_translation_mm);
+      const double rho = r + p.sphere->radius_mm + h;
+      // |d + s u| = rho, d = c0 + e - x: the smaller root (the ball comes from outside).
+      contact = [x, rho, u, id = p.id](const Eigen::Vector3d& b0) {
+        const Eigen::Vector3d d = b0 - x;
+        const double du = d.dot(u), disc = du * du - d.squaredNorm() + rho * rho;
+        if (disc < 0) throw std::runtime_error("point " + std::to_string(id) + ": the approach misses the sphere");
+        return -du - std::sqrt(disc);
+      };
+    } else {
+      const FacePlane plane = facePlane_m(plan, p, m);
+      const double nu = plane.normal_m.dot(u);
+      if (std::abs(nu) < 1e-6) throw std::runtime_error("point " + std::to_string(p.id) + ": approach along its face");
+      contact = [plane, nu, r, h](const Eigen::Vector3d& b0) { return (r + h - plane.normal_m.dot(b0 - plane.point_m)) / nu; };
+    }
+    // The actual ball is the read position plus the linear axes' error there: solve for s with
+    // the ball at c0 + s u + E(c0 + s u). E varies by well under 1e-3 mm per mm, so the fixed
+    // point converges geometrically within a few steps.
     double s = 0.0;
     for (int it = 0;; ++it) {
       const Eigen::Vector3d c = c0 + s * u;
       const Eigen::Vector3d e = m.has_linear_axes ? m.axes.error(c) : Eigen::Vector3d::Zero();
-      const double next = (r + h - plane.normal_m.dot(c0 + e - plane.point_m)) / nu;
+      const double next = contact(c0 + e);
       const bool done = std::abs(next - s) < 1e-13;
       s = next;
       if (done) break;

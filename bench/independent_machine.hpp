@@ -7,7 +7,8 @@
 // Eq. (1), the square column's faces, the ball-plane contact and the linear axes of 000
 // Eq. (22)-(23) are all written again here.
 //
-// One machine of A/C tilting-table kind (000 Fig. 1) with a square-column test piece:
+// One machine of A/C tilting-table kind (000 Fig. 1) with a square-column test piece (or the
+// calibration sphere of a sphere cycle's plan):
 //   - the 8 location errors of 000 Table 1, drawn normally around 000 Table 4's means;
 //   - the piece's set-up: a rigid rotation about the nominal top centre (about X, then Y, then
 //     Z, exact) then a translation, drawn from setup_orientation / setup_position;
@@ -130,7 +131,8 @@ struct FacePlane {
 FacePlane facePlane_m(const ProbePlan& plan, const ProbePoint& point, const Machine& m);
 
 /// The trigger of every plan point: the read ball-centre position (machine frame, mm) at which the
-/// actual ball, moving along the plan's approach line, touches the true face (exact contact,
+/// actual ball, moving along the plan's approach line, touches the true face, or on a sphere
+/// cycle's point the true sphere (its centre moved by the set-up's translation) (exact contact,
 /// linear axes solved by fixed-point iteration), plus pretravel and the per-touch scatter. The
 /// per-touch draws come from the machine's touch_seed in plan order, so a chip changes nothing
 /// but its own touch. t_s is the plan's. Throws std::runtime_error when a trigger would fall

@@ -136,6 +136,25 @@ TEST(IndependentMachine, LinearAxesAndPretravelContactEqualsRotacalSimulate) {
   EXPECT_GT(maxDiffUm(ours, simulate(plan, without, {})), 1.0);  // the axes do act (um)
 }
 
+// A sphere cycle's plan (one_sphere): the same agreement on the sphere, moved off its place, with
+// and without this generator's linear-axis field.
+TEST(IndependentMachine, SphereTriggersEqualRotacalSimulate) {
+  const ProbePlan plan = makePlan("one_sphere", loadMachine(kMachine), {});
+  ContributorSet c = loadContributors(kContrib);
+  ind::DrawOptions o;
+  o.form = o.pretravel = o.repeatability = o.roughness = false;
+  for (const bool axes : {false, true}) {
+    o.linear_axes = axes;
+    const ind::Machine m = ind::drawMachine(c, plan.machine, o, 3);
+    Truth truth;
+    truth.errors = m.location;
+    for (const auto& p : plan.points) truth.sphere_center_error_w_mm[p.sphere->id] = m.setup_translation_mm;
+    if (axes) truth.linear_axis_error = [&m](const Eigen::Vector3d& read) { return m.axes.error(read); };
+    EXPECT_LT(maxDiffUm(ind::measure(plan, m), simulate(plan, truth, {})), 1e-6) << (axes ? "with axes" : "");
+    EXPECT_GT(m.setup_translation_mm.norm(), 1e-3);  // the sphere is off its place (mm)
+  }
+}
+
 // A chip of c under one touch moves that trigger back along the approach by c (to the
 // cosine of the face's tilt) and no other.
 TEST(IndependentMachine, ChipReadsTheSurfaceCloserAtItsTouchAlone) {
