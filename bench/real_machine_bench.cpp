@@ -9,7 +9,9 @@
 //
 // Run: build/bench/rotacal_real_machine_bench [--machines N] [--mc-runs R] [--seed S]
 //        [--contributors FILE] [--dialect D] [--sd-um X] [--sd-mdeg X] [--no-chips] [--verbose]
-//        [--cycle touch154|one_sphere] [--dump DIR]
+//        [--cycle touch154|one_sphere] [--dump DIR] [--off LIST]
+// --off switches contributors of the generator off (setup, form, linear_axes, pretravel,
+// repeatability, roughness; comma-separated), to see which one a failure is owed to.
 // --dump writes the first machine's PLAN.json, RESULTS, TRUTH.json, REPORT.json and DIAGNOSIS.json,
 // so that the command line can be run on the same data (`rotacal analyze --plan DIR/PLAN.json ...`).
 // Defaults: 200 machines, 2000 Monte Carlo runs per analysis (the CLI's default), seeds 1..N,
@@ -59,13 +61,14 @@ struct Args {
   bool chips = true;
   bool verbose = false;
   std::string dump;  // a folder for the first machine's RESULTS, REPORT.json and DIAGNOSIS.json
+  std::string off;   // contributors switched off, comma-separated (what each failure is owed to)
 };
 
 [[noreturn]] void usage(const char* why) {
   std::fprintf(stderr,
                "rotacal_real_machine_bench: %s\nusage: rotacal_real_machine_bench [--machines N] [--mc-runs R] [--seed S] "
                "[--contributors FILE] [--machine FILE] [--dialect D] [--sd-um X] [--sd-mdeg X] [--no-chips] [--verbose]\n"
-               "       [--cycle touch154|one_sphere] [--dump DIR]\n",
+               "       [--cycle touch154|one_sphere] [--dump DIR] [--off setup,form,linear_axes,pretravel,repeatability,roughness]\n",
                why);
   std::exit(2);
 }
@@ -90,6 +93,7 @@ Args parse(int argc, char** argv) {
     else if (k == "--verbose") a.verbose = true;
     else if (k == "--cycle") a.cycle = value();
     else if (k == "--dump") a.dump = value();
+    else if (k == "--off") a.off = value();
     else usage(("unknown option " + k).c_str());
   }
   if (a.machines < 1) usage("--machines must be >= 1");
@@ -282,6 +286,19 @@ int main(int argc, char** argv) {
   ind::DrawOptions draw;
   draw.sd_um = args.sd_um;
   draw.sd_mdeg = args.sd_mdeg;
+  for (size_t b = 0, e; b <= args.off.size() && !args.off.empty(); b = e + 1) {
+    e = std::min(args.off.find(',', b), args.off.size());
+    const std::string w = args.off.substr(b, e - b);
+    bool* flag = w == "setup" ? &draw.setup
+                 : w == "form" ? &draw.form
+                 : w == "linear_axes" ? &draw.linear_axes
+                 : w == "pretravel" ? &draw.pretravel
+                 : w == "repeatability" ? &draw.repeatability
+                 : w == "roughness" ? &draw.roughness
+                 : nullptr;
+    if (!flag) usage(("--off: unknown contributor " + w).c_str());
+    *flag = false;
+  }
 
   int n = 0, analyzed = 0, written = 0, screen_removed = 0, screen_gave_up = 0, diagnosed = 0, inadequate = 0,
       named = 0, no_effect = 0;
@@ -323,7 +340,7 @@ int main(int argc, char** argv) {
         ++screen_gave_up;
         beyond.add(a.beyond);
       }
-      threshold.add(a.threshold_t);
+      if (a.doc.contains("outliers")) threshold.add(a.threshold_t);
       for (size_t k = 0; k < cover.size(); ++k) {
         const auto v = reported(a.doc, cover[k].name);
         if (!v) continue;
@@ -381,6 +398,9 @@ int main(int argc, char** argv) {
         tally->written += c.written;
         tally->written_from_chip += c.written && !caught;
         tally->gave_up += c.too_many;
+        if (!c.written)
+          ++refusals[fmt::format("{:g} um chip: ", height_mm * 1e3) +
+                     (c.ok ? c.refused.substr(0, std::min<size_t>(c.refused.find(':'), 60)) : "analyze refused: " + c.error.substr(0, 80))];
         chip_line += fmt::format(" chip {:g} um at {}: {}{}", height_mm * 1e3, id, caught ? "caught" : "missed",
                                  c.written ? (caught ? ", written" : ", WRITTEN") : ", refused");
       }
@@ -399,6 +419,7 @@ int main(int argc, char** argv) {
   std::printf("rotacal_real_machine_bench: %s (%zu touches) on %s, contributors %s, dialect %s\n", args.cycle.c_str(),
               plan.points.size(), args.machine.c_str(),
               args.contributors.c_str(), args.dialect.c_str());
+  if (!args.off.empty()) std::printf("switched off in the generator: %s\n", args.off.c_str());
   std::printf("%d machines (seeds %llu..%llu), location errors around 000 Table 4 (sd %g um, %g mdeg), analyze's Monte "
               "Carlo %d runs; %.0f s (%.1f s per machine)\n\n",
               n, static_cast<unsigned long long>(args.seed), static_cast<unsigned long long>(args.seed + n - 1), args.sd_um,
@@ -432,7 +453,8 @@ int main(int argc, char** argv) {
                   pct(in_uc[k], counted[k]), std::sqrt(err2[k] / counted[k]), std::sqrt(U2[k] / counted[k]),
                   cover[k].unit.c_str());
   std::printf("\nWhat fires (chip-free machines):\n");
-  std::printf("- outlier screen threshold |t|: %s\n", threshold.text(2).c_str());
+  std::printf("- outlier screen threshold |t|: %s\n",
+              threshold.v.empty() ? "no outlier screen in this cycle's analyze" : threshold.text(2).c_str());
   std::printf("- touches beyond it when the screen gave up: %s\n", beyond.text(0).c_str());
   std::printf("- touches removed when it did not: %s\n", removed_count.text(0).c_str());
   std::printf("- diagnose baseline chi2 / dof: %s\n", chi2_dof.text(2).c_str());
