@@ -167,7 +167,8 @@ int cmdGenerate(const Common& c, const std::string& plan_file, const std::string
 
 int cmdSimulate(const Common& c, const std::string& plan_file, const std::string& truth_file,
                 std::optional<double> noise_um, std::uint64_t seed, std::optional<double> start_s,
-                const std::string& dialect_name, const std::string& out) {
+                const std::string& dialect_name, const std::string& out, const std::string& contributors_file,
+                std::uint64_t machine_seed, const std::string& truth_out) {
   // NaN would pass a "< 0" test and poison every trigger; a clock beyond the controllers' years
   // cannot be printed.
   if (noise_um && !(*noise_um >= 0 && *noise_um <= kMaxNoiseUm))
@@ -176,21 +177,33 @@ int cmdSimulate(const Common& c, const std::string& plan_file, const std::string
   if (start_s && !(*start_s >= 0 && *start_s <= kMaxClockSeconds))
     throw CLI::ValidationError("--start-s", fmt::format("must be a number of seconds from 0 to {:g} (got {})",
                                                         kMaxClockSeconds, *start_s));
-  checkOutputs({{"-o", out}}, {plan_file, truth_file});
+  std::vector<std::string> inputs = {plan_file, truth_file};
+  if (!contributors_file.empty()) inputs.push_back(contributors_file);
+  if (!truth_out.empty() && contributors_file.empty())
+    throw CLI::ValidationError("--truth-out", "writes the machine drawn from --contributors: give --contributors");
+  checkOutputs({{"-o", out}, {"--truth-out", truth_out}}, inputs);
   const PlanReader in(plan_file, dialect_name);
   auto r = in.request<SimulateRequest>();
   r.truth = {truth_file, readTextFile(truth_file)};
   r.noise_um = noise_um;
   r.start_s = start_s;
   r.seed = seed;
+  std::optional<ContributorSet> declared;
+  if (!contributors_file.empty()) declared = loadContributors(contributors_file);
+  r.contributors = declared ? &*declared : nullptr;
+  r.machine_seed = machine_seed;
   Simulated s;
   try {
     s = in.cycle.simulate(r);
   } catch (const std::invalid_argument& e) {
     failFile(truth_file, e.what());
   }
-  OutputSet outputs({plan_file, truth_file});
+  if (declared && s.truth.is_null())
+    throw CLI::ValidationError("--contributors", "the " + in.plan.cycle + " cycle's simulator draws no machine from "
+                                                 "contributors (its truth file declares the machine)");
+  OutputSet outputs(inputs);
   outputs.add("-o", out, std::move(s.results_text));
+  if (!truth_out.empty()) outputs.add("--truth-out", truth_out, s.truth.dump(1) + "\n");
   outputs.commit();
   if (out != "-") say(c, s.message + " -> " + out + "\n");
   return 0;
@@ -292,15 +305,20 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
 
 int cmdDiagnose(const Common& c, const std::string& plan_file, const std::vector<std::string>& results,
                 const std::string& dialect_name, double alpha, const std::string& json_out, const std::string& text_out,
-                const std::string& html_out) {
+                const std::string& html_out, const std::string& contributors_file) {
   if (!(alpha > 0 && alpha < 0.5)) throw CLI::ValidationError("--alpha", "alpha must be in (0, 0.5)");
   std::vector<std::string> inputs = results;
   inputs.push_back(plan_file);
+  if (!contributors_file.empty()) inputs.push_back(contributors_file);
   checkOutputs({{"--json", json_out}, {"--text", text_out}, {"--html", html_out}}, inputs);
   const PlanReader in(plan_file, dialect_name);
   auto r = in.request<DiagnoseRequest>();
   r.results = readInputs(results);
   r.alpha = alpha;
+  std::optional<ContributorSet> declared;
+  if (!contributors_file.empty()) declared = loadContributors(contributors_file);
+  else declared = in.plan.machine.contributors;
+  r.contributors = declared ? &*declared : nullptr;
   const auto progress = progressIndicator(c, "rotacal diagnose", "candidate fits");
   auto total = std::make_shared<int>(0);
   if (progress)
@@ -320,12 +338,12 @@ int cmdDiagnose(const Common& c, const std::string& plan_file, const std::vector
 std::vector<Command> cycleCommands(CLI::App& app, const Common& common) {
   struct Args {
     std::string cycle, machine_file, plan_file, dialect, out, truth_file, method, json_out, text_out, offsets_out,
-        html_out, contributors_file;
+        html_out, contributors_file, truth_out;
     int mc_runs = 2000;
     std::uint64_t mc_seed = 1;
     std::vector<std::string> sets, results, compensated_with;
     double noise_um = 0.0, start_s = 0.0, alpha = JudgeOptions{}.alpha;
-    std::uint64_t seed = 1;
+    std::uint64_t seed = 1, machine_seed = 1;
     bool force = false;
   };
   auto a = std::make_shared<Args>();
@@ -356,13 +374,18 @@ std::vector<Command> cycleCommands(CLI::App& app, const Common& common) {
   auto* noise_opt = sim->add_option("--noise-um", a->noise_um, "probe repeatability, standard deviation (um)");
   sim->add_option("--seed", a->seed, "random seed");
   auto* start_opt = sim->add_option("--start-s", a->start_s, "clock at the cycle start (s), for repeats");
+  sim->add_option("--contributors", a->contributors_file,
+                  "CONTRIB.json: draw a whole machine from these declared contributors on top of the truth (linear "
+                  "axes, pretravel, set-up, form, per-touch scatter)");
+  sim->add_option("--machine-seed", a->machine_seed, "seed of the machine drawn from --contributors (default 1)");
+  sim->add_option("--truth-out", a->truth_out, "TRUTH.json: the truth simulated, with what was drawn");
   sim->add_option("--dialect", a->dialect, results_dialects)->required();
   sim->add_option("-o,--output", a->out, "RESULTS")->required();
   cmds.push_back({sim, [a, &common, noise_opt, start_opt] {
                     return cmdSimulate(common, a->plan_file, a->truth_file,
                                        noise_opt->count() ? std::optional<double>(a->noise_um) : std::nullopt, a->seed,
                                        start_opt->count() ? std::optional<double>(a->start_s) : std::nullopt,
-                                       a->dialect, a->out);
+                                       a->dialect, a->out, a->contributors_file, a->machine_seed, a->truth_out);
                   }});
 
   auto* ana = app.add_subcommand("analyze", "identify the errors of a cycle from the controller's results");
@@ -397,9 +420,11 @@ std::vector<Command> cycleCommands(CLI::App& app, const Common& common) {
   dia->add_option("--html", a->html_out, "DIAGNOSIS.html: the report to look at, self-contained");
   dia->add_option("--text", a->text_out, "the readable summary, also printed on stdout");
   dia->add_option("--alpha", a->alpha, "family-wise false-alarm rate of the judge (default 0.01, docs/diagnosis.md)");
+  dia->add_option("--contributors", a->contributors_file,
+                  "CONTRIB.json: the declared contributors the tests read (default: the machine's `contributors`)");
   cmds.push_back({dia, [a, &common] {
                     return cmdDiagnose(common, a->plan_file, a->results, a->dialect, a->alpha, a->json_out,
-                                       a->text_out, a->html_out);
+                                       a->text_out, a->html_out, a->contributors_file);
                   }});
   return cmds;
 }

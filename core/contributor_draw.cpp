@@ -1,6 +1,7 @@
 #include "core/contributor_draw.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -172,6 +173,88 @@ Eigen::MatrixXd probeAxesCovariance(const ContributorSet& set, const std::functi
       }
   }
   return C;
+}
+
+namespace {
+
+Json roundedArray(const Eigen::Vector3d& v, double factor) {
+  return Json::array({std::round(v.x() * factor * 1e6) / 1e6, std::round(v.y() * factor * 1e6) / 1e6,
+                      std::round(v.z() * factor * 1e6) / 1e6});
+}
+
+}  // namespace
+
+DrawnMachine drawMachine(const ProbePlan& plan, const ContributorSet& set, std::uint64_t seed, Truth* truth) {
+  DrawnMachine out;
+  Json& rec = out.record;
+  rec["seed"] = seed;
+  rec["contributors"] = set.file.empty() ? std::string("the machine's") : set.file;
+  ProbeAxesDraw axes;
+  drawProbeAxes(plan, set, isProbeAxesContributor, seed, 0, -1, &axes);
+  applyProbeAxesDraw(axes, truth);
+  if (std::any_of(axes.pretravel_mm.begin(), axes.pretravel_mm.end(), [](double v) { return v != 0.0; })) {
+    Json p = Json::object();
+    const char* dir[6] = {"+X", "-X", "+Y", "-Y", "+Z", "-Z"};
+    for (size_t k = 0; k < 6; ++k) p[dir[k]] = std::round(mmToUm(axes.pretravel_mm[k]) * 1e6) / 1e6;
+    rec["pretravel_um"] = p;
+  }
+  if (axes.linear) {
+    const LinearAxisErrors& e = axes.linear_errors;
+    Json lin = {{"scale_um_per_m", roundedArray(e.scale, 1e6)},
+                {"squareness_um_per_m", {{"S_xy", e.S_xy * 1e6}, {"S_xz", e.S_xz * 1e6}, {"S_yz", e.S_yz * 1e6}}}};
+    Json nodes = Json::object();
+    for (int a = 0; a < 3; ++a) {
+      const AxisNodes& n = e.nodes[static_cast<size_t>(a)];
+      if (n.spacing_mm <= 0) continue;
+      Json values = Json::array();
+      for (size_t k = 0; k < n.mm[0].size(); ++k)
+        values.push_back({std::round(mmToUm(n.mm[0][k]) * 1e6) / 1e6, std::round(mmToUm(n.mm[1][k]) * 1e6) / 1e6,
+                          std::round(mmToUm(n.mm[2][k]) * 1e6) / 1e6});
+      nodes[std::string(1, "XYZ"[a])] = {{"spacing_mm", n.spacing_mm}, {"first_node_mm", n.spacing_mm * n.first},
+                                         {"values_um_xyz", values}};
+    }
+    lin["random_nodes"] = nodes;
+    rec["linear_axes"] = lin;
+  }
+  double per_touch_mm2 = 0.0;
+  for (const Contributor& c : set.items) {
+    Rng rng(seed, contributorStream(*c.info, 0));
+    switch (c.info->kind) {
+      case ContributorKind::ProbeRepeatability:
+      case ContributorKind::SurfaceRoughness:
+        per_touch_mm2 += c.u[0] * c.u[0];
+        break;
+      case ContributorKind::SetupPosition:
+        for (int k = 0; k < 3; ++k) truth->artefact.setup.translation_mm[k] += c.u[k] * rng.normal();
+        break;
+      case ContributorKind::SetupOrientation:
+        for (int k = 0; k < 3; ++k) truth->artefact.setup.rotation_rad[k] += c.u[k] * rng.normal();
+        break;
+      case ContributorKind::FormError:
+        for (auto& f : truth->artefact.form) {
+          f.offset_mm += c.u[0] * rng.normal();
+          f.tilt_u_rad += c.u[1] * rng.normal();
+          f.tilt_v_rad += c.u[1] * rng.normal();
+        }
+        break;
+      default:
+        if (!isProbeAxesContributor(*c.info)) out.left_out.emplace_back(c.info->id);
+        break;
+    }
+  }
+  // The declared per-touch scatter replaces the truth file's noise: one declaration, not two.
+  if (per_touch_mm2 > 0) truth->noise_um = mmToUm(std::sqrt(per_touch_mm2));
+  rec["per_touch_um"] = std::round(truth->noise_um * 1e6) / 1e6;
+  rec["setup"] = {{"translation_um", roundedArray(truth->artefact.setup.translation_mm, 1e3)},
+                  {"rotation_urad", roundedArray(truth->artefact.setup.rotation_rad, 1e6)}};
+  Json form = Json::array();
+  for (const auto& f : truth->artefact.form)
+    form.push_back({{"offset_um", std::round(mmToUm(f.offset_mm) * 1e6) / 1e6},
+                    {"tilt_u_urad", std::round(f.tilt_u_rad * 1e12) / 1e6},
+                    {"tilt_v_urad", std::round(f.tilt_v_rad * 1e12) / 1e6}});
+  rec["form"] = form;
+  if (!out.left_out.empty()) rec["left_out"] = out.left_out;
+  return out;
 }
 
 }  // namespace rotacal

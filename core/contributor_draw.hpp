@@ -82,4 +82,16 @@ Eigen::MatrixXd probeAxesCovariance(const ContributorSet& set, const std::functi
 /// Adds a draw to a truth (to its linear_axis_error and pretravel, if it has them).
 void applyProbeAxesDraw(const ProbeAxesDraw& draw, Truth* truth);
 
+/// A whole machine as its declared contributors make it, for the exact simulator (`simulate
+/// --contributors`): on top of `truth` (its location errors, anything else it sets), the probe's
+/// pretravel by direction and the linear axes of 000 Eqs. (22)-(23) over the plan's trigger span
+/// (drawProbeAxes, run 0 of `seed`), the test piece's set-up and form, and the per-touch scatter
+/// (repeatability and roughness) as the truth's noise, replacing the truth file's. Contributors of other instruments (the
+/// R-test's, the laser's) are named in `left_out`. `record` is what was drawn, in report units.
+struct DrawnMachine {
+  Json record;
+  std::vector<std::string> left_out;
+};
+DrawnMachine drawMachine(const ProbePlan& plan, const ContributorSet& set, std::uint64_t seed, Truth* truth);
+
 }  // namespace rotacal

@@ -11,6 +11,7 @@
 
 #include <fmt/format.h>
 
+#include "core/declared_noise.hpp"
 #include "core/statistics.hpp"
 #include "core/require_valid.hpp"
 
@@ -218,6 +219,14 @@ struct Context {
   const JudgeProblem& pb;
   const JudgeOptions& o;
   Eigen::VectorXd inv_sigma, yw;
+  Eigen::VectorXd sigma;     // per observation: pb.sigma, or sqrt(diag) of pb.covariance
+  Eigen::MatrixXd W, W_inv;  // the covariance's inverse root and root; empty: diagonal
+  Eigen::MatrixXd whiten(const Eigen::MatrixXd& X) const {
+    return W.size() ? Eigen::MatrixXd(W * X) : Eigen::MatrixXd(inv_sigma.asDiagonal() * X);
+  }
+  Eigen::VectorXd raw(const Eigen::VectorXd& rw) const {
+    return W.size() ? Eigen::VectorXd(W_inv * rw) : Eigen::VectorXd(rw.cwiseQuotient(inv_sigma));
+  }
   std::vector<std::vector<int>> members;
   std::vector<Eigen::MatrixXd> factor_cols;  // whitened
   double exact_rad = 0.0, partial_rad = 0.0, thr = 0.0;
@@ -232,7 +241,7 @@ JudgeAdequacy adequacy(const Context& cx, const Span& sx) {
   a.threshold = cx.thr;
   a.p_value = a.dof > 0 ? chiSquareSurvival(a.chi2, a.dof) : 1.0;
   a.passes = !(a.p_value < a.threshold);
-  const Eigen::VectorXd raw = r.cwiseQuotient(cx.inv_sigma);
+  const Eigen::VectorXd raw = cx.raw(r);
   a.rms_residual = std::sqrt(raw.squaredNorm() / static_cast<double>(n));
   // Harmonic mean of the variances: extra white scatter tau^2 raises E chi2 / dof to
   // 1 + tau^2 / sigma_eff^2 (exactly for equal sigma_i, on average otherwise).
@@ -271,7 +280,7 @@ JudgeAdequacy adequacy(const Context& cx, const Span& sx) {
         }
       }
     } else {
-      const Eigen::VectorXd fit = (pr.A * z).cwiseQuotient(cx.inv_sigma);
+      const Eigen::VectorXd fit = cx.raw(pr.A * z);
       s.detail = fmt::format("a quadratic in {} ({} to {} {}) carries a misfit from {:+.3g} to {:+.3g} {}", fac.name,
                              fmtg(*std::min_element(fac.values.begin(), fac.values.end())),
                              fmtg(*std::max_element(fac.values.begin(), fac.values.end())), fac.unit, fit.minCoeff(),
@@ -355,7 +364,7 @@ void refresh(const Context& cx, Model* m) {
   m->r = cx.yw - m->span.Q * (m->span.Q.transpose() * cx.yw);
   m->chi2 = m->r.squaredNorm();
   m->dof = static_cast<int>(cx.yw.size()) - m->span.rank();
-  m->ho = holdout(m->span.Q, cx.yw, cx.pb.sigma, cx.members);
+  m->ho = holdout(m->span.Q, cx.yw, cx.sigma, cx.members);
 }
 
 struct Evaluated {
@@ -374,7 +383,7 @@ Evaluated evaluate(const Context& cx, const Model& m, size_t ci, int step) {
   ev.c.step = step;
   ev.c.k = static_cast<int>(cause.J.cols());
   ev.c.threshold = cx.thr;
-  ev.Jw = cx.inv_sigma.asDiagonal() * cause.J;
+  ev.Jw = cx.whiten(cause.J);
   ev.sc = spanOf(ev.Jw);
   ev.pr = principal(m.span.Q, ev.sc.Q, cx.exact_rad);
   ev.c.k_eff = static_cast<int>(ev.pr.A.cols());
@@ -403,7 +412,7 @@ Evaluated evaluate(const Context& cx, const Model& m, size_t ci, int step) {
 
   Eigen::MatrixXd Qe(m.span.Q.rows(), m.span.Q.cols() + ev.pr.A.cols());
   Qe << m.span.Q, ev.pr.A;
-  const Holdout he = holdout(Qe, cx.yw, cx.pb.sigma, cx.members);
+  const Holdout he = holdout(Qe, cx.yw, cx.sigma, cx.members);
   std::vector<char> use(he.valid.size());
   std::vector<double> d;
   for (size_t g = 0; g < use.size(); ++g) {
@@ -531,10 +540,19 @@ JudgeConfounded pairConfounded(const Context& cx, const Evaluated& a, size_t ia,
 void validateProblem(const JudgeProblem& pb) {
   const Eigen::Index n = pb.y.size();
   if (n == 0) bad("no observations");
-  if (pb.sigma.size() != n) bad(fmt::format("sigma: expected {} entries, got {}", n, pb.sigma.size()));
+  if (pb.covariance.size()) {
+    if (pb.covariance.rows() != n || pb.covariance.cols() != n)
+      bad(fmt::format("covariance: expected {} x {}, got {} x {}", n, n, pb.covariance.rows(), pb.covariance.cols()));
+    if (!pb.covariance.allFinite()) bad("covariance has a non-finite entry");
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (!(pb.covariance(i, i) > 0)) bad(fmt::format("covariance({0}, {0}) = {1} must be > 0", i, pb.covariance(i, i)));
+  } else {
+    if (pb.sigma.size() != n) bad(fmt::format("sigma: expected {} entries, got {}", n, pb.sigma.size()));
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (!(pb.sigma[i] > 0) || !std::isfinite(pb.sigma[i]))
+        bad(fmt::format("sigma[{}] = {} must be > 0 and finite", i, pb.sigma[i]));
+  }
   if (!pb.y.allFinite()) bad("y has a non-finite entry");
-  for (Eigen::Index i = 0; i < n; ++i)
-    if (!(pb.sigma[i] > 0) || !std::isfinite(pb.sigma[i])) bad(fmt::format("sigma[{}] = {} must be > 0 and finite", i, pb.sigma[i]));
   if (pb.J0.rows() != n) bad(fmt::format("J0: expected {} rows, got {}", n, pb.J0.rows()));
   if (!pb.J0.allFinite()) bad("J0 has a non-finite entry");
   if (pb.baseline_parameters.size() != static_cast<size_t>(pb.J0.cols()))
@@ -611,8 +629,16 @@ JudgeSummary judge(const JudgeProblem& pb, const JudgeOptions& o) {
   const Eigen::Index n = pb.y.size();
   const size_t m_causes = pb.causes.size();
 
-  Context cx{pb, o, pb.sigma.cwiseInverse(), Eigen::VectorXd(), {}, {}, 0, 0, 0};
-  cx.yw = pb.y.cwiseProduct(cx.inv_sigma);
+  Context cx{pb, o, {}, {}, {}, {}, {}, {}, {}, 0, 0, 0};
+  if (pb.covariance.size()) {
+    cx.sigma = pb.covariance.diagonal().cwiseSqrt();
+    cx.W = inverseSquareRoot(pb.covariance);
+    cx.W_inv = cx.W.inverse();
+  } else {
+    cx.sigma = pb.sigma;
+  }
+  cx.inv_sigma = cx.sigma.cwiseInverse();
+  cx.yw = cx.whiten(pb.y);
   cx.exact_rad = o.exact_angle_deg * kPi / 180.0;
   cx.partial_rad = o.partial_angle_deg * kPi / 180.0;
   cx.thr = o.alpha / static_cast<double>(m_causes + 1);
@@ -625,7 +651,7 @@ JudgeSummary judge(const JudgeProblem& pb, const JudgeOptions& o) {
       cx.members[it->second].push_back(static_cast<int>(i));
     }
   }
-  for (const auto& f : pb.factors) cx.factor_cols.push_back(factorColumns(f, cx.inv_sigma));
+  for (const auto& f : pb.factors) cx.factor_cols.push_back(cx.whiten(factorColumns(f, Eigen::VectorXd::Ones(n))));
 
   JudgeSummary s;
   s.unit = pb.unit;
@@ -638,10 +664,12 @@ JudgeSummary judge(const JudgeProblem& pb, const JudgeOptions& o) {
   s.holdout_margin = o.holdout_margin;
   s.exact_angle_deg = o.exact_angle_deg;
   s.partial_angle_deg = o.partial_angle_deg;
-  s.declared_sigma_rms = std::sqrt(pb.sigma.squaredNorm() / static_cast<double>(n));
+  s.declared_sigma_rms = std::sqrt(cx.sigma.squaredNorm() / static_cast<double>(n));
+  s.declaration = pb.declaration;
+  s.correlated = pb.covariance.size() > 0;
 
   Model model;
-  model.X = cx.inv_sigma.asDiagonal() * pb.J0;
+  model.X = cx.whiten(pb.J0);
   model.names = pb.baseline_parameters;
   refresh(cx, &model);
   s.baseline_rank = model.span.rank();
@@ -788,15 +816,18 @@ JudgeSummary judge(const JudgeProblem& pb, const JudgeOptions& o) {
   auto where = [&](const JudgeAdequacy& a) {
     for (const auto& f : a.factors)
       if (f.dof > 0 && f.p_value < cx.thr)
-        return fmt::format("; most of it sits with {} ({:.0f} % of chi2: {})", f.factor, 100.0 * f.share, f.detail);
+        // "Most" only when it is most: a factor with a significant but small share is named as such.
+        return fmt::format("; {} sits with {} ({:.0f} % of chi2: {})", f.share > 0.5 ? "most of it" : "a significant part",
+                           f.factor, 100.0 * f.share, f.detail);
     return std::string("; no factor given carries it");
   };
   if (!fin.passes || unresolved) {
     s.verdict = JudgeVerdict::ModelInadequate;
     if (!fin.passes)
       s.message = fmt::format("the model does not explain the data: its residual exceeds the declared noise ({:.3g} {} "
-                              "rms) by {:.3g} {} rms ({}){}",
-                              s.declared_sigma_rms, pb.unit, fin.excess_rms, pb.unit, adequacyClause(fin), where(fin));
+                              "rms{}) by {:.3g} {} rms ({}){}",
+                              s.declared_sigma_rms, pb.unit, pb.declaration.empty() ? "" : "; " + pb.declaration,
+                              fin.excess_rms, pb.unit, adequacyClause(fin), where(fin));
     else
       s.message = fmt::format("the model passes the overall test ({}) but a targeted test finds a signal that this plan "
                               "cannot attribute",
@@ -879,6 +910,8 @@ Json judgeToJson(const JudgeSummary& s) {
                 {"partial_angle_deg", s.partial_angle_deg}};
   j["observations"] = s.observations;
   j["declared_sigma_rms"] = s.declared_sigma_rms;
+  if (!s.declaration.empty()) j["declaration"] = s.declaration;
+  j["noise_correlated"] = s.correlated;
   j["baseline"] = {{"rank", s.baseline_rank},
                    {"adequacy", adequacyJson(s.baseline)},
                    {"holdout_rms", s.baseline_holdout_rms},

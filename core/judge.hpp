@@ -97,6 +97,14 @@ struct JudgeProblem {
   Eigen::VectorXd y;
   /// Declared standard deviation per observation (> 0), in y's unit: never the fit's own.
   Eigen::VectorXd sigma;
+  /// The declared covariance of the observations (y's unit squared) when they are correlated:
+  /// the structured part the declared contributors leave (core/declared_noise.hpp). Empty: the
+  /// observations are independent with `sigma`. Given, it replaces `sigma` (which may be left
+  /// empty) and everything is whitened by its symmetric inverse root; the raw-unit figures
+  /// (rms, held-out rms, excess) then take sqrt(diag) as each observation's sigma.
+  Eigen::MatrixXd covariance;
+  /// What the noise declaration is, named in every verdict ("declared: repeatability only ...").
+  std::string declaration;
   std::string unit = "um";  // of y and sigma
   Eigen::MatrixXd J0;       // n x p, may be rank deficient
   std::vector<JudgeParameter> baseline_parameters;  // p
@@ -209,6 +217,8 @@ struct JudgeSummary {
   double alpha = 0.0, per_test_alpha = 0.0, holdout_margin = 0.0;
   double exact_angle_deg = 0.0, partial_angle_deg = 0.0;
   double declared_sigma_rms = 0.0;  // rms of the declared sigma_i
+  std::string declaration;          // JudgeProblem::declaration
+  bool correlated = false;          // tested against a full declared covariance
   JudgeAdequacy baseline;
   JudgeAdequacy final_model;  // after the accepted causes (== baseline when none)
   double baseline_holdout_rms = 0.0;

@@ -29,21 +29,21 @@ std::function<bool(int, const ProbePoint&)> OutlierScreen::holdOut() const {
 }
 
 std::string OutlierScreen::text() const {
+  const std::string against = declaration.empty() ? "the declared repeatability" : "the declared noise (" + declaration + ")";
   if (too_many)
-    return fmt::format("outlier screen: {} of {} touches beyond {:.2f} x the declared repeatability even with the worst "
-                       "left out: more than a few chips, a model that does not fit the data or a repeatability declared "
+    return fmt::format("outlier screen: {} of {} touches beyond {:.2f} x {} even with the worst "
+                       "left out: more than a few chips, a model that does not fit the data or a noise declared "
                        "too small; none excluded (rotacal diagnose)",
-                       beyond, touches, threshold_t);
+                       beyond, touches, threshold_t, against);
   if (excluded.empty())
-    return fmt::format("outlier screen: no touch beyond {:.2f} x the declared repeatability ({} touches)", threshold_t,
-                       touches);
+    return fmt::format("outlier screen: no touch beyond {:.2f} x {} ({} touches)", threshold_t, against, touches);
   std::string list;
   for (const auto& e : excluded)
     list += fmt::format("{}point {}{} ({:+.2f} um, {:.1f} x)", list.empty() ? "" : ", ", e.point_id,
                         e.run > 0 ? fmt::format(" of run {}", e.run + 1) : std::string(), e.residual_um, std::abs(e.t));
-  return fmt::format("outlier screen: excluded {} of {} touches beyond {:.2f} x the declared repeatability (a chip "
+  return fmt::format("outlier screen: excluded {} of {} touches beyond {:.2f} x {} (a chip "
                      "or dirt on the surface; fit without them): {}",
-                     excluded.size(), touches, threshold_t, list);
+                     excluded.size(), touches, threshold_t, against, list);
 }
 
 OutlierScreen screenOutliers(
@@ -57,19 +57,37 @@ OutlierScreen screenOutliers(
   if (s.touches == 0) return s;
   s.threshold_t = normalQuantile(1.0 - options.alpha / (2.0 * s.touches));
   const int cap = static_cast<int>(std::floor(options.max_fraction * s.touches));
-  auto beyondIn = [&](const IdentificationResult& fit) {
-    int n = 0;
+  s.declaration = options.declaration;
+  // Each fitted touch and its statistic, in the residuals' order.
+  auto statistics = [&](const IdentificationResult& fit, std::vector<const PointResidual*>* fitted) {
+    fitted->clear();
     for (const auto& p : fit.residuals)
-      if (!p.held_out && std::abs(p.residual_um) / options.sigma_um > s.threshold_t) ++n;
-    return n;
+      if (!p.held_out) fitted->push_back(&p);
+    if (options.statistic) {
+      Eigen::VectorXd t = options.statistic(fit);
+      if (t.size() != static_cast<Eigen::Index>(fitted->size()))
+        throw std::logic_error(fmt::format("outlier screen: {} statistics for {} touches", t.size(), fitted->size()));
+      return t;
+    }
+    Eigen::VectorXd t(static_cast<Eigen::Index>(fitted->size()));
+    for (size_t i = 0; i < fitted->size(); ++i) t[static_cast<Eigen::Index>(i)] = (*fitted)[i]->residual_um / options.sigma_um;
+    return t;
+  };
+  auto beyondIn = [&](const IdentificationResult& fit) {
+    std::vector<const PointResidual*> fitted;
+    const Eigen::VectorXd t = statistics(fit, &fitted);
+    return static_cast<int>((t.array().abs() > s.threshold_t).count());
   };
   // Worst first: one gross outlier (a value millimetres off) drags the whole fit and puts many
   // touches beyond the threshold; left out, the others come back.
   while (true) {
-    const PointResidual* worst = nullptr;
-    for (const auto& p : r.residuals)
-      if (!p.held_out && (!worst || std::abs(p.residual_um) > std::abs(worst->residual_um))) worst = &p;
-    if (!worst || std::abs(worst->residual_um) / options.sigma_um <= s.threshold_t) break;
+    std::vector<const PointResidual*> fitted;
+    const Eigen::VectorXd t = statistics(r, &fitted);
+    if (t.size() == 0) break;
+    Eigen::Index at = 0;
+    const double worst_t = t.cwiseAbs().maxCoeff(&at);
+    const PointResidual* worst = fitted[static_cast<size_t>(at)];
+    if (worst_t <= s.threshold_t) break;
     if (static_cast<int>(s.excluded.size()) >= cap) {
       // Still beyond after the most a few chips can be: the model or the declared repeatability
       // is wrong. Nothing is left out: the analysis and the adequacy test see all the data.
@@ -78,7 +96,7 @@ OutlierScreen screenOutliers(
       s.excluded.clear();
       return s;
     }
-    s.excluded.push_back({worst->run, worst->point_id, worst->residual_um, worst->residual_um / options.sigma_um});
+    s.excluded.push_back({worst->run, worst->point_id, worst->residual_um, t[at]});
     IdentificationResult next = fit(s.holdOut());
     if (next.summary.termination != Termination::Converged) {
       // Leaving this touch out broke the fit (a point the model cannot do without): keep it.
@@ -102,8 +120,13 @@ Json outlierScreenJson(const OutlierScreen& s, const OutlierOptions& o) {
                   {"residual_um", std::round(e.residual_um * 1e6) / 1e6},
                   {"t", std::round(e.t * 1e4) / 1e4},
                   {"reason", "beyond the threshold: a chip or dirt on the surface; left out of the fit"}});
-  return {{"test", "|residual| / declared repeatability against the normal quantile at alpha / (2 N), worst first, "
-                   "refitted after each"},
+  Json j = {{"test", o.statistic ? "|t| of each touch against everything the others predict for it under the declared "
+                                    "covariance of the touches (generalized least squares deletion residual) against the "
+                                    "normal quantile at alpha / (2 N), worst first, refitted after each"
+                                  : "|residual| / declared repeatability against the normal quantile at alpha / (2 N), "
+                                    "worst first, refitted after each"},
+          {"declaration", o.declaration.empty() ? fmt::format("declared: repeatability only ({:.3f} um)", o.sigma_um)
+                                                : o.declaration},
           {"sigma_um", o.sigma_um},
           {"alpha", o.alpha},
           {"threshold_t", std::round(s.threshold_t * 1e4) / 1e4},
@@ -113,6 +136,7 @@ Json outlierScreenJson(const OutlierScreen& s, const OutlierOptions& o) {
           {"beyond", s.beyond},
           {"excluded", ex},
           {"summary", s.text()}};
+  return j;
 }
 
 }  // namespace rotacal

@@ -3,9 +3,11 @@
 // otherwise good data. Least squares would average it in; this screen finds it, names it by run
 // and point, and leaves it out of the fit with the reason, never silently.
 //
-// The test: the residual of each fitted touch against the DECLARED probe repeatability,
-// t = r / sigma (the user's claim, never the fit's own sigma, which an outlier inflates; without
-// the leverage factor sqrt(1 - h) the test is conservative: a residual is smaller than its error).
+// The test: each fitted touch's residual against the DECLARED noise (the user's claim, never the
+// fit's own sigma, which an outlier inflates): with the declared covariance of the touches, the
+// generalized least squares deletion residual, what the touch reads beyond what every other touch
+// predicts for it (core/declared_noise.hpp), N(0, 1) under the declaration; with a per-touch
+// scatter alone, t = r / sigma (without the leverage factor sqrt(1 - h): conservative).
 // Threshold: |t| > z with z the two-sided normal quantile at alpha / N (Bonferroni over the N
 // fitted touches: clean data lose a touch in at most alpha of the runs). The worst touch beyond z
 // is left out and the model refitted, until none is beyond z (worst first: a gross outlier, a
@@ -14,6 +16,7 @@
 // does not fit (or a repeatability declared too small): then nothing is left out and the screen
 // says so (too_many), so that the model's adequacy test (diagnose) sees the whole data; analyze
 // then writes no offsets without --force.
+#include <Eigen/Core>
 #include <functional>
 #include <string>
 #include <vector>
@@ -24,9 +27,16 @@
 namespace rotacal {
 
 struct OutlierOptions {
-  double sigma_um = 0.7;      // declared probe repeatability, k = 1
+  double sigma_um = 0.7;      // declared per-touch scatter, k = 1, when `statistic` is empty
   double alpha = 0.01;        // family-wise rate of a clean run losing a touch
   double max_fraction = 0.05; // of the fitted touches; beyond it nothing is left out
+  /// Each fitted touch's statistic (the fit's residuals not held out, in their order), N(0, 1)
+  /// under the declared noise: core/declared_noise.hpp's deletionStatistics on the declared
+  /// covariance, so that the linear axes' shared errors are not taken for chips. Empty:
+  /// residual / sigma_um (the touches independent, with the per-touch scatter alone).
+  std::function<Eigen::VectorXd(const IdentificationResult& fit)> statistic;
+  /// What the statistic tests against, for the report ("declared: repeatability only ...").
+  std::string declaration;
   bool validate(std::string* why) const;
 };
 
@@ -43,6 +53,7 @@ struct OutlierScreen {
   int touches = 0;          // fitted touches of the first fit
   bool too_many = false;    // still beyond after max_fraction left out: none excluded
   int beyond = 0;           // touches beyond the threshold in the last fit, when too_many
+  std::string declaration;  // OutlierOptions::declaration
   /// The rule to give IdentificationOptions::hold_out for the excluded touches (null when none).
   std::function<bool(int run, const ProbePoint& point)> holdOut() const;
   std::string text() const;  // one line for the report

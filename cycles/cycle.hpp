@@ -53,6 +53,10 @@ struct SimulateRequest {
   std::optional<double> start_s;     // --start-s: clock at the cycle start, for repeats
   std::uint64_t seed = 1;
   const DialectIO* dialect = nullptr;
+  /// --contributors: a whole machine drawn from these declared contributors (machine_seed) on
+  /// top of the truth file (core/contributor_draw.hpp drawMachine); null: the truth file alone.
+  const ContributorSet* contributors = nullptr;
+  std::uint64_t machine_seed = 1;
 };
 
 /// `simulate()` run on what a truth file declares: a refusal of the simulation becomes an
@@ -72,6 +76,9 @@ auto onTruthFile(const InputFile& truth, F&& simulate) -> decltype(simulate()) {
 struct Simulated {
   std::string results_text;  // what the controller (or device) writes
   std::string message;       // one line for the terminal, without the output path
+  /// The truth simulated, with what was drawn from the contributors (`drawn`); null when the
+  /// cycle's simulator draws no machine (the CLI then refuses --contributors).
+  Json truth;
 };
 
 struct AnalyzeRequest {
@@ -91,6 +98,9 @@ struct DiagnoseRequest {
   std::vector<InputFile> results;
   const DialectIO* dialect = nullptr;
   double alpha = JudgeOptions{}.alpha;  // family-wise false-alarm rate (docs/diagnosis.md), validated by the CLI
+  /// The declared contributors the tests read (--contributors, else the machine's), as analyze's;
+  /// null: the probe's repeatability alone is declared, and the diagnosis says so.
+  const ContributorSet* contributors = nullptr;
   std::function<void(int done, int all)> progress;  // may be empty
 };
 

@@ -7,6 +7,7 @@
 #include <map>
 #include <stdexcept>
 
+#include "core/contributor_draw.hpp"
 #include "core/errors.hpp"
 #include "core/simulation.hpp"
 
@@ -33,13 +34,26 @@ std::vector<MeasurementRun> readProbeRuns(const ProbePlan& plan, const std::vect
 
 Simulated simulateProbing(const SimulateRequest& r) {
   const ProbePlan& plan = *r.plan;
-  Truth truth = truthFromJson(parseJsonText(r.truth.text, r.truth.path), plan.machine);
+  const JsonDoc doc = parseJsonText(r.truth.text, r.truth.path);
+  Truth truth = truthFromJson(doc, plan.machine);
+  Json truth_json = doc.value;
+  std::string drawn;
+  if (r.contributors) {
+    const DrawnMachine m = drawMachine(plan, *r.contributors, r.machine_seed, &truth);
+    truth_json["drawn"] = m.record;
+    drawn = fmt::format(", a machine drawn from {} (machine seed {})",
+                        r.contributors->file.empty() ? std::string("the machine's contributors") : r.contributors->file,
+                        r.machine_seed);
+  }
   if (r.noise_um) truth.noise_um = *r.noise_um;
   if (r.start_s) truth.start_time_s = *r.start_s;
+  truth_json["noise_um"] = truth.noise_um;
   const MeasurementRun run = onTruthFile(r.truth, [&] { return simulate(plan, truth, {r.seed}); });
-  return {r.dialect->write_results(plan, run),
-          fmt::format("simulated {} triggers (noise {:.3f} um, seed {}) as {} results", run.points.size(), truth.noise_um,
-                      r.seed, r.dialect->name)};
+  Simulated s{r.dialect->write_results(plan, run),
+              fmt::format("simulated {} triggers (noise {:.3f} um, seed {}{}) as {} results", run.points.size(),
+                          truth.noise_um, r.seed, drawn, r.dialect->name),
+              truth_json};
+  return s;
 }
 
 std::string sphereReachRefusal(const MachineModel& machine, const Eigen::Isometry3d& T, const Eigen::Vector3d& c_m,

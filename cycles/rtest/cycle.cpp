@@ -67,7 +67,8 @@ class Rtest final : public Cycle {
     const RtestSeries s = onTruthFile(r.truth, [&] { return simulateRtest(plan, truth, extras, o); });
     return {rtestResultsCsv(plan, s),
             fmt::format("simulated {} R-test cycle(s) of {} readings (sensor noise {:.3f} um, seed {})", s.cycles.size(),
-                        plan.points.size(), o.noise_um, r.seed)};
+                        plan.points.size(), o.noise_um, r.seed),
+            Json()};
   }
 
 

@@ -43,7 +43,8 @@ class Tooltip final : public Cycle {
     const TooltipRun run = onTruthFile(r.truth, [&] { return simulateTooltip(plan, truth, r.seed); });
     return {tooltipResultsText(plan, run),
             fmt::format("simulated {} tool-tip readings (dR {:.3f} um, noise {:.3f} um, seed {})", run.size(),
-                        truth.dR_um, truth.noise_um, r.seed)};
+                        truth.dR_um, truth.noise_um, r.seed),
+            Json()};
   }
 
   CycleDocuments analyze(const AnalyzeRequest& r) const override {

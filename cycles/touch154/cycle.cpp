@@ -10,6 +10,7 @@
 #include "core/units.hpp"
 #include "cycles/touch154/budget.hpp"
 #include "cycles/touch154/closed_form.hpp"
+#include "cycles/touch154/declared.hpp"
 #include "cycles/touch154/commands.hpp"
 #include "cycles/touch154/diagnose.hpp"
 #include "cycles/touch154/figures.hpp"
@@ -22,6 +23,16 @@
 
 namespace rotacal {
 namespace {
+
+/// The declared noise; two declarations of the probe's repeatability that disagree are the
+/// contributors file's error (its path leads the message).
+Touch154Noise declaredNoiseOrFail(const ProbePlan& plan, const ContributorSet* declared) {
+  try {
+    return touch154DeclaredNoise(plan, declared);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(declared && !declared->file.empty() ? declared->file : "MACHINE.json contributors", 0, e.what());
+  }
+}
 
 class Touch154 final : public Cycle {
  public:
@@ -44,9 +55,14 @@ class Touch154 final : public Cycle {
     IdentificationOptions opt;
     opt.method = method;
     opt.prior_sigma_um = plan.machine.probe.repeatability_um;
-    // Touches that hit a chip: found by the least squares' residuals, left out with the reason.
+    // Touches that hit a chip: found by the least squares' residuals against the declared noise
+    // (the machine's contributors, shared errors included), left out with the reason.
+    const Touch154Noise noise = declaredNoiseOrFail(plan, r.contributors);
     OutlierOptions oo;
-    oo.sigma_um = plan.machine.probe.repeatability_um;
+    oo.sigma_um = std::sqrt(noise.noise.white_um2);
+    oo.declaration = noise.noise.declaration;
+    if (noise.basis.size())
+      oo.statistic = [&noise](const IdentificationResult& fit) { return touch154OutlierStatistic(noise, fit); };
     const OutlierScreen screen = screenOutliers(
         [&](const std::function<bool(int, const ProbePoint&)>& hold) {
           IdentificationOptions o = opt;
@@ -89,6 +105,17 @@ class Touch154 final : public Cycle {
     out.text = analysisText(a) + screen.text() + "\n";
     out.doc = analysisToJson(a);
     out.doc["outliers"] = outlierScreenJson(screen, oo);
+    // What the screen and the adequacy test read, and how the data compare with it.
+    if (noise.basis.size()) {
+      const IdentificationResult* lp = a.main.method == Method::LeastSquaresPerPoint ? &a.main : nullptr;
+      for (const auto& other : a.other_methods)
+        if (!lp && other.method == Method::LeastSquaresPerPoint) lp = &other;
+      if (lp) {
+        const FittedReadings f = fittedProblem(noise, lp->residuals);
+        out.doc["declared_noise"] = declaredNoiseJson(noise.noise, testAgainstDeclared(f.residual_um, f.J, f.covariance_um2),
+                                                      static_cast<int>(plan.points.size()));
+      }
+    }
     if (!screen.excluded.empty() || screen.too_many) out.warnings.push_back(screen.text());
     if (screen.too_many) out.offsets_refused = screen.text();
     if (!screen.excluded.empty() && method == Method::ClosedForm)
@@ -119,6 +146,8 @@ class Touch154 final : public Cycle {
     Touch154DiagnosisOptions o;
     o.judge.alpha = r.alpha;
     o.sigma_um = plan.machine.probe.repeatability_um;  // declared, never the fit's own
+    const Touch154Noise noise = declaredNoiseOrFail(plan, r.contributors);
+    o.noise = &noise;
     std::string why;
     if (!o.validate(&why)) throw std::invalid_argument(why);
     if (r.progress) r.progress(0, 1);

@@ -41,11 +41,20 @@ std::vector<std::string> judgeNames(const std::vector<ExtensionPtr>& cands) {
 }  // namespace
 
 JudgeProblem touch154JudgeProblem(const ProbePlan& plan, const Linearisation& lin,
-                                  const std::vector<ExtensionPtr>& candidates, double sigma_um) {
+                                  const std::vector<ExtensionPtr>& candidates, double sigma_um,
+                                  const Touch154Noise* noise) {
   JudgeProblem p;
   const Eigen::Index n = lin.residual_um.size();
   p.y = lin.residual_um;
-  p.sigma = Eigen::VectorXd::Constant(n, sigma_um);
+  if (noise && noise->noise.structured_um2.size()) {
+    std::vector<std::pair<int, int>> kept;
+    for (const auto& o : lin.observations) kept.emplace_back(o.run, noise->index_of_id.at(o.point->id));
+    p.covariance = noise->noise.covariance(kept);
+  } else {
+    p.sigma = Eigen::VectorXd::Constant(n, noise ? std::sqrt(noise->noise.white_um2) : sigma_um);
+  }
+  p.declaration = noise ? noise->noise.declaration
+                        : fmt::format("declared: repeatability only ({:.3f} um, MACHINE.json probe.repeatability_um)", sigma_um);
   p.unit = "um";
   p.J0 = lin.J0;
   for (size_t k = 0; k < lin.J0_names.size(); ++k) p.baseline_parameters.push_back({lin.J0_names[k], lin.J0_units[k]});
@@ -94,7 +103,7 @@ Touch154Diagnosis diagnoseTouch154(const ProbePlan& plan, const std::vector<Meas
   io.prior_sigma_um = options.sigma_um;
   d.lin = lineariseAtBaseline(plan, runs, io, d.candidates);
   if (!d.lin.ok) return d;
-  d.judged = judge(touch154JudgeProblem(plan, d.lin, d.candidates, options.sigma_um), options.judge);
+  d.judged = judge(touch154JudgeProblem(plan, d.lin, d.candidates, options.sigma_um, options.noise), options.judge);
   // Each accepted cause refitted with the exact model (with the ones accepted before it): the
   // location errors it re-estimates and the residuals the figures draw.
   std::vector<ExtensionPtr> accepted;
@@ -153,7 +162,7 @@ std::string touch154DiagnosisText(const Touch154Diagnosis& d) {
   std::string s = fmt::format(
       "baseline (location errors + per-point offsets): residual rms {:.3f} um, held-out rms {:.3f} um (leave one pose out)\n",
       d.lin.baseline.summary.residual_rms_um, d.judged.baseline_holdout_rms);
-  s += fmt::format("declared noise (MACHINE.json probe repeatability): {:.3f} um\n", d.judged.declared_sigma_rms);
+  s += fmt::format("declared noise: {:.3f} um rms per touch ({})\n", d.judged.declared_sigma_rms, d.judged.declaration);
   s += judgeText(d.judged);
   for (const auto& f : d.findings) {
     const auto& params = locationParameters(f.fit.estimate.kinematics);

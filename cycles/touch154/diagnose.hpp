@@ -5,8 +5,11 @@
 //    surface offset per target point), linearised at its solution (lineariseAtBaseline): y = its
 //    residuals, J0 = its Jacobian, each catalogued cause's columns those of its model extension
 //    (cycles/touch154/causes.hpp) at zero, from the exact model;
-//  - sigma = the DECLARED probe repeatability (MACHINE.json), never the fit's own: an unmodelled
-//    effect then shows as a misfit instead of hiding in an inflated noise;
+//  - the noise is the DECLARED one, never the fit's own: an unmodelled effect then shows as a
+//    misfit instead of hiding in an inflated noise. With the machine's contributors it is their
+//    covariance of the touches (per touch: repeatability and roughness; shared: the linear axes,
+//    pretravel, set-up and form, to first order), the machine the uncertainty budget describes;
+//    without, the probe repeatability of MACHINE.json;
 //  - groups = poses (leave one pose out, every repeat of it); factors = time, pose, approach,
 //    face, repeat, X/Y/Z position of the trigger;
 //  - confounding comes from the Jacobians on this plan (the judge's principal angles), never a
@@ -19,12 +22,16 @@
 #include "core/judge.hpp"
 #include "core/json_io.hpp"
 #include "core/model_extension.hpp"
+#include "cycles/touch154/declared.hpp"
 
 namespace rotacal {
 
 struct Touch154DiagnosisOptions {
   JudgeOptions judge;                    // alpha from the CLI's --alpha
   double sigma_um = 0.7;                 // declared probe repeatability (MACHINE.json), k = 1
+  /// The declared noise the tests read (cycles/touch154/declared.hpp): its white part replaces
+  /// sigma_um, its structured part makes the judge whiten by the full covariance. Null: sigma_um.
+  const Touch154Noise* noise = nullptr;
   std::vector<ExtensionPtr> candidates;  // empty: catalogFor(plan, runs)
 
   bool validate(std::string* why) const;
@@ -46,7 +53,8 @@ struct Touch154Diagnosis {
 
 /// The judge's problem for a linearised baseline and candidates (exposed for the tests).
 JudgeProblem touch154JudgeProblem(const ProbePlan& plan, const Linearisation& lin,
-                                  const std::vector<ExtensionPtr>& candidates, double sigma_um);
+                                  const std::vector<ExtensionPtr>& candidates, double sigma_um,
+                                  const Touch154Noise* noise = nullptr);
 
 /// Throws std::invalid_argument for invalid options. A baseline that does not converge gives
 /// lin.ok == false and no judgement.

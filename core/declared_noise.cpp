@@ -1,0 +1,157 @@
+#include "core/declared_noise.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "core/statistics.hpp"
+
+namespace rotacal {
+
+Eigen::MatrixXd DeclaredNoise::covariance(const std::vector<std::pair<int, int>>& kept) const {
+  const auto n = static_cast<Eigen::Index>(kept.size());
+  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(n, n);
+  if (structured_um2.size() > 0) {
+    for (Eigen::Index a = 0; a < n; ++a) {
+      const int ia = kept[static_cast<size_t>(a)].second;
+      if (ia < 0 || ia >= structured_um2.rows())
+        throw std::invalid_argument(fmt::format("declared noise: reading {} beyond the plan's {}", ia, structured_um2.rows()));
+      for (Eigen::Index b = 0; b < n; ++b) C(a, b) = structured_um2(ia, kept[static_cast<size_t>(b)].second);
+    }
+  }
+  C.diagonal().array() += white_um2;
+  return C;
+}
+
+double DeclaredNoise::rmsSigmaUm(int readings) const {
+  if (structured_um2.size() == 0 || readings <= 0) return std::sqrt(white_um2);
+  const Eigen::Index n = std::min<Eigen::Index>(readings, structured_um2.rows());
+  return std::sqrt(white_um2 + structured_um2.diagonal().head(n).mean());
+}
+
+DeclaredNoise repeatabilityOnly(double repeatability_um, const std::string& source) {
+  DeclaredNoise d;
+  d.white_um2 = repeatability_um * repeatability_um;
+  d.declaration = fmt::format("declared: repeatability only ({:.3f} um, {})", repeatability_um, source);
+  d.repeatability_only = true;
+  return d;
+}
+
+DeclaredNoise perTouchDeclaration(const ContributorSet* declared, double machine_repeatability_um) {
+  const Contributor* rep = declared ? declared->find("probe_repeatability") : nullptr;
+  if (!rep) {
+    DeclaredNoise d = repeatabilityOnly(machine_repeatability_um, "MACHINE.json probe.repeatability_um");
+    if (declared)
+      d.declaration = fmt::format("declared: repeatability only ({:.3f} um, MACHINE.json probe.repeatability_um; {} "
+                                  "declares no probe_repeatability)",
+                                  machine_repeatability_um, declared->file.empty() ? "the contributors" : declared->file);
+    return d;
+  }
+  const double declared_um = rep->u[0] * 1000.0;
+  if (std::abs(declared_um - machine_repeatability_um) > 0.01 * std::max(declared_um, machine_repeatability_um))
+    throw std::invalid_argument(fmt::format(
+        "contributors.probe_repeatability u = {:.4g} um contradicts MACHINE.json probe.repeatability_um = {:.4g} um "
+        "(one quantity, two values: make them agree)",
+        declared_um, machine_repeatability_um));
+  DeclaredNoise d;
+  std::string parts;
+  for (const Contributor& c : declared->items) {
+    if (c.info->kind != ContributorKind::ProbeRepeatability && c.info->kind != ContributorKind::SurfaceRoughness) continue;
+    d.white_um2 += c.u[0] * c.u[0] * 1e6;
+    parts += fmt::format("{}{} {:.3f} um", parts.empty() ? "" : " + ", c.info->id, c.u[0] * 1000.0);
+  }
+  const std::string from = declared->file.empty() ? "the machine's contributors" : declared->file;
+  d.repeatability_only = std::none_of(declared->items.begin(), declared->items.end(), [](const Contributor& c) {
+    return c.info->kind != ContributorKind::ProbeRepeatability && c.u.cwiseAbs().maxCoeff() > 0;
+  });
+  d.declaration = d.repeatability_only ? fmt::format("declared: repeatability only ({:.3f} um, {})", declared_um, from)
+                                       : fmt::format("declared per touch: {} (from {})", parts, from);
+  return d;
+}
+
+Eigen::MatrixXd inverseSquareRoot(const Eigen::MatrixXd& S) {
+  if (S.rows() != S.cols()) throw std::invalid_argument("declared noise: the covariance is not square");
+  if (!S.allFinite()) throw std::invalid_argument("declared noise: the covariance has a non-finite entry");
+  if (S.rows() == 0) return S;
+  if (!(S.diagonal().minCoeff() > 0)) throw std::invalid_argument("declared noise: a reading with no declared variance");
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (S + S.transpose()));
+  const double top = es.eigenvalues().maxCoeff();
+  const Eigen::VectorXd inv_root = es.eigenvalues().cwiseMax(1e-12 * top).cwiseSqrt().cwiseInverse();
+  return es.eigenvectors() * inv_root.asDiagonal() * es.eigenvectors().transpose();
+}
+
+namespace {
+
+/// The whitened problem: W = S^-1/2 and an orthonormal basis Q of W J's span.
+struct Whitened {
+  Eigen::MatrixXd W, Q;
+};
+
+Whitened whitened(const Eigen::VectorXd& residual, const Eigen::MatrixXd& J, const Eigen::MatrixXd& S) {
+  const Eigen::Index n = residual.size();
+  if (J.rows() != n || S.rows() != n || S.cols() != n)
+    throw std::invalid_argument(fmt::format("declared noise: {} readings, J {} rows, covariance {} x {}", n, J.rows(),
+                                            S.rows(), S.cols()));
+  Whitened w;
+  w.W = inverseSquareRoot(S);
+  w.Q = Eigen::MatrixXd(n, 0);
+  if (J.cols() > 0 && n > 0) {
+    const Eigen::MatrixXd Xw = w.W * J;
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(Xw, Eigen::ComputeThinU);
+    const Eigen::VectorXd& sv = svd.singularValues();
+    Eigen::Index rank = 0;
+    while (rank < sv.size() && sv[rank] > 1e-10 * sv[0]) ++rank;
+    w.Q = svd.matrixU().leftCols(rank);
+  }
+  return w;
+}
+
+}  // namespace
+
+DeclaredNoiseTest testAgainstDeclared(const Eigen::VectorXd& residual, const Eigen::MatrixXd& J, const Eigen::MatrixXd& S) {
+  const Whitened w = whitened(residual, J, S);
+  const Eigen::VectorXd yw = w.W * residual;
+  DeclaredNoiseTest t;
+  t.chi2 = (yw - w.Q * (w.Q.transpose() * yw)).squaredNorm();
+  t.dof = static_cast<int>(residual.size() - w.Q.cols());
+  t.p_value = t.dof > 0 ? chiSquareSurvival(t.chi2, t.dof) : 1.0;
+  t.ratio = t.dof > 0 ? std::sqrt(t.chi2 / t.dof) : 0.0;
+  return t;
+}
+
+Json declaredNoiseJson(const DeclaredNoise& noise, const DeclaredNoiseTest& test, int readings) {
+  const double white = std::sqrt(noise.white_um2);
+  return {{"declaration", noise.declaration},
+          {"repeatability_only", noise.repeatability_only},
+          {"per_touch_um", std::round(white * 1e6) / 1e6},
+          {"shared_rms_um", std::round(std::sqrt(std::max(0.0, noise.rmsSigmaUm(readings) * noise.rmsSigmaUm(readings) -
+                                                             noise.white_um2)) * 1e6) / 1e6},
+          {"test", "the fit's residual whitened by the declared covariance of the touches: chi2 on readings - rank"},
+          {"chi2", std::round(test.chi2 * 1e4) / 1e4},
+          {"dof", test.dof},
+          {"p_value", test.p_value},
+          {"ratio", std::round(test.ratio * 1e4) / 1e4},
+          {"summary", fmt::format("the residual is {:.2f} x the declared noise (chi2 {:.1f} on {} dof, p {:.2g})",
+                                  test.ratio, test.chi2, test.dof, test.p_value)}};
+}
+
+Eigen::VectorXd deletionStatistics(const Eigen::VectorXd& residual, const Eigen::MatrixXd& J, const Eigen::MatrixXd& S) {
+  const Eigen::Index n = residual.size();
+  const Whitened w = whitened(residual, J, S);
+  const Eigen::MatrixXd& W = w.W;
+  const Eigen::MatrixXd& Q = w.Q;
+  // P = W (I - Q Q^T) W: the residual projector of the whitened fit brought back to readings.
+  const Eigen::VectorXd yw = W * residual;
+  const Eigen::VectorXd Py = W * (yw - Q * (Q.transpose() * yw));
+  const Eigen::MatrixXd M = W - Q * (Q.transpose() * W);
+  const Eigen::VectorXd Pdiag = W.cwiseProduct(M).colwise().sum().transpose();
+  Eigen::VectorXd t(n);
+  for (Eigen::Index i = 0; i < n; ++i) t[i] = Pdiag[i] > 1e-14 * W(i, i) * W(i, i) ? Py[i] / std::sqrt(Pdiag[i]) : 0.0;
+  return t;
+}
+
+}  // namespace rotacal

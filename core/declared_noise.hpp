@@ -1,0 +1,81 @@
+#pragma once
+// The declaration every test of a cycle's data is made against: the covariance of the readings
+// that the machine's declared contributors produce, the same declaration its uncertainty reads.
+// Two parts:
+//   white       the per-reading scatter, independent at every touch (probe repeatability and
+//               surface roughness; repeatability alone when nothing else is declared);
+//   structured  what the declared systematic contributors (the linear axes' scale, squareness and
+//               random node errors of 000 Eqs. (22)-(23), the probe's pretravel by direction, the
+//               artefact's set-up and form) move the readings by, to first order, shared between
+//               readings: two touches a few millimetres apart read almost the same linear-axis
+//               error. It is the same machine in every repeat of a plan, so repeats share it.
+// A test that takes the white part alone for the whole noise tests a machine that the product's
+// own budget says does not exist: the linear axes of 000 Table 5 leave several micrometres in a
+// touch154 residual where the probe declares 1.2 um. Tests therefore work on whitened residuals
+// (generalized least squares, Sigma^-1/2), so their null hypothesis is the declared machine.
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "core/contributors.hpp"
+#include "core/json_io.hpp"
+
+namespace rotacal {
+
+struct DeclaredNoise {
+  double white_um2 = 0.0;          // per-reading variance, um^2
+  Eigen::MatrixXd structured_um2;  // readings x readings of ONE run (plan order), um^2; empty: none
+  /// One phrase naming what was declared and where it came from, for every verdict that tests
+  /// against it ("declared: repeatability only (0.700 um, MACHINE.json)").
+  std::string declaration;
+  bool repeatability_only = true;  // no contributor beyond the probe's repeatability
+
+  /// The covariance (um^2) of the readings kept[k] = (run, index in the run's plan order), in that
+  /// order: the structured part between any two (the same machine in every run) and the white
+  /// part on the diagonal.
+  Eigen::MatrixXd covariance(const std::vector<std::pair<int, int>>& kept) const;
+  /// rms of sqrt(diag): the declared scatter of one reading, white and structured together.
+  double rmsSigmaUm(int readings) const;
+};
+
+/// The declaration of a probe whose repeatability alone is known (no contributors file).
+DeclaredNoise repeatabilityOnly(double repeatability_um, const std::string& source);
+
+/// The white part a probe cycle declares: the per-touch contributors (probe_repeatability,
+/// surface_roughness) of `declared`, or MACHINE.json's probe repeatability when `declared` is null
+/// or names no probe_repeatability (the declaration says which). Throws std::invalid_argument
+/// naming the field when its probe_repeatability contradicts MACHINE.json's
+/// by more than 1 % (two declarations of one quantity: neither is silently preferred).
+DeclaredNoise perTouchDeclaration(const ContributorSet* declared, double machine_repeatability_um);
+
+/// Sigma^-1/2 by its eigen-decomposition (the symmetric root: each whitened reading stays tied to
+/// its own touch, unlike a Cholesky factor, so "where the misfit sits" still reads by touch).
+/// Eigenvalues below 1e-12 of the largest are floored there. Throws std::invalid_argument when
+/// the matrix is not square, not finite or not positive on its diagonal.
+Eigen::MatrixXd inverseSquareRoot(const Eigen::MatrixXd& covariance);
+
+/// The outlier statistic of each reading under correlated declared noise: the standardized
+/// residual of reading i predicted from all the others (the generalized least squares deletion
+/// residual, the score test of a mean shift at i). With P = S^-1 - S^-1 J (J^T S^-1 J)^+ J^T S^-1,
+/// t_i = (P y)_i / sqrt(P_ii), N(0, 1) under the declaration for every i. It depends on J's column
+/// span alone, and P y = P r for any fit's residual r = y - J b, so `residual` may come from any
+/// fit of the same linear model. For S = sigma^2 I it is r_i / (sigma sqrt(1 - h_ii)).
+/// J: readings x parameters (may be rank deficient); S: the declared covariance.
+Eigen::VectorXd deletionStatistics(const Eigen::VectorXd& residual, const Eigen::MatrixXd& J,
+                                   const Eigen::MatrixXd& covariance);
+
+/// The data against the declaration as a whole: chi2 = r^T P r (the whitened residual's sum of
+/// squares, P as above), chi2(dof) with dof = readings - rank J under the declaration.
+struct DeclaredNoiseTest {
+  double chi2 = 0.0;
+  int dof = 0;
+  double p_value = 1.0;
+  double ratio = 0.0;  // sqrt(chi2 / dof): 1 when the data scatter as declared
+};
+DeclaredNoiseTest testAgainstDeclared(const Eigen::VectorXd& residual, const Eigen::MatrixXd& J,
+                                      const Eigen::MatrixXd& covariance);
+
+/// REPORT.json's `declared_noise`: what was declared, and by how much the data exceed it.
+Json declaredNoiseJson(const DeclaredNoise& noise, const DeclaredNoiseTest& test, int readings);
+
+}  // namespace rotacal

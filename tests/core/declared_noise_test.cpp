@@ -1,0 +1,205 @@
+// Tests of the data against a correlated declared noise (core/declared_noise.hpp), each figure
+// computed another way: the hat matrix's studentized residual for white noise, the explicit GLS
+// projector by Cholesky inverses for a shift at one reading, and draws from the declared
+// covariance (by its Cholesky factor, not the symmetric root the code uses) for the null
+// distributions of the statistics and of the judge's adequacy test.
+#include "core/declared_noise.hpp"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+
+#include "core/judge.hpp"
+#include "core/rng.hpp"
+#include "core/statistics.hpp"
+
+namespace rotacal::test {
+namespace {
+
+/// Readings along a line, a structured part like a linear axis's node errors (a squared
+/// exponential kernel over position, 3 um) plus a white 1 um.
+Eigen::MatrixXd correlatedCovariance(int n) {
+  Eigen::MatrixXd S(n, n);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const double d = (i - j) / 6.0;
+      S(i, j) = 9.0 * std::exp(-0.5 * d * d) + (i == j ? 1.0 : 0.0);
+    }
+  return S;
+}
+
+Eigen::MatrixXd design(int n, int p, std::uint64_t seed) {
+  Rng rng(seed, 0);
+  Eigen::MatrixXd J(n, p);
+  for (int i = 0; i < n; ++i)
+    for (int k = 0; k < p; ++k) J(i, k) = k == 0 ? 1.0 : rng.normal();
+  return J;
+}
+
+TEST(DeclaredNoise, WhiteNoiseGivesTheStudentizedResidual) {
+  const int n = 30, p = 4;
+  const Eigen::MatrixXd J = design(n, p, 7);
+  Rng rng(3, 1);
+  Eigen::VectorXd y(n);
+  for (int i = 0; i < n; ++i) y[i] = 2.0 * rng.normal();
+  const double sigma = 1.5;
+  const Eigen::MatrixXd H = J * (J.transpose() * J).inverse() * J.transpose();
+  const Eigen::VectorXd r = y - H * y;
+  const Eigen::VectorXd t = deletionStatistics(r, J, sigma * sigma * Eigen::MatrixXd::Identity(n, n));
+  for (int i = 0; i < n; ++i) EXPECT_NEAR(t[i], r[i] / (sigma * std::sqrt(1.0 - H(i, i))), 1e-9) << i;
+  // Any fit's residual of the same model gives the same statistic (P J = 0): here y itself.
+  const Eigen::VectorXd t_y = deletionStatistics(y, J, sigma * sigma * Eigen::MatrixXd::Identity(n, n));
+  EXPECT_LT((t_y - t).cwiseAbs().maxCoeff(), 1e-9);
+}
+
+TEST(DeclaredNoise, AShiftAtOneReadingMatchesTheExplicitProjector) {
+  const int n = 40, p = 3;
+  const Eigen::MatrixXd S = correlatedCovariance(n);
+  const Eigen::MatrixXd J = design(n, p, 11);
+  const Eigen::MatrixXd Si = S.llt().solve(Eigen::MatrixXd::Identity(n, n));
+  const Eigen::MatrixXd P = Si - Si * J * (J.transpose() * Si * J).llt().solve(J.transpose() * Si);
+  for (int k : {0, 17, 39}) {
+    const Eigen::VectorXd y = 20.0 * Eigen::VectorXd::Unit(n, k);
+    const Eigen::VectorXd t = deletionStatistics(y, J, S);
+    EXPECT_NEAR(t[k], 20.0 * std::sqrt(P(k, k)), 1e-7) << k;
+    // The shift is seen at its own reading far better than the white-noise rule would see it
+    // through the 3 um shared part: the others predict that part.
+    EXPECT_GT(t[k], 20.0 / std::sqrt(S(k, k)));
+  }
+}
+
+TEST(DeclaredNoise, StatisticsAreStandardNormalUnderTheDeclaration) {
+  const int n = 40, p = 3, draws = 4000;
+  const Eigen::MatrixXd S = correlatedCovariance(n);
+  const Eigen::MatrixXd L = S.llt().matrixL();
+  const Eigen::MatrixXd J = design(n, p, 5);
+  Rng rng(9, 2);
+  Eigen::VectorXd sum_t2 = Eigen::VectorXd::Zero(n);
+  double sum_chi2 = 0.0;
+  int rejected = 0;
+  const double z = normalQuantile(1.0 - 0.05 / (2.0 * n));  // Bonferroni at 5 %
+  for (int d = 0; d < draws; ++d) {
+    Eigen::VectorXd e(n);
+    for (int i = 0; i < n; ++i) e[i] = rng.normal();
+    const Eigen::VectorXd y = J * Eigen::Vector3d(1.0, -2.0, 0.5) + L * e;
+    const Eigen::VectorXd t = deletionStatistics(y, J, S);
+    sum_t2 += t.cwiseAbs2();
+    if (t.cwiseAbs().maxCoeff() > z) ++rejected;
+    sum_chi2 += testAgainstDeclared(y, J, S).chi2;
+  }
+  const Eigen::VectorXd var = sum_t2 / draws;
+  // Var(t_i) = 1; the estimate's standard error is sqrt(2 / 4000) = 0.022.
+  EXPECT_LT((var.array() - 1.0).abs().maxCoeff(), 0.1) << var.transpose();
+  // chi2 ~ chi2(n - p): mean 37, standard error of the mean sqrt(2 * 37 / 4000) = 0.14.
+  EXPECT_NEAR(sum_chi2 / draws, n - p, 0.6);
+  // The family rate of the screen's rule is at most its 5 % (Bonferroni; correlated tests make
+  // it conservative). Binomial(4000, 0.05): 200 +- 14.
+  EXPECT_LE(rejected, 240);
+  // Against the white part alone, the same data are "outliers" in most draws: the defect this
+  // declaration removes.
+  int white_rejected = 0;
+  Rng rng2(9, 2);
+  for (int d = 0; d < 400; ++d) {
+    Eigen::VectorXd e(n);
+    for (int i = 0; i < n; ++i) e[i] = rng2.normal();
+    const Eigen::VectorXd y = L * e;
+    const Eigen::VectorXd t = deletionStatistics(y, J, Eigen::MatrixXd::Identity(n, n));
+    if (t.cwiseAbs().maxCoeff() > z) ++white_rejected;
+  }
+  EXPECT_GT(white_rejected, 200);
+}
+
+TEST(DeclaredNoise, TheJudgeWhitensByTheFullCovariance) {
+  const int n = 40, p = 3, draws = 600;
+  const Eigen::MatrixXd S = correlatedCovariance(n);
+  const Eigen::MatrixXd L = S.llt().matrixL();
+  const Eigen::MatrixXd J = design(n, p, 13);
+  Rng rng(21, 3);
+  int alarms = 0, alarms_diagonal = 0;
+  for (int d = 0; d < draws; ++d) {
+    Eigen::VectorXd e(n);
+    for (int i = 0; i < n; ++i) e[i] = rng.normal();
+    JudgeProblem pb;
+    pb.y = L * e;
+    pb.J0 = J;
+    for (int k = 0; k < p; ++k) pb.baseline_parameters.push_back({"b" + std::to_string(k), "um"});
+    pb.covariance = S;
+    pb.declaration = "test covariance";
+    const JudgeSummary s = judge(pb);
+    if (!s.baseline.passes) ++alarms;
+    if (d == 0) {
+      // The same chi2 as testAgainstDeclared, computed by the judge's own whitening.
+      EXPECT_NEAR(s.baseline.chi2, testAgainstDeclared(pb.y, J, S).chi2, 1e-6);
+      EXPECT_EQ(s.baseline.dof, n - p);
+      EXPECT_TRUE(s.correlated);
+    }
+    // The same data judged with the diagonal alone (each reading's full variance, no sharing).
+    JudgeProblem diag = pb;
+    diag.covariance.resize(0, 0);
+    diag.sigma = S.diagonal().cwiseSqrt();
+    if (!judge(diag).baseline.passes) ++alarms_diagonal;
+  }
+  // alpha = 1 %: Binomial(600, 0.01) exceeds 14 with probability below 1e-3.
+  EXPECT_LE(alarms, 14);
+  // Taking correlated errors for independent ones is not conservative, just wrong: the diagonal
+  // judge's rate is far from 1 % (the chi2's variance is much larger than 2 dof).
+  EXPECT_GT(alarms_diagonal, 30);
+}
+
+TEST(DeclaredNoise, DiagonalCovarianceEqualsSigma) {
+  const int n = 25, p = 2;
+  const Eigen::MatrixXd J = design(n, p, 17);
+  Rng rng(1, 4);
+  Eigen::VectorXd y(n), sigma(n);
+  for (int i = 0; i < n; ++i) {
+    sigma[i] = 0.5 + 0.1 * i;
+    y[i] = sigma[i] * rng.normal() + (i == 7 ? 3.0 : 0.0);
+  }
+  JudgeProblem a;
+  a.y = y;
+  a.J0 = J;
+  a.baseline_parameters = {{"b0", "um"}, {"b1", "um"}};
+  a.sigma = sigma;
+  JudgeProblem b = a;
+  b.sigma.resize(0);
+  b.covariance = sigma.cwiseAbs2().asDiagonal();
+  const JudgeSummary sa = judge(a), sb = judge(b);
+  EXPECT_NEAR(sa.baseline.chi2, sb.baseline.chi2, 1e-9);
+  EXPECT_NEAR(sa.baseline.rms_residual, sb.baseline.rms_residual, 1e-9);
+  EXPECT_EQ(sa.verdict, sb.verdict);
+}
+
+TEST(DeclaredNoise, RepeatabilityOnlyAndContradictions) {
+  const DeclaredNoise d = perTouchDeclaration(nullptr, 0.7);
+  EXPECT_TRUE(d.repeatability_only);
+  EXPECT_NEAR(d.white_um2, 0.49, 1e-12);
+  EXPECT_NE(d.declaration.find("repeatability only"), std::string::npos) << d.declaration;
+
+  ContributorSet cs;
+  cs.file = "CONTRIB.json";
+  Contributor rep;
+  rep.info = findContributor("probe_repeatability");
+  rep.u = Eigen::Vector3d::Constant(0.7e-3);
+  cs.items.push_back(rep);
+  const DeclaredNoise only = perTouchDeclaration(&cs, 0.7);
+  EXPECT_TRUE(only.repeatability_only);
+  EXPECT_NE(only.declaration.find("repeatability only"), std::string::npos) << only.declaration;
+  Contributor rough;
+  rough.info = findContributor("surface_roughness");
+  rough.u = Eigen::Vector3d::Constant(1.0e-3);
+  cs.items.push_back(rough);
+  const DeclaredNoise both = perTouchDeclaration(&cs, 0.7);
+  EXPECT_FALSE(both.repeatability_only);
+  EXPECT_NEAR(both.white_um2, 0.49 + 1.0, 1e-9);  // sqrt(0.7^2 + 1.0^2) = 1.22 um
+  try {
+    perTouchDeclaration(&cs, 0.5);
+    ADD_FAILURE() << "a contradiction was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("probe_repeatability"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("repeatability_um"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace rotacal::test
