@@ -4,8 +4,8 @@
 // file, location errors around 000 Table 4), measured with the cycle's bundled plan, written
 // through a dialect's results writer and read back, analyzed and diagnosed through the Cycle
 // interface exactly as the command line does (`analyze --contributors CONTRIB --offsets`,
-// `diagnose`). The same machine is measured again with a chip under one random touch (20 um and
-// 1 mm) and analyzed. Printed, not asserted: the figures of docs/real_machines.md.
+// `diagnose --contributors CONTRIB`). The same machine is measured again with a chip under one
+// random touch (20 um and 1 mm) and analyzed. Printed, not asserted: the figures of docs/real_machines.md.
 //
 // Run: build/bench/rotacal_real_machine_bench [--machines N] [--mc-runs R] [--seed S]
 //        [--contributors FILE] [--dialect D] [--sd-um X] [--sd-mdeg X] [--no-chips] [--verbose]
@@ -357,6 +357,7 @@ int main(int argc, char** argv) {
     dr.plan = &plan;
     dr.results = {{"RESULTS" + std::string(dialect.resultsExtension()), dialect.writeResults(plan, clean)}};
     dr.dialect = &io;
+    dr.contributors = &contrib;  // as `diagnose` reads the machine's (or --contributors)
     std::string verdict = "refused";
     try {
       const CycleDocuments dg = cycle.diagnose(dr);
