@@ -1,0 +1,468 @@
+// rotacal_real_machine_bench: analyze and diagnose on real machines, not the clean world. Each
+// machine is drawn by the independent generator (bench/independent_machine.hpp: 000 Eq. (1),
+// Eq. (22)-(23), set-up, form, pretravel, repeatability and roughness from the contributors
+// file, location errors around 000 Table 4), measured with the cycle's bundled plan, written
+// through a dialect's results writer and read back, analyzed and diagnosed through the Cycle
+// interface exactly as the command line does (`analyze --contributors CONTRIB --offsets`,
+// `diagnose --contributors CONTRIB`). The same machine is measured again with a chip under one
+// random touch (20 um and 1 mm) and analyzed. Printed, not asserted: the figures of docs/real_machines.md.
+//
+// Run: build/bench/rotacal_real_machine_bench [--machines N] [--mc-runs R] [--seed S]
+//        [--contributors FILE] [--dialect D] [--sd-um X] [--sd-mdeg X] [--no-chips] [--verbose]
+//        [--cycle touch154|one_sphere] [--dump DIR] [--off LIST]
+// --off switches contributors of the generator off (setup, form, linear_axes, pretravel,
+// repeatability, roughness; comma-separated), to see which one a failure is owed to.
+// --dump writes the first machine's PLAN.json, RESULTS, TRUTH.json, REPORT.json and DIAGNOSIS.json,
+// so that the command line can be run on the same data (`rotacal analyze --plan DIR/PLAN.json ...`).
+// Defaults: 200 machines, 2000 Monte Carlo runs per analysis (the CLI's default), seeds 1..N,
+// examples/contributors/table5.json, linuxcnc; about 2 s per machine (three analyses and one
+// diagnosis). `--machines 20` is a quick check; `--mc-runs 500` cuts the analyses' time further.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <functional>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "bench/independent_machine.hpp"
+#include "controllers/dialect.hpp"
+#include "core/contributors.hpp"
+#include "core/machine.hpp"
+#include "cycles/cycle.hpp"
+
+#ifndef ROTACAL_SOURCE_DIR
+#define ROTACAL_SOURCE_DIR "."
+#endif
+
+using namespace rotacal;
+namespace ind = rotacal::independent;
+
+namespace {
+
+struct Args {
+  int machines = 200;
+  int mc_runs = 2000;
+  std::uint64_t seed = 1;
+  std::string contributors = std::string(ROTACAL_SOURCE_DIR) + "/examples/contributors/table5.json";
+  std::string machine = std::string(ROTACAL_SOURCE_DIR) + "/examples/machines/ac_trunnion.json";
+  std::string dialect = "linuxcnc";
+  double sd_um = 5.0, sd_mdeg = 0.5;
+  std::string cycle = "touch154";
+  bool chips = true;
+  bool verbose = false;
+  std::string dump;  // a folder for the first machine's RESULTS, REPORT.json and DIAGNOSIS.json
+  std::string off;   // contributors switched off, comma-separated (what each failure is owed to)
+};
+
+[[noreturn]] void usage(const char* why) {
+  std::fprintf(stderr,
+               "rotacal_real_machine_bench: %s\nusage: rotacal_real_machine_bench [--machines N] [--mc-runs R] [--seed S] "
+               "[--contributors FILE] [--machine FILE] [--dialect D] [--sd-um X] [--sd-mdeg X] [--no-chips] [--verbose]\n"
+               "       [--cycle touch154|one_sphere] [--dump DIR] [--off setup,form,linear_axes,pretravel,repeatability,roughness]\n",
+               why);
+  std::exit(2);
+}
+
+Args parse(int argc, char** argv) {
+  Args a;
+  for (int i = 1; i < argc; ++i) {
+    const std::string k = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) usage(("missing value of " + k).c_str());
+      return argv[++i];
+    };
+    if (k == "--machines") a.machines = std::stoi(value());
+    else if (k == "--mc-runs") a.mc_runs = std::stoi(value());
+    else if (k == "--seed") a.seed = std::stoull(value());
+    else if (k == "--contributors") a.contributors = value();
+    else if (k == "--machine") a.machine = value();
+    else if (k == "--dialect") a.dialect = value();
+    else if (k == "--sd-um") a.sd_um = std::stod(value());
+    else if (k == "--sd-mdeg") a.sd_mdeg = std::stod(value());
+    else if (k == "--no-chips") a.chips = false;
+    else if (k == "--verbose") a.verbose = true;
+    else if (k == "--cycle") a.cycle = value();
+    else if (k == "--dump") a.dump = value();
+    else if (k == "--off") a.off = value();
+    else usage(("unknown option " + k).c_str());
+  }
+  if (a.machines < 1) usage("--machines must be >= 1");
+  if (a.mc_runs < 100) usage("--mc-runs must be >= 100 (analyze's own lower limit)");
+  return a;
+}
+
+DialectIO dialectIO(const Dialect& d) {
+  return {std::string(d.name()),
+          [&d](const std::string& text, const std::string& file, const ProbePlan& plan) {
+            return d.parseResults(text, file, plan);
+          },
+          [&d](const ProbePlan& plan, const MeasurementRun& run) { return d.writeResults(plan, run); }};
+}
+
+// What one analyze gave, as the command line would see it.
+struct Analyzed {
+  bool ok = false;            // analyze returned (no refusal of the data as a whole)
+  std::string error;          // its message otherwise
+  bool written = false;       // `--offsets` would write the file (no refusal, the writer accepts it)
+  std::string refused;        // why not
+  std::vector<int> excluded;  // point ids the outlier screen left out
+  bool too_many = false;
+  int beyond = 0;
+  double threshold_t = 0;
+  Json doc;
+};
+
+Analyzed analyze(const Cycle& cycle, const ProbePlan& plan, const Dialect& d, const DialectIO& io,
+                 const ContributorSet& contrib, const MeasurementRun& run, const Args& args, std::uint64_t mc_seed) {
+  AnalyzeRequest r;
+  r.plan = &plan;
+  r.results = {{"RESULTS" + std::string(d.resultsExtension()), d.writeResults(plan, run)}};
+  r.dialect = &io;
+  r.contributors = &contrib;
+  r.mc_runs = args.mc_runs;
+  r.mc_seed = mc_seed;
+  Analyzed a;
+  CycleDocuments docs;
+  try {
+    docs = cycle.analyze(r);
+  } catch (const std::exception& e) {
+    a.error = e.what();
+    return a;
+  }
+  a.ok = true;
+  a.doc = docs.doc;
+  if (a.doc.contains("outliers")) {
+    const Json& o = a.doc["outliers"];
+    for (const auto& e : o.value("excluded", Json::array())) a.excluded.push_back(e.value("point", 0));
+    a.too_many = o.value("too_many", false);
+    a.beyond = o.value("beyond", 0);
+    a.threshold_t = o.value("threshold_t", 0.0);
+  }
+  // `analyze --offsets` (cli/cmd_cycle.cpp): no corrections, a refusal, or the dialect's writer
+  // refusing a correction beyond its plausibility limit each mean no file without --force.
+  if (!docs.offsets) {
+    a.refused = docs.offsets_refused.empty() ? "no offsets" : docs.offsets_refused;
+  } else if (!docs.offsets_refused.empty()) {
+    a.refused = docs.offsets_refused;
+  } else {
+    OffsetRequest req;
+    req.plan = &plan;
+    req.identified = docs.offsets->identified;
+    req.u = docs.offsets->u;
+    req.report_file = "REPORT.json";
+    req.path = "offsets.ngc";
+    try {
+      (void)d.writeOffsets(req);
+      a.written = true;
+    } catch (const std::exception& e) {
+      a.refused = e.what();
+    }
+  }
+  return a;
+}
+
+// The report's value and U of a parameter, in report units; nullopt when the report has none.
+struct ValueU {
+  double value = 0, U = 0, u_c = 0;
+};
+// A parameter's value, U and u_c in the report: U and u_c beside the value, else in the budget's
+// block under the parameter's own name or its ISO 230-7 name (one_sphere's budget is in those).
+std::optional<ValueU> reported(const Json& doc, const std::string& name) {
+  const Json* entry = nullptr;
+  if (doc.contains("location_errors") && doc["location_errors"].contains(name)) entry = &doc["location_errors"][name];
+  const Json* budget = nullptr;
+  if (doc.contains("uncertainty") && doc["uncertainty"].contains("parameters")) {
+    const Json& ps = doc["uncertainty"]["parameters"];
+    if (ps.contains(name)) budget = &ps[name];
+    else if (entry && entry->contains("iso") && ps.contains((*entry)["iso"].get<std::string>()))
+      budget = &ps[(*entry)["iso"].get<std::string>()];
+    else {
+      // 000's parameters that 000 Table 1 names relative to the A axis are, in the per-axis
+      // ISO 230-7 model, the C axis's own (docs/conventions.md).
+      static const std::map<std::string, std::string> per_axis = {{"dx_AY", "X0C"}, {"dy_CA", "Y0C"}, {"b_CA", "B0C"}};
+      const auto it = per_axis.find(name);
+      if (it != per_axis.end() && ps.contains(it->second)) budget = &ps[it->second];
+    }
+  }
+  if (!entry && budget) entry = budget;  // a parameter only the budget lists (one_sphere's squareness)
+  if (!entry) return std::nullopt;
+  auto number = [&](const char* key) -> std::optional<double> {
+    if (entry->contains(key) && (*entry)[key].is_number()) return (*entry)[key].get<double>();
+    if (budget && budget->contains(key) && (*budget)[key].is_number()) return (*budget)[key].get<double>();
+    return std::nullopt;
+  };
+  const auto value = number("value"), U = number("U"), uc = number("u_c");
+  if (!value || !U) return std::nullopt;
+  return ValueU{*value, *U, uc.value_or(0.0)};
+}
+
+// The diagnosis' baseline adequacy test, where the cycle's document puts it.
+const Json* baselineAdequacy(const Json& doc) {
+  for (const Json* d : {&doc, doc.contains("judge") ? &doc["judge"] : nullptr})
+    if (d && d->contains("baseline") && (*d)["baseline"].contains("adequacy")) return &(*d)["baseline"]["adequacy"];
+  return nullptr;
+}
+
+// What the coverage is counted on: the location errors, then the linear axes' squareness where
+// the report estimates it (one_sphere fits it), each with the drawn truth in report units.
+struct Counted {
+  std::string name, unit;
+  std::function<double(const ind::Machine&)> truth;
+};
+std::vector<Counted> countedParameters() {
+  std::vector<Counted> c;
+  const auto& params = locationParameters(Kinematics::TableAC);
+  for (size_t k = 0; k < params.size(); ++k)
+    c.push_back({std::string(params[k].name), std::string(reportUnit(params[k].kind)),
+                 [k](const ind::Machine& m) { return m.location.reportValue(static_cast<int>(k)); }});
+  // A squareness S (mm/mm) is reported as the small angle it is, in mdeg.
+  const double mdeg = 180.0 / 3.14159265358979323846 * 1e3;
+  c.push_back({"S_xy", "mdeg", [mdeg](const ind::Machine& m) { return m.axes.S_xy * mdeg; }});
+  c.push_back({"S_xz", "mdeg", [mdeg](const ind::Machine& m) { return m.axes.S_xz * mdeg; }});
+  c.push_back({"S_yz", "mdeg", [mdeg](const ind::Machine& m) { return m.axes.S_yz * mdeg; }});
+  return c;
+}
+
+void writeFile(const std::string& dir, const std::string& name, const std::string& text) {
+  std::filesystem::create_directories(dir);
+  std::ofstream(std::filesystem::path(dir) / name, std::ios::binary) << text;
+}
+
+// The drawn truth as TRUTH.json (rotacal-truth/1) plus what the generator drew beside it.
+Json truthJson(const ind::Machine& m) {
+  Json le = Json::object();
+  const auto& params = locationParameters(Kinematics::TableAC);
+  for (size_t k = 0; k < params.size(); ++k)
+    le[std::string(params[k].name)] = {{"value", m.location.reportValue(static_cast<int>(k))},
+                                       {"unit", std::string(reportUnit(params[k].kind))}};
+  return {{"format", "rotacal-truth/1"},
+          {"_comment", "drawn by bench/independent_machine (rotacal_real_machine_bench --dump)"},
+          {"location_errors", le},
+          {"independent_generator",
+           {{"setup_translation_um", {1e3 * m.setup_translation_mm.x(), 1e3 * m.setup_translation_mm.y(), 1e3 * m.setup_translation_mm.z()}},
+            {"setup_rotation_urad", {1e6 * m.setup_rotation_rad.x(), 1e6 * m.setup_rotation_rad.y(), 1e6 * m.setup_rotation_rad.z()}},
+            {"squareness_um_per_m", {{"S_xy", 1e6 * m.axes.S_xy}, {"S_xz", 1e6 * m.axes.S_xz}, {"S_yz", 1e6 * m.axes.S_yz}}},
+            {"scale_um_per_m", {1e6 * m.axes.scale[0], 1e6 * m.axes.scale[1], 1e6 * m.axes.scale[2]}},
+            {"node_spacing_mm", {m.axes.spacing_mm[0], m.axes.spacing_mm[1], m.axes.spacing_mm[2]}}}}};
+}
+
+double pct(int k, int n) { return n > 0 ? 100.0 * k / n : 0.0; }
+
+struct Quantiles {
+  std::vector<double> v;
+  void add(double x) { v.push_back(x); }
+  std::string text(int digits) const {
+    if (v.empty()) return "-";
+    std::vector<double> s = v;
+    std::sort(s.begin(), s.end());
+    auto q = [&](double p) { return s[static_cast<size_t>(p * static_cast<double>(s.size() - 1) + 0.5)]; };
+    return fmt::format("median {:.{}f} (min {:.{}f}, 90 % {:.{}f}, max {:.{}f}; {} machines)", q(0.5), digits, s.front(),
+                       digits, q(0.9), digits, s.back(), digits, s.size());
+  }
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Args args = parse(argc, argv);
+  const auto t0 = std::chrono::steady_clock::now();
+  const MachineModel machine = loadMachine(args.machine);
+  const ContributorSet contrib = loadContributors(args.contributors);
+  const ProbePlan plan = makePlan(args.cycle, machine, {});
+  const Cycle& cycle = cycleOfPlan(plan);
+  const Dialect& dialect = dialectByName(args.dialect);
+  const DialectIO io = dialectIO(dialect);
+
+  ind::DrawOptions draw;
+  draw.sd_um = args.sd_um;
+  draw.sd_mdeg = args.sd_mdeg;
+  for (size_t b = 0, e; b <= args.off.size() && !args.off.empty(); b = e + 1) {
+    e = std::min(args.off.find(',', b), args.off.size());
+    const std::string w = args.off.substr(b, e - b);
+    bool* flag = w == "setup" ? &draw.setup
+                 : w == "form" ? &draw.form
+                 : w == "linear_axes" ? &draw.linear_axes
+                 : w == "pretravel" ? &draw.pretravel
+                 : w == "repeatability" ? &draw.repeatability
+                 : w == "roughness" ? &draw.roughness
+                 : nullptr;
+    if (!flag) usage(("--off: unknown contributor " + w).c_str());
+    *flag = false;
+  }
+
+  int n = 0, analyzed = 0, written = 0, screen_removed = 0, screen_gave_up = 0, diagnosed = 0, inadequate = 0,
+      named = 0, no_effect = 0;
+  std::map<std::string, int> causes, refusals;
+  struct ChipTally {
+    int n = 0, caught = 0, written = 0, written_from_chip = 0, gave_up = 0;
+  };
+  ChipTally chip20, chip1mm;
+  const std::vector<Counted> cover = countedParameters();
+  std::vector<int> in_U(cover.size(), 0), in_uc(cover.size(), 0), counted(cover.size(), 0);
+  std::vector<double> err2(cover.size(), 0.0), U2(cover.size(), 0.0);
+  Quantiles beyond, removed_count, chi2_dof, excess_rms, residual_rms, threshold;
+  std::map<std::string, int> top_factor;
+
+  for (int i = 0; i < args.machines; ++i) {
+    const std::uint64_t seed = args.seed + static_cast<std::uint64_t>(i);
+    const ind::Machine m = ind::drawMachine(contrib, machine, draw, seed);
+    ++n;
+    const MeasurementRun clean = ind::measure(plan, m);
+    const Analyzed a = analyze(cycle, plan, dialect, io, contrib, clean, args, seed);
+    const bool dump = i == 0 && !args.dump.empty();
+    if (dump) {
+      writeFile(args.dump, "PLAN.json", planToJson(plan).dump(1) + "\n");
+      writeFile(args.dump, "RESULTS" + std::string(dialect.resultsExtension()), dialect.writeResults(plan, clean));
+      writeFile(args.dump, "TRUTH.json", truthJson(m).dump(1) + "\n");
+      writeFile(args.dump, "REPORT.json", a.doc.dump(1) + "\n");
+    }
+    if (!a.ok) {
+      ++refusals["analyze refused: " + a.error.substr(0, 80)];
+    } else {
+      ++analyzed;
+      if (a.written) ++written;
+      else ++refusals[a.refused.substr(0, std::min<size_t>(a.refused.find(':') == std::string::npos ? 60 : a.refused.find(':'), 60))];
+      if (!a.excluded.empty()) {
+        ++screen_removed;
+        removed_count.add(static_cast<double>(a.excluded.size()));
+      }
+      if (a.too_many) {
+        ++screen_gave_up;
+        beyond.add(a.beyond);
+      }
+      if (a.doc.contains("outliers")) threshold.add(a.threshold_t);
+      for (size_t k = 0; k < cover.size(); ++k) {
+        const auto v = reported(a.doc, cover[k].name);
+        if (!v) continue;
+        const double e = std::abs(v->value - cover[k].truth(m));
+        ++counted[k];
+        in_U[k] += e <= v->U;
+        in_uc[k] += e <= v->u_c;
+        err2[k] += e * e;
+        U2[k] += v->U * v->U;
+      }
+    }
+
+    DiagnoseRequest dr;
+    dr.plan = &plan;
+    dr.results = {{"RESULTS" + std::string(dialect.resultsExtension()), dialect.writeResults(plan, clean)}};
+    dr.dialect = &io;
+    dr.contributors = &contrib;  // as `diagnose` reads the machine's (or --contributors)
+    std::string verdict = "refused";
+    try {
+      const CycleDocuments dg = cycle.diagnose(dr);
+      if (dump) writeFile(args.dump, "DIAGNOSIS.json", dg.doc.dump(1) + "\n");
+      ++diagnosed;
+      verdict = dg.doc.value("verdict", std::string("?"));
+      if (verdict == "model_inadequate") ++inadequate;
+      if (verdict == "no_significant_effect") ++no_effect;
+      const Json findings = dg.doc.value("findings", Json::array());
+      if (!findings.empty()) ++named;
+      for (const auto& f : findings) ++causes[f.value("cause", std::string("?"))];
+      if (const Json* adequacy = baselineAdequacy(dg.doc)) {
+        const Json& ad = *adequacy;
+        const double dof = ad.value("dof", 0.0);
+        if (dof > 0) chi2_dof.add(ad.value("chi2", 0.0) / dof);
+        excess_rms.add(ad.value("excess_rms", 0.0));
+        residual_rms.add(ad.value("rms_residual", 0.0));
+        double best = -1;
+        std::string who;
+        for (const auto& f : ad.value("factors", Json::array()))
+          if (f.value("share", 0.0) > best) best = f.value("share", 0.0), who = f.value("factor", std::string("?"));
+        if (!who.empty()) ++top_factor[who];
+      }
+    } catch (const std::exception& e) {
+      ++refusals["diagnose refused: " + std::string(e.what()).substr(0, 80)];
+    }
+
+    std::string chip_line;
+    if (args.chips) {
+      // The chip's touch: one of the plan's, drawn from the machine's own seed.
+      std::mt19937_64 pick(seed ^ 0x9e3779b97f4a7c15ULL);
+      const int id = plan.points[std::uniform_int_distribution<size_t>(0, plan.points.size() - 1)(pick)].id;
+      for (auto [height_mm, tally] : {std::pair{0.020, &chip20}, std::pair{1.0, &chip1mm}}) {
+        const MeasurementRun chipped = ind::measure(plan, m, ind::Chip{id, height_mm});
+        const Analyzed c = analyze(cycle, plan, dialect, io, contrib, chipped, args, seed);
+        ++tally->n;
+        const bool caught = std::find(c.excluded.begin(), c.excluded.end(), id) != c.excluded.end();
+        tally->caught += caught;
+        tally->written += c.written;
+        tally->written_from_chip += c.written && !caught;
+        tally->gave_up += c.too_many;
+        if (!c.written)
+          ++refusals[fmt::format("{:g} um chip: ", height_mm * 1e3) +
+                     (c.ok ? c.refused.substr(0, std::min<size_t>(c.refused.find(':'), 60)) : "analyze refused: " + c.error.substr(0, 80))];
+        chip_line += fmt::format(" chip {:g} um at {}: {}{}", height_mm * 1e3, id, caught ? "caught" : "missed",
+                                 c.written ? (caught ? ", written" : ", WRITTEN") : ", refused");
+      }
+    }
+    if (args.verbose || (i + 1) % 20 == 0)
+      std::fprintf(stderr, "machine %d/%d (seed %llu): offsets %s, screen %s, diagnose %s;%s  [%.0f s]\n", i + 1,
+                   args.machines, static_cast<unsigned long long>(seed),
+                   a.ok ? (a.written ? "written" : "refused") : "analyze refused",
+                   a.too_many ? fmt::format("gave up ({} beyond {:.2f})", a.beyond, a.threshold_t).c_str()
+                              : fmt::format("{} removed", a.excluded.size()).c_str(),
+                   verdict.c_str(), chip_line.c_str(),
+                   std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  std::printf("rotacal_real_machine_bench: %s (%zu touches) on %s, contributors %s, dialect %s\n", args.cycle.c_str(),
+              plan.points.size(), args.machine.c_str(),
+              args.contributors.c_str(), args.dialect.c_str());
+  if (!args.off.empty()) std::printf("switched off in the generator: %s\n", args.off.c_str());
+  std::printf("%d machines (seeds %llu..%llu), location errors around 000 Table 4 (sd %g um, %g mdeg), analyze's Monte "
+              "Carlo %d runs; %.0f s (%.1f s per machine)\n\n",
+              n, static_cast<unsigned long long>(args.seed), static_cast<unsigned long long>(args.seed + n - 1), args.sd_um,
+              args.sd_mdeg, args.mc_runs, seconds, seconds / n);
+  if (analyzed < n || diagnosed < n)
+    std::printf("analyze returned on %d of %d machines, diagnose on %d (the others refused the data: listed below)\n\n",
+                analyzed, n, diagnosed);
+  std::printf("| figure | machines | %% | issue's target |\n|---|---|---|---|\n");
+  auto row = [&](const char* what, int k, int of, const char* target) {
+    std::printf("| %s | %d / %d | %.1f %% | %s |\n", what, k, of, pct(k, of), target);
+  };
+  row("offsets written (`analyze --offsets`, no --force)", written, n, ">= 99 %");
+  row("`diagnose`: model_inadequate", inadequate, n, "<= 5 %");
+  row("`diagnose`: a cause named", named, n, "<= 2 %");
+  row("`diagnose`: no_significant_effect", no_effect, n, "");
+  row("outlier screen removed >= 1 touch (chip-free)", screen_removed, n, "<= 1 % (its alpha)");
+  row("outlier screen gave up (too many beyond; offsets refused)", screen_gave_up, n, "");
+  if (args.chips) {
+    row("20 um chip caught (its touch excluded)", chip20.caught, chip20.n, ">= 95 %");
+    row("20 um chip: offsets written", chip20.written, chip20.n, "");
+    row("20 um chip: offsets written with the chip in the fit", chip20.written_from_chip, chip20.n, "0");
+    row("1 mm chip caught", chip1mm.caught, chip1mm.n, "100 %");
+    row("1 mm chip: offsets written", chip1mm.written, chip1mm.n, "");
+    row("1 mm chip: offsets written with the chip in the fit", chip1mm.written_from_chip, chip1mm.n, "0");
+  }
+  std::printf("\nCoverage of analyze's U (chip-free machines; truth = the drawn location errors):\n\n");
+  std::printf("| parameter | within U | within u_c | rms error | rms U | unit |\n|---|---|---|---|---|---|\n");
+  for (size_t k = 0; k < cover.size(); ++k)
+    if (counted[k] > 0)
+      std::printf("| %s | %.1f %% | %.1f %% | %.3f | %.3f | %s |\n", cover[k].name.c_str(), pct(in_U[k], counted[k]),
+                  pct(in_uc[k], counted[k]), std::sqrt(err2[k] / counted[k]), std::sqrt(U2[k] / counted[k]),
+                  cover[k].unit.c_str());
+  std::printf("\nWhat fires (chip-free machines):\n");
+  std::printf("- outlier screen threshold |t|: %s\n",
+              threshold.v.empty() ? "no outlier screen in this cycle's analyze" : threshold.text(2).c_str());
+  std::printf("- touches beyond it when the screen gave up: %s\n", beyond.text(0).c_str());
+  std::printf("- touches removed when it did not: %s\n", removed_count.text(0).c_str());
+  std::printf("- diagnose baseline chi2 / dof: %s\n", chi2_dof.text(2).c_str());
+  std::printf("- diagnose baseline rms residual (um): %s\n", residual_rms.text(2).c_str());
+  std::printf("- diagnose baseline excess rms over the declared noise (um): %s\n", excess_rms.text(2).c_str());
+  for (const auto& [f, k] : top_factor) std::printf("- adequacy factor carrying the largest share: %s on %d machines\n", f.c_str(), k);
+  for (const auto& [c, k] : causes) std::printf("- cause named: %s on %d machines\n", c.c_str(), k);
+  for (const auto& [r, k] : refusals) std::printf("- not written / refused: \"%s\" on %d machines\n", r.c_str(), k);
+  return 0;
+}

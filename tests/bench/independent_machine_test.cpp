@@ -1,0 +1,258 @@
+// The independent generator (bench/independent_machine.hpp) against rotacal's own simulator and
+// against the closed form of 000 Eq. (22)-(23). The generator shares no code with
+// core/simulation, so agreement on a clean machine checks both readings of 000 Eq. (1), the
+// set-up and the contact; the statistics check that its linear axes are the model the
+// contributors file declares.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "bench/independent_machine.hpp"
+#include "core/contributors.hpp"
+#include "core/machine.hpp"
+#include "core/simulation.hpp"
+#include "cycles/cycle.hpp"
+
+namespace rotacal {
+namespace {
+
+namespace ind = independent;
+
+const std::string kMachine = std::string(ROTACAL_SOURCE_DIR) + "/examples/machines/ac_trunnion.json";
+const std::string kContrib = std::string(ROTACAL_SOURCE_DIR) + "/examples/contributors/table5.json";
+
+const ProbePlan& touch154() {
+  static const ProbePlan plan = makePlan("touch154", loadMachine(kMachine), {});
+  return plan;
+}
+
+// The largest difference between two runs' triggers, um.
+double maxDiffUm(const MeasurementRun& a, const MeasurementRun& b) {
+  EXPECT_EQ(a.points.size(), b.points.size());
+  double worst = 0;
+  for (size_t i = 0; i < a.points.size() && i < b.points.size(); ++i) {
+    EXPECT_EQ(a.points[i].point_id, b.points[i].point_id);
+    worst = std::max(worst, 1e3 * (a.points[i].position_m_mm - b.points[i].position_m_mm).norm());
+  }
+  return worst;
+}
+
+LocationErrors table4() {
+  LocationErrors e;
+  e.kinematics = Kinematics::TableAC;
+  const double v[8] = {14.6, 23.2, 27.7, 3.9, -0.5, -0.1, -0.5, 0.2};
+  const char* names[8] = {"dx_AY", "dy_AY", "dz_AY", "dy_CA", "a_AY", "b_AY", "c_AY", "b_CA"};
+  for (int i = 0; i < 8; ++i) e.setReportValue(parameterIndex(Kinematics::TableAC, names[i]), v[i]);
+  return e;
+}
+
+double triggerShiftUm(const MeasurementRun& a, const MeasurementRun& nominal) {
+  double worst = 0;
+  for (size_t i = 0; i < a.points.size(); ++i)
+    worst = std::max(worst, 1e3 * (a.points[i].position_m_mm - nominal.points[i].position_m_mm).norm());
+  return worst;
+}
+
+// A clean machine (location errors only, no noise): both simulators give the same triggers, for
+// 000 Table 4's errors and for each error alone at a size that shows its sign (100 um, 10 mdeg).
+TEST(IndependentMachine, CleanMachineTriggersEqualRotacalSimulate) {
+  const ProbePlan& plan = touch154();
+  std::vector<LocationErrors> cases = {table4()};
+  for (int k = 0; k < kNumLocationErrors; ++k) {
+    LocationErrors e;
+    e.kinematics = Kinematics::TableAC;
+    const bool length = locationParameters(Kinematics::TableAC)[static_cast<size_t>(k)].kind == ParamKind::Length;
+    e.setReportValue(k, length ? 100.0 : 10.0);
+    cases.push_back(e);
+  }
+  Truth perfect;
+  const MeasurementRun nominal = simulate(plan, perfect, {});
+  for (const LocationErrors& e : cases) {
+    Truth truth;
+    truth.errors = e;
+    const MeasurementRun theirs = simulate(plan, truth, {});
+    const MeasurementRun ours = ind::measure(plan, ind::cleanMachine(e));
+    EXPECT_LT(maxDiffUm(ours, theirs), 1e-6);
+    // and the case moves the triggers at all (a test of nothing would pass too)
+    EXPECT_GT(triggerShiftUm(ours, nominal), 5.0);
+  }
+}
+
+// The set-up and each part of the form alone, against rotacal's ArtefactTruth. The tilt axes are
+// defined differently (here Z x n on the sides; rotacal's +Y or +X): the same physical tilt is
+// handed to each in its own convention.
+TEST(IndependentMachine, SetupAndFormEqualRotacalSimulate) {
+  const ProbePlan& plan = touch154();
+  const LocationErrors e = table4();
+  ind::Machine ours = ind::cleanMachine(e);
+  Truth truth;
+  truth.errors = e;
+  ours.setup_translation_mm = truth.artefact.setup.translation_mm = Eigen::Vector3d(0.5, -0.4, 0.12);
+  ours.setup_rotation_rad = truth.artefact.setup.rotation_rad = Eigen::Vector3d(1e-3, -2e-3, 3e-3);
+  EXPECT_LT(maxDiffUm(ind::measure(plan, ours), simulate(plan, truth, {})), 1e-6);
+
+  for (const bool tilts : {false, true}) {
+    for (Face f : kAllFaces) {
+      const size_t i = static_cast<size_t>(f);
+      if (!tilts) {
+        ours.form[i] = {0.05 * (1 + static_cast<double>(i)), 0, 0};
+        truth.artefact.form[i] = {0.05 * (1 + static_cast<double>(i)), 0, 0};
+        continue;
+      }
+      const Eigen::Vector3d n = faceNormal_w(f);
+      const Eigen::Vector3d u_ours = f == Face::Top ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitZ().cross(n);
+      const auto axes = faceAxes_w(f);
+      const double tu = 2e-3 * (1 + static_cast<double>(i)), tv = -1e-3 * (1 + static_cast<double>(i));
+      ours.form[i] = {0, tu, tv};
+      truth.artefact.form[i] = {0, tu * u_ours.dot(axes[0]), tv};
+    }
+    EXPECT_LT(maxDiffUm(ind::measure(plan, ours), simulate(plan, truth, {})), 1e-6) << (tilts ? "tilts" : "offsets");
+  }
+}
+
+// The contact with the linear axes' error field: rotacal's simulator given this generator's
+// field (drawn from 000 Table 5) and pretravel by direction finds the same triggers; the
+// field itself is what the statistics below check.
+TEST(IndependentMachine, LinearAxesAndPretravelContactEqualsRotacalSimulate) {
+  const ProbePlan& plan = touch154();
+  ContributorSet c = loadContributors(kContrib);
+  ind::DrawOptions o;
+  o.setup = o.form = o.repeatability = o.roughness = false;
+  ind::Machine m = ind::drawMachine(c, plan.machine, o, 7);
+  m.pretravel_mm = {1e-3, -2e-3, 3e-3, 0.5e-3, -1.5e-3, 2.5e-3};
+  Truth truth;
+  truth.errors = m.location;
+  truth.linear_axis_error = [&m](const Eigen::Vector3d& read) { return m.axes.error(read); };
+  truth.pretravel_by_direction_um = [&m](const Eigen::Vector3d& u) {
+    double pt = 0;
+    for (int k = 0; k < 3; ++k) pt += u[k] * u[k] * m.pretravel_mm[static_cast<size_t>(2 * k + (u[k] < 0 ? 1 : 0))];
+    return 1e3 * pt;
+  };
+  const MeasurementRun ours = ind::measure(plan, m);
+  EXPECT_LT(maxDiffUm(ours, simulate(plan, truth, {})), 1e-6);
+  Truth without = truth;
+  without.linear_axis_error = nullptr;
+  EXPECT_GT(maxDiffUm(ours, simulate(plan, without, {})), 1.0);  // the axes do act (um)
+}
+
+// A sphere cycle's plan (one_sphere): the same agreement on the sphere, moved off its place, with
+// and without this generator's linear-axis field.
+TEST(IndependentMachine, SphereTriggersEqualRotacalSimulate) {
+  const ProbePlan plan = makePlan("one_sphere", loadMachine(kMachine), {});
+  ContributorSet c = loadContributors(kContrib);
+  ind::DrawOptions o;
+  o.form = o.pretravel = o.repeatability = o.roughness = false;
+  for (const bool axes : {false, true}) {
+    o.linear_axes = axes;
+    const ind::Machine m = ind::drawMachine(c, plan.machine, o, 3);
+    Truth truth;
+    truth.errors = m.location;
+    for (const auto& p : plan.points) truth.sphere_center_error_w_mm[p.sphere->id] = m.setup_translation_mm;
+    if (axes) truth.linear_axis_error = [&m](const Eigen::Vector3d& read) { return m.axes.error(read); };
+    EXPECT_LT(maxDiffUm(ind::measure(plan, m), simulate(plan, truth, {})), 1e-6) << (axes ? "with axes" : "");
+    EXPECT_GT(m.setup_translation_mm.norm(), 1e-3);  // the sphere is off its place (mm)
+  }
+}
+
+// A chip of c under one touch moves that trigger back along the approach by c (to the
+// cosine of the face's tilt) and no other.
+TEST(IndependentMachine, ChipReadsTheSurfaceCloserAtItsTouchAlone) {
+  const ProbePlan& plan = touch154();
+  ContributorSet c = loadContributors(kContrib);
+  ind::DrawOptions o;
+  o.linear_axes = false;  // their slope would change the shift by ~1e-4 c
+  const ind::Machine m = ind::drawMachine(c, plan.machine, o, 11);
+  const MeasurementRun clean = ind::measure(plan, m);
+  const int id = plan.points[40].id;
+  const MeasurementRun chipped = ind::measure(plan, m, ind::Chip{id, 0.020});
+  for (size_t i = 0; i < plan.points.size(); ++i) {
+    const Eigen::Vector3d d = chipped.points[i].position_m_mm - clean.points[i].position_m_mm;
+    if (plan.points[i].id != id) {
+      EXPECT_EQ(d.norm(), 0.0);
+      continue;
+    }
+    // back along the approach by c over the cosine between the approach and the true face's
+    // normal (the form's tilts and the set-up turn it by a few mrad)
+    const double cosine = std::abs(ind::facePlane_m(plan, plan.points[i], m).normal_m.dot(plan.points[i].approach_m));
+    EXPECT_NEAR(d.dot(plan.points[i].approach_m), -0.020 / cosine, 1e-12);
+    EXPECT_NEAR(d.norm(), 0.020, 1e-6);
+  }
+}
+
+// Var(E_ba,rand(q)) at a fixed q averaged over the spacing p ~ U[p_min, p_max]: u^2 times
+// E_p[(1 - f)^2 + f^2], f = frac(q / p), integrated numerically (midpoint rule, 2e5 steps).
+double interpolationFactor(double q, double p_min, double p_max) {
+  const int n = 200000;
+  double s = 0;
+  for (int i = 0; i < n; ++i) {
+    const double p = p_min + (p_max - p_min) * (i + 0.5) / n;
+    const double f = q / p - std::floor(q / p);
+    s += (1 - f) * (1 - f) + f * f;
+  }
+  return s / n;
+}
+
+struct Moments {
+  double sum = 0, sum2 = 0;
+  int n = 0;
+  void add(double x) { sum += x, sum2 += x * x, ++n; }
+  double mean() const { return sum / n; }
+  double var() const { return (sum2 - sum * sum / n) / (n - 1); }
+};
+
+// 000 Eq. (22)-(23) in closed form against the drawn machines: at a node the random part has the
+// declared variance u^2, midway between nodes u^2 / 2 (two independent nodes weighed 1/2 each);
+// at a fixed position, over the drawn spacings, u^2 E_p[(1 - f)^2 + f^2] plus the slope's
+// (u_slope q)^2; the spacing is uniform on the file's range. Tolerances: 4 standard errors.
+TEST(IndependentMachine, LinearAxisDrawHasEq22And23Statistics) {
+  const ContributorSet c = loadContributors(kContrib);
+  const MachineModel machine = loadMachine(kMachine);
+  const int N = 4000;
+  const double u_rand = c.find("E_xy_rand")->u[0], u_S = c.find("S_xy")->u[0], u_lin = c.find("E_yy_lin")->u[0];
+  const double q = 137.0;  // mm along Y, not a multiple of anything
+  Moments node, mid, fixed_xy, fixed_yy, spacing, node_zz;
+  for (int k = 0; k < N; ++k) {
+    const ind::Machine m = ind::drawMachine(c, machine, {}, 1000 + static_cast<std::uint64_t>(k));
+    const ind::LinearAxes& a = m.axes;
+    const double p = a.spacing_mm[1];
+    spacing.add(p);
+    node.add(a.randomPart(1, 0, 3 * p));           // E_xy,rand at a node
+    mid.add(a.randomPart(1, 0, 3.5 * p));          // midway
+    fixed_xy.add(a.component(1, 0, q));            // S_xy q + E_xy,rand(q)
+    fixed_yy.add(a.component(1, 1, q));            // E_yy,lin q + E_yy,rand(q)
+    node_zz.add(a.component(2, 2, -2 * a.spacing_mm[2]) + 2 * a.spacing_mm[2] * a.scale[2]);  // random part at a node
+  }
+  const double se = std::sqrt(2.0 / (N - 1));  // relative standard error of a variance
+  const double g = interpolationFactor(q, c.node_spacing_min_mm, c.node_spacing_max_mm);
+  EXPECT_NEAR(node.var() / (u_rand * u_rand), 1.0, 4 * se);
+  EXPECT_NEAR(node_zz.var() / std::pow(c.find("E_zz_rand")->u[0], 2), 1.0, 4 * se);
+  EXPECT_NEAR(mid.var() / (u_rand * u_rand), 0.5, 4 * se * 0.5);
+  const double v_xy = u_S * u_S * q * q + u_rand * u_rand * g;
+  const double v_yy = u_lin * u_lin * q * q + std::pow(c.find("E_yy_rand")->u[0], 2) * g;
+  EXPECT_NEAR(fixed_xy.var() / v_xy, 1.0, 4 * se);
+  EXPECT_NEAR(fixed_yy.var() / v_yy, 1.0, 4 * se);
+  EXPECT_NEAR(node.mean(), 0.0, 4 * u_rand / std::sqrt(N));
+  EXPECT_NEAR(fixed_xy.mean(), 0.0, 4 * std::sqrt(v_xy / N));
+  // the spacing: uniform on [20, 50] mm has mean 35 and variance 30^2 / 12
+  EXPECT_NEAR(spacing.mean(), 0.5 * (c.node_spacing_min_mm + c.node_spacing_max_mm),
+              4 * (c.node_spacing_max_mm - c.node_spacing_min_mm) / std::sqrt(12.0 * N));
+  EXPECT_NEAR(spacing.var() / (std::pow(c.node_spacing_max_mm - c.node_spacing_min_mm, 2) / 12), 1.0, 4 * 0.02);
+  // the factor itself lies between the midway 1/2 and the node's 1
+  EXPECT_GT(g, 0.5);
+  EXPECT_LT(g, 1.0);
+}
+
+// Two machines from one seed are the same machine; another seed is another.
+TEST(IndependentMachine, SeededDraws) {
+  const ContributorSet c = loadContributors(kContrib);
+  const ProbePlan& plan = touch154();
+  const MeasurementRun a = ind::measure(plan, ind::drawMachine(c, plan.machine, {}, 5));
+  const MeasurementRun b = ind::measure(plan, ind::drawMachine(c, plan.machine, {}, 5));
+  const MeasurementRun d = ind::measure(plan, ind::drawMachine(c, plan.machine, {}, 6));
+  EXPECT_EQ(maxDiffUm(a, b), 0.0);
+  EXPECT_GT(maxDiffUm(a, d), 1.0);
+}
+
+}  // namespace
+}  // namespace rotacal
