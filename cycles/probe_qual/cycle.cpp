@@ -26,7 +26,10 @@ class ProbeQual final : public Cycle {
     const ProbePlan& plan = *r.plan;
     const ProbeQualification q = qualifyProbe(plan, readProbeRuns(plan, r.results, *r.dialect));
     const std::vector<std::string> files = pathsOf(r.results);
-    return documents(probeQualReportJson(plan, q, files), probeQualText(q));
+    CycleDocuments out = documents(probeQualReportJson(plan, q, files), probeQualText(q));
+    // A chip left out is named on stderr: the repeatability copied into MACHINE.json is the rest's.
+    if (!q.screen.excluded.empty() || q.screen.too_many) out.warnings.push_back(q.screen.text());
+    return out;
   }
 
   CycleDocuments diagnose(const DiagnoseRequest& r) const override {

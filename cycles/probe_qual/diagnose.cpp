@@ -39,7 +39,8 @@ ProbeQualDiagnosis diagnoseProbeQual(const ProbePlan& plan, const std::vector<Me
   std::vector<double> weights;  // the rows read along the approach
   for (Eigen::Index j = 0; j < n; ++j) {
     const auto js = static_cast<size_t>(j);
-    weights.push_back(1.0 / std::max(1e-6, std::abs(q.normals[js].dot(plan.points[js % plan.points.size()].approach_m))));
+    weights.push_back(
+        1.0 / std::max(1e-6, std::abs(q.normals[js].dot(plan.points[static_cast<size_t>(q.point_index[js])].approach_m))));
   }
   p.causes.push_back(sphereDriftCause(q.normals, q.t_s, weights));
   p.group_name = "repeat";
