@@ -14,6 +14,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "core/contributor_draw.hpp"
+#include "core/contributors.hpp"
 #include "core/simulation.hpp"
 #include "core/units.hpp"
 #include "cycles/cycle.hpp"
@@ -180,6 +182,35 @@ TEST(ProbeQual, TheScreenKeepsItsRateOnCleanProbes) {
     lost += qualifyProbe(plan, {simulate(plan, t, {static_cast<std::uint64_t>(5000 + k)})}).screen.excluded.empty() ? 0 : 1;
   std::printf("clean qualifications that lost a touch: %d of 300\n", lost);
   EXPECT_LE(lost, 8);
+}
+
+TEST(ProbeQual, TheJudgeKeepsItsRateOnDrawnMachines) {
+  // 20 machines drawn from the bundled machine's own contributors (table5.json: 0.7 um
+  // repeatability + 1.0 um roughness per touch, the linear axes' scale, squareness and random
+  // node errors of 000 Eqs. (22)-(23)), qualified twice 30 min apart: against that declaration
+  // the judge's false alarms stay at its rate (alpha = 1 %: Binomial(20, 0.01) exceeds 2 with
+  // probability 0.001); against the repeatability alone, such machines look inadequate.
+  const MachineModel m = acMachine();
+  const ProbePlan plan = makePlan("probe_qual", m, {});
+  const ContributorSet cs = loadContributors(test::sourcePath("examples/contributors/table5.json"));
+  int inadequate = 0, old_inadequate = 0;
+  for (int k = 0; k < 20; ++k) {
+    Truth t = test::truthWith(test::table4Mean());
+    t.pretravel_by_direction_um = truePretravel;
+    drawMachine(plan, cs, 700 + static_cast<std::uint64_t>(k), &t);
+    Truth later = t;
+    later.start_time_s = 1800.0;
+    const std::vector<MeasurementRun> runs = {simulate(plan, t, {static_cast<std::uint64_t>(2 * k + 1)}),
+                                              simulate(plan, later, {static_cast<std::uint64_t>(2 * k + 2)})};
+    const auto d = diagnoseProbeQual(plan, runs, JudgeOptions{}, &cs);
+    if (d.summary.verdict != JudgeVerdict::NoSignificantEffect) std::printf("machine %d: %s\n", k, d.summary.message.c_str());
+    inadequate += d.summary.verdict == JudgeVerdict::ModelInadequate;
+    old_inadequate += diagnoseProbeQual(plan, runs, JudgeOptions{}).summary.verdict == JudgeVerdict::ModelInadequate;
+  }
+  std::printf("20 drawn machines: model_inadequate on %d against the declared contributors, %d against the "
+              "repeatability alone\n",
+              inadequate, old_inadequate);
+  EXPECT_LE(inadequate, 2);
 }
 
 TEST(ProbeQual, OptionsThatCannotBeMetAreRefusedSayingWhy) {
