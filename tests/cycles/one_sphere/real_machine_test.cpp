@@ -71,10 +71,16 @@ TEST(OneSphereRealMachine, TheScreenAndTheJudgeKeepTheirRatesAndCatchAChip) {
   const DeclaredNoise repeatability = repeatabilityOnly(b.machine.probe.repeatability_um, "MACHINE.json");
   const size_t n = b.plan.points.size();
   int screened = 0, too_many = 0, inadequate = 0, caught = 0, old_screened = 0, old_inadequate = 0;
+  double chi2_per_dof = 0.0;
   for (int m = 0; m < kMachines; ++m) {
     const MeasurementRun run = b.measure(m);
     const SphereScreen s = screenSphereTouches(b.plan, {run}, b.noise);
     screened += s.screen.excluded.empty() ? 0 : 1;
+    {
+      const SphereFittedProblem f = sphereFittedProblem(b.noise, s.fit);
+      const DeclaredNoiseTest dt = testAgainstDeclared(f.residual_um, f.J, f.covariance_um2);
+      chi2_per_dof += dt.chi2 / dt.dof / kMachines;
+    }
     too_many += s.screen.too_many ? 1 : 0;
     const SphereScreen old = screenSphereTouches(b.plan, {run}, repeatability);
     old_screened += (old.screen.too_many || !old.screen.excluded.empty()) ? 1 : 0;
@@ -88,9 +94,13 @@ TEST(OneSphereRealMachine, TheScreenAndTheJudgeKeepTheirRatesAndCatchAChip) {
     const size_t k = (37 * static_cast<size_t>(m)) % n;
     caught += b.excluded(screenSphereTouches(b.plan, {b.moved(run, k, -0.020)}, b.noise).screen, k) ? 1 : 0;
   }
+  std::printf("mean chi2 / dof of the whitened residual: %.3f\n", chi2_per_dof);
   std::printf("%d drawn machines (%zu touches each): screen removed a touch on %d (too many on %d), model_inadequate "
               "on %d, 20 um chip caught on %d; against the repeatability alone: screen flagged %d, model_inadequate %d\n",
               kMachines, n, screened, too_many, inadequate, caught, old_screened, old_inadequate);
+  // The declaration is the drawn machines' own: the whitened residual's chi2 / dof averages 1
+  // (its sd over 20 machines at 53 dof is sqrt(2 / 53 / 20) = 0.043; 0.15 is over 3 of them).
+  EXPECT_NEAR(chi2_per_dof, 1.0, 0.15);
   // alpha = 1 % each: Binomial(20, 0.01) exceeds 2 with probability 0.001.
   EXPECT_LE(screened, 2);
   EXPECT_EQ(too_many, 0);

@@ -71,10 +71,16 @@ TEST(Spheres3RealMachine, TheScreenAndTheJudgeKeepTheirRatesAndCatchAChip) {
   old.noise = nullptr;
   int screened = 0, too_many = 0, inadequate = 0, named = 0, caught = 0, left_out = 0, radius_refused = 0,
       old_inadequate = 0;
+  double chi2_per_dof = 0.0;
   for (int m = 0; m < kMachines; ++m) {
     const MeasurementRun run = b.measure(m);
     const Spheres3Screen s = screenSpheres3Touches(b.plan, {run}, b.noise, b.options);
     screened += s.screen.excluded.empty() ? 0 : 1;
+    {
+      const Spheres3TouchProblem tp = spheres3TouchProblem({run}, identifySpheres3(b.plan, {run}, b.options), b.noise);
+      const DeclaredNoiseTest dt = testAgainstDeclared(tp.residual_um, tp.J, tp.covariance_um2);
+      chi2_per_dof += dt.chi2 / dt.dof / kMachines;
+    }
     too_many += s.screen.too_many ? 1 : 0;
     const Spheres3Diagnosis dg = diagnoseSpheres3(b.plan, {run}, d);
     if (dg.judged.verdict == JudgeVerdict::ModelInadequate) {
@@ -97,11 +103,15 @@ TEST(Spheres3RealMachine, TheScreenAndTheJudgeKeepTheirRatesAndCatchAChip) {
       ++radius_refused;
     }
   }
+  std::printf("mean chi2 / dof of the whitened residual: %.3f\n", chi2_per_dof);
   std::printf("%d drawn machines (%zu touches each): screen removed a touch on %d (too many on %d), model_inadequate "
               "on %d, a cause named on %d (against the repeatability alone: model_inadequate on %d); 20 um chip caught on "
               "%d (left out on %d, named as one the model cannot do without on the rest), refused by the radius check "
               "alone on %d\n",
               kMachines, n, screened, too_many, inadequate, named, old_inadequate, caught, left_out, radius_refused);
+  // The declaration is the drawn machines' own: the whitened residual's chi2 / dof averages 1
+  // (its sd over 20 machines at 69 dof is sqrt(2 / 69 / 20) = 0.038; 0.15 is over 3 of them).
+  EXPECT_NEAR(chi2_per_dof, 1.0, 0.15);
   // alpha = 1 % each: Binomial(20, 0.01) exceeds 2 with probability 0.001.
   EXPECT_LE(screened, 2);
   EXPECT_EQ(too_many, 0);
