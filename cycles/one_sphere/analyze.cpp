@@ -2,10 +2,14 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
+#include <memory>
 #include <stdexcept>
+#include <utility>
 
+#include "core/contributor_draw.hpp"
 #include "core/errors.hpp"
 #include "core/report_envelope.hpp"
 #include "core/rotary_backlash.hpp"
@@ -46,7 +50,8 @@ struct Trigger {
 
 }  // namespace
 
-SphereCycleResult identifySphereCycle(const ProbePlan& plan, const std::vector<MeasurementRun>& runs) {
+SphereCycleResult identifySphereCycle(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
+                                      const SphereCycleOptions& options) {
   const SphereLayout l = sphereLayoutOf(plan);
   const Kinematics kin = plan.machine.kinematics;
   SphereCycleResult out;
@@ -61,10 +66,14 @@ SphereCycleResult identifySphereCycle(const ProbePlan& plan, const std::vector<M
   const auto nx = static_cast<Eigen::Index>(out.names.size());
   const double rho = l.radius_mm + plan.machine.probe.ball_radius_mm();
 
-  std::vector<Trigger> triggers;
-  for (const PlannedTrigger& pt : triggersInPlanOrder(plan, runs))
-    triggers.push_back({pt.trigger->position_m_mm, plan.points[pt.point_index].pose, directions[pt.point_index],
-                        static_cast<int>(pt.point_index), pt.run, pt.t_s});
+  // Every touch of the plan (what the plan can separate is decided on them all) and the fitted ones.
+  std::vector<Trigger> all, triggers, held;
+  for (const PlannedTrigger& pt : triggersInPlanOrder(plan, runs)) {
+    const Trigger t{pt.trigger->position_m_mm, plan.points[pt.point_index].pose, directions[pt.point_index],
+                    static_cast<int>(pt.point_index), pt.run, pt.t_s};
+    all.push_back(t);
+    (options.hold_out && options.hold_out(pt.run, plan.points[pt.point_index]) ? held : triggers).push_back(t);
+  }
   out.touches = static_cast<int>(triggers.size());
 
   // What the plan can show, at nominal: the held parameters stay at 0, the others are fitted.
@@ -82,13 +91,13 @@ SphereCycleResult identifySphereCycle(const ProbePlan& plan, const std::vector<M
   // The plan's Jacobian, at its nominal triggers: what this plan confounds, whatever the data.
   // (At the measured triggers a direction the plan confounds exactly, such as the squareness
   // under a head, is only nearly null, and its rounding leaks into the exact null directions.)
-  Eigen::MatrixXd J0(static_cast<Eigen::Index>(triggers.size()), nx);
+  Eigen::MatrixXd J0(static_cast<Eigen::Index>(all.size()), nx);
   {
     const Eigen::VectorXd zero = Eigen::VectorXd::Zero(nx);
     Eigen::RowVectorXd row;
-    for (size_t j = 0; j < triggers.size(); ++j) {
-      sphereTouchResidual(m, sq, terms, zero, triggers[j].pose, triggers[j].direction,
-                          plan.points[static_cast<size_t>(triggers[j].point_index)].trigger_m_mm, rho, &row);
+    for (size_t j = 0; j < all.size(); ++j) {
+      sphereTouchResidual(m, sq, terms, zero, all[j].pose, all[j].direction,
+                          plan.points[static_cast<size_t>(all[j].point_index)].trigger_m_mm, rho, &row);
       J0.row(static_cast<Eigen::Index>(j)) = row;
     }
   }
@@ -116,6 +125,10 @@ SphereCycleResult identifySphereCycle(const ProbePlan& plan, const std::vector<M
   if (!fit.summary.usable())
     throw InputError(runs.empty() ? std::string("results") : runs.front().source, 0,
                      "the sphere cycle's fit did not converge: " + fit.summary.briefReport());
+  if (!held.empty() && fit.summary.rank < nf)
+    throw InputError(runs.empty() ? std::string("results") : runs.front().source, 0,
+                     fmt::format("with {} touches left out the sphere cycle's fit sees {} of its {} parameters",
+                                 held.size(), fit.summary.rank, nf));
   out.x = expand(fit.x);
   out.cov_per_sigma2 = Eigen::MatrixXd::Zero(nx, nx);
   for (Eigen::Index a = 0; a < nf; ++a)
@@ -132,6 +145,9 @@ SphereCycleResult identifySphereCycle(const ProbePlan& plan, const std::vector<M
   out.dof = out.touches - fit.summary.rank;
   out.residual_sd_um = out.dof > 0 ? mmToUm(std::sqrt(r.squaredNorm() / out.dof)) : 0.0;
   for (Eigen::Index j = 0; j < r.size(); ++j) out.residuals_um.push_back(mmToUm(r[j]));
+  for (const auto& t : held)
+    out.held_out.push_back({t.point_index, t.run,
+                            mmToUm(sphereTouchResidual(m, sq, terms, out.x, t.pose, t.direction, t.t_mm, rho, nullptr))});
 
   // The papers' parameters, for the offsets and the reports that speak them (tilting tables:
   // a head machine's are its ISO 230-7 parameters alone).
@@ -152,6 +168,108 @@ SphereCycleResult identifySphereCycle(const ProbePlan& plan, const std::vector<M
                                        mmToUm((papers - sphereCentreInAxes(m, out.x.head(np), pose.pose)).norm()));
   }
   return out;
+}
+
+DeclaredNoise sphereDeclaredNoise(const ProbePlan& plan, const ContributorSet* declared) {
+  DeclaredNoise noise = perTouchDeclaration(declared, plan.machine.probe.repeatability_um);
+  if (!declared) return noise;
+  std::string ids;
+  for (const Contributor& c : declared->items)
+    if (isProbeAxesContributor(*c.info) && !isPerTouchContributor(*c.info) && c.u.cwiseAbs().maxCoeff() > 0)
+      ids += fmt::format("{}{}", ids.empty() ? "" : ", ", c.info->id);
+  if (ids.empty()) return noise;
+  const SphereLayout l = sphereLayoutOf(plan);
+  const KinematicModel m = sphereModel(plan.machine, l.center_w_mm);
+  const Eigen::VectorXd nominal = Eigen::VectorXd::Zero(m.size());
+  std::vector<Eigen::Vector3d> t, u;
+  Eigen::VectorXd nu(static_cast<Eigen::Index>(plan.points.size()));
+  for (size_t i = 0; i < plan.points.size(); ++i) {
+    const ProbePoint& p = plan.points[i];
+    t.push_back(p.trigger_m_mm);
+    u.push_back(p.approach_m);
+    const Eigen::Vector3d n = (p.trigger_m_mm - sphereCentreInAxes(m, nominal, p.pose)).normalized();
+    nu[static_cast<Eigen::Index>(i)] = n.dot(p.approach_m);
+  }
+  const auto shared = [](const ContributorInfo& c) { return isProbeAxesContributor(c) && !isPerTouchContributor(c); };
+  noise.structured_um2 = mmToUm(1.0) * mmToUm(1.0) * nu.asDiagonal() * probeAxesCovariance(*declared, shared, t, u) *
+                         nu.asDiagonal();
+  noise.repeatability_only = false;
+  noise.declaration += fmt::format("; shared between touches, to first order: {} ({:.2f} um rms per touch)", ids,
+                                   std::sqrt(noise.structured_um2.diagonal().mean()));
+  return noise;
+}
+
+SphereFittedProblem sphereFittedProblem(const DeclaredNoise& noise, const SphereCycleResult& r) {
+  const auto n = static_cast<Eigen::Index>(r.residuals_um.size());
+  SphereFittedProblem f;
+  f.residual_um = Eigen::Map<const Eigen::VectorXd>(r.residuals_um.data(), n);
+  std::vector<std::pair<int, int>> kept;
+  for (Eigen::Index j = 0; j < n; ++j)
+    kept.emplace_back(r.run_index[static_cast<size_t>(j)], r.point_index[static_cast<size_t>(j)]);
+  f.covariance_um2 = noise.covariance(kept);
+  f.J.resize(n, 0);
+  for (size_t i = 0; i < r.names.size(); ++i) {
+    if (r.identifiability.held[i]) continue;
+    f.J.conservativeResize(n, f.J.cols() + 1);
+    f.J.col(f.J.cols() - 1) = r.J_r_x.col(static_cast<Eigen::Index>(i));
+  }
+  return f;
+}
+
+SphereScreen screenSphereTouches(const ProbePlan& plan, const std::vector<MeasurementRun>& runs, const DeclaredNoise& noise) {
+  // Each fit the screen asks for, by the touches it holds out: the statistic reads its Jacobian.
+  using Key = std::vector<std::pair<int, int>>;  // (run, point id), sorted
+  const auto fits = std::make_shared<std::map<Key, std::shared_ptr<const SphereCycleResult>>>();
+  const auto keyOf = [](const std::vector<PointResidual>& residuals) {
+    Key k;
+    for (const auto& p : residuals)
+      if (p.held_out) k.emplace_back(p.run, p.point_id);
+    std::sort(k.begin(), k.end());
+    return k;
+  };
+  const auto fit = [&](const std::function<bool(int, const ProbePoint&)>& hold) {
+    IdentificationResult out;
+    std::shared_ptr<const SphereCycleResult> r;
+    if (!hold) {
+      r = std::make_shared<const SphereCycleResult>(identifySphereCycle(plan, runs));
+    } else {
+      try {
+        r = std::make_shared<const SphereCycleResult>(identifySphereCycle(plan, runs, {hold}));
+      } catch (const InputError& e) {
+        // This touch cannot be left out (the fit loses a parameter): the screen keeps it.
+        out.summary.termination = Termination::RankDeficient;
+        out.summary.message = e.what();
+        return out;
+      }
+    }
+    out.summary.termination = Termination::Converged;
+    for (size_t j = 0; j < r->residuals_um.size(); ++j)
+      out.residuals.push_back({r->run_index[j], plan.points[static_cast<size_t>(r->point_index[j])].id, r->residuals_um[j],
+                               0.0, false});
+    for (const auto& h : r->held_out)
+      out.residuals.push_back({h.run, plan.points[static_cast<size_t>(h.point_index)].id, h.residual_um, 0.0, true});
+    (*fits)[keyOf(out.residuals)] = r;
+    return out;
+  };
+  SphereScreen s;
+  s.options.sigma_um = std::sqrt(noise.white_um2);
+  s.options.declaration = noise.declaration;
+  s.options.statistic = [fits, keyOf, noise](const IdentificationResult& f) {
+    const auto it = fits->find(keyOf(f.residuals));
+    if (it == fits->end()) throw std::logic_error("sphere outlier screen: a statistic asked of a fit never made");
+    const SphereFittedProblem p = sphereFittedProblem(noise, *it->second);
+    return deletionStatistics(p.residual_um, p.J, p.covariance_um2);
+  };
+  s.screen = screenOutliers(fit, s.options);
+  const Key last = [&] {
+    Key k;
+    for (const auto& e : s.screen.excluded) k.emplace_back(e.run, e.point_id);
+    std::sort(k.begin(), k.end());
+    return k;
+  }();
+  const auto it = fits->find(last);
+  s.fit = it != fits->end() ? *it->second : identifySphereCycle(plan, runs, {s.screen.holdOut()});
+  return s;
 }
 
 Json sphereReportJson(const ProbePlan& plan, const SphereCycleResult& r, const UncertaintyBudget& b,

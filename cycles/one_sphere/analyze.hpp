@@ -8,15 +8,19 @@
 // What the plan cannot separate (core/identifiability.hpp) is held at nominal and named.
 #include <Eigen/Core>
 #include <array>
+#include <functional>
 #include <string>
 #include <vector>
 
+#include "core/contributors.hpp"
+#include "core/declared_noise.hpp"
 #include "core/error_model.hpp"
 #include "core/identifiability.hpp"
 #include "core/json_io.hpp"
 #include "core/kinematic_model.hpp"
 #include "core/least_squares.hpp"
 #include "core/measurement.hpp"
+#include "core/outliers.hpp"
 #include "core/probe_plan.hpp"
 #include "core/uncertainty_budget.hpp"
 #include "cycles/one_sphere/design.hpp"
@@ -49,10 +53,56 @@ struct SphereCycleResult {
   LocationErrors location;
   std::array<int, kNumLocationErrors> location_index_in_x{};  // each papers parameter: its index in x
   double mapping_residual_um = 0.0;
+  /// The touches left out of the fit (SphereCycleOptions::hold_out): each one's plan point (index),
+  /// run and residual against the model fitted without it (um). The per-trigger vectors above
+  /// hold the fitted touches alone.
+  struct HeldOut {
+    int point_index = 0;
+    int run = 0;
+    double residual_um = 0.0;
+  };
+  std::vector<HeldOut> held_out;
+};
+
+struct SphereCycleOptions {
+  /// Touches left out of the fit (the outlier screen's): still predicted, never fitted. What the
+  /// plan cannot separate is decided on every touch of the plan, so that leaving a touch out never
+  /// changes which parameters are reported; a hold-out that leaves a fitted parameter without data
+  /// is refused (InputError).
+  std::function<bool(int run, const ProbePoint& point)> hold_out;
 };
 
 /// Throws std::invalid_argument naming the results file when a trigger is missing or the fit fails.
-SphereCycleResult identifySphereCycle(const ProbePlan& plan, const std::vector<MeasurementRun>& runs);
+SphereCycleResult identifySphereCycle(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
+                                      const SphereCycleOptions& options = {});
+
+/// The declaration the cycle's tests read (core/declared_noise.hpp), over the plan's touches in
+/// plan order. White: the per-touch contributors (perTouchDeclaration: probe repeatability and
+/// roughness, else MACHINE.json's repeatability). Structured: the probe's pretravel by direction
+/// and the linear axes (probeAxesCovariance at the plan's nominal triggers), each touch's trigger
+/// displacement along its approach u read by its residual as (n . u) ds, n the nominal contact
+/// normal; none when `declared` is null. The set-up is fitted (dX_S ...), so it is not part of
+/// the noise. Throws std::invalid_argument when the two repeatabilities contradict each other.
+DeclaredNoise sphereDeclaredNoise(const ProbePlan& plan, const ContributorSet* declared);
+
+/// A fit's residuals (fitted touches, um), the columns of the parameters it frees (its span) and
+/// their declared covariance (um^2): what deletionStatistics, testAgainstDeclared and the judge read.
+struct SphereFittedProblem {
+  Eigen::VectorXd residual_um;
+  Eigen::MatrixXd J;
+  Eigen::MatrixXd covariance_um2;
+};
+SphereFittedProblem sphereFittedProblem(const DeclaredNoise& noise, const SphereCycleResult& r);
+
+/// The outlier screen of analyze (core/outliers.hpp) on the sphere cycle's one-stage fit: each
+/// fitted touch's GLS deletion residual under `noise`, worst first, refitted without it. `fit` is
+/// the fit with the excluded touches held out (the first fit when none is excluded).
+struct SphereScreen {
+  OutlierOptions options;
+  OutlierScreen screen;
+  SphereCycleResult fit;
+};
+SphereScreen screenSphereTouches(const ProbePlan& plan, const std::vector<MeasurementRun>& runs, const DeclaredNoise& noise);
 
 Json sphereReportJson(const ProbePlan& plan, const SphereCycleResult& r, const UncertaintyBudget& b,
                       const std::vector<std::string>& files);

@@ -2,6 +2,7 @@
 // touched at a grid of tilt and C angles (the KinematicsOpt / CYCLE996 / AxiSet class).
 #include <fmt/format.h>
 
+#include "core/errors.hpp"
 #include "core/singleton.hpp"
 #include "core/units.hpp"
 #include "cycles/cycle.hpp"
@@ -15,6 +16,16 @@
 namespace rotacal {
 namespace {
 
+/// The declared noise; two declarations of the probe's repeatability that disagree are the
+/// contributors file's error (its path leads the message).
+DeclaredNoise sphereNoiseOrFail(const ProbePlan& plan, const ContributorSet* declared) {
+  try {
+    return sphereDeclaredNoise(plan, declared);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(declared && !declared->file.empty() ? declared->file : "MACHINE.json contributors", 0, e.what());
+  }
+}
+
 class Sphere final : public Cycle {
  public:
   Sphere() : Cycle({"one_sphere", "issue 19: both rotary axes' ISO 230-7 location errors and the probe's radius from one sphere",
@@ -24,7 +35,12 @@ class Sphere final : public Cycle {
 
   CycleDocuments analyze(const AnalyzeRequest& r) const override {
     const ProbePlan& plan = *r.plan;
-    const SphereCycleResult res = identifySphereCycle(plan, readProbeRuns(plan, r.results, *r.dialect));
+    // Touches that hit a chip: found against the declared noise (the machine's contributors,
+    // the linear axes' shared errors included), left out of the fit with the reason.
+    const DeclaredNoise noise = sphereNoiseOrFail(plan, r.contributors);
+    const SphereScreen screened = screenSphereTouches(plan, readProbeRuns(plan, r.results, *r.dialect), noise);
+    const OutlierScreen& screen = screened.screen;
+    const SphereCycleResult& res = screened.fit;
     BudgetOptions bo;
     bo.runs = r.mc_runs;
     bo.seed = r.mc_seed;
@@ -32,7 +48,12 @@ class Sphere final : public Cycle {
     const std::vector<std::string> files = pathsOf(r.results);
     CycleDocuments out;
     out.doc = sphereReportJson(plan, res, b, files);
-    out.text = sphereText(res, b);
+    out.text = sphereText(res, b) + screen.text() + "\n";
+    out.doc["outliers"] = outlierScreenJson(screen, screened.options);
+    const SphereFittedProblem f = sphereFittedProblem(noise, res);
+    out.doc["declared_noise"] = declaredNoiseJson(noise, testAgainstDeclared(f.residual_um, f.J, f.covariance_um2),
+                                                  static_cast<int>(plan.points.size()));
+    if (!screen.excluded.empty() || screen.too_many) out.warnings.push_back(screen.text());
     if (!hasPapersLocationErrors(plan.machine.kinematics)) {
       // No writer takes a head's kinematics yet: controllers.md has no verified form of them.
       out.offsets_refused = fmt::format(
@@ -52,10 +73,20 @@ class Sphere final : public Cycle {
           c.u[i] = q.kind == ParamKind::Length ? umToMm(uc[k]) : mdegToRad(uc[k]);
     }
     out.offsets = c;
+    // More than a few chips: nothing was left out, and data this far from the declared noise
+    // sign no offsets.
+    if (screen.too_many) out.offsets_refused = screen.text();
     return out;
   }
 
-  CycleDocuments diagnose(const DiagnoseRequest& r) const override { return judgedFitDocuments(name(), r, diagnoseSphere); }
+  CycleDocuments diagnose(const DiagnoseRequest& r) const override {
+    const ProbePlan& plan = *r.plan;
+    JudgeOptions o;
+    o.alpha = r.alpha;
+    sphereNoiseOrFail(plan, r.contributors);  // a contradictory declaration names its file
+    const SphereDiagnosis d = diagnoseSphere(plan, readProbeRuns(plan, r.results, *r.dialect), o, r.contributors);
+    return documents(judgedDiagnosisJson(std::string(name()), plan, d), judgeText(d.summary));
+  }
 };
 
 }  // namespace

@@ -29,12 +29,17 @@ std::string separateWith(const JudgeConfounded& c) {
 
 }  // namespace
 
-SphereDiagnosis diagnoseSphere(const ProbePlan& plan, const std::vector<MeasurementRun>& runs, const JudgeOptions& options) {
+SphereDiagnosis diagnoseSphere(const ProbePlan& plan, const std::vector<MeasurementRun>& runs, const JudgeOptions& options,
+                               const ContributorSet* declared) {
   const SphereCycleResult fit = identifySphereCycle(plan, runs);
   const auto n = static_cast<Eigen::Index>(fit.residuals_um.size());
   JudgeProblem p;
   p.y = Eigen::Map<const Eigen::VectorXd>(fit.residuals_um.data(), n);
-  p.sigma = Eigen::VectorXd::Constant(n, plan.machine.probe.repeatability_um);  // declared, never the fit's
+  // The declared covariance of the touches, never the fit's own scatter: the linear axes' shared
+  // errors are part of the declared machine, not a misfit.
+  const DeclaredNoise noise = sphereDeclaredNoise(plan, declared);
+  p.covariance = sphereFittedProblem(noise, fit).covariance_um2;
+  p.declaration = noise.declaration;
   p.unit = "um";
   // The baseline at its solution: the columns of the parameters the fit frees, in um per report
   // unit. The held ones (the plan's unseen directions, analyze's `unseparable`) stay out: their

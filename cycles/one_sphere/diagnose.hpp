@@ -1,6 +1,6 @@
 #pragma once
 // What the one-sphere model gets wrong: the shared judge (core/judge.hpp) on the fit's residual,
-// against the declared probe noise, with the causes a sphere cycle can show:
+// against the declared noise (the machine's contributors), with the causes a sphere cycle can show:
 //  - thermal_drift: the sphere (or the spindle) moving linearly in time in X, Y, Z over the cycle;
 //  - pretravel_by_direction: the probe's trigger distance differing between its approach
 //    directions (lobing), beyond the one effective radius the model fits.
@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "core/contributors.hpp"
 #include "core/json_io.hpp"
 #include "core/judge.hpp"
 #include "core/measurement.hpp"
@@ -18,6 +19,10 @@ namespace rotacal {
 
 using SphereDiagnosis = JudgedFit;
 
-SphereDiagnosis diagnoseSphere(const ProbePlan& plan, const std::vector<MeasurementRun>& runs, const JudgeOptions& options);
+/// `declared`: the contributors the judge's noise is declared by (sphereDeclaredNoise: the
+/// per-touch scatter and the shared part of the pretravel and linear axes); null: the probe's
+/// repeatability alone.
+SphereDiagnosis diagnoseSphere(const ProbePlan& plan, const std::vector<MeasurementRun>& runs, const JudgeOptions& options,
+                               const ContributorSet* declared = nullptr);
 
 }  // namespace rotacal

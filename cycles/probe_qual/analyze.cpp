@@ -5,6 +5,9 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "core/errors.hpp"
 #include "core/report_envelope.hpp"
@@ -16,7 +19,78 @@
 
 namespace rotacal {
 
-ProbeQualification qualifyProbe(const ProbePlan& plan, const std::vector<MeasurementRun>& runs) {
+namespace {
+
+constexpr double kRoundingUm = 1e-6;
+
+/// The two-sided Student t quantile: the t with P(|T| > t) = p at nu degrees of freedom
+/// (bisection on the survival function, which is monotone).
+double studentTwoSidedQuantile(double p, double nu) {
+  double lo = 0.0, hi = 1.0;
+  while (studentTwoSided(hi, nu) > p) hi *= 2.0;
+  for (int i = 0; i < 200 && hi - lo > 1e-12 * hi; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (studentTwoSided(mid, nu) > p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+/// Each kept touch's externally studentized deviation from its own repeats (ProbeQualScreen), 0
+/// where it is no candidate; `residual` in um along the approach.
+std::vector<double> studentizedDeviations(const std::vector<double>& residual, const std::vector<int>& group, int groups,
+                                          const std::vector<char>& keep, std::vector<double>* deviation, int* dof) {
+  std::vector<double> sum(static_cast<size_t>(groups), 0.0);
+  std::vector<int> count(static_cast<size_t>(groups), 0);
+  for (size_t j = 0; j < residual.size(); ++j)
+    if (keep[j]) sum[static_cast<size_t>(group[j])] += residual[j], ++count[static_cast<size_t>(group[j])];
+  double ss = 0.0;
+  int kept = 0, used_groups = 0;
+  deviation->assign(residual.size(), 0.0);
+  for (size_t j = 0; j < residual.size(); ++j) {
+    if (!keep[j]) continue;
+    const auto g = static_cast<size_t>(group[j]);
+    (*deviation)[j] = residual[j] - sum[g] / count[g];
+    ss += (*deviation)[j] * (*deviation)[j];
+    ++kept;
+  }
+  for (int c : count) used_groups += c > 0 ? 1 : 0;
+  *dof = kept - used_groups;
+  std::vector<double> t(residual.size(), 0.0);
+  if (*dof < 2) return t;
+  for (size_t j = 0; j < residual.size(); ++j) {
+    const int n = count[static_cast<size_t>(group[j])];
+    if (!keep[j] || n < 3) continue;
+    const double one_less_h = 1.0 - 1.0 / n;
+    const double e = (*deviation)[j];
+    // A scatter below 1e-6 um is the rounding of mm coordinates (1e-16 of 100 mm is 1e-8 um),
+    // not a probe: noise-free data must not make rounding a chip.
+    const double s2 = std::max(kRoundingUm * kRoundingUm, std::max(0.0, ss - e * e / one_less_h) / (*dof - 1));
+    t[j] = e / std::sqrt(s2 * one_less_h);
+  }
+  return t;
+}
+
+}  // namespace
+
+std::string ProbeQualScreen::text() const {
+  const std::string rule = fmt::format("{:.2f} (Student t, {} dof, at {:g} / {} touches)", threshold_t, dof, alpha, touches);
+  if (too_many)
+    return fmt::format("outlier screen: {} of {} touches beyond {} even with the worst left out: more than a few chips "
+                       "(a drift, a loose stylus?); none excluded",
+                       beyond, touches, rule);
+  if (excluded.empty()) return fmt::format("outlier screen: no touch beyond {}", rule);
+  std::string list;
+  for (const auto& e : excluded)
+    list += fmt::format("{}point {} ({}, repeat {}{}: {:+.2f} um, t {:.1f})", list.empty() ? "" : ", ", e.point_id,
+                        e.direction, e.repeat + 1, e.run > 0 ? fmt::format(" of run {}", e.run + 1) : std::string(),
+                        e.deviation_um, std::abs(e.t));
+  return fmt::format("outlier screen: excluded {} of {} touches beyond {} (a chip or dirt on the sphere; the "
+                     "repeatability and the fit without them): {}",
+                     excluded.size(), touches, rule, list);
+}
+
+ProbeQualification qualifyProbe(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
+                                const ProbeQualOptions& options) {
   const ProbeQualLayout l = probeQualLayoutOf(plan);
   const auto touches = l.touches();
   const auto approaches = l.approaches();
@@ -26,8 +100,10 @@ ProbeQualification qualifyProbe(const ProbePlan& plan, const std::vector<Measure
   const std::string source = runs.empty() ? std::string("results") : runs.front().source;
   ProbeQualification q;
   q.directions = A + 1;
+  if (!(options.alpha > 0 && options.alpha < 1) || !(options.max_fraction >= 0 && options.max_fraction < 0.5))
+    throw std::invalid_argument("probe_qual screen: alpha must be in (0, 1) and max_fraction in [0, 0.5)");
   std::vector<Eigen::Vector3d> t, u;
-  std::vector<int> approach_of;
+  std::vector<int> approach_of, run_of;
   for (const PlannedTrigger& pt : triggersInPlanOrder(plan, runs)) {
     const ProbePoint& p = plan.points[pt.point_index];
     t.push_back(pt.trigger->position_m_mm);
@@ -36,9 +112,10 @@ ProbeQualification qualifyProbe(const ProbePlan& plan, const std::vector<Measure
     approach_of.push_back(touches[static_cast<size_t>(p.target - 1)].approach);
     q.repeat_of.push_back(pt.run * l.repeats + static_cast<int>(pt.point_index) / G);
     q.t_s.push_back(pt.t_s);
+    q.point_index.push_back(static_cast<int>(pt.point_index));
+    run_of.push_back(pt.run);
   }
-  const auto N = static_cast<Eigen::Index>(t.size());
-  q.touches = static_cast<int>(N);
+  auto N = static_cast<Eigen::Index>(t.size());
 
   // The horizontal pretravel in the span that a centre offset cannot mimic: an orthonormal basis
   // B of the azimuths' space less their cos and sin (the mean and the higher harmonics).
@@ -81,9 +158,86 @@ ProbeQualification qualifyProbe(const ProbePlan& plan, const std::vector<Measure
   Eigen::VectorXd x0 = Eigen::VectorXd::Zero(nx);
   // The centre as the axes read it (a head's reading is the pivot, the ball L below it).
   x0.head<3>() = T_m_w_nominal(plan.machine.kinematics, Pose{}) * l.center_w_mm - ballFromAxes_m(plan.machine, Pose{});
-  const LeastSquaresResult fit = solveLeastSquares(model, x0);
+  LeastSquaresResult fit = solveLeastSquares(model, x0);
   if (!fit.summary.usable())
     throw InputError(source, 0, "the probe qualification's fit did not converge: " + fit.summary.briefReport());
+
+  // The screen on the repeats: a touch's deviation from its own repeats does not depend on the
+  // fit (every repeat of a touch has the same model row), so the first fit's residuals serve.
+  {
+    Eigen::VectorXd r0;
+    model(fit.x, r0, nullptr);
+    std::vector<double> res(static_cast<size_t>(N));
+    for (Eigen::Index j = 0; j < N; ++j) res[static_cast<size_t>(j)] = mmToUm(r0[j]);
+    std::vector<char> keep(static_cast<size_t>(N), 1);
+    std::vector<size_t> excluded_at;
+    std::vector<double> dev;
+    int dof = 0;
+    std::vector<double> ts = studentizedDeviations(res, q.touch_of, G, keep, &dev, &dof);
+    ProbeQualScreen& sc = q.screen;
+    sc.alpha = options.alpha;
+    sc.max_fraction = options.max_fraction;
+    sc.touches = static_cast<int>(N);
+    sc.dof = dof - 1;
+    if (sc.dof >= 1) {
+      sc.threshold_t = studentTwoSidedQuantile(options.alpha / static_cast<double>(N), sc.dof);
+      const int cap = static_cast<int>(std::floor(options.max_fraction * static_cast<double>(N)));
+      while (true) {
+        size_t worst = 0;
+        for (size_t j = 1; j < ts.size(); ++j)
+          if (std::abs(ts[j]) > std::abs(ts[worst])) worst = j;
+        if (!(std::abs(ts[worst]) > sc.threshold_t)) break;
+        if (static_cast<int>(sc.excluded.size()) >= cap) {
+          // Still beyond with the most a few chips can be left out: not chips. All data stay.
+          sc.too_many = true;
+          sc.beyond = static_cast<int>(std::count_if(ts.begin(), ts.end(), [&](double v) { return std::abs(v) > sc.threshold_t; }));
+          sc.excluded.clear();
+          excluded_at.clear();
+          std::fill(keep.begin(), keep.end(), 1);
+          break;
+        }
+        const int pi = q.point_index[worst];
+        excluded_at.push_back(worst);
+        sc.excluded.push_back({run_of[worst], q.repeat_of[worst] - run_of[worst] * l.repeats,
+                               plan.points[static_cast<size_t>(pi)].id, touches[static_cast<size_t>(q.touch_of[worst])].name,
+                               dev[worst], ts[worst]});
+        keep[worst] = 0;
+        ts = studentizedDeviations(res, q.touch_of, G, keep, &dev, &dof);
+      }
+    }
+    // What each excluded touch deviates by from its repeats that stayed.
+    for (size_t k = 0; k < sc.excluded.size(); ++k) {
+      const size_t at = excluded_at[k];
+      double sum = 0.0;
+      int n = 0;
+      for (size_t j = 0; j < keep.size(); ++j)
+        if (keep[j] && q.touch_of[j] == q.touch_of[at]) sum += res[j], ++n;
+      if (n > 0) sc.excluded[k].deviation_um = res[at] - sum / n;
+    }
+    if (!sc.excluded.empty()) {
+      // The fit and everything after it on the kept touches.
+      const auto filter = [&keep](auto& v) {
+        size_t k = 0;
+        for (size_t j = 0; j < v.size(); ++j)
+          if (keep[j]) v[k++] = v[j];
+        v.resize(k);
+      };
+      filter(t);
+      filter(u);
+      filter(approach_of);
+      filter(run_of);
+      filter(q.touch_of);
+      filter(q.repeat_of);
+      filter(q.t_s);
+      filter(q.point_index);
+      N = static_cast<Eigen::Index>(t.size());
+      fit = solveLeastSquares(model, fit.x);
+      if (!fit.summary.usable())
+        throw InputError(source, 0, "the probe qualification's fit without the excluded touches did not converge: " +
+                                        fit.summary.briefReport());
+    }
+  }
+  q.touches = static_cast<int>(N);
   Eigen::VectorXd r;
   Eigen::MatrixXd J;
   model(fit.x, r, &J);
@@ -105,7 +259,7 @@ ProbeQualification qualifyProbe(const ProbePlan& plan, const std::vector<Measure
   for (int g = 0; g < G; ++g) mean[static_cast<size_t>(g)] /= std::max(1, count[static_cast<size_t>(g)]);
   double ss = 0.0;
   for (Eigen::Index j = 0; j < N; ++j) ss += std::pow(r[j] - mean[static_cast<size_t>(q.touch_of[static_cast<size_t>(j)])], 2);
-  q.dof = static_cast<int>(N) - G;
+  q.dof = static_cast<int>(N) - static_cast<int>(std::count_if(count.begin(), count.end(), [](int c) { return c > 0; }));
   if (q.dof < 1) throw InputError(source, 0, "every touch needs at least 2 repeats for a repeatability");
   q.repeatability_um = mmToUm(std::sqrt(ss / q.dof));
   q.repeatability_lo_um = q.repeatability_um * std::sqrt(q.dof / chiSquareUpperQuantile(0.025, q.dof));
@@ -191,6 +345,27 @@ Json probeQualReportJson(const ProbePlan& plan, const ProbeQualification& q, con
                                             {"note", "probe_qual: rms of the pretravel by direction about its mean, "
                                                      "less what the repeatability alone gives it"}}}};
   j["fit"] = {{"touches", q.touches}, {"approach_directions", q.directions}, {"dof", q.dof}};
+  Json ex = Json::array();
+  for (const auto& e : q.screen.excluded)
+    ex.push_back({{"run", e.run + 1},
+                  {"repeat", e.repeat + 1},
+                  {"point", e.point_id},
+                  {"direction", e.direction},
+                  {"deviation_um", round6(e.deviation_um)},
+                  {"t", std::round(e.t * 1e4) / 1e4},
+                  {"reason", "beyond the threshold: a chip or dirt on the sphere; left out of the repeatability and the fit"}});
+  j["outliers"] = {{"test", "each touch's deviation from the mean of its own repeats, externally studentized by the "
+                            "pooled scatter of every other touch (Student t with dof - 1), against the two-sided t "
+                            "quantile at alpha / N; worst first, recomputed after each; no declared repeatability assumed"},
+                   {"alpha", q.screen.alpha},
+                   {"threshold_t", std::round(q.screen.threshold_t * 1e4) / 1e4},
+                   {"t_dof", q.screen.dof},
+                   {"touches", q.screen.touches},
+                   {"max_fraction", q.screen.max_fraction},
+                   {"too_many", q.screen.too_many},
+                   {"beyond", q.screen.beyond},
+                   {"excluded", ex},
+                   {"summary", q.screen.text()}};
   return j;
 }
 
@@ -205,6 +380,7 @@ std::string probeQualText(const ProbeQualification& q) {
   for (const auto& p : q.by_direction) s += fmt::format("  {:<16} {:+8.3f}  {:.3f}\n", p.name, p.pretravel_um, p.u_um);
   s += fmt::format("lobing: range {:.3f} um, rms {:.3f} um (the repeatability alone gives {:.3f} um: net {:.3f} um)\n",
                    q.lobing_range_um, q.lobing_rms_um, q.lobing_rms_noise_um, q.lobing_rms_net_um);
+  s += q.screen.text() + "\n";
   return s;
 }
 

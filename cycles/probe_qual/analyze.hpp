@@ -28,6 +28,44 @@ struct DirectionPretravel {
   int touches = 0;
 };
 
+/// A touch left out of the qualification by the outlier screen.
+struct ProbeQualExcluded {
+  int run = 0;            // results file, 0-based
+  int repeat = 0;         // repeat within the plan, 0-based
+  int point_id = 0;
+  std::string direction;  // the touch's approach (plan touch name)
+  double deviation_um = 0.0;  // from the mean of the same touch's other repeats, along the approach
+  double t = 0.0;             // externally studentized, in the screen's step that left it out
+};
+
+/// The screen on the repeats (a chip or dirt under one touch): each touch's deviation from the
+/// mean of its own repeats, externally studentized by the pooled scatter of every OTHER touch
+/// (the leave-one-out repeatability, which the touch under test cannot inflate):
+///   t_j = e_j / (s_(j) sqrt(1 - 1/n_g)),  s_(j)^2 = (SS - e_j^2 / (1 - 1/n_g)) / (dof - 1),
+/// e_j the touch's residual from its n_g repeats' mean, SS and dof the pooled ones. Under a
+/// probe that scatters normally t_j is Student's t with dof - 1 degrees of freedom, whatever the
+/// probe's repeatability: no declared value is assumed, which is what this cycle measures.
+/// Threshold: the two-sided t quantile at alpha / N (Bonferroni over the N touches). Worst
+/// first, recomputed after each; a touch is a candidate only among at least 3 repeats (of 2,
+/// both deviate alike and neither can be named). Beyond max_fraction of the touches the data
+/// are not a few chips: nothing is excluded and the screen says so (too_many).
+struct ProbeQualScreen {
+  double alpha = 0.01;
+  double max_fraction = 0.05;
+  double threshold_t = 0.0;
+  int dof = 0;  // of the t distribution at the start (pooled dof - 1)
+  int touches = 0;
+  bool too_many = false;
+  int beyond = 0;  // touches beyond the threshold with the most a few chips can be left out
+  std::vector<ProbeQualExcluded> excluded;
+  std::string text() const;  // one line for the report
+};
+
+struct ProbeQualOptions {
+  double alpha = 0.01;         // family-wise rate of a clean qualification losing a touch
+  double max_fraction = 0.05;  // of the touches; beyond it nothing is left out
+};
+
 struct ProbeQualification {
   int touches = 0;
   int directions = 0;
@@ -53,10 +91,15 @@ struct ProbeQualification {
   std::vector<int> touch_of, repeat_of;
   std::vector<double> t_s;             // per touch: the controller's clock, else the plan's time
   std::vector<Eigen::Vector3d> normals;
+  std::vector<int> point_index;        // per touch: its plan point
+  /// The screen; the per-touch vectors above, the fit and the repeatability hold the touches it
+  /// kept (all of them when it excluded none).
+  ProbeQualScreen screen;
 };
 
 /// Throws InputError naming the results file when a trigger is missing or the fit fails.
-ProbeQualification qualifyProbe(const ProbePlan& plan, const std::vector<MeasurementRun>& runs);
+ProbeQualification qualifyProbe(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
+                                const ProbeQualOptions& options = {});
 
 Json probeQualReportJson(const ProbePlan& plan, const ProbeQualification& q, const std::vector<std::string>& files);
 std::string probeQualText(const ProbeQualification& q);

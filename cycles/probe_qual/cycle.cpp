@@ -1,6 +1,8 @@
 // probe_qual (issue 19 item 5): the probe's repeatability, effective radius and pretravel by
 // direction on the one_sphere cycle's calibration sphere, for MACHINE.json's probe section and
 // the contributors' probe entries.
+#include "core/declared_noise.hpp"
+#include "core/errors.hpp"
 #include "core/singleton.hpp"
 #include "cycles/cycle.hpp"
 #include "cycles/probing.hpp"
@@ -26,11 +28,26 @@ class ProbeQual final : public Cycle {
     const ProbePlan& plan = *r.plan;
     const ProbeQualification q = qualifyProbe(plan, readProbeRuns(plan, r.results, *r.dialect));
     const std::vector<std::string> files = pathsOf(r.results);
-    return documents(probeQualReportJson(plan, q, files), probeQualText(q));
+    CycleDocuments out = documents(probeQualReportJson(plan, q, files), probeQualText(q));
+    // A chip left out is named on stderr: the repeatability copied into MACHINE.json is the rest's.
+    if (!q.screen.excluded.empty() || q.screen.too_many) out.warnings.push_back(q.screen.text());
+    return out;
   }
 
   CycleDocuments diagnose(const DiagnoseRequest& r) const override {
-    return judgedFitDocuments(name(), r, diagnoseProbeQual);
+    const ProbePlan& plan = *r.plan;
+    JudgeOptions o;
+    o.alpha = r.alpha;
+    const std::vector<MeasurementRun> runs = readProbeRuns(plan, r.results, *r.dialect);
+    try {
+      perTouchDeclaration(r.contributors, plan.machine.probe.repeatability_um);
+    } catch (const std::invalid_argument& e) {
+      // Two declarations of the repeatability that disagree: the contributors file's error.
+      throw InputError(r.contributors && !r.contributors->file.empty() ? r.contributors->file : "MACHINE.json contributors",
+                       0, e.what());
+    }
+    const JudgedFit d = diagnoseProbeQual(plan, runs, o, r.contributors);
+    return documents(judgedDiagnosisJson(std::string(name()), plan, d), judgeText(d.summary));
   }
 };
 

@@ -3,7 +3,13 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
+#include <string>
+#include <utility>
 
+#include "core/contributor_draw.hpp"
+#include "core/declared_noise.hpp"
+#include "core/units.hpp"
 #include "cycles/judge_contract.hpp"
 #include "cycles/probe_qual/analyze.hpp"
 #include "cycles/probe_qual/plan.hpp"
@@ -24,14 +30,41 @@ std::string separateWith(const JudgeConfounded&) {
 }  // namespace
 
 ProbeQualDiagnosis diagnoseProbeQual(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
-                                     const JudgeOptions& options) {
+                                     const JudgeOptions& options, const ContributorSet* declared) {
   const ProbeQualification q = qualifyProbe(plan, runs);
-  const auto touches = probeQualLayoutOf(plan).touches();
+  const ProbeQualLayout layout = probeQualLayoutOf(plan);
+  const auto touches = layout.touches();
   const auto n = static_cast<Eigen::Index>(q.residuals_um.size());
   JudgeProblem p;
   p.y = Eigen::Map<const Eigen::VectorXd>(q.residuals_um.data(), n);
-  p.sigma = Eigen::VectorXd::Constant(n, plan.machine.probe.repeatability_um);  // declared, never the data's
   p.unit = "um";
+  // The declared noise, never the data's: a row reads its trigger's displacement ds along the
+  // approach as sign(m . u) ds (rows weighted by 1 / |m . u|).
+  DeclaredNoise noise = perTouchDeclaration(declared, plan.machine.probe.repeatability_um);
+  if (declared) {
+    std::string ids;
+    for (const Contributor& c : declared->items)
+      if (isProbeAxesContributor(*c.info) && !isPerTouchContributor(*c.info) && c.u.cwiseAbs().maxCoeff() > 0)
+        ids += fmt::format("{}{}", ids.empty() ? "" : ", ", c.info->id);
+    if (!ids.empty()) {
+      std::vector<Eigen::Vector3d> t, u;
+      for (const auto& pt : plan.points) t.push_back(pt.trigger_m_mm), u.push_back(pt.approach_m);
+      const auto shared = [](const ContributorInfo& c) { return isProbeAxesContributor(c) && !isPerTouchContributor(c); };
+      noise.structured_um2 = mmToUm(1.0) * mmToUm(1.0) * probeAxesCovariance(*declared, shared, t, u);
+      noise.repeatability_only = false;
+      noise.declaration += fmt::format("; shared between touches, to first order: {} ({:.2f} um rms per touch)", ids,
+                                       std::sqrt(noise.structured_um2.diagonal().mean()));
+    }
+  }
+  std::vector<std::pair<int, int>> kept;
+  Eigen::VectorXd sign(n);
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const auto js = static_cast<size_t>(j);
+    kept.emplace_back(q.repeat_of[js] / layout.repeats, q.point_index[js]);
+    sign[j] = q.normals[js].dot(plan.points[static_cast<size_t>(q.point_index[js])].approach_m) < 0 ? -1.0 : 1.0;
+  }
+  p.covariance = sign.asDiagonal() * noise.covariance(kept) * sign.asDiagonal();
+  p.declaration = noise.declaration;
   // The baseline at its solution: the sphere's centre and the pretravel per approach (um along
   // the approach per um).
   p.J0 = q.J_weighted;
@@ -39,7 +72,8 @@ ProbeQualDiagnosis diagnoseProbeQual(const ProbePlan& plan, const std::vector<Me
   std::vector<double> weights;  // the rows read along the approach
   for (Eigen::Index j = 0; j < n; ++j) {
     const auto js = static_cast<size_t>(j);
-    weights.push_back(1.0 / std::max(1e-6, std::abs(q.normals[js].dot(plan.points[js % plan.points.size()].approach_m))));
+    weights.push_back(
+        1.0 / std::max(1e-6, std::abs(q.normals[js].dot(plan.points[static_cast<size_t>(q.point_index[js])].approach_m))));
   }
   p.causes.push_back(sphereDriftCause(q.normals, q.t_s, weights));
   p.group_name = "repeat";

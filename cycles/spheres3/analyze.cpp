@@ -1,17 +1,24 @@
 #include "cycles/spheres3/analyze.hpp"
 
 #include <Eigen/Cholesky>
+#include <Eigen/QR>
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
+#include <memory>
+#include <optional>
 #include <stdexcept>
+#include <utility>
 
 #include <fmt/format.h>
 
+#include "core/contributor_draw.hpp"
 #include "core/transforms.hpp"
 #include "core/report_envelope.hpp"
 #include "core/units.hpp"
+#include "cycles/spheres3/diagnose.hpp"
 #include "core/require_valid.hpp"
 
 namespace rotacal {
@@ -196,12 +203,18 @@ Spheres3Result identifySpheres3(const ProbePlan& plan, const std::vector<Measure
     for (const auto& t : runs[run].points) by_id[t.point_id] = &t;
     for (int a = 0; a < n_angles; ++a)
       for (int s = 0; s < 3; ++s) {
-        const auto& ids = group[static_cast<size_t>(a * 3 + s)];
+        const auto& all_ids = group[static_cast<size_t>(a * 3 + s)];
+        std::vector<int> ids, held;
         std::vector<Eigen::Vector3d> pts;
-        for (int id : ids) {
+        for (int id : all_ids) {
           const auto it = by_id.find(id);
           if (it == by_id.end())
             throw std::invalid_argument(fmt::format("{}: no trigger for point {}", runs[run].source, id));
+          if (opt.hold_out_touch && opt.hold_out_touch(static_cast<int>(run), *plan.findPoint(id))) {
+            held.push_back(id);
+            continue;
+          }
+          ids.push_back(id);
           pts.push_back(it->second->position_m_mm);
         }
         const Eigen::Vector3d guess = T_m_w_nominal(plan.machine.kinematics, plan.findPoint(ids.front())->pose) *
@@ -211,11 +224,12 @@ Spheres3Result identifySpheres3(const ProbePlan& plan, const std::vector<Measure
         o.angle = a;
         o.sphere = s;
         o.point_ids = ids;
+        o.held_point_ids = held;
         try {
           o.fit = fitSphereCentre(pts, guess, {r.nominal_radius_mm + ball, true, 50});
         } catch (const std::invalid_argument& e) {
           throw std::invalid_argument(fmt::format("{}: sphere {} at C = {:g} deg (points {}..{}): {}", runs[run].source,
-                                                  s + 1, r.c_deg[static_cast<size_t>(a)], ids.front(), ids.back(),
+                                                  s + 1, r.c_deg[static_cast<size_t>(a)], all_ids.front(), all_ids.back(),
                                                   e.what()));
         }
         const double dev_um = mmToUm(o.fit.rho_mm - ball - r.nominal_radius_mm);
@@ -224,7 +238,7 @@ Spheres3Result identifySpheres3(const ProbePlan& plan, const std::vector<Measure
           throw std::invalid_argument(fmt::format(
               "{}: sphere {} at C = {:g} deg (points {}..{}): fitted radius {:.4f} mm is {:+.1f} um from the nominal "
               "{:.4f} mm (limit {:g} um): a bad touch (chip, coolant), a wrong sphere or ball radius in the plan",
-              runs[run].source, s + 1, r.c_deg[static_cast<size_t>(a)], ids.front(), ids.back(), o.fit.rho_mm - ball,
+              runs[run].source, s + 1, r.c_deg[static_cast<size_t>(a)], all_ids.front(), all_ids.back(), o.fit.rho_mm - ball,
               dev_um, r.nominal_radius_mm, opt.radius_tolerance_um));
         rss_touch += o.fit.rss_mm2;
         dof_touch += o.fit.dof;
@@ -509,6 +523,239 @@ std::string spheres3Text(const Spheres3Result& r) {
   s += fmt::format("residual {:.3f} um rms, chi2 {:.1f} on {} dof, {} Gauss-Newton iterations (last step {:.2g} um)\n",
                    r.residual_rms_um, r.chi2, r.dof, r.iterations, mmToUm(r.last_step_mm));
   return s;
+}
+
+}  // namespace rotacal
+
+namespace rotacal {
+
+Spheres3Noise spheres3DeclaredNoise(const ProbePlan& plan, const ContributorSet* declared) {
+  Spheres3Noise out;
+  out.trigger = perTouchDeclaration(declared, plan.machine.probe.repeatability_um);
+  const auto n = static_cast<Eigen::Index>(plan.points.size());
+  out.nu.resize(n);
+  std::vector<Eigen::Vector3d> t, u;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const ProbePoint& p = plan.points[static_cast<size_t>(i)];
+    if (!p.sphere) throw std::invalid_argument(fmt::format("point {} is not a touch on a sphere", p.id));
+    out.index_of_id[p.id] = static_cast<int>(i);
+    const Eigen::Vector3d c = T_m_w_nominal(plan.machine.kinematics, p.pose) * p.sphere->center_w_mm;
+    out.nu[i] = (p.trigger_m_mm - c).normalized().dot(p.approach_m);
+    t.push_back(p.trigger_m_mm);
+    u.push_back(p.approach_m);
+  }
+  out.approach = u;
+  if (!declared) return out;
+  std::string ids;
+  for (const Contributor& c : declared->items)
+    if (isProbeAxesContributor(*c.info) && !isPerTouchContributor(*c.info) && c.u.cwiseAbs().maxCoeff() > 0)
+      ids += fmt::format("{}{}", ids.empty() ? "" : ", ", c.info->id);
+  if (ids.empty()) return out;
+  const auto shared = [](const ContributorInfo& c) { return isProbeAxesContributor(c) && !isPerTouchContributor(c); };
+  out.trigger.structured_um2 = mmToUm(1.0) * mmToUm(1.0) * probeAxesCovariance(*declared, shared, t, u);
+  out.trigger.repeatability_only = false;
+  out.trigger.declaration += fmt::format("; shared between touches, to first order: {} ({:.2f} um rms per touch)", ids,
+                                         std::sqrt(out.trigger.structured_um2.diagonal().mean()));
+  return out;
+}
+
+Spheres3TouchProblem spheres3TouchProblem(const std::vector<MeasurementRun>& runs, const Spheres3Result& r,
+                                          const Spheres3Noise& noise) {
+  Spheres3TouchProblem out;
+  std::vector<std::map<int, Eigen::Vector3d>> trigger(runs.size());
+  for (size_t k = 0; k < runs.size(); ++k)
+    for (const auto& t : runs[k].points) trigger[k][t.point_id] = t.position_m_mm;
+  const int n_angles = static_cast<int>(r.c_deg.size());
+  // Columns: 6 per angle (table motion), 9 (sphere positions), one radius per sphere fit.
+  const Eigen::Index radius0 = 6 * n_angles + 9;
+  std::vector<Eigen::RowVectorXd> rows;
+  std::vector<double> res;
+  std::vector<std::pair<int, int>> kept;  // (run, plan index) for the covariance
+  const Eigen::Index cols = radius0 + static_cast<Eigen::Index>(r.observations.size());
+  for (size_t q = 0; q < r.observations.size(); ++q) {
+    const Spheres3Observation& o = r.observations[q];
+    const Eigen::Vector3d c = o.fit.centre_mm - o.residual_mm;  // where the stage-2 model puts the sphere
+    const double cr = degToRad(r.c_deg[static_cast<size_t>(o.angle)]);
+    const Eigen::Matrix3d R = spheres3Table_m_w(Eigen::Vector4d::Zero(), ComponentVector::Zero(), cr).linear();
+    const auto residualOf = [&](int id) {
+      const Eigen::Vector3d& t = trigger[static_cast<size_t>(o.run)].at(id);
+      return std::make_pair(mmToUm((t - c).norm() - o.fit.rho_mm), Eigen::Vector3d((t - c).normalized()));
+    };
+    for (int id : o.point_ids) {
+      const auto [e, n] = residualOf(id);
+      Eigen::RowVectorXd row = Eigen::RowVectorXd::Zero(cols);
+      row.segment<3>(6 * o.angle) = n.transpose();
+      row.segment<3>(6 * o.angle + 3) = c.cross(n).transpose();
+      row.segment<3>(6 * n_angles + 3 * o.sphere) = n.transpose() * R;
+      row[radius0 + static_cast<Eigen::Index>(q)] = 1.0;
+      rows.push_back(row);
+      res.push_back(e);
+      out.touches.emplace_back(o.run, id);
+      kept.emplace_back(o.run, noise.index_of_id.at(id));
+    }
+    for (int id : o.held_point_ids) out.held.push_back({{o.run, id}, residualOf(id).first});
+  }
+  const auto m = static_cast<Eigen::Index>(rows.size());
+  out.residual_um = Eigen::Map<const Eigen::VectorXd>(res.data(), m);
+  out.J.resize(m, cols);
+  for (Eigen::Index j = 0; j < m; ++j) out.J.row(j) = rows[static_cast<size_t>(j)];
+  Eigen::VectorXd nu(m);
+  for (Eigen::Index j = 0; j < m; ++j) nu[j] = noise.nu[kept[static_cast<size_t>(j)].second];
+  out.covariance_um2 = nu.asDiagonal() * noise.trigger.covariance(kept) * nu.asDiagonal();
+
+  // The smooth model's span, at the identified location errors and spheres (central differences
+  // of the exact table transform; steps 1e-4 um / 1e-7 rad, far below any parameter).
+  std::vector<ComponentTerm> smooth;
+  for (const auto& t : componentTerms(ComponentModel::Full, n_angles))
+    if (t.k <= Spheres3DiagnosisOptions{}.max_harmonic) smooth.push_back(t);
+  const Eigen::Index ns = 13 + static_cast<Eigen::Index>(smooth.size());
+  out.J_smooth = Eigen::MatrixXd::Zero(m, ns + static_cast<Eigen::Index>(r.observations.size()));
+  const double hl = umToMm(1e-4), ha = 1e-7;
+  const ComponentVector zero = ComponentVector::Zero();
+  Eigen::Index row = 0;
+  out.residual_smooth_um.resize(m);
+  for (size_t q = 0; q < r.observations.size(); ++q) {
+    const Spheres3Observation& o = r.observations[q];
+    const double c = degToRad(r.c_deg[static_cast<size_t>(o.angle)]);
+    const Eigen::Vector3d& sw = r.sphere_w_mm[static_cast<size_t>(o.sphere)];
+    const auto at = [&](const Eigen::Vector4d& L, const ComponentVector& e, const Eigen::Vector3d& s) {
+      return Eigen::Vector3d(spheres3Table_m_w(L, e, c) * s);
+    };
+    const Eigen::Vector3d c0 = at(r.location, zero, sw);
+    for (size_t k = 0; k < o.point_ids.size(); ++k)
+      out.residual_smooth_um[row + static_cast<Eigen::Index>(k)] =
+          mmToUm((trigger[static_cast<size_t>(o.run)].at(o.point_ids[k]) - c0).norm() - o.fit.rho_mm);
+    Eigen::MatrixXd D(3, ns);  // d centre / d parameter, mm per mm or rad
+    for (int i = 0; i < 4; ++i) {
+      const double h = i < 2 ? hl : ha;
+      Eigen::Vector4d lp = r.location, lm = r.location;
+      lp[i] += h;
+      lm[i] -= h;
+      D.col(i) = (at(lp, zero, sw) - at(lm, zero, sw)) / (2 * h);
+    }
+    for (int a = 0; a < 3; ++a) {
+      Eigen::Vector3d sp = sw, sm = sw;
+      sp[a] += hl;
+      sm[a] -= hl;
+      D.col(4 + 3 * o.sphere + a) = (at(r.location, zero, sp) - at(r.location, zero, sm)) / (2 * hl);
+      for (int b = 0; b < 3; ++b)
+        if (b != o.sphere) D.col(4 + 3 * b + a).setZero();
+    }
+    for (size_t t = 0; t < smooth.size(); ++t) {
+      const double h = smooth[t].component >= 3 ? ha : hl;
+      const ComponentVector v = smooth[t].value(c);
+      D.col(13 + static_cast<Eigen::Index>(t)) = (at(r.location, h * v, sw) - at(r.location, -h * v, sw)) / (2 * h);
+    }
+    for (size_t k = 0; k < o.point_ids.size(); ++k, ++row) {
+      const Eigen::Vector3d n = out.J.row(row).segment<3>(6 * o.angle).transpose();  // the touch's normal
+      out.J_smooth.row(row).head(ns) = n.transpose() * D;
+      out.J_smooth(row, ns + static_cast<Eigen::Index>(q)) = 1.0;
+    }
+  }
+
+  // What the full model leaves of each touch: P_ii / (S^-1)_ii, P = S^-1 - S^-1 J (J^T S^-1 J)^+ J^T S^-1.
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(out.covariance_um2);
+  const Eigen::MatrixXd Si = ldlt.solve(Eigen::MatrixXd::Identity(m, m));
+  const Eigen::MatrixXd SiJ = Si * out.J;
+  const Eigen::MatrixXd F = (out.J.transpose() * SiJ).completeOrthogonalDecomposition().pseudoInverse();
+  out.full_share.resize(m);
+  for (Eigen::Index j = 0; j < m; ++j)
+    out.full_share[j] = (Si(j, j) - SiJ.row(j).dot(F * SiJ.row(j).transpose())) / Si(j, j);
+  return out;
+}
+
+Eigen::VectorXd spheres3OutlierStatistic(const Spheres3TouchProblem& p) {
+  Eigen::VectorXd t = deletionStatistics(p.residual_um, p.J, p.covariance_um2);
+  if ((p.full_share.array() < kSpheres3FullShareFloor).any()) {
+    const Eigen::VectorXd ts = deletionStatistics(p.residual_smooth_um, p.J_smooth, p.covariance_um2);
+    for (Eigen::Index j = 0; j < t.size(); ++j)
+      if (p.full_share[j] < kSpheres3FullShareFloor) t[j] = ts[j];
+  }
+  return t;
+}
+
+Spheres3Screen screenSpheres3Touches(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
+                                     const Spheres3Noise& noise, const Spheres3Options& options) {
+  // Each fit the screen asks for, by the touches it holds out: the statistic reads its problem.
+  using Key = std::vector<std::pair<int, int>>;  // (run, point id), sorted
+  const auto problems = std::make_shared<std::map<Key, Spheres3TouchProblem>>();
+  const auto keyOf = [](const std::vector<PointResidual>& residuals) {
+    Key k;
+    for (const auto& p : residuals)
+      if (p.held_out) k.emplace_back(p.run, p.point_id);
+    std::sort(k.begin(), k.end());
+    return k;
+  };
+  Spheres3Options o = options;
+  o.radius_tolerance_um = std::numeric_limits<double>::infinity();
+  // The statistic reads P r, the same for any parameters in the model's span to first order: a
+  // step of 1e-3 um changes none, and a gross chip (Gauss-Newton converges linearly on a large
+  // residual) then needs no more than the screen's few iterations.
+  o.step_tolerance_mm = std::max(o.step_tolerance_mm, umToMm(1e-3));
+  o.max_iterations = std::max(o.max_iterations, 50);
+  const auto fit = [&](const std::function<bool(int, const ProbePoint&)>& hold) {
+    IdentificationResult out;
+    Spheres3Options oh = o;
+    oh.hold_out_touch = hold;
+    std::optional<Spheres3Result> r;
+    if (!hold) {
+      r = identifySpheres3(plan, runs, oh);
+    } else {
+      try {
+        r = identifySpheres3(plan, runs, oh);
+      } catch (const std::invalid_argument& e) {
+        // This touch cannot be left out (its sphere would keep fewer than 4): the screen keeps it.
+        out.summary.termination = Termination::RankDeficient;
+        out.summary.message = e.what();
+        return out;
+      }
+    }
+    Spheres3TouchProblem p = spheres3TouchProblem(runs, *r, noise);
+    out.summary.termination = Termination::Converged;
+    for (Eigen::Index j = 0; j < p.residual_um.size(); ++j)
+      out.residuals.push_back({p.touches[static_cast<size_t>(j)].first, p.touches[static_cast<size_t>(j)].second,
+                               p.residual_um[j], 0.0, false});
+    for (const auto& [touch, e] : p.held) out.residuals.push_back({touch.first, touch.second, e, 0.0, true});
+    (*problems)[keyOf(out.residuals)] = std::move(p);
+    return out;
+  };
+  Spheres3Screen s;
+  s.options.sigma_um = std::sqrt(noise.trigger.white_um2);
+  s.options.declaration = noise.trigger.declaration;
+  s.options.statistic = [problems, keyOf](const IdentificationResult& f) {
+    const auto it = problems->find(keyOf(f.residuals));
+    if (it == problems->end()) throw std::logic_error("spheres3 outlier screen: a statistic asked of a fit never made");
+    return spheres3OutlierStatistic(it->second);
+  };
+  s.screen = screenOutliers(fit, s.options);
+  if (s.screen.too_many) return s;
+  // A touch beyond the threshold that could not be left out (the screen keeps a touch whose
+  // removal leaves the fit without a parameter: a top touch alone sets its sphere's height at its
+  // angle, and the full model needs every angle's three heights) is named here: the data must
+  // not be analysed with it.
+  Key last;
+  for (const auto& e : s.screen.excluded) last.emplace_back(e.run, e.point_id);
+  std::sort(last.begin(), last.end());
+  const auto it = problems->find(last);
+  if (it == problems->end()) throw std::logic_error("spheres3 outlier screen: its last fit was never made");
+  const Eigen::VectorXd t = spheres3OutlierStatistic(it->second);
+  for (Eigen::Index j = 0; j < t.size(); ++j)
+    if (std::abs(t[j]) > s.screen.threshold_t)
+      s.kept_beyond.push_back({it->second.touches[static_cast<size_t>(j)].first, it->second.touches[static_cast<size_t>(j)].second,
+                               it->second.residual_um[j], t[j]});
+  return s;
+}
+
+std::string Spheres3Screen::keptBeyondText() const {
+  if (kept_beyond.empty()) return "";
+  std::string list;
+  for (const auto& e : kept_beyond)
+    list += fmt::format("{}point {}{} (t {:.1f})", list.empty() ? "" : ", ", e.point_id,
+                        e.run > 0 ? fmt::format(" of run {}", e.run + 1) : std::string(), std::abs(e.t));
+  return fmt::format("outlier screen: {} beyond {:.2f} x the declared noise, but the model cannot do without {} (a "
+                     "top touch alone sets its sphere's height at its angle): a chip or dirt there would go wholly into "
+                     "the component errors; clean the sphere and measure again",
+                     list, screen.threshold_t, kept_beyond.size() == 1 ? "it" : "them");
 }
 
 }  // namespace rotacal

@@ -35,12 +35,18 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <array>
+#include <functional>
+#include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "core/contributors.hpp"
+#include "core/declared_noise.hpp"
 #include "core/geometric_errors.hpp"
 #include "core/json_io.hpp"
 #include "core/measurement.hpp"
+#include "core/outliers.hpp"
 #include "core/probe_plan.hpp"
 #include "core/sphere_centre_fit.hpp"
 
@@ -80,6 +86,9 @@ struct Spheres3Options {
   int max_iterations = 20;
   double step_tolerance_mm = 1e-9;    // largest position change of a step (1e-6 um)
   int hold_out_angle = -1;            // index of an angle left out of the fit (predicted only)
+  /// Touches left out of their sphere's fit (the outlier screen's): the sphere's centre and
+  /// radius from the others (4 fix them exactly). A sphere left with fewer than 4 is refused.
+  std::function<bool(int run, const ProbePoint& point)> hold_out_touch;
 
   bool validate(std::string* why) const;
 };
@@ -89,7 +98,8 @@ struct Spheres3Observation {
   int angle = 0;   // index into c_deg
   int sphere = 0;  // 0..2
   SphereFit fit;
-  std::vector<int> point_ids;
+  std::vector<int> point_ids;       // the touches fitted (all the plan's but those held out)
+  std::vector<int> held_point_ids;  // Spheres3Options::hold_out_touch's
   Eigen::Vector3d residual_mm = Eigen::Vector3d::Zero();  // measured centre - model
   bool held_out = false;
 };
@@ -137,6 +147,76 @@ struct Spheres3Result {
 /// (missing triggers, a sphere fit beyond the radius tolerance, a rank-deficient model).
 Spheres3Result identifySpheres3(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
                                 const Spheres3Options& options);
+
+/// The declaration the cycle's tests read (core/declared_noise.hpp), per plan point (plan order),
+/// as the triggers' displacements along their approaches (um): white, the per-touch
+/// contributors (perTouchDeclaration); structured, the probe's pretravel by direction and the
+/// linear axes (probeAxesCovariance at the nominal triggers); none beyond the white part when
+/// `declared` is null. `nu` = n . u per plan point (n the nominal contact normal): a touch's
+/// residual |t - c| - rho moves by nu ds. Throws std::invalid_argument when the two
+/// repeatabilities contradict each other.
+struct Spheres3Noise {
+  DeclaredNoise trigger;
+  Eigen::VectorXd nu;
+  std::vector<Eigen::Vector3d> approach;  // per plan point (unit)
+  std::map<int, int> index_of_id;         // plan point id -> plan index
+};
+Spheres3Noise spheres3DeclaredNoise(const ProbePlan& plan, const ContributorSet* declared);
+
+/// The identification seen touch by touch, what the outlier screen and the whitened adequacy
+/// test read: each fitted touch's residual against its sphere as the stage-2 model places it,
+/// |t_j - c_model| - rho (um, rho the touch's stage-1 radius), in observation order; J the span
+/// of the full model linearised there: per C angle a rigid motion of the table (3 translations,
+/// 3 rotations), the three spheres' positions on the table, and each sphere fit's radius (the
+/// full component model has exactly the rank of N rigid poses plus the inter-sphere distances,
+/// so the two spans agree); the declared covariance of the residuals (um^2).
+struct Spheres3TouchProblem {
+  Eigen::VectorXd residual_um;
+  Eigen::MatrixXd J;
+  /// The full model leaves no redundancy on some touches (the top touch alone sets its sphere's
+  /// height at its angle, and the table's height and tilt at each angle take any three heights):
+  /// a chip there goes wholly into the component errors. Those touches are tested against the
+  /// smooth model instead: the location errors, the spheres' positions, the component errors up to
+  /// the diagnosis's max_harmonic (an oval or trefoil bearing, a wobble) and the sphere fits' radii.
+  Eigen::MatrixXd J_smooth;
+  /// Each touch's residual against a member of the smooth model (the identified location errors
+  /// and spheres, no component error; the stage-1 radius), um: what J_smooth's test reads.
+  Eigen::VectorXd residual_smooth_um;
+  /// Per row: the share of the touch's whitened weight the full model leaves (P_ii / (S^-1)_ii);
+  /// below kSpheres3FullShareFloor the touch is screened against J_smooth.
+  Eigen::VectorXd full_share;
+  Eigen::MatrixXd covariance_um2;
+  std::vector<std::pair<int, int>> touches;  // (run, point id) per row
+  std::vector<std::pair<std::pair<int, int>, double>> held;  // (run, point id) and residual (um)
+};
+Spheres3TouchProblem spheres3TouchProblem(const std::vector<MeasurementRun>& runs, const Spheres3Result& r,
+                                          const Spheres3Noise& noise);
+
+/// The outlier screen (core/outliers.hpp) on every touch: each fitted touch's GLS deletion
+/// residual in spheres3TouchProblem, worst first, the model refitted without it. The screen's
+/// fits take no radius refusal (a chip is what makes a radius wrong); the caller's final fit
+/// with the excluded touches held out keeps it.
+/// A touch whose share of weight left by the full model is below this is tested against the
+/// smooth model. On the bundled plan the full model leaves each top touch 2-3 % of its weight
+/// (only the declared shared linear-axis errors tie it to the others), so a 20 um chip there
+/// moves its statistic by about 1; the side touches keep 10-50 %. Fixed by the plan and the
+/// declaration, never by the data, so each statistic stays N(0, 1) under its own model.
+inline constexpr double kSpheres3FullShareFloor = 0.1;
+
+/// The screen's statistic for each row of a touch problem: the GLS deletion residual under the
+/// full model, or under the smooth one where the full model leaves the touch no redundancy.
+Eigen::VectorXd spheres3OutlierStatistic(const Spheres3TouchProblem& p);
+
+struct Spheres3Screen {
+  OutlierOptions options;
+  OutlierScreen screen;
+  /// Touches beyond the threshold in the screen's last fit that it could not leave out (the fit
+  /// cannot do without them): analyze refuses such data, naming them (keptBeyondText).
+  std::vector<ExcludedTouch> kept_beyond;
+  std::string keptBeyondText() const;
+};
+Spheres3Screen screenSpheres3Touches(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
+                                     const Spheres3Noise& noise, const Spheres3Options& options);
 
 /// The table pose of the stage-2 model at a paper-convention C (rad): T_L T_E(C) Dc(-C).
 Eigen::Isometry3d spheres3Table_m_w(const Eigen::Vector4d& location, const ComponentVector& component, double c_rad);

@@ -9,11 +9,22 @@
 
 #include <fmt/format.h>
 
+#include "core/errors.hpp"
 #include "core/units.hpp"
 #include "core/singleton.hpp"
 
 namespace rotacal {
 namespace {
+
+/// The declared noise; two declarations of the probe's repeatability that disagree are the
+/// contributors file's error (its path leads the message).
+Spheres3Noise spheres3NoiseOrFail(const ProbePlan& plan, const ContributorSet* declared) {
+  try {
+    return spheres3DeclaredNoise(plan, declared);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(declared && !declared->file.empty() ? declared->file : "MACHINE.json contributors", 0, e.what());
+  }
+}
 
 class Spheres3 final : public Cycle {
  public:
@@ -29,15 +40,33 @@ class Spheres3 final : public Cycle {
     Spheres3Options opt;
     opt.prior_sigma_um = plan.machine.probe.repeatability_um;
     const std::vector<MeasurementRun> runs = readProbeRuns(plan, r.results, *r.dialect);
+    // Touches that hit a chip: found against the declared noise (the machine's contributors, the
+    // linear axes' shared errors included) before the radius check, left out with the reason;
+    // the radius check then reads the spheres without them.
+    const Spheres3Noise noise = spheres3NoiseOrFail(plan, r.contributors);
+    const Spheres3Screen screened = screenSpheres3Touches(plan, runs, noise, opt);
+    const OutlierScreen& screen = screened.screen;
+    if (!screened.kept_beyond.empty()) throw InputError(r.results.front().path, 0, screened.keptBeyondText());
+    opt.hold_out_touch = screen.holdOut();
     const Spheres3Result res = identifySpheres3(plan, runs, opt);
     CycleDocuments out;
-    out.text = spheres3Text(res);
+    out.text = spheres3Text(res) + screen.text() + "\n";
     out.doc = spheres3ReportJson(plan, res, pathsOf(r.results));
+    out.doc["outliers"] = outlierScreenJson(screen, screened.options);
+    const Spheres3TouchProblem tp = spheres3TouchProblem(runs, res, noise);
+    out.doc["declared_noise"] = declaredNoiseJson(noise.trigger, testAgainstDeclared(tp.residual_um, tp.J, tp.covariance_um2),
+                                                  static_cast<int>(plan.points.size()));
+    if (!screen.excluded.empty() || screen.too_many) out.warnings.push_back(screen.text());
     // What analyze signs (issue 17): u_A from the data, u_B from the declared contributors by
     // Monte Carlo through the same estimator (cycles/spheres3/budget.hpp, docs/uncertainty.md).
     std::vector<Spheres3Result> per_run;
     if (runs.size() >= 2)
-      for (const auto& run : runs) per_run.push_back(identifySpheres3(plan, {run}, opt));
+      for (size_t k = 0; k < runs.size(); ++k) {
+        Spheres3Options o = opt;
+        if (opt.hold_out_touch)
+          o.hold_out_touch = [&opt, k](int, const ProbePoint& p) { return opt.hold_out_touch(static_cast<int>(k), p); };
+        per_run.push_back(identifySpheres3(plan, {runs[k]}, o));
+      }
     Spheres3BudgetOptions bo;
     bo.runs = r.mc_runs;
     bo.seed = r.mc_seed;
@@ -59,6 +88,8 @@ class Spheres3 final : public Cycle {
     Spheres3DiagnosisOptions o;
     o.judge.alpha = r.alpha;
     o.sigma_um = plan.machine.probe.repeatability_um;  // the declared noise, never the fit's own
+    const Spheres3Noise noise = spheres3NoiseOrFail(plan, r.contributors);
+    o.noise = &noise;
     const Spheres3Diagnosis d = diagnoseSpheres3(plan, readProbeRuns(plan, r.results, *r.dialect), o);
     return documents(spheres3DiagnosisJson(d), spheres3DiagnosisText(d));
   }

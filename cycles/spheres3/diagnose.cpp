@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "core/sphere_centre_fit.hpp"
 #include "core/units.hpp"
 #include "cycles/judge_contract.hpp"
 #include "core/require_valid.hpp"
@@ -171,6 +172,34 @@ JudgeProblem spheres3JudgeProblem(const Spheres3Result& b, const std::vector<Mea
       time_f.values.push_back(t_h[k]);
     }
     n_runs = std::max(n_runs, o.run + 1);
+  }
+  if (options.noise) {
+    // The centres' declared covariance: each sphere fit maps its touches' displacements along
+    // their approaches linearly (linearSphereFit), C_centres = M C_touches M^T, the touches'
+    // covariance white per reading and shared (the same machine) between every two.
+    const Spheres3Noise& nz = *options.noise;
+    std::vector<std::pair<int, int>> readings;  // (run, plan index)
+    std::vector<std::pair<Eigen::Index, Eigen::Index>> block;  // per observation: first reading, count
+    std::vector<Eigen::MatrixXd> maps;
+    for (const auto& o : obs) {
+      std::vector<Eigen::Vector3d> pts, approaches;
+      block.emplace_back(static_cast<Eigen::Index>(readings.size()), static_cast<Eigen::Index>(o.point_ids.size()));
+      for (int id : o.point_ids) {
+        const int idx = nz.index_of_id.at(id);
+        readings.emplace_back(o.run, idx);
+        approaches.push_back(nz.approach[static_cast<size_t>(idx)]);
+        for (const auto& t : runs[static_cast<size_t>(o.run)].points)
+          if (t.point_id == id) pts.push_back(t.position_m_mm);
+      }
+      maps.push_back(linearSphereFit(pts, approaches, o.fit).centre);
+    }
+    const Eigen::MatrixXd C = nz.trigger.covariance(readings);
+    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n, static_cast<Eigen::Index>(readings.size()));
+    for (size_t k = 0; k < obs.size(); ++k)
+      M.block(3 * static_cast<Eigen::Index>(k), block[k].first, 3, block[k].second) = maps[k];
+    p.covariance = M * C * M.transpose();
+    p.declaration = nz.trigger.declaration;
+    p.sigma = Eigen::VectorXd();
   }
   for (const auto& f : fam_order)
     if (!fam[f].parameters.empty()) p.causes.push_back(fam[f]);

@@ -31,6 +31,10 @@ struct Spheres3DiagnosisOptions {
   /// Highest harmonic of C in the error-motion families. 3: an oval (2C) or trefoil (3C)
   /// bearing and a wobble (1C); higher orders are left to the adequacy test (model_inadequate).
   int max_harmonic = 3;
+  /// The declared noise of the touches (spheres3DeclaredNoise, the machine's contributors): the
+  /// judge then reads the centres' full declared covariance, each sphere fit's linear map of its
+  /// touches' covariance (white and shared), in place of sigma_um. Null: sigma_um alone.
+  const Spheres3Noise* noise = nullptr;
 
   bool validate(std::string* why) const;
 };
