@@ -86,6 +86,10 @@ struct DeclaredNoiseTest {
 DeclaredNoiseTest testAgainstDeclared(const Eigen::VectorXd& residual, const Eigen::MatrixXd& J,
                                       const Eigen::MatrixXd& covariance);
 
+/// Why analyze holds the offsets back (p < kOffsetsAdequacyAlpha), or "" when the data are
+/// within the declaration.
+std::string offsetsHeldBack(const DeclaredNoise& noise, const DeclaredNoiseTest& test);
+
 /// REPORT.json's `declared_noise`: what was declared, and by how much the data exceed it.
 Json declaredNoiseJson(const DeclaredNoise& noise, const DeclaredNoiseTest& test);
 

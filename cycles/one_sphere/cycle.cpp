@@ -51,8 +51,8 @@ class Sphere final : public Cycle {
     out.text = sphereText(res, b) + screen.text() + "\n";
     out.doc["outliers"] = outlierScreenJson(screen, screened.options);
     const SphereFittedProblem f = sphereFittedProblem(noise, res);
-    out.doc["declared_noise"] = declaredNoiseJson(noise, testAgainstDeclared(f.residual_um, f.J, f.covariance_um2),
-                                                  static_cast<int>(plan.points.size()));
+    const DeclaredNoiseTest test = testAgainstDeclared(f.residual_um, f.J, f.covariance_um2);
+    out.doc["declared_noise"] = declaredNoiseJson(noise, test);
     if (!screen.excluded.empty() || screen.too_many) out.warnings.push_back(screen.text());
     if (!hasPapersLocationErrors(plan.machine.kinematics)) {
       // No writer takes a head's kinematics yet: controllers.md has no verified form of them.
@@ -76,6 +76,11 @@ class Sphere final : public Cycle {
     // More than a few chips: nothing was left out, and data this far from the declared noise
     // sign no offsets.
     if (screen.too_many) out.offsets_refused = screen.text();
+    const std::string held = offsetsHeldBack(noise, test);
+    if (!held.empty() && out.offsets_refused.empty()) {
+      out.offsets_refused = held;
+      out.warnings.push_back(held);
+    }
     return out;
   }
 

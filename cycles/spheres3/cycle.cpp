@@ -54,8 +54,7 @@ class Spheres3 final : public Cycle {
     out.doc = spheres3ReportJson(plan, res, pathsOf(r.results));
     out.doc["outliers"] = outlierScreenJson(screen, screened.options);
     const Spheres3TouchProblem tp = spheres3TouchProblem(runs, res, noise);
-    out.doc["declared_noise"] = declaredNoiseJson(noise.trigger, testAgainstDeclared(tp.residual_um, tp.J, tp.covariance_um2),
-                                                  static_cast<int>(plan.points.size()));
+    out.doc["declared_noise"] = declaredNoiseJson(noise.trigger, testAgainstDeclared(tp.residual_um, tp.J, tp.covariance_um2));
     if (!screen.excluded.empty() || screen.too_many) out.warnings.push_back(screen.text());
     // What analyze signs (issue 17): u_A from the data, u_B from the declared contributors by
     // Monte Carlo through the same estimator (cycles/spheres3/budget.hpp, docs/uncertainty.md).

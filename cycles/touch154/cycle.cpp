@@ -116,12 +116,10 @@ class Touch154 final : public Cycle {
         const FittedReadings f = fittedProblem(noise, lp->residuals);
         const DeclaredNoiseTest test = testAgainstDeclared(f.residual_um, f.J, f.covariance_um2);
         out.doc["declared_noise"] = declaredNoiseJson(noise.noise, test);
-        if (test.p_value < kOffsetsAdequacyAlpha && out.offsets_refused.empty()) {
-          out.offsets_refused = fmt::format(
-              "the data exceed the declared noise: the residual is {:.2f} x it (chi2 {:.1f} on {} dof, p {:.2g} < {:g}; {}): "
-              "the model does not explain this machine (rotacal diagnose names what it misses)",
-              test.ratio, test.chi2, test.dof, test.p_value, kOffsetsAdequacyAlpha, noise.noise.declaration);
-          out.warnings.push_back(out.offsets_refused);
+        const std::string held = offsetsHeldBack(noise.noise, test);
+        if (!held.empty() && out.offsets_refused.empty()) {
+          out.offsets_refused = held;
+          out.warnings.push_back(held);
         }
       }
     }
