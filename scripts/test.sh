@@ -1,9 +1,12 @@
 #!/usr/bin/env bash
 # Builds rotacal and runs every test (the README's second command; .ci/run calls it).
+# One CTest run: the four LinuxCNC cases (label e2e) start first (their COST) and take four of its
+# slots, while the rest of the suite runs on the machine's cores beside them. A LinuxCNC session
+# waits on the controller's motion, not on a core, and each has its own namespaces (tests/e2e).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 WERROR=OFF
 if [ "${CI:-}" = "true" ]; then WERROR=ON; fi
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DROTACAL_WERROR=$WERROR
 cmake --build build -j"$(nproc)"
-ctest --test-dir build --output-on-failure -j"$(nproc)"
+ctest --test-dir build --output-on-failure -j"$(( $(nproc) + 4 ))"

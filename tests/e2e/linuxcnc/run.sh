@@ -25,6 +25,9 @@
 #                     without sparm=identityfirst): for the conventions read-back only
 #   --setp FILE       'setp PIN VALUE' lines applied after the truth's (read-back: rot-point,
 #                     offsets of the kinematics and the probe's matching axis lines)
+#   --shared          run LinuxCNC in the machine's own namespaces (one session at a time, as
+#                     LinuxCNC itself allows); by default, where `unshare` exists, each session
+#                     gets its own (scripts/ns_session.sh), so that sessions run side by side
 # The program's (LOGOPEN,name) file is copied to DIR/name. Exit status: 0 ok, 1 program or
 # controller error (DIR/driver_status.json has the messages), 2 timeout, 3 setup problem.
 set -u -o pipefail
@@ -33,7 +36,7 @@ HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 PY=/usr/bin/python3          # Debian's interpreter: it has the linuxcnc and hal modules
 export PYTHONDONTWRITEBYTECODE=1   # no __pycache__ in the source tree
 
-NGC="" PRE="" TRUTH="" MACHINE="" PLAN="" OUT="" TIMEOUT=900 BUILD=/tmp/rotacal-e2e-comp C_MOTOR=0 COMP="" TCP=0 SETP=""
+NGC="" PRE="" TRUTH="" MACHINE="" PLAN="" OUT="" TIMEOUT=900 BUILD=/tmp/rotacal-e2e-comp C_MOTOR=0 COMP="" TCP=0 SETP="" ISOLATE=1
 while [ $# -gt 0 ]; do
     case "$1" in
         --ngc) NGC="$2"; shift 2;;
@@ -48,7 +51,8 @@ while [ $# -gt 0 ]; do
         --comp-file) COMP="$2"; C_MOTOR=1; shift 2;;
         --kins-tcp) TCP=1; shift;;
         --setp) SETP="$2"; shift 2;;
-        -h|--help) sed -n '2,28p' "$0" | sed 's/^# \{0,1\}//'; exit 0;;
+        --shared) ISOLATE=0; shift;;
+        -h|--help) sed -n '2,31p' "$0" | sed 's/^# \{0,1\}//'; exit 0;;
         *) echo "run.sh: unknown option $1 (see --help)" >&2; exit 3;;
     esac
 done
@@ -66,8 +70,9 @@ command -v linuxcnc >/dev/null || die "linuxcnc not found (Debian package linuxc
 command -v halcompile >/dev/null || die "halcompile not found (Debian package linuxcnc-uspace-dev)"
 "$PY" -c "import linuxcnc, hal" 2>/dev/null || die "$PY cannot import linuxcnc/hal (linuxcnc-uspace)"
 [ "$(id -u)" = 0 ] || die "needs root: rtapi_app loads realtime modules only from /usr/lib/linuxcnc/modules"
-LOCK=/tmp/linuxcnc.lock      # LinuxCNC allows one instance per machine
-if [ -e "$LOCK" ]; then
+command -v unshare >/dev/null && command -v nsenter >/dev/null || ISOLATE=0
+LOCK=/tmp/linuxcnc.lock      # LinuxCNC allows one instance per namespace set
+if [ "$ISOLATE" = 0 ] && [ -e "$LOCK" ]; then
     if pidof milltask rtapi_app linuxcncsvr >/dev/null 2>&1; then
         die "another LinuxCNC instance is running ($LOCK); not starting"
     fi
@@ -84,14 +89,20 @@ T_START=$SECONDS
 # uspace rtapi_app loads realtime modules only from LinuxCNC's module dir
 MODDIR=/usr/lib/linuxcnc/modules
 mkdir -p "$BUILD" || die "cannot create $BUILD"
+# sessions side by side: one builds and installs at a time, and the module is replaced by a
+# rename, never rewritten under a running session's loaded copy
+exec 9>"$BUILD/.lock" && flock 9 || die "cannot lock $BUILD/.lock"
 if [ ! -f "$BUILD/vtouchprobe.so" ] || ! cmp -s "$HERE/comp/vtouchprobe.comp" "$BUILD/vtouchprobe.comp"; then
     cp "$HERE/comp/vtouchprobe.comp" "$BUILD/vtouchprobe.comp"
     (cd "$BUILD" && halcompile --compile vtouchprobe.comp) > "$OUT/build.log" 2>&1 \
         || { rm -f "$BUILD/vtouchprobe.comp"; die "halcompile vtouchprobe.comp failed (see $OUT/build.log)"; }
 fi
 if ! cmp -s "$BUILD/vtouchprobe.so" "$MODDIR/vtouchprobe.so"; then
-    cp "$BUILD/vtouchprobe.so" "$MODDIR/vtouchprobe.so" || die "cannot install vtouchprobe.so into $MODDIR"
+    { cp "$BUILD/vtouchprobe.so" "$MODDIR/.vtouchprobe.so.new" && mv -f "$MODDIR/.vtouchprobe.so.new" "$MODDIR/vtouchprobe.so"; } \
+        || die "cannot install vtouchprobe.so into $MODDIR"
 fi
+flock -u 9
+exec 9>&-
 
 # ------------------------------------------------------ truth -> HAL pins
 "$PY" "$HERE/scripts/truth_params.py" --truth "$TRUTH" --machine "$MACHINE" ${PLAN:+--plan "$PLAN"} -o "$OUT/params.json" \
@@ -132,10 +143,30 @@ export RTAPI_FIFO_PATH="/tmp/rotacal-e2e-rtapi-$$.fifo"
 rm -f "$OUT/driver_status.json" "$OUT/driver.log"
 tmp_before="$(ls -d /tmp/linuxcnc.debug.* /tmp/linuxcnc.print.* 2>/dev/null | sort)"
 
-echo "run.sh: LinuxCNC starting (timeout ${TIMEOUT}s), run directory $OUT"
+echo "run.sh: LinuxCNC starting (timeout ${TIMEOUT}s, $([ "$ISOLATE" = 1 ] && echo "own namespaces" || echo "shared namespaces")), run directory $OUT"
 # own session: the watchdog can address the whole tree by its process group
-HOME="$OUT" setsid linuxcnc -r "$OUT/config/$INI" > "$OUT/linuxcnc.log" 2>&1 < /dev/null &
+if [ "$ISOLATE" = 1 ]; then
+    # --kill-child: TERM to unshare reaches the namespace's first process (the linuxcnc script,
+    # which cleans up on TERM); when that process ends, the kernel ends the whole namespace
+    HOME="$OUT" setsid unshare --ipc --net --mount --pid --fork --mount-proc --kill-child=SIGTERM \
+        bash "$HERE/scripts/ns_session.sh" "$OUT/config/$INI" "$OUT" "$HERE" "$NGC" ${PRE:+"$PRE"} \
+        > "$OUT/linuxcnc.log" 2>&1 < /dev/null &
+else
+    HOME="$OUT" setsid linuxcnc -r "$OUT/config/$INI" > "$OUT/linuxcnc.log" 2>&1 < /dev/null &
+fi
 LPID=$!
+# unshare's child: the namespace's first process (its pid out here)
+ns_init() { cut -d' ' -f1 "/proc/$LPID/task/$LPID/children" 2>/dev/null; }
+# the driver's pid in driver.pid is its pid in the session's namespace: signal it from there
+ns_kill() {  # ns_kill SIGNAL PID
+    if [ "$ISOLATE" = 1 ]; then
+        local init
+        init=$(ns_init)
+        [ -n "$init" ] && nsenter -t "$init" -p -- kill -"$1" "$2" 2>/dev/null
+    else
+        kill -"$1" "$2" 2>/dev/null
+    fi
+}
 deadline=$(( SECONDS + TIMEOUT ))
 stage=0
 while kill -0 "$LPID" 2>/dev/null; do
@@ -143,13 +174,21 @@ while kill -0 "$LPID" 2>/dev/null; do
         stage=$((stage + 1))
         case $stage in
             1) echo "run.sh: TIMEOUT -- stopping the driver (clean LinuxCNC shutdown follows)"
-               [ -f "$OUT/driver.pid" ] && kill -TERM "$(cat "$OUT/driver.pid")" 2>/dev/null;;
+               [ -f "$OUT/driver.pid" ] && ns_kill TERM "$(cat "$OUT/driver.pid")";;
             2) echo "run.sh: still running -- TERM to the linuxcnc script ($LPID)"
                kill -TERM "$LPID" 2>/dev/null;;
             *) echo "run.sh: still running -- KILL process group $LPID, stop realtime"
-               kill -KILL -- "-$LPID" 2>/dev/null
-               /usr/lib/linuxcnc/realtime stop >/dev/null 2>&1
-               rm -f "$LOCK"
+               if [ "$ISOLATE" = 1 ]; then
+                   # the namespace's first process: killing it ends every process of the session,
+                   # and its shared memory goes with its IPC namespace
+                   init=$(ns_init)
+                   [ -n "$init" ] && kill -KILL "$init" 2>/dev/null
+                   kill -KILL -- "-$LPID" 2>/dev/null
+               else
+                   kill -KILL -- "-$LPID" 2>/dev/null
+                   /usr/lib/linuxcnc/realtime stop >/dev/null 2>&1
+                   rm -f "$LOCK"
+               fi
                break;;
         esac
         deadline=$(( SECONDS + 20 ))
