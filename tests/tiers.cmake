@@ -23,6 +23,9 @@ set(ROTACAL_STATISTICAL_TESTS
   "WithNoiseWithinUncertainty" "NoisyLocationErrorsWithinTheirUncertainty"
   # a Monte Carlo, or drawn values, against the closed form
   "MonteCarlo" "RefitsOfDrawnContributors" "HasTheRequestedSpread" "HaveTheStatedSpread"
+  # machines drawn from their declared contributors: the screen's and the judge's rates on them
+  "RealMachine\\." "KeepsItsRateOn" "KeepTheirRates" "StandardNormalUnderTheDeclaration"
+  "TheJudgeWhitensByTheFullCovariance"
 )
 
 # rotacal_apply_tiers(LIST TIER ...): each test named in the variable LIST gets label statistical
