@@ -873,8 +873,12 @@ JudgeSummary judge(const JudgeProblem& pb, const JudgeOptions& o) {
                             fmt::join(found, ", "), adequacyClause(fin));
   } else {
     s.verdict = JudgeVerdict::NoSignificantEffect;
-    s.message = fmt::format("no catalogued cause passes; the model explains the data within the declared noise ({})",
-                            adequacyClause(fin));
+    // With shared contributors declared, what they leave in the residual (a linear axis's
+    // squareness, a face's form) is the declaration's, not a cause: say which declaration it is.
+    s.message = fmt::format("no catalogued cause passes; the model explains the data within the declared noise ({}){}",
+                            adequacyClause(fin),
+                            pb.declaration.empty() ? std::string()
+                                                   : fmt::format(": consistent with what is declared ({})", pb.declaration));
   }
   return s;
 }

@@ -178,8 +178,14 @@ TEST(DeclaredNoise, DiagonalCovarianceEqualsSigma) {
   b.covariance = sigma.cwiseAbs2().asDiagonal();
   const JudgeSummary sa = judge(a), sb = judge(b);
   EXPECT_NEAR(sa.baseline.chi2, sb.baseline.chi2, 1e-9);
-  EXPECT_NEAR(sa.baseline.rms_residual, sb.baseline.rms_residual, 1e-9);
   EXPECT_EQ(sa.verdict, sb.verdict);
+  // The raw-unit residual of the covariance form is the model's ordinary least squares residual
+  // (the sigma form's is the weighted one): both against the normal equations.
+  const Eigen::VectorXd ols = y - J * (J.transpose() * J).ldlt().solve(J.transpose() * y);
+  const Eigen::MatrixXd Wd = sigma.cwiseInverse().asDiagonal();
+  const Eigen::VectorXd wls = y - J * (J.transpose() * Wd * Wd * J).ldlt().solve(J.transpose() * Wd * Wd * y);
+  EXPECT_NEAR(sb.baseline.rms_residual, std::sqrt(ols.squaredNorm() / n), 1e-9);
+  EXPECT_NEAR(sa.baseline.rms_residual, std::sqrt(wls.squaredNorm() / n), 1e-9);
 }
 
 TEST(DeclaredNoise, RepeatabilityOnlyAndContradictions) {
