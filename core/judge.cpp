@@ -699,6 +699,12 @@ JudgeSummary judge(const JudgeProblem& pb, const JudgeOptions& o) {
   Model model;
   model.X = cx.whiten(pb.J0);
   model.names = pb.baseline_parameters;
+  if (cx.W.size()) {
+    // The held-out errors in y's unit: sqrt(diag) would scale them by what the model absorbs (a
+    // set-up of 120 um), so every observation takes the declared scatter the baseline leaves.
+    const double left = declaredResidualRms(cx, spanOf(model.X));
+    cx.sigma = Eigen::VectorXd::Constant(n, left > 0 ? left : std::sqrt(pb.covariance.diagonal().mean()));
+  }
   refresh(cx, &model);
   s.baseline_rank = model.span.rank();
   // With shared errors, sqrt(diag Sigma) counts what the model absorbs (a set-up of 120 um in Z);

@@ -162,7 +162,8 @@ std::string touch154DiagnosisText(const Touch154Diagnosis& d) {
   std::string s = fmt::format(
       "baseline (location errors + per-point offsets): residual rms {:.3f} um, held-out rms {:.3f} um (leave one pose out)\n",
       d.lin.baseline.summary.residual_rms_um, d.judged.baseline_holdout_rms);
-  s += fmt::format("declared noise: {:.3f} um rms per touch ({})\n", d.judged.declared_sigma_rms, d.judged.declaration);
+  s += fmt::format("declared noise: {:.3f} um rms {} ({})\n", d.judged.declared_sigma_rms,
+                   d.judged.correlated ? "left in the baseline's residual" : "per touch", d.judged.declaration);
   s += judgeText(d.judged);
   for (const auto& f : d.findings) {
     const auto& params = locationParameters(f.fit.estimate.kinematics);
