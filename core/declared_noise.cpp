@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "core/contributor_draw.hpp"
 #include "core/statistics.hpp"
 
 namespace rotacal {
@@ -71,6 +72,21 @@ DeclaredNoise perTouchDeclaration(const ContributorSet* declared, double machine
   d.declaration = d.repeatability_only ? fmt::format("declared: repeatability only ({:.3f} um, {})", declared_um, from)
                                        : fmt::format("declared per touch: {} (from {})", parts, from);
   return d;
+}
+
+void addProbeAxesPart(const ContributorSet& declared, const std::vector<Eigen::Vector3d>& t,
+                      const std::vector<Eigen::Vector3d>& u, const Eigen::VectorXd& scale, DeclaredNoise* noise) {
+  const auto shared = [](const ContributorInfo& c) { return isProbeAxesContributor(c) && !isPerTouchContributor(c); };
+  std::string ids;
+  for (const Contributor& c : declared.items)
+    if (shared(*c.info) && c.u.cwiseAbs().maxCoeff() > 0) ids += fmt::format("{}{}", ids.empty() ? "" : ", ", c.info->id);
+  if (ids.empty()) return;
+  Eigen::MatrixXd C = 1e6 * probeAxesCovariance(declared, shared, t, u);  // mm^2 -> um^2
+  if (scale.size()) C = scale.asDiagonal() * C * scale.asDiagonal();
+  noise->structured_um2 = C;
+  noise->repeatability_only = false;
+  noise->declaration += fmt::format("; shared between touches, to first order: {} ({:.2f} um rms per touch)", ids,
+                                    std::sqrt(C.diagonal().mean()));
 }
 
 Eigen::MatrixXd inverseSquareRoot(const Eigen::MatrixXd& S) {

@@ -48,6 +48,14 @@ DeclaredNoise repeatabilityOnly(double repeatability_um, const std::string& sour
 /// by more than 1 % (two declarations of one quantity: neither is silently preferred).
 DeclaredNoise perTouchDeclaration(const ContributorSet* declared, double machine_repeatability_um);
 
+/// The shared part of a probe cycle's touches, read at trigger_m_mm along approach_m (plan order):
+/// the declared pretravel and linear axes to first order (contributor_draw.hpp's
+/// probeAxesCovariance), each touch's displacement along its approach times scale[i] (the touch's
+/// reading per unit of it: 1, or n . u on a sphere; empty: 1). Sets `noise`'s structured part
+/// and names the contributors in its declaration; leaves it unchanged when none is declared.
+void addProbeAxesPart(const ContributorSet& declared, const std::vector<Eigen::Vector3d>& trigger_m_mm,
+                      const std::vector<Eigen::Vector3d>& approach_m, const Eigen::VectorXd& scale, DeclaredNoise* noise);
+
 /// Sigma^-1/2 by its eigen-decomposition (the symmetric root: each whitened reading stays tied to
 /// its own touch, unlike a Cholesky factor, so "where the misfit sits" still reads by touch).
 /// Eigenvalues below 1e-12 of the largest are floored there. Throws std::invalid_argument when

@@ -173,11 +173,6 @@ SphereCycleResult identifySphereCycle(const ProbePlan& plan, const std::vector<M
 DeclaredNoise sphereDeclaredNoise(const ProbePlan& plan, const ContributorSet* declared) {
   DeclaredNoise noise = perTouchDeclaration(declared, plan.machine.probe.repeatability_um);
   if (!declared) return noise;
-  std::string ids;
-  for (const Contributor& c : declared->items)
-    if (isProbeAxesContributor(*c.info) && !isPerTouchContributor(*c.info) && c.u.cwiseAbs().maxCoeff() > 0)
-      ids += fmt::format("{}{}", ids.empty() ? "" : ", ", c.info->id);
-  if (ids.empty()) return noise;
   const SphereLayout l = sphereLayoutOf(plan);
   const KinematicModel m = sphereModel(plan.machine, l.center_w_mm);
   const Eigen::VectorXd nominal = Eigen::VectorXd::Zero(m.size());
@@ -190,12 +185,7 @@ DeclaredNoise sphereDeclaredNoise(const ProbePlan& plan, const ContributorSet* d
     const Eigen::Vector3d n = (p.trigger_m_mm - sphereCentreInAxes(m, nominal, p.pose)).normalized();
     nu[static_cast<Eigen::Index>(i)] = n.dot(p.approach_m);
   }
-  const auto shared = [](const ContributorInfo& c) { return isProbeAxesContributor(c) && !isPerTouchContributor(c); };
-  noise.structured_um2 = mmToUm(1.0) * mmToUm(1.0) * nu.asDiagonal() * probeAxesCovariance(*declared, shared, t, u) *
-                         nu.asDiagonal();
-  noise.repeatability_only = false;
-  noise.declaration += fmt::format("; shared between touches, to first order: {} ({:.2f} um rms per touch)", ids,
-                                   std::sqrt(noise.structured_um2.diagonal().mean()));
+  addProbeAxesPart(*declared, t, u, nu, &noise);
   return noise;
 }
 

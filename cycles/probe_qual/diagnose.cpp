@@ -42,19 +42,9 @@ ProbeQualDiagnosis diagnoseProbeQual(const ProbePlan& plan, const std::vector<Me
   // approach as sign(m . u) ds (rows weighted by 1 / |m . u|).
   DeclaredNoise noise = perTouchDeclaration(declared, plan.machine.probe.repeatability_um);
   if (declared) {
-    std::string ids;
-    for (const Contributor& c : declared->items)
-      if (isProbeAxesContributor(*c.info) && !isPerTouchContributor(*c.info) && c.u.cwiseAbs().maxCoeff() > 0)
-        ids += fmt::format("{}{}", ids.empty() ? "" : ", ", c.info->id);
-    if (!ids.empty()) {
-      std::vector<Eigen::Vector3d> t, u;
-      for (const auto& pt : plan.points) t.push_back(pt.trigger_m_mm), u.push_back(pt.approach_m);
-      const auto shared = [](const ContributorInfo& c) { return isProbeAxesContributor(c) && !isPerTouchContributor(c); };
-      noise.structured_um2 = mmToUm(1.0) * mmToUm(1.0) * probeAxesCovariance(*declared, shared, t, u);
-      noise.repeatability_only = false;
-      noise.declaration += fmt::format("; shared between touches, to first order: {} ({:.2f} um rms per touch)", ids,
-                                       std::sqrt(noise.structured_um2.diagonal().mean()));
-    }
+    std::vector<Eigen::Vector3d> t, u;
+    for (const auto& pt : plan.points) t.push_back(pt.trigger_m_mm), u.push_back(pt.approach_m);
+    addProbeAxesPart(*declared, t, u, Eigen::VectorXd(), &noise);
   }
   std::vector<std::pair<int, int>> kept;
   Eigen::VectorXd sign(n);

@@ -545,17 +545,7 @@ Spheres3Noise spheres3DeclaredNoise(const ProbePlan& plan, const ContributorSet*
     u.push_back(p.approach_m);
   }
   out.approach = u;
-  if (!declared) return out;
-  std::string ids;
-  for (const Contributor& c : declared->items)
-    if (isProbeAxesContributor(*c.info) && !isPerTouchContributor(*c.info) && c.u.cwiseAbs().maxCoeff() > 0)
-      ids += fmt::format("{}{}", ids.empty() ? "" : ", ", c.info->id);
-  if (ids.empty()) return out;
-  const auto shared = [](const ContributorInfo& c) { return isProbeAxesContributor(c) && !isPerTouchContributor(c); };
-  out.trigger.structured_um2 = mmToUm(1.0) * mmToUm(1.0) * probeAxesCovariance(*declared, shared, t, u);
-  out.trigger.repeatability_only = false;
-  out.trigger.declaration += fmt::format("; shared between touches, to first order: {} ({:.2f} um rms per touch)", ids,
-                                         std::sqrt(out.trigger.structured_um2.diagonal().mean()));
+  if (declared) addProbeAxesPart(*declared, t, u, Eigen::VectorXd(), &out.trigger);
   return out;
 }
 
