@@ -198,7 +198,7 @@ def run_touch154(a):
     figures["identified1"] = got1
 
     # 2. the compensation loop (000 Sec. 4.5): the work-offset program, then the same cycle; and
-    # 3. the post-processor route (issue 18): the program rewritten for run 1's errors, run
+    # 3. the post-processor route: the program rewritten for run 1's errors, run
     # unchanged, its records read back as the original program's. Both sessions need only run 1's
     # outputs: they run side by side, and are checked in this order after.
     with open(offsets) as f:
