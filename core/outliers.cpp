@@ -1,5 +1,6 @@
 #include "core/outliers.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 #include <stdexcept>
@@ -44,6 +45,14 @@ std::string OutlierScreen::text() const {
   return fmt::format("outlier screen: excluded {} of {} touches beyond {:.2f} x {} (a chip "
                      "or dirt on the surface; fit without them): {}",
                      excluded.size(), touches, threshold_t, against, list);
+}
+
+std::vector<std::pair<int, int>> heldOutTouches(const std::vector<PointResidual>& residuals) {
+  std::vector<std::pair<int, int>> k;
+  for (const auto& p : residuals)
+    if (p.held_out) k.emplace_back(p.run, p.point_id);
+  std::sort(k.begin(), k.end());
+  return k;
 }
 
 OutlierScreen screenOutliers(

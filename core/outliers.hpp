@@ -59,6 +59,10 @@ struct OutlierScreen {
   std::string text() const;  // one line for the report
 };
 
+/// The touches a fit held out, as (run, point id) sorted: the key by which a screen's caller
+/// keeps the fit it made for each hold-out rule.
+std::vector<std::pair<int, int>> heldOutTouches(const std::vector<PointResidual>& residuals);
+
 /// Runs `fit` (an identification with the given hold-out rule) repeatedly; returns the screen.
 /// `fit` is called with a null rule first.
 OutlierScreen screenOutliers(

@@ -210,13 +210,7 @@ SphereScreen screenSphereTouches(const ProbePlan& plan, const std::vector<Measur
   // Each fit the screen asks for, by the touches it holds out: the statistic reads its Jacobian.
   using Key = std::vector<std::pair<int, int>>;  // (run, point id), sorted
   const auto fits = std::make_shared<std::map<Key, std::shared_ptr<const SphereCycleResult>>>();
-  const auto keyOf = [](const std::vector<PointResidual>& residuals) {
-    Key k;
-    for (const auto& p : residuals)
-      if (p.held_out) k.emplace_back(p.run, p.point_id);
-    std::sort(k.begin(), k.end());
-    return k;
-  };
+  const auto keyOf = [](const std::vector<PointResidual>& residuals) { return heldOutTouches(residuals); };
   const auto fit = [&](const std::function<bool(int, const ProbePoint&)>& hold) {
     IdentificationResult out;
     std::shared_ptr<const SphereCycleResult> r;

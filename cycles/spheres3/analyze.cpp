@@ -669,13 +669,7 @@ Spheres3Screen screenSpheres3Touches(const ProbePlan& plan, const std::vector<Me
   // Each fit the screen asks for, by the touches it holds out: the statistic reads its problem.
   using Key = std::vector<std::pair<int, int>>;  // (run, point id), sorted
   const auto problems = std::make_shared<std::map<Key, Spheres3TouchProblem>>();
-  const auto keyOf = [](const std::vector<PointResidual>& residuals) {
-    Key k;
-    for (const auto& p : residuals)
-      if (p.held_out) k.emplace_back(p.run, p.point_id);
-    std::sort(k.begin(), k.end());
-    return k;
-  };
+  const auto keyOf = [](const std::vector<PointResidual>& residuals) { return heldOutTouches(residuals); };
   Spheres3Options o = options;
   o.radius_tolerance_um = std::numeric_limits<double>::infinity();
   // The statistic reads P r, the same for any parameters in the model's span to first order: a
