@@ -7,10 +7,14 @@
 # found it is left in build-fuzz/findings/HARNESS/.
 #   scripts/fuzz.sh [SECONDS_PER_HARNESS] [HARNESS...]     (FUZZ_JOBS=2: two harnesses at a time)
 #   scripts/fuzz.sh --configure-only    (the sanitizer build's configuration alone: scripts/sanitize-corpus.sh)
+#   scripts/fuzz.sh --build-only        (configure and build every harness and the corpus' `rotacal`;
+#                                        .ci/run builds them beside the tests)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 CONFIGURE_ONLY=0
+BUILD_ONLY=0
 if [ "${1:-}" = "--configure-only" ]; then CONFIGURE_ONLY=1; shift; fi
+if [ "${1:-}" = "--build-only" ]; then BUILD_ONLY=1; shift; fi
 SECONDS_PER=${1:-20}
 shift || true
 ROOT=$PWD
@@ -30,12 +34,14 @@ fi
 # -O1 -gline-tables-only: what libFuzzer's documentation uses; a third less compile time than
 # -O2 -g (core/identification.cpp: 53 s of CPU instead of 77 s), with file:line in every report.
 SAN="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer -O1 -gline-tables-only"
-LAUNCH=()
-if command -v ccache >/dev/null; then LAUNCH=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
 cmake -S . -B "$B" -DCMAKE_BUILD_TYPE=None -DCMAKE_C_COMPILER="$CC_" -DCMAKE_CXX_COMPILER="$CXX_" \
-  "${LAUNCH[@]}" -DROTACAL_FUZZ=ON -DROTACAL_BUILD_TESTS=OFF -DROTACAL_BUILD_BENCH=OFF -DROTACAL_WERROR=OFF \
+  -DROTACAL_FUZZ=ON -DROTACAL_BUILD_TESTS=OFF -DROTACAL_BUILD_BENCH=OFF -DROTACAL_WERROR=OFF \
   -DCMAKE_CXX_FLAGS="$SAN" >/dev/null
 if [ $CONFIGURE_ONLY = 1 ]; then exit 0; fi
+if [ $BUILD_ONLY = 1 ]; then
+  cmake --build "$B" --target "${HARNESSES[@]}" rotacal -j"$(nproc)"
+  exit 0
+fi
 cmake --build "$B" --target "${HARNESSES[@]}" -j"$(nproc)"
 
 # Seeds: the real files each boundary reads, made by the normal build's rotacal (built if absent).
