@@ -422,6 +422,9 @@ Json spheres3ReportJson(const ProbePlan& plan, const Spheres3Result& r, const st
                      {"unit", reportUnitOf(comp)}});
   }
   j["component_error_terms"] = terms;
+  j["component_error_terms_u"] =
+      "u of each term is its fit's own (the covariance of the series), no Type B evaluated: the signed u (u_c) is "
+      "component_errors' at each angle";
   j["component_errors_convention"] =
       "Fourier series over the sampled angles without the mean (a location error or a sphere position) and without the "
       "first harmonic that turns with the table (a sphere position); positive EXC/EYC/EZC move the table in +X/+Y/+Z, "
