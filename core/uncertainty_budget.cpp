@@ -31,6 +31,12 @@ Eigen::VectorXd UncertaintyBudget::uA() const { return sqrtDiag(cov_a); }
 Eigen::VectorXd UncertaintyBudget::uB() const { return sqrtDiag(cov_b); }
 Eigen::VectorXd UncertaintyBudget::uC() const { return sqrtDiag(covariance()); }
 
+double UncertaintyBudget::uCOr(std::string_view name, double otherwise) const {
+  for (int i = 0; i < size(); ++i)
+    if (names[static_cast<size_t>(i)] == name) return std::sqrt(std::max(0.0, cov_a(i, i) + cov_b(i, i)));
+  return otherwise;
+}
+
 Eigen::VectorXd UncertaintyBudget::coverageFactors() const {
   return coverage_factor.size() == size() ? coverage_factor : Eigen::VectorXd::Constant(size(), kCoverageFactor);
 }
@@ -199,15 +205,13 @@ std::string coverageFactorSource(const UncertaintyBudget& b) {
 }
 
 Json budgetJson(const UncertaintyBudget& b, const Eigen::VectorXd& values, int top) {
-  const Eigen::VectorXd ua = b.uA(), ub = b.uB(), uc = b.uC(), k = b.coverageFactors();
+  const Eigen::VectorXd ua = b.uA(), ub = b.uB(), k = b.coverageFactors();
   Json params = Json::object();
-  for (int i = 0; i < b.size(); ++i)
-    params[b.names[i]] = {{"unit", b.units[i]},
-                          {"u_a", round6(ua[i])},
-                          {"u_b", round6(ub[i])},
-                          {"u_c", round6(uc[i])},
-                          {"U", round6(k[i] * uc[i])},
-                          {"k", round6(k[i])}};
+  for (int i = 0; i < b.size(); ++i) {
+    Json e = {{"unit", b.units[i]}};
+    setUncertaintyFields(&e, ua[i], ub[i], k[i]);
+    params[b.names[i]] = e;
+  }
   if (values.size() == b.size())
     for (int i = 0; i < b.size(); ++i) params[b.names[i]]["value"] = round6(values[i]);
   const Eigen::MatrixXd cov = b.covariance(), cor = b.correlation();
@@ -253,17 +257,48 @@ Json budgetJson(const UncertaintyBudget& b, const Eigen::VectorXd& values, int t
   return j;
 }
 
+void setUncertaintyFields(Json* entry, double u_a, double u_b, double k, double u_between) {
+  const double u_c = std::hypot(u_a, u_b);
+  Json& e = *entry;
+  e["u"] = round6(u_c);
+  e["u_a"] = round6(u_a);
+  e["u_b"] = round6(u_b);
+  e["u_c"] = round6(u_c);
+  if (u_between >= 0) e["u_between"] = round6(u_between);
+  e["U"] = round6(k * u_c);
+  e["k"] = round6(k);
+}
+
+void setUncertaintyArrays(Json* entry, const Eigen::VectorXd& u_a, const Eigen::VectorXd& u_b, const Eigen::VectorXd& k) {
+  if (u_b.size() != u_a.size() || k.size() != u_a.size())
+    throw std::invalid_argument("setUncertaintyArrays: u_a, u_b and k differ in length");
+  Json u = Json::array(), a = Json::array(), b = Json::array(), c = Json::array(), big = Json::array(), kk = Json::array();
+  for (Eigen::Index i = 0; i < u_a.size(); ++i) {
+    Json one = Json::object();
+    setUncertaintyFields(&one, u_a[i], u_b[i], k[i]);
+    u.push_back(one["u"]);
+    a.push_back(one["u_a"]);
+    b.push_back(one["u_b"]);
+    c.push_back(one["u_c"]);
+    big.push_back(one["U"]);
+    kk.push_back(one["k"]);
+  }
+  Json& e = *entry;
+  e["u"] = u;
+  e["u_a"] = a;
+  e["u_b"] = b;
+  e["u_c"] = c;
+  e["U"] = big;
+  e["k"] = kk;
+}
+
+void setTypeAOnlyFields(Json* entry, double u_a) { setUncertaintyFields(entry, u_a, 0.0, kCoverageFactor); }
+
 void addBudgetFields(Json* parameters, const UncertaintyBudget& b) {
-  const Eigen::VectorXd ua = b.uA(), ub = b.uB(), uc = b.uC(), ubetween = b.uBetween(), k = b.coverageFactors();
+  const Eigen::VectorXd ua = b.uA(), ub = b.uB(), ubetween = b.uBetween(), k = b.coverageFactors();
   for (int i = 0; i < b.size(); ++i) {
     if (!parameters->contains(b.names[i])) continue;
-    Json& e = (*parameters)[b.names[i]];
-    e["u_a"] = round6(ua[i]);
-    e["u_b"] = round6(ub[i]);
-    e["u_c"] = round6(uc[i]);
-    e["u_between"] = round6(ubetween[i]);
-    e["U"] = round6(k[i] * uc[i]);
-    e["k"] = round6(k[i]);
+    setUncertaintyFields(&(*parameters)[b.names[i]], ua[i], ub[i], k[i], ubetween[i]);
   }
 }
 

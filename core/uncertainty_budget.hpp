@@ -9,6 +9,7 @@
 //        twice;
 //   u_c = sqrt(u_A^2 + u_B^2), U = k u_c with k read off the propagated distribution for 95.45 %
 //   (JCGM 101 7.7; k = 2, the normal value, when there is no Monte Carlo to read it from);
+//   u_c is what a REPORT.json's `u` is, in every cycle (setUncertaintyFields);
 // the combined covariance (cov_A + cov_B) and its correlation matrix, and the budget: each
 // contributor's share alone. Cycle-neutral: a cycle hands in the numbers (report units: um, mdeg,
 // um/h, ...); this file combines and writes them. docs/uncertainty.md states the rules and the
@@ -68,6 +69,9 @@ struct UncertaintyBudget {
   Eigen::VectorXd uA() const;
   Eigen::VectorXd uB() const;
   Eigen::VectorXd uC() const;
+  /// u_c of the parameter named `name`, or `otherwise` when the budget has none of that name
+  /// (a text headline prints what REPORT.json's u holds).
+  double uCOr(std::string_view name, double otherwise) const;
   /// What differs between two calibrations of the same machine: u_A and the contributors drawn
   /// anew at every set-up (variesBetweenCalibrations), each alone from the budget's terms. The
   /// machine's own systematic errors (its linear axes, the artefact's form) are the same in every
@@ -203,8 +207,19 @@ std::string coverageFactorSource(const UncertaintyBudget& budget);
 /// ...] largest first]}}. `values` (report units, the budget's order), when given, adds each
 /// parameter's value beside its uncertainty.
 Json budgetJson(const UncertaintyBudget& budget, const Eigen::VectorXd& values = Eigen::VectorXd(), int top = 5);
-/// Adds u_a, u_b, u_c, U and k to each entry of a parameters object ({name: {value, unit, u}})
-/// whose name the budget has; `u` (contract.md: from the data) is left as it is.
+/// The one meaning of `u` in every REPORT.json (contract.md: the standard uncertainty, k = 1):
+/// u = u_c = sqrt(u_a^2 + u_b^2), written beside u_a (the data's part), u_b (the declared
+/// contributors'), u_c, U = k u_c and k, and u_between when it is given (>= 0). Every number a
+/// cycle signs goes through here, so the fields cannot disagree between cycles.
+void setUncertaintyFields(Json* entry, double u_a, double u_b, double k, double u_between = -1.0);
+/// The same for an entry that holds a value per angle or tilt: each field an array, element by
+/// element (u_a, u_b and k of equal length).
+void setUncertaintyArrays(Json* entry, const Eigen::VectorXd& u_a, const Eigen::VectorXd& u_b, const Eigen::VectorXd& k);
+/// A number for which no Type B is evaluated (the cycle declares none for it): u = u_c = u_a,
+/// u_b = 0 and U = kCoverageFactor u_c. The report must say in words that u_B was not evaluated.
+void setTypeAOnlyFields(Json* entry, double u_a);
+/// Adds u_a, u_b, u_c, u_between, U and k to each entry of a parameters object ({name: {value,
+/// unit, u}}) whose name the budget has, and sets its `u` to u_c (setUncertaintyFields).
 void addBudgetFields(Json* parameters, const UncertaintyBudget& budget);
 /// The readable table: value beside u_A u_B u_c U, then the largest contributors and the
 /// strongest correlations.

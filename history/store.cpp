@@ -151,9 +151,12 @@ Calibration calibrationFromReport(const JsonDoc& doc, const std::string& machine
       StoredParameter p;
       p.name = name;
       p.value = requireNumber(doc, e, "value", Limits::symmetric(kMaxStoredValue));
-      // What differs between calibrations (issue 17): u_between where the report signs a budget
-      // (u_A and the contributors drawn anew at every set-up); the data's u in older reports.
+      // A trend compares calibrations of one machine, so it weighs each by what differs between
+      // them: u_between (u_A and the contributors drawn anew at every set-up). The machine's own
+      // systematic errors, in u (= u_c) and u_b, are the same every time and cancel. A report
+      // without u_between: its u_a, the data's part; older still, its u, which was then the data's.
       p.u = e.contains("u_between") ? requireNumber(doc, e, "u_between", Limits::nonNegative(kMaxStoredValue))
+            : e.contains("u_a")     ? requireNumber(doc, e, "u_a", Limits::nonNegative(kMaxStoredValue))
                                     : requireNumber(doc, e, "u", Limits::nonNegative(kMaxStoredValue));
       p.unit = requireString(doc, e, "unit");
       if (head && p.unit != "um" && p.unit != "mdeg")

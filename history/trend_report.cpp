@@ -108,9 +108,9 @@ Json historyJson(const std::string& machine_id, const std::vector<Calibration>& 
                 {"title", fmt::format("{}: {}", name, t.verdict)},
                 {"x", {{"label", "time since the first calibration"}, {"unit", "d"}}},
                 {"y", {{"label", name}, {"unit", unit[name]}}},
-                {"series", Json::array({{{"name", "identified, u (k = 1)"}, {"style", "points"}, {"x", x}, {"y", y}, {"u", u}},
+                {"series", Json::array({{{"name", "identified, u (k = 1): u_between, what differs between calibrations"}, {"style", "points"}, {"x", x}, {"y", y}, {"u", u}},
                                         {{"name", "model chosen by the tests"}, {"style", "line"}, {"x", x}, {"y", fit}}})},
-                {"bands", Json::array({{{"name", "value ± 2u (k = 2)"}, {"x", x}, {"lo", lo}, {"hi", hi}}})}};
+                {"bands", Json::array({{{"name", "value ± 2u (u_between, k = 2)"}, {"x", x}, {"lo", lo}, {"hi", hi}}})}};
     if (t.step_after)
       fig["note"] = fmt::format("Step of {:.3f} {} (u {:.3f}) after calibration #{}.", t.step_size, unit[name], t.step_u,
                                 seqs[name][static_cast<size_t>(*t.step_after)]);

@@ -88,9 +88,13 @@ std::vector<std::string> paperOrder(const Json& obj) {
 }
 
 /// A table of location errors {"name": {"value","unit","u","iso"}} with optional extra columns.
+/// A report's u is u_c (core/uncertainty_budget.hpp) and its column says so; a table whose entries
+/// carry no u_c (a diagnosis' re-estimate) heads it plain u.
 std::string locationTable(const Json& le, const std::vector<std::pair<std::string, const Json*>>& others = {}) {
   std::string s = "<table class=\"params\">";
-  std::vector<std::string> head = {"parameter", "ISO 230-7", "value", "u (k = 1)", "unit"};
+  bool all_uc = !le.empty();
+  for (const auto& [name, e] : le.items()) all_uc = all_uc && e.is_object() && e.contains("u_c");
+  std::vector<std::string> head = {"parameter", "ISO 230-7", "value", all_uc ? "u_c (k = 1)" : "u (k = 1)", "unit"};
   for (const auto& o : others) head.push_back(escape(o.first));
   s += row(head, true);
   for (const auto& name : paperOrder(le)) {

@@ -296,6 +296,14 @@ Json sphereReportJson(const ProbePlan& plan, const SphereCycleResult& r, const U
   // Each fitted parameter's budget beside its value (u_between: what history trends with).
   addBudgetFields(&kp, b);
   j["kinematic_parameters"] = kp;
+  // Each of the papers' location errors is one model parameter to first order: its budget too.
+  if (j.contains("location_errors"))
+    for (int i = 0; i < kNumLocationErrors; ++i) {
+      const std::string& model = r.names[static_cast<size_t>(r.location_index_in_x[static_cast<size_t>(i)])].name;
+      const std::string paper(locationParameters(plan.machine.kinematics)[static_cast<size_t>(i)].name);
+      if (!kp.contains(model) || !kp[model].contains("u_c") || !j["location_errors"].contains(paper)) continue;
+      for (const char* f : {"u", "u_a", "u_b", "u_c", "u_between", "U", "k"}) j["location_errors"][paper][f] = kp[model][f];
+    }
   Json unseen = Json::array();
   for (const auto& c : r.identifiability.combinations)
     unseen.push_back({{"held", r.names[static_cast<size_t>(c.held)].name}, {"direction", c.text}});

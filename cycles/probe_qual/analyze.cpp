@@ -13,6 +13,7 @@
 #include "core/report_envelope.hpp"
 #include "core/least_squares.hpp"
 #include "core/statistics.hpp"
+#include "core/uncertainty_budget.hpp"
 #include "core/units.hpp"
 #include "cycles/probe_qual/plan.hpp"
 #include "cycles/probing.hpp"
@@ -326,6 +327,16 @@ Json probeQualReportJson(const ProbePlan& plan, const ProbeQualification& q, con
                     {"unit", "um"},
                     {"touches", p.touches}});
   j["pretravel_by_direction"] = dirs;
+  // u means u_c in every report; here no Type B is evaluated, so u_c is the data's u_A.
+  setTypeAOnlyFields(&j["mean_pretravel"], q.u_mean_pretravel_um);
+  for (size_t i = 0; i < q.by_direction.size(); ++i) setTypeAOnlyFields(&j["pretravel_by_direction"][i], q.by_direction[i].u_um);
+  j["uncertainty"] = {{"coverage_probability", round6(kCoverageProbability)},
+                      {"coverage_factor", fmt::format("k = {:g}, the distribution taken as normal (no Monte Carlo distribution)",
+                                                      kCoverageFactor)},
+                      {"type_a", "the repeatability through the fit's covariance (the pooled scatter of the repeats)"},
+                      {"type_b", "not evaluated: the qualification measures the probe's own contributors (repeatability, "
+                                 "pretravel) that the other cycles declare, so u_c = u_A, the data's scatter only"},
+                      {"type_b_evaluated", false}};
   j["pretravel_note"] = "along the approach, late triggers positive; the horizontal pattern's first harmonic (cos and "
                         "sin of the azimuth) is a centre offset and is in the sphere's centre";
   j["lobing"] = {{"range", round6(q.lobing_range_um)},
@@ -373,13 +384,14 @@ std::string probeQualText(const ProbeQualification& q) {
   std::string s = fmt::format(
       "probe qualification: {} touches, {} directions\n"
       "repeatability {:.3f} um ({} dof; 95 % interval {:.3f} .. {:.3f} um)\n"
-      "mean pretravel {:+.3f} um (u {:.3f} um): effective ball diameter {:.4f} mm\n"
-      "pretravel by direction (um, u):\n",
+      "mean pretravel {:+.3f} um (u_c {:.3f} um): effective ball diameter {:.4f} mm\n"
+      "pretravel by direction (um, u_c):\n",
       q.touches, q.directions, q.repeatability_um, q.dof, q.repeatability_lo_um, q.repeatability_hi_um, q.mean_pretravel_um,
       q.u_mean_pretravel_um, q.effective_ball_diameter_mm);
   for (const auto& p : q.by_direction) s += fmt::format("  {:<16} {:+8.3f}  {:.3f}\n", p.name, p.pretravel_um, p.u_um);
   s += fmt::format("lobing: range {:.3f} um, rms {:.3f} um (the repeatability alone gives {:.3f} um: net {:.3f} um)\n",
                    q.lobing_range_um, q.lobing_rms_um, q.lobing_rms_noise_um, q.lobing_rms_net_um);
+  s += "u_c (k = 1) = u_A: Type B not evaluated (the qualification measures the probe's own contributors)\n";
   s += q.screen.text() + "\n";
   return s;
 }

@@ -378,8 +378,8 @@ Json rtestReportJson(const ProbePlan& plan, const std::vector<RtestCycle>& cycle
                                                   "change with time is not observed, and the other tilts' rotations "
                                                   "carry minus that change about their C axis"
                                                 : "set to 0 in the first cycle, its change with time is observed")},
-      {"u", "standard uncertainty (k = 1) from max(sensor repeatability, residual), later cycles include the first "
-            "cycle's reference"}};
+      {"u", "the fit's standard uncertainty (k = 1) from max(sensor repeatability, residual), later cycles include the "
+            "first cycle's reference; analyze replaces it by u_c once the budget is evaluated"}};
   size_t used = 0;
   double rss = 0;
   Json cj = Json::array();
@@ -570,7 +570,7 @@ Json rtestReportJson(const ProbePlan& plan, const std::vector<RtestCycle>& cycle
   return j;
 }
 
-std::string rtestReportText(const ProbePlan& plan, const RtestAnalysis& a) {
+std::string rtestReportText(const ProbePlan& plan, const RtestAnalysis& a, const RtestSignedU& su) {
   const Kinematics k = a.kinematics;
   const char ax = tiltAxis(k);
   std::string s = fmt::format("rotacal rtest (002): {} poses, {} cycle(s), machine {}\n", plan.points.size(),
@@ -588,6 +588,8 @@ std::string rtestReportText(const ProbePlan& plan, const RtestAnalysis& a) {
                        "repeat this cycle\n",
                        mmToUm(f.reread_minus_reset_mm.norm()), f.reset_p);
     if (c != 0 && c + 1 != a.cycles.size()) continue;
+    const bool tilt_signed = su.tilt_u_c.rows() == kRtestParams && su.tilt_u_c.cols() == static_cast<Eigen::Index>(a.tilt_deg.size());
+    s += fmt::format("  ({})\n", tilt_signed ? "value +- u_c, k = 1" : "value +- the fit's u, k = 1");
     s += fmt::format("  {:>8}", std::string(1, ax) + " deg");
     for (int p = 0; p < kRtestParams; ++p) s += fmt::format(" {:>16}", rtestParameterName(k, p) + " " + unitOf(p));
     s += "\n";
@@ -595,30 +597,38 @@ std::string rtestReportText(const ProbePlan& plan, const RtestAnalysis& a) {
       s += fmt::format("  {:>8g}", a.tilt_deg[i]);
       for (int p = 0; p < kRtestParams; ++p)
         s += fmt::format(" {:>8.3f} +-{:<6.3f}", toReport(p, f.value(p, static_cast<int>(i))),
-                         toReport(p, f.u(p, static_cast<int>(i))));
+                         !tilt_signed ? toReport(p, f.u(p, static_cast<int>(i)))
+                         : c == 0     ? su.tilt_u_c(p, static_cast<Eigen::Index>(i))
+                                      : std::hypot(toReport(p, f.u(p, static_cast<int>(i))),
+                                                   su.tilt_u_b(p, static_cast<Eigen::Index>(i))));
       s += "\n";
     }
   }
   if (a.location.identifiable) {
-    s += fmt::format("location errors (ISO 230-7, constant over the tilt, first cycle; fit residual {:.3f} um rms):\n",
-                     a.location.residual_rms_um);
+    s += fmt::format("location errors (ISO 230-7, constant over the tilt, first cycle; fit residual {:.3f} um rms; {}):\n",
+                     a.location.residual_rms_um, su.location ? "+- u_c, k = 1" : "+- the fit's u, k = 1");
     const auto& info = locationParameters(k);
     for (int q = 0; q < kNumLocationErrors; ++q) {
       const bool len = info[static_cast<size_t>(q)].kind == ParamKind::Length;
       s += fmt::format("  {:<8} {:>8} {:>9.3f} +-{:<6.3f} {}\n", info[static_cast<size_t>(q)].name,
                        info[static_cast<size_t>(q)].iso, len ? mmToUm(a.location.value[q]) : radToMdeg(a.location.value[q]),
-                       len ? mmToUm(a.location.u[q]) : radToMdeg(a.location.u[q]), len ? "um" : "mdeg");
+                       su.location ? su.location->uCOr(info[static_cast<size_t>(q)].name,
+                                                       len ? mmToUm(a.location.u[q]) : radToMdeg(a.location.u[q]))
+                                   : len ? mmToUm(a.location.u[q]) : radToMdeg(a.location.u[q]),
+                       len ? "um" : "mdeg");
     }
   } else {
     s += "location errors: " + a.location.why + "\n";
   }
   if (a.cycles.size() >= 3) {
-    s += "drift (straight line across cycles), per hour:\n";
+    const bool drift_signed = su.drift_u_c.rows() == kRtestParams && su.drift_u_c.cols() == static_cast<Eigen::Index>(a.tilt_deg.size());
+    s += fmt::format("drift (straight line across cycles), per hour ({}):\n", drift_signed ? "+- u_c, k = 1" : "+- the fit's u, k = 1");
     for (size_t i = 0; i < a.tilt_deg.size(); ++i) {
       s += fmt::format("  {:>8g}", a.tilt_deg[i]);
       for (int p = 0; p < kRtestParams; ++p)
         s += fmt::format(" {:>8.3f} +-{:<6.3f}", toReport(p, a.rate(p, static_cast<int>(i))) * 3600.0,
-                         toReport(p, a.rate_u(p, static_cast<int>(i))) * 3600.0);
+                         drift_signed ? su.drift_u_c(p, static_cast<Eigen::Index>(i))
+                                      : toReport(p, a.rate_u(p, static_cast<int>(i))) * 3600.0);
       s += "\n";
     }
   }

@@ -22,6 +22,7 @@
 
 #include "core/json_io.hpp"
 #include "core/probe_plan.hpp"
+#include "core/uncertainty_budget.hpp"
 #include "cycles/rtest/plan.hpp"
 
 namespace rotacal {
@@ -114,6 +115,15 @@ RtestAnalysis analyzeRtest(const ProbePlan& plan, const std::vector<RtestCycle>&
 /// REPORT.json of the R-test (contract, extended): per cycle estimates, drift, figures.
 Json rtestReportJson(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, const RtestAnalysis& analysis,
                      const std::vector<std::string>& result_files);
-std::string rtestReportText(const ProbePlan& plan, const RtestAnalysis& analysis);
+/// What REPORT.json's u holds (u_c), for the text to print the same numbers: the location errors'
+/// budget, the first cycle's per-tilt u_c and u_B (6 x tilts, report units; a later cycle's u_c
+/// is its own fit's u with the first cycle's u_B), the drift rates' u_c (per hour). Left empty,
+/// the text prints the fit's own u and says so.
+struct RtestSignedU {
+  const UncertaintyBudget* location = nullptr;
+  Eigen::MatrixXd tilt_u_c, tilt_u_b;
+  Eigen::MatrixXd drift_u_c;
+};
+std::string rtestReportText(const ProbePlan& plan, const RtestAnalysis& analysis, const RtestSignedU& signed_u = {});
 
 }  // namespace rotacal

@@ -268,27 +268,44 @@ RtestTiltBudget rtestTiltBudget(const ProbePlan& plan, const RtestCycle& first, 
 
 void addRtestTiltBudget(Json* report, const ProbePlan& plan, const RtestTiltBudget& b) {
   if (!report->contains("cycles") || (*report)["cycles"].empty()) return;
-  Json& errors = (*report)["cycles"][0]["errors"];
-  const Eigen::MatrixXd ua = b.uA(), ub = b.uB(), uc = b.uC(), U = b.expanded(), k = b.coverageFactors();
-  auto row = [&](const Eigen::MatrixXd& m, int p) {
-    Json r = Json::array();
-    for (int i = 0; i < b.tilts; ++i) r.push_back(round6(m(p, i)));
-    return r;
-  };
-  for (int p = 0; p < kRtestParams; ++p) {
-    const std::string name = rtestParameterName(plan.machine.kinematics, p);
-    if (!errors.contains(name)) continue;
-    Json& e = errors[name];
-    e["u_a"] = row(ua, p);
-    e["u_b"] = row(ub, p);
-    e["u_c"] = row(uc, p);
-    e["U"] = row(U, p);
-    e["k"] = row(k, p);
+  const Eigen::MatrixXd ua = b.uA(), ub = b.uB(), k = b.coverageFactors();
+  const Eigen::VectorXd k_normal = Eigen::VectorXd::Constant(b.tilts, kCoverageFactor);
+  Json& cycles = (*report)["cycles"];
+  for (size_t c = 0; c < cycles.size(); ++c) {
+    Json& errors = cycles[c]["errors"];
+    for (int p = 0; p < kRtestParams; ++p) {
+      const std::string name = rtestParameterName(plan.machine.kinematics, p);
+      if (!errors.contains(name)) continue;
+      Json& e = errors[name];
+      if (c == 0) {
+        setUncertaintyArrays(&e, ua.row(p).transpose(), ub.row(p).transpose(), k.row(p).transpose());
+        continue;
+      }
+      // A later cycle's Type A is its own fit's u. Its Type B is the first cycle's: the same
+      // contributors on the same poses, around errors a few micrometres apart. No Monte Carlo
+      // of its own to read k from: the normal k.
+      Eigen::VectorXd own = Eigen::VectorXd::Zero(b.tilts);
+      for (int i = 0; i < b.tilts && i < static_cast<int>(e["u"].size()); ++i) own[i] = e["u"][static_cast<size_t>(i)].get<double>();
+      setUncertaintyArrays(&e, own, ub.row(p).transpose(), k_normal);
+    }
   }
+  if (report->contains("per_tilt_errors")) {
+    Json& errors = (*report)["per_tilt_errors"]["errors"];
+    for (int p = 0; p < kRtestParams; ++p) {
+      const std::string name = rtestParameterName(plan.machine.kinematics, p);
+      if (errors.contains(name))
+        setUncertaintyArrays(&errors[name], ua.row(p).transpose(), ub.row(p).transpose(), k.row(p).transpose());
+    }
+  }
+  if (report->contains("conventions"))
+    (*report)["conventions"]["u"] =
+        "u = u_c, the standard uncertainty (k = 1), with u_a (the data's), u_b (the declared contributors') and U = k u_c "
+        "beside it; the first cycle's from its budget (per_tilt_uncertainty); a later cycle's u_a from its own fit, "
+        "max(sensor repeatability, residual), including the first cycle's reference, its u_b the first cycle's and k = 2";
   (*report)["per_tilt_uncertainty"] = {{"type_a", b.budget.type_a_source},
                                        {"type_b", b.budget.type_b_source},
                                        {"coverage_factor", coverageFactorSource(b.budget)},
-                                       {"where", "cycles[0].errors: u_a u_b u_c U k per tilt"}};
+                                       {"where", "cycles[*].errors and per_tilt_errors: u (= u_c) u_a u_b u_c U k per tilt"}};
 }
 
 RtestDriftBudget rtestDriftBudget(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, const RtestAnalysis& a,
@@ -342,20 +359,13 @@ RtestDriftBudget rtestDriftBudget(const ProbePlan& plan, const std::vector<Rtest
 void addRtestDriftBudget(Json* report, const ProbePlan& plan, const RtestDriftBudget& b) {
   if (!report->contains("drift") || b.u_a.size() == 0) return;
   Json& drift = (*report)["drift"];
-  const Eigen::MatrixXd uc = b.uC();
-  auto row = [&](const Eigen::MatrixXd& m, int p, double mult) {
-    Json r = Json::array();
-    for (Eigen::Index i = 0; i < m.cols(); ++i) r.push_back(round6(mult * m(p, i)));
-    return r;
-  };
+  const Eigen::VectorXd k = Eigen::VectorXd::Constant(b.u_a.cols(), kCoverageFactor);
   for (int p = 0; p < kRtestParams; ++p) {
     const std::string name = rtestParameterName(plan.machine.kinematics, p);
     if (!drift.contains(name)) continue;
     Json& e = drift[name];
-    e["u_a"] = row(b.u_a, p, 1.0);
-    e["u_b"] = row(b.u_b, p, 1.0);
-    e["u_c"] = row(uc, p, 1.0);
-    e["U"] = row(uc, p, kCoverageFactor);
+    setUncertaintyArrays(&e, b.u_a.row(p).transpose(), b.u_b.row(p).transpose(), k);
+    // First order, no distribution to read k from: one k for every rate, as before.
     e["k"] = kCoverageFactor;
   }
   (*report)["drift_uncertainty"] = {{"type_a", "the trend's own u: the cycles' u, widened by the scatter about the line"},

@@ -1,6 +1,8 @@
 // rtest (002): the position-dependent errors of the tilt axis with an R-test, and their thermal
 // drift. The R-test logger writes its own CSV whatever the controller; no offsets (the errors
 // depend on position and time).
+#include <optional>
+
 #include <fmt/format.h>
 
 #include "core/errors.hpp"
@@ -80,7 +82,6 @@ class Rtest final : public Cycle {
     o.sensor_sigma_um = sensorSigma(plan);
     const RtestAnalysis a = analyzeRtest(plan, cycles, o);
     const std::vector<std::string> files = pathsOf(r.results);
-    out.text = rtestReportText(plan, a);
     out.doc = rtestReportJson(plan, cycles, a, files);
     out.doc["warnings"] = out.warnings;
     for (size_t c = 0; c < a.cycles.size(); ++c)
@@ -93,11 +94,16 @@ class Rtest final : public Cycle {
     out.doc["errors_heading"] = "ISO 230-7 location errors (constant over the tilt, first cycle)";
     // What analyze signs (issue 17): u_A from the data, u_B from the declared contributors by
     // Monte Carlo through the same fit (cycles/rtest/budget.hpp, docs/uncertainty.md).
+    // The text prints what REPORT.json signs (u = u_c): written once every budget is known.
+    RtestSignedU signed_u;
+    std::string budget_text;
+    std::optional<UncertaintyBudget> location_budget;
     if (a.location.identifiable) {
       RtestBudgetOptions bo;
       bo.runs = r.mc_runs;
       bo.seed = r.mc_seed;
-      const UncertaintyBudget b = rtestBudget(plan, cycles.front(), a.location, o.sensor_sigma_um, r.contributors, bo);
+      location_budget = rtestBudget(plan, cycles.front(), a.location, o.sensor_sigma_um, r.contributors, bo);
+      const UncertaintyBudget& b = *location_budget;
       addBudgetFields(&out.doc["location_errors"], b);
       out.doc["uncertainty"] = budgetJson(b);
       Eigen::VectorXd values(kNumLocationErrors);
@@ -105,9 +111,12 @@ class Rtest final : public Cycle {
       for (int i = 0; i < kNumLocationErrors; ++i)
         values[i] = params[static_cast<size_t>(i)].kind == ParamKind::Length ? mmToUm(a.location.value[i])
                                                                              : radToMdeg(a.location.value[i]);
-      out.text += "\n" + budgetText(b, values);
+      budget_text += "\n" + budgetText(b, values);
+      signed_u.location = &*location_budget;
     }
-    addRtestDriftBudget(&out.doc, plan, rtestDriftBudget(plan, cycles, a, o, r.contributors));
+    const RtestDriftBudget db = rtestDriftBudget(plan, cycles, a, o, r.contributors);
+    addRtestDriftBudget(&out.doc, plan, db);
+    if (db.u_a.size() > 0) signed_u.drift_u_c = db.uC();
     // The per-tilt errors, what the R-test measures at each tilt, with the same contributors.
     {
       RtestBudgetOptions bo;
@@ -115,12 +124,16 @@ class Rtest final : public Cycle {
       bo.seed = r.mc_seed;
       const RtestTiltBudget tb = rtestTiltBudget(plan, cycles.front(), a, o, r.contributors, bo);
       addRtestTiltBudget(&out.doc, plan, tb);
+      signed_u.tilt_u_c = tb.uC();
+      signed_u.tilt_u_b = tb.uB();
       const Eigen::MatrixXd U = tb.expanded();
-      out.text += fmt::format("per-tilt errors of the first cycle: U ({:.2f} %) at most {:.3f} um (translations), {:.3f} "
-                              "mdeg (rotations) over the {} tilts; u_B {} (REPORT.json cycles[0].errors: u_a u_b u_c U k)\n",
-                              100.0 * kCoverageProbability, U.topRows(3).maxCoeff(), U.bottomRows(3).maxCoeff(), tb.tilts,
-                              tb.budget.type_b_evaluated ? "from the declared contributors" : "not evaluated (none declared)");
+      budget_text += fmt::format("per-tilt errors of the first cycle: U ({:.2f} %) at most {:.3f} um (translations), {:.3f} "
+                                 "mdeg (rotations) over the {} tilts; u_B {} (REPORT.json cycles[*].errors: u (= u_c) u_a "
+                                 "u_b u_c U k)\n",
+                                 100.0 * kCoverageProbability, U.topRows(3).maxCoeff(), U.bottomRows(3).maxCoeff(), tb.tilts,
+                                 tb.budget.type_b_evaluated ? "from the declared contributors" : "not evaluated (none declared)");
     }
+    out.text = rtestReportText(plan, a, signed_u) + budget_text;
     return out;
   }
 

@@ -683,7 +683,7 @@ Json spaceframeReportJson(const SpaceframeAnalysis& a, const ProbePlan& plan, co
   return j;
 }
 
-std::string spaceframeText(const SpaceframeAnalysis& a, const ProbePlan& plan) {
+std::string spaceframeText(const SpaceframeAnalysis& a, const ProbePlan& plan, const UncertaintyBudget* budget) {
   std::string s;
   s += fmt::format("rotacal analysis: cycle spaceframe (003), machine {}\n", plan.machine.name);
   s += fmt::format("{} sphere centres from {} touches, {} lengths (003 Eq. (5))\n", a.points.size(), a.triggers,
@@ -701,17 +701,19 @@ std::string spaceframeText(const SpaceframeAnalysis& a, const ProbePlan& plan) {
                    "{} non-conforming, {} inside the guard bands)\n\n",
                    a.verdict.max_U_um, a.length_sigma_um, lengthDecisionName(a.verdict.decision), a.verdict.conforming,
                    a.verdict.nonconforming, a.verdict.undecided);
-  s += fmt::format("identification ({}, rank {}/{}, {} dof), what explains dL:\n", a.summary.termination, a.summary.rank,
-                   a.summary.parameters, a.summary.dof);
+  s += fmt::format("identification ({}, rank {}/{}, {} dof), what explains dL ({}):\n", a.summary.termination,
+                   a.summary.rank, a.summary.parameters, a.summary.dof,
+                   budget ? "+- u_c, k = 1" : "+- the fit's u, k = 1");
+  const auto uOf = [&](const std::string& name, double fit) { return budget ? budget->uCOr(name, fit) : fit; };
   const auto& params = locationParameters(a.model.errors.kinematics);
   const ModelVector unit = FrameModel::reportUnits(a.model.errors.kinematics);
   for (int i = 0; i < kNumLocationErrors; ++i)
     s += fmt::format("  {:<8} {:<5} {:>10.3f} +- {:.3f} {}\n", params[i].name, params[i].iso, a.model.errors.reportValue(i),
-                     a.u[i] * unit[i], reportUnit(params[i].kind));
+                     uOf(std::string(params[i].name), a.u[i] * unit[i]), reportUnit(params[i].kind));
   const char* ax = "XYZ";
   for (int i = 0; i < 3; ++i)
     s += fmt::format("  scale {}        {:>10.3f} +- {:.3f} um/m\n", ax[i], a.model.scale[i] * 1e6,
-                     a.u[kNumLocationErrors + i] * 1e6);
+                     uOf(std::string("scale_") + ax[i], a.u[kNumLocationErrors + i] * 1e6));
   if (SpaceframeLayout::fromOptions(plan.options).nominal_from == "initial") {
     s += "  (self-calibration: scale Z is the reference; the frame's spheres are fitted too:)\n";
     for (int i = 0; i < 7; ++i)

@@ -21,6 +21,7 @@
 #include "core/probe_plan.hpp"
 #include "cycles/spaceframe/frame.hpp"
 #include "core/sphere_centre_fit.hpp"
+#include "core/uncertainty_budget.hpp"
 
 namespace rotacal {
 
@@ -153,6 +154,8 @@ SpaceframeAnalysis analyzeSpaceframe(const ProbePlan& plan, const std::vector<Me
                                      const SpaceframeOptions& options = {});
 
 Json spaceframeReportJson(const SpaceframeAnalysis& a, const ProbePlan& plan, const std::vector<std::string>& files);
-std::string spaceframeText(const SpaceframeAnalysis& a, const ProbePlan& plan);
+/// `budget` (its u_c, what REPORT.json's u is) when given: the identification's +- is u_c; else
+/// the fit's own u.
+std::string spaceframeText(const SpaceframeAnalysis& a, const ProbePlan& plan, const UncertaintyBudget* budget = nullptr);
 
 }  // namespace rotacal

@@ -26,7 +26,6 @@ class Spaceframe final : public Cycle {
     const SpaceframeAnalysis a = analyzeSpaceframe(plan, runs);
     const std::vector<std::string> files = pathsOf(r.results);
     CycleDocuments out;
-    out.text = spaceframeText(a, plan);
     out.doc = spaceframeReportJson(a, plan, files);
     // What analyze signs (issue 17): u_A from the data, u_B from the declared contributors and
     // the frame's calibration by Monte Carlo through the same estimator (cycles/spaceframe/budget.hpp).
@@ -39,7 +38,7 @@ class Spaceframe final : public Cycle {
     const UncertaintyBudget b = spaceframeBudget(plan, a, per_run, r.contributors, bo);
     const Eigen::VectorXd values = spaceframeBudgetValues(plan, a);
     addSpaceframeBudget(&out.doc, b, values);
-    out.text += "\n" + budgetText(b, values);
+    out.text = spaceframeText(a, plan, &b) + "\n" + budgetText(b, values);
     if (a.summary.termination != "converged") out.warnings.push_back("spaceframe identification " + a.summary.termination);
     return out;
   }

@@ -422,6 +422,9 @@ Json spheres3ReportJson(const ProbePlan& plan, const Spheres3Result& r, const st
                      {"unit", reportUnitOf(comp)}});
   }
   j["component_error_terms"] = terms;
+  j["component_error_terms_u"] =
+      "u of each term is its fit's own (the covariance of the series), no Type B evaluated: the signed u (u_c) is "
+      "component_errors' at each angle";
   j["component_errors_convention"] =
       "Fourier series over the sampled angles without the mean (a location error or a sphere position) and without the "
       "first harmonic that turns with the table (a sphere position); positive EXC/EYC/EZC move the table in +X/+Y/+Z, "
@@ -492,18 +495,19 @@ Json spheres3ReportJson(const ProbePlan& plan, const Spheres3Result& r, const st
   return j;
 }
 
-std::string spheres3Text(const Spheres3Result& r) {
+std::string spheres3Text(const Spheres3Result& r, const UncertaintyBudget* location) {
   std::string s = fmt::format("spheres3: {} touches, {} sphere centres, {} angles; touch noise {:.3f} um (1 dof per "
                               "sphere), largest radius deviation {:.2f} um\n",
                               r.points_used, r.observations.size(), r.c_deg.size(), r.sigma_touch_um,
                               r.max_radius_dev_um);
-  s += "C-axis location errors (001 Table 1, k = 1):\n";
+  s += fmt::format("C-axis location errors (001 Table 1, {}):\n", location ? "+- u_c, k = 1" : "+- the fit's u, k = 1");
   for (int i = 0; i < 4; ++i) {
     const bool angle = i >= 2;
-    s += fmt::format("  {} ({})  {:+9.3f} {} +- {:.3f}\n", spheres3LocationNames()[static_cast<size_t>(i)],
-                     spheres3LocationIso()[static_cast<size_t>(i)],
+    const double fit_u = angle ? radToMdeg(r.location_u[i]) : mmToUm(r.location_u[i]);
+    const std::string name = spheres3LocationNames()[static_cast<size_t>(i)];
+    s += fmt::format("  {} ({})  {:+9.3f} {} +- {:.3f}\n", name, spheres3LocationIso()[static_cast<size_t>(i)],
                      angle ? radToMdeg(r.location[i]) : mmToUm(r.location[i]), angle ? "mdeg" : "um  ",
-                     angle ? radToMdeg(r.location_u[i]) : mmToUm(r.location_u[i]));
+                     location ? location->uCOr(name, fit_u) : fit_u);
   }
   if (!r.terms.empty()) {
     s += "component errors at each angle (um / mdeg):\n      C";

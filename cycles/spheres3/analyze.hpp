@@ -49,6 +49,7 @@
 #include "core/outliers.hpp"
 #include "core/probe_plan.hpp"
 #include "core/sphere_centre_fit.hpp"
+#include "core/uncertainty_budget.hpp"
 
 namespace rotacal {
 
@@ -223,6 +224,8 @@ Eigen::Isometry3d spheres3Table_m_w(const Eigen::Vector4d& location, const Compo
 
 /// REPORT.json for a spheres3 analysis (contract + component errors, volumetric errors, figures).
 Json spheres3ReportJson(const ProbePlan& plan, const Spheres3Result& r, const std::vector<std::string>& result_files);
-std::string spheres3Text(const Spheres3Result& r);
+/// `location` (the location errors' budget: its u_c, what REPORT.json's u is) when given: the
+/// headline's +- is u_c; else the fit's own u.
+std::string spheres3Text(const Spheres3Result& r, const UncertaintyBudget* location = nullptr);
 
 }  // namespace rotacal

@@ -280,18 +280,9 @@ void addSpheres3Budget(Json* report, const Spheres3Budget& b) {
   addBudgetFields(&(*report)["location_errors"], b.location);
   (*report)["uncertainty"] = budgetJson(b.location);
   if (!report->contains("component_errors")) return;
-  auto column = [](const Eigen::MatrixXd& m, int k, double mult) {
-    Json a = Json::array();
-    for (Eigen::Index i = 0; i < m.rows(); ++i) a.push_back(round6(mult * m(i, k)));
-    return a;
-  };
   for (int k = 0; k < kNumComponentErrors; ++k) {
     Json& e = (*report)["component_errors"][componentNames()[static_cast<size_t>(k)]];
-    e["u_a"] = column(b.component_u_a, k, 1.0);
-    e["u_b"] = column(b.component_u_b, k, 1.0);
-    e["u_c"] = column(b.component_u_c, k, 1.0);
-    e["U"] = column(b.componentExpanded(), k, 1.0);
-    e["k"] = column(b.component_k, k, 1.0);
+    setUncertaintyArrays(&e, b.component_u_a.col(k), b.component_u_b.col(k), b.component_k.col(k));
   }
 }
 

@@ -50,7 +50,6 @@ class Spheres3 final : public Cycle {
     opt.hold_out_touch = screen.holdOut();
     const Spheres3Result res = identifySpheres3(plan, runs, opt);
     CycleDocuments out;
-    out.text = spheres3Text(res) + screen.text() + "\n";
     out.doc = spheres3ReportJson(plan, res, pathsOf(r.results));
     out.doc["outliers"] = outlierScreenJson(screen, screened.options);
     const Spheres3TouchProblem tp = spheres3TouchProblem(runs, res, noise);
@@ -71,12 +70,13 @@ class Spheres3 final : public Cycle {
     bo.seed = r.mc_seed;
     const Spheres3Budget b = spheres3Budget(plan, res, per_run, r.contributors, bo);
     addSpheres3Budget(&out.doc, b);
+    out.text = spheres3Text(res, &b.location) + screen.text() + "\n";
     Eigen::VectorXd values(4);
     for (int i = 0; i < 4; ++i) values[i] = i < 2 ? mmToUm(res.location[i]) : radToMdeg(res.location[i]);
     out.text += "\n" + budgetText(b.location, values);
     if (b.component_u_c.size() > 0)
       out.text += fmt::format("component errors: U ({:.2f} %) at most {:.3f} um (EXC EYC EZC), {:.3f} mdeg (EAC EBC ECC) "
-                              "over the sampled angles (REPORT.json component_errors: u_a u_b u_c U k)\n",
+                              "over the sampled angles (REPORT.json component_errors: u (= u_c) u_a u_b u_c U k)\n",
                               100.0 * kCoverageProbability, b.componentExpanded().leftCols(3).maxCoeff(),
                               b.componentExpanded().rightCols(3).maxCoeff());
     return out;

@@ -425,21 +425,24 @@ Json tooltipReportJson(const ProbePlan& plan, const std::vector<TooltipRun>& run
   return j;
 }
 
-std::string tooltipReportText(const ProbePlan& plan, const TooltipAnalysis& a) {
+std::string tooltipReportText(const ProbePlan& plan, const TooltipAnalysis& a, const UncertaintyBudget* budget) {
   const TooltipOptions o = tooltipOptionsFrom(plan.options, plan.machine);
+  const auto uOf = [&](const std::string& name, double fit) { return budget ? budget->uCOr(name, fit) : fit; };
+  const char* u_name = budget ? "u_c" : "u (the fit's)";
   std::string s = a.transverse_only
                       ? fmt::format("tooltip ({} axis, R = {:.3f} mm): the transverse reading alone: the pivot-length "
                                     "error dR is not identifiable (each angle's angular error absorbs dR sin A); the "
                                     "angular errors below assume dR = 0\n",
                                     o.axis, o.radius_mm)
-                      : fmt::format("tooltip ({} axis, R = {:.3f} mm): pivot-length error dR = {:.2f} um (u {:.2f} um)\n",
-                                    o.axis, o.radius_mm, a.joint.dR_um, a.joint.u_dR_um);
+                      : fmt::format("tooltip ({} axis, R = {:.3f} mm): pivot-length error dR = {:.2f} um ({} {:.2f} um, "
+                                    "k = 1)\n",
+                                    o.axis, o.radius_mm, a.joint.dR_um, u_name, uOf("dR", a.joint.u_dR_um));
   s += fmt::format("residual rms {:.3f} um (angular+pivot) vs {:.3f} um (004's angular model)\n", a.joint.residual_rms_um,
                    a.angular.residual_rms_um);
-  s += "angle_deg  e_mdeg  u_mdeg  e_004model_mdeg\n";
+  s += fmt::format("angle_deg  e_mdeg  {}  e_004model_mdeg\n", budget ? "uc_mdeg" : "u_mdeg (fit)");
   for (size_t k = 0; k < a.joint.angles_deg.size(); ++k)
-    s += fmt::format("{:9.3f} {:7.3f} {:7.3f} {:9.3f}\n", a.joint.angles_deg[k], a.joint.e_mdeg[k], a.joint.u_e_mdeg[k],
-                     a.angular.e_mdeg[k]);
+    s += fmt::format("{:9.3f} {:7.3f} {:7.3f} {:9.3f}\n", a.joint.angles_deg[k], a.joint.e_mdeg[k],
+                     uOf(fmt::format("e_{}{:g}", o.axis, a.joint.angles_deg[k]), a.joint.u_e_mdeg[k]), a.angular.e_mdeg[k]);
   return s;
 }
 

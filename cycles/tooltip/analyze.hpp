@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "core/uncertainty_budget.hpp"
 #include "core/json_io.hpp"
 #include "cycles/tooltip/plan.hpp"
 #include "core/statistics.hpp"  // fSurvival
@@ -75,6 +76,8 @@ struct TooltipAnalysis {
 };
 TooltipAnalysis analyzeTooltip(const ProbePlan& plan, const std::vector<TooltipRun>& runs);
 Json tooltipReportJson(const ProbePlan& plan, const std::vector<TooltipRun>& runs, const TooltipAnalysis& a);
-std::string tooltipReportText(const ProbePlan& plan, const TooltipAnalysis& a);
+/// `budget` (its u_c, what REPORT.json's u is) when given: dR's and each angle's u is u_c; else
+/// the fit's own u, said so.
+std::string tooltipReportText(const ProbePlan& plan, const TooltipAnalysis& a, const UncertaintyBudget* budget = nullptr);
 
 }  // namespace rotacal

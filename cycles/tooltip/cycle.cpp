@@ -53,7 +53,6 @@ class Tooltip final : public Cycle {
     TooltipAnalysis a = analyzeTooltip(plan, runs);
     a.result_files = pathsOf(r.results);
     CycleDocuments out;
-    out.text = tooltipReportText(plan, a);
     out.doc = tooltipReportJson(plan, runs, a);
     out.doc["errors_heading"] = "Identified errors";  // a pivot length and angular errors, not location errors in ISO 230-7's sense
     // What analyze signs (issue 17): u_A from the data, u_B from the declared contributors by
@@ -64,20 +63,15 @@ class Tooltip final : public Cycle {
     const TooltipOptions to = tooltipOptionsFrom(plan.options, plan.machine);
     const UncertaintyBudget b = tooltipBudget(plan, runs, a, to.noise_um, r.contributors, bo);
     addBudgetFields(&out.doc["location_errors"], b);
-    // The angular errors are an array by angle: each entry gets the same fields beside its u.
-    const Eigen::VectorXd ua = b.uA(), ub = b.uB(), uc = b.uC(), k = b.coverageFactors();
+    // The angular errors are an array by angle: each entry gets the same fields, u = u_c.
+    const Eigen::VectorXd ua = b.uA(), ub = b.uB(), k = b.coverageFactors();
     for (auto& e : out.doc["angular_error"])
       for (int i = 0; i < b.size(); ++i)
-        if (b.names[static_cast<size_t>(i)] == fmt::format("e_{}{:g}", to.axis, e["angle_deg"].get<double>())) {
-          e["u_a"] = round6(ua[i]);
-          e["u_b"] = round6(ub[i]);
-          e["u_c"] = round6(uc[i]);
-          e["U"] = round6(k[i] * uc[i]);
-          e["k"] = round6(k[i]);
-        }
+        if (b.names[static_cast<size_t>(i)] == fmt::format("e_{}{:g}", to.axis, e["angle_deg"].get<double>()))
+          setUncertaintyFields(&e, ua[i], ub[i], k[i]);
     const Eigen::VectorXd values = tooltipBudgetValues(a, b);
     out.doc["uncertainty"] = budgetJson(b, values);
-    out.text += "\n" + budgetText(b, values);
+    out.text = tooltipReportText(plan, a, &b) + "\n" + budgetText(b, values);
     return out;
   }
 

@@ -14,6 +14,12 @@ double uReport(const LocationErrors& e, const ErrorVector& u, int i) {
   return locationParameters(e.kinematics)[i].kind == ParamKind::Length ? mmToUm(u[i]) : radToMdeg(u[i]);
 }
 
+// A repeat alone or another estimator has no budget of its own: its u is not the signed u_c,
+// and says so where it stands.
+constexpr const char* kOwnFitU =
+    "u here is this estimate's own fit (its covariance scaled by its residual), no Type B evaluated: not the report's "
+    "u_c, which location_errors carries";
+
 Json summaryJson(const IdentificationSummary& s) {
   return {{"termination", std::string(terminationName(s.termination))},
           {"message", s.message},
@@ -44,6 +50,7 @@ Json analysisToJson(const Analysis& a) {
     for (size_t r = 0; r < a.per_run.size(); ++r)
       runs.push_back({{"results", r < a.result_files.size() ? a.result_files[r] : ""},
                       {"location_errors", locationErrorsJson(a.per_run[r].estimate, a.per_run[r].u)},
+                      {"u_source", kOwnFitU},
                       {"residual_rms_um", round6(a.per_run[r].summary.residual_rms_um)}});
     j["runs"] = runs;
   }
@@ -55,6 +62,7 @@ Json analysisToJson(const Analysis& a) {
         continue;
       }
       other[std::string(methodName(o.method))] = {{"location_errors", locationErrorsJson(o.estimate, o.u)},
+                                                  {"u_source", kOwnFitU},
                                                   {"summary", summaryJson(o.summary)}};
     }
     j["other_methods"] = other;
@@ -82,13 +90,15 @@ std::string analysisText(const Analysis& a) {
   s += fmt::format("results: {} file(s), {} triggers\n", a.result_files.size(), m.summary.observations);
   s += fmt::format("method: {} ({})\n\n", methodName(m.method), m.summary.message);
   const auto& params = locationParameters(m.estimate.kinematics);
-  s += fmt::format("{:<8} {:<9} {:>10} {:>9}  {:<5}", "error", "ISO", "value", "u (k=1)", "unit");
+  // The headline's u is what REPORT.json's u is: u_c, the budget's combination.
+  const Eigen::VectorXd uc = a.budget.size() == kNumLocationErrors ? a.budget.uC() : Eigen::VectorXd();
+  s += fmt::format("{:<8} {:<9} {:>10} {:>9}  {:<5}", "error", "ISO", "value", uc.size() ? "u_c (k=1)" : "u (fit)", "unit");
   for (const auto& o : a.other_methods)
     if (o.summary.termination == Termination::Converged) s += fmt::format(" {:>16}", methodName(o.method));
   s += "\n";
   for (int i = 0; i < kNumLocationErrors; ++i) {
     s += fmt::format("{:<8} {:<9} {:>10.3f} {:>9.3f}  {:<5}", params[i].name, params[i].iso, m.estimate.reportValue(i),
-                     uReport(m.estimate, m.u, i), reportUnit(params[i].kind));
+                     uc.size() == kNumLocationErrors ? uc[i] : uReport(m.estimate, m.u, i), reportUnit(params[i].kind));
     for (const auto& o : a.other_methods)
       if (o.summary.termination == Termination::Converged) s += fmt::format(" {:>16.3f}", o.estimate.reportValue(i));
     s += "\n";

@@ -139,11 +139,14 @@ TEST_F(Cli, RepeatsAreAnalyzedPerRunAndTogether) {
   const auto r = nlohmann::json::parse(slurp(p("rep.json")));
   EXPECT_EQ(r["points_used"], 3 * 154);
   EXPECT_EQ(r["runs"].size(), 3u);
-  // 0.7 um noise, three repeats: each estimate within 4 u of the truth.
+  // 0.7 um noise, three repeats: each estimate within 4 u_a of the truth. The simulation has the
+  // probe's noise alone: the data's part is the yardstick (u = u_c also holds the declared
+  // contributors, which this machine was simulated without).
   const double dx = r["location_errors"]["dx_AY"]["value"].get<double>();
-  const double u = r["location_errors"]["dx_AY"]["u"].get<double>();
-  EXPECT_GT(u, 0.0);
-  EXPECT_NEAR(dx, 14.6, 4 * u);
+  const double u_a = r["location_errors"]["dx_AY"]["u_a"].get<double>();
+  EXPECT_GT(u_a, 0.0);
+  EXPECT_NEAR(dx, 14.6, 4 * u_a);
+  EXPECT_EQ(r["location_errors"]["dx_AY"]["u"], r["location_errors"]["dx_AY"]["u_c"]);
 }
 
 }  // namespace

@@ -136,8 +136,33 @@ TEST(UncertaintyBudget, CombinesTypeAAndTypeBAndExpandsWithItsCoverageFactor) {
   Json params = {{"x", {{"value", 1.0}, {"u", 0.3}}}, {"w", {{"value", 2.0}}}};
   addBudgetFields(&params, b);
   EXPECT_NEAR(params["x"]["u_c"].get<double>(), uc[0], 1e-5);
-  EXPECT_DOUBLE_EQ(params["x"]["u"].get<double>(), 0.3);  // contract.md: u stays the data's
+  // u is u_c in every report: the entry's earlier u (0.3) is replaced, and u_c is the quadrature
+  // sum of its parts (to the printed rounding, 5e-7 each).
+  EXPECT_EQ(params["x"]["u"], params["x"]["u_c"]);
+  EXPECT_NE(params["x"]["u"].get<double>(), 0.3);
+  const double pa = params["x"]["u_a"].get<double>(), pb = params["x"]["u_b"].get<double>(), pc = params["x"]["u_c"].get<double>();
+  EXPECT_NEAR(pc * pc, pa * pa + pb * pb, 1.1e-6 * (pa + pb + pc));
+  EXPECT_NEAR(pa, b.uA()[0], 5e-7);
+  EXPECT_NEAR(pb, b.uB()[0], 5e-7);
+  EXPECT_NEAR(params["x"]["U"].get<double>(), b.expanded()[0], 1e-5);
+  EXPECT_NEAR(params["x"]["u_between"].get<double>(), b.uBetween()[0], 5e-7);
+  EXPECT_EQ(j["parameters"]["y"]["u"], j["parameters"]["y"]["u_c"]);
   EXPECT_FALSE(params["w"].contains("u_c"));
+  EXPECT_FALSE(params["w"].contains("u"));
+  // No Type B evaluated for a number: u_c = u_A, u_B = 0, U = 2 u_c (k for a normal distribution).
+  Json alone = Json::object();
+  setTypeAOnlyFields(&alone, 0.25);
+  EXPECT_DOUBLE_EQ(alone["u"].get<double>(), 0.25);
+  EXPECT_DOUBLE_EQ(alone["u_c"].get<double>(), 0.25);
+  EXPECT_DOUBLE_EQ(alone["u_b"].get<double>(), 0.0);
+  EXPECT_DOUBLE_EQ(alone["U"].get<double>(), 0.5);
+  // Arrays: element by element, the same as one number at a time (3-4-5: u_c = 5 exactly).
+  Json arr = Json::object();
+  setUncertaintyArrays(&arr, Eigen::Vector2d(3.0, 0.0), Eigen::Vector2d(4.0, 1.0), Eigen::Vector2d(2.0, 1.5));
+  EXPECT_DOUBLE_EQ(arr["u"][0].get<double>(), 5.0);
+  EXPECT_DOUBLE_EQ(arr["u_c"][1].get<double>(), 1.0);
+  EXPECT_DOUBLE_EQ(arr["U"][0].get<double>(), 10.0);
+  EXPECT_DOUBLE_EQ(arr["U"][1].get<double>(), 1.5);
 }
 
 namespace {

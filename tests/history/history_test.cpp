@@ -21,6 +21,7 @@
 #include <sqlite3.h>
 
 #include "core/errors.hpp"
+#include "core/json_io.hpp"
 #include "history/store.hpp"
 #include "history/trend.hpp"
 #include "history/trend_report.hpp"
@@ -385,6 +386,23 @@ TEST(Store, AReportWithANegativeUncertaintyIsNotAdded) {
   EXPECT_EQ(r.code, 1) << r.out;
   EXPECT_EQ(r.out.rfind("rotacal: error: " + report + ":4: field 'u'", 0), 0u) << r.out;
   EXPECT_FALSE(fs::exists(db));
+}
+
+TEST(Store, ATrendWeighsByWhatDiffersBetweenCalibrations) {
+  // REPORT.json's u is u_c, which holds the machine's own systematic errors (the same in every
+  // calibration). The store reads u_between where the report has it, else u_a (the data's
+  // part), and u alone only from a report that has neither (written when u was the data's).
+  const auto stored = [](const std::string& entry) {
+    const JsonDoc doc = parseJsonText(R"({"format": "rotacal-report/1", "cycle": "touch154", "residual_rms_um": 0.7,
+      "location_errors": {"dx_AY": )" + entry + "}}",
+                                      "REPORT.json");
+    const Calibration c = calibrationFromReport(doc, "m", 0.0);
+    return c.parameters.at(0).u;
+  };
+  EXPECT_DOUBLE_EQ(stored(R"({"value": 1, "unit": "um", "u": 4.5, "u_a": 0.2, "u_b": 4.4955, "u_c": 4.5, "u_between": 0.3})"),
+                   0.3);
+  EXPECT_DOUBLE_EQ(stored(R"({"value": 1, "unit": "um", "u": 4.5, "u_a": 0.2, "u_b": 4.4955, "u_c": 4.5})"), 0.2);
+  EXPECT_DOUBLE_EQ(stored(R"({"value": 1, "unit": "um", "u": 0.25})"), 0.25);
 }
 
 }  // namespace

@@ -51,7 +51,10 @@ TEST(RtestCli, ThermalSeriesEndToEnd) {
       const double zb[3] = {-std::sin(b), 0.0, std::cos(b)};
       const double want = q < 3 ? rates[q] - rates[2] * zb[q] : rates[q] - rates[5] * zb[q - 3];
       const auto& d = r["drift"][names[q]];
-      EXPECT_NEAR(d["rate"][i].get<double>(), want, 4.0 * d["u"][i].get<double>() + 1e-9) << names[q] << " " << i;
+      // u_a: the trend's own u (what u was before u meant u_c); the sensors' gain in u_b scales
+      // the rate and this simulation has none.
+      EXPECT_NEAR(d["rate"][i].get<double>(), want, 4.0 * d["u_a"][i].get<double>() + 1e-9) << names[q] << " " << i;
+      EXPECT_EQ(d["u"][i], d["u_c"][i]) << names[q] << " " << i;
     }
   // The reset was read and re-read in every cycle; no sensor step on this clean series.
   EXPECT_EQ(r["reset_checks"]["cycles_checked"], 13);
@@ -61,10 +64,12 @@ TEST(RtestCli, ThermalSeriesEndToEnd) {
   EXPECT_EQ(r["location_errors"].size(), 8u);
   EXPECT_EQ(r["per_tilt_errors"]["errors"].size(), 6u);
   // First cycle: the position-dependent table of the truth file at B = -60 (dy_CB -2.5 um,
-  // b_BY -4 mdeg), within 4 u (plus the drift during the first cycle, < 0.1 um).
+  // b_BY -4 mdeg), within 4 u_a (plus the drift during the first cycle, < 0.1 um): the simulation
+  // has the sensors' noise and drift alone, none of the declared contributors u (= u_c) holds.
   const auto& c1 = r["cycles"][0]["errors"];
-  EXPECT_NEAR(c1["dy_CB"]["values"][0].get<double>(), -2.5, 4 * c1["dy_CB"]["u"][0].get<double>() + 0.1);
-  EXPECT_NEAR(c1["b_BY"]["values"][0].get<double>(), -4.0, 4 * c1["b_BY"]["u"][0].get<double>());
+  EXPECT_NEAR(c1["dy_CB"]["values"][0].get<double>(), -2.5, 4 * c1["dy_CB"]["u_a"][0].get<double>() + 0.1);
+  EXPECT_NEAR(c1["b_BY"]["values"][0].get<double>(), -4.0, 4 * c1["b_BY"]["u_a"][0].get<double>());
+  EXPECT_EQ(c1["b_BY"]["u"][0], c1["b_BY"]["u_c"][0]);
   // figures (briefs/figures.md): 6 parameters over time + 5 sensor profiles
   ASSERT_EQ(r["figures"].size(), 11u);
   for (const auto& f : r["figures"]) {
