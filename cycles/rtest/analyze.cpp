@@ -88,8 +88,32 @@ Eigen::VectorXd rtestLocationRows(const ProbePlan& plan, const RtestCycle& cyc, 
   return y;
 }
 
+double rtestSensorNoiseUm(const ProbePlan& plan) {
+  return parseNumber("sensor_noise_um",
+                     plan.options.count("sensor_noise_um") ? plan.options.at("sensor_noise_um") : std::string("0.2"));
+}
+
+DeclaredNoise rtestDeclaredNoise(const ProbePlan& plan, const ContributorSet* declared) {
+  const double sensor_um = rtestSensorNoiseUm(plan);
+  DeclaredNoise d;
+  d.white_um2 = sensor_um * sensor_um;
+  std::string parts = fmt::format("sensors {:.3f} um (PLAN.json sensor_noise_um)", sensor_um);
+  const Contributor* form = declared ? declared->find("rtest_sphere_form") : nullptr;
+  if (form && form->u[0] > 0) {
+    const double form_um = mmToUm(form->u[0]);
+    d.white_um2 += form_um * form_um;
+    parts += fmt::format(" + rtest_sphere_form {:.3f} um ({})", form_um,
+                         declared->file.empty() ? std::string("the machine's contributors") : declared->file);
+  }
+  d.repeatability_only = !(form && form->u[0] > 0);
+  d.declaration = fmt::format("declared per reading: {} = {:.3f} um", parts, std::sqrt(d.white_um2));
+  return d;
+}
+
 void RtestFitOptions::validate() const {
   if (!(sensor_sigma_um > 0)) throw std::invalid_argument("rtest fit: sensor_sigma_um must be > 0");
+  if (!(reading_sigma_um >= 0) || !std::isfinite(reading_sigma_um))
+    throw std::invalid_argument("rtest fit: reading_sigma_um must be >= 0");
   if (!(reset_alpha > 0 && reset_alpha < 1)) throw std::invalid_argument("rtest fit: reset_alpha must be in (0, 1)");
 }
 

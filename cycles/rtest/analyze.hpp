@@ -20,7 +20,10 @@
 #include <string>
 #include <vector>
 
+#include "core/contributors.hpp"
+#include "core/declared_noise.hpp"
 #include "core/json_io.hpp"
+#include "core/outliers.hpp"
 #include "core/probe_plan.hpp"
 #include "cycles/rtest/plan.hpp"
 
@@ -30,9 +33,23 @@ namespace rotacal {
 /// errors of the pose's tilt (mm, rad), exact at zero error: wq = T_m_w^-1 rq with rq fixed.
 Eigen::Matrix<double, 3, kRtestParams> J_wq_omega(Kinematics kinematics, const Pose& pose, const Eigen::Vector3d& nest_w);
 
+/// The plan's sensor noise (`sensor_noise_um`, default 002's 0.2 um), um.
+double rtestSensorNoiseUm(const ProbePlan& plan);
+
+/// What one reading scatters by, as declared: the sensors (the plan's `sensor_noise_um`) and the
+/// sphere's form at the contact (`rtest_sphere_form` of the contributors, per reading, Type A:
+/// the same per-reading part the uncertainty budget reads), added in quadrature, white. Every
+/// test of the readings against the declared noise (the screen, the judge of diagnose) reads it.
+DeclaredNoise rtestDeclaredNoise(const ProbePlan& plan, const ContributorSet* declared);
+
 struct RtestFitOptions {
   double sensor_sigma_um = 0.2;  // the sensors' repeatability: a floor for the noise estimate
   double reset_alpha = 0.01;     // false-alarm rate of the re-read check over the whole series
+  /// The declared scatter of one reading (sensors and sphere form, rtestDeclaredNoise), um; 0: the
+  /// sensors alone. The screen of gross readings tests against it.
+  double reading_sigma_um = 0.0;
+  std::string declaration;       // what reading_sigma_um is, for the report
+  double screenSigmaUm() const { return reading_sigma_um > 0 ? reading_sigma_um : sensor_sigma_um; }
   void validate() const;         // throws std::invalid_argument
 };
 

@@ -1,6 +1,8 @@
 // rtest (002): the position-dependent errors of the tilt axis with an R-test, and their thermal
 // drift. The R-test logger writes its own CSV whatever the controller; no offsets (the errors
 // depend on position and time).
+#include <cmath>
+
 #include <fmt/format.h>
 
 #include "core/errors.hpp"
@@ -38,10 +40,7 @@ std::vector<RtestCycle> readCycles(const ProbePlan& plan, const std::vector<Inpu
   return cycles;
 }
 
-double sensorSigma(const ProbePlan& plan) {
-  return parseNumber("sensor_noise_um",
-                     plan.options.count("sensor_noise_um") ? plan.options.at("sensor_noise_um") : std::string("0.2"));
-}
+double sensorSigma(const ProbePlan& plan) { return rtestSensorNoiseUm(plan); }
 
 class Rtest final : public Cycle {
  public:
@@ -78,6 +77,9 @@ class Rtest final : public Cycle {
     const std::vector<RtestCycle> cycles = readCycles(plan, r.results, &out.warnings);
     RtestFitOptions o;
     o.sensor_sigma_um = sensorSigma(plan);
+    const DeclaredNoise noise = rtestDeclaredNoise(plan, r.contributors);
+    o.reading_sigma_um = std::sqrt(noise.white_um2);
+    o.declaration = noise.declaration;
     const RtestAnalysis a = analyzeRtest(plan, cycles, o);
     const std::vector<std::string> files = pathsOf(r.results);
     out.text = rtestReportText(plan, a);
@@ -130,7 +132,12 @@ class Rtest final : public Cycle {
     const std::vector<RtestCycle> cycles = readCycles(plan, r.results, &out.warnings);
     RtestDiagnosisOptions o;
     o.judge.alpha = r.alpha;
-    o.sensor_sigma_um = sensorSigma(plan);  // the declared noise (plan option, default 002's 0.2 um)
+    o.sensor_sigma_um = sensorSigma(plan);  // the sensors (plan option, default 002's 0.2 um): the re-read check
+    // The judge tests every reading against what one reading is declared to scatter by: the
+    // sensors and the sphere's form, the per-reading part analyze's uncertainty budget reads too.
+    const DeclaredNoise noise = rtestDeclaredNoise(plan, r.contributors);
+    o.reading_sigma_um = std::sqrt(noise.white_um2);
+    o.declaration = noise.declaration;
     o.validate();
     const RtestDiagnosis d = diagnoseRtest(plan, cycles, o);
     out.text = rtestDiagnosisText(plan, d);

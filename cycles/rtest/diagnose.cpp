@@ -17,6 +17,7 @@ void RtestDiagnosisOptions::validate() const {
   std::string why;
   if (!judge.validate(&why)) throw std::invalid_argument(why);
   if (!(sensor_sigma_um > 0) || !std::isfinite(sensor_sigma_um)) throw std::invalid_argument("sensor_sigma_um must be > 0");
+  if (!(reading_sigma_um >= 0) || !std::isfinite(reading_sigma_um)) throw std::invalid_argument("reading_sigma_um must be >= 0");
 }
 
 namespace {
@@ -191,9 +192,12 @@ RtestDiagnosis diagnoseRtest(const ProbePlan& plan, const std::vector<RtestCycle
   RtestDiagnosis d;
   RtestFitOptions fo;
   fo.sensor_sigma_um = o.sensor_sigma_um;
+  fo.reading_sigma_um = o.reading_sigma_um;
+  fo.declaration = o.declaration;
   d.analysis = analyzeRtest(plan, cycles, fo);
   d.cycles = static_cast<int>(cycles.size());
-  const RtestJudgeSetup setup = rtestJudgeSetup(plan, cycles, o.sensor_sigma_um);
+  RtestJudgeSetup setup = rtestJudgeSetup(plan, cycles, o.readingSigmaUm());
+  setup.problem.declaration = o.declaration;
   d.summary = judge(setup.problem, o.judge);
   const double level = d.summary.per_test_alpha;
   const JudgeCause& drift = setup.problem.causes.front();
@@ -374,8 +378,9 @@ Json rtestDiagnosisJson(const ProbePlan& plan, const RtestDiagnosis& d) {
 }
 
 std::string rtestDiagnosisText(const ProbePlan& plan, const RtestDiagnosis& d) {
-  std::string s = fmt::format("rotacal diagnose rtest: {} cycles, declared sensor noise {:.3g} um\n", d.cycles,
-                              d.summary.declared_sigma_rms);
+  std::string s = fmt::format("rotacal diagnose rtest: {} cycles, declared noise per reading {:.3g} um{}\n", d.cycles,
+                              d.summary.declared_sigma_rms,
+                              d.summary.declaration.empty() ? std::string() : " (" + d.summary.declaration + ")");
   s += judgeText(d.summary);
   for (const auto& f : d.summary.findings) s += fmt::format("finding {}: {}\n", f.cause, rtestFindingSummary(plan, d, f));
   for (const auto& c : d.confounds)

@@ -42,7 +42,12 @@ namespace rotacal {
 
 struct RtestDiagnosisOptions {
   JudgeOptions judge;             // alpha and the rules (docs/diagnosis.md)
-  double sensor_sigma_um = 0.2;   // the declared sensor noise
+  double sensor_sigma_um = 0.2;   // the declared sensor noise (the re-read check of analyze)
+  /// The declared scatter of one reading (rtestDeclaredNoise: sensors and sphere form), what the
+  /// judge whitens by; 0: the sensors alone.
+  double reading_sigma_um = 0.0;
+  std::string declaration;        // what it is, named in the verdict
+  double readingSigmaUm() const { return reading_sigma_um > 0 ? reading_sigma_um : sensor_sigma_um; }
   void validate() const;          // throws std::invalid_argument
 };
 
