@@ -114,8 +114,32 @@ RtestLocationEstimator rtestLocationEstimator(const ProbePlan& plan, bool own);
 /// The readings of one cycle as the estimator's rows y (mm).
 Eigen::VectorXd rtestLocationRows(const ProbePlan& plan, const RtestCycle& cycle, bool own);
 
+/// The screen of gross readings (a sensor glitch: one value tens of micrometres or millimetres
+/// off): every pose reading's value (x, y, z apart) against what the rest of its cycle predicts
+/// for it, the deletion residual under the declared per-reading noise (core/declared_noise.hpp),
+/// Bonferroni over all the values of the series at kRtestScreenAlpha, worst first and refitted
+/// (core/outliers.hpp); a value beyond is left out of every fit (analyze and diagnose) and named.
+/// The reset and re-read rows are not screened: a jump between them is the re-read check's
+/// (a sensor step, flagged there), which a screen would otherwise take for a glitch.
+/// Each cycle is screened against its own fit (its own reset and sensor zero), so neither a drift
+/// between cycles nor a step of the counts looks like a glitch.
+constexpr double kRtestScreenAlpha = 0.01;       // a clean series loses a value in at most 1 %
+constexpr double kRtestScreenMaxFraction = 0.05; // beyond: the model or the noise, not glitches
+struct RtestScreen {
+  OutlierOptions options;
+  OutlierScreen screen;  // run = the cycle (0-based), point_id = 3 x (pose index) + axis
+  /// (cycle, row) of the values left out: row = 3 x (plan point index) + axis (x, y, z).
+  std::vector<std::pair<int, int>> excluded() const;
+};
+RtestScreen screenRtestReadings(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, double reading_sigma_um,
+                                const std::string& declaration);
+/// REPORT.json's `outliers` block of the R-test, and its one line.
+Json rtestScreenJson(const ProbePlan& plan, const RtestScreen& s);
+std::string rtestScreenText(const ProbePlan& plan, const RtestScreen& s);
+
 struct RtestAnalysis {
   Kinematics kinematics = Kinematics::TableBC;
+  RtestScreen screen;         // what was left out of every fit below
   RtestLocationFit location;  // the eight location errors, first cycle
   std::vector<double> tilt_deg;
   std::vector<RtestCycleFit> cycles;

@@ -84,6 +84,9 @@ class Rtest final : public Cycle {
     const std::vector<std::string> files = pathsOf(r.results);
     out.text = rtestReportText(plan, a);
     out.doc = rtestReportJson(plan, cycles, a, files);
+    out.doc["outliers"] = rtestScreenJson(plan, a.screen);
+    out.text += rtestScreenText(plan, a.screen) + "\n";
+    if (!a.screen.screen.excluded.empty() || a.screen.screen.too_many) out.warnings.push_back(rtestScreenText(plan, a.screen));
     out.doc["warnings"] = out.warnings;
     for (size_t c = 0; c < a.cycles.size(); ++c)
       if (a.cycles[c].sensor_step)
@@ -142,6 +145,8 @@ class Rtest final : public Cycle {
     const RtestDiagnosis d = diagnoseRtest(plan, cycles, o);
     out.text = rtestDiagnosisText(plan, d);
     out.doc = rtestDiagnosisJson(plan, d);
+    if (!d.analysis.screen.screen.excluded.empty() || d.analysis.screen.screen.too_many)
+      out.warnings.push_back(rtestScreenText(plan, d.analysis.screen));
     return out;
   }
 };

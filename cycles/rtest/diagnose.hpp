@@ -58,7 +58,10 @@ struct RtestJudgeSetup {
   std::vector<double> t_h;        // hours since the reset, per observation
   std::vector<int> cycle;         // 0-based cycle, per observation (reset and re-read rows included)
 };
-RtestJudgeSetup rtestJudgeSetup(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, double sensor_sigma_um);
+/// `excluded`: the pose readings' values the screen left out, (cycle, 3 x plan point index + axis)
+/// as RtestScreen::excluded gives them: their rows are not in the problem.
+RtestJudgeSetup rtestJudgeSetup(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, double sensor_sigma_um,
+                                const std::vector<std::pair<int, int>>& excluded = {});
 
 /// What the nested judgements say about one confound of the table drift.
 struct RtestConfound {
