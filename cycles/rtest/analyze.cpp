@@ -346,7 +346,7 @@ Json rtestScreenJson(const ProbePlan& plan, const RtestScreen& s) {
                   {"axis", std::string(1, "xyz"[e.point_id % 3])},
                   {"residual_um", std::round(e.residual_um * 1e4) / 1e4},
                   {"t", std::round(e.t * 1e3) / 1e3},
-                  {"reason", "beyond the threshold: a sensor glitch (or a knock during the dwell); left out of every fit"}});
+                  {"reason", "beyond the threshold: a gross reading (a sensor glitch); left out of every fit"}});
   }
   return {{"test", "each pose reading's value against what the rest of its cycle predicts for it under the declared noise "
                    "per reading (deletion residual) against the normal quantile at alpha / (2 N), worst first, refitted "
@@ -608,8 +608,9 @@ Json rtestReportJson(const ProbePlan& plan, const std::vector<RtestCycle>& cycle
                                                 : "set to 0 in the first cycle, its change with time is observed")},
       {"u", "standard uncertainty (k = 1) from max(sensor repeatability, residual), later cycles include the first "
             "cycle's reference"}};
-  size_t used = 0;
+  size_t used = 0, values = 0;
   double rss = 0;
+  const std::vector<std::pair<int, int>> screened_out = a.screen.excluded();
   Json cj = Json::array();
   for (size_t c = 0; c < a.cycles.size(); ++c) {
     const auto& f = a.cycles[c];
@@ -639,9 +640,16 @@ Json rtestReportJson(const ProbePlan& plan, const std::vector<RtestCycle>& cycle
                   {"own_reset", f.own_reset},
                   {"reset_check", rc},
                   {"errors", e}});
-    for (const auto& r : f.residual_w_mm) rss += mmToUm(mmToUm(r.squaredNorm()));
+    // The values the screen left out are not fitted: their residual is the glitch itself.
+    for (size_t jj = 0; jj < f.residual_w_mm.size(); ++jj)
+      for (int ax = 0; ax < 3; ++ax)
+        if (!std::binary_search(screened_out.begin(), screened_out.end(), std::make_pair(static_cast<int>(c), 3 * static_cast<int>(jj) + ax))) {
+          rss += std::pow(mmToUm(f.residual_w_mm[jj][ax]), 2);
+          ++values;
+        }
     used += f.residual_w_mm.size();
   }
+  j["outliers"] = rtestScreenJson(plan, a.screen);
   j["cycles"] = cj;
   // The re-read check (issue 16/17): a difference beyond what the declared noise allows is a
   // sensor step (a knock, a lost count) inside that cycle.
@@ -673,7 +681,7 @@ Json rtestReportJson(const ProbePlan& plan, const std::vector<RtestCycle>& cycle
                                     : "the reset could not be checked: the results have no reset / re-read rows (pose 0)"}};
   j["findings"] = findings;
   j["points_used"] = used;
-  j["residual_rms_um"] = std::sqrt(rss / std::max<size_t>(1, 3 * used));
+  j["residual_rms_um"] = std::sqrt(rss / std::max<size_t>(1, values));
   // What the R-test measures: the six errors of the table at each tilt (the first cycle), under
   // 002 Table 2's names and their ISO 230-7 component-error counterparts of the tilt axis.
   {

@@ -84,7 +84,6 @@ class Rtest final : public Cycle {
     const std::vector<std::string> files = pathsOf(r.results);
     out.text = rtestReportText(plan, a);
     out.doc = rtestReportJson(plan, cycles, a, files);
-    out.doc["outliers"] = rtestScreenJson(plan, a.screen);
     out.text += rtestScreenText(plan, a.screen) + "\n";
     if (!a.screen.screen.excluded.empty() || a.screen.screen.too_many) out.warnings.push_back(rtestScreenText(plan, a.screen));
     out.doc["warnings"] = out.warnings;
