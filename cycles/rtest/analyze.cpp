@@ -403,7 +403,7 @@ RtestAnalysis analyzeRtest(const ProbePlan& plan, const std::vector<RtestCycle>&
   RtestAnalysis out;
   out.kinematics = k;
   out.tilt_deg = L.tilts;
-  out.screen = screenRtestReadings(plan, cycles, opt.screenSigmaUm(), opt.declaration);
+  if (opt.screen) out.screen = screenRtestReadings(plan, cycles, opt.screenSigmaUm(), opt.declaration);
   const std::vector<std::pair<int, int>> excluded = out.screen.excluded();
   Eigen::Vector3d ref_dev = Eigen::Vector3d::Zero();  // J_ref omega_0: wq(0,0,t0) - wq*, first cycle
   Eigen::Matrix3d ref_cov = Eigen::Matrix3d::Zero();

@@ -49,6 +49,9 @@ struct RtestFitOptions {
   /// sensors alone. The screen of gross readings tests against it.
   double reading_sigma_um = 0.0;
   std::string declaration;       // what reading_sigma_um is, for the report
+  /// false: no screen of gross readings (the budget's Monte Carlo and its derivatives propagate
+  /// noise-free simulated readings through the fixed estimator; a screen there would only cost time).
+  bool screen = true;
   double screenSigmaUm() const { return reading_sigma_um > 0 ? reading_sigma_um : sensor_sigma_um; }
   void validate() const;         // throws std::invalid_argument
 };
