@@ -17,7 +17,7 @@ set(ROTACAL_STATISTICAL_TESTS
   # false alarms on clean seeds
   "FalseAlarm" "AlphaShareOfAlarms" "CleanSeedsRaise" "CleanRunsRarely"
   # power: a hidden effect found in most seeds
-  "HiddenDriftFound" "HiddenScaleFound" "HiddenHarmonicFound" "IsFoundWithItsParametersWithin3u"
+  "HiddenDriftFound" "HiddenScaleFound" "HiddenHarmonicFound" "HiddenGlitchFound" "IsFoundWithItsParametersWithin3u"
   # coverage: the truth within the reported uncertainty as often as claimed
   "AsOftenAsClaimed" "Over200Seeds" "WithinReportedUncertainty" "WithinTheReportedUncertainty"
   "WithNoiseWithinUncertainty" "NoisyLocationErrorsWithinTheirUncertainty"

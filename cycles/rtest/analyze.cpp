@@ -2,6 +2,8 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <functional>
+#include <map>
 #include <cmath>
 #include <stdexcept>
 
@@ -88,8 +90,32 @@ Eigen::VectorXd rtestLocationRows(const ProbePlan& plan, const RtestCycle& cyc, 
   return y;
 }
 
+double rtestSensorNoiseUm(const ProbePlan& plan) {
+  return parseNumber("sensor_noise_um",
+                     plan.options.count("sensor_noise_um") ? plan.options.at("sensor_noise_um") : std::string("0.2"));
+}
+
+DeclaredNoise rtestDeclaredNoise(const ProbePlan& plan, const ContributorSet* declared) {
+  const double sensor_um = rtestSensorNoiseUm(plan);
+  DeclaredNoise d;
+  d.white_um2 = sensor_um * sensor_um;
+  std::string parts = fmt::format("sensors {:.3f} um (PLAN.json sensor_noise_um)", sensor_um);
+  const Contributor* form = declared ? declared->find("rtest_sphere_form") : nullptr;
+  if (form && form->u[0] > 0) {
+    const double form_um = mmToUm(form->u[0]);
+    d.white_um2 += form_um * form_um;
+    parts += fmt::format(" + rtest_sphere_form {:.3f} um ({})", form_um,
+                         declared->file.empty() ? std::string("the machine's contributors") : declared->file);
+  }
+  d.repeatability_only = !(form && form->u[0] > 0);
+  d.declaration = fmt::format("declared per reading: {} = {:.3f} um", parts, std::sqrt(d.white_um2));
+  return d;
+}
+
 void RtestFitOptions::validate() const {
   if (!(sensor_sigma_um > 0)) throw std::invalid_argument("rtest fit: sensor_sigma_um must be > 0");
+  if (!(reading_sigma_um >= 0) || !std::isfinite(reading_sigma_um))
+    throw std::invalid_argument("rtest fit: reading_sigma_um must be >= 0");
   if (!(reset_alpha > 0 && reset_alpha < 1)) throw std::invalid_argument("rtest fit: reset_alpha must be in (0, 1)");
 }
 
@@ -132,7 +158,8 @@ Eigen::Vector3d exactW(const ProbePlan& plan, const Eigen::MatrixXd& value, int 
 /// C 0): rows J_wq_e(pose_j) - J_wq_e(reset pose), 002 Eq. (6) with constant errors; with reset
 /// reads the cycle's zero is a free offset observed by the reset and re-read rows, as in the
 /// per-tilt fit.
-RtestLocationFit fitLocation(const ProbePlan& plan, const RtestCycle& cyc, double sensor_sigma_um) {
+RtestLocationFit fitLocation(const ProbePlan& plan, const RtestCycle& cyc, double sensor_sigma_um,
+                             const std::vector<int>& dropped_rows) {
   const bool own = cyc.reset.has_value() && cyc.reread.has_value();
   const RtestLocationEstimator e = rtestLocationEstimator(plan, own);
   RtestLocationFit f;
@@ -140,19 +167,34 @@ RtestLocationFit fitLocation(const ProbePlan& plan, const RtestCycle& cyc, doubl
     f.why = e.why;
     return f;
   }
+  // The screen's values left out: the fit runs on the other rows (the estimator's own G, for the
+  // budget's Monte Carlo, stays the plan's).
+  const Eigen::VectorXd y_all = rtestLocationRows(plan, cyc, own);
+  std::vector<int> keep;
+  for (int i = 0; i < static_cast<int>(e.A.rows()); ++i)
+    if (std::find(dropped_rows.begin(), dropped_rows.end(), i) == dropped_rows.end()) keep.push_back(i);
+  const Eigen::MatrixXd A = e.A(keep, Eigen::all);
+  const Eigen::VectorXd y = y_all(keep);
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd =
+      dropped_rows.empty() ? e.svd
+                           : Eigen::JacobiSVD<Eigen::MatrixXd>(A * e.scale.cwiseInverse().asDiagonal(),
+                                                               Eigen::ComputeThinU | Eigen::ComputeThinV);
+  const auto& sv = svd.singularValues();
+  if (!(sv[sv.size() - 1] > 1e-8 * sv[0])) {
+    f.why = "the readings the screen left out leave the eight location errors unseparated";
+    return f;
+  }
   f.identifiable = true;
-  const Eigen::VectorXd y = rtestLocationRows(plan, cyc, own);
-  const Eigen::VectorXd x = e.scale.cwiseInverse().asDiagonal() * e.svd.solve(y);
-  const Eigen::VectorXd r = y - e.A * x;
-  const int rows = static_cast<int>(e.A.rows()), ncol = static_cast<int>(e.A.cols());
+  const Eigen::VectorXd x = e.scale.cwiseInverse().asDiagonal() * svd.solve(y);
+  const Eigen::VectorXd r = y - A * x;
+  const int rows = static_cast<int>(A.rows()), ncol = static_cast<int>(A.cols());
   const int dof = rows - ncol - e.zero_rows;
   const double s_res = dof > 0 ? mmToUm(std::sqrt(r.squaredNorm() / dof)) : 0.0;
   f.residual_rms_um = mmToUm(std::sqrt(r.squaredNorm() / std::max(1, rows - e.zero_rows)));
   f.residual_sd_um = s_res;
   f.dof = dof;
   f.sigma_um = std::max(sensor_sigma_um, s_res);
-  const auto& sv = e.svd.singularValues();
-  const Eigen::MatrixXd Ns_inv = e.svd.matrixV() * sv.cwiseInverse().cwiseAbs2().asDiagonal() * e.svd.matrixV().transpose();
+  const Eigen::MatrixXd Ns_inv = svd.matrixV() * sv.cwiseInverse().cwiseAbs2().asDiagonal() * svd.matrixV().transpose();
   for (int q = 0; q < kNumLocationErrors; ++q) {
     f.value[q] = x[q];
     f.u[q] = umToMm(f.sigma_um) * std::sqrt(std::max(0.0, Ns_inv(q, q))) / e.scale[q];
@@ -164,6 +206,182 @@ double toReport(int p, double v) { return rtestParameterIsLength(p) ? mmToUm(v) 
 std::string unitOf(int p) { return rtestParameterIsLength(p) ? "um" : "mdeg"; }
 
 }  // namespace
+
+std::vector<std::pair<int, int>> RtestScreen::excluded() const {
+  std::vector<std::pair<int, int>> v;
+  for (const auto& e : screen.excluded) v.emplace_back(e.run, e.point_id);
+  std::sort(v.begin(), v.end());
+  return v;
+}
+
+namespace {
+
+/// One cycle's linear model for the screen, in um (rows: 3 per pose, then the reset and the
+/// re-read when the cycle has them; columns scaled to unit norm): the errors at every tilt and,
+/// where the cycle has no reset of its own after the first, the sensors' zero of the series as
+/// 3 free offsets (analyze's reference from the first cycle, which the screen of one cycle does
+/// not lean on). `screened` marks the rows the screen tests (the poses; not the reset pose's own
+/// rows of a first cycle without a reset reading, which are 0 = 0).
+struct ScreenDesign {
+  Eigen::MatrixXd A;
+  Eigen::VectorXd y;
+  std::vector<bool> screened;
+};
+
+ScreenDesign screenDesign(const ProbePlan& plan, const std::vector<Eigen::Matrix<double, 3, kRtestParams>>& J,
+                          const std::vector<int>& tilt_of, int ref_point, int ref_tilt, const RtestCycle& cyc, bool first) {
+  const int np = static_cast<int>(plan.points.size()), nt = 1 + *std::max_element(tilt_of.begin(), tilt_of.end());
+  const int n = kRtestParams * nt;
+  const bool own = cyc.reset.has_value() && cyc.reread.has_value();
+  const bool offset = own || !first;
+  const int rows = 3 * np + (own ? 6 : 0), ncol = n + (offset ? 3 : 0);
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(rows, ncol);
+  ScreenDesign d;
+  d.y.resize(rows);
+  d.screened.assign(static_cast<size_t>(rows), false);
+  for (int j = 0; j < np; ++j) {
+    A.block(3 * j, kRtestParams * tilt_of[static_cast<size_t>(j)], 3, kRtestParams) += J[static_cast<size_t>(j)];
+    if (offset) A.block(3 * j, n, 3, 3).setIdentity();
+    else A.block(3 * j, kRtestParams * ref_tilt, 3, kRtestParams) -= J[static_cast<size_t>(ref_point)];
+    d.y.segment<3>(3 * j) = mmToUm(1.0) * cyc.readings[static_cast<size_t>(j)].dq_w_mm;
+    for (int a = 0; a < 3; ++a) d.screened[static_cast<size_t>(3 * j + a)] = offset || j != ref_point;
+  }
+  if (own) {
+    for (int k2 = 0; k2 < 2; ++k2) {
+      A.block(3 * np + 3 * k2, kRtestParams * ref_tilt, 3, kRtestParams) = J[static_cast<size_t>(ref_point)];
+      A.block(3 * np + 3 * k2, n, 3, 3).setIdentity();
+    }
+    d.y.segment<3>(3 * np) = mmToUm(1.0) * cyc.reset->dq_w_mm;
+    d.y.segment<3>(3 * np + 3) = mmToUm(1.0) * cyc.reread->dq_w_mm;
+  }
+  // Unit columns (mm and rad differ by 1e2); a column of zeros (dz and c at the reset's tilt in a
+  // cycle referred to a reset) stays zero: the fits below are rank-revealing.
+  for (int q = 0; q < ncol; ++q) {
+    const double nrm = A.col(q).norm();
+    if (nrm > 0) A.col(q) /= nrm;
+  }
+  d.A = std::move(A);
+  return d;
+}
+
+int rankOf(const Eigen::MatrixXd& A) {
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(A);
+  const auto& sv = svd.singularValues();
+  int r = 0;
+  for (int i = 0; i < sv.size(); ++i) r += sv[i] > 1e-8 * sv[0] ? 1 : 0;
+  return r;
+}
+
+}  // namespace
+
+RtestScreen screenRtestReadings(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, double reading_sigma_um,
+                                const std::string& declaration) {
+  if (!(reading_sigma_um > 0) || !std::isfinite(reading_sigma_um))
+    throw std::invalid_argument("rtest screen: the declared noise per reading must be > 0");
+  const Layout L = layoutOf(plan);
+  const Eigen::Vector3d nest = rtestNest_w(plan);
+  std::vector<Eigen::Matrix<double, 3, kRtestParams>> J;
+  for (const auto& p : plan.points) J.push_back(J_wq_omega(plan.machine.kinematics, p.pose, nest));
+  std::vector<ScreenDesign> designs;
+  std::vector<int> full_rank;
+  for (size_t c = 0; c < cycles.size(); ++c) {
+    if (cycles[c].readings.size() != plan.points.size()) throw std::invalid_argument("rtest: cycle with missing readings");
+    designs.push_back(screenDesign(plan, J, L.tilt_of_point, L.ref_point, L.ref_tilt, cycles[c], c == 0));
+    full_rank.push_back(rankOf(designs.back().A));
+  }
+  const double s2 = reading_sigma_um * reading_sigma_um;
+  // Each fit's statistics, by the values it held out (the screen asks for them after the fit).
+  std::map<std::vector<std::pair<int, int>>, Eigen::VectorXd> stats;
+  auto fit = [&](const std::function<bool(int, const ProbePoint&)>& hold_out) {
+    IdentificationResult res;
+    res.summary.termination = Termination::Converged;
+    std::vector<double> t_all;
+    for (size_t c = 0; c < designs.size(); ++c) {
+      const ScreenDesign& d = designs[c];
+      std::vector<int> keep;
+      std::vector<bool> held(static_cast<size_t>(d.A.rows()), false);
+      for (int i = 0; i < d.A.rows(); ++i) {
+        ProbePoint key;
+        key.id = i;
+        held[static_cast<size_t>(i)] = d.screened[static_cast<size_t>(i)] && hold_out && hold_out(static_cast<int>(c), key);
+        const bool zero_row = !d.screened[static_cast<size_t>(i)] && i < 3 * static_cast<int>(plan.points.size());
+        if (!held[static_cast<size_t>(i)] && !zero_row) keep.push_back(i);
+      }
+      const Eigen::MatrixXd Ak = d.A(keep, Eigen::all);
+      if (rankOf(Ak) < full_rank[c]) res.summary.termination = Termination::RankDeficient;
+      const Eigen::VectorXd b = Ak.completeOrthogonalDecomposition().solve(d.y(keep));
+      const Eigen::VectorXd r = d.y - d.A * b;
+      Eigen::VectorXd t = deletionStatistics(r(keep), Ak, s2 * Eigen::MatrixXd::Identity(Ak.rows(), Ak.rows()));
+      for (size_t k = 0; k < keep.size(); ++k) {
+        const int i = keep[k];
+        if (!d.screened[static_cast<size_t>(i)]) continue;
+        // A value the others cannot predict (its leverage 1) cannot be tested: 0.
+        t_all.push_back(std::isfinite(t[static_cast<Eigen::Index>(k)]) ? t[static_cast<Eigen::Index>(k)] : 0.0);
+      }
+      for (int i = 0; i < d.A.rows(); ++i)
+        if (d.screened[static_cast<size_t>(i)])
+          res.residuals.push_back({static_cast<int>(c), i, r[i], 0.0, held[static_cast<size_t>(i)]});
+    }
+    stats[heldOutTouches(res.residuals)] = Eigen::Map<const Eigen::VectorXd>(t_all.data(), static_cast<Eigen::Index>(t_all.size()));
+    return res;
+  };
+  RtestScreen out;
+  out.options.sigma_um = reading_sigma_um;
+  out.options.alpha = kRtestScreenAlpha;
+  out.options.max_fraction = kRtestScreenMaxFraction;
+  out.options.declaration = declaration;
+  out.options.statistic = [&stats](const IdentificationResult& f) { return stats.at(heldOutTouches(f.residuals)); };
+  out.screen = screenOutliers(fit, out.options);
+  out.options.statistic = nullptr;  // it reads this call's fits
+  return out;
+}
+
+Json rtestScreenJson(const ProbePlan& plan, const RtestScreen& s) {
+  Json ex = Json::array();
+  for (const auto& e : s.screen.excluded) {
+    const auto& p = plan.points[static_cast<size_t>(e.point_id / 3)];
+    ex.push_back({{"cycle", e.run + 1},
+                  {"pose", p.id},
+                  {"pose_name", p.pose_name},
+                  {"axis", std::string(1, "xyz"[e.point_id % 3])},
+                  {"residual_um", std::round(e.residual_um * 1e4) / 1e4},
+                  {"t", std::round(e.t * 1e3) / 1e3},
+                  {"reason", "beyond the threshold: a gross reading (a sensor glitch); left out of every fit"}});
+  }
+  return {{"test", "each pose reading's value against what the rest of its cycle predicts for it under the declared noise "
+                   "per reading (deletion residual) against the normal quantile at alpha / (2 N), worst first, refitted "
+                   "after each; the reset and re-read rows are the re-read check's"},
+          {"declaration", s.options.declaration},
+          {"sigma_um", s.options.sigma_um},
+          {"alpha", s.options.alpha},
+          {"threshold_t", std::round(s.screen.threshold_t * 1e4) / 1e4},
+          {"values", s.screen.touches},
+          {"max_fraction", s.options.max_fraction},
+          {"too_many", s.screen.too_many},
+          {"beyond", s.screen.beyond},
+          {"excluded", ex},
+          {"summary", rtestScreenText(plan, s)}};
+}
+
+std::string rtestScreenText(const ProbePlan& plan, const RtestScreen& s) {
+  const OutlierScreen& o = s.screen;
+  const std::string against = fmt::format("the declared noise per reading ({:.3f} um)", s.options.sigma_um);
+  if (o.too_many)
+    return fmt::format("reading screen: {} of {} values beyond {:.2f} x {} even with the worst left out: more than a "
+                       "few glitches, a model that does not fit or a noise declared too small; none left out (rotacal "
+                       "diagnose)",
+                       o.beyond, o.touches, o.threshold_t, against);
+  if (o.excluded.empty())
+    return fmt::format("reading screen: no value beyond {:.2f} x {} ({} values)", o.threshold_t, against, o.touches);
+  std::string list;
+  for (const auto& e : o.excluded)
+    list += fmt::format("{}cycle {} pose {} d{} ({:+.2f} um, {:.1f} x)", list.empty() ? "" : ", ", e.run + 1,
+                        plan.points[static_cast<size_t>(e.point_id / 3)].id, "xyz"[e.point_id % 3], e.residual_um,
+                        std::abs(e.t));
+  return fmt::format("reading screen: left out {} of {} values beyond {:.2f} x {} (a sensor glitch; every fit runs "
+                     "without them): {}",
+                     o.excluded.size(), o.touches, o.threshold_t, against, list);
+}
 
 RtestAnalysis analyzeRtest(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, const RtestFitOptions& opt) {
   opt.validate();
@@ -185,6 +403,8 @@ RtestAnalysis analyzeRtest(const ProbePlan& plan, const std::vector<RtestCycle>&
   RtestAnalysis out;
   out.kinematics = k;
   out.tilt_deg = L.tilts;
+  if (opt.screen) out.screen = screenRtestReadings(plan, cycles, opt.screenSigmaUm(), opt.declaration);
+  const std::vector<std::pair<int, int>> excluded = out.screen.excluded();
   Eigen::Vector3d ref_dev = Eigen::Vector3d::Zero();  // J_ref omega_0: wq(0,0,t0) - wq*, first cycle
   Eigen::Matrix3d ref_cov = Eigen::Matrix3d::Zero();
   for (size_t c = 0; c < cycles.size(); ++c) {
@@ -227,7 +447,13 @@ RtestAnalysis analyzeRtest(const ProbePlan& plan, const std::vector<RtestCycle>&
     // Scale columns (mm and rad differ by 1e2) before the rank test.
     Eigen::VectorXd scale(cols.size());
     for (size_t q = 0; q < cols.size(); ++q) scale[q] = std::max(Au.col(q).norm(), 1e-300);
-    const Eigen::MatrixXd As = Au * scale.cwiseInverse().asDiagonal();
+    // The values the screen left out are not fitted (their residual is then what the fit predicts).
+    std::vector<int> dropped, keep;
+    for (const auto& e : excluded)
+      if (e.first == static_cast<int>(c)) dropped.push_back(e.second);
+    for (int i = 0; i < rows; ++i)
+      if (std::find(dropped.begin(), dropped.end(), i) == dropped.end()) keep.push_back(i);
+    const Eigen::MatrixXd As = Au(keep, Eigen::all) * scale.cwiseInverse().asDiagonal();
     Eigen::JacobiSVD<Eigen::MatrixXd> svd(As, Eigen::ComputeThinU | Eigen::ComputeThinV);
     const auto& sv = svd.singularValues();
     if (sv.size() == 0 || sv[sv.size() - 1] < 1e-8 * sv[0])
@@ -235,21 +461,23 @@ RtestAnalysis analyzeRtest(const ProbePlan& plan, const std::vector<RtestCycle>&
           "rtest: the plan cannot separate the six errors at every tilt (condition {:.3g}); use at least 3 C angles "
           "and a nest off the C axis",
           sv[0] / std::max(sv[sv.size() - 1], 1e-300)));
-    const Eigen::VectorXd xs = svd.solve(y);
+    const Eigen::VectorXd xs = svd.solve(Eigen::VectorXd(y(keep)));
     const Eigen::VectorXd xu = scale.cwiseInverse().asDiagonal() * xs;
     const Eigen::MatrixXd Ns_inv = svd.matrixV() * sv.cwiseInverse().cwiseAbs2().asDiagonal() * svd.matrixV().transpose();
     const Eigen::MatrixXd N_inv = scale.cwiseInverse().asDiagonal() * Ns_inv * scale.cwiseInverse().asDiagonal();
     const Eigen::VectorXd r = y - Au * xu;
     // Without a reset reading of its own the first cycle's reset pose defines the zero: 0 = 0.
     const int zero_rows = first && !own ? 3 : 0;
-    const int dof = rows - static_cast<int>(cols.size()) - zero_rows;
-    const double s_res = dof > 0 ? mmToUm(std::sqrt(r.squaredNorm() / dof)) : 0.0;
+    const int kept = static_cast<int>(keep.size());
+    const int dof = kept - static_cast<int>(cols.size()) - zero_rows;
+    const double r2 = r(keep).squaredNorm();
+    const double s_res = dof > 0 ? mmToUm(std::sqrt(r2 / dof)) : 0.0;
     RtestCycleFit f;
     f.t_s = cyc.t_s();
     f.sigma_um = std::max(opt.sensor_sigma_um, s_res);
     f.residual_sd_um = s_res;
     f.dof = dof;
-    f.residual_rms_um = mmToUm(std::sqrt(r.squaredNorm() / (rows - zero_rows)));
+    f.residual_rms_um = mmToUm(std::sqrt(r2 / (kept - zero_rows)));
     f.dz_reference_fixed = referred;
     f.own_reset = own;
     if (own) {
@@ -264,7 +492,7 @@ RtestAnalysis analyzeRtest(const ProbePlan& plan, const std::vector<RtestCycle>&
       // The reference term J_ref omega_0 carries the first cycle's uncertainty into every row.
       Eigen::MatrixXd S(rows, 3);
       for (int j = 0; j < rows / 3; ++j) S.block<3, 3>(3 * j, 0).setIdentity();
-      const Eigen::MatrixXd G = N_inv * Au.transpose() * S;
+      const Eigen::MatrixXd G = N_inv * Au(keep, Eigen::all).transpose() * S(keep, Eigen::all);
       cov_u += G * ref_cov * G.transpose();
     }
     Eigen::VectorXd x = Eigen::VectorXd::Zero(ncol);
@@ -291,7 +519,7 @@ RtestAnalysis analyzeRtest(const ProbePlan& plan, const std::vector<RtestCycle>&
       f.linearisation_um = std::max(f.linearisation_um, mmToUm((ex - li).cwiseAbs().maxCoeff()));
     }
     if (first) {
-      out.location = fitLocation(plan, cyc, opt.sensor_sigma_um);
+      out.location = fitLocation(plan, cyc, opt.sensor_sigma_um, dropped);
       const Eigen::VectorXd x_ref = x.segment<kRtestParams>(kRtestParams * L.ref_tilt);
       ref_dev = Jref * x_ref;
       ref_cov = Jref * f.cov.block<kRtestParams, kRtestParams>(kRtestParams * L.ref_tilt, kRtestParams * L.ref_tilt) *
@@ -380,8 +608,9 @@ Json rtestReportJson(const ProbePlan& plan, const std::vector<RtestCycle>& cycle
                                                 : "set to 0 in the first cycle, its change with time is observed")},
       {"u", "the fit's standard uncertainty (k = 1) from max(sensor repeatability, residual), later cycles include the "
             "first cycle's reference; analyze replaces it by u_c once the budget is evaluated"}};
-  size_t used = 0;
+  size_t used = 0, values = 0;
   double rss = 0;
+  const std::vector<std::pair<int, int>> screened_out = a.screen.excluded();
   Json cj = Json::array();
   for (size_t c = 0; c < a.cycles.size(); ++c) {
     const auto& f = a.cycles[c];
@@ -411,9 +640,16 @@ Json rtestReportJson(const ProbePlan& plan, const std::vector<RtestCycle>& cycle
                   {"own_reset", f.own_reset},
                   {"reset_check", rc},
                   {"errors", e}});
-    for (const auto& r : f.residual_w_mm) rss += mmToUm(mmToUm(r.squaredNorm()));
+    // The values the screen left out are not fitted: their residual is the glitch itself.
+    for (size_t jj = 0; jj < f.residual_w_mm.size(); ++jj)
+      for (int ax = 0; ax < 3; ++ax)
+        if (!std::binary_search(screened_out.begin(), screened_out.end(), std::make_pair(static_cast<int>(c), 3 * static_cast<int>(jj) + ax))) {
+          rss += std::pow(mmToUm(f.residual_w_mm[jj][ax]), 2);
+          ++values;
+        }
     used += f.residual_w_mm.size();
   }
+  j["outliers"] = rtestScreenJson(plan, a.screen);
   j["cycles"] = cj;
   // The re-read check (issue 16/17): a difference beyond what the declared noise allows is a
   // sensor step (a knock, a lost count) inside that cycle.
@@ -445,7 +681,7 @@ Json rtestReportJson(const ProbePlan& plan, const std::vector<RtestCycle>& cycle
                                     : "the reset could not be checked: the results have no reset / re-read rows (pose 0)"}};
   j["findings"] = findings;
   j["points_used"] = used;
-  j["residual_rms_um"] = std::sqrt(rss / std::max<size_t>(1, 3 * used));
+  j["residual_rms_um"] = std::sqrt(rss / std::max<size_t>(1, values));
   // What the R-test measures: the six errors of the table at each tilt (the first cycle), under
   // 002 Table 2's names and their ISO 230-7 component-error counterparts of the tilt axis.
   {

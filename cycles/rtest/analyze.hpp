@@ -20,7 +20,10 @@
 #include <string>
 #include <vector>
 
+#include "core/contributors.hpp"
+#include "core/declared_noise.hpp"
 #include "core/json_io.hpp"
+#include "core/outliers.hpp"
 #include "core/probe_plan.hpp"
 #include "core/uncertainty_budget.hpp"
 #include "cycles/rtest/plan.hpp"
@@ -31,9 +34,26 @@ namespace rotacal {
 /// errors of the pose's tilt (mm, rad), exact at zero error: wq = T_m_w^-1 rq with rq fixed.
 Eigen::Matrix<double, 3, kRtestParams> J_wq_omega(Kinematics kinematics, const Pose& pose, const Eigen::Vector3d& nest_w);
 
+/// The plan's sensor noise (`sensor_noise_um`, default 002's 0.2 um), um.
+double rtestSensorNoiseUm(const ProbePlan& plan);
+
+/// What one reading scatters by, as declared: the sensors (the plan's `sensor_noise_um`) and the
+/// sphere's form at the contact (`rtest_sphere_form` of the contributors, per reading, Type A:
+/// the same per-reading part the uncertainty budget reads), added in quadrature, white. Every
+/// test of the readings against the declared noise (the screen, the judge of diagnose) reads it.
+DeclaredNoise rtestDeclaredNoise(const ProbePlan& plan, const ContributorSet* declared);
+
 struct RtestFitOptions {
   double sensor_sigma_um = 0.2;  // the sensors' repeatability: a floor for the noise estimate
   double reset_alpha = 0.01;     // false-alarm rate of the re-read check over the whole series
+  /// The declared scatter of one reading (sensors and sphere form, rtestDeclaredNoise), um; 0: the
+  /// sensors alone. The screen of gross readings tests against it.
+  double reading_sigma_um = 0.0;
+  std::string declaration;       // what reading_sigma_um is, for the report
+  /// false: no screen of gross readings (the budget's Monte Carlo and its derivatives propagate
+  /// noise-free simulated readings through the fixed estimator; a screen there would only cost time).
+  bool screen = true;
+  double screenSigmaUm() const { return reading_sigma_um > 0 ? reading_sigma_um : sensor_sigma_um; }
   void validate() const;         // throws std::invalid_argument
 };
 
@@ -98,8 +118,32 @@ RtestLocationEstimator rtestLocationEstimator(const ProbePlan& plan, bool own);
 /// The readings of one cycle as the estimator's rows y (mm).
 Eigen::VectorXd rtestLocationRows(const ProbePlan& plan, const RtestCycle& cycle, bool own);
 
+/// The screen of gross readings (a sensor glitch: one value tens of micrometres or millimetres
+/// off): every pose reading's value (x, y, z apart) against what the rest of its cycle predicts
+/// for it, the deletion residual under the declared per-reading noise (core/declared_noise.hpp),
+/// Bonferroni over all the values of the series at kRtestScreenAlpha, worst first and refitted
+/// (core/outliers.hpp); a value beyond is left out of every fit (analyze and diagnose) and named.
+/// The reset and re-read rows are not screened: a jump between them is the re-read check's
+/// (a sensor step, flagged there), which a screen would otherwise take for a glitch.
+/// Each cycle is screened against its own fit (its own reset and sensor zero), so neither a drift
+/// between cycles nor a step of the counts looks like a glitch.
+constexpr double kRtestScreenAlpha = 0.01;       // a clean series loses a value in at most 1 %
+constexpr double kRtestScreenMaxFraction = 0.05; // beyond: the model or the noise, not glitches
+struct RtestScreen {
+  OutlierOptions options;
+  OutlierScreen screen;  // run = the cycle (0-based), point_id = 3 x (pose index) + axis
+  /// (cycle, row) of the values left out: row = 3 x (plan point index) + axis (x, y, z).
+  std::vector<std::pair<int, int>> excluded() const;
+};
+RtestScreen screenRtestReadings(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, double reading_sigma_um,
+                                const std::string& declaration);
+/// REPORT.json's `outliers` block of the R-test, and its one line.
+Json rtestScreenJson(const ProbePlan& plan, const RtestScreen& s);
+std::string rtestScreenText(const ProbePlan& plan, const RtestScreen& s);
+
 struct RtestAnalysis {
   Kinematics kinematics = Kinematics::TableBC;
+  RtestScreen screen;         // what was left out of every fit below
   RtestLocationFit location;  // the eight location errors, first cycle
   std::vector<double> tilt_deg;
   std::vector<RtestCycleFit> cycles;

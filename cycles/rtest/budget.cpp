@@ -216,7 +216,9 @@ RtestTiltBudget rtestTiltBudget(const ProbePlan& plan, const RtestCycle& first, 
     RtestSeries s = simulateRtest(plan, t, x, so);  // one cycle
     if (!first.reset || !first.reread)
       for (auto& c : s.cycles) c.reset = c.reread = std::nullopt;
-    return analyzeRtest(plan, s.cycles, fit_options).cycles.front();
+    RtestFitOptions o = fit_options;
+    o.screen = false;
+    return analyzeRtest(plan, s.cycles, o).cycles.front();
   };
   auto perTilt = [&](const Truth& t, const RtestTruthExtras& x) -> Eigen::VectorXd {
     const RtestCycleFit c = fitOf(t, x);
@@ -343,7 +345,9 @@ RtestDriftBudget rtestDriftBudget(const ProbePlan& plan, const std::vector<Rtest
         if (c.reset) perturb(*c.reset);
         if (c.reread) perturb(*c.reread);
       }
-      const Eigen::MatrixXd d = (analyzeRtest(plan, moved, fit_options).rate - a.rate) / kEps;
+      RtestFitOptions o = fit_options;
+      o.screen = false;
+      const Eigen::MatrixXd d = (analyzeRtest(plan, moved, o).rate - a.rate) / kEps;
       out.u_b += (u * d.cwiseProduct(f)).cwiseAbs2();
     }
   out.u_b = out.u_b.cwiseSqrt();

@@ -1,6 +1,7 @@
 // rtest (002): the position-dependent errors of the tilt axis with an R-test, and their thermal
 // drift. The R-test logger writes its own CSV whatever the controller; no offsets (the errors
 // depend on position and time).
+#include <cmath>
 #include <optional>
 
 #include <fmt/format.h>
@@ -40,10 +41,7 @@ std::vector<RtestCycle> readCycles(const ProbePlan& plan, const std::vector<Inpu
   return cycles;
 }
 
-double sensorSigma(const ProbePlan& plan) {
-  return parseNumber("sensor_noise_um",
-                     plan.options.count("sensor_noise_um") ? plan.options.at("sensor_noise_um") : std::string("0.2"));
-}
+double sensorSigma(const ProbePlan& plan) { return rtestSensorNoiseUm(plan); }
 
 class Rtest final : public Cycle {
  public:
@@ -80,19 +78,23 @@ class Rtest final : public Cycle {
     const std::vector<RtestCycle> cycles = readCycles(plan, r.results, &out.warnings);
     RtestFitOptions o;
     o.sensor_sigma_um = sensorSigma(plan);
+    const DeclaredNoise noise = rtestDeclaredNoise(plan, r.contributors);
+    o.reading_sigma_um = std::sqrt(noise.white_um2);
+    o.declaration = noise.declaration;
     const RtestAnalysis a = analyzeRtest(plan, cycles, o);
     const std::vector<std::string> files = pathsOf(r.results);
     out.doc = rtestReportJson(plan, cycles, a, files);
+    if (!a.screen.screen.excluded.empty() || a.screen.screen.too_many) out.warnings.push_back(rtestScreenText(plan, a.screen));
     out.doc["warnings"] = out.warnings;
     for (size_t c = 0; c < a.cycles.size(); ++c)
       if (a.cycles[c].sensor_step)
         out.warnings.push_back(fmt::format("cycle {}: the reset pose re-read differs from its reading before the first "
                                            "pose beyond the declared sensor noise (p = {:.2g}): a sensor step",
                                            c + 1, a.cycles[c].reset_p));
-    // The eight ISO 230-7 location errors separated by the constant-error fit (issue 17); what
+    // The eight ISO 230-7 location errors separated by the constant-error fit; what
     // the R-test measures at each tilt is per_tilt_errors.
     out.doc["errors_heading"] = "ISO 230-7 location errors (constant over the tilt, first cycle)";
-    // What analyze signs (issue 17): u_A from the data, u_B from the declared contributors by
+    // What analyze signs: u_A from the data, u_B from the declared contributors by
     // Monte Carlo through the same fit (cycles/rtest/budget.hpp, docs/uncertainty.md).
     // The text prints what REPORT.json signs (u = u_c): written once every budget is known.
     RtestSignedU signed_u;
@@ -133,7 +135,7 @@ class Rtest final : public Cycle {
                                  100.0 * kCoverageProbability, U.topRows(3).maxCoeff(), U.bottomRows(3).maxCoeff(), tb.tilts,
                                  tb.budget.type_b_evaluated ? "from the declared contributors" : "not evaluated (none declared)");
     }
-    out.text = rtestReportText(plan, a, signed_u) + budget_text;
+    out.text = rtestReportText(plan, a, signed_u) + rtestScreenText(plan, a.screen) + "\n" + budget_text;
     return out;
   }
 
@@ -143,11 +145,18 @@ class Rtest final : public Cycle {
     const std::vector<RtestCycle> cycles = readCycles(plan, r.results, &out.warnings);
     RtestDiagnosisOptions o;
     o.judge.alpha = r.alpha;
-    o.sensor_sigma_um = sensorSigma(plan);  // the declared noise (plan option, default 002's 0.2 um)
+    o.sensor_sigma_um = sensorSigma(plan);  // the sensors (plan option, default 002's 0.2 um): the re-read check
+    // The judge tests every reading against what one reading is declared to scatter by: the
+    // sensors and the sphere's form, the per-reading part analyze's uncertainty budget reads too.
+    const DeclaredNoise noise = rtestDeclaredNoise(plan, r.contributors);
+    o.reading_sigma_um = std::sqrt(noise.white_um2);
+    o.declaration = noise.declaration;
     o.validate();
     const RtestDiagnosis d = diagnoseRtest(plan, cycles, o);
     out.text = rtestDiagnosisText(plan, d);
     out.doc = rtestDiagnosisJson(plan, d);
+    if (!d.analysis.screen.screen.excluded.empty() || d.analysis.screen.screen.too_many)
+      out.warnings.push_back(rtestScreenText(plan, d.analysis.screen));
     return out;
   }
 };

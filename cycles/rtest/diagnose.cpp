@@ -17,6 +17,7 @@ void RtestDiagnosisOptions::validate() const {
   std::string why;
   if (!judge.validate(&why)) throw std::invalid_argument(why);
   if (!(sensor_sigma_um > 0) || !std::isfinite(sensor_sigma_um)) throw std::invalid_argument("sensor_sigma_um must be > 0");
+  if (!(reading_sigma_um >= 0) || !std::isfinite(reading_sigma_um)) throw std::invalid_argument("reading_sigma_um must be >= 0");
 }
 
 namespace {
@@ -54,7 +55,8 @@ std::string tiltLabel(Kinematics k, double tilt) { return fmt::format("{}={:g}",
 
 }  // namespace
 
-RtestJudgeSetup rtestJudgeSetup(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, double sigma_um) {
+RtestJudgeSetup rtestJudgeSetup(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, double sigma_um,
+                                const std::vector<std::pair<int, int>>& excluded) {
   if (cycles.empty()) throw std::invalid_argument("rtest: no cycles to diagnose");
   const Kinematics k = plan.machine.kinematics;
   const Eigen::Vector3d nest = rtestNest_w(plan);
@@ -137,6 +139,7 @@ RtestJudgeSetup rtestJudgeSetup(const ProbePlan& plan, const std::vector<RtestCy
     }
   }
   // The sensors' zero: the first cycle's reset reading (or, without one, its reset pose).
+  std::vector<int> dropped;  // rows of the values the screen left out
   const double t0 = cycles.front().reset ? cycles.front().reset->t_s : cycles.front().readings.at(static_cast<size_t>(ref)).t_s;
   JudgeFactor f_time{"time", {}, {}, "h"}, f_tilt{"tilt", {}, {}, ""}, f_c{"C", {}, {}, ""}, f_dir{"direction", {}, {}, ""},
       f_cycle{"cycle", {}, {}, ""}, f_read{"reading", {}, {}, ""};
@@ -164,6 +167,9 @@ RtestJudgeSetup rtestJudgeSetup(const ProbePlan& plan, const std::vector<RtestCy
       spindle.J.block(r, 0, 3, 1) = tau * Rt[j].col(2);
       linear.J.block(r, 0, 3, 3) = tau * Rt[j];
       pb.y.segment<3>(r) = mmToUm(1.0) * rd.dq_w_mm;
+      for (int d = 0; d < 3; ++d)
+        if (!is_reset && std::binary_search(excluded.begin(), excluded.end(), std::make_pair(c, 3 * static_cast<int>(j) + d)))
+          dropped.push_back(r + d);
       for (int d = 0; d < 3; ++d) {
         pb.groups.push_back(c);
         s.t_h.push_back(tau);
@@ -183,6 +189,28 @@ RtestJudgeSetup rtestJudgeSetup(const ProbePlan& plan, const std::vector<RtestCy
   pb.causes.push_back(std::move(drift));
   for (auto& st : steps) pb.causes.push_back(std::move(st));
   s.confounds = {std::move(spindle), std::move(linear)};
+  if (!dropped.empty()) {
+    std::vector<int> keep;
+    for (int i = 0; i < n; ++i)
+      if (std::find(dropped.begin(), dropped.end(), i) == dropped.end()) keep.push_back(i);
+    auto pick = [&keep](auto& v) {
+      auto all = v;
+      v.clear();
+      for (int i : keep) v.push_back(all[static_cast<size_t>(i)]);
+    };
+    pb.y = Eigen::VectorXd(pb.y(keep));
+    pb.sigma = Eigen::VectorXd(pb.sigma(keep));
+    pb.J0 = Eigen::MatrixXd(pb.J0(keep, Eigen::all));
+    for (auto& c : pb.causes) c.J = Eigen::MatrixXd(c.J(keep, Eigen::all));
+    for (auto& c : s.confounds) c.J = Eigen::MatrixXd(c.J(keep, Eigen::all));
+    pick(pb.groups);
+    pick(s.t_h);
+    pick(s.cycle);
+    for (auto& f : pb.factors) {
+      if (!f.levels.empty()) pick(f.levels);
+      if (!f.values.empty()) pick(f.values);
+    }
+  }
   return s;
 }
 
@@ -191,9 +219,12 @@ RtestDiagnosis diagnoseRtest(const ProbePlan& plan, const std::vector<RtestCycle
   RtestDiagnosis d;
   RtestFitOptions fo;
   fo.sensor_sigma_um = o.sensor_sigma_um;
+  fo.reading_sigma_um = o.reading_sigma_um;
+  fo.declaration = o.declaration;
   d.analysis = analyzeRtest(plan, cycles, fo);
   d.cycles = static_cast<int>(cycles.size());
-  const RtestJudgeSetup setup = rtestJudgeSetup(plan, cycles, o.sensor_sigma_um);
+  RtestJudgeSetup setup = rtestJudgeSetup(plan, cycles, o.readingSigmaUm(), d.analysis.screen.excluded());
+  setup.problem.declaration = o.declaration;
   d.summary = judge(setup.problem, o.judge);
   const double level = d.summary.per_test_alpha;
   const JudgeCause& drift = setup.problem.causes.front();
@@ -348,6 +379,7 @@ Json rtestDiagnosisJson(const ProbePlan& plan, const RtestDiagnosis& d) {
                   {"explains_the_drift", c.explains}});
   j["drift_confounds"] = cj;
   j["judge"] = judgeToJson(s);
+  j["outliers"] = rtestScreenJson(plan, d.analysis.screen);
   if (d.cycles >= 3) {
     Json figs = Json::array();
     for (int p = 0; p < kRtestParams; ++p) {
@@ -374,8 +406,10 @@ Json rtestDiagnosisJson(const ProbePlan& plan, const RtestDiagnosis& d) {
 }
 
 std::string rtestDiagnosisText(const ProbePlan& plan, const RtestDiagnosis& d) {
-  std::string s = fmt::format("rotacal diagnose rtest: {} cycles, declared sensor noise {:.3g} um\n", d.cycles,
-                              d.summary.declared_sigma_rms);
+  std::string s = fmt::format("rotacal diagnose rtest: {} cycles, declared noise per reading {:.3g} um{}\n", d.cycles,
+                              d.summary.declared_sigma_rms,
+                              d.summary.declaration.empty() ? std::string() : " (" + d.summary.declaration + ")");
+  s += rtestScreenText(plan, d.analysis.screen) + "\n";
   s += judgeText(d.summary);
   for (const auto& f : d.summary.findings) s += fmt::format("finding {}: {}\n", f.cause, rtestFindingSummary(plan, d, f));
   for (const auto& c : d.confounds)

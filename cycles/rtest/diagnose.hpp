@@ -42,7 +42,12 @@ namespace rotacal {
 
 struct RtestDiagnosisOptions {
   JudgeOptions judge;             // alpha and the rules (docs/diagnosis.md)
-  double sensor_sigma_um = 0.2;   // the declared sensor noise
+  double sensor_sigma_um = 0.2;   // the declared sensor noise (the re-read check of analyze)
+  /// The declared scatter of one reading (rtestDeclaredNoise: sensors and sphere form), what the
+  /// judge whitens by; 0: the sensors alone.
+  double reading_sigma_um = 0.0;
+  std::string declaration;        // what it is, named in the verdict
+  double readingSigmaUm() const { return reading_sigma_um > 0 ? reading_sigma_um : sensor_sigma_um; }
   void validate() const;          // throws std::invalid_argument
 };
 
@@ -53,7 +58,10 @@ struct RtestJudgeSetup {
   std::vector<double> t_h;        // hours since the reset, per observation
   std::vector<int> cycle;         // 0-based cycle, per observation (reset and re-read rows included)
 };
-RtestJudgeSetup rtestJudgeSetup(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, double sensor_sigma_um);
+/// `excluded`: the pose readings' values the screen left out, (cycle, 3 x plan point index + axis)
+/// as RtestScreen::excluded gives them: their rows are not in the problem.
+RtestJudgeSetup rtestJudgeSetup(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, double sensor_sigma_um,
+                                const std::vector<std::pair<int, int>>& excluded = {});
 
 /// What the nested judgements say about one confound of the table drift.
 struct RtestConfound {
