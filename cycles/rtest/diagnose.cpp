@@ -337,7 +337,7 @@ Json rtestDiagnosisJson(const ProbePlan& plan, const RtestDiagnosis& d) {
     findings.push_back(e);
   }
   j["findings"] = findings;
-  j["confounded"] = confoundedJson(s, [](const JudgeConfounded& c) { return separateWith(c.cause); });
+  writeConfounded(j, s, [](const JudgeConfounded& c) { return separateWith(c.cause); });
   Json cj = Json::array();
   for (const auto& c : d.confounds)
     cj.push_back({{"cause", c.entry.cause},
@@ -376,7 +376,7 @@ Json rtestDiagnosisJson(const ProbePlan& plan, const RtestDiagnosis& d) {
 std::string rtestDiagnosisText(const ProbePlan& plan, const RtestDiagnosis& d) {
   std::string s = fmt::format("rotacal diagnose rtest: {} cycles, declared sensor noise {:.3g} um\n", d.cycles,
                               d.summary.declared_sigma_rms);
-  s += judgeText(d.summary);
+  s += judgeText(d.summary, [](const JudgeConfounded& c) { return separateWith(c.cause); });
   for (const auto& f : d.summary.findings) s += fmt::format("finding {}: {}\n", f.cause, rtestFindingSummary(plan, d, f));
   for (const auto& c : d.confounds)
     s += fmt::format("{} alone: p {:.2g}, {}; the table drift beyond it: p {:.2g}, {}{}\n", c.entry.cause, c.alone.p_value,
