@@ -158,8 +158,9 @@ TEST(Touch154Diagnose, TiltAxisBacklashIsOneFindingWithWhatThePlanCannotTellItFr
       EXPECT_NE(std::find(named.begin(), named.end(), c), named.end()) << c << "\n" << text;
     EXPECT_EQ(d.judged.verdict, d.judged.final_model.passes ? JudgeVerdict::EffectFound : JudgeVerdict::ModelInadequate);
     EXPECT_GT(f.gain, 2.0 * f.gain_se);
-    if (const JudgeEstimate* e = f.parameter(f.cause == "tilt_axis_positioning" ? "EAA@A-90" : "backlash_A"))
+    if (const JudgeEstimate* e = f.parameter(f.cause == "tilt_axis_positioning" ? "EAA@A-90" : "backlash_A")) {
       EXPECT_LE(std::abs(std::abs(e->value) - b_mdeg), 3.0 * e->u) << text;
+    }
     // Every pair among the three is carried by the finding: no significant signal left unnamed.
     for (const auto& c : d.judged.confounded) EXPECT_FALSE(c.signal) << c.why;
     EXPECT_NE(text.find("the plan cannot tell them apart"), std::string::npos) << text;
