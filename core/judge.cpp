@@ -24,8 +24,15 @@ constexpr double kPi = 3.14159265358979323846;
 // fraction of the largest are zero. Far below any exact-confounding angle worth stating
 // (0.1 deg is 1.7e-3): it only removes columns that are copies of others to rounding.
 constexpr double kRankRtol = 1e-9;
-// An eigenvalue of I - H_SS below this is a direction only the held-out group has data for.
-constexpr double kFoldTol = 1e-9;
+// Leaving group S out, the refit's information along a direction of the model is the full
+// fit's times an eigenvalue lambda of I - H_SS (Q orthonormal: Q_rest^T Q_rest = I - Q_S^T Q_S),
+// and its prediction of S along that direction carries a noise variance 1 / lambda readings'.
+// Below this share the other groups do not identify the direction: it is refitted on S itself
+// like a parameter only S has data for (lambda = 0). At 1e-2 a fold's prediction may carry at
+// most about a hundred readings' worth of noise per such direction; above it, one fold whose
+// refit is near-singular decided the mean gain alone (a fold at lambda ~ 1e-7 gave a gain of
+// -4e6 and rejected an effect at p = 1e-84). Both models' folds follow the same rule.
+constexpr double kFoldInformation = 1e-2;
 // Fewer folds than this give no standard error worth the name for the held-out gain.
 constexpr int kMinFolds = 3;
 // A term of a confounding combination is named when it moves the data by at least this
@@ -161,11 +168,12 @@ Holdout holdout(const Eigen::MatrixXd& Q, const Eigen::VectorXd& yw, const Eigen
     // group has data for, such as one angular error per commanded angle). It cannot be
     // predicted from the other groups; it is refitted on S itself and the group's prediction
     // error lives in the rest (the full residual r_S is orthogonal to those directions, as
-    // r is to the model's span). The pseudo-inverse on the other eigenvalues does both.
+    // r is to the model's span). The pseudo-inverse on the other eigenvalues does both; an
+    // eigenvalue below kFoldInformation is such a direction too (the rest barely sees it).
     Eigen::VectorXd inv = Eigen::VectorXd::Zero(m);
     int dims = 0;
     for (Eigen::Index i = 0; i < m; ++i)
-      if (es.eigenvalues()[i] > kFoldTol) {
+      if (es.eigenvalues()[i] > kFoldInformation) {
         inv[i] = 1.0 / es.eigenvalues()[i];
         ++dims;
       }
@@ -473,6 +481,24 @@ Evaluated evaluate(const Context& cx, const Model& m, size_t ci, int step) {
   return ev;
 }
 
+/// Whether cause `c` still passes the significance test (both forms, as in evaluate) once the
+/// columns of `with` join the model: what `c` explains beyond `with`.
+bool passesBeyond(const Context& cx, const Model& m, const Evaluated& with, const Evaluated& c) {
+  Eigen::MatrixXd X(m.X.rows(), m.X.cols() + with.Jw.cols());
+  X << m.X, with.Jw;
+  const Span sx = spanOf(X);
+  const Principal pr = principal(sx.Q, c.sc.Q, cx.exact_rad);
+  const int k = static_cast<int>(pr.A.cols());
+  if (k == 0) return false;
+  const Eigen::VectorXd r = cx.yw - sx.Q * (sx.Q.transpose() * cx.yw);
+  const double delta = (pr.A.transpose() * r).squaredNorm();
+  const int dof_ext = static_cast<int>(cx.yw.size()) - sx.rank() - k;
+  if (dof_ext <= 0) return false;
+  const double chi2_ext = std::max(r.squaredNorm() - delta, 0.0);
+  const double f = chi2_ext > 0 ? (delta / k) / (chi2_ext / dof_ext) : std::numeric_limits<double>::infinity();
+  return std::max(chiSquareSurvival(delta, k), fSurvival(f, k, dof_ext)) < cx.thr;
+}
+
 // One entry per cause and partner; a later step's evaluation replaces an earlier one: the model
 // has grown since, and `signal` must say whether the shared signal is still unexplained by the
 // final model (a cause accepted later may have taken it), as the verdict does.
@@ -645,6 +671,12 @@ const JudgeEstimate* JudgeFinding::parameter(std::string_view name) const {
   return nullptr;
 }
 
+std::string JudgeFinding::label() const {
+  std::string l = cause;
+  for (const auto& c : confounded_with) l += " or " + c;
+  return l;
+}
+
 const JudgeFinding* JudgeSummary::finding(std::string_view cause) const {
   for (const auto& f : findings)
     if (f.cause == cause) return &f;
@@ -719,6 +751,8 @@ JudgeSummary judge(const JudgeProblem& pb, const JudgeOptions& o) {
   std::vector<char> used(m_causes, 0);
   std::vector<size_t> accepted;
   std::vector<JudgeCandidate> accepted_tests;
+  std::vector<std::vector<std::string>> accepted_partners;
+  std::vector<std::vector<JudgeConfounded>> accepted_carried;
   bool unresolved = false;
   std::vector<std::string> unresolved_causes;
   for (int step = 0;; ++step) {
@@ -754,39 +788,111 @@ JudgeSummary judge(const JudgeProblem& pb, const JudgeOptions& o) {
       if (ev[c].eligible && ev[c].c.k_eff > 0 && ev[c].pr.angle.minCoeff() < cx.partial_rad)
         for (const auto& t : modelConfounded(cx, model, ev[c], c).with_terms) ev[c].c.overlaps.push_back(t.name);
     // Between causes, with the model projected out.
+    struct Pair {
+      size_t a, b;
+      double angle;
+    };
+    std::vector<Pair> pairs;
+    std::vector<std::pair<Pair, JudgeConfounded>> shared;  // exactly confounded, both passing
     for (size_t i = 0; i < live.size(); ++i)
       for (size_t j = i + 1; j < live.size(); ++j) {
         const size_t a = live[i], b = live[j];
         const PairAngle p = pairAngle(ev[a], ev[b]);
-        const double sn = std::sin(p.angle);
-        if (ev[b].passes()) ev[a].c.separability = std::min(ev[a].c.separability, sn);
-        if (ev[a].passes()) ev[b].c.separability = std::min(ev[b].c.separability, sn);
-        if (p.angle < cx.partial_rad && ev[b].passes()) ev[a].c.overlaps.push_back(pb.causes[b].name);
-        if (p.angle < cx.partial_rad && ev[a].passes()) ev[b].c.overlaps.push_back(pb.causes[a].name);
+        pairs.push_back({a, b, p.angle});
         if (p.angle >= cx.exact_rad) continue;
         JudgeConfounded e = pairConfounded(cx, ev[a], a, ev[b], b, p);
         e.signal = ev[a].passes() && ev[b].passes();
         if (e.signal) {
           ambiguous[a] = ambiguous[b] = 1;
-          ev[a].c.reason = "passes, but " + pb.causes[b].name + " explains the same signal";
-          ev[b].c.reason = "passes, but " + pb.causes[a].name + " explains the same signal";
-          unresolved = true;
-          unresolved_causes.push_back(pb.causes[a].name + " or " + pb.causes[b].name);
+          shared.push_back({pairs.back(), e});
         }
         addConfounded(&s.confounded, e);
       }
+    // A significant signal along causes the plan cannot tell apart is one finding: the cause with
+    // the largest held-out gain stands for the causes it is exactly confounded with (its
+    // partners), which are not candidates of their own at this step. A partner is named only when
+    // it explains the signal as well: with the partner in the model, nothing of the cause passes
+    // (an X scale is not "scale or frame temperature" because its isotropic part is; such a pair
+    // stays withheld). Causes confounded with the model itself (blocked) stand for nothing.
+    std::vector<int> rep(m_causes, -1);  // an ambiguous cause's representative (itself for one)
+    {
+      std::vector<size_t> order;
+      for (size_t c : live)
+        if (ambiguous[c] && !blocked[c]) order.push_back(c);
+      std::stable_sort(order.begin(), order.end(), [&](size_t x, size_t y) { return ev[x].c.gain > ev[y].c.gain; });
+      for (size_t c : order) {
+        if (rep[c] >= 0) continue;
+        std::vector<size_t> partners;
+        bool all = true;
+        for (const auto& pe : shared) {
+          const Pair& p = pe.first;
+          const size_t other = p.a == c ? p.b : p.b == c ? p.a : m_causes;
+          if (other == m_causes) continue;
+          all = all && rep[other] < 0 && !blocked[other] && !passesBeyond(cx, model, ev[other], ev[c]);
+          partners.push_back(other);
+        }
+        if (!all) continue;
+        rep[c] = static_cast<int>(c);
+        for (size_t other : partners) rep[other] = static_cast<int>(c);
+      }
+    }
+    auto oneFinding = [&](size_t a, size_t b) { return rep[a] >= 0 && rep[a] == rep[b]; };
+    // Separability and overlaps count the passing causes a finding does not name.
+    for (const Pair& p : pairs) {
+      if (oneFinding(p.a, p.b)) continue;
+      const double sn = std::sin(p.angle);
+      if (ev[p.b].passes()) ev[p.a].c.separability = std::min(ev[p.a].c.separability, sn);
+      if (ev[p.a].passes()) ev[p.b].c.separability = std::min(ev[p.b].c.separability, sn);
+      if (p.angle < cx.partial_rad && ev[p.b].passes()) ev[p.a].c.overlaps.push_back(pb.causes[p.b].name);
+      if (p.angle < cx.partial_rad && ev[p.a].passes()) ev[p.b].c.overlaps.push_back(pb.causes[p.a].name);
+    }
+    for (const auto& [p, e] : shared) {
+      const size_t r = rep[p.a] >= 0 && rep[p.a] == rep[p.b] ? static_cast<size_t>(rep[p.a]) : m_causes;
+      for (const size_t c : {p.a, p.b}) {
+        const size_t other = c == p.a ? p.b : p.a;
+        if (r < m_causes && c != r)
+          ev[c].c.reason = "passes, but " + pb.causes[r].name + " explains the same signal (this plan cannot tell them "
+                           "apart: named in its finding)";
+        else if (r == m_causes)
+          ev[c].c.reason = "passes, but " + pb.causes[other].name + " explains the same signal";
+      }
+    }
+    auto candidate = [&](size_t c) {
+      return ev[c].passes() && !blocked[c] && (!ambiguous[c] || rep[c] == static_cast<int>(c));
+    };
     // The best eligible cause by held-out gain.
     int best = -1;
     for (size_t c : live)
-      if (ev[c].passes() && !blocked[c] && !ambiguous[c] &&
-          (best < 0 || ev[c].c.gain > ev[static_cast<size_t>(best)].c.gain))
-        best = static_cast<int>(c);
+      if (candidate(c) && (best < 0 || ev[c].c.gain > ev[static_cast<size_t>(best)].c.gain)) best = static_cast<int>(c);
     const bool full = static_cast<int>(accepted.size()) >= o.max_causes;
     for (size_t c : live) {
-      if (full && ev[c].passes() && !blocked[c] && !ambiguous[c])
+      if (full && candidate(c))
         ev[c].c.reason = fmt::format("passes, but max_causes = {} are already accepted", o.max_causes);
-      else if (!full && best >= 0 && c != static_cast<size_t>(best) && ev[c].passes() && !blocked[c] && !ambiguous[c])
+      else if (!full && best >= 0 && c != static_cast<size_t>(best) && candidate(c))
         ev[c].c.reason = "passes, but " + pb.causes[static_cast<size_t>(best)].name + " predicts held-out data better";
+    }
+    // A shared signal the accepted cause's finding does not carry is left unresolved.
+    const int taken = full ? -1 : best;
+    std::vector<JudgeConfounded> carried;
+    std::vector<std::string> partners;
+    for (auto& [p, e] : shared) {
+      if (taken >= 0 && rep[p.a] == taken && rep[p.b] == taken &&
+          (p.a == static_cast<size_t>(taken) || p.b == static_cast<size_t>(taken))) {
+        e.signal = false;
+        e.finding = pb.causes[static_cast<size_t>(taken)].name;
+        partners.push_back(pb.causes[p.a == static_cast<size_t>(taken) ? p.b : p.a].name);
+        addConfounded(&s.confounded, e);
+        carried.push_back(e);
+        continue;
+      }
+      if (taken >= 0 && rep[p.a] == taken && rep[p.b] == taken) {  // two of the finding's partners
+        e.signal = false;
+        e.finding = pb.causes[static_cast<size_t>(taken)].name;
+        addConfounded(&s.confounded, e);
+        continue;
+      }
+      unresolved = true;
+      unresolved_causes.push_back(pb.causes[p.a].name + " or " + pb.causes[p.b].name);
     }
     if (full || best < 0) {
       for (size_t c : live) s.candidate_tests.push_back(ev[c].c);
@@ -798,6 +904,8 @@ JudgeSummary judge(const JudgeProblem& pb, const JudgeOptions& o) {
     for (size_t c : live) s.candidate_tests.push_back(ev[c].c);
     accepted.push_back(b);
     accepted_tests.push_back(ev[b].c);
+    accepted_partners.push_back(partners);
+    accepted_carried.push_back(carried);
     used[b] = 1;
     const JudgeCause& cause = pb.causes[b];
     Eigen::MatrixXd X(n, model.X.cols() + cause.J.cols());
@@ -833,14 +941,22 @@ JudgeSummary judge(const JudgeProblem& pb, const JudgeOptions& o) {
     f.gain_se = t.gain_se;
     f.separability = t.separability;
     f.overlaps = t.overlaps;
+    f.confounded_with = accepted_partners[i];
+    f.confounding = accepted_carried[i];
     const double partial_sin = std::sin(cx.partial_rad);
-    f.confidence = f.separability < partial_sin
-                       ? fmt::format("lowered: partly confounded with {} (separability {:.2f}, below sin {:g} deg = "
-                                     "{:.2f}); its u is inflated up to {:.1f}x by the overlap, and an error of those is "
-                                     "partly read as this cause",
-                                     fmt::join(f.overlaps, ", "), f.separability, o.partial_angle_deg, partial_sin,
-                                     1.0 / f.separability)
-                       : "full";
+    const std::string partly =
+        fmt::format("partly confounded with {} (separability {:.2f}, below sin {:g} deg = {:.2f}); its u is inflated up to "
+                    "{:.1f}x by the overlap, and an error of those is partly read as this cause",
+                    fmt::join(f.overlaps, ", "), f.separability, o.partial_angle_deg, partial_sin, 1.0 / f.separability);
+    if (!f.confounded_with.empty()) {
+      std::vector<std::string> whys;
+      for (const auto& e : f.confounding) whys.push_back(e.why);
+      f.confidence = fmt::format("one signal this plan cannot attribute: {} or {}; the parameters read it as {} ({})",
+                                 f.cause, fmt::join(f.confounded_with, " or "), f.cause, fmt::join(whys, "; "));
+      if (f.separability < partial_sin) f.confidence += "; and " + partly;
+    } else {
+      f.confidence = f.separability < partial_sin ? "lowered: " + partly : "full";
+    }
     if (birge > 1.0)
       f.confidence += fmt::format("; u scaled by the Birge ratio {:.2f} (the final model misfits)", birge);
     s.findings.push_back(f);
@@ -849,7 +965,8 @@ JudgeSummary judge(const JudgeProblem& pb, const JudgeOptions& o) {
   // The verdict, and a sentence that is true whatever it is.
   const JudgeAdequacy& fin = s.final_model;
   std::vector<std::string> found;
-  for (const auto& f : s.findings) found.push_back(f.cause);
+  for (const auto& f : s.findings)
+    found.push_back(f.confounded_with.empty() ? f.cause : f.label() + " (one signal: this plan cannot tell them apart)");
   auto where = [&](const JudgeAdequacy& a) {
     for (const auto& f : a.factors)
       if (f.dof > 0 && f.p_value < cx.thr)
@@ -933,8 +1050,32 @@ Json confoundedJson(const JudgeSummary& s, const std::function<std::string(const
                    {"cause_terms", termsJson(c.cause_terms)},
                    {"with_terms", termsJson(c.with_terms)},
                    {"signal", c.signal}});
+    if (!c.finding.empty()) out.back()["finding"] = c.finding;
   }
   return out;
+}
+
+std::string findingSeparateWith(const JudgeFinding& f,
+                                const std::function<std::string(const JudgeConfounded&)>& separate_with) {
+  std::vector<std::string> advice;
+  if (separate_with)
+    for (const auto& e : f.confounding) {
+      const std::string a = separate_with(e);
+      if (!a.empty() && std::find(advice.begin(), advice.end(), a) == advice.end()) advice.push_back(a);
+    }
+  return fmt::format("{}", fmt::join(advice, "; "));
+}
+
+void writeConfounded(Json& doc, const JudgeSummary& s,
+                     const std::function<std::string(const JudgeConfounded&)>& separate_with) {
+  doc["confounded"] = confoundedJson(s, separate_with);
+  if (!doc.contains("findings") || !doc["findings"].is_array()) return;
+  for (size_t k = 0; k < s.findings.size() && k < doc["findings"].size(); ++k) {
+    const JudgeFinding& f = s.findings[k];
+    if (f.confounded_with.empty()) continue;
+    doc["findings"][k]["confounded_with"] = f.confounded_with;
+    doc["findings"][k]["separate_with"] = findingSeparateWith(f, separate_with);
+  }
 }
 
 Json judgeToJson(const JudgeSummary& s) {
@@ -960,7 +1101,7 @@ Json judgeToJson(const JudgeSummary& s) {
                    {"unidentifiable", s.unidentifiable}};
   j["final_model"] = {{"adequacy", adequacyJson(s.final_model)}, {"estimates", estimatesJson(s.final_estimates)}};
   Json f = Json::array();
-  for (const auto& x : s.findings)
+  for (const auto& x : s.findings) {
     f.push_back({{"cause", x.cause},
                  {"description", x.description},
                  {"step", x.step},
@@ -974,6 +1115,15 @@ Json judgeToJson(const JudgeSummary& s) {
                  {"separability", x.separability},
                  {"overlaps", x.overlaps},
                  {"confidence", x.confidence}});
+    if (!x.confounded_with.empty()) {
+      Json e = Json::array();
+      for (const auto& c : x.confounding)
+        e.push_back({{"cause", c.cause}, {"with", c.with}, {"angle_deg", c.angle_deg},
+                     {"cause_terms", termsJson(c.cause_terms)}, {"with_terms", termsJson(c.with_terms)}, {"why", c.why}});
+      f.back()["confounded_with"] = x.confounded_with;
+      f.back()["confounding"] = e;
+    }
+  }
   j["findings"] = f;
   Json c = Json::array();
   for (const auto& x : s.candidate_tests)
@@ -999,11 +1149,13 @@ Json judgeToJson(const JudgeSummary& s) {
                   {"with_terms", termsJson(x.with_terms)},
                   {"signal", x.signal},
                   {"why", x.why}});
+  for (size_t k = 0; k < s.confounded.size(); ++k)
+    if (!s.confounded[k].finding.empty()) cf[k]["finding"] = s.confounded[k].finding;
   j["confounded"] = cf;
   return j;
 }
 
-std::string judgeText(const JudgeSummary& s) {
+std::string judgeText(const JudgeSummary& s, const std::function<std::string(const JudgeConfounded&)>& separate_with) {
   std::string t;
   t += fmt::format("verdict: {}: {}\n", judgeVerdictName(s.verdict), s.message);
   t += fmt::format("rules: alpha {:g} over {} tests (each at {:.3g}); held-out gain > {:g} SE, leave one {} out ({} "
@@ -1030,13 +1182,23 @@ std::string judgeText(const JudgeSummary& s) {
                      c.step, c.cause, c.k_eff, c.k, c.delta_chi2, c.p_value, c.holdout_rms_model, c.holdout_rms_cause,
                      s.unit, c.gain, c.gain_se, c.angle_deg, c.reason);
   for (const auto& f : s.findings) {
-    t += fmt::format("FOUND {}: {}\n", f.cause, f.description);
+    if (f.confounded_with.empty()) {
+      t += fmt::format("FOUND {}: {}\n", f.cause, f.description);
+    } else {
+      const std::string how = findingSeparateWith(f, separate_with);
+      t += fmt::format("FOUND {}: the plan cannot tell them apart; {}\n  read as {}: {}\n", f.label(),
+                       how.empty() ? "see the confounded entries below" : how, f.cause, f.description);
+    }
     for (const auto& p : f.parameters) t += fmt::format("  {} = {:.4g} +- {:.2g} {}\n", p.name, p.value, p.u, p.unit);
     t += fmt::format("  confidence: {}\n", f.confidence);
   }
   if (!s.findings.empty()) adequacyText("with the findings", s.final_model);
   for (const auto& c : s.confounded)
-    t += fmt::format("confounded{}: {}\n", c.signal ? " (with a significant signal)" : "", c.why);
+    t += fmt::format("confounded{}: {}\n",
+                     c.signal             ? " (with a significant signal)"
+                     : c.finding.empty()  ? ""
+                                          : " (its signal is the finding " + c.finding + ")",
+                     c.why);
   return t;
 }
 

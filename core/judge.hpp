@@ -30,16 +30,28 @@
 //    standard error sd(d)/sqrt(G); the cause passes when mean > margin x SE. A parameter only
 //    the held-out group has data for (I - H_SS singular: one angular error per commanded angle)
 //    is refitted on the group itself and the prediction error measured in the rest of it (the
-//    pseudo-inverse of I - H_SS); a group with nothing left to predict is no fold.
+//    pseudo-inverse of I - H_SS); a group with nothing left to predict is no fold. "Only the
+//    group has data for" includes a direction the other groups pin with less than a stated
+//    share of the full fit's information (kFoldInformation in judge.cpp): predicting it from
+//    them would measure their near-singular refit, not the cause, and one such fold would
+//    decide the mean gain by itself.
 //  - Confounding from the Jacobians only: principal angles (whitened) between a cause's columns
 //    and the current model's span, and between two causes once the model is projected out.
 //    Below the exact angle: a `JudgeConfounded` entry naming the combination that absorbs it;
 //    such a cause is never effect_found. Below the partial angle: the cause's separability
 //    (sin of that angle) is reported as a lowered confidence.
+//  - A significant signal along causes the plan cannot tell apart is a finding: when causes
+//    that each pass both tests are exactly confounded with one another (beyond the model), the
+//    one with the largest held-out gain extends the model like any cause, and its finding names
+//    the others (`confounded_with`, with the entries that say what each is read as). A partner
+//    is named only when it explains the signal as well (with it in the model, nothing of the
+//    cause passes); otherwise the pair is withheld as before. Its gain is measured on held-out
+//    data as any finding's; which of them it is, the plan cannot say.
 //  - Verdicts: effect_found when causes were accepted AND the model with them passes the
 //    adequacy test AND no significant signal is left that could only be read as confounded
 //    causes; model_inadequate when the final model fails adequacy, or a significant signal can
-//    only be read as confounded causes; no_significant_effect when the baseline passes
+//    only be read as a cause confounded with the model itself, or as confounded causes the
+//    selection could no longer take (max_causes); no_significant_effect when the baseline passes
 //    adequacy and nothing is accepted or left. "Explains the data within the declared noise"
 //    is said only when the final model passes the adequacy test (`explainsData()`).
 //  - Parameter u: from the declared noise, (B^T B)^-1 of the cause's whitened columns with the
@@ -49,9 +61,7 @@
 //    the declared noise stands and rescaling would only add the ratio's own sampling noise).
 //
 // Design choices beyond the brief: the candidates' test uses max(p_chi2, p_F) always (see
-// above); a cause whose partner under exact confounding also passes is not accepted, the
-// shared signal is reported as a `JudgeConfounded` entry with `signal = true`, and the verdict
-// is model_inadequate (the data show an effect but no single cause can be named); "where the
+// above); "where the
 // misfit sits" is itself a nested test of each factor's columns (indicators of a categorical
 // factor's levels, a quadratic in a continuous one) on the residual, so a factor's chi2 share
 // never counts what the model already absorbs.
@@ -176,21 +186,6 @@ struct JudgeCandidate {
   std::string reason;  // "accepted", or why not
 };
 
-struct JudgeFinding {
-  std::string cause;
-  std::string description;
-  int step = 0;
-  std::vector<JudgeEstimate> parameters;  // from the final model
-  double delta_chi2 = 0.0, p_value = 1.0;
-  double holdout_rms_model = 0.0, holdout_rms_cause = 0.0, gain = 0.0, gain_se = 0.0;
-  double separability = 1.0;
-  std::vector<std::string> overlaps;
-  std::string confidence;  // "full", or why lowered
-
-  /// The estimate of the named parameter (nullptr when the cause has none of that name).
-  const JudgeEstimate* parameter(std::string_view name) const;
-};
-
 struct JudgeTerm {
   std::string name;  // "cause.param" or a baseline parameter
   double coefficient = 0.0;
@@ -204,8 +199,32 @@ struct JudgeConfounded {
   double angle_deg = 0.0;
   std::vector<JudgeTerm> cause_terms;  // this combination of the cause's parameters ...
   std::vector<JudgeTerm> with_terms;   // ... moves the data as this one does
-  bool signal = false;                 // the shared signal passes the cause's tests
+  bool signal = false;                 // the shared signal passes the cause's tests and the final model leaves it
+  std::string finding;                 // the finding that carries the shared signal (its cause), if one does
   std::string why;
+};
+
+struct JudgeFinding {
+  std::string cause;  // the cause whose columns extend the model
+  std::string description;
+  /// Other causes that explain the same significant signal exactly as `cause` does on this plan
+  /// (principal angle below the exact one, beyond the model): the finding is that signal, read as
+  /// `cause`; the data cannot say which of them it is. Empty: `cause` alone.
+  std::vector<std::string> confounded_with;
+  /// The entries that tie `cause` to each of them (what one is read as in the other's terms).
+  std::vector<JudgeConfounded> confounding;
+  int step = 0;
+  std::vector<JudgeEstimate> parameters;  // from the final model
+  double delta_chi2 = 0.0, p_value = 1.0;
+  double holdout_rms_model = 0.0, holdout_rms_cause = 0.0, gain = 0.0, gain_se = 0.0;
+  double separability = 1.0;
+  std::vector<std::string> overlaps;
+  std::string confidence;  // "full", or why lowered
+
+  /// The estimate of the named parameter (nullptr when the cause has none of that name).
+  const JudgeEstimate* parameter(std::string_view name) const;
+  /// `cause`, or "cause or other or ..." when the plan cannot tell them apart.
+  std::string label() const;
 };
 
 struct JudgeSummary {
@@ -247,7 +266,18 @@ JudgeSummary judge(const JudgeProblem& problem, const JudgeOptions& options = {}
 /// what absorbs it (baseline parameters, accepted causes or another cause); `separate_with` is
 /// the cycle's advice for the entry: what plan or instrument tells them apart.
 Json confoundedJson(const JudgeSummary& summary, const std::function<std::string(const JudgeConfounded&)>& separate_with);
+/// What tells a confounded finding's causes apart: the cycle's advice for each of its entries,
+/// distinct sentences joined by "; " (empty without advice or when the finding names one cause).
+std::string findingSeparateWith(const JudgeFinding& f,
+                                const std::function<std::string(const JudgeConfounded&)>& separate_with);
+/// The document's `confounded` (confoundedJson) and, on each entry of its `findings` (in the
+/// summary's order) that names causes this plan cannot tell apart, `confounded_with` and
+/// `separate_with`: the one place a cycle's advice reaches both.
+void writeConfounded(Json& doc, const JudgeSummary& summary,
+                     const std::function<std::string(const JudgeConfounded&)>& separate_with);
 Json judgeToJson(const JudgeSummary& s);
-std::string judgeText(const JudgeSummary& s);
+/// The summary as text; `separate_with` (the cycle's advice, may be empty) completes the line of
+/// a finding whose causes this plan cannot tell apart.
+std::string judgeText(const JudgeSummary& s, const std::function<std::string(const JudgeConfounded&)>& separate_with = {});
 
 }  // namespace rotacal

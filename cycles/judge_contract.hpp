@@ -156,7 +156,7 @@ inline Json judgedDiagnosisJson(const std::string& cycle, const ProbePlan& plan,
   verdictJson(j, s);
   j["findings"] = contractFindingsJson(
       s, [](const JudgeFinding& f) { return f.description + ": " + findingParametersText(f); });
-  j["confounded"] = confoundedJson(s, separate_with);
+  writeConfounded(j, s, separate_with);
   j["judge"] = judgeToJson(s);
   return j;
 }

@@ -111,7 +111,7 @@ CycleDocuments judgedFitDocuments(std::string_view cycle, const DiagnoseRequest&
   JudgeOptions o;
   o.alpha = r.alpha;
   const JudgedFit d = judged(plan, readProbeRuns(plan, r.results, *r.dialect), o);
-  return documents(judgedDiagnosisJson(std::string(cycle), plan, d), judgeText(d.summary));
+  return documents(judgedDiagnosisJson(std::string(cycle), plan, d), judgeText(d.summary, d.separate_with));
 }
 
 }  // namespace rotacal

@@ -90,7 +90,7 @@ class Sphere final : public Cycle {
     o.alpha = r.alpha;
     sphereNoiseOrFail(plan, r.contributors);  // a contradictory declaration names its file
     const SphereDiagnosis d = diagnoseSphere(plan, readProbeRuns(plan, r.results, *r.dialect), o, r.contributors);
-    return documents(judgedDiagnosisJson(std::string(name()), plan, d), judgeText(d.summary));
+    return documents(judgedDiagnosisJson(std::string(name()), plan, d), judgeText(d.summary, d.separate_with));
   }
 };
 

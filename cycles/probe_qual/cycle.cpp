@@ -47,7 +47,7 @@ class ProbeQual final : public Cycle {
                        0, e.what());
     }
     const JudgedFit d = diagnoseProbeQual(plan, runs, o, r.contributors);
-    return documents(judgedDiagnosisJson(std::string(name()), plan, d), judgeText(d.summary));
+    return documents(judgedDiagnosisJson(std::string(name()), plan, d), judgeText(d.summary, d.separate_with));
   }
 };
 

@@ -368,7 +368,7 @@ Json rtestDiagnosisJson(const ProbePlan& plan, const RtestDiagnosis& d) {
     findings.push_back(e);
   }
   j["findings"] = findings;
-  j["confounded"] = confoundedJson(s, [](const JudgeConfounded& c) { return separateWith(c.cause); });
+  writeConfounded(j, s, [](const JudgeConfounded& c) { return separateWith(c.cause); });
   Json cj = Json::array();
   for (const auto& c : d.confounds)
     cj.push_back({{"cause", c.entry.cause},
@@ -410,7 +410,7 @@ std::string rtestDiagnosisText(const ProbePlan& plan, const RtestDiagnosis& d) {
                               d.summary.declared_sigma_rms,
                               d.summary.declaration.empty() ? std::string() : " (" + d.summary.declaration + ")");
   s += rtestScreenText(plan, d.analysis.screen) + "\n";
-  s += judgeText(d.summary);
+  s += judgeText(d.summary, [](const JudgeConfounded& c) { return separateWith(c.cause); });
   for (const auto& f : d.summary.findings) s += fmt::format("finding {}: {}\n", f.cause, rtestFindingSummary(plan, d, f));
   for (const auto& c : d.confounds)
     s += fmt::format("{} alone: p {:.2g}, {}; the table drift beyond it: p {:.2g}, {}{}\n", c.entry.cause, c.alone.p_value,

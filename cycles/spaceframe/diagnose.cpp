@@ -318,6 +318,17 @@ Json fitJson(const SpaceframeFit& f) {
   return j;
 }
 
+
+/// What separates a confounded entry's causes on this cycle.
+std::string separateWith(const JudgeConfounded& c) {
+  const bool frame =
+      c.cause == "frame_temperature" || std::find(c.with.begin(), c.with.end(), "frame_temperature") != c.with.end();
+  return frame ? std::string("a frame whose length is known at its temperature (a calibrated step gauge, or the "
+                             "frame's measured temperature and expansion coefficient) separates its expansion "
+                             "from the linear axes' scale")
+               : "add orientations or spheres where the Jacobian columns of " + c.cause + " and what it is read as differ";
+}
+
 }  // namespace
 
 Json spaceframeDiagnosisJson(const SpaceframeDiagnosis& d, const ProbePlan& plan) {
@@ -362,15 +373,7 @@ Json spaceframeDiagnosisJson(const SpaceframeDiagnosis& d, const ProbePlan& plan
     f["holdout_rms_um"] = jf.holdout_rms_cause;
     f["gain_pct"] = gain;
   }
-  j["confounded"] = confoundedJson(s, [](const JudgeConfounded& c) {
-    const bool frame = c.cause == "frame_temperature" ||
-                       std::find(c.with.begin(), c.with.end(), "frame_temperature") != c.with.end();
-    return frame ? std::string("a frame whose length is known at its temperature (a calibrated step gauge, or the "
-                               "frame's measured temperature and expansion coefficient) separates its expansion "
-                               "from the linear axes' scale")
-                 : "add orientations or spheres where the Jacobian columns of " + c.cause +
-                       " and what it is read as differ";
-  });
+  writeConfounded(j, s, separateWith);
   return j;
 }
 
@@ -379,7 +382,7 @@ std::string spaceframeDiagnosisText(const SpaceframeDiagnosis& d) {
       "spaceframe diagnosis: baseline (location errors + frame) residual {:.3f} um rms over {} centres; declared probe "
       "noise {:.3f} um (the sphere fits' own: {:.3f} um)\n",
       d.baseline.residual_rms_um, d.centres, d.sigma_um, d.fit_noise_um);
-  return s + judgeText(d.judged);
+  return s + judgeText(d.judged, separateWith);
 }
 
 }  // namespace rotacal

@@ -262,6 +262,12 @@ std::string separationHint(const std::vector<std::string>& causes) {
          "angle other than 0); the confounding is computed from this plan's Jacobians";
 }
 
+std::string separateWith(const JudgeConfounded& c) {
+  std::vector<std::string> causes = {c.cause};
+  causes.insert(causes.end(), c.with.begin(), c.with.end());
+  return separationHint(causes);
+}
+
 }  // namespace
 
 Json spheres3DiagnosisJson(const Spheres3Diagnosis& d) {
@@ -292,11 +298,7 @@ Json spheres3DiagnosisJson(const Spheres3Diagnosis& d) {
     f["holdout_rms_um"] = jf.holdout_rms_cause;
     f["gain_pct"] = gain;
   }
-  j["confounded"] = confoundedJson(s, [](const JudgeConfounded& c) {
-    std::vector<std::string> causes = {c.cause};
-    causes.insert(causes.end(), c.with.begin(), c.with.end());
-    return separationHint(causes);
-  });
+  writeConfounded(j, s, separateWith);
   return j;
 }
 
@@ -307,7 +309,7 @@ std::string spheres3DiagnosisText(const Spheres3Diagnosis& d) {
       d.baseline.residual_rms_um, d.judged.baseline_holdout_rms);
   s += fmt::format("declared noise (MACHINE.json probe repeatability, carried to the centres): {:.3f} um rms\n",
                    d.judged.declared_sigma_rms);
-  s += judgeText(d.judged);
+  s += judgeText(d.judged, separateWith);
   return s;
 }
 

@@ -192,7 +192,48 @@ namespace {
 
 const JudgeEstimate* paramOf(const JudgeFinding& f, size_t i) { return i < f.parameters.size() ? &f.parameters[i] : nullptr; }
 
+std::string separateWith(const JudgeConfounded& c) {
+  // `with` names another cause, or a parameter of an accepted one ("pivot_length.dR").
+  auto is = [](const std::string& w, const std::string& cause) { return w == cause || w.rfind(cause + ".", 0) == 0; };
+  const bool pivot_scale = (c.cause == kPivot || c.cause == kScale) &&
+                           std::any_of(c.with.begin(), c.with.end(), [&](const std::string& w) {
+                             return is(w, kPivot) || is(w, kScale);
+                           });
+  if (pivot_scale)
+    return "a second tool length (the same angles with another radius_mm, diagnosed together): a scale error moves the "
+           "tip in proportion to R, a pivot-length error does not";
+  return "a plan on which their columns differ (other angles, a second tool length, repeats)";
+}
+
+/// A cause in the words of the text ("pivot_length or linear-axis scale").
+std::string causeWords(const std::string& cause) {
+  if (cause == kScale) return "linear-axis scale";
+  if (cause == kDrift) return "thermal drift";
+  return cause;
+}
+
+std::string termsWords(const std::vector<JudgeTerm>& terms) {
+  std::vector<std::string> t;
+  for (const auto& x : terms) t.push_back(fmt::format("{} = {:.4g} {}", x.name, x.coefficient, x.unit));
+  return fmt::format("{}", fmt::join(t, ", "));
+}
+
+std::string ownSummary(const JudgeFinding& f);
+
 std::string findingSummary(const JudgeFinding& f) {
+  if (f.confounded_with.empty()) return ownSummary(f);
+  // One signal the plan cannot attribute: name every cause, how to tell them apart, then the
+  // estimate as the model extension reads it and what that is in the others' terms.
+  std::vector<std::string> names = {causeWords(f.cause)};
+  for (const auto& c : f.confounded_with) names.push_back(causeWords(c));
+  std::string s = fmt::format("{}: the plan cannot tell them apart; {}. Read as {}: {}", fmt::join(names, " or "),
+                              findingSeparateWith(f, separateWith), causeWords(f.cause), ownSummary(f));
+  for (const auto& e : f.confounding)
+    s += fmt::format(" On this plan {} is read as {}.", termsWords(e.cause_terms), termsWords(e.with_terms));
+  return s;
+}
+
+std::string ownSummary(const JudgeFinding& f) {
   if (f.cause == kPivot) {
     const JudgeEstimate& p = *paramOf(f, 0);
     return fmt::format("The tool tip sits {:.1f} um (u {:.1f} um) {} from the pivot than the program assumes; 004's formula "
@@ -209,14 +250,6 @@ std::string findingSummary(const JudgeFinding& f) {
                      f.parameters[1].value, f.parameters[1].u);
 }
 
-std::string separateWith(const JudgeConfounded& c) {
-  const bool pivot_scale = (c.cause == kPivot || c.cause == kScale) &&
-                           std::any_of(c.with.begin(), c.with.end(), [](const std::string& w) { return w == kPivot || w == kScale; });
-  if (pivot_scale)
-    return "a second tool length (the same angles with another radius_mm, diagnosed together): a scale error moves the "
-           "tip in proportion to R, a pivot-length error does not";
-  return "a plan on which their columns differ (other angles, a second tool length, repeats)";
-}
 
 
 }  // namespace
@@ -235,7 +268,7 @@ Json tooltipDiagnosisJson(const TooltipDiagnosis& d) {
     if (f.cause == kPivot)
       e["location_errors"] = {{"dR", {{"value", f.parameters[0].value}, {"unit", "um"}, {"u", f.parameters[0].u}}}};
   });
-  j["confounded"] = confoundedJson(s, separateWith);
+  writeConfounded(j, s, separateWith);
   j["judge"] = judgeToJson(s);
   return j;
 }
@@ -244,7 +277,7 @@ std::string tooltipDiagnosisText(const TooltipDiagnosis& d) {
   std::string s = fmt::format("rotacal diagnose tooltip: {} tool length(s) (R = {} mm), {} repeat(s), declared laser noise "
                               "{:.3g} um\n",
                               d.sets, fmt::join(d.radius_mm, ", "), d.runs, d.summary.declared_sigma_rms);
-  s += judgeText(d.summary);
+  s += judgeText(d.summary, separateWith);
   for (const auto& f : d.summary.findings) s += fmt::format("finding {}: {}\n", f.cause, findingSummary(f));
   return s;
 }

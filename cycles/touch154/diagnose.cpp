@@ -122,6 +122,20 @@ Touch154Diagnosis diagnoseTouch154(const ProbePlan& plan, const std::vector<Meas
   return d;
 }
 
+namespace {
+
+/// What separates a confounded entry's causes, named by the contract's cause of the extension.
+std::function<std::string(const JudgeConfounded&)> separateWith(const Touch154Diagnosis& d) {
+  return [&d](const JudgeConfounded& c) {
+    const auto it = std::find(d.judge_names.begin(), d.judge_names.end(), c.cause);
+    const std::string cause =
+        it == d.judge_names.end() ? c.cause : d.candidates[static_cast<size_t>(it - d.judge_names.begin())]->cause();
+    return separationHint(cause, c.with);
+  };
+}
+
+}  // namespace
+
 Json touch154DiagnosisJson(const Touch154Diagnosis& d, const ProbePlan& plan) {
   const JudgeSummary& s = d.judged;
   Json j = judgeToJson(s);
@@ -149,12 +163,7 @@ Json touch154DiagnosisJson(const Touch154Diagnosis& d, const ProbePlan& plan) {
     f["holdout_rms_um"] = jf.holdout_rms_cause;
     f["gain_pct"] = gain;
   }
-  j["confounded"] = confoundedJson(s, [&d](const JudgeConfounded& c) {
-    const auto it = std::find(d.judge_names.begin(), d.judge_names.end(), c.cause);
-    const std::string cause =
-        it == d.judge_names.end() ? c.cause : d.candidates[static_cast<size_t>(it - d.judge_names.begin())]->cause();
-    return separationHint(cause, c.with);
-  });
+  writeConfounded(j, s, separateWith(d));
   return j;
 }
 
@@ -164,7 +173,7 @@ std::string touch154DiagnosisText(const Touch154Diagnosis& d) {
       d.lin.baseline.summary.residual_rms_um, d.judged.baseline_holdout_rms);
   s += fmt::format("declared noise: {:.3f} um rms {} ({})\n", d.judged.declared_sigma_rms,
                    d.judged.correlated ? "left in the baseline's residual" : "per touch", d.judged.declaration);
-  s += judgeText(d.judged);
+  s += judgeText(d.judged, separateWith(d));
   for (const auto& f : d.findings) {
     const auto& params = locationParameters(f.fit.estimate.kinematics);
     s += fmt::format("location errors with {} (exact refit):\n  {:<8} {:>10} {:>10}\n", f.extension->cause(), "error",

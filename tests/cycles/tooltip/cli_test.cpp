@@ -60,11 +60,21 @@ TEST(TooltipCli, PlanGenerateSimulateAnalyzeDiagnose) {
   ASSERT_EQ(r.code, 0) << r.out;
   const auto dg = loadJson(d + "/DIAG.json");
   // One tool: a 40 um pivot error moves the tip exactly as an isotropic scale of -1000 x 40 / 381
-  // um/m would (issue 16): never "effect found: pivot_length", a confounded pair with a signal.
-  EXPECT_EQ(dg["verdict"], "model_inadequate");
-  EXPECT_TRUE(dg["findings"].empty());
+  // um/m would (issue 16): never "effect found: pivot_length" alone; one finding that names both,
+  // with what separates them, and the pair's entry says the finding carries its signal.
+  ASSERT_EQ(dg["findings"].size(), 1u) << r.out;
+  const auto& f = dg["findings"][0];
+  std::vector<std::string> named = {f["cause"].get<std::string>()};
+  for (const auto& c : f["confounded_with"]) named.push_back(c.get<std::string>());
+  EXPECT_NE(std::find(named.begin(), named.end(), "pivot_length"), named.end());
+  EXPECT_NE(std::find(named.begin(), named.end(), "linear_axis_scale"), named.end());
+  EXPECT_NE(f["separate_with"].get<std::string>().find("second tool length"), std::string::npos);
+  EXPECT_TRUE(r.out.find("pivot_length or linear-axis scale: the plan cannot tell them apart") != std::string::npos ||
+              r.out.find("linear-axis scale or pivot_length: the plan cannot tell them apart") != std::string::npos)
+      << r.out;
   ASSERT_FALSE(dg["confounded"].empty());
-  EXPECT_EQ(dg["confounded"][0]["signal"], true);
+  EXPECT_EQ(dg["confounded"][0]["signal"], false);
+  EXPECT_EQ(dg["confounded"][0]["finding"], f["cause"]);
   const auto causes = dg["confounded"][0]["causes"].get<std::vector<std::string>>();
   EXPECT_NE(std::find(causes.begin(), causes.end(), "pivot_length"), causes.end());
   EXPECT_NE(std::find(causes.begin(), causes.end(), "linear_axis_scale"), causes.end());

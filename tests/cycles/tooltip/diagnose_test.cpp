@@ -91,8 +91,9 @@ TEST(TooltipDiagnosis, CauseColumnsMatchTheExactSimulator) {
 }
 
 // Issue 16's reproduction: an isotropic 30 um/m scale of Y and Z, no pivot error, one tool.
-// Never "effect found: pivot_length": the judge finds the pair exactly confounded from the
-// columns, with the closed form: dR = 1 um moves the tip as s_Y = s_Z = -1000 / R um/m.
+// Never "effect found: pivot_length" alone: the judge finds the pair exactly confounded from the
+// columns, with the closed form dR = 1 um moves the tip as s_Y = s_Z = -1000 / R um/m, and the
+// signal is one finding that names both, read as whichever predicts held-out data better.
 TEST(TooltipDiagnosis, Reproduction30umPerMScaleIsConfoundedWithPivotLength) {
   for (double R : {381.0, 150.0}) {
     const ProbePlan plan = planR(R);
@@ -101,11 +102,14 @@ TEST(TooltipDiagnosis, Reproduction30umPerMScaleIsConfoundedWithPivotLength) {
       t.scale_t_um_m = t.scale_z_um_m = 30.0;
       const TooltipDiagnosis d = run({&plan}, t, static_cast<std::uint64_t>(seed));
       if (seed == 1 && R == 381.0) std::printf("%s", tooltipDiagnosisText(d).c_str());
-      EXPECT_NE(d.summary.verdict, JudgeVerdict::EffectFound) << tooltipDiagnosisText(d);
-      EXPECT_EQ(d.summary.finding("pivot_length"), nullptr);
+      ASSERT_EQ(d.summary.findings.size(), 1u) << tooltipDiagnosisText(d);
+      const JudgeFinding& f = d.summary.findings[0];
+      EXPECT_EQ(f.confounded_with.size(), 1u);
+      EXPECT_TRUE(f.label() == "pivot_length or linear_axis_scale" || f.label() == "linear_axis_scale or pivot_length")
+          << f.label();
       const JudgeConfounded* c = pairEntry(d.summary);
       ASSERT_NE(c, nullptr) << tooltipDiagnosisText(d);
-      EXPECT_TRUE(c->signal);
+      EXPECT_EQ(c->finding, f.cause);
       EXPECT_LT(c->angle_deg, 1e-4);
       const auto& pivot_terms = c->cause == "pivot_length" ? c->cause_terms : c->with_terms;
       const auto& scale_terms = c->cause == "pivot_length" ? c->with_terms : c->cause_terms;
@@ -113,12 +117,95 @@ TEST(TooltipDiagnosis, Reproduction30umPerMScaleIsConfoundedWithPivotLength) {
       ASSERT_EQ(scale_terms.size(), 2u);
       for (const auto& st : scale_terms)
         EXPECT_NEAR(st.coefficient / pivot_terms[0].coefficient, -1000.0 / R, 1e-6 * 1000.0 / R) << st.name;
+      // The estimate is the truth read in the finding's cause: s, or dR = -s R / 1000.
+      for (const auto& p : f.parameters)
+        EXPECT_LE(std::abs(p.value - (f.cause == "pivot_length" ? -30.0 * R / 1000.0 : 30.0)), 3.0 * p.u) << p.name;
       const Json j = tooltipDiagnosisJson(d);
-      EXPECT_EQ(j["verdict"], "model_inadequate");
-      EXPECT_EQ(j["judge"]["confounded"][0]["signal"], true);
+      if (d.summary.final_model.passes) {
+        EXPECT_EQ(j["verdict"], "effect_found");
+      }
+      EXPECT_EQ(j["findings"][0]["confounded_with"].size(), 1u);
+      EXPECT_FALSE(j["findings"][0]["separate_with"].get<std::string>().empty());
       EXPECT_FALSE(j["confounded"][0]["separate_with"].get<std::string>().empty());
     }
   }
+}
+
+// A pivot-length error on one tool (dR = 5 um, 004's R = 381 mm; truth drawn by the simulator,
+// noise as declared): the signal the plan cannot attribute is one finding naming pivot_length
+// and the linear-axis scale, with how to separate them, its held-out gain > 0 and the truth
+// within 3 u read in the finding's cause (dR, or s = -dR 1000 / R um/m). Before, the verdict was
+// model_inadequate with no cause named.
+TEST(TooltipDiagnosis, PivotLengthOnOneToolIsOneFindingWithTheScale) {
+  const double R = 381.0;
+  const ProbePlan plan = planR(R);
+  int effect_found = 0;
+  for (int seed = 1; seed <= 5; ++seed) {
+    TooltipTruth t = truthOf(seed);
+    t.dR_um = 5.0;
+    const TooltipDiagnosis d = run({&plan}, t, static_cast<std::uint64_t>(40 + seed));
+    const std::string text = tooltipDiagnosisText(d);
+    if (seed == 1) std::printf("%s", text.c_str());
+    ASSERT_EQ(d.summary.findings.size(), 1u) << text;
+    // effect_found unless the model with the finding still misfits the declared noise (seed 2:
+    // chi2 41.5 on 16 dof, then model_inadequate naming the same finding; the rate is below).
+    EXPECT_EQ(d.summary.verdict, d.summary.final_model.passes ? JudgeVerdict::EffectFound : JudgeVerdict::ModelInadequate);
+    effect_found += d.summary.verdict == JudgeVerdict::EffectFound;
+    const JudgeFinding& f = d.summary.findings[0];
+    EXPECT_EQ(f.confounded_with.size(), 1u);
+    EXPECT_GT(f.gain, 0.0);
+    EXPECT_GT(f.gain, 2.0 * f.gain_se);
+    EXPECT_LT(f.holdout_rms_cause, f.holdout_rms_model);
+    for (const auto& p : f.parameters)
+      EXPECT_LE(std::abs(p.value - (f.cause == "pivot_length" ? 5.0 : -5.0 * 1000.0 / R)), 3.0 * p.u) << p.name << text;
+    EXPECT_NE(text.find("pivot_length or linear-axis scale: the plan cannot tell them apart; a second tool length"),
+              std::string::npos)
+        << text;
+    const Json j = tooltipDiagnosisJson(d);
+    EXPECT_GT(j["findings"][0]["gain_pct"].get<double>(), 0.0);
+    EXPECT_NE(j["findings"][0]["separate_with"].get<std::string>().find("second tool length"), std::string::npos);
+  }
+  EXPECT_GE(effect_found, 4);
+}
+
+// Power and false alarms of that finding over many seeds: dR = 5 um on one tool, 50 seeds, named
+// (pivot_length with linear_axis_scale, effect_found) with the truth within 3 u in at least 45;
+// clean data (the angular errors only, noise as declared), 200 seeds: any alarm, and a confounded
+// finding in particular, no more often than alpha = 0.01 allows (more than 6 of 200 has binomial
+// probability 4.3e-3 at that rate).
+TEST(TooltipDiagnosis, PivotLengthOnOneToolIsFoundWithItsParametersWithin3u) {
+  const double R = 381.0;
+  const ProbePlan plan = planR(R);
+  for (double dR : {5.0}) {
+    int named = 0;
+    for (int seed = 1; seed <= 50; ++seed) {
+      TooltipTruth t = truthOf(seed);
+      t.dR_um = dR;
+      const TooltipDiagnosis d = run({&plan}, t, static_cast<std::uint64_t>(1000 + seed));
+      if (d.summary.verdict != JudgeVerdict::EffectFound || d.summary.findings.size() != 1) continue;
+      const JudgeFinding& f = d.summary.findings[0];
+      if (f.confounded_with.size() != 1 || f.gain <= 0) continue;
+      bool within = true;
+      for (const auto& p : f.parameters)
+        within = within && std::abs(p.value - (f.cause == "pivot_length" ? dR : -dR * 1000.0 / R)) <= 3.0 * p.u;
+      named += within;
+    }
+    std::printf("tooltip dR = %g um on one tool: named with the scale, within 3 u, %d / 50\n", dR, named);
+    EXPECT_GE(named, 45);
+  }
+}
+
+TEST(TooltipDiagnosis, CleanOneToolConfoundedFindingFalseAlarmsWithinAlpha) {
+  const ProbePlan plan = planR(381);
+  int alarms = 0, confounded = 0;
+  for (int seed = 1; seed <= 200; ++seed) {
+    const TooltipDiagnosis d = run({&plan}, truthOf(seed), static_cast<std::uint64_t>(5000 + seed));
+    alarms += d.summary.verdict != JudgeVerdict::NoSignificantEffect;
+    for (const auto& f : d.summary.findings) confounded += !f.confounded_with.empty();
+  }
+  std::printf("tooltip clean, one tool: %d alarms, %d confounded findings in 200 seeds\n", alarms, confounded);
+  EXPECT_LE(alarms, 6);
+  EXPECT_LE(confounded, 6);
 }
 
 // The same scale with two tool lengths on the real plans (R = 381 and 200 mm, the same angles):

@@ -137,21 +137,33 @@ TEST(Touch154Diagnose, StraightnessOutsideTheCatalogIsModelInadequateWithXCarryi
   }
 }
 
-TEST(Touch154Diagnose, TiltAxisBacklashIsModelInadequateWithItsConfoundingNamed) {
+TEST(Touch154Diagnose, TiltAxisBacklashIsOneFindingWithWhatThePlanCannotTellItFrom) {
   // 10 arcsec of lost motion on A (the simulator turns the table to the angle A really reaches;
   // no Jacobian). 000's plan reaches A = -90 from above only: the data cannot tell backlash from
-  // a positioning error at -90 deg, nor either from S_yz, so no single cause may be named.
+  // a positioning error at -90 deg, nor either from S_yz, so no single cause may be named: one
+  // finding names all three, and reads the signal as its cause (-90 deg stands b = 2.78 mdeg off
+  // A = 0: EAA@A-90 or backlash_A of that size, within 3 u).
   const ProbePlan plan = test::touch154Plan();
   Truth t = clean();
   t.rotary_backlash_deg[0] = 10.0 / 3600.0;
+  const double b_mdeg = 10.0 / 3.6;
   for (int seed : {51, 52}) {
     const Touch154Diagnosis d = diagnoseTouch154(plan, repeats(plan, t, seed), options());
-    ASSERT_EQ(d.judged.verdict, JudgeVerdict::ModelInadequate) << touch154DiagnosisText(d);
-    bool named = false;
-    for (const auto& c : d.judged.confounded)
-      named |= c.signal && c.cause == "tilt_axis_positioning" &&
-               std::find(c.with.begin(), c.with.end(), "tilt_axis_backlash") != c.with.end();
-    EXPECT_TRUE(named) << touch154DiagnosisText(d);
+    const std::string text = touch154DiagnosisText(d);
+    ASSERT_EQ(d.judged.findings.size(), 1u) << text;
+    const JudgeFinding& f = d.judged.findings[0];
+    std::vector<std::string> named = f.confounded_with;
+    named.push_back(f.cause);
+    for (const char* c : {"tilt_axis_positioning", "tilt_axis_backlash", "linear_axis_squareness"})
+      EXPECT_NE(std::find(named.begin(), named.end(), c), named.end()) << c << "\n" << text;
+    EXPECT_EQ(d.judged.verdict, d.judged.final_model.passes ? JudgeVerdict::EffectFound : JudgeVerdict::ModelInadequate);
+    EXPECT_GT(f.gain, 2.0 * f.gain_se);
+    if (const JudgeEstimate* e = f.parameter(f.cause == "tilt_axis_positioning" ? "EAA@A-90" : "backlash_A")) {
+      EXPECT_LE(std::abs(std::abs(e->value) - b_mdeg), 3.0 * e->u) << text;
+    }
+    // Every pair among the three is carried by the finding: no significant signal left unnamed.
+    for (const auto& c : d.judged.confounded) EXPECT_FALSE(c.signal) << c.why;
+    EXPECT_NE(text.find("the plan cannot tell them apart"), std::string::npos) << text;
   }
 }
 
