@@ -23,6 +23,7 @@ set(ROTACAL_STATISTICAL_TESTS
   "WithNoiseWithinUncertainty" "NoisyLocationErrorsWithinTheirUncertainty"
   # a Monte Carlo, or drawn values, against the closed form
   "MonteCarlo" "RefitsOfDrawnContributors" "HasTheRequestedSpread" "HaveTheStatedSpread"
+  "SensorResponseMatchesTheSimulatorsOwn"
   # machines drawn from their declared contributors: the screen's and the judge's rates on them
   "RealMachine\\." "KeepsItsRateOn" "KeepTheirRates" "StandardNormalUnderTheDeclaration"
   "TheJudgeWhitensByTheFullCovariance"
