@@ -1,4 +1,4 @@
-// rtest diagnose through the judge (issue 16) on simulated R-test series whose truth the judge
+// rtest diagnose through the judge on simulated R-test series whose truth the judge
 // never sees: the problem's columns against the exact simulator, 002's drift (11 cycles, -2 um/h
 // dy_CB at every tilt, 0.3 um) found jointly and read as the linear axes it equally is, a
 // spindle growth named with the closed-form combination it is read as, a 1 um sensor step,

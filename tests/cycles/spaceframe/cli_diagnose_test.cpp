@@ -40,7 +40,7 @@ TEST_F(SpaceframeDiagnoseCli, BundledScaleTruthIsNamed) {
   EXPECT_EQ(d["format"], "rotacal-diagnosis/1");
   EXPECT_EQ(d["cycle"], "spaceframe");
   // The scale's isotropic part (about 12 um/m) moves the centres exactly as the frame's
-  // temperature would: the judge names the pair instead of picking one (issue 16), as one
+  // temperature would: the judge names the pair instead of picking one, as one
   // finding that names both (the pair's entry then names that finding) or as a pair whose
   // significant signal no finding carries.
   ASSERT_NE(d["verdict"], "no_significant_effect");

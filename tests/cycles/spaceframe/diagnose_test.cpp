@@ -1,4 +1,4 @@
-// The space-frame cycle's diagnosis through the one judge (issue 16): effects hidden in exact
+// The space-frame cycle's diagnosis through the one judge: effects hidden in exact
 // simulated data (truth the judge never sees) are never "no significant effect" while the
 // baseline fails its chi-square against the declared noise; clean data stays quiet; the frame's
 // temperature is reported as confounded with the linear axes' scale because their Jacobians say

@@ -60,7 +60,7 @@ TEST(TooltipCli, PlanGenerateSimulateAnalyzeDiagnose) {
   ASSERT_EQ(r.code, 0) << r.out;
   const auto dg = loadJson(d + "/DIAG.json");
   // One tool: a 40 um pivot error moves the tip exactly as an isotropic scale of -1000 x 40 / 381
-  // um/m would (issue 16): never "effect found: pivot_length" alone; one finding that names both,
+  // um/m would: never "effect found: pivot_length" alone; one finding that names both,
   // with what separates them, and the pair's entry says the finding carries its signal.
   ASSERT_EQ(dg["findings"].size(), 1u) << r.out;
   const auto& f = dg["findings"][0];

@@ -1,5 +1,5 @@
-// tooltip diagnose through the judge (issue 16) on the exact simulator (cycles/tooltip/plan.hpp),
-// whose truth the judge never sees: the cause columns against the simulator, issue 16's
+// tooltip diagnose through the judge on the exact simulator (cycles/tooltip/plan.hpp),
+// whose truth the judge never sees: the cause columns against the simulator, the case that failed once
 // reproduction (an isotropic 30 um/m scale, no pivot error, one tool: a confounded pair, never
 // pivot_length found) with the closed-form combination dR = 1 um <-> s = -1000 / R um/m, the
 // confounding gone with two tool lengths on the real plans, hidden causes found, clean data.

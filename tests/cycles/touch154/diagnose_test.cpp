@@ -1,4 +1,4 @@
-// touch154's diagnosis through the one judge (issue 16): inject an effect into exact simulated
+// touch154's diagnosis through the one judge: inject an effect into exact simulated
 // data (the simulator's truth, which the judge never sees) and check the verdict, the name and
 // the parameters; clean data stays quiet; an effect outside the catalog is model_inadequate;
 // confounding follows from the Jacobians. The many-seed figures are in bench/diagnose_bench.cpp.
