@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "core/contributor_draw.hpp"
+#include "core/rng.hpp"
 #include "core/statistics.hpp"
 
 namespace rotacal {
@@ -26,6 +27,24 @@ Eigen::MatrixXd DeclaredNoise::covariance(const std::vector<std::pair<int, int>>
   }
   C.diagonal().array() += white_um2;
   return C;
+}
+
+Eigen::MatrixXd DeclaredNoise::nullDraws(const std::vector<std::pair<int, int>>& kept, std::uint64_t seed) const {
+  const auto n = static_cast<Eigen::Index>(kept.size());
+  const Eigen::Index draws = structured_draws_um.cols();
+  if (draws == 0) return Eigen::MatrixXd(n, 0);
+  Eigen::MatrixXd D(n, draws);
+  for (Eigen::Index a = 0; a < n; ++a) {
+    const int ia = kept[static_cast<size_t>(a)].second;
+    if (ia < 0 || ia >= structured_draws_um.rows())
+      throw std::invalid_argument(fmt::format("declared noise: reading {} beyond the plan's {}", ia, structured_draws_um.rows()));
+    D.row(a) = structured_draws_um.row(ia);
+  }
+  const double white = std::sqrt(white_um2);
+  Rng rng(seed, 0);
+  for (Eigen::Index d = 0; d < draws; ++d)
+    for (Eigen::Index a = 0; a < n; ++a) D(a, d) += white * rng.normal();
+  return D;
 }
 
 double DeclaredNoise::rmsSigmaUm(int readings) const {
@@ -129,13 +148,34 @@ Whitened whitened(const Eigen::VectorXd& residual, const Eigen::MatrixXd& J, con
 }  // namespace
 
 DeclaredNoiseTest testAgainstDeclared(const Eigen::VectorXd& residual, const Eigen::MatrixXd& J, const Eigen::MatrixXd& S) {
+  return testAgainstDeclared(residual, J, S, Eigen::MatrixXd(residual.size(), 0));
+}
+
+DeclaredNoiseTest testAgainstDeclared(const Eigen::VectorXd& residual, const Eigen::MatrixXd& J, const Eigen::MatrixXd& S,
+                                      const Eigen::MatrixXd& null_draws) {
   const Whitened w = whitened(residual, J, S);
+  if (null_draws.rows() != residual.size())
+    throw std::invalid_argument(
+        fmt::format("declared noise: {} readings, null draws of {}", residual.size(), null_draws.rows()));
   const Eigen::VectorXd yw = w.W * residual;
   DeclaredNoiseTest t;
   t.chi2 = (yw - w.Q * (w.Q.transpose() * yw)).squaredNorm();
   t.dof = static_cast<int>(residual.size() - w.Q.cols());
+  t.null_dof = t.dof;
   t.p_value = t.dof > 0 ? chiSquareSurvival(t.chi2, t.dof) : 1.0;
   t.ratio = t.dof > 0 ? std::sqrt(t.chi2 / t.dof) : 0.0;
+  if (t.dof > 0 && null_draws.cols() >= kMinNullDraws) {
+    const Eigen::MatrixXd Dw = w.W * null_draws;
+    const Eigen::VectorXd c = (Dw - w.Q * (w.Q.transpose() * Dw)).colwise().squaredNorm().transpose();
+    const double mean = c.mean();
+    const double var = (c.array() - mean).square().sum() / static_cast<double>(c.size() - 1);
+    if (mean > 0 && var > 0) {
+      t.null_draws = static_cast<int>(c.size());
+      t.null_scale = var / (2.0 * mean);
+      t.null_dof = 2.0 * mean * mean / var;
+      t.p_value = chiSquareSurvival(t.chi2 / t.null_scale, t.null_dof);
+    }
+  }
   if (t.dof > 0) {
     Eigen::JacobiSVD<Eigen::MatrixXd> svd(J, Eigen::ComputeThinU);
     Eigen::Index rank = 0;
@@ -149,13 +189,23 @@ DeclaredNoiseTest testAgainstDeclared(const Eigen::VectorXd& residual, const Eig
   return t;
 }
 
+namespace {
+
+std::string nullText(const DeclaredNoiseTest& t) {
+  if (t.null_draws == 0) return fmt::format("chi2({})", t.dof);
+  return fmt::format("{:.3f} x chi2({:.1f}): the mean and variance of chi2 over {} draws of the declared machine",
+                     t.null_scale, t.null_dof, t.null_draws);
+}
+
+}  // namespace
+
 std::string offsetsHeldBack(const DeclaredNoise& noise, const DeclaredNoiseTest& test) {
   if (!(test.p_value < kOffsetsAdequacyAlpha)) return "";
   return fmt::format("the data exceed the declared noise: residual {:.2f} um rms where it leaves {:.2f} um; whitened, "
-                     "{:.2f} x it (chi2 {:.1f} on {} dof, p {:.2g} < {:g}; {}): the model does not explain this machine "
-                     "(rotacal diagnose names what it misses)",
+                     "{:.2f} x it (chi2 {:.1f} on {} dof, p {:.2g} < {:g} against {}; {}): the model does not explain "
+                     "this machine (rotacal diagnose names what it misses)",
                      test.residual_rms, test.declared_rms, test.ratio, test.chi2, test.dof, test.p_value,
-                     kOffsetsAdequacyAlpha, noise.declaration);
+                     kOffsetsAdequacyAlpha, nullText(test), noise.declaration);
 }
 
 Json declaredNoiseJson(const DeclaredNoise& noise, const DeclaredNoiseTest& test) {
@@ -166,6 +216,10 @@ Json declaredNoiseJson(const DeclaredNoise& noise, const DeclaredNoiseTest& test
           {"declared_residual_rms_um", std::round(test.declared_rms * 1e6) / 1e6},
           {"residual_rms_um", std::round(test.residual_rms * 1e6) / 1e6},
           {"test", "the fit's residual whitened by the declared covariance of the touches: chi2 on readings - rank"},
+          {"null", nullText(test)},
+          {"null_draws", test.null_draws},
+          {"null_scale", std::round(test.null_scale * 1e4) / 1e4},
+          {"null_dof", std::round(test.null_dof * 100) / 100},
           {"chi2", std::round(test.chi2 * 1e4) / 1e4},
           {"dof", test.dof},
           {"p_value", test.p_value},

@@ -14,6 +14,7 @@
 // residual of 000's 154-touch cycle where the probe declares 1.2 um. Tests therefore work on whitened residuals
 // (generalized least squares, Sigma^-1/2), so their null hypothesis is the declared machine.
 #include <Eigen/Core>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -29,11 +30,21 @@ struct DeclaredNoise {
   /// against it ("declared: repeatability only (0.700 um, MACHINE.json)").
   std::string declaration;
   bool repeatability_only = true;  // no contributor beyond the probe's repeatability
+  /// Draws of the shared part from the declared contributors' own draw: ONE run's readings (plan
+  /// order, um) x draws; empty: none. The covariance above summarises them to second order; the
+  /// whole-residual test takes its null from them (testAgainstDeclared), because the linear axes'
+  /// random node spacing makes their errors a scale mixture whose chi2 has a heavier upper tail
+  /// than a Gaussian of the same covariance.
+  Eigen::MatrixXd structured_draws_um;
 
   /// The covariance (um^2) of the readings kept[k] = (run, index in the run's plan order), in that
   /// order: the structured part between any two (the same machine in every run) and the white
   /// part on the diagonal.
   Eigen::MatrixXd covariance(const std::vector<std::pair<int, int>>& kept) const;
+  /// Draws of the readings kept[k] (as covariance()): columns of structured_draws_um (the same
+  /// machine in every run) plus the white part drawn per reading from `seed`; readings x draws,
+  /// empty when no structured draws are held.
+  Eigen::MatrixXd nullDraws(const std::vector<std::pair<int, int>>& kept, std::uint64_t seed) const;
   /// rms of sqrt(diag): the declared scatter of one reading, white and structured together.
   double rmsSigmaUm(int readings) const;
 };
@@ -84,6 +95,11 @@ struct DeclaredNoiseTest {
   double chi2 = 0.0;
   int dof = 0;
   double p_value = 1.0;
+  /// The null p_value reads: chi2(dof), or, from draws of the declared machine, null_scale x
+  /// chi2(null_dof) with the draws' mean and variance of chi2 (Satterthwaite's moment match).
+  int null_draws = 0;
+  double null_scale = 1.0;
+  double null_dof = 0.0;
   double ratio = 0.0;  // sqrt(chi2 / dof): 1 when the data scatter as declared
   /// In the readings' unit: the model's ordinary residual rms per degree of freedom, and the
   /// declared scatter left in it (sqrt(tr(M S M) / dof), M its projector): the shared part the
@@ -93,6 +109,13 @@ struct DeclaredNoiseTest {
 };
 DeclaredNoiseTest testAgainstDeclared(const Eigen::VectorXd& residual, const Eigen::MatrixXd& J,
                                       const Eigen::MatrixXd& covariance);
+/// The same with its null from `null_draws` (readings x draws of the declared noise, e.g.
+/// DeclaredNoise::nullDraws): each draw's chi2 through the same whitened projector, and the data's
+/// chi2 read against the scaled chi2 of the draws' mean and variance. Fewer than
+/// kMinNullDraws draws: chi2(dof), as without them.
+constexpr int kMinNullDraws = 200;
+DeclaredNoiseTest testAgainstDeclared(const Eigen::VectorXd& residual, const Eigen::MatrixXd& J,
+                                      const Eigen::MatrixXd& covariance, const Eigen::MatrixXd& null_draws);
 
 /// Why analyze holds the offsets back (p < kOffsetsAdequacyAlpha), or "" when the data are
 /// within the declaration.

@@ -114,7 +114,7 @@ class Touch154 final : public Cycle {
         if (!lp && other.method == Method::LeastSquaresPerPoint) lp = &other;
       if (lp) {
         const FittedReadings f = fittedProblem(noise, lp->residuals);
-        const DeclaredNoiseTest test = testAgainstDeclared(f.residual_um, f.J, f.covariance_um2);
+        const DeclaredNoiseTest test = testAgainstDeclared(f.residual_um, f.J, f.covariance_um2, f.null_draws_um);
         out.doc["declared_noise"] = declaredNoiseJson(noise.noise, test);
         const std::string held = offsetsHeldBack(noise.noise, test);
         if (!held.empty() && out.offsets_refused.empty()) {

@@ -35,6 +35,14 @@ Touch154Noise touch154DeclaredNoise(const ProbePlan& plan, const ContributorSet*
   if (systematic.items.empty()) return out;
   out.noise.structured_um2 = 1e6 * triggerCovariance(chain, systematic);
   out.noise.repeatability_only = false;
+  // The same contributors drawn as the budget draws them, for the whole-residual test's null.
+  const DrawModel model = drawModel(systematic);
+  out.noise.structured_draws_um.resize(chain.points, kTouch154NullDraws);
+  RunDraw draw;
+  for (int d = 0; d < kTouch154NullDraws; ++d) {
+    drawRun(model, chain, kTouch154NullSeed, d, &draw);
+    out.noise.structured_draws_um.col(d) = 1e3 * linearisedTriggerChange(chain, draw);
+  }
   // What the shared part leaves in the per-point model's residual, per degree of freedom: the
   // set-up's 120 um and the faces' offsets are absorbed, and would read as noise otherwise.
   const Eigen::MatrixXd& Q = out.basis;
@@ -72,6 +80,7 @@ FittedReadings fittedProblem(const Touch154Noise& n, const std::vector<PointResi
     ++k;
   }
   f.covariance_um2 = n.noise.covariance(kept);
+  f.null_draws_um = n.noise.nullDraws(kept, kTouch154NullSeed);
   return f;
 }
 

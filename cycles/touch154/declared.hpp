@@ -4,6 +4,7 @@
 // (triggerCovariance), so that the outlier screen and diagnose test the machine the budget
 // describes; and the per-point model's span, which the outlier statistic needs.
 #include <Eigen/Core>
+#include <cstdint>
 #include <map>
 
 #include "core/contributors.hpp"
@@ -19,6 +20,12 @@ struct Touch154Noise {
   std::map<int, int> index_of_id;  // plan point id -> index in plan order
 };
 
+/// Draws of the declared machine behind the whole-residual test's null (DeclaredNoise::
+/// structured_draws_um): its p-value near the offsets' 1e-3 needs the null's variance to a few per
+/// cent, i.e. some thousands of draws; the seed is fixed so that one data set gets one verdict.
+constexpr int kTouch154NullDraws = 4000;
+constexpr std::uint64_t kTouch154NullSeed = 0x154;
+
 /// White: the per-touch contributors (perTouchDeclaration). Structured: every other declared
 /// contributor through the exact chain linearised at the nominal machine; none when `declared` is
 /// null or the plan cannot identify the location errors by least squares (then no basis either).
@@ -33,6 +40,7 @@ struct FittedReadings {
   Eigen::VectorXd residual_um;
   Eigen::MatrixXd J;
   Eigen::MatrixXd covariance_um2;
+  Eigen::MatrixXd null_draws_um;  // readings x draws of the declared noise (testAgainstDeclared's null)
 };
 FittedReadings fittedProblem(const Touch154Noise& n, const std::vector<PointResidual>& residuals);
 

@@ -477,6 +477,16 @@ void linearisedRun(const LinearChain& c, const MethodMask& active, const std::ve
 
 }  // namespace
 
+Eigen::VectorXd linearisedTriggerChange(const LinearChain& chain, const RunDraw& draw) {
+  Workspace w;
+  locateNodes(chain, draw, &w);
+  Eigen::VectorXd ds = draw.repeat_mm - draw.rough_mm;
+  for (int a = 0; a < 3; ++a)
+    if (hasRandom(draw, a)) allRandomTriggers(chain, draw, w, a, &ds);
+  ds.noalias() += chain.S * fixedValues(draw);
+  return ds;
+}
+
 std::array<ErrorVector, kNumUncertaintyMethods> linearisedDeviation(const LinearChain& chain, const MethodMask& active,
                                                                       const RunDraw& draw) {
   Workspace w;

@@ -141,6 +141,11 @@ RunDraw onlyContributor(const RunDraw& draw, const ContributorInfo& contributor)
 /// Which estimators a run evaluates.
 using MethodMask = std::array<bool, kNumUncertaintyMethods>;
 
+/// The triggers' change (mm along each approach, plan order) that one draw makes, to first order:
+/// what linearisedDeviation maps through every estimator. Its draws are the declared machine a
+/// test of the data holds the data against (declared.cpp).
+Eigen::VectorXd linearisedTriggerChange(const LinearChain& chain, const RunDraw& draw);
+
 /// Deviation (estimate - truth) of each estimator in `active` for one draw (others: zero):
 /// linearised, or through the exact simulator and the estimators. `ok` (exact only) is false
 /// when a least-squares identification did not converge.

@@ -65,6 +65,30 @@ MeasurementRun withChip(const ProbePlan& plan, MeasurementRun run, int point_id,
   return run;
 }
 
+// The whole-residual test's null draws (the budget's draw through the linearised chain) against
+// the covariance the screen and the judge whiten by (triggerCovariance, the node spacing
+// integrated numerically): two routes to one second moment.
+TEST(Touch154RealMachine, TheNullsDrawsHaveTheDeclaredCovariance) {
+  const ProbePlan plan = test::touch154Plan();
+  const ContributorSet cs = loadContributors(test::sourcePath("examples/contributors/table5.json"));
+  const Touch154Noise noise = touch154DeclaredNoise(plan, &cs);
+  const Eigen::MatrixXd& D = noise.noise.structured_draws_um;
+  ASSERT_EQ(D.rows(), static_cast<Eigen::Index>(plan.points.size()));
+  ASSERT_EQ(D.cols(), kTouch154NullDraws);
+  const Eigen::MatrixXd& C = noise.noise.structured_um2;
+  const Eigen::MatrixXd sample = D * D.transpose() / static_cast<double>(D.cols());  // zero-mean draws
+  // 4000 draws: a variance to sqrt(2 / 4000) = 2.2 % (more where the set-up's few values dominate).
+  const Eigen::VectorXd rel = (sample.diagonal() - C.diagonal()).cwiseQuotient(C.diagonal());
+  EXPECT_LT(rel.cwiseAbs().maxCoeff(), 0.12) << rel.transpose();
+  EXPECT_LT((sample - C).norm() / C.norm(), 0.06);
+  // What the test reads: the residual's part, through the per-point model's projector.
+  const Eigen::MatrixXd& Q = noise.basis;
+  const Eigen::MatrixXd R = D - Q * (Q.transpose() * D);
+  const double left = R.colwise().squaredNorm().mean();
+  const double declared = C.trace() - (Q.transpose() * C * Q).trace();
+  EXPECT_NEAR(left, declared, 0.05 * declared);
+}
+
 TEST(Touch154RealMachine, TheScreenAndTheJudgeKeepTheirRatesAndCatchAChip) {
   const ProbePlan plan = test::touch154Plan();
   const ContributorSet cs = loadContributors(test::sourcePath("examples/contributors/table5.json"));
