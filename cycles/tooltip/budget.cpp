@@ -18,12 +18,7 @@ bool tooltipTypeA(const ContributorInfo& c) {
          c.kind == ContributorKind::LaserLateralCoupling;
 }
 
-namespace {
-
-/// The contributors that act on the tool-tip readings as Type B: the linear axes carry the pivot
-/// (004 Sec. VII's machine positioning), and the beams' alignment. The touch and R-test ids have
-/// no probe, piece or sensor nest here.
-bool actsAsTypeB(const ContributorInfo& c) {
+bool tooltipTypeB(const ContributorInfo& c) {
   switch (c.kind) {
     case ContributorKind::LaserAlignment:
     case ContributorKind::LinearScale:
@@ -32,6 +27,13 @@ bool actsAsTypeB(const ContributorInfo& c) {
     default: return false;
   }
 }
+
+namespace {
+
+/// The contributors that act on the tool-tip readings as Type B: the linear axes carry the pivot
+/// (004 Sec. VII's machine positioning), and the beams' alignment. The touch and R-test ids have
+/// no probe, piece or sensor nest here.
+bool actsAsTypeB(const ContributorInfo& c) { return tooltipTypeB(c); }
 
 int transverse(char axis) { return axis == 'A' ? 1 : 0; }  // Y for A, X for B
 int unread(char axis) { return axis == 'A' ? 0 : 1; }      // the direction 004's laser does not read
@@ -191,7 +193,7 @@ UncertaintyBudget tooltipBudget(const ProbePlan& plan, const std::vector<Tooltip
   for (const auto& run : runs)
     for (size_t k = 0; k < run.size(); ++k) {
       if (refs[k] == static_cast<int>(k)) continue;
-      rows.push_back(2 * obs);
+      if (std::isfinite(run[k].t_um)) rows.push_back(2 * obs);  // NaN: left out by the screen
       if (std::isfinite(run[k].z_um)) rows.push_back(2 * obs + 1);
       ++obs;
     }

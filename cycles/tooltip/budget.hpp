@@ -27,6 +27,9 @@ struct TooltipBudgetOptions : BudgetOptions {};
 
 /// Contributors that act independently at every reading: u_A measures them.
 bool tooltipTypeA(const ContributorInfo& c);
+/// Contributors that act on the readings through the machine or the set-up (the linear axes
+/// carrying the pivot, the beams' alignment): Type B, drawn by drawTooltip.
+bool tooltipTypeB(const ContributorInfo& c);
 
 /// One drawn realisation of the tooltip cycle's Type B contributors (internal units).
 struct TooltipDraw {

@@ -10,6 +10,7 @@
 #include "cycles/tooltip/analyze.hpp"
 #include "cycles/tooltip/budget.hpp"
 #include "cycles/tooltip/diagnose.hpp"
+#include "cycles/tooltip/noise.hpp"
 #include "cycles/cycle.hpp"
 #include "cycles/tooltip/program.hpp"
 #include "core/singleton.hpp"
@@ -21,6 +22,16 @@ std::vector<TooltipRun> readRuns(const ProbePlan& plan, const std::vector<InputF
   std::vector<TooltipRun> runs;
   for (const auto& f : results) runs.push_back(parseTooltipResults(f.text, f.path, plan));
   return runs;
+}
+
+/// The cycle writes no offsets; its values go into the machine's kinematics tables by hand. When
+/// they must not, REPORT.json, the text and the warnings say why (and `--offsets` gives it).
+void holdBack(CycleDocuments* out, const std::string& why) {
+  if (why.empty() || !out->offsets_refused.empty()) return;
+  out->offsets_refused = why;
+  out->warnings.push_back(why);
+  out->doc["corrections_held_back"] = why;
+  out->text += "corrections held back: " + why + "\n";
 }
 
 class Tooltip final : public Cycle {
@@ -72,6 +83,14 @@ class Tooltip final : public Cycle {
     const Eigen::VectorXd values = tooltipBudgetValues(a, b);
     out.doc["uncertainty"] = budgetJson(b, values);
     out.text = tooltipReportText(plan, a, &b) + "\n" + budgetText(b, values);
+    // The data against what the machine's contributors declare (the budget's own model): beyond
+    // it, the model does not explain this machine, and its values go into no kinematics table.
+    const DeclaredNoise noise = tooltipDeclaredNoise(plan, r.contributors, &runs.front());
+    const DeclaredNoiseTest test =
+        testAgainstDeclared(a.joint.kept_residual_um, a.joint.kept_J, noise.covariance(a.joint.kept_values));
+    out.doc["declared_noise"] = declaredNoiseJson(noise, test);
+    out.text += "declared noise: " + out.doc["declared_noise"]["summary"].get<std::string>() + " (" + noise.declaration + ")\n";
+    holdBack(&out, offsetsHeldBack(noise, test));
     return out;
   }
 
@@ -85,7 +104,8 @@ class Tooltip final : public Cycle {
                            "diagnose needs both directions of the reading (dz too): its causes (pivot length, scale, "
                            "drift) differ only in how they split between the two; analyze reads one direction");
     TooltipDiagnosisOptions o;
-    o.judge.alpha = r.alpha;  // the declared noise: the plan's laser_noise_um
+    o.judge.alpha = r.alpha;
+    o.contributors = r.contributors;  // the declared noise; none: the plan's laser_noise_um alone
     o.validate();
     const TooltipDiagnosis d = diagnoseTooltip({{&plan, runs}}, o);
     return documents(tooltipDiagnosisJson(d), tooltipDiagnosisText(d));
