@@ -215,8 +215,9 @@ bool noZ(const Problem& p) {
 
 std::vector<bool> activeFor(const Problem& p, bool pivot, int excluded) {
   std::vector<bool> active(p.J() + 1, false);
+  // An angle whose every reading the screen of gross readings left out (NaN) has no data.
   for (const auto& b : p.obs)
-    if (b.j != excluded) active[b.j] = active[b.j_ref] = true;
+    if (b.j != excluded && (std::isfinite(b.t_um) || std::isfinite(b.z_um))) active[b.j] = active[b.j_ref] = true;
   // From the transverse reading alone, e at the zero pose and e_j = e_0 cos(0) / cos(theta_j)
   // leave every reading unchanged: the zero pose is the reference, its error 0 by definition
   // (the laser is zeroed there, 004).
@@ -307,8 +308,12 @@ TooltipFit fitTooltip(const ProbePlan& plan, const std::vector<TooltipRun>& runs
   f.kept_J = g.kept_J;
   f.res_t_um.assign(p.readings, 0.0);
   f.res_z_um.assign(p.readings, 0.0);
+  f.model_t_um.assign(p.readings, 0.0);
+  f.model_z_um.assign(p.readings, 0.0);
   for (const auto& b : p.obs) {
     const Eigen::Vector2d mdl = p.model(b, g.x);
+    f.model_t_um[b.reading] = mdl[0];
+    f.model_z_um[b.reading] = mdl[1];
     f.res_t_um[b.reading] = b.t_um - mdl[0];
     f.res_z_um[b.reading] = b.z_um - mdl[1];
   }

@@ -44,6 +44,7 @@ struct TooltipFit {
   double sigma_um = 0.0;         // noise used for the uncertainties
   double last_step_um = 0.0;     // size of the last Gauss-Newton step (linearisation check)
   std::vector<double> res_t_um, res_z_um;  // residual per reading (data - model; NaN where not read)
+  std::vector<double> model_t_um, model_z_um;  // the model per reading (0 at the zero readings)
   /// The values fitted (read, not a zero reading): (run, 2 k + c) with k the plan point and c = 0
   /// the transverse component, 1 Z; their residual (um) and the Jacobian of the fitted
   /// parameters there (um per rad or mm): what a test against the declared noise reads.

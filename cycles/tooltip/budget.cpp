@@ -63,8 +63,10 @@ Layout layoutOf(const ProbePlan& plan, const TooltipAnalysis& a) {
       fixed[static_cast<size_t>(angleIndex(angles, o.axis == 'A' ? p.A : p.B))] = true;
     }
   Layout l;
+  // An angle the fit has no value for (its readings left out by the screen, or unseen from the
+  // transverse reading alone) is not estimated either.
   for (size_t j = 0; j < angles.size(); ++j)
-    if (!fixed[j]) l.e.push_back(static_cast<int>(j));
+    if (!fixed[j] && std::isfinite(a.joint.e_mdeg[j])) l.e.push_back(static_cast<int>(j));
   l.dR = !a.transverse_only;
   return l;
 }

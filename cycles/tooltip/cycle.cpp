@@ -11,6 +11,7 @@
 #include "cycles/tooltip/budget.hpp"
 #include "cycles/tooltip/diagnose.hpp"
 #include "cycles/tooltip/noise.hpp"
+#include "cycles/tooltip/screen.hpp"
 #include "cycles/cycle.hpp"
 #include "cycles/tooltip/program.hpp"
 #include "core/singleton.hpp"
@@ -60,7 +61,13 @@ class Tooltip final : public Cycle {
 
   CycleDocuments analyze(const AnalyzeRequest& r) const override {
     const ProbePlan& plan = *r.plan;
-    const std::vector<TooltipRun> runs = readRuns(plan, r.results);
+    const std::vector<TooltipRun> read = readRuns(plan, r.results);
+    // Gross readings (a laser glitch, a chip): found against what the machine's contributors
+    // declare, left out of every fit below with the reason; too many: nothing left out, and the
+    // values are held back.
+    const DeclaredNoise noise = tooltipDeclaredNoise(plan, r.contributors, &read.front());
+    const TooltipScreen screen = screenTooltipReadings(plan, read, noise);
+    const std::vector<TooltipRun> runs = withoutScreened(read, screen);
     TooltipAnalysis a = analyzeTooltip(plan, runs);
     a.result_files = pathsOf(r.results);
     CycleDocuments out;
@@ -83,9 +90,12 @@ class Tooltip final : public Cycle {
     const Eigen::VectorXd values = tooltipBudgetValues(a, b);
     out.doc["uncertainty"] = budgetJson(b, values);
     out.text = tooltipReportText(plan, a, &b) + "\n" + budgetText(b, values);
+    out.doc["outliers"] = tooltipScreenJson(plan, screen);
+    out.text += tooltipScreenText(plan, screen) + "\n";
+    if (!screen.screen.excluded.empty()) out.warnings.push_back(tooltipScreenText(plan, screen));
+    if (screen.screen.too_many) holdBack(&out, tooltipScreenText(plan, screen));
     // The data against what the machine's contributors declare (the budget's own model): beyond
     // it, the model does not explain this machine, and its values go into no kinematics table.
-    const DeclaredNoise noise = tooltipDeclaredNoise(plan, r.contributors, &runs.front());
     const DeclaredNoiseTest test =
         testAgainstDeclared(a.joint.kept_residual_um, a.joint.kept_J, noise.covariance(a.joint.kept_values));
     out.doc["declared_noise"] = declaredNoiseJson(noise, test);
@@ -107,8 +117,13 @@ class Tooltip final : public Cycle {
     o.judge.alpha = r.alpha;
     o.contributors = r.contributors;  // the declared noise; none: the plan's laser_noise_um alone
     o.validate();
-    const TooltipDiagnosis d = diagnoseTooltip({{&plan, runs}}, o);
-    return documents(tooltipDiagnosisJson(d), tooltipDiagnosisText(d));
+    // The judge sees the readings the screen keeps (all of them when it found too many).
+    const TooltipScreen screen = screenTooltipReadings(plan, runs, tooltipDeclaredNoise(plan, r.contributors, &runs.front()));
+    const TooltipDiagnosis d = diagnoseTooltip({{&plan, withoutScreened(runs, screen)}}, o);
+    CycleDocuments out = documents(tooltipDiagnosisJson(d), tooltipDiagnosisText(d) + tooltipScreenText(plan, screen) + "\n");
+    out.doc["outliers"] = tooltipScreenJson(plan, screen);
+    if (!screen.screen.excluded.empty() || screen.screen.too_many) out.warnings.push_back(tooltipScreenText(plan, screen));
+    return out;
   }
 };
 
