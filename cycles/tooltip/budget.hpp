@@ -45,6 +45,12 @@ struct TooltipDraw {
 /// alone or combined (one stream per contributor).
 void drawTooltip(const ProbePlan& plan, const ContributorSet& set, std::uint64_t seed, int run, int only, TooltipDraw* out);
 
+/// The draw as the simulator's machine: the linear axes' error at the pivot's command, the beams.
+TooltipMachine tooltipMachineOf(const ProbePlan& plan, const TooltipDraw& draw);
+
+/// What `draw` is, for TRUTH.json's `drawn` (report units: um, um/m, urad).
+Json tooltipDrawJson(const TooltipDraw& draw);
+
 /// A head with an angular error per distinct commanded angle (mdeg, the fit's ascending order of
 /// `angles_deg`) and a pivot-length error (um).
 struct TooltipHead {

@@ -2,6 +2,8 @@
 // program. The laser writes its own file whatever the controller; no offsets.
 #include <cmath>
 
+#include "core/contributor_draw.hpp"
+
 #include <fmt/format.h>
 
 #include "core/errors.hpp"
@@ -50,13 +52,40 @@ class Tooltip final : public Cycle {
     const ProbePlan& plan = *r.plan;
     const JsonDoc doc = parseJsonText(r.truth.text, r.truth.path);
     TooltipTruth truth = tooltipTruthFrom(doc, doc.value);
+    // --contributors: a machine drawn from them on top of the truth file, as the budget draws
+    // it (drawTooltip, run 0 of the machine seed: the linear axes carrying the pivot, the beams'
+    // alignment), and the declared per-reading scatter as the noise, replacing the truth file's
+    // (one declaration, not two).
+    TooltipMachine machine;
+    Json truth_json;
+    std::string drawn;
+    if (r.contributors) {
+      const ContributorSplit split = splitContributors(*r.contributors, tooltipTypeA, tooltipTypeB);
+      TooltipDraw draw;
+      onTruthFile(r.truth, [&] {
+        drawTooltip(plan, split.type_b, r.machine_seed, 0, -1, &draw);
+        return 0;
+      });
+      machine = tooltipMachineOf(plan, draw);
+      truth.noise_um = std::sqrt(tooltipDeclaredNoise(plan, r.contributors).white_um2);
+      const std::string from = r.contributors->file.empty() ? std::string("the machine's contributors") : r.contributors->file;
+      truth_json = doc.value;
+      Json rec = tooltipDrawJson(draw);
+      rec["seed"] = r.machine_seed;
+      rec["contributors"] = from;
+      rec["per_reading_um"] = std::round(truth.noise_um * 1e6) / 1e6;
+      if (!split.left_out.empty()) rec["left_out"] = split.left_out;
+      truth_json["drawn"] = rec;
+      drawn = fmt::format(", a machine drawn from {} (machine seed {})", from, r.machine_seed);
+    }
     // Both are >= 0: the truth file's reader and --noise-um's check refuse a negative noise.
     if (r.noise_um) truth.noise_um = *r.noise_um;
-    const TooltipRun run = onTruthFile(r.truth, [&] { return simulateTooltip(plan, truth, r.seed); });
+    if (!truth_json.is_null()) truth_json["noise_um"] = truth.noise_um;
+    const TooltipRun run = onTruthFile(r.truth, [&] { return simulateTooltip(plan, truth, r.seed, machine); });
     return {tooltipResultsText(plan, run),
-            fmt::format("simulated {} tool-tip readings (dR {:.3f} um, noise {:.3f} um, seed {})", run.size(),
-                        truth.dR_um, truth.noise_um, r.seed),
-            Json()};
+            fmt::format("simulated {} tool-tip readings (dR {:.3f} um, noise {:.3f} um, seed {}{})", run.size(),
+                        truth.dR_um, truth.noise_um, r.seed, drawn),
+            truth_json};
   }
 
   CycleDocuments analyze(const AnalyzeRequest& r) const override {

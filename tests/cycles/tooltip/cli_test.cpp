@@ -90,6 +90,18 @@ TEST(TooltipCli, PlanGenerateSimulateAnalyzeDiagnose) {
   EXPECT_NE(std::find(causes.begin(), causes.end(), "pivot_length"), causes.end());
   EXPECT_NE(std::find(causes.begin(), causes.end(), "linear_axis_scale"), causes.end());
 
+  // A machine drawn from the contributors: what was drawn is in --truth-out, the noise is the
+  // declared per-reading scatter.
+  r = sh("simulate --plan " + d + "/plan.json --truth " + d + "/truth.json --contributors " +
+         test::sourcePath("examples/contributors/tooltip_004.json") + " --machine-seed 4 --truth-out " + d +
+         "/drawn.json --dialect csv -o " + d + "/rd.csv");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto drawn = loadJson(d + "/drawn.json");
+  EXPECT_EQ(drawn["drawn"]["seed"], 4);
+  EXPECT_TRUE(drawn["drawn"].contains("linear_axes"));
+  EXPECT_TRUE(drawn["drawn"].contains("laser_alignment_urad"));
+  EXPECT_NEAR(drawn["noise_um"].get<double>(), 1.905, 1e-3);
+
   // Bad input: FILE:LINE, exit 1, nothing written.
   std::ofstream(d + "/bad.csv") << "angle_deg,dy_um,dz_um\n0,0,0\n5,1.0,oops\n";
   r = sh("analyze --plan " + d + "/plan.json --results " + d + "/bad.csv --dialect csv --json " + d + "/BAD.json");
