@@ -35,6 +35,7 @@ struct Problem {
     int j = 0, j_ref = 0;                       // angle indices
     double t_um = 0, z_um = 0;
     int reading = 0;                            // index in the concatenated runs
+    int run = 0, k = 0;                         // run, and plan point in it
   };
   std::vector<Obs> obs;
   int readings = 0;
@@ -111,6 +112,8 @@ Problem makeProblem(const ProbePlan& plan, const std::vector<TooltipRun>& runs) 
       b.t_um = run[k].t_um;
       b.z_um = run[k].z_um;
       b.reading = reading;
+      b.run = static_cast<int>(&run - runs.data());
+      b.k = static_cast<int>(k);
       p.obs.push_back(b);
     }
   }
@@ -127,6 +130,11 @@ struct GnResult {
   double last_step = 0;
   int used = 0;  // observations (components)
   int active = 0;
+  // At the solution, over the values read (finite): the residual, the Jacobian of the active
+  // parameters, and each value's (run, 2 k + c).
+  Eigen::VectorXd kept_residual;
+  Eigen::MatrixXd kept_J;
+  std::vector<std::pair<int, int>> kept;
 };
 
 /// Gauss-Newton over the active parameters, on the observations `use` accepts.
@@ -140,21 +148,22 @@ GnResult gaussNewton(const Problem& p, Eigen::VectorXd x, const std::vector<bool
     if (use(b)) obs.push_back(&b);
   const int m = 2 * static_cast<int>(obs.size()), n = static_cast<int>(cols.size());
   GnResult g;
-  // A reading of the transverse direction alone has no Z row: its row stays zero and uncounted.
+  // A reading of the transverse direction alone has no Z row, and a value the screen of gross
+  // readings left out is NaN: its row stays zero and uncounted.
   g.used = 0;
-  for (const auto* b : obs) g.used += std::isfinite(b->z_um) ? 2 : 1;
+  for (const auto* b : obs) g.used += (std::isfinite(b->t_um) ? 1 : 0) + (std::isfinite(b->z_um) ? 1 : 0);
   g.active = n;
   Eigen::MatrixXd jac(m, n);
   Eigen::VectorXd res(m);
   auto evaluate = [&](const Eigen::VectorXd& xx) {
     for (size_t i = 0; i < obs.size(); ++i) {
       const Eigen::Vector2d mdl = p.model(*obs[i], xx);
-      const bool z = std::isfinite(obs[i]->z_um);
-      res(2 * i) = obs[i]->t_um - mdl[0];
+      const bool t = std::isfinite(obs[i]->t_um), z = std::isfinite(obs[i]->z_um);
+      res(2 * i) = t ? obs[i]->t_um - mdl[0] : 0.0;
       res(2 * i + 1) = z ? obs[i]->z_um - mdl[1] : 0.0;
       const auto full = p.jacobian(*obs[i], xx);
       for (int c = 0; c < n; ++c) {
-        jac(2 * i, c) = full(0, cols[c]);
+        jac(2 * i, c) = t ? full(0, cols[c]) : 0.0;
         jac(2 * i + 1, c) = z ? full(1, cols[c]) : 0.0;
       }
     }
@@ -178,6 +187,15 @@ GnResult gaussNewton(const Problem& p, Eigen::VectorXd x, const std::vector<bool
   evaluate(x);
   g.x = x;
   g.rss = res.squaredNorm();
+  std::vector<int> rows;
+  for (size_t i = 0; i < obs.size(); ++i)
+    for (int c = 0; c < 2; ++c)
+      if (std::isfinite(c == 0 ? obs[i]->t_um : obs[i]->z_um)) {
+        rows.push_back(2 * static_cast<int>(i) + c);
+        g.kept.emplace_back(obs[i]->run, 2 * obs[i]->k + c);
+      }
+  g.kept_residual = res(rows);
+  g.kept_J = jac(rows, Eigen::all);
   const Eigen::MatrixXd ata = jac.transpose() * jac;
   Eigen::FullPivLU<Eigen::MatrixXd> lu(ata);
   if (lu.rank() < n) throw std::invalid_argument("tooltip fit: the parameters are not identifiable from these readings");
@@ -197,8 +215,9 @@ bool noZ(const Problem& p) {
 
 std::vector<bool> activeFor(const Problem& p, bool pivot, int excluded) {
   std::vector<bool> active(p.J() + 1, false);
+  // An angle whose every reading the screen of gross readings left out (NaN) has no data.
   for (const auto& b : p.obs)
-    if (b.j != excluded) active[b.j] = active[b.j_ref] = true;
+    if (b.j != excluded && (std::isfinite(b.t_um) || std::isfinite(b.z_um))) active[b.j] = active[b.j_ref] = true;
   // From the transverse reading alone, e at the zero pose and e_j = e_0 cos(0) / cos(theta_j)
   // leave every reading unchanged: the zero pose is the reference, its error 0 by definition
   // (the laser is zeroed there, 004).
@@ -284,10 +303,17 @@ TooltipFit fitTooltip(const ProbePlan& plan, const std::vector<TooltipRun>& runs
     f.dR_um = mmToUm(g.x[p.J()]);
     f.u_dR_um = mmToUm(f.sigma_um * std::sqrt(g.cov_unit(p.J(), p.J())));
   }
+  f.kept_values = g.kept;
+  f.kept_residual_um = g.kept_residual;
+  f.kept_J = g.kept_J;
   f.res_t_um.assign(p.readings, 0.0);
   f.res_z_um.assign(p.readings, 0.0);
+  f.model_t_um.assign(p.readings, 0.0);
+  f.model_z_um.assign(p.readings, 0.0);
   for (const auto& b : p.obs) {
     const Eigen::Vector2d mdl = p.model(b, g.x);
+    f.model_t_um[b.reading] = mdl[0];
+    f.model_z_um[b.reading] = mdl[1];
     f.res_t_um[b.reading] = b.t_um - mdl[0];
     f.res_z_um[b.reading] = b.z_um - mdl[1];
   }

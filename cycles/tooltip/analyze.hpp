@@ -11,6 +11,7 @@
 // standard uncertainties from the residual (k = 1).
 #include <Eigen/Core>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/uncertainty_budget.hpp"
@@ -42,7 +43,14 @@ struct TooltipFit {
   double residual_rms_um = 0.0;
   double sigma_um = 0.0;         // noise used for the uncertainties
   double last_step_um = 0.0;     // size of the last Gauss-Newton step (linearisation check)
-  std::vector<double> res_t_um, res_z_um;  // residual per reading (data - model)
+  std::vector<double> res_t_um, res_z_um;  // residual per reading (data - model; NaN where not read)
+  std::vector<double> model_t_um, model_z_um;  // the model per reading (0 at the zero readings)
+  /// The values fitted (read, not a zero reading): (run, 2 k + c) with k the plan point and c = 0
+  /// the transverse component, 1 Z; their residual (um) and the Jacobian of the fitted
+  /// parameters there (um per rad or mm): what a test against the declared noise reads.
+  std::vector<std::pair<int, int>> kept_values;
+  Eigen::VectorXd kept_residual_um;
+  Eigen::MatrixXd kept_J;
 };
 
 /// The exact model of every non-zero reading (transverse, Z interleaved; um) at the parameters

@@ -18,12 +18,7 @@ bool tooltipTypeA(const ContributorInfo& c) {
          c.kind == ContributorKind::LaserLateralCoupling;
 }
 
-namespace {
-
-/// The contributors that act on the tool-tip readings as Type B: the linear axes carry the pivot
-/// (004 Sec. VII's machine positioning), and the beams' alignment. The touch and R-test ids have
-/// no probe, piece or sensor nest here.
-bool actsAsTypeB(const ContributorInfo& c) {
+bool tooltipTypeB(const ContributorInfo& c) {
   switch (c.kind) {
     case ContributorKind::LaserAlignment:
     case ContributorKind::LinearScale:
@@ -32,6 +27,13 @@ bool actsAsTypeB(const ContributorInfo& c) {
     default: return false;
   }
 }
+
+namespace {
+
+/// The contributors that act on the tool-tip readings as Type B: the linear axes carry the pivot
+/// (004 Sec. VII's machine positioning), and the beams' alignment. The touch and R-test ids have
+/// no probe, piece or sensor nest here.
+bool actsAsTypeB(const ContributorInfo& c) { return tooltipTypeB(c); }
 
 int transverse(char axis) { return axis == 'A' ? 1 : 0; }  // Y for A, X for B
 int unread(char axis) { return axis == 'A' ? 0 : 1; }      // the direction 004's laser does not read
@@ -61,8 +63,10 @@ Layout layoutOf(const ProbePlan& plan, const TooltipAnalysis& a) {
       fixed[static_cast<size_t>(angleIndex(angles, o.axis == 'A' ? p.A : p.B))] = true;
     }
   Layout l;
+  // An angle the fit has no value for (its readings left out by the screen, or unseen from the
+  // transverse reading alone) is not estimated either.
   for (size_t j = 0; j < angles.size(); ++j)
-    if (!fixed[j]) l.e.push_back(static_cast<int>(j));
+    if (!fixed[j] && std::isfinite(a.joint.e_mdeg[j])) l.e.push_back(static_cast<int>(j));
   l.dR = !a.transverse_only;
   return l;
 }
@@ -96,12 +100,56 @@ void drawTooltip(const ProbePlan& plan, const ContributorSet& set, std::uint64_t
   d->linear = drawLinearAxes(set, only, lo, hi, seed, run, &d->linear_errors);
 }
 
+TooltipMachine tooltipMachineOf(const ProbePlan& plan, const TooltipDraw& draw) {
+  const TooltipOptions o = tooltipOptionsFrom(plan.options, plan.machine);
+  const int ti = transverse(o.axis), ui = unread(o.axis);
+  TooltipMachine m;
+  if (draw.linear) m.pivot_error_mm = draw.linear_errors.asFunction();
+  // The beams' directions: a tilt in the read plane is the cosine error plus cross-talk of the
+  // other read component; a tilt out of it reads the unread component.
+  m.beam_t = Eigen::Vector3d::Zero();
+  m.beam_z = Eigen::Vector3d::Zero();
+  m.beam_t[ti] = std::cos(draw.out_t) * std::cos(draw.in_t);
+  m.beam_t[2] = std::cos(draw.out_t) * std::sin(draw.in_t);
+  m.beam_t[ui] = std::sin(draw.out_t);
+  m.beam_z[2] = std::cos(draw.out_z) * std::cos(draw.in_z);
+  m.beam_z[ti] = std::cos(draw.out_z) * std::sin(draw.in_z);
+  m.beam_z[ui] = std::sin(draw.out_z);
+  return m;
+}
+
+Json tooltipDrawJson(const TooltipDraw& d) {
+  auto r6 = [](double v) { return std::round(v * 1e6) / 1e6; };
+  Json j;
+  j["laser_alignment_urad"] = {{"transverse_beam_in_plane", r6(d.in_t * 1e6)},
+                               {"transverse_beam_out_of_plane", r6(d.out_t * 1e6)},
+                               {"z_beam_in_plane", r6(d.in_z * 1e6)},
+                               {"z_beam_out_of_plane", r6(d.out_z * 1e6)}};
+  if (d.linear) {
+    const LinearAxisErrors& e = d.linear_errors;
+    Json lin = {{"scale_um_per_m", {r6(e.scale.x() * 1e6), r6(e.scale.y() * 1e6), r6(e.scale.z() * 1e6)}},
+                {"squareness_um_per_m", {{"S_xy", r6(e.S_xy * 1e6)}, {"S_xz", r6(e.S_xz * 1e6)}, {"S_yz", r6(e.S_yz * 1e6)}}}};
+    Json nodes = Json::object();
+    for (int a = 0; a < 3; ++a) {
+      const AxisNodes& n = e.nodes[static_cast<size_t>(a)];
+      if (n.spacing_mm <= 0) continue;
+      Json values = Json::array();
+      for (size_t k = 0; k < n.mm[0].size(); ++k)
+        values.push_back({r6(mmToUm(n.mm[0][k])), r6(mmToUm(n.mm[1][k])), r6(mmToUm(n.mm[2][k]))});
+      nodes[std::string(1, "XYZ"[a])] = {{"spacing_mm", n.spacing_mm}, {"first_node_mm", n.spacing_mm * n.first},
+                                         {"values_um_xyz", values}};
+    }
+    lin["random_nodes"] = nodes;
+    j["linear_axes"] = lin;
+  }
+  return j;
+}
+
 TooltipRun simulateTooltipHead(const ProbePlan& plan, const TooltipHead& head, const TooltipDraw& draw, bool read_z,
                                double noise_um, Rng* rng) {
   const TooltipOptions o = tooltipOptionsFrom(plan.options, plan.machine);
   if (head.e_mdeg.size() != head.angles_deg.size())
     throw std::invalid_argument("tooltip head: one angular error per angle");
-  const int ti = transverse(o.axis), ui = unread(o.axis);
   const double r_true = o.radius_mm + umToMm(head.dR_um);
   std::vector<Eigen::Vector3d> devs;
   devs.reserve(plan.points.size());
@@ -115,15 +163,9 @@ TooltipRun simulateTooltipHead(const ProbePlan& plan, const TooltipHead& head, c
     if (draw.linear) pivot += draw.linear_errors.error(pt.trigger_m_mm);
     devs.push_back(pivot + tipOffset_m(degToRad(actual.A), degToRad(actual.B), r_true) - pt.contact_w_mm);
   }
-  // The beams' directions: a tilt in the read plane is the cosine error plus cross-talk of the
-  // other read component; a tilt out of it reads the unread component.
-  Eigen::Vector3d nt = Eigen::Vector3d::Zero(), nz = Eigen::Vector3d::Zero();
-  nt[ti] = std::cos(draw.out_t) * std::cos(draw.in_t);
-  nt[2] = std::cos(draw.out_t) * std::sin(draw.in_t);
-  nt[ui] = std::sin(draw.out_t);
-  nz[2] = std::cos(draw.out_z) * std::cos(draw.in_z);
-  nz[ti] = std::cos(draw.out_z) * std::sin(draw.in_z);
-  nz[ui] = std::sin(draw.out_z);
+  const TooltipMachine m = tooltipMachineOf(plan, draw);
+  const Eigen::Vector3d& nt = m.beam_t;
+  const Eigen::Vector3d& nz = m.beam_z;
   const std::vector<int> refs = tooltipReferences(plan);
   TooltipRun run;
   run.reserve(plan.points.size());
@@ -191,7 +233,7 @@ UncertaintyBudget tooltipBudget(const ProbePlan& plan, const std::vector<Tooltip
   for (const auto& run : runs)
     for (size_t k = 0; k < run.size(); ++k) {
       if (refs[k] == static_cast<int>(k)) continue;
-      rows.push_back(2 * obs);
+      if (std::isfinite(run[k].t_um)) rows.push_back(2 * obs);  // NaN: left out by the screen
       if (std::isfinite(run[k].z_um)) rows.push_back(2 * obs + 1);
       ++obs;
     }

@@ -27,6 +27,9 @@ struct TooltipBudgetOptions : BudgetOptions {};
 
 /// Contributors that act independently at every reading: u_A measures them.
 bool tooltipTypeA(const ContributorInfo& c);
+/// Contributors that act on the readings through the machine or the set-up (the linear axes
+/// carrying the pivot, the beams' alignment): Type B, drawn by drawTooltip.
+bool tooltipTypeB(const ContributorInfo& c);
 
 /// One drawn realisation of the tooltip cycle's Type B contributors (internal units).
 struct TooltipDraw {
@@ -41,6 +44,12 @@ struct TooltipDraw {
 /// contributor but set.items[only] is zero. The same (seed, run) draws the same values whether
 /// alone or combined (one stream per contributor).
 void drawTooltip(const ProbePlan& plan, const ContributorSet& set, std::uint64_t seed, int run, int only, TooltipDraw* out);
+
+/// The draw as the simulator's machine: the linear axes' error at the pivot's command, the beams.
+TooltipMachine tooltipMachineOf(const ProbePlan& plan, const TooltipDraw& draw);
+
+/// What `draw` is, for TRUTH.json's `drawn` (report units: um, um/m, urad).
+Json tooltipDrawJson(const TooltipDraw& draw);
 
 /// A head with an angular error per distinct commanded angle (mdeg, the fit's ascending order of
 /// `angles_deg`) and a pivot-length error (um).

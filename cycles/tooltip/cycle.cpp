@@ -2,6 +2,8 @@
 // program. The laser writes its own file whatever the controller; no offsets.
 #include <cmath>
 
+#include "core/contributor_draw.hpp"
+
 #include <fmt/format.h>
 
 #include "core/errors.hpp"
@@ -10,6 +12,8 @@
 #include "cycles/tooltip/analyze.hpp"
 #include "cycles/tooltip/budget.hpp"
 #include "cycles/tooltip/diagnose.hpp"
+#include "cycles/tooltip/noise.hpp"
+#include "cycles/tooltip/screen.hpp"
 #include "cycles/cycle.hpp"
 #include "cycles/tooltip/program.hpp"
 #include "core/singleton.hpp"
@@ -21,6 +25,16 @@ std::vector<TooltipRun> readRuns(const ProbePlan& plan, const std::vector<InputF
   std::vector<TooltipRun> runs;
   for (const auto& f : results) runs.push_back(parseTooltipResults(f.text, f.path, plan));
   return runs;
+}
+
+/// The cycle writes no offsets; its values go into the machine's kinematics tables by hand. When
+/// they must not, REPORT.json, the text and the warnings say why (and `--offsets` gives it).
+void holdBack(CycleDocuments* out, const std::string& why) {
+  if (why.empty() || !out->offsets_refused.empty()) return;
+  out->offsets_refused = why;
+  out->warnings.push_back(why);
+  out->doc["corrections_held_back"] = why;
+  out->text += "corrections held back: " + why + "\n";
 }
 
 class Tooltip final : public Cycle {
@@ -38,18 +52,51 @@ class Tooltip final : public Cycle {
     const ProbePlan& plan = *r.plan;
     const JsonDoc doc = parseJsonText(r.truth.text, r.truth.path);
     TooltipTruth truth = tooltipTruthFrom(doc, doc.value);
+    // --contributors: a machine drawn from them on top of the truth file, as the budget draws
+    // it (drawTooltip, run 0 of the machine seed: the linear axes carrying the pivot, the beams'
+    // alignment), and the declared per-reading scatter as the noise, replacing the truth file's
+    // (one declaration, not two).
+    TooltipMachine machine;
+    Json truth_json;
+    std::string drawn;
+    if (r.contributors) {
+      const ContributorSplit split = splitContributors(*r.contributors, tooltipTypeA, tooltipTypeB);
+      TooltipDraw draw;
+      onTruthFile(r.truth, [&] {
+        drawTooltip(plan, split.type_b, r.machine_seed, 0, -1, &draw);
+        return 0;
+      });
+      machine = tooltipMachineOf(plan, draw);
+      truth.noise_um = std::sqrt(tooltipDeclaredNoise(plan, r.contributors).white_um2);
+      const std::string from = r.contributors->file.empty() ? std::string("the machine's contributors") : r.contributors->file;
+      truth_json = doc.value;
+      Json rec = tooltipDrawJson(draw);
+      rec["seed"] = r.machine_seed;
+      rec["contributors"] = from;
+      rec["per_reading_um"] = std::round(truth.noise_um * 1e6) / 1e6;
+      if (!split.left_out.empty()) rec["left_out"] = split.left_out;
+      truth_json["drawn"] = rec;
+      drawn = fmt::format(", a machine drawn from {} (machine seed {})", from, r.machine_seed);
+    }
     // Both are >= 0: the truth file's reader and --noise-um's check refuse a negative noise.
     if (r.noise_um) truth.noise_um = *r.noise_um;
-    const TooltipRun run = onTruthFile(r.truth, [&] { return simulateTooltip(plan, truth, r.seed); });
+    if (!truth_json.is_null()) truth_json["noise_um"] = truth.noise_um;
+    const TooltipRun run = onTruthFile(r.truth, [&] { return simulateTooltip(plan, truth, r.seed, machine); });
     return {tooltipResultsText(plan, run),
-            fmt::format("simulated {} tool-tip readings (dR {:.3f} um, noise {:.3f} um, seed {})", run.size(),
-                        truth.dR_um, truth.noise_um, r.seed),
-            Json()};
+            fmt::format("simulated {} tool-tip readings (dR {:.3f} um, noise {:.3f} um, seed {}{})", run.size(),
+                        truth.dR_um, truth.noise_um, r.seed, drawn),
+            truth_json};
   }
 
   CycleDocuments analyze(const AnalyzeRequest& r) const override {
     const ProbePlan& plan = *r.plan;
-    const std::vector<TooltipRun> runs = readRuns(plan, r.results);
+    const std::vector<TooltipRun> read = readRuns(plan, r.results);
+    // Gross readings (a laser glitch, a chip): found against what the machine's contributors
+    // declare, left out of every fit below with the reason; too many: nothing left out, and the
+    // values are held back.
+    const DeclaredNoise noise = tooltipDeclaredNoise(plan, r.contributors, &read.front());
+    const TooltipScreen screen = screenTooltipReadings(plan, read, noise);
+    const std::vector<TooltipRun> runs = withoutScreened(read, screen);
     TooltipAnalysis a = analyzeTooltip(plan, runs);
     a.result_files = pathsOf(r.results);
     CycleDocuments out;
@@ -72,6 +119,17 @@ class Tooltip final : public Cycle {
     const Eigen::VectorXd values = tooltipBudgetValues(a, b);
     out.doc["uncertainty"] = budgetJson(b, values);
     out.text = tooltipReportText(plan, a, &b) + "\n" + budgetText(b, values);
+    out.doc["outliers"] = tooltipScreenJson(plan, screen);
+    out.text += tooltipScreenText(plan, screen) + "\n";
+    if (!screen.screen.excluded.empty()) out.warnings.push_back(tooltipScreenText(plan, screen));
+    if (screen.screen.too_many) holdBack(&out, tooltipScreenText(plan, screen));
+    // The data against what the machine's contributors declare (the budget's own model): beyond
+    // it, the model does not explain this machine, and its values go into no kinematics table.
+    const DeclaredNoiseTest test =
+        testAgainstDeclared(a.joint.kept_residual_um, a.joint.kept_J, noise.covariance(a.joint.kept_values));
+    out.doc["declared_noise"] = declaredNoiseJson(noise, test);
+    out.text += "declared noise: " + out.doc["declared_noise"]["summary"].get<std::string>() + " (" + noise.declaration + ")\n";
+    holdBack(&out, offsetsHeldBack(noise, test));
     return out;
   }
 
@@ -85,10 +143,16 @@ class Tooltip final : public Cycle {
                            "diagnose needs both directions of the reading (dz too): its causes (pivot length, scale, "
                            "drift) differ only in how they split between the two; analyze reads one direction");
     TooltipDiagnosisOptions o;
-    o.judge.alpha = r.alpha;  // the declared noise: the plan's laser_noise_um
+    o.judge.alpha = r.alpha;
+    o.contributors = r.contributors;  // the declared noise; none: the plan's laser_noise_um alone
     o.validate();
-    const TooltipDiagnosis d = diagnoseTooltip({{&plan, runs}}, o);
-    return documents(tooltipDiagnosisJson(d), tooltipDiagnosisText(d));
+    // The judge sees the readings the screen keeps (all of them when it found too many).
+    const TooltipScreen screen = screenTooltipReadings(plan, runs, tooltipDeclaredNoise(plan, r.contributors, &runs.front()));
+    const TooltipDiagnosis d = diagnoseTooltip({{&plan, withoutScreened(runs, screen)}}, o);
+    CycleDocuments out = documents(tooltipDiagnosisJson(d), tooltipDiagnosisText(d) + tooltipScreenText(plan, screen) + "\n");
+    out.doc["outliers"] = tooltipScreenJson(plan, screen);
+    if (!screen.screen.excluded.empty() || screen.screen.too_many) out.warnings.push_back(tooltipScreenText(plan, screen));
+    return out;
   }
 };
 

@@ -9,6 +9,7 @@
 
 #include "core/units.hpp"
 #include "cycles/judge_contract.hpp"
+#include "cycles/tooltip/noise.hpp"
 
 namespace rotacal {
 
@@ -43,7 +44,8 @@ std::vector<double> planAngles(const ProbePlan& plan, char axis) {
 
 }  // namespace
 
-TooltipJudgeSetup tooltipJudgeSetup(const std::vector<TooltipSet>& sets, double noise_um) {
+TooltipJudgeSetup tooltipJudgeSetup(const std::vector<TooltipSet>& sets, double noise_um,
+                                    const ContributorSet* contributors) {
   if (sets.empty() || sets.front().runs.empty()) throw std::invalid_argument("tooltip diagnose: no results");
   if (!(noise_um > 0)) throw std::invalid_argument("tooltip diagnose: the declared laser noise must be > 0");
   const TooltipOptions o0 = tooltipOptionsFrom(sets.front().plan->options, sets.front().plan->machine);
@@ -91,7 +93,8 @@ TooltipJudgeSetup tooltipJudgeSetup(const std::vector<TooltipSet>& sets, double 
 
   std::vector<double> y, tau;
   std::vector<Eigen::VectorXd> j0, piv, sc;
-  std::vector<int> group;
+  std::vector<int> group, comp;
+  std::vector<std::pair<int, int>> kept;  // (set, 2 k + c) of each value: the declaration's index
   JudgeFactor f_angle{"angle", {}, {}, ""}, f_comp{"component", {}, {}, ""}, f_rep{"repeat", {}, {}, ""},
       f_time{"time", {}, {}, "h"}, f_tool{"tool", {}, {}, ""};
   const char tname = o0.axis == 'A' ? 'Y' : 'X';
@@ -118,6 +121,9 @@ TooltipJudgeSetup tooltipJudgeSetup(const std::vector<TooltipSet>& sets, double 
         const double t_h = (plan.points[k].t_s - plan.points[static_cast<size_t>(refs[k])].t_s) / 3600.0;
         for (int c = 0; c < 2; ++c) {
           const Eigen::Index row = 2 * obs + c;
+          if (!std::isfinite(c == 0 ? run[k].t_um : run[k].z_um)) continue;  // left out by the screen
+          kept.emplace_back(static_cast<int>(si), static_cast<int>(2 * k) + c);
+          comp.push_back(c);
           y.push_back((c == 0 ? run[k].t_um : run[k].z_um) - ev.model_um[row]);
           Eigen::VectorXd jr = Eigen::VectorXd::Zero(na);
           for (size_t q = 0; q < own.size(); ++q)
@@ -146,7 +152,36 @@ TooltipJudgeSetup tooltipJudgeSetup(const std::vector<TooltipSet>& sets, double 
   JudgeProblem& pb = s.problem;
   pb.unit = "um";
   pb.y = Eigen::Map<const Eigen::VectorXd>(y.data(), n);
-  pb.sigma = Eigen::VectorXd::Constant(n, noise_um);
+  if (!contributors) {
+    pb.sigma = Eigen::VectorXd::Constant(n, noise_um);
+    pb.declaration = fmt::format("declared: laser noise {:.3f} um only (laser_noise_um)", noise_um);
+  } else {
+    // The machine's declaration: white per value of each set's plan, the structured part shared
+    // between every value of every set and repeat (one machine), about the first run's readings.
+    std::vector<const ProbePlan*> plans;
+    std::vector<const TooltipRun*> about;
+    std::vector<double> white;
+    std::vector<Eigen::Index> first;
+    Eigen::Index m = 0;
+    for (const auto& set : sets) {
+      plans.push_back(set.plan);
+      about.push_back(&set.runs.front());
+      const DeclaredNoise dn = tooltipDeclaredNoise(*set.plan, contributors);
+      white.push_back(dn.white_um2);
+      if (pb.declaration.empty()) pb.declaration = dn.declaration;
+      first.push_back(m);
+      m += 2 * static_cast<Eigen::Index>(set.plan->points.size());
+    }
+    const Eigen::MatrixXd S = tooltipStructuredUm2(plans, *contributors, about);
+    pb.covariance.resize(n, n);
+    for (Eigen::Index a = 0; a < n; ++a)
+      for (Eigen::Index b = 0; b < n; ++b) {
+        const auto& ka = kept[static_cast<size_t>(a)];
+        const auto& kb = kept[static_cast<size_t>(b)];
+        pb.covariance(a, b) = S(first[static_cast<size_t>(ka.first)] + ka.second, first[static_cast<size_t>(kb.first)] + kb.second);
+      }
+    for (Eigen::Index a = 0; a < n; ++a) pb.covariance(a, a) += white[static_cast<size_t>(kept[static_cast<size_t>(a)].first)];
+  }
   pb.J0.resize(n, na);
   for (Eigen::Index i = 0; i < n; ++i) pb.J0.row(i) = j0[static_cast<size_t>(i)].transpose();
   for (double a : s.angles_deg) pb.baseline_parameters.push_back({fmt::format("e({}={:g})", o0.axis, a), "mdeg"});
@@ -162,7 +197,7 @@ TooltipJudgeSetup tooltipJudgeSetup(const std::vector<TooltipSet>& sets, double 
   if (repeated) {
     JudgeCause drift{kDrift, "the tool tip drifts in the read plane with time", Eigen::MatrixXd::Zero(n, 2),
                      {{fmt::format("d{}/h", tname), "um/h"}, {"dZ/h", "um/h"}}};
-    for (Eigen::Index i = 0; i < n; ++i) drift.J(i, i % 2) = tau[static_cast<size_t>(i)];
+    for (Eigen::Index i = 0; i < n; ++i) drift.J(i, comp[static_cast<size_t>(i)]) = tau[static_cast<size_t>(i)];
     pb.causes.push_back(drift);
   }
   pb.groups = group;
@@ -178,7 +213,7 @@ TooltipDiagnosis diagnoseTooltip(const std::vector<TooltipSet>& sets, const Tool
   TooltipDiagnosis d;
   const double noise =
       o.noise_um > 0 ? o.noise_um : tooltipOptionsFrom(sets.front().plan->options, sets.front().plan->machine).noise_um;
-  d.setup = tooltipJudgeSetup(sets, noise);
+  d.setup = tooltipJudgeSetup(sets, noise, o.contributors);
   d.sets = static_cast<int>(sets.size());
   for (const auto& s : sets) {
     d.runs += static_cast<int>(s.runs.size());

@@ -8,8 +8,12 @@
 //    J0: that model's Jacobian there (cycles/tooltip/analyze.hpp, analytic, checked against
 //    finite differences). With several tool lengths (sets) the angular errors are shared by
 //    commanded angle (one axis) and the baseline is linearised at the first set's solution.
-//  - sigma: the DECLARED laser noise, the plan's `laser_noise_um` (default 0.254 um: 004 Sec.
-//    VII's laser system error, 0.000010 in), never the fit's own scatter.
+//  - the noise: the DECLARED one, never the fit's own scatter. With the machine's contributors,
+//    their declaration (cycles/tooltip/noise.hpp: the per-reading laser contributors, and what the
+//    linear axes and the beams' alignment move the readings by, shared between readings, as the
+//    judge's full covariance); without, the plan's `laser_noise_um` alone (default 0.254 um: 004
+//    Sec. VII's laser system error, 0.000010 in). A value the screen of gross readings left out
+//    (NaN) is not in the problem.
 //  - groups: the repeats (results files) when there are at least 3, else the commanded angles
 //    (leave one angle out: its own error is refitted on it by the judge); factors: angle,
 //    component, repeat, time, tool.
@@ -25,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include "core/contributors.hpp"
 #include "core/judge.hpp"
 #include "core/json_io.hpp"
 #include "cycles/tooltip/analyze.hpp"
@@ -41,6 +46,8 @@ struct TooltipSet {
 struct TooltipDiagnosisOptions {
   JudgeOptions judge;
   double noise_um = 0.0;  // declared laser noise; 0: the first plan's laser_noise_um
+  /// The machine's declared contributors (null: the laser noise above alone).
+  const ContributorSet* contributors = nullptr;
   void validate() const;  // throws std::invalid_argument
 };
 
@@ -49,7 +56,8 @@ struct TooltipJudgeSetup {
   std::vector<double> angles_deg;  // the shared angular errors' angles, ascending
   TooltipFit baseline;             // 004's model fitted to the first set (the linearisation point)
 };
-TooltipJudgeSetup tooltipJudgeSetup(const std::vector<TooltipSet>& sets, double noise_um);
+TooltipJudgeSetup tooltipJudgeSetup(const std::vector<TooltipSet>& sets, double noise_um,
+                                    const ContributorSet* contributors = nullptr);
 
 struct TooltipDiagnosis {
   int sets = 0, runs = 0;

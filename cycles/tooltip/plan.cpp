@@ -249,6 +249,10 @@ TooltipTruth tooltipTruthFrom(const JsonDoc& doc, const Json& truth) {
 }
 
 TooltipRun simulateTooltip(const ProbePlan& plan, const TooltipTruth& truth, std::uint64_t seed) {
+  return simulateTooltip(plan, truth, seed, TooltipMachine{});
+}
+
+TooltipRun simulateTooltip(const ProbePlan& plan, const TooltipTruth& truth, std::uint64_t seed, const TooltipMachine& machine) {
   const TooltipOptions o = tooltipOptionsFrom(plan.options, plan.machine);
   const double r_true = o.radius_mm + umToMm(truth.dR_um);
   const int ti = transverseIndex(o.axis);
@@ -265,19 +269,22 @@ TooltipRun simulateTooltip(const ProbePlan& plan, const TooltipTruth& truth, std
     Eigen::Vector3d pivot = pt.trigger_m_mm;
     pivot[ti] *= 1.0 + 1e-6 * truth.scale_t_um_m;
     pivot.z() *= 1.0 + 1e-6 * truth.scale_z_um_m;
+    if (machine.pivot_error_mm) pivot += machine.pivot_error_mm(pt.trigger_m_mm);
     Eigen::Vector3d tip = pivot + tipOffset_m(degToRad(actual.A), degToRad(actual.B), r_true);
     tip[ti] += umToMm(truth.drift_t_um_h * pt.t_s / 3600.0);
     tip.z() += umToMm(truth.drift_z_um_h * pt.t_s / 3600.0);
     devs.push_back(tip - pt.contact_w_mm);
   }
+  Eigen::Vector3d beam_t = machine.beam_t;
+  if (beam_t.isZero()) beam_t = Eigen::Vector3d::Unit(ti);
   const std::vector<int> refs = tooltipReferences(plan);
   for (size_t k = 0; k < plan.points.size(); ++k) {
     const ProbePoint& pt = plan.points[k];
     const Eigen::Vector3d rel = mmToUm(1.0) * (devs[k] - devs[refs[k]]);
     TooltipReading r;
     r.angle_deg = o.axis == 'A' ? pt.pose.A : pt.pose.B;
-    r.t_um = rel[ti];
-    r.z_um = rel.z();
+    r.t_um = beam_t.dot(rel);
+    r.z_um = machine.beam_z.dot(rel);
     if (truth.noise_um > 0 && refs[k] != static_cast<int>(k)) {
       r.t_um += truth.noise_um * rng.normal();
       r.z_um += truth.noise_um * rng.normal();

@@ -9,6 +9,7 @@
 // B: X and Z), zeroed at the sweep's first pose at 0 deg (004: the start, Yp = Zp = A = 0). This header holds the plan, the exact
 // head geometry, the simulator and the results file; cycles/tooltip/analyze.hpp the analysis.
 #include <Eigen/Core>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -90,6 +91,15 @@ using TooltipRun = std::vector<TooltipReading>;
 
 /// Exact forward model: deviation of every plan point, zeroed at the first point of its sweep.
 TooltipRun simulateTooltip(const ProbePlan& plan, const TooltipTruth& truth, std::uint64_t seed);
+
+/// What a machine drawn from its contributors adds (simulate --contributors, budget.hpp's
+/// drawTooltip): the linear axes put the pivot off its command by `pivot_error_mm(command)`, and
+/// the laser reads along the unit directions `beam_t` and `beam_z` (machine frame).
+struct TooltipMachine {
+  std::function<Eigen::Vector3d(const Eigen::Vector3d&)> pivot_error_mm;  // empty: none
+  Eigen::Vector3d beam_t = Eigen::Vector3d::Zero(), beam_z = Eigen::Vector3d::UnitZ();  // beam_t zero: the transverse axis
+};
+TooltipRun simulateTooltip(const ProbePlan& plan, const TooltipTruth& truth, std::uint64_t seed, const TooltipMachine& machine);
 
 /// Index of the zero reading (the first pose at 0 deg of the same sweep) of every plan point.
 std::vector<int> tooltipReferences(const ProbePlan& plan);
