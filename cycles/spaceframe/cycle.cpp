@@ -3,6 +3,7 @@
 #include "cycles/spaceframe/analyze.hpp"
 #include "cycles/spaceframe/budget.hpp"
 #include "cycles/spaceframe/diagnose.hpp"
+#include "cycles/spaceframe/noise.hpp"
 #include "cycles/cycle.hpp"
 #include "cycles/probing.hpp"
 #include "postproc/probe_program.hpp"
@@ -10,6 +11,26 @@
 
 namespace rotacal {
 namespace {
+
+/// The declared noise; two declarations of the probe's repeatability that disagree are the
+/// contributors file's error (its path leads the message).
+SpaceframeNoise noiseOrFail(const ProbePlan& plan, const ContributorSet* declared) {
+  try {
+    return spaceframeDeclaredNoise(plan, declared);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(declared && !declared->file.empty() ? declared->file : "MACHINE.json contributors", 0, e.what());
+  }
+}
+
+/// The cycle writes no offsets; what it identifies is what explains dL. When that must not be
+/// used, REPORT.json, the text and the warnings say why (and `--offsets` gives it).
+void holdBack(CycleDocuments* out, const std::string& why) {
+  if (why.empty() || !out->offsets_refused.empty()) return;
+  out->offsets_refused = why;
+  out->warnings.push_back(why);
+  out->doc["corrections_held_back"] = why;
+  out->text += "identification held back: " + why + "\n";
+}
 
 class Spaceframe final : public Cycle {
  public:
@@ -22,6 +43,7 @@ class Spaceframe final : public Cycle {
 
   CycleDocuments analyze(const AnalyzeRequest& r) const override {
     const ProbePlan& plan = *r.plan;
+    const SpaceframeNoise noise = noiseOrFail(plan, r.contributors);
     const std::vector<MeasurementRun> runs = readProbeRuns(plan, r.results, *r.dialect);
     const SpaceframeAnalysis a = analyzeSpaceframe(plan, runs);
     const std::vector<std::string> files = pathsOf(r.results);
@@ -40,6 +62,14 @@ class Spaceframe final : public Cycle {
     addSpaceframeBudget(&out.doc, b, values);
     out.text = spaceframeText(a, plan, &b) + "\n" + budgetText(b, values);
     if (a.summary.termination != "converged") out.warnings.push_back("spaceframe identification " + a.summary.termination);
+    // The centres against what the machine's contributors declare (the budget's own model):
+    // beyond it, the model does not explain this machine.
+    const SpaceframeCentreProblem cp = spaceframeCentreProblem(plan, a, noise);
+    const DeclaredNoiseTest test = testAgainstDeclared(cp.residual_um, cp.J, cp.covariance_um2);
+    out.doc["declared_noise"] = spaceframeDeclaredNoiseJson(noise, test);
+    out.text += "declared noise: " + out.doc["declared_noise"]["summary"].get<std::string>() + " (" +
+                noise.touch.declaration + ")\n";
+    holdBack(&out, offsetsHeldBack(noise.touch, test));
     return out;
   }
 
@@ -48,6 +78,10 @@ class Spaceframe final : public Cycle {
     SpaceframeDiagnosisOptions o;
     o.judge.alpha = r.alpha;
     o.sigma_um = plan.machine.probe.repeatability_um;  // declared, never the fits' own
+    // The judge reads the centres' declared covariance: the machine's contributors, or the
+    // probe's repeatability alone when none are declared.
+    const SpaceframeNoise noise = noiseOrFail(plan, r.contributors);
+    o.noise = &noise;
     const SpaceframeDiagnosis d = diagnoseSpaceframe(plan, readProbeRuns(plan, r.results, *r.dialect), o);
     if (!d.baseline.converged)
       throw InputError(r.results.front().path, 0, "spaceframe diagnosis: a model fit did not converge");
