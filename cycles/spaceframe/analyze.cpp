@@ -352,14 +352,23 @@ SpaceframeAnalysis analyzeSpaceframe(const ProbePlan& plan, const std::vector<Me
   a.points = framePoints(plan);
   a.runs = static_cast<int>(runs.size());
   if (!options.held_out_ids.empty()) {
-    // Touches the screen left out: out of their sphere's fit in every run; a sphere left with
-    // fewer than 4 leaves the fit at that pose (3 touches fix no centre and radius).
+    // Touches the screen left out: out of their sphere's fit in every run; a sphere whose touches
+    // left no longer fix its centre and radius leaves the fit at that pose.
     std::vector<FramePoint> kept;
     for (FramePoint f : a.points) {
       std::vector<int> ids, out;
       for (int id : f.point_ids) (options.held_out_ids.count(id) ? out : ids).push_back(id);
       a.held_out_ids.insert(a.held_out_ids.end(), out.begin(), out.end());
-      if (ids.size() < 4 && !out.empty()) {
+      // Whether the touches left fix a centre and a radius: their approaches and the radius
+      // column of rank 4 (four touches on the equator leave the height free).
+      bool fixes = ids.size() >= 4;
+      if (fixes && !out.empty()) {
+        Eigen::MatrixXd H(static_cast<Eigen::Index>(ids.size()), 4);
+        for (size_t k = 0; k < ids.size(); ++k)
+          H.row(static_cast<Eigen::Index>(k)) << plan.findPoint(ids[k])->approach_m.transpose(), 1.0;
+        fixes = Eigen::FullPivLU<Eigen::MatrixXd>(H).rank() == 4;
+      }
+      if (!fixes && !out.empty()) {
         std::string list;
         for (int id : f.point_ids) list += fmt::format("{}{}", list.empty() ? "" : ", ", id);
         a.points_left_out.push_back(fmt::format("pose {} sphere {} (points {})", f.pose_name, f.sphere, list));

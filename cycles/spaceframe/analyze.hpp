@@ -111,8 +111,8 @@ struct SpaceframeOptions {
   double rank_tolerance = 1e-10;     // singular values below this x largest are dropped
   /// Touches (plan point ids) left out of every run (the outlier screen's): a touch left out in
   /// one repeat is left out of all, so that every repeat fits its sphere from the same touches
-  /// and the model predicts one centre for them. A sphere left with fewer than 4 touches at a
-  /// pose leaves the fit there (its centre and radius are no longer fixed).
+  /// and the model predicts one centre for them. A sphere whose touches left fix no centre and
+  /// radius at a pose (fewer than 4, or the 4 on its equator) leaves the fit there.
   std::set<int> held_out_ids;
   bool validate() const { return finite_step_scale > 0 && max_iterations > 0 && rank_tolerance > 0; }
 };
@@ -152,7 +152,8 @@ struct SpaceframeAnalysis {
   int triggers = 0;
   int runs = 0;                                // repeats averaged per centre
   std::vector<int> held_out_ids;               // touches left out (SpaceframeOptions::held_out_ids)
-  /// Centres left out because a touch of theirs was: "pose t45p-90 sphere 3 (points 101, 102, 103)".
+  /// Centres left out because a touch of theirs was and the rest fix no centre and radius (fewer
+  /// than 4, or 4 on the equator): "pose t45p-90 sphere 3 (points 101, 102, 103, 104)".
   std::vector<std::string> points_left_out;
   /// Plausibility of the sphere fits: fitted radius - nominal radius. A pretravel or a wrong
   /// ball diameter shows as every sphere smaller or larger; a dirty sphere or a bad touch as one.

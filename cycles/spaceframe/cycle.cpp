@@ -4,6 +4,7 @@
 #include "cycles/spaceframe/budget.hpp"
 #include "cycles/spaceframe/diagnose.hpp"
 #include "cycles/spaceframe/noise.hpp"
+#include "cycles/spaceframe/screen.hpp"
 #include "cycles/cycle.hpp"
 #include "cycles/probing.hpp"
 #include "postproc/probe_program.hpp"
@@ -45,7 +46,13 @@ class Spaceframe final : public Cycle {
     const ProbePlan& plan = *r.plan;
     const SpaceframeNoise noise = noiseOrFail(plan, r.contributors);
     const std::vector<MeasurementRun> runs = readProbeRuns(plan, r.results, *r.dialect);
-    const SpaceframeAnalysis a = analyzeSpaceframe(plan, runs);
+    // Touches that hit a chip: found against the declared noise, left out of every fit below
+    // (and out of every repeat) with the reason; too many: nothing left out, and the
+    // identification is held back.
+    const SpaceframeScreen screened = screenSpaceframeTouches(plan, runs, noise);
+    const SpaceframeAnalysis& a = screened.fit;
+    SpaceframeOptions so;
+    so.held_out_ids = screened.heldOutIds();
     const std::vector<std::string> files = pathsOf(r.results);
     CycleDocuments out;
     out.doc = spaceframeReportJson(a, plan, files);
@@ -53,7 +60,7 @@ class Spaceframe final : public Cycle {
     // the frame's calibration by Monte Carlo through the same estimator (cycles/spaceframe/budget.hpp).
     std::vector<SpaceframeAnalysis> per_run;
     if (runs.size() >= 2)
-      for (const auto& run : runs) per_run.push_back(analyzeSpaceframe(plan, {run}));
+      for (const auto& run : runs) per_run.push_back(analyzeSpaceframe(plan, {run}, so));
     SpaceframeBudgetOptions bo;
     bo.runs = r.mc_runs;
     bo.seed = r.mc_seed;
@@ -62,6 +69,10 @@ class Spaceframe final : public Cycle {
     addSpaceframeBudget(&out.doc, b, values);
     out.text = spaceframeText(a, plan, &b) + "\n" + budgetText(b, values);
     if (a.summary.termination != "converged") out.warnings.push_back("spaceframe identification " + a.summary.termination);
+    out.doc["outliers"] = screened.json();
+    out.text += screened.text() + "\n";
+    if (!screened.screen.excluded.empty()) out.warnings.push_back(screened.text());
+    if (screened.screen.too_many) holdBack(&out, screened.text());
     // The centres against what the machine's contributors declare (the budget's own model):
     // beyond it, the model does not explain this machine.
     const SpaceframeCentreProblem cp = spaceframeCentreProblem(plan, a, noise);
@@ -82,10 +93,17 @@ class Spaceframe final : public Cycle {
     // probe's repeatability alone when none are declared.
     const SpaceframeNoise noise = noiseOrFail(plan, r.contributors);
     o.noise = &noise;
-    const SpaceframeDiagnosis d = diagnoseSpaceframe(plan, readProbeRuns(plan, r.results, *r.dialect), o);
+    // The judge sees the touches the screen keeps (all of them when it found too many).
+    const std::vector<MeasurementRun> runs = readProbeRuns(plan, r.results, *r.dialect);
+    const SpaceframeScreen screened = screenSpaceframeTouches(plan, runs, noise);
+    o.held_out_ids = screened.heldOutIds();
+    const SpaceframeDiagnosis d = diagnoseSpaceframe(plan, runs, o);
     if (!d.baseline.converged)
       throw InputError(r.results.front().path, 0, "spaceframe diagnosis: a model fit did not converge");
-    return documents(spaceframeDiagnosisJson(d, plan), spaceframeDiagnosisText(d));
+    CycleDocuments out = documents(spaceframeDiagnosisJson(d, plan), spaceframeDiagnosisText(d) + screened.text() + "\n");
+    out.doc["outliers"] = screened.json();
+    if (!screened.screen.excluded.empty() || screened.screen.too_many) out.warnings.push_back(screened.text());
+    return out;
   }
 };
 
