@@ -1,5 +1,10 @@
 // spaceframe (003): length errors of a 7-sphere frame against U = +-(A + K L), and what explains them.
+#include <fmt/format.h>
+
+#include "core/contributor_draw.hpp"
 #include "core/errors.hpp"
+#include "core/simulation.hpp"
+#include "core/transforms.hpp"
 #include "cycles/spaceframe/analyze.hpp"
 #include "cycles/spaceframe/budget.hpp"
 #include "cycles/spaceframe/diagnose.hpp"
@@ -41,6 +46,52 @@ class Spaceframe final : public Cycle {
                          makeSpaceframePlan, probeProgram, {},
                          "a spaceframe analysis is a performance test: it writes no offsets (calibrate with touch154 "
                          "and use its offsets)"}) {}
+
+  // --contributors: a whole machine drawn as every probing cycle draws it (drawMachine: the
+  // probe's pretravel, the linear axes of 000 Eqs. (22)-(23), the per-touch scatter as the noise),
+  // with the set-up acting where this cycle has one: the frame on the table, turned about its
+  // origin and shifted, as FrameModel's set-up (the test piece it was drawn for is not on the
+  // table). Its spheres have no faces: a declared form_error is named as left out.
+  Simulated simulate(const SimulateRequest& r) const override {
+    if (!r.contributors) return simulateProbing(r);
+    const ProbePlan& plan = *r.plan;
+    const JsonDoc doc = parseJsonText(r.truth.text, r.truth.path);
+    Truth truth = truthFromJson(doc, plan.machine);
+    Json truth_json = doc.value;
+    const DrawnMachine m = onTruthFile(r.truth, [&] { return drawMachine(plan, *r.contributors, r.machine_seed, &truth); });
+    const SpaceframeLayout l = SpaceframeLayout::fromOptions(plan.options);
+    const Eigen::Vector3d& t = truth.artefact.setup.translation_mm;
+    const Eigen::Vector3d& w = truth.artefact.setup.rotation_rad;
+    const Eigen::Isometry3d S = Eigen::Translation3d(t + l.origin_w_mm) * Da(w.x()) * Db(w.y()) * Dc(w.z()) *
+                                Eigen::Translation3d(-l.origin_w_mm);
+    for (int s = 1; s <= 7; ++s) {
+      const Eigen::Vector3d p = l.origin_w_mm + l.frame.spheres_mm[static_cast<size_t>(s - 1)];
+      const auto it = truth.sphere_center_error_w_mm.find(s);  // Eigen leaves a new entry unset
+      const Eigen::Vector3d e = it == truth.sphere_center_error_w_mm.end() ? Eigen::Vector3d::Zero() : it->second;
+      truth.sphere_center_error_w_mm[s] = S * (p + e) - p;
+    }
+    truth.artefact.setup = {};
+    Json rec = m.record;
+    rec["setup"]["applied_to"] = "the frame on the table: rotation about the frame's origin, then translation";
+    rec.erase("form");
+    if (r.contributors->find("form_error")) {
+      Json left = rec.value("left_out", Json::array());
+      left.push_back("form_error (the frame's spheres have no faces)");
+      rec["left_out"] = left;
+    }
+    truth_json["drawn"] = rec;
+    if (r.noise_um) truth.noise_um = *r.noise_um;
+    if (r.start_s) truth.start_time_s = *r.start_s;
+    truth_json["noise_um"] = truth.noise_um;
+    const MeasurementRun run = onTruthFile(r.truth, [&] { return rotacal::simulate(plan, truth, {r.seed}); });
+    return {r.dialect->write_results(plan, run),
+            fmt::format("simulated {} triggers (noise {:.3f} um, seed {}, a machine drawn from {} (machine seed {})) as {} "
+                        "results",
+                        run.points.size(), truth.noise_um, r.seed,
+                        r.contributors->file.empty() ? std::string("the machine's contributors") : r.contributors->file,
+                        r.machine_seed, r.dialect->name),
+            truth_json};
+  }
 
   CycleDocuments analyze(const AnalyzeRequest& r) const override {
     const ProbePlan& plan = *r.plan;
