@@ -286,10 +286,10 @@ SphereFitOptions fitOptions(const ProbePlan& plan, const ProbePoint& touch) {
 
 }  // namespace
 
-Eigen::Vector3d FrameModel::fittedCentre_m(const ProbePlan& plan, const FramePoint& p, const Eigen::Vector3d& origin_w) const {
+std::vector<double> FrameModel::readingsAlong(const ProbePlan& plan, const FramePoint& p, const Eigen::Vector3d& origin_w) const {
   const Eigen::Vector3d x = actualCentre_m(p, origin_w);
   const Eigen::Matrix3d K = Eigen::Matrix3d((Eigen::Vector3d::Ones() + scale).asDiagonal()) + shear;  // actual = K read
-  std::vector<Eigen::Vector3d> t;
+  std::vector<double> s;
   for (int id : p.point_ids) {
     const ProbePoint& q = *plan.findPoint(id);
     const double rho = q.sphere->radius_mm + plan.machine.probe.ball_radius_mm();
@@ -298,7 +298,17 @@ Eigen::Vector3d FrameModel::fittedCentre_m(const ProbePlan& plan, const FramePoi
     const double bb = b.squaredNorm(), ab = a.dot(b);
     const double disc = ab * ab - bb * (a.squaredNorm() - rho * rho);
     if (disc < 0) throw std::invalid_argument(fmt::format("point {}: the model's probe misses the sphere", id));
-    t.push_back(q.trigger_m_mm + ((-ab - std::sqrt(disc)) / bb) * q.approach_m);
+    s.push_back((-ab - std::sqrt(disc)) / bb);
+  }
+  return s;
+}
+
+Eigen::Vector3d FrameModel::fittedCentre_m(const ProbePlan& plan, const FramePoint& p, const Eigen::Vector3d& origin_w) const {
+  const std::vector<double> s = readingsAlong(plan, p, origin_w);
+  std::vector<Eigen::Vector3d> t;
+  for (size_t k = 0; k < s.size(); ++k) {
+    const ProbePoint& q = *plan.findPoint(p.point_ids[k]);
+    t.push_back(q.trigger_m_mm + s[k] * q.approach_m);
   }
   return fitSphereCentre(t, p.nominal_m_mm, fitOptions(plan, *plan.findPoint(p.point_ids.front()))).centre_mm;
 }
@@ -340,6 +350,37 @@ SpaceframeAnalysis analyzeSpaceframe(const ProbePlan& plan, const std::vector<Me
   SpaceframeAnalysis a;
   a.spec = layout.spec;
   a.points = framePoints(plan);
+  a.runs = static_cast<int>(runs.size());
+  if (!options.held_out_ids.empty()) {
+    // Touches the screen left out: out of their sphere's fit in every run; a sphere whose touches
+    // left no longer fix its centre and radius leaves the fit at that pose.
+    std::vector<FramePoint> kept;
+    for (FramePoint f : a.points) {
+      std::vector<int> ids, out;
+      for (int id : f.point_ids) (options.held_out_ids.count(id) ? out : ids).push_back(id);
+      a.held_out_ids.insert(a.held_out_ids.end(), out.begin(), out.end());
+      // Whether the touches left fix a centre and a radius: their approaches and the radius
+      // column of rank 4 (four touches on the equator leave the height free).
+      bool fixes = ids.size() >= 4;
+      if (fixes && !out.empty()) {
+        Eigen::MatrixXd H(static_cast<Eigen::Index>(ids.size()), 4);
+        for (size_t k = 0; k < ids.size(); ++k)
+          H.row(static_cast<Eigen::Index>(k)) << plan.findPoint(ids[k])->approach_m.transpose(), 1.0;
+        fixes = Eigen::FullPivLU<Eigen::MatrixXd>(H).rank() == 4;
+      }
+      if (!fixes && !out.empty()) {
+        std::string list;
+        for (int id : f.point_ids) list += fmt::format("{}{}", list.empty() ? "" : ", ", id);
+        a.points_left_out.push_back(fmt::format("pose {} sphere {} (points {})", f.pose_name, f.sphere, list));
+        continue;
+      }
+      f.point_ids = ids;
+      f.index = static_cast<int>(kept.size());
+      kept.push_back(f);
+    }
+    a.points = kept;
+    if (a.points.size() < 3) throw std::invalid_argument("spaceframe: fewer than 3 centres left after the held-out touches");
+  }
 
   // Triggers by point id, per run.
   std::vector<std::map<int, Eigen::Vector3d>> by_id(runs.size());

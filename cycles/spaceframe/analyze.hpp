@@ -12,6 +12,7 @@
 // applies them the other way round (tilt in the frame, then turn about the fixed Z: a rotary
 // table carrying a tilt stage). The count is the same: 45 orientations, 315 points, 49455
 // lengths; the nominal lengths are those of the poses the machine takes.
+#include <set>
 #include <string>
 #include <vector>
 
@@ -92,6 +93,10 @@ struct FrameModel {
   /// plan's touches give (exact ball-on-sphere contact seen through the scaled linear axes). On
   /// an anisotropic scale this is not actual / (1 + s): one-sided touches bias the fit.
   Eigen::Vector3d fittedCentre_m(const ProbePlan& plan, const FramePoint& p, const Eigen::Vector3d& origin_w) const;
+  /// The readings this model gives for the point's touches (p.point_ids' order): where the
+  /// exact ball meets the model's sphere (nominal R + r) through the linear axes' map, as the
+  /// distance (mm) along each touch's approach from its nominal trigger (trigger_m_mm).
+  std::vector<double> readingsAlong(const ProbePlan& plan, const FramePoint& p, const Eigen::Vector3d& origin_w) const;
 };
 
 /// d(fitted centre)/d(parameter) at `model` for the `active` entries of FrameModel::toVector(),
@@ -104,6 +109,11 @@ struct SpaceframeOptions {
   double finite_step_scale = 1e-3;   // Jacobian steps: 1e-3 um / mdeg / um/m / ...
   int max_iterations = 20;
   double rank_tolerance = 1e-10;     // singular values below this x largest are dropped
+  /// Touches (plan point ids) left out of every run (the outlier screen's): a touch left out in
+  /// one repeat is left out of all, so that every repeat fits its sphere from the same touches
+  /// and the model predicts one centre for them. A sphere whose touches left fix no centre and
+  /// radius at a pose (fewer than 4, or the 4 on its equator) leaves the fit there.
+  std::set<int> held_out_ids;
   bool validate() const { return finite_step_scale > 0 && max_iterations > 0 && rank_tolerance > 0; }
 };
 
@@ -140,6 +150,11 @@ struct SpaceframeAnalysis {
   double dL_rms_um = 0.0;                      // before: the measured dL
   double dL_unexplained_rms_um = 0.0;          // dL minus the dL the identified model predicts
   int triggers = 0;
+  int runs = 0;                                // repeats averaged per centre
+  std::vector<int> held_out_ids;               // touches left out (SpaceframeOptions::held_out_ids)
+  /// Centres left out because a touch of theirs was and the rest fix no centre and radius (fewer
+  /// than 4, or 4 on the equator): "pose t45p-90 sphere 3 (points 101, 102, 103, 104)".
+  std::vector<std::string> points_left_out;
   /// Plausibility of the sphere fits: fitted radius - nominal radius. A pretravel or a wrong
   /// ball diameter shows as every sphere smaller or larger; a dirty sphere or a bad touch as one.
   double radius_limit_um = 0.0;       // max(2 um, 6 x probe repeatability): far beyond the fits' noise

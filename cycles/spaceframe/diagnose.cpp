@@ -31,6 +31,10 @@ struct Problem {
   std::vector<FramePoint> points;
   std::vector<Eigen::Vector3d> measured_m_mm;
   std::vector<Eigen::Matrix3d> W;
+  /// With a declared covariance of the centres: its inverse root (1/um) replaces W, and `raw`
+  /// (once the baseline is fitted) hands the judge plain um, which it whitens itself.
+  Eigen::MatrixXd W_full;
+  bool raw = false;
   ModelVector unit;
 
   int n() const { return static_cast<int>(points.size()); }
@@ -49,17 +53,23 @@ struct Problem {
     FrameModel fm = FrameModel::fromVector(kin, x);
     fm.shear << 0.0, c.squareness[0], c.squareness[1], 0.0, 0.0, c.squareness[2], 0.0, 0.0, 0.0;
     const ErrorVector e0 = fm.errors.values;
-    w->resize(3 * n());
-    if (plain) plain->resize(3 * n());
+    Eigen::VectorXd r_all(3 * n());
     for (int i = 0; i < n(); ++i) {
       FramePoint p = points[i];
       p.center_w_mm *= 1.0 + c.frame_expansion;
       fm.errors.values = e0;
       fm.errors.values.head<3>() += c.drift * t_h[static_cast<size_t>(i)];
-      const Eigen::Vector3d r = mmToUm(1.0) * (measured_m_mm[i] - fm.fittedCentre_m(*plan, p, origin_w_mm));
-      w->segment<3>(3 * i) = W[i] * r;
-      if (plain) plain->segment<3>(3 * i) = r;
+      r_all.segment<3>(3 * i) = mmToUm(1.0) * (measured_m_mm[i] - fm.fittedCentre_m(*plan, p, origin_w_mm));
     }
+    if (raw) {
+      *w = r_all;
+    } else if (W_full.size() > 0) {
+      *w = W_full * r_all;
+    } else {
+      w->resize(3 * n());
+      for (int i = 0; i < n(); ++i) w->segment<3>(3 * i) = W[i] * r_all.segment<3>(3 * i);
+    }
+    if (plain) *plain = r_all;
   }
   // d(model, whitened um) / d(parameter, report unit): central differences of 1e-3 report units
   // (the fits converge to 1e-13 mm, far below the 1e-6 um these steps resolve).
@@ -136,6 +146,7 @@ SpaceframeDiagnosis diagnoseSpaceframe(const ProbePlan& plan, const std::vector<
   // The sphere fits and measured centres of the analysis (its own identification is not used).
   SpaceframeOptions so;
   so.max_iterations = 1;
+  so.held_out_ids = options.held_out_ids;
   const SpaceframeAnalysis a = analyzeSpaceframe(plan, runs, so);
   const SpaceframeLayout layout = SpaceframeLayout::fromOptions(plan.options);
   Problem pb;
@@ -170,6 +181,16 @@ SpaceframeDiagnosis diagnoseSpaceframe(const ProbePlan& plan, const std::vector<
   d.centres = pb.n();
   d.fit_noise_um = dof_fit > 0 ? std::sqrt(ss_fit / dof_fit) : 0.0;
   d.sigma_um = options.sigma_um;
+  d.declaration = fmt::format("declared: the probe's noise only ({:.3f} um per touch, carried to each centre by its "
+                              "sphere fit)", options.sigma_um);
+  if (options.noise) {
+    d.problem.covariance = spaceframeCentreCovariance(plan, pb.points, *options.noise, static_cast<int>(runs.size()));
+    pb.W_full = inverseSquareRoot(d.problem.covariance);
+    d.sigma_um = std::sqrt(options.noise->touch.white_um2);
+    d.declaration = options.noise->touch.declaration;
+  }
+  // With a declared covariance the whitened residual is unitless: chi2 = |W r|^2.
+  const double fit_sigma = options.noise ? 1.0 : d.sigma_um;
 
   JudgeProblem& jp = d.problem;
   // One orientation: the pose's A and C modulo 360 (theta = 0 and 360 are the same table pose).
@@ -200,14 +221,21 @@ SpaceframeDiagnosis diagnoseSpaceframe(const ProbePlan& plan, const std::vector<
   for (int i : full)
     if (!isScale(i)) base.push_back(i);
   Eigen::MatrixXd Jb;
-  d.baseline = fitAll(pb, base, d.sigma_um, &Jb);
+  d.baseline = fitAll(pb, base, fit_sigma, &Jb);
+  // The judge whitens by the declared covariance itself: from here on it reads plain um.
+  if (options.noise) pb.raw = true;
   const ModelVector xb = d.baseline.model.toVector();
   // The judge's y: whitened um (unit variance per touch sigma) and sigma the declared noise.
   Eigen::VectorXd w;
   pb.residuals(xb, &w, nullptr);
   jp.y = w;
-  jp.sigma = Eigen::VectorXd::Constant(w.size(), d.sigma_um);
-  jp.unit = "um (whitened by each centre's sphere-fit covariance)";
+  jp.declaration = d.declaration;
+  if (options.noise) {
+    jp.unit = "um";
+  } else {
+    jp.sigma = Eigen::VectorXd::Constant(w.size(), d.sigma_um);
+    jp.unit = "um (whitened by each centre's sphere-fit covariance)";
+  }
   jp.J0 = pb.jacobian(xb, base);
   const auto& lp = locationParameters(pb.kin);
   for (int i : base) {
@@ -346,6 +374,7 @@ Json spaceframeDiagnosisJson(const SpaceframeDiagnosis& d, const ProbePlan& plan
   j["baseline"]["p_value"] = s.baseline.p_value;
   j["holdout_scheme"] = fmt::format("leave one orientation out ({} orientations, {} centres)", d.holdout_groups, d.centres);
   j["sigma_um"] = round6(d.sigma_um);
+  j["declaration"] = d.declaration;
   j["fit_noise_um"] = round6(d.fit_noise_um);
   const auto& lp = locationParameters(plan.machine.kinematics);
   for (size_t k = 0; k < s.findings.size(); ++k) {
@@ -380,8 +409,8 @@ Json spaceframeDiagnosisJson(const SpaceframeDiagnosis& d, const ProbePlan& plan
 std::string spaceframeDiagnosisText(const SpaceframeDiagnosis& d) {
   std::string s = fmt::format(
       "spaceframe diagnosis: baseline (location errors + frame) residual {:.3f} um rms over {} centres; declared probe "
-      "noise {:.3f} um (the sphere fits' own: {:.3f} um)\n",
-      d.baseline.residual_rms_um, d.centres, d.sigma_um, d.fit_noise_um);
+      "noise {:.3f} um per touch (the sphere fits' own: {:.3f} um); {}\n",
+      d.baseline.residual_rms_um, d.centres, d.sigma_um, d.fit_noise_um, d.declaration);
   return s + judgeText(d.judged, separateWith);
 }
 

@@ -21,6 +21,7 @@
 
 #include "core/judge.hpp"
 #include "cycles/spaceframe/analyze.hpp"
+#include "cycles/spaceframe/noise.hpp"
 
 namespace rotacal {
 
@@ -40,12 +41,19 @@ struct SpaceframeFit {
 struct SpaceframeDiagnosisOptions {
   JudgeOptions judge;     // alpha from the CLI's --alpha
   double sigma_um = 0.7;  // declared probe noise (MACHINE.json), k = 1
+  /// The declaration (spaceframeDeclaredNoise: the machine's contributors): given, the judge
+  /// reads the centres' declared covariance (JudgeProblem::covariance, structured between
+  /// centres) and sigma_um is not used; null: each centre whitened by its sphere fit and sigma_um.
+  const SpaceframeNoise* noise = nullptr;
+  /// Touches the outlier screen left out (SpaceframeOptions::held_out_ids).
+  std::set<int> held_out_ids;
   /// Candidate causes by name; empty: the whole catalog above.
   std::vector<std::string> candidates;
 };
 
 struct SpaceframeDiagnosis {
   double sigma_um = 0.0;            // declared touch noise
+  std::string declaration;          // what the judge tests against
   double fit_noise_um = 0.0;        // the sphere fits' pooled touch noise (reported, not used)
   int centres = 0;
   int holdout_groups = 0;

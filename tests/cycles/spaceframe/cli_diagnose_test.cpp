@@ -29,14 +29,21 @@ class SpaceframeDiagnoseCli : public ScratchTest {
   nlohmann::json load(const std::string& name) const { return test::loadJson(p(name)); }
 };
 
+// The bundled machine declares 000 Table 5's linear axes (10 um/m of scale, 30 um/m of
+// squareness per axis): a scale of 20 / -15 / 30 um/m is a machine it declares, so the judge is
+// told a machine whose only declared noise is the probe's (--contributors with the repeatability
+// alone), on which the scale is an effect.
 TEST_F(SpaceframeDiagnoseCli, BundledScaleTruthIsNamed) {
+  std::ofstream(p("probe_only.json")) << R"({"format": "rotacal-contributors/1",
+    "contributors": {"probe_repeatability": {"u": 0.7, "unit": "um"}}})";
   auto r = sh("simulate --plan " + p("plan.json") + " --truth " + test::sourcePath("examples/truth/spaceframe_scale.json") +
               " --seed 5 --dialect linuxcnc -o " + p("res.txt"));
   ASSERT_EQ(r.code, 0) << r.out;
   r = sh("diagnose --plan " + p("plan.json") + " --results " + p("res.txt") + " --dialect linuxcnc --json " +
-         p("D.json") + " --html " + p("D.html") + " --text " + p("D.txt"));
+         p("D.json") + " --html " + p("D.html") + " --text " + p("D.txt") + " --contributors " + p("probe_only.json"));
   ASSERT_EQ(r.code, 0) << r.out;
   const auto d = load("D.json");
+  EXPECT_NE(d["declaration"].get<std::string>().find("repeatability only"), std::string::npos) << d["declaration"];
   EXPECT_EQ(d["format"], "rotacal-diagnosis/1");
   EXPECT_EQ(d["cycle"], "spaceframe");
   // The scale's isotropic part (about 12 um/m) moves the centres exactly as the frame's
@@ -79,6 +86,10 @@ TEST_F(SpaceframeDiagnoseCli, NoScaleNoFinding) {
   ASSERT_EQ(r.code, 0) << r.out;
   const auto d = load("D.json");
   EXPECT_EQ(d["verdict"], "no_significant_effect");
+  // Judged against the machine's own contributors (MACHINE.json names 000 Table 5's, the plan
+  // carries them): the linear axes' errors shared between touches.
+  EXPECT_NE(d["declaration"].get<std::string>().find("shared between touches"), std::string::npos) << d["declaration"];
+  EXPECT_NE(d["declaration"].get<std::string>().find("S_xy"), std::string::npos) << d["declaration"];
   EXPECT_TRUE(d["findings"].empty());
   EXPECT_NEAR(d["baseline"]["location_errors"]["dx_AY"]["value"].get<double>(), 14.6,
               3 * d["baseline"]["location_errors"]["dx_AY"]["u"].get<double>());
