@@ -4,6 +4,7 @@
 // fails it is never written.
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <optional>
 #include <cstdio>
 #include <memory>
@@ -16,6 +17,7 @@
 #include "cli/command.hpp"
 #include "controllers/common.hpp"
 #include "controllers/motion_reader.hpp"
+#include "core/error_model.hpp"
 #include "core/errors.hpp"
 #include "core/json_io.hpp"
 #include "core/machine.hpp"
@@ -89,8 +91,46 @@ int cmdCheck(const Common& c, const std::string& program_file, const std::string
       failFile(plan_file, e.what());
     }
   }
+  // With a plan, what stands on the table is the plan's, as `generate` checked it: a space frame's
+  // plan takes the column off the table, and the machine file's column would be a collision on
+  // every move. The plan must be of this machine.
+  MachineModel checked = machine;
+  if (plan) {
+    if (plan->machine.name != machine.name || plan->machine.kinematics != machine.kinematics)
+      failFile(plan_file, fmt::format("the plan is of machine '{}' ({}), --machine {} is '{}' ({})", plan->machine.name,
+                                      kinematicsName(plan->machine.kinematics), machine_file, machine.name,
+                                      kinematicsName(machine.kinematics)));
+    checked.artefact = plan->machine.artefact;
+  }
   const std::string text = readTextFile(program_file);
-  const ProgramCheckResult r = verifyProgram(text, dialect, machine, plan ? &*plan : nullptr, true);
+  ProgramCheckResult r = verifyProgram(text, dialect, checked, plan ? &*plan : nullptr, true);
+  // The dialect's own rules (comments, brackets, labels and jump targets, decimal points, the
+  // no-trigger alarms it writes), against what the plan's program must show: the checker
+  // `generate` runs before it writes, so a hand-edited program is not passed on its motion alone.
+  if (plan) {
+    nc::Shape shape;
+    try {
+      shape = nc::shapeOf(cycleOfPlan(*plan).program(*plan, dialect));
+    } catch (const std::invalid_argument& e) {
+      failFile(plan_file, e.what());
+    }
+    std::vector<ProgramViolation> rules;
+    for (const std::string& p : d.check(text, *plan, shape)) {
+      // "LINE: problem" (controllers/dialect.hpp); a problem of the whole program names line 1.
+      const size_t colon = p.find(": ");
+      int line = 1;
+      std::string what = p;
+      if (colon != std::string::npos && colon > 0 &&
+          std::all_of(p.begin(), p.begin() + static_cast<long>(colon), [](char ch) { return ch >= '0' && ch <= '9'; })) {
+        line = std::max(1, std::atoi(p.substr(0, colon).c_str()));
+        what = p.substr(colon + 2);
+      }
+      rules.push_back({line, fmt::format("the {} checker: {}", d.name(), what)});
+    }
+    r.violations.insert(r.violations.begin(), rules.begin(), rules.end());
+    std::stable_sort(r.violations.begin(), r.violations.end(),
+                     [](const ProgramViolation& a, const ProgramViolation& b) { return a.line < b.line; });
+  }
   if (!r.violations.empty()) {
     for (const auto& v : r.violations) std::printf("%s:%d: %s\n", program_file.c_str(), v.line, v.problem.c_str());
     std::fflush(stdout);
@@ -102,6 +142,10 @@ int cmdCheck(const Common& c, const std::string& program_file, const std::string
                          : fmt::format("{} (and {} more violations, listed on stdout)", v.problem, r.violations.size() - 1));
   }
   say(c, checkSummary(program_file, text, r));
+  say(c, plan ? fmt::format("{}: the {} checker's rules (comments, brackets, labels, alarms): ok against the plan\n",
+                            program_file, d.name())
+              : fmt::format("{}: the {} checker's rules (comments, brackets, labels, alarms): not checked (give --plan)\n",
+                            program_file, d.name()));
   return 0;
 }
 

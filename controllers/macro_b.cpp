@@ -5,7 +5,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
+#include <map>
+#include <string>
+#include <utility>
 #include <stdexcept>
 
 #include "controllers/common.hpp"
@@ -359,6 +363,11 @@ std::vector<std::string> MacroBDialect::check(const std::string& text, const Pro
       continue;
     }
     if (b.hasWord('G', 103)) g103 = b.hasWord('P', 1);
+    // What the verifier cannot follow is not passed (docs/safety.md): a subprogram or macro call
+    // runs moves it never sees.
+    for (const auto& [letter, code] : {std::pair{'M', 98}, {'M', 198}, {'G', 65}, {'G', 66}, {'M', 99}})
+      if (b.hasWord(letter, code))
+        problem(b.line, fmt::format("{}{}: a subprogram or macro call the verifier cannot follow", letter, code));
     for (const auto& w : b.words) {
       if (w.letter == 'O' && i != o_block) problem(b.line, "O word (program number) after the start of the program");
       const bool needs_point = w.letter == 'X' || w.letter == 'Y' || w.letter == 'Z' || w.letter == 'A' ||
@@ -387,11 +396,46 @@ std::vector<std::string> MacroBDialect::check(const std::string& text, const Pro
       ok = label && reads[0] && reads[1] && reads[2] && alarm < blocks.size() &&
            blocks[alarm].code.rfind("#3000=", 0) == 0 && target < blocks.size() && !blocks[target].control &&
            blocks[target].hasWord('N', static_cast<double>(*label));
+      // The jump past the alarm is taken when the probe stopped short of the end point (the squared
+      // distance GT a positive tolerance). Any other comparison, or a tolerance at or below zero
+      // (a squared distance is never negative), jumps always or never by the values alone: the
+      // alarm either cannot be raised or the check is not the one rotacal writes.
+      if (ok) {
+        const size_t gt = g == std::string::npos ? std::string::npos : c.code.rfind("]GT", g);
+        const double tol = gt == std::string::npos ? 0.0 : std::strtod(c.code.c_str() + gt + 3, nullptr);
+        if (gt == std::string::npos || !(tol > 0.0)) {
+          problem(c.line, "the no-trigger check must jump past its alarm on [squared distance]GT a positive tolerance: "
+                          "as written the alarm can never be raised, or the test is not rotacal's");
+        }
+      }
       break;
     }
     if (!ok)
       problem(b.line, "G31 is not followed by the no-trigger check (#5061-#5063 vs the end point, IF[..]GOTO n, "
                       "#3000 alarm, N n)");
+  }
+  // A jump back to a label at or before it is a loop the verifier cannot bound (it may never end);
+  // rotacal's programs jump forward only, past an alarm. A jump to a label that is not there stops
+  // the control.
+  {
+    std::map<long, int> label_line;
+    for (const auto& b : blocks)
+      if (!b.control)
+        if (const nc::Word* n = b.find('N'); n && n->value) label_line.emplace(static_cast<long>(*n->value), b.line);
+    for (const auto& b : blocks) {
+      if (!b.control) continue;
+      const size_t g = b.code.find("GOTO");
+      if (g == std::string::npos) continue;
+      const auto label = ctl::parseDigits(ctl::trim(b.code.substr(g + 4)));
+      if (!label) {
+        problem(b.line, "GOTO without a label number");
+        continue;
+      }
+      const auto it = label_line.find(*label);
+      if (it == label_line.end()) problem(b.line, fmt::format("GOTO{}: no block N{} in the program", *label, *label));
+      else if (it->second <= b.line)
+        problem(b.line, fmt::format("GOTO{} jumps back to line {}: a loop the verifier cannot bound", *label, it->second));
+    }
   }
   const int last_line = blocks.empty() ? 1 : blocks.back().line;
   if (static_cast<size_t>(probes) != shape.probes)

@@ -153,8 +153,10 @@ TEST(SpaceframeRealMachine, JudgeScreenAndBudgetKeepTheirRatesOnDrawnMachines) {
   const ContributorSet cs = table5();
   const LocationErrors truth = test::table4Mean();
   const auto& params = locationParameters(plan.machine.kinematics);
-  const int machines = 30;
-  int inadequate = 0, effect = 0, screened = 0, held = 0, in = 0, all = 0, old_inadequate = 0, old_effect = 0;
+  // 20 machines: the rates' test at its size for a unit-sized run (docs/spaceframe.md has 30, and
+  // the verdicts against the repeatability alone, which this test does not repeat).
+  const int machines = 20;
+  int inadequate = 0, effect = 0, screened = 0, held = 0, in = 0, all = 0;
   for (int m = 1; m <= machines; ++m) {
     const Simulated s = simulateDrawn(plan, cs, static_cast<std::uint64_t>(100 + m), static_cast<std::uint64_t>(m));
     DiagnoseRequest dr;
@@ -166,10 +168,6 @@ TEST(SpaceframeRealMachine, JudgeScreenAndBudgetKeepTheirRatesOnDrawnMachines) {
     const std::string verdict = cycleByName("spaceframe").diagnose(dr).doc["verdict"].get<std::string>();
     inadequate += verdict == "model_inadequate" ? 1 : 0;
     effect += verdict == "effect_found" ? 1 : 0;
-    dr.contributors = nullptr;
-    const std::string old = cycleByName("spaceframe").diagnose(dr).doc["verdict"].get<std::string>();
-    old_inadequate += old == "model_inadequate" ? 1 : 0;
-    old_effect += old == "effect_found" ? 1 : 0;
     const CycleDocuments a = analyzeThrough(plan, {csvIO().read_results(s.results_text, "r.csv", plan)}, &cs,
                                             static_cast<std::uint64_t>(m));
     screened += a.doc["outliers"]["excluded"].empty() ? 0 : 1;
@@ -181,9 +179,8 @@ TEST(SpaceframeRealMachine, JudgeScreenAndBudgetKeepTheirRatesOnDrawnMachines) {
     }
   }
   std::printf("spaceframe on %d drawn machines (Table 5): model_inadequate %d, effect_found %d, screen lost a touch %d, "
-              "held back %d; U covers the location errors %d of %d; against the probe's repeatability alone: "
-              "model_inadequate %d, effect_found %d\n",
-              machines, inadequate, effect, screened, held, in, all, old_inadequate, old_effect);
+              "held back %d; U covers the location errors %d of %d\n",
+              machines, inadequate, effect, screened, held, in, all);
   EXPECT_LE(inadequate + effect, 3);
   EXPECT_LE(screened, 3);
   EXPECT_LE(held, 1);
