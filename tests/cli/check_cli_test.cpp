@@ -9,6 +9,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <tuple>
 
 #include "cli_run.hpp"
 
@@ -148,6 +149,24 @@ TEST(CheckCli, HandEditsThatMakeAProgramUnsafeFailWithThePlanAtTheirLine) {
   e.erase(dot, end - dot);
   expectAt(check("point.nc", e), lineOf(z), "Z", "point.nc");
   EXPECT_NE(check("point.nc", e).out.find("has no decimal point"), std::string::npos);
+  // The other guarded dialects: Okuma's alarm deleted, Siemens' condition made never true and its
+  // label deleted; each names the probing move whose guard it broke.
+  for (const auto& [dialect, from, to] :
+       {std::tuple<std::string, std::string, std::string>{"okuma", "VDOUT[992]=1001\n", ""},
+        {"siemens", "$AC_MEA[1]==0", "$AC_MEA[1]==2"},
+        {"siemens", "\nNOHIT1:", "\n"}}) {
+    const std::string prog = d.p("g." + dialect);
+    ASSERT_EQ(sh("generate --plan " + d.p("plan.json") + " --dialect " + dialect + " -o " + prog).code, 0) << dialect;
+    std::string t = slurp(prog);
+    const size_t at = t.find(from);
+    ASSERT_NE(at, std::string::npos) << dialect << " " << from;
+    t.replace(at, from.size(), to);
+    spit(d.p("edit." + dialect), t);
+    const auto r = sh("check " + d.p("edit." + dialect) + " --dialect " + dialect + " --machine " + kMachine + " --plan " +
+                      d.p("plan.json"));
+    EXPECT_EQ(r.code, 1) << dialect << " " << from << ": " << r.out;
+    EXPECT_NE(r.out.find("the " + dialect + " checker: "), std::string::npos) << r.out;
+  }
 }
 
 // A space frame's plan takes the column off the table: its programs pass check with the plan in
