@@ -1,5 +1,5 @@
 #pragma once
-// The compensation loop closed on one simulated machine (issue 18, item 5): shared by
+// The compensation loop closed on one simulated machine: shared by
 // rotacal_compensation_loop_bench (50 machines, printed) and the test that asserts it on a few.
 #include <cstdint>
 #include <string>

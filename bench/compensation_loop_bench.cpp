@@ -1,5 +1,5 @@
-// rotacal_compensation_loop_bench: the compensation loop closed on simulated machines (issue 18,
-// item 5). Each machine draws location errors, the C axis's component errors (001's size) and
+// rotacal_compensation_loop_bench: the compensation loop closed on simulated machines.
+// Each machine draws location errors, the C axis's component errors (001's size) and
 // an effect no cycle models (an error motion of the A axis); the touch154 and spheres3 cycles
 // are simulated on it with probe noise, analyzed as `analyze` does, their REPORT.json read as
 // `compensate --report a --report b` reads them, and the volumetric error evaluated on the true

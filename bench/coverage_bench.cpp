@@ -1,4 +1,4 @@
-// rotacal_coverage_bench: the honest test of an uncertainty (issue 17). Machines are drawn from
+// rotacal_coverage_bench: the honest test of an uncertainty. Machines are drawn from
 // the declared contributors (true location errors, probe repeatability, pre-travel, linear-axis
 // errors, set-up, form, roughness), each measured on the exact simulator and analyzed as
 // `analyze` does (estimate + touch154Budget); the bench counts how often the truth lies within
@@ -518,7 +518,7 @@ ProbePlan oneSpherePlan(const MachineModel& machine, const std::string& plan_opt
   return plan;
 }
 
-// The one sphere (issue 19): every machine draws the 8 location errors of its A/C table (000 Table
+// The one sphere: every machine draws the 8 location errors of its A/C table (000 Table
 // 4's size), the sphere's place on the table (50 um) and every declared contributor that acts on
 // one sphere (the probe's pretravel by direction and the linear axes through drawProbeAxes, on
 // the exact simulator; repeatability and roughness per touch), and is analyzed as `analyze` does
@@ -586,7 +586,7 @@ int oneSphereCoverage(int machines, const std::string& contributors_file, const 
   return 0;
 }
 
-// The one sphere under a spindle head (issue 19): a B head over a C table
+// The one sphere under a spindle head: a B head over a C table
 // (examples/machines/bc_head_table.json) or an A head carrying a B head (ab_head.json). Every
 // machine draws the separable location errors of its axes and the pivot-to-ball length's deviation
 // (`drawn`: 20 um / 2 mdeg), the sphere's set-up (50 um; the 5 held directions' own parameters stay

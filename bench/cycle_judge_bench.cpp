@@ -1,5 +1,5 @@
 // rotacal_cycle_judge_bench: printed figures of the rtest and tooltip diagnoses through the judge
-// (issue 16, docs/diagnosis.md). Simulated with the cycles' exact simulators; the judge never
+// (docs/diagnosis.md). Simulated with the cycles' exact simulators; the judge never
 // sees the truth. alpha = 0.01 (JudgeOptions' default). Run: build/bench/rotacal_cycle_judge_bench
 #include <Eigen/Dense>
 #include <chrono>
@@ -211,7 +211,7 @@ void tooltipBench() {
         confounded += !c.with_model && c.signal && (c.cause == "pivot_length" || c.with[0] == "pivot_length");
       pivot_found += d.summary.finding("pivot_length") != nullptr;
     }
-    std::printf("  issue 16 reproduction (30 um/m isotropic scale, no pivot error, one tool): confounded pair with a signal "
+    std::printf("  the once-missed case (30 um/m isotropic scale, no pivot error, one tool): confounded pair with a signal "
                 "in %d / 50, pivot_length found in %d / 50\n",
                 confounded, pivot_found);
   }

@@ -1,5 +1,5 @@
 // rotacal_diagnose_bench: the figures of docs/diagnosis.md for the touch cycles' diagnosis
-// through the judge (issue 16), printed, not asserted: false alarms on clean data (200 seeds)
+// through the judge, printed, not asserted: false alarms on clean data (200 seeds)
 // and detection rates of hidden effects (50 seeds each), with the parameter within 3 u.
 // Run: build/bench/rotacal_diagnose_bench [touch154|touch154_drawn|one_sphere_drawn|spaceframe] [clean_seeds] [effect_seeds]
 // touch154_drawn: the same effects on top of machines drawn from the bundled contributors by the
@@ -265,7 +265,7 @@ void spaceframe(int clean_seeds, int effect_seeds) {
   trial(runner, effect_seeds, "squareness S_xy = 30 um/m",
         linearAxisError([](const Eigen::Vector3d& c) { return Eigen::Vector3d(30e-6 * c.y(), 0, 0); }),
         "linear_axis_squareness", 0, 30.0);
-  trial(runner, effect_seeds, "drift dz_AY 4 um/h (issue 16)", driftDzAy(4.0, 3600.0), "thermal_drift", 2, 4.0);
+  trial(runner, effect_seeds, "drift dz_AY 4 um/h", driftDzAy(4.0, 3600.0), "thermal_drift", 2, 4.0);
   trial(runner, effect_seeds, "X scale 20 um/m (isotropic part = frame temperature)",
         linearAxisError([](const Eigen::Vector3d& c) { return Eigen::Vector3d(20e-6 * c.x(), 0, 0); }),
         "linear_axis_scale", 0, 20.0);

@@ -1,4 +1,4 @@
-// rotacal's speed figures (issue 5): printed, never asserted. A small harness on std::chrono:
+// rotacal's speed figures: printed, never asserted. A small harness on std::chrono:
 // each figure is the median (and the minimum) of repeated timings after one warm-up call.
 //
 //   build-dir/bench/rotacal_bench [--quick]
@@ -173,7 +173,7 @@ int main(int argc, char** argv) {
            [&] { dialectByName(d).parseResults(text, "dump", big); });
   }
 
-  std::printf("target (issue 5): 1000 runs of the 154-point chain <= 10 ms on 2 cores: %.3f ms (closed_form + "
+  std::printf("target: 1000 runs of the 154-point chain <= 10 ms on 2 cores: %.3f ms (closed_form + "
               "least_squares, median) -> %s\n",
               both.median_ms, both.median_ms <= 10.0 ? "met" : "NOT met");
   return 0;

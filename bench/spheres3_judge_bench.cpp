@@ -1,5 +1,5 @@
 // rotacal_spheres3_judge_bench: printed figures of the spheres3 diagnosis through the judge
-// (issue 16, docs/diagnosis.md). Simulated with the spheres3 model's own exact transform and the
+// (docs/diagnosis.md). Simulated with the spheres3 model's own exact transform and the
 // probing simulator (0.7 um probe noise, declared and drawn); the judge never sees the truth.
 // alpha = 0.01 (JudgeOptions' default). Run: build/bench/rotacal_spheres3_judge_bench [clean] [hidden]
 #include <cmath>

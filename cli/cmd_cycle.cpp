@@ -41,7 +41,7 @@ CycleOptions parseSets(const std::vector<std::string>& sets) {
 
 std::string cycleList() {
   std::string s;
-  // Each summary opens with its source: a paper's number ("000: ...") or the issue ("issue 19: ...").
+  // Each summary opens with its source: a paper's number ("000: ..."), a standard ("ISO 230-10: ...") or "rotacal's own".
   for (const Cycle* c : cycles())
     s += fmt::format("{}{} ({})", s.empty() ? "" : ", ", c->name(), c->summary().substr(0, c->summary().find(':')));
   return s;

@@ -1,4 +1,4 @@
-# Install, export and package (issue 18 item 6: a library for CAM posts).
+# Install, export and package (a library for CAM posts).
 #
 #   cmake --install build --prefix PREFIX   bin/rotacal, the static libraries a post-processor
 #                                           links, their headers under include/rotacal/ (core/...,

@@ -80,7 +80,7 @@ struct MachineCommand {
 
 struct SubdivisionOptions {
   /// Largest distance (mm) of the controlled point, seen from the workpiece, from where the
-  /// nominal machine would put it at the same fraction of the move (0.2 um: issue 18).
+  /// nominal machine would put it at the same fraction of the move (0.2 um).
   double max_deviation_mm = 0.2e-3;
   int samples_per_piece = 8;  // interior points at which each piece is evaluated
   int max_pieces = 1000;      // a move needing more is refused (compensateMove throws)

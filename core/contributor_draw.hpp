@@ -1,5 +1,5 @@
 #pragma once
-// One Monte Carlo draw of the declared contributors that every probing cycle shares (issue 17):
+// One Monte Carlo draw of the declared contributors that every probing cycle shares:
 // the probe's pretravel per approach direction and the linear axes' errors (000 Sec. 5,
 // core/linear_axes.hpp), as a modifier of the simulator's Truth. The cycles' budgets draw their
 // own instruments (R-test sensors, laser) beside it. Random streams: one per contributor (its

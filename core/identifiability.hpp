@@ -1,5 +1,5 @@
 #pragma once
-// What a plan can and cannot separate, read off its Jacobian (issue 19: a pose design states its
+// What a plan can and cannot separate, read off its Jacobian (a pose design states its
 // identifiability). A direction v of the parameters with J v = 0 changes no reading: no data of
 // this plan can tell those parameters apart, whatever the noise. Each such direction is named by
 // the parameter held at nominal for it (the last one involved, so that set-up and tool terms are

@@ -94,7 +94,7 @@ struct IdentificationResult {
 IdentificationResult identify(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
                               const IdentificationOptions& options);
 
-/// The least-squares problem linearised at the baseline's solution (issue 16: the judge works on
+/// The least-squares problem linearised at the baseline's solution (the judge works on
 /// it). The baseline (location errors + nuisance, no extension) is fitted to convergence; then
 /// the model with the candidate extensions, all at zero, is differentiated there: the baseline's
 /// columns analytically, the extensions' by central differences of the exact model (the same

@@ -1,5 +1,5 @@
 #pragma once
-// One judge for every cycle's diagnosis (issue 16): does the baseline model explain the data
+// One judge for every cycle's diagnosis: does the baseline model explain the data
 // within the DECLARED noise, which catalogued cause (if any) explains what it misses, and which
 // causes this plan cannot tell apart. Cycle-free: it works on a linearised problem (the
 // observations' deviations, their declared standard deviations, the baseline Jacobian and one

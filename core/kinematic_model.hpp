@@ -1,5 +1,5 @@
 #pragma once
-// Five-axis kinematics with the ISO 230-7 location errors of both rotary axes (issue 19): the
+// Five-axis kinematics with the ISO 230-7 location errors of both rotary axes: the
 // model the one-sphere cycle identifies, for any of the four configurations
 //   table_ac    A tilting table carrying a C table            (000's machine)
 //   table_bc    B tilting table carrying a C table            (002's machine)

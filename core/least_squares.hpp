@@ -1,5 +1,5 @@
 #pragma once
-// The shared estimation engine: weighted Gauss-Newton with rank handling (issue 15, item 2).
+// The shared estimation engine: weighted Gauss-Newton with rank handling.
 // A problem gives its whitened residuals r(x) = W^(1/2) (y - f(x)) and their Jacobian J_r_x;
 // the engine scales the columns, takes the minimum-norm Gauss-Newton step through a truncated
 // SVD (directions the data cannot see keep their starting value instead of blowing up), and

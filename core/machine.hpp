@@ -78,7 +78,7 @@ struct MachineModel {
   double retract_mm = 0.0;               // double touch: back-off after the first touch (0 = single touch)
   std::optional<SquareColumn> artefact;
   std::optional<SpindleHead> head;       // head_table always, head_ab for a touch probe (MACHINE.json "head")
-  /// The Type B contributors the owner declares (issue 17): inline, or a contributors file named
+  /// The Type B contributors the owner declares: inline, or a contributors file named
   /// relative to MACHINE.json. Plans carry them inline. Absent: reports say u_B was not evaluated.
   std::optional<ContributorSet> contributors;
 

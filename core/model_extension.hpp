@@ -1,6 +1,6 @@
 #pragma once
 // A physical cause the baseline model leaves out, as an extension of the exact model with named
-// parameters (issue 6's catalog). An extension acts on one observation in one or more of three
+// parameters (the causes' catalog). An extension acts on one observation in one or more of three
 // exact ways: it changes the location errors in force (e.g. thermal drift: errors that move
 // with time), it adds a positioning error of the linear axes (squareness, probe length), or it
 // shifts the trigger along the approach (pretravel). The identification differentiates the exact

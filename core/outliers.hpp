@@ -1,5 +1,5 @@
 #pragma once
-// Outlier touches (issue 14, item 6): a touch that hit a chip or a dirty spot lies 5-50 um off in
+// Outlier touches: a touch that hit a chip or a dirty spot lies 5-50 um off in
 // otherwise good data. Least squares would average it in; this screen finds it, names it by run
 // and point, and leaves it out of the fit with the reason, never silently.
 //

@@ -1,5 +1,5 @@
 #pragma once
-// A pose design for a sphere read at rotary poses (issue 19 item 2): which n of the candidate
+// A pose design for a sphere read at rotary poses: which n of the candidate
 // poses make the kinematic model's parameters best known. D-optimal (the largest determinant of
 // the information of the parameters the poses can separate), by greedy forward selection then
 // Fedorov exchange passes. It states what no candidate set separates (held, as identifiability

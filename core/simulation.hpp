@@ -45,7 +45,7 @@ struct Truth {
   /// angle by half of it in the direction it last moved, actual = commanded - sign(last move) b / 2.
   /// The last move is read from the plan's order of poses (each probing pose reached straight from
   /// the one before; the program starts at A = B = C = 0, reached in +). Outside every cycle's catalog: the test of
-  /// `model_inadequate` (issue 16).
+  /// `model_inadequate`.
   Eigen::Vector3d rotary_backlash_deg = Eigen::Vector3d::Zero();
   /// A spindle head: the true probe-ball centre less the X Y Z reading at a pose (machine frame,
   /// mm), the head's exact chain. Empty: the reading is the ball centre (a table machine).

@@ -1,5 +1,5 @@
 #pragma once
-// The uncertainty a report signs (issue 17), the same for every cycle: per parameter
+// The uncertainty a report signs, the same for every cycle: per parameter
 //   u_A  what the data's own scatter says (Type A: the fit's covariance scaled by its residual,
 //        or the scatter of the repeats' estimates when there are repeats, the larger);
 //   u_B  the declared contributors the data cannot show (Type B: pre-travel, the linear axes,

@@ -86,7 +86,7 @@ struct AnalyzeRequest {
   std::vector<InputFile> results;  // repeats of the plan, in time order
   const DialectIO* dialect = nullptr;
   std::string method;              // "" = the cycle's default; one of Cycle::methods()
-  /// The Type B contributors (issue 17: --contributors, else the machine's); null: none declared,
+  /// The Type B contributors (--contributors, else the machine's); null: none declared,
   /// and the report says u_B was not evaluated.
   const ContributorSet* contributors = nullptr;
   int mc_runs = 2000;              // Monte Carlo runs of u_B

@@ -1,5 +1,5 @@
 #pragma once
-// The calibration history of rotacal (issue 7): one SQLite file, many machines. Every
+// The calibration history of rotacal: one SQLite file, many machines. Every
 // `rotacal history add` stores one calibration (its parameters with their uncertainty, time,
 // plan, residual). Several processes may add at once: the file runs in WAL mode with a busy
 // timeout, and each add is one IMMEDIATE transaction (all or nothing). A file that is not a

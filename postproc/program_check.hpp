@@ -1,5 +1,5 @@
 #pragma once
-// The program verifier (issue 14, `rotacal check`): simulates the motions read back from a
+// The program verifier (`rotacal check`): simulates the motions read back from a
 // program's text (controllers/motion_reader.hpp) on the machine's nominal kinematics and proves
 // what a probing program must never do wrong on a real machine:
 // - no non-probing move brings the probe ball or its stylus (a capsule of the ball's radius from

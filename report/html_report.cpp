@@ -441,7 +441,7 @@ std::string analyzeBody(const Json& doc) {
 
 std::string diagnoseBody(const Json& doc) {
   std::string s;
-  // The judge's three verdicts (issue 16); its message says why, in words true for each.
+  // The judge's three verdicts; its message says why, in words true for each.
   const std::string verdict = str(doc, "verdict");
   const bool found = verdict == "effect_found", inadequate = verdict == "model_inadequate";
   s += fmt::format("<p class=\"verdict {}\">{}</p>\n", found || inadequate ? "found" : "none",

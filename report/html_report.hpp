@@ -1,5 +1,5 @@
 #pragma once
-// The HTML report (issue 7): one self-contained page (inline CSS, inline SVG, one small inline
+// The HTML report: one self-contained page (inline CSS, inline SVG, one small inline
 // script for the magnification choice; no network, no external fonts or scripts) drawn from the
 // content of REPORT.json (analyze), DIAGNOSIS.json (diagnose) or a history trend
 // (rotacal-history/1). Every `figures` entry of the document is drawn generically.

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# libFuzzer + AddressSanitizer + UndefinedBehaviorSanitizer on every input boundary (issue 14,
-# tests/fuzz/): builds the harnesses with clang in build-fuzz/, makes seed corpora from
+# libFuzzer + AddressSanitizer + UndefinedBehaviorSanitizer on every input boundary
+# (tests/fuzz/): builds the harnesses with clang in build-fuzz/, makes seed corpora from
 # examples/ (plans, results of every dialect, programs, machines, truths, contributors, reports)
 # and tests/data/bad/, then runs each harness for SECONDS (default 20) on one core. Fails on
 # any crash, leak, timeout, out-of-memory, sanitizer report or escaped exception; the input that

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# One Definition Rule check (issue 15): the rotacal binary built with link-time optimisation, where
+# One Definition Rule check: the rotacal binary built with link-time optimisation, where
 # GCC sees every library at once and reports two different definitions of one name (-Wodr) as an
 # error. Tests and bench are left out: the binary links every library layer.
 set -euo pipefail

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The library for CAM posts and the Debian packages, checked from an existing build dir (issue 18
-# item 6; .ci/run calls it after scripts/test.sh):
+# The library for CAM posts and the Debian packages, checked from an existing build dir
+# (.ci/run calls it after scripts/test.sh):
 #   1. `cmake --install` into a temporary prefix; examples/cam-post configured and built against
 #      that prefix only (find_package(rotacal)), with -Werror; a shared library (a post as a CAM
 #      plugin) linked against the static libraries;

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The bad-input corpus (tests/data/bad/MANIFEST.tsv, issue 14) under AddressSanitizer,
+# The bad-input corpus (tests/data/bad/MANIFEST.tsv) under AddressSanitizer,
 # UndefinedBehaviorSanitizer and LeakSanitizer: the `rotacal` of the sanitizer build that
 # scripts/fuzz.sh configures (build-fuzz/, clang, the same flags; only the command-line program
 # is added to it) runs every file twice, as tests/cli/bad_corpus_test.sh checks it. A sanitizer

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # AddressSanitizer + UndefinedBehaviorSanitizer build of everything, and the whole non-e2e suite
-# under it (issue 14): any report is an error (halt_on_error, no recovery from UB). Not yet in
+# under it: any report is an error (halt_on_error, no recovery from UB). Not yet in
 # .ci/run: its first full run here did not finish within a session (about 50 min of build on the
 # 2-core machine while other builds ran); run it by hand until a clean run is recorded.
 set -euo pipefail

@@ -1,5 +1,5 @@
 #pragma once
-// The one-sphere cycle's uncertainty budget (issue 17's rules, issue 19 item 4):
+// The one-sphere cycle's uncertainty budget (core/uncertainty_budget.hpp's rules):
 //  - u_A: the per-touch scatter by the shared rule (readingScatter; declared: the contributors'
 //    per-touch part, repeatability and roughness, else the machine's probe repeatability) through
 //    the fit's covariance;

@@ -1,4 +1,4 @@
-// one_sphere (issue 19): both rotary axes' ISO 230-7 location errors from one calibration sphere,
+// one_sphere: both rotary axes' ISO 230-7 location errors from one calibration sphere,
 // touched at a grid of tilt and C angles (the KinematicsOpt / CYCLE996 / AxiSet class).
 #include <fmt/format.h>
 
@@ -28,7 +28,7 @@ DeclaredNoise sphereNoiseOrFail(const ProbePlan& plan, const ContributorSet* dec
 
 class Sphere final : public Cycle {
  public:
-  Sphere() : Cycle({"one_sphere", "issue 19: both rotary axes' ISO 230-7 location errors and the probe's radius from one sphere",
+  Sphere() : Cycle({"one_sphere", "rotacal's own: both rotary axes' ISO 230-7 location errors and the probe's radius from one sphere",
                      {"examples/machines/ac_trunnion.json", {}},
                      7019,  // 7000 + the issue that specifies it (19)
                      makeSpherePlan, probeProgram, spherePlanRules()}) {}

@@ -1,5 +1,5 @@
 #pragma once
-// The one-sphere cycle's measurement equation and its pose design (issue 19 item 2).
+// The one-sphere cycle's measurement equation and its pose design.
 //
 // One touch, ball centre read at t (machine frame) at pose q:
 //   r = |t + E_S(t) - X(p, q)| - (R + r_ball + dR),

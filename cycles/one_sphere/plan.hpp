@@ -1,5 +1,5 @@
 #pragma once
-// The one-sphere cycle (issue 19; the KinematicsOpt / CYCLE996 / AxiSet class): one calibration
+// The one-sphere cycle (the KinematicsOpt / CYCLE996 / AxiSet class): one calibration
 // sphere on the table, on a stem, touched at every pose of a grid of the tilt axis (A or B) and
 // C. At each pose the ball comes from above (the top) and from the sides of the four horizontal
 // directions whose contact lies on the sphere's half away from the stem (contact normal n with

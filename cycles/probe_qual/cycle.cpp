@@ -1,4 +1,4 @@
-// probe_qual (issue 19 item 5): the probe's repeatability, effective radius and pretravel by
+// probe_qual: the probe's repeatability, effective radius and pretravel by
 // direction on the one_sphere cycle's calibration sphere, for MACHINE.json's probe section and
 // the contributors' probe entries.
 #include "core/declared_noise.hpp"
@@ -17,7 +17,7 @@ namespace {
 class ProbeQual final : public Cycle {
  public:
   ProbeQual() : Cycle({"probe_qual",
-                       "issue 19: the probe's repeatability, effective radius and pretravel by direction on one sphere",
+                       "ISO 230-10: the probe's repeatability, effective radius and pretravel by direction on one sphere",
                        {"examples/machines/ac_trunnion.json", {}},
                        7230,  // 7000 + 230 (ISO 230-10, the probing system's test)
                        makeProbeQualPlan, probeProgram, probeQualPlanRules(),

@@ -1,5 +1,5 @@
 #pragma once
-// probe_qual (issue 19 item 5; ISO 230-10's idea, Heidenhain's sphere-radius check): the
+// probe_qual (ISO 230-10's idea, Heidenhain's sphere-radius check): the
 // probe's qualification on the calibration sphere of the one_sphere cycle, in the approach
 // directions rotacal's touch cycles use: horizontal (`azimuths` of them, from +X) and down (-Z,
 // the top). One pose (every rotary axis at 0). Each horizontal approach touches the sphere at

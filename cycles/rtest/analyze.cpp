@@ -651,7 +651,7 @@ Json rtestReportJson(const ProbePlan& plan, const std::vector<RtestCycle>& cycle
   }
   j["outliers"] = rtestScreenJson(plan, a.screen);
   j["cycles"] = cj;
-  // The re-read check (issue 16/17): a difference beyond what the declared noise allows is a
+  // The re-read check: a difference beyond what the declared noise allows is a
   // sensor step (a knock, a lost count) inside that cycle.
   Json flagged = Json::array(), findings = Json::array();
   for (size_t c = 0; c < a.cycles.size(); ++c) {
@@ -704,7 +704,7 @@ Json rtestReportJson(const ProbePlan& plan, const std::vector<RtestCycle>& cycle
                              "cycle (002 Table 2): the {} axis's errors with the C axis's offsets from it turned by {}",
                              ax, ax, ax)}};
   }
-  // ISO 230-7 location errors of both axes, separated by the constant-error fit (issue 17: no
+  // ISO 230-7 location errors of both axes, separated by the constant-error fit (no
   // longer the mean of the per-tilt errors, which read X0C - X0B = 10 um as X0B = 7.46 um).
   Json le = Json::object();
   const auto& info = locationParameters(k);

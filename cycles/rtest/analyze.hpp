@@ -83,7 +83,7 @@ struct RtestCycleFit {
 /// B/C X0B Y0C Z0B A0B B0B C0B, A0C-A0B, X0C-X0B), constant over the tilt.
 Eigen::Matrix<double, 3, kNumLocationErrors> J_wq_e(Kinematics kinematics, const Pose& pose, const Eigen::Vector3d& nest_w);
 
-/// The location errors of both axes separated (issue 17): 002 Eq. (6) with omega_0 = the eight
+/// The location errors of both axes separated: 002 Eq. (6) with omega_0 = the eight
 /// constant location errors, fitted to the first cycle's readings. The per-tilt errors are what
 /// the R-test measures; on a B/C table a constant X0C - X0B enters them as dx_BY(B) = (X0C-X0B)
 /// cos B and dz_BY(B) = (X0C-X0B) sin B, A0C - A0B as a_BY(B) = (A0C-A0B) cos B and c_BY(B) =
@@ -103,7 +103,7 @@ struct RtestLocationFit {
 /// The location fit's estimator: the design matrix A (rows: 3 per plan point in plan order, then
 /// with `own` the reset and the re-read; columns: the eight location errors of locationParameters,
 /// then with `own` the cycle's zero offset) and its least-squares map G (x = G y, mm / rad). The
-/// estimator is linear in the readings: G is exact, not a linearisation (issue 17: the budget's
+/// estimator is linear in the readings: G is exact, not a linearisation (the budget's
 /// Monte Carlo runs the readings of the exact simulator through G).
 struct RtestLocationEstimator {
   bool own = false;

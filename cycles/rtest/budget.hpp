@@ -1,5 +1,5 @@
 #pragma once
-// The uncertainty the rtest cycle signs for the eight location errors (issue 17), on
+// The uncertainty the rtest cycle signs for the eight location errors, on
 // core/uncertainty_budget:
 //   Type A  the per-reading scatter (sensor noise, rtest_sphere_form) through the location fit's
 //           own map G, sigma^2 G G^T, with sigma from the residual less what the Type B

@@ -1,5 +1,5 @@
 #pragma once
-// rotacal diagnose for R-test series (002), through the one judge (core/judge.hpp, issue 16).
+// rotacal diagnose for R-test series (002), through the one judge (core/judge.hpp).
 //
 // The problem handed to the judge:
 //  - y: every sensor reading (um, workpiece frame, 3 per pose and cycle, and per reset and
@@ -18,7 +18,7 @@
 //    constant offset (dx, dy, dz in the workpiece frame, where the nest's sensors sit): a step
 //    between cycles K-1 and K;
 //  - sensor_step_in_cycle_K (K = 1..cycles, cycles with a re-read): the offset from cycle K's
-//    re-read on: a step during cycle K (issue 16 item 5; the poses of cycle K read after the step
+//    re-read on: a step during cycle K (the poses of cycle K read after the step
 //    are not modelled). Both are the contract's `sensor_step`.
 // Confounds of the table drift (002 Sec. 4.3: the R-test sees the sphere against the nest only):
 //  - spindle_growth: the sphere rises along machine Z linearly with time;

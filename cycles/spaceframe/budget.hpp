@@ -1,5 +1,5 @@
 #pragma once
-// The uncertainty the spaceframe cycle signs (issue 17, core/uncertainty_budget.hpp) for what its
+// The uncertainty the spaceframe cycle signs (core/uncertainty_budget.hpp) for what its
 // least squares identifies: the eight location errors, the linear axes' scale and the frame's
 // set-up on the table (calibrated frame), or the location errors and the scale of X and Y
 // relative to Z (self-calibration: the sphere offsets keep the data's u only).

@@ -107,7 +107,7 @@ class Spaceframe final : public Cycle {
     const std::vector<std::string> files = pathsOf(r.results);
     CycleDocuments out;
     out.doc = spaceframeReportJson(a, plan, files);
-    // What analyze signs (issue 17): u_A from the data, u_B from the declared contributors and
+    // What analyze signs: u_A from the data, u_B from the declared contributors and
     // the frame's calibration by Monte Carlo through the same estimator (cycles/spaceframe/budget.hpp).
     std::vector<SpaceframeAnalysis> per_run;
     if (runs.size() >= 2)

@@ -66,7 +66,7 @@ const std::array<const char*, 4>& spheres3LocationIso();                // X0C Y
 /// Which component-error terms the model carries.
 enum class ComponentModel {
   None,               // location errors only (the diagnosis baseline)
-  SecondOrderRadial,  // EXC, EYC: cos 2C and sin 2C (rotary_error_motion of issue 6)
+  SecondOrderRadial,  // EXC, EYC: cos 2C and sin 2C (rotary_error_motion)
   Full                // every identifiable harmonic (the analysis model)
 };
 

@@ -1,5 +1,5 @@
 #pragma once
-// The uncertainty the spheres3 cycle signs (issue 17, core/uncertainty_budget.hpp) for its four
+// The uncertainty the spheres3 cycle signs (core/uncertainty_budget.hpp) for its four
 // location errors (Oxc Oyc Sxc Syc = X0C Y0C A0C B0C) and its component errors at the sampled
 // angles:
 //   Type A  the per-touch scatter (probe repeatability, surface roughness / the sphere's form

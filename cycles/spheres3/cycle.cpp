@@ -55,7 +55,7 @@ class Spheres3 final : public Cycle {
     const Spheres3TouchProblem tp = spheres3TouchProblem(runs, res, noise);
     out.doc["declared_noise"] = declaredNoiseJson(noise.trigger, testAgainstDeclared(tp.residual_um, tp.J, tp.covariance_um2));
     if (!screen.excluded.empty() || screen.too_many) out.warnings.push_back(screen.text());
-    // What analyze signs (issue 17): u_A from the data, u_B from the declared contributors by
+    // What analyze signs: u_A from the data, u_B from the declared contributors by
     // Monte Carlo through the same estimator (cycles/spheres3/budget.hpp, docs/uncertainty.md).
     std::vector<Spheres3Result> per_run;
     if (runs.size() >= 2)

@@ -1,6 +1,6 @@
 #pragma once
 // The uncertainty the tooltip cycle signs for its angular errors e_k (mdeg) and the pivot-length
-// error dR (um) (issue 17), on core/uncertainty_budget:
+// error dR (um), on core/uncertainty_budget:
 //   Type A  the per-reading scatter (the laser's own error, the sphere's form, lateral coupling:
 //           004 Sec. VII) through the fit's own map, sigma^2 (J^T J)^-1, with sigma from the
 //           residual less what the Type B contributors leave in it, floored at the declared

@@ -102,7 +102,7 @@ class Tooltip final : public Cycle {
     CycleDocuments out;
     out.doc = tooltipReportJson(plan, runs, a);
     out.doc["errors_heading"] = "Identified errors";  // a pivot length and angular errors, not location errors in ISO 230-7's sense
-    // What analyze signs (issue 17): u_A from the data, u_B from the declared contributors by
+    // What analyze signs: u_A from the data, u_B from the declared contributors by
     // Monte Carlo through the same fit (cycles/tooltip/budget.hpp, docs/uncertainty.md).
     TooltipBudgetOptions bo;
     bo.runs = r.mc_runs;

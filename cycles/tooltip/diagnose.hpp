@@ -1,6 +1,6 @@
 #pragma once
-// rotacal diagnose for fixed-tool-tip readings (004), through the one judge (core/judge.hpp,
-// issue 16).
+// rotacal diagnose for fixed-tool-tip readings (004), through the one judge
+// (core/judge.hpp).
 //
 // The problem handed to the judge:
 //  - y: every laser reading component (transverse and Z, um) minus 004's model (one angular

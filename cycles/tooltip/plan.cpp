@@ -231,7 +231,7 @@ TooltipTruth tooltipTruthFrom(const JsonDoc& doc, const Json& truth) {
       if (!known.count(k))
         doc.fail(j, k, "unknown tooltip truth field '" + k + "' (expected dR_um, angular_error, scale_um_m)");
     t.dR_um = numberOr(doc, j, "dR_um", 0.0, Limits::symmetric(kMaxLocationErrorUm, "um"));
-    // An isotropic scale error of the two linear axes in the read plane (issue 16).
+    // An isotropic scale error of the two linear axes in the read plane.
     t.scale_t_um_m = t.scale_z_um_m = numberOr(doc, j, "scale_um_m", 0.0, Limits::symmetric(1000.0, "um/m"));
     if (j.contains("angular_error")) {
       const Json& e = requireObject(doc, j, "angular_error");

@@ -1,5 +1,5 @@
 #pragma once
-// The uncertainty `analyze` signs for touch154 (issue 17; core/uncertainty_budget.hpp): u_A
+// The uncertainty `analyze` signs for touch154 (core/uncertainty_budget.hpp): u_A
 // from the data, u_B from the declared contributors propagated by the linearised Monte Carlo of
 // cycles/touch154/uncertainty.hpp through the estimator that made the estimate, around the
 // identified location errors.
@@ -14,7 +14,7 @@
 namespace rotacal {
 
 struct Touch154BudgetOptions : BudgetOptions {
-  // Its budget table's shares from 500 runs each (the touch154 default since issue 17).
+  // Its budget table's shares from 500 runs each (the touch154 default).
   Touch154BudgetOptions() { alone_runs = 500; }
 };
 

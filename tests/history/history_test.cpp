@@ -261,7 +261,7 @@ TEST(HistoryCli, Table4SeriesDriftThenAStep) {
 }
 
 TEST(HistoryCli, AHeadMachinesGrowingSpindleIsADrift) {
-  // A head/head machine (issue 19: examples/machines/ab_head.json) calibrated with one_sphere on
+  // A head/head machine (examples/machines/ab_head.json) calibrated with one_sphere on
   // days 0-4 while its spindle grows 3 um/day (dL) and the sphere is set up anew each day. Its
   // report carries the head's ISO 230-7 parameters as kinematic_parameters: history trends the
   // fitted ones (dL: a drift of 3 um/day; the axes' errors stable) and leaves the sphere's set-up
