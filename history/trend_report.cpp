@@ -65,7 +65,11 @@ Json historyJson(const std::string& machine_id, const std::vector<Calibration>& 
                {"chi2_drift", r6(t.chi2_drift)},
                {"dof_drift", std::max(0, t.n - 2)},
                {"step", t.step},
-               {"verdict", t.verdict}};
+               {"verdict", t.verdict},
+               // With fewer than 3 calibrations there is no mean to speak of and no drift was
+               // tested: `mean` is then the latest value and the drift fields are not measurements.
+               {"value_is", t.n >= 3 ? "mean" : "latest"},
+               {"drift_evaluated", t.n >= 3}};
     if (t.step_after) {
       tj["step_after_seq"] = seqs[name][static_cast<size_t>(*t.step_after)];
       tj["step_size"] = r6(t.step_size);
@@ -149,10 +153,14 @@ std::string historyText(const Json& h) {
   for (const auto& c : h["calibrations"])
     s += fmt::format("  #{:<3} {}  {:<9} residual {:.3f} um  {}\n", c["seq"].get<int>(), c["time_utc"].get<std::string>(),
                      c["cycle"].get<std::string>(), c["residual_rms_um"].get<double>(), c["source"].get<std::string>());
-  s += fmt::format("\n{:<8} {:<5} {:>10} {:>16} {:>8} {:>12}  {}\n", "param", "unit", "mean", "drift /day (u)", "step", "size", "verdict");
+  s += fmt::format("\n{:<8} {:<5} {:>10} {:<6} {:>16} {:>8} {:>12}  {}\n", "param", "unit", "value", "", "drift /day (u)", "step",
+                   "size", "verdict");
   for (const auto& [name, t] : h["trends"].items()) {
-    s += fmt::format("{:<8} {:<5} {:>10.3f} {:>8.3f} ({:.3f}) {:>8} {:>12}  {}\n", name, t["unit"].get<std::string>(),
-                     t["mean"].get<double>(), t["drift_per_day"].get<double>(), t["drift_u_per_day"].get<double>(),
+    const bool evaluated = t["n"].get<int>() >= 3;
+    s += fmt::format("{:<8} {:<5} {:>10.3f} {:<6} {:>16} {:>8} {:>12}  {}\n", name, t["unit"].get<std::string>(),
+                     t["mean"].get<double>(), evaluated ? "mean" : "latest",
+                     evaluated ? fmt::format("{:.3f} ({:.3f})", t["drift_per_day"].get<double>(), t["drift_u_per_day"].get<double>())
+                               : std::string("-"),
                      t["step_after_seq"].is_null() ? std::string("-") : "after #" + std::to_string(t["step_after_seq"].get<int>()),
                      t.contains("step_size") ? fmt::format("{:.3f}", t["step_size"].get<double>()) : std::string("-"),
                      t["verdict"].get<std::string>());

@@ -113,6 +113,27 @@ Calibration sample(const std::string& machine, double t_s, double dx) {
   return c;
 }
 
+// With fewer than 3 calibrations the shown value is the latest, not a mean, and no drift was
+// tested: the text says so instead of printing "0.000 (0.000)" as if it had been measured.
+TEST(Trend, FewerThanThreeCalibrationsShowTheLatestAndNoDrift) {
+  const std::vector<Calibration> two = {sample("m", 0.0, 10.0), sample("m", 86400.0, 12.0)};
+  const Json h2 = historyJson("m", two, TrendOptions{});
+  EXPECT_EQ(h2["trends"]["dx_AY"]["value_is"], "latest");
+  EXPECT_FALSE(h2["trends"]["dx_AY"]["drift_evaluated"].get<bool>());
+  EXPECT_DOUBLE_EQ(h2["trends"]["dx_AY"]["mean"].get<double>(), 12.0);
+  const std::string t2 = historyText(h2);
+  EXPECT_NE(t2.find("12.000 latest                -"), std::string::npos) << t2;
+  EXPECT_EQ(t2.find("(0.000)"), std::string::npos) << t2;
+  std::vector<Calibration> three = two;
+  three.push_back(sample("m", 2 * 86400.0, 14.0));
+  const Json h3 = historyJson("m", three, TrendOptions{});
+  EXPECT_EQ(h3["trends"]["dx_AY"]["value_is"], "mean");
+  // The weighted mean of 10, 12, 14 with equal u, and their slope of 2 um/day.
+  EXPECT_NEAR(h3["trends"]["dx_AY"]["mean"].get<double>(), 12.0, 1e-9);
+  EXPECT_NEAR(h3["trends"]["dx_AY"]["drift_per_day"].get<double>(), 2.0, 1e-9);
+  EXPECT_NE(historyText(h3).find("12.000 mean      2.000 ("), std::string::npos) << historyText(h3);
+}
+
 TEST(Store, RoundTripInTimeOrder) {
   const fs::path d = freshDir();
   const std::string db_path = (d / "sub" / "h.sqlite").string();  // the directory is created
