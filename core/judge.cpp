@@ -378,9 +378,61 @@ std::vector<JudgeTerm> terms(const Eigen::VectorXd& coef, const Eigen::MatrixXd&
   return out;
 }
 
+/// The stem and number of a parameter named like offset_target14 (number -1 when none).
+std::pair<std::string, int> stemAndNumber(const std::string& name) {
+  size_t k = name.size();
+  while (k > 0 && name[k - 1] >= '0' && name[k - 1] <= '9') --k;
+  if (k == name.size() || k == 0 || name.size() - k > 6) return {name, -1};
+  return {name.substr(0, k), std::stoi(name.substr(k))};
+}
+
+// Beyond this many members of one family (a model's per-point offsets, offset_target1..28) a
+// sentence names the family once: a line of 28 names and coefficients says less than its range.
+constexpr size_t kFamilyListed = 3;
+
+/// Names, a family of more than kFamilyListed numbered ones as "stem1..28 (28 parameters)".
+std::string namesText(const std::vector<std::string>& names) {
+  std::map<std::string, std::vector<int>> family;
+  for (const auto& n : names)
+    if (const auto [stem, k] = stemAndNumber(n); k >= 0) family[stem].push_back(k);
+  std::vector<std::string> out;
+  std::set<std::string> done;
+  for (const auto& n : names) {
+    const auto [stem, k] = stemAndNumber(n);
+    if (k < 0 || family[stem].size() <= kFamilyListed) {
+      out.push_back(n);
+      continue;
+    }
+    if (!done.insert(stem).second) continue;
+    auto& ks = family[stem];
+    std::sort(ks.begin(), ks.end());
+    out.push_back(fmt::format("{}{}..{} ({} parameters)", stem, ks.front(), ks.back(), ks.size()));
+  }
+  return fmt::format("{}", fmt::join(out, ", "));
+}
+
 std::string termsText(const std::vector<JudgeTerm>& t) {
+  std::map<std::string, size_t> family;
+  for (const auto& x : t)
+    if (const auto [stem, k] = stemAndNumber(x.name); k >= 0) ++family[stem];
   std::string s;
-  for (const auto& x : t) s += (s.empty() ? "" : ", ") + fmt::format("{} = {:.4g} {}", x.name, x.coefficient, x.unit);
+  std::map<std::string, std::vector<const JudgeTerm*>> grouped;
+  std::set<std::string> done;
+  for (const auto& x : t)
+    if (const auto [stem, k] = stemAndNumber(x.name); k >= 0 && family[stem] > kFamilyListed) grouped[stem].push_back(&x);
+  for (const auto& x : t) {
+    const auto [stem, k] = stemAndNumber(x.name);
+    if (k >= 0 && family[stem] > kFamilyListed) {
+      if (!done.insert(stem).second) continue;
+      // The family by its range of coefficients: what each of its members takes.
+      double lo = 1e300, hi = -1e300;
+      for (const JudgeTerm* g : grouped[stem]) lo = std::min(lo, g->coefficient), hi = std::max(hi, g->coefficient);
+      s += (s.empty() ? "" : ", ") +
+           fmt::format("{} of {} from {:.4g} to {:.4g} {}", grouped[stem].size(), stem, lo, hi, x.unit);
+      continue;
+    }
+    s += (s.empty() ? "" : ", ") + fmt::format("{} = {:.4g} {}", x.name, x.coefficient, x.unit);
+  }
   return s.empty() ? "nothing" : s;
 }
 
@@ -531,7 +583,7 @@ JudgeConfounded modelConfounded(const Context& cx, const Model& m, const Evaluat
   }
   e.why = fmt::format("on this plan {} moves the data exactly as the model's {} do (principal angle {:.2g} deg): {} is "
                       "read as {}",
-                      cause.name, fmt::join(e.with, ", "), e.angle_deg, termsText(e.cause_terms), termsText(e.with_terms));
+                      cause.name, namesText(e.with), e.angle_deg, termsText(e.cause_terms), termsText(e.with_terms));
   // Every other direction of the cause the model absorbs as exactly: each is an error the data
   // cannot show and the model's parameters take in full (lobing +X/-X read as dx_AY, say).
   for (Eigen::Index d = 1; d < ev.pr.angle.size() && d < ev.pr.V.cols() && ev.pr.angle[d] < cx.exact_rad; ++d) {
