@@ -78,9 +78,12 @@ class Rtest final : public Cycle {
     const std::vector<RtestCycle> cycles = readCycles(plan, r.results, &out.warnings);
     RtestFitOptions o;
     o.sensor_sigma_um = sensorSigma(plan);
-    const DeclaredNoise noise = rtestDeclaredNoise(plan, r.contributors);
+    // The structured part (the sensors' gain and cross-talk, the sphere offset, the linear axes)
+    // taken about the first cycle's readings: the sensors scale what they read.
+    const DeclaredNoise noise = rtestDeclaredNoise(plan, r.contributors, cycles.empty() ? nullptr : &cycles.front());
     o.reading_sigma_um = std::sqrt(noise.white_um2);
     o.declaration = noise.declaration;
+    o.structured_um2 = noise.structured_um2;
     const RtestAnalysis a = analyzeRtest(plan, cycles, o);
     const std::vector<std::string> files = pathsOf(r.results);
     out.doc = rtestReportJson(plan, cycles, a, files);
@@ -148,9 +151,12 @@ class Rtest final : public Cycle {
     o.sensor_sigma_um = sensorSigma(plan);  // the sensors (plan option, default 002's 0.2 um): the re-read check
     // The judge tests every reading against what one reading is declared to scatter by: the
     // sensors and the sphere's form, the per-reading part analyze's uncertainty budget reads too.
-    const DeclaredNoise noise = rtestDeclaredNoise(plan, r.contributors);
+    // The structured part (the sensors' gain and cross-talk, the sphere offset, the linear axes)
+    // taken about the first cycle's readings: the sensors scale what they read.
+    const DeclaredNoise noise = rtestDeclaredNoise(plan, r.contributors, cycles.empty() ? nullptr : &cycles.front());
     o.reading_sigma_um = std::sqrt(noise.white_um2);
     o.declaration = noise.declaration;
+    o.structured_um2 = noise.structured_um2;
     o.validate();
     const RtestDiagnosis d = diagnoseRtest(plan, cycles, o);
     out.text = rtestDiagnosisText(plan, d);
