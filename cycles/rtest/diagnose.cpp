@@ -231,14 +231,12 @@ RtestDiagnosis diagnoseRtest(const ProbePlan& plan, const std::vector<RtestCycle
   if (o.structured_um2.size() > 0) {
     // The same machine in every cycle: any two readings share what their plan rows share.
     JudgeProblem& pb = setup.problem;
-    const auto n = pb.y.size();
     const auto np3 = 3 * static_cast<Eigen::Index>(plan.points.size());
     if (o.structured_um2.rows() != np3 || o.structured_um2.cols() != np3)
       throw std::invalid_argument("rtest diagnose: the structured part is not 3 x the plan's points square");
     std::vector<Eigen::Index> at(setup.plan_row.begin(), setup.plan_row.end());
     pb.covariance = o.structured_um2(at, at);
     pb.covariance.diagonal() += pb.sigma.cwiseAbs2();
-    (void)n;
   }
   d.summary = judge(setup.problem, o.judge);
   const double level = d.summary.per_test_alpha;
