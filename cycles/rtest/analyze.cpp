@@ -9,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include "core/contributor_draw.hpp"
 #include "core/report_envelope.hpp"
 #include "core/statistics.hpp"
 #include "core/units.hpp"
@@ -95,7 +96,93 @@ double rtestSensorNoiseUm(const ProbePlan& plan) {
                      plan.options.count("sensor_noise_um") ? plan.options.at("sensor_noise_um") : std::string("0.2"));
 }
 
-DeclaredNoise rtestDeclaredNoise(const ProbePlan& plan, const ContributorSet* declared) {
+Eigen::MatrixXd rtestStructuredUm2(const ProbePlan& plan, const ContributorSet& set, const RtestCycle* about) {
+  const Kinematics k = plan.machine.kinematics;
+  const auto np = static_cast<Eigen::Index>(plan.points.size());
+  const Eigen::Vector3d nest = rtestNest_w(plan);
+  const int ref = rtestReferencePoint(plan) - 1;
+  Eigen::MatrixXd S = Eigen::MatrixXd::Zero(3 * np, 3 * np);
+  // d wq / d rq = R^T: what a displacement of the sphere in the machine frame reads, per pose.
+  std::vector<Eigen::Matrix3d> Rt;
+  std::vector<Eigen::Vector3d> q_m;  // the commanded sphere centre (machine frame), where the linear axes act
+  for (const auto& p : plan.points) {
+    const auto T = T_m_w_nominal(k, p.pose);
+    Rt.push_back(T.linear().transpose());
+    q_m.push_back(T * nest);
+  }
+  const Eigen::Matrix3d& Rt_ref = Rt[static_cast<size_t>(ref)];
+  double gain = 0.0, direction = 0.0;
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero(), drift = Eigen::Vector3d::Zero();
+  ContributorSet linear;
+  linear.node_spacing_min_mm = set.node_spacing_min_mm;
+  linear.node_spacing_max_mm = set.node_spacing_max_mm;
+  for (const Contributor& c : set.items) {
+    switch (c.info->kind) {
+      case ContributorKind::RtestSensorGain: gain = c.u[0]; break;
+      case ContributorKind::RtestSensorDirection: direction = c.u[0]; break;
+      case ContributorKind::RtestSphereOffset: offset = c.u.head<3>(); break;
+      case ContributorKind::RtestCycleDrift: drift = c.u.head<3>(); break;
+      default:
+        if (isLinearAxisContributor(*c.info) && c.u.cwiseAbs().maxCoeff() > 0) linear.items.push_back(c);
+    }
+  }
+  // A constant offset s of the sphere reads (R_i^T - R_ref^T) s: the sensors were zeroed at the
+  // reset pose with the same offset on.
+  if (offset.squaredNorm() > 0) {
+    const Eigen::Matrix3d V = offset.cwiseAbs2().asDiagonal();
+    for (Eigen::Index i = 0; i < np; ++i)
+      for (Eigen::Index j = 0; j < np; ++j)
+        S.block<3, 3>(3 * i, 3 * j) += (Rt[static_cast<size_t>(i)] - Rt_ref) * V * (Rt[static_cast<size_t>(j)] - Rt_ref).transpose();
+  }
+  // The drift within one cycle: the sphere moves by v t (applyRtestDraw: 0 at the clock's start,
+  // the declared value at the end of the first cycle), read as R_i^T v t_i less the zero's.
+  if (drift.squaredNorm() > 0) {
+    const double T = std::max(1.0, rtestCycleTime_s(plan));
+    const std::vector<double> times = rtestReadTimes(plan);
+    const double t_ref = rtestResetReads(plan) ? times.front() : plan.points[static_cast<size_t>(ref)].t_s;
+    const Eigen::Matrix3d V = (drift / T).cwiseAbs2().asDiagonal();
+    std::vector<Eigen::Matrix3d> D;
+    for (Eigen::Index i = 0; i < np; ++i) D.push_back(Rt[static_cast<size_t>(i)] * plan.points[static_cast<size_t>(i)].t_s - Rt_ref * t_ref);
+    for (Eigen::Index i = 0; i < np; ++i)
+      for (Eigen::Index j = 0; j < np; ++j)
+        S.block<3, 3>(3 * i, 3 * j) += D[static_cast<size_t>(i)] * V * D[static_cast<size_t>(j)].transpose();
+  }
+  // The linear axes' error at each commanded centre, every machine direction (probeAxesCovariance,
+  // the model drawLinearAxes draws), read through R_i^T less the reset pose's.
+  if (!linear.items.empty()) {
+    std::vector<Eigen::Vector3d> t, u;
+    for (Eigen::Index i = 0; i < np; ++i)
+      for (int a = 0; a < 3; ++a) {
+        t.push_back(q_m[static_cast<size_t>(i)]);
+        u.push_back(Eigen::Vector3d::Unit(a));
+      }
+    const Eigen::MatrixXd C = probeAxesCovariance(linear, isLinearAxisContributor, t, u);
+    Eigen::MatrixXd D = Eigen::MatrixXd::Zero(3 * np, 3 * np);
+    for (Eigen::Index i = 0; i < np; ++i) {
+      D.block<3, 3>(3 * i, 3 * i) += Rt[static_cast<size_t>(i)];
+      D.block<3, 3>(3 * i, 3 * ref) -= Rt_ref;
+    }
+    S += D * C * D.transpose();
+  }
+  // The sensors' response (gain on the diagonal, cross-talk off it) scales what the sensors read:
+  // first order in it about the displacements the readings show (none about the nominal machine,
+  // where every reading is 0). Every entry independent: no term between two components.
+  if ((gain > 0 || direction > 0) && about) {
+    if (about->readings.size() != plan.points.size()) throw std::invalid_argument("rtest declared noise: a cycle does not match its plan");
+    Eigen::MatrixXd d(3, np);
+    for (Eigen::Index i = 0; i < np; ++i) d.col(i) = about->readings[static_cast<size_t>(i)].dq_w_mm;
+    for (int a = 0; a < 3; ++a) {
+      Eigen::Vector3d w = Eigen::Vector3d::Constant(direction * direction);
+      w[a] = gain * gain;
+      const Eigen::MatrixXd G = d.transpose() * w.asDiagonal() * d;  // np x np
+      for (Eigen::Index i = 0; i < np; ++i)
+        for (Eigen::Index j = 0; j < np; ++j) S(3 * i + a, 3 * j + a) += G(i, j);
+    }
+  }
+  return kUmPerMm * kUmPerMm * S;
+}
+
+DeclaredNoise rtestDeclaredNoise(const ProbePlan& plan, const ContributorSet* declared, const RtestCycle* about) {
   const double sensor_um = rtestSensorNoiseUm(plan);
   DeclaredNoise d;
   d.white_um2 = sensor_um * sensor_um;
@@ -109,6 +196,21 @@ DeclaredNoise rtestDeclaredNoise(const ProbePlan& plan, const ContributorSet* de
   }
   d.repeatability_only = !(form && form->u[0] > 0);
   d.declaration = fmt::format("declared per reading: {} = {:.3f} um", parts, std::sqrt(d.white_um2));
+  if (!declared) return d;
+  std::string shared;
+  for (const Contributor& c : declared->items) {
+    if (c.u.cwiseAbs().maxCoeff() <= 0) continue;
+    const ContributorKind kd = c.info->kind;
+    const bool acts = kd == ContributorKind::RtestSphereOffset || kd == ContributorKind::RtestCycleDrift ||
+                      isLinearAxisContributor(*c.info) ||
+                      ((kd == ContributorKind::RtestSensorGain || kd == ContributorKind::RtestSensorDirection) && about);
+    if (acts) shared += fmt::format("{}{}", shared.empty() ? "" : ", ", c.info->id);
+  }
+  if (shared.empty()) return d;
+  d.structured_um2 = rtestStructuredUm2(plan, *declared, about);
+  d.repeatability_only = false;
+  d.declaration += fmt::format("; shared between readings, to first order: {} ({:.2f} um rms per reading)", shared,
+                               std::sqrt(d.structured_um2.diagonal().mean()));
   return d;
 }
 
@@ -275,7 +377,10 @@ int rankOf(const Eigen::MatrixXd& A) {
 }  // namespace
 
 RtestScreen screenRtestReadings(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, double reading_sigma_um,
-                                const std::string& declaration) {
+                                const std::string& declaration, const Eigen::MatrixXd& structured_um2) {
+  const auto np3 = 3 * static_cast<Eigen::Index>(plan.points.size());
+  if (structured_um2.size() > 0 && (structured_um2.rows() != np3 || structured_um2.cols() != np3))
+    throw std::invalid_argument("rtest screen: the structured part is not 3 x the plan's points square");
   if (!(reading_sigma_um > 0) || !std::isfinite(reading_sigma_um))
     throw std::invalid_argument("rtest screen: the declared noise per reading must be > 0");
   const Layout L = layoutOf(plan);
@@ -311,7 +416,14 @@ RtestScreen screenRtestReadings(const ProbePlan& plan, const std::vector<RtestCy
       if (rankOf(Ak) < full_rank[c]) res.summary.termination = Termination::RankDeficient;
       const Eigen::VectorXd b = Ak.completeOrthogonalDecomposition().solve(d.y(keep));
       const Eigen::VectorXd r = d.y - d.A * b;
-      Eigen::VectorXd t = deletionStatistics(r(keep), Ak, s2 * Eigen::MatrixXd::Identity(Ak.rows(), Ak.rows()));
+      Eigen::MatrixXd cov = s2 * Eigen::MatrixXd::Identity(Ak.rows(), Ak.rows());
+      if (structured_um2.size() > 0) {
+        // The reset and re-read rows read the reset pose: its rows of the shared part.
+        std::vector<Eigen::Index> at;
+        for (int i : keep) at.push_back(i < np3 ? i : 3 * (L.ref_point) + i % 3);
+        cov += structured_um2(at, at);
+      }
+      Eigen::VectorXd t = deletionStatistics(r(keep), Ak, cov);
       for (size_t k = 0; k < keep.size(); ++k) {
         const int i = keep[k];
         if (!d.screened[static_cast<size_t>(i)]) continue;
@@ -403,7 +515,7 @@ RtestAnalysis analyzeRtest(const ProbePlan& plan, const std::vector<RtestCycle>&
   RtestAnalysis out;
   out.kinematics = k;
   out.tilt_deg = L.tilts;
-  if (opt.screen) out.screen = screenRtestReadings(plan, cycles, opt.screenSigmaUm(), opt.declaration);
+  if (opt.screen) out.screen = screenRtestReadings(plan, cycles, opt.screenSigmaUm(), opt.declaration, opt.structured_um2);
   const std::vector<std::pair<int, int>> excluded = out.screen.excluded();
   Eigen::Vector3d ref_dev = Eigen::Vector3d::Zero();  // J_ref omega_0: wq(0,0,t0) - wq*, first cycle
   Eigen::Matrix3d ref_cov = Eigen::Matrix3d::Zero();

@@ -41,7 +41,20 @@ double rtestSensorNoiseUm(const ProbePlan& plan);
 /// sphere's form at the contact (`rtest_sphere_form` of the contributors, per reading, Type A:
 /// the same per-reading part the uncertainty budget reads), added in quadrature, white. Every
 /// test of the readings against the declared noise (the screen, the judge of diagnose) reads it.
-DeclaredNoise rtestDeclaredNoise(const ProbePlan& plan, const ContributorSet* declared);
+///
+/// And the structured part: what the declared contributors that act on every reading of the
+/// machine alike move one cycle's readings by, to first order (rtestStructuredUm2), the model the
+/// budget draws (drawRtest). The same machine in every cycle: cycles share it. `about`: the
+/// readings the sensors' gain and cross-talk are taken about (one cycle of the plan, e.g. the
+/// first); null: the nominal machine, where they move nothing to first order.
+DeclaredNoise rtestDeclaredNoise(const ProbePlan& plan, const ContributorSet* declared, const RtestCycle* about = nullptr);
+
+/// The structured part (um^2), rows 3 x (plan point index) + axis (x, y, z), of one cycle read
+/// against the sensors' zero at the reset pose: the sphere offset s reads (R_i^T - R_ref^T) s;
+/// the drift within the cycle R_i^T v t_i less the zero's; the linear axes their error at the
+/// commanded centre (probeAxesCovariance) read the same way; the sensors' response S reads
+/// dS x (the reading), each entry independent (gain on the diagonal, cross-talk off it).
+Eigen::MatrixXd rtestStructuredUm2(const ProbePlan& plan, const ContributorSet& declared, const RtestCycle* about);
 
 struct RtestFitOptions {
   double sensor_sigma_um = 0.2;  // the sensors' repeatability: a floor for the noise estimate
@@ -50,6 +63,9 @@ struct RtestFitOptions {
   /// sensors alone. The screen of gross readings tests against it.
   double reading_sigma_um = 0.0;
   std::string declaration;       // what reading_sigma_um is, for the report
+  /// The declared structured part of one cycle (rtestDeclaredNoise), shared by every cycle; the
+  /// screen whitens by it beside reading_sigma_um. Empty: none.
+  Eigen::MatrixXd structured_um2;
   /// false: no screen of gross readings (the budget's Monte Carlo and its derivatives propagate
   /// noise-free simulated readings through the fixed estimator; a screen there would only cost time).
   bool screen = true;
@@ -136,7 +152,7 @@ struct RtestScreen {
   std::vector<std::pair<int, int>> excluded() const;
 };
 RtestScreen screenRtestReadings(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, double reading_sigma_um,
-                                const std::string& declaration);
+                                const std::string& declaration, const Eigen::MatrixXd& structured_um2 = {});
 /// REPORT.json's `outliers` block of the R-test, and its one line.
 Json rtestScreenJson(const ProbePlan& plan, const RtestScreen& s);
 std::string rtestScreenText(const ProbePlan& plan, const RtestScreen& s);

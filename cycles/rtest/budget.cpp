@@ -14,11 +14,9 @@ namespace rotacal {
 
 bool rtestTypeA(const ContributorInfo& c) { return c.kind == ContributorKind::RtestSphereForm; }
 
-namespace {
-
 /// The contributors that act on an R-test cycle as Type B (the touch cycles' probe, set-up and
 /// piece contributors do not: the R-test has no probe and no piece).
-bool actsAsTypeB(const ContributorInfo& c) {
+bool rtestActsAsTypeB(const ContributorInfo& c) {
   switch (c.kind) {
     case ContributorKind::RtestSensorGain:
     case ContributorKind::RtestSensorDirection:
@@ -30,6 +28,10 @@ bool actsAsTypeB(const ContributorInfo& c) {
     default: return false;
   }
 }
+
+namespace {
+
+bool actsAsTypeB(const ContributorInfo& c) { return rtestActsAsTypeB(c); }
 
 /// The commanded sphere positions of the plan (machine frame): the span of the linear axes.
 void commandedSpan(const ProbePlan& plan, Eigen::Vector3d* lo, Eigen::Vector3d* hi) {
@@ -87,6 +89,38 @@ void applyRtestDraw(const ProbePlan& plan, const RtestDraw& d, Truth* truth, Rte
       return Eigen::Vector3d(v * t + (before ? before(t) : Eigen::Vector3d::Zero()));
     };
   }
+}
+
+Json rtestDrawJson(const RtestDraw& d) {
+  auto r6 = [](double v) { return std::round(v * 1e6) / 1e6; };
+  Json j;
+  Json S = Json::array();
+  for (int a = 0; a < 3; ++a) {
+    Json row = Json::array();
+    for (int b = 0; b < 3; ++b) row.push_back(r6((d.sensor_response(a, b) - (a == b ? 1.0 : 0.0)) * 1e6));
+    S.push_back(row);
+  }
+  j["sensor_response_minus_identity_ppm_or_urad"] = S;
+  j["sphere_offset_um"] = {r6(mmToUm(d.sphere_offset_mm.x())), r6(mmToUm(d.sphere_offset_mm.y())), r6(mmToUm(d.sphere_offset_mm.z()))};
+  j["cycle_drift_um"] = {r6(mmToUm(d.cycle_drift_mm.x())), r6(mmToUm(d.cycle_drift_mm.y())), r6(mmToUm(d.cycle_drift_mm.z()))};
+  if (d.linear) {
+    const LinearAxisErrors& e = d.linear_errors;
+    Json lin = {{"scale_um_per_m", {r6(e.scale.x() * 1e6), r6(e.scale.y() * 1e6), r6(e.scale.z() * 1e6)}},
+                {"squareness_um_per_m", {{"S_xy", r6(e.S_xy * 1e6)}, {"S_xz", r6(e.S_xz * 1e6)}, {"S_yz", r6(e.S_yz * 1e6)}}}};
+    Json nodes = Json::object();
+    for (int a = 0; a < 3; ++a) {
+      const AxisNodes& n = e.nodes[static_cast<size_t>(a)];
+      if (n.spacing_mm <= 0) continue;
+      Json values = Json::array();
+      for (size_t k = 0; k < n.mm[0].size(); ++k)
+        values.push_back({r6(mmToUm(n.mm[0][k])), r6(mmToUm(n.mm[1][k])), r6(mmToUm(n.mm[2][k]))});
+      nodes[std::string(1, "XYZ"[a])] = {{"spacing_mm", n.spacing_mm}, {"first_node_mm", n.spacing_mm * n.first},
+                                         {"values_um_xyz", values}};
+    }
+    lin["random_nodes"] = nodes;
+    j["linear_axes"] = lin;
+  }
+  return j;
 }
 
 UncertaintyBudget rtestBudget(const ProbePlan& plan, const RtestCycle& first, const RtestLocationFit& fit,

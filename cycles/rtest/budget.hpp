@@ -25,6 +25,8 @@ struct RtestBudgetOptions : BudgetOptions {};
 
 /// Contributors that act independently at every reading: u_A measures them.
 bool rtestTypeA(const ContributorInfo& c);
+/// Contributors that act on every reading of the machine alike (drawRtest draws them): Type B.
+bool rtestActsAsTypeB(const ContributorInfo& c);
 
 /// One drawn realisation of the R-test's Type B contributors (internal units).
 struct RtestDraw {
@@ -42,6 +44,8 @@ void drawRtest(const ProbePlan& plan, const ContributorSet& set, std::uint64_t s
 /// Puts a draw on a truth (linear axes) and its extras (sensors, sphere, drift). The drift runs
 /// linearly from 0 at the first cycle's start to cycle_drift at rtestCycleTime_s.
 void applyRtestDraw(const ProbePlan& plan, const RtestDraw& d, Truth* truth, RtestTruthExtras* extras);
+/// What a draw put on the machine, in report units (TRUTH.json's `drawn` of simulate --contributors).
+Json rtestDrawJson(const RtestDraw& d);
 
 /// The budget of the eight location errors (report units, order of locationParameters).
 /// `contributors` null: u_B not evaluated (said in words). Not identifiable: empty budget.

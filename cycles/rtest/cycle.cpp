@@ -61,14 +61,43 @@ class Rtest final : public Cycle {
     rtestTruthFromJson(doc, plan.machine.kinematics, truth, extras);
     RtestSimOptions o;
     o.seed = r.seed;
+    o.noise_um = truth.noise_um;
+    // --contributors: a machine drawn from them on top of the truth file, as the budget draws it
+    // (drawRtest, run 0 of the machine seed: the sensors' gain and cross-talk, the sphere offset,
+    // the drift within a cycle, the linear axes), and the declared per-reading scatter (sensors
+    // and sphere form) as the noise, replacing the truth file's (one declaration, not two).
+    Json truth_json;
+    std::string drawn;
+    if (r.contributors) {
+      RtestDraw draw;
+      onTruthFile(r.truth, [&] {
+        drawRtest(plan, *r.contributors, r.machine_seed, 0, -1, &draw);
+        return 0;
+      });
+      applyRtestDraw(plan, draw, &truth, &extras);
+      o.noise_um = std::sqrt(rtestDeclaredNoise(plan, r.contributors).white_um2);
+      const std::string from = r.contributors->file.empty() ? std::string("the machine's contributors") : r.contributors->file;
+      std::vector<std::string> left_out;
+      for (const Contributor& c : r.contributors->items)
+        if (!rtestTypeA(*c.info) && !rtestActsAsTypeB(*c.info)) left_out.emplace_back(c.info->id);
+      truth_json = doc.value;
+      Json rec = rtestDrawJson(draw);
+      rec["seed"] = r.machine_seed;
+      rec["contributors"] = from;
+      rec["per_reading_um"] = std::round(o.noise_um * 1e6) / 1e6;
+      if (!left_out.empty()) rec["left_out"] = left_out;
+      truth_json["drawn"] = rec;
+      drawn = fmt::format(", a machine drawn from {} (machine seed {})", from, r.machine_seed);
+    }
     // Both are >= 0: the truth file's reader and --noise-um's check refuse a negative noise.
-    o.noise_um = r.noise_um.value_or(truth.noise_um);
+    if (r.noise_um) o.noise_um = *r.noise_um;
+    if (!truth_json.is_null()) truth_json["noise_um"] = o.noise_um;
     o.start_s = r.start_s.value_or(0.0);
     const RtestSeries s = onTruthFile(r.truth, [&] { return simulateRtest(plan, truth, extras, o); });
     return {rtestResultsCsv(plan, s),
-            fmt::format("simulated {} R-test cycle(s) of {} readings (sensor noise {:.3f} um, seed {})", s.cycles.size(),
-                        plan.points.size(), o.noise_um, r.seed),
-            Json()};
+            fmt::format("simulated {} R-test cycle(s) of {} readings (sensor noise {:.3f} um, seed {}{})", s.cycles.size(),
+                        plan.points.size(), o.noise_um, r.seed, drawn),
+            truth_json};
   }
 
 
@@ -78,9 +107,12 @@ class Rtest final : public Cycle {
     const std::vector<RtestCycle> cycles = readCycles(plan, r.results, &out.warnings);
     RtestFitOptions o;
     o.sensor_sigma_um = sensorSigma(plan);
-    const DeclaredNoise noise = rtestDeclaredNoise(plan, r.contributors);
+    // The structured part (the sensors' gain and cross-talk, the sphere offset, the linear axes)
+    // taken about the first cycle's readings: the sensors scale what they read.
+    const DeclaredNoise noise = rtestDeclaredNoise(plan, r.contributors, cycles.empty() ? nullptr : &cycles.front());
     o.reading_sigma_um = std::sqrt(noise.white_um2);
     o.declaration = noise.declaration;
+    o.structured_um2 = noise.structured_um2;
     const RtestAnalysis a = analyzeRtest(plan, cycles, o);
     const std::vector<std::string> files = pathsOf(r.results);
     out.doc = rtestReportJson(plan, cycles, a, files);
@@ -148,9 +180,12 @@ class Rtest final : public Cycle {
     o.sensor_sigma_um = sensorSigma(plan);  // the sensors (plan option, default 002's 0.2 um): the re-read check
     // The judge tests every reading against what one reading is declared to scatter by: the
     // sensors and the sphere's form, the per-reading part analyze's uncertainty budget reads too.
-    const DeclaredNoise noise = rtestDeclaredNoise(plan, r.contributors);
+    // The structured part (the sensors' gain and cross-talk, the sphere offset, the linear axes)
+    // taken about the first cycle's readings: the sensors scale what they read.
+    const DeclaredNoise noise = rtestDeclaredNoise(plan, r.contributors, cycles.empty() ? nullptr : &cycles.front());
     o.reading_sigma_um = std::sqrt(noise.white_um2);
     o.declaration = noise.declaration;
+    o.structured_um2 = noise.structured_um2;
     o.validate();
     const RtestDiagnosis d = diagnoseRtest(plan, cycles, o);
     out.text = rtestDiagnosisText(plan, d);

@@ -174,6 +174,7 @@ RtestJudgeSetup rtestJudgeSetup(const ProbePlan& plan, const std::vector<RtestCy
         pb.groups.push_back(c);
         s.t_h.push_back(tau);
         s.cycle.push_back(c);
+        s.plan_row.push_back(3 * static_cast<int>(j) + d);
         f_time.values.push_back(tau);
         f_tilt.levels.push_back(fmt::format("{:g}", tilts[static_cast<size_t>(ti)]));
         f_c.levels.push_back(fmt::format("{:g}", plan.points[j].pose.C));
@@ -206,6 +207,7 @@ RtestJudgeSetup rtestJudgeSetup(const ProbePlan& plan, const std::vector<RtestCy
     pick(pb.groups);
     pick(s.t_h);
     pick(s.cycle);
+    pick(s.plan_row);
     for (auto& f : pb.factors) {
       if (!f.levels.empty()) pick(f.levels);
       if (!f.values.empty()) pick(f.values);
@@ -221,10 +223,21 @@ RtestDiagnosis diagnoseRtest(const ProbePlan& plan, const std::vector<RtestCycle
   fo.sensor_sigma_um = o.sensor_sigma_um;
   fo.reading_sigma_um = o.reading_sigma_um;
   fo.declaration = o.declaration;
+  fo.structured_um2 = o.structured_um2;
   d.analysis = analyzeRtest(plan, cycles, fo);
   d.cycles = static_cast<int>(cycles.size());
   RtestJudgeSetup setup = rtestJudgeSetup(plan, cycles, o.readingSigmaUm(), d.analysis.screen.excluded());
   setup.problem.declaration = o.declaration;
+  if (o.structured_um2.size() > 0) {
+    // The same machine in every cycle: any two readings share what their plan rows share.
+    JudgeProblem& pb = setup.problem;
+    const auto np3 = 3 * static_cast<Eigen::Index>(plan.points.size());
+    if (o.structured_um2.rows() != np3 || o.structured_um2.cols() != np3)
+      throw std::invalid_argument("rtest diagnose: the structured part is not 3 x the plan's points square");
+    std::vector<Eigen::Index> at(setup.plan_row.begin(), setup.plan_row.end());
+    pb.covariance = o.structured_um2(at, at);
+    pb.covariance.diagonal() += pb.sigma.cwiseAbs2();
+  }
   d.summary = judge(setup.problem, o.judge);
   const double level = d.summary.per_test_alpha;
   const JudgeCause& drift = setup.problem.causes.front();

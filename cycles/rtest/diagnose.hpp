@@ -47,6 +47,9 @@ struct RtestDiagnosisOptions {
   /// judge whitens by; 0: the sensors alone.
   double reading_sigma_um = 0.0;
   std::string declaration;        // what it is, named in the verdict
+  /// The declared structured part of one cycle (rtestDeclaredNoise), the same machine in every
+  /// cycle: the judge whitens by it beside reading_sigma_um (and the screen). Empty: none.
+  Eigen::MatrixXd structured_um2;
   double readingSigmaUm() const { return reading_sigma_um > 0 ? reading_sigma_um : sensor_sigma_um; }
   void validate() const;          // throws std::invalid_argument
 };
@@ -57,6 +60,7 @@ struct RtestJudgeSetup {
   std::vector<JudgeCause> confounds;  // spindle_growth, linear_axis_drift
   std::vector<double> t_h;        // hours since the reset, per observation
   std::vector<int> cycle;         // 0-based cycle, per observation (reset and re-read rows included)
+  std::vector<int> plan_row;      // 3 x (plan point index) + axis, per observation (reset, re-read: the reset pose's)
 };
 /// `excluded`: the pose readings' values the screen left out, (cycle, 3 x plan point index + axis)
 /// as RtestScreen::excluded gives them: their rows are not in the problem.

@@ -318,8 +318,12 @@ struct Example002 {
     RtestDiagnosisOptions o;
     o.sensor_sigma_um = 0.2;
     o.reading_sigma_um = std::sqrt(noise.white_um2);
-    o.declaration = noise.declaration;
-    return diagnoseRtest(plan, series(plan, t, extras, seed, std::sqrt(noise.white_um2)), o);
+    const std::vector<RtestCycle> c = series(plan, t, extras, seed, std::sqrt(noise.white_um2));
+    // As the CLI does: the structured part too, taken about the first cycle's readings.
+    const DeclaredNoise as_read = rtestDeclaredNoise(plan, &contributors, &c.front());
+    o.declaration = as_read.declaration;
+    o.structured_um2 = as_read.structured_um2;
+    return diagnoseRtest(plan, c, o);
   }
 };
 
