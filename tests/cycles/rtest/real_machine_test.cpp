@@ -135,8 +135,10 @@ TEST(RtestRealMachine, JudgeAndBudgetKeepTheirRatesOnDrawnMachines) {
   // The screen: its N(0, 1) deletion statistics hold its 1 % on the Gaussian part of the
   // declaration (without the linear axes' random nodes: 0 of these 30), but a drawn machine's
   // nodes sit at ONE spacing, a scale mixture over machines with a heavier tail than the
-  // covariance's Gaussian: 3 of 30 lose a value. Asserted: far fewer than against the white part.
-  EXPECT_LE(screened, 4);
+  // covariance's Gaussian: 3 of 30 lose a value, above the stated 1 % (Binomial(30, 0.01) reaches
+  // 3 with probability 0.3 %). That is a defect of the screen on such machines (docs/rtest.md),
+  // not asserted away with a bound chosen after seeing it; what is asserted is the change the
+  // declaration makes: against the white part alone most series lose a value.
   EXPECT_GT(white_screened, machines / 2);
 }
 
