@@ -108,15 +108,27 @@ void addProbeAxesPart(const ContributorSet& declared, const std::vector<Eigen::V
                                     std::sqrt(C.diagonal().mean()));
 }
 
-Eigen::MatrixXd inverseSquareRoot(const Eigen::MatrixXd& S) {
+void squareRoots(const Eigen::MatrixXd& S, Eigen::MatrixXd* inverse_root, Eigen::MatrixXd* root) {
   if (S.rows() != S.cols()) throw std::invalid_argument("declared noise: the covariance is not square");
   if (!S.allFinite()) throw std::invalid_argument("declared noise: the covariance has a non-finite entry");
-  if (S.rows() == 0) return S;
+  if (S.rows() == 0) {
+    if (inverse_root) *inverse_root = S;
+    if (root) *root = S;
+    return;
+  }
   if (!(S.diagonal().minCoeff() > 0)) throw std::invalid_argument("declared noise: a reading with no declared variance");
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (S + S.transpose()));
   const double top = es.eigenvalues().maxCoeff();
-  const Eigen::VectorXd inv_root = es.eigenvalues().cwiseMax(1e-12 * top).cwiseSqrt().cwiseInverse();
-  return es.eigenvectors() * inv_root.asDiagonal() * es.eigenvectors().transpose();
+  const Eigen::VectorXd r = es.eigenvalues().cwiseMax(1e-12 * top).cwiseSqrt();
+  const Eigen::MatrixXd& V = es.eigenvectors();
+  if (inverse_root) *inverse_root = V * r.cwiseInverse().asDiagonal() * V.transpose();
+  if (root) *root = V * r.asDiagonal() * V.transpose();
+}
+
+Eigen::MatrixXd inverseSquareRoot(const Eigen::MatrixXd& S) {
+  Eigen::MatrixXd W;
+  squareRoots(S, &W, nullptr);
+  return W;
 }
 
 namespace {

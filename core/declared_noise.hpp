@@ -72,6 +72,8 @@ void addProbeAxesPart(const ContributorSet& declared, const std::vector<Eigen::V
 /// Eigenvalues below 1e-12 of the largest are floored there. Throws std::invalid_argument when
 /// the matrix is not square, not finite or not positive on its diagonal.
 Eigen::MatrixXd inverseSquareRoot(const Eigen::MatrixXd& covariance);
+/// The same, and the square root S^1/2 (its inverse) from the one eigen-decomposition.
+void squareRoots(const Eigen::MatrixXd& covariance, Eigen::MatrixXd* inverse_root, Eigen::MatrixXd* root);
 
 /// The outlier statistic of each reading under correlated declared noise: the standardized
 /// residual of reading i predicted from all the others (the generalized least squares deletion

@@ -744,8 +744,7 @@ JudgeSummary judge(const JudgeProblem& pb, const JudgeOptions& o) {
   Context cx{pb, o, {}, {}, {}, {}, {}, {}, {}, 0, 0, 0};
   if (pb.covariance.size()) {
     cx.sigma = pb.covariance.diagonal().cwiseSqrt();
-    cx.W = inverseSquareRoot(pb.covariance);
-    cx.W_inv = cx.W.inverse();
+    squareRoots(pb.covariance, &cx.W, &cx.W_inv);
   } else {
     cx.sigma = pb.sigma;
   }

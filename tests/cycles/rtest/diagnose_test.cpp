@@ -333,7 +333,9 @@ TEST(RtestDiagnosis, Example002HiddenDriftFoundUnderTheContributorsNoise) {
   ASSERT_TRUE(static_cast<bool>(ex.truth.drift));
   // The declaration is the budget's per-reading part, computed here from the file's two figures.
   ASSERT_NEAR(ex.noise.white_um2, 0.2 * 0.2 + 0.1 * 0.1, 1e-12);
-  for (std::uint64_t seed = 1; seed <= 8; ++seed) {
+  // 4 seeds: each diagnosis whitens 891 readings by the full declared covariance (8 of 8 found on
+  // 8 seeds, docs/rtest.md).
+  for (std::uint64_t seed = 1; seed <= 4; ++seed) {
     const RtestDiagnosis d = ex.diagnose(ex.truth, seed);
     ASSERT_EQ(d.summary.verdict, JudgeVerdict::EffectFound) << rtestDiagnosisText(ex.plan, d);
     EXPECT_NE(d.summary.finding("thermal_drift"), nullptr) << seed;
@@ -351,7 +353,7 @@ TEST(RtestDiagnosis, Example002CleanSeedsRaiseNothingUnderTheContributorsNoise) 
   Truth still = ex.truth;
   still.drift = nullptr;
   int named = 0;
-  for (std::uint64_t seed = 1; seed <= 8; ++seed) {
+  for (std::uint64_t seed = 1; seed <= 4; ++seed) {  // 8 of 8 quiet on 8 seeds (docs/rtest.md)
     const RtestDiagnosis d = ex.diagnose(still, seed);
     named += d.summary.findings.empty() ? 0 : 1;
     EXPECT_EQ(d.summary.verdict, JudgeVerdict::NoSignificantEffect) << rtestDiagnosisText(ex.plan, d);
