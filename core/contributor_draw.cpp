@@ -184,6 +184,24 @@ Json roundedArray(const Eigen::Vector3d& v, double factor) {
 
 }  // namespace
 
+Json linearAxesRecord(const LinearAxisErrors& e) {
+  const auto r6 = [](double v) { return std::round(v * 1e6) / 1e6; };
+  Json lin = {{"scale_um_per_m", {r6(e.scale.x() * 1e6), r6(e.scale.y() * 1e6), r6(e.scale.z() * 1e6)}},
+              {"squareness_um_per_m", {{"S_xy", r6(e.S_xy * 1e6)}, {"S_xz", r6(e.S_xz * 1e6)}, {"S_yz", r6(e.S_yz * 1e6)}}}};
+  Json nodes = Json::object();
+  for (int a = 0; a < 3; ++a) {
+    const AxisNodes& n = e.nodes[static_cast<size_t>(a)];
+    if (n.spacing_mm <= 0) continue;
+    Json values = Json::array();
+    for (size_t k = 0; k < n.mm[0].size(); ++k)
+      values.push_back({r6(mmToUm(n.mm[0][k])), r6(mmToUm(n.mm[1][k])), r6(mmToUm(n.mm[2][k]))});
+    nodes[std::string(1, "XYZ"[a])] = {{"spacing_mm", n.spacing_mm}, {"first_node_mm", n.spacing_mm * n.first},
+                                       {"values_um_xyz", values}};
+  }
+  lin["random_nodes"] = nodes;
+  return lin;
+}
+
 DrawnMachine drawMachine(const ProbePlan& plan, const ContributorSet& set, std::uint64_t seed, Truth* truth) {
   DrawnMachine out;
   Json& rec = out.record;
@@ -198,24 +216,7 @@ DrawnMachine drawMachine(const ProbePlan& plan, const ContributorSet& set, std::
     for (size_t k = 0; k < 6; ++k) p[dir[k]] = std::round(mmToUm(axes.pretravel_mm[k]) * 1e6) / 1e6;
     rec["pretravel_um"] = p;
   }
-  if (axes.linear) {
-    const LinearAxisErrors& e = axes.linear_errors;
-    Json lin = {{"scale_um_per_m", roundedArray(e.scale, 1e6)},
-                {"squareness_um_per_m", {{"S_xy", e.S_xy * 1e6}, {"S_xz", e.S_xz * 1e6}, {"S_yz", e.S_yz * 1e6}}}};
-    Json nodes = Json::object();
-    for (int a = 0; a < 3; ++a) {
-      const AxisNodes& n = e.nodes[static_cast<size_t>(a)];
-      if (n.spacing_mm <= 0) continue;
-      Json values = Json::array();
-      for (size_t k = 0; k < n.mm[0].size(); ++k)
-        values.push_back({std::round(mmToUm(n.mm[0][k]) * 1e6) / 1e6, std::round(mmToUm(n.mm[1][k]) * 1e6) / 1e6,
-                          std::round(mmToUm(n.mm[2][k]) * 1e6) / 1e6});
-      nodes[std::string(1, "XYZ"[a])] = {{"spacing_mm", n.spacing_mm}, {"first_node_mm", n.spacing_mm * n.first},
-                                         {"values_um_xyz", values}};
-    }
-    lin["random_nodes"] = nodes;
-    rec["linear_axes"] = lin;
-  }
+  if (axes.linear) rec["linear_axes"] = linearAxesRecord(axes.linear_errors);
   double per_touch_mm2 = 0.0;
   for (const Contributor& c : set.items) {
     Rng rng(seed, contributorStream(*c.info, 0));

@@ -82,6 +82,10 @@ Eigen::MatrixXd probeAxesCovariance(const ContributorSet& set, const std::functi
 /// Adds a draw to a truth (to its linear_axis_error and pretravel, if it has them).
 void applyProbeAxesDraw(const ProbeAxesDraw& draw, Truth* truth);
 
+/// What was drawn of the linear axes, in report units (um/m, um), for a drawn machine's truth
+/// record: scale, squareness and each axis's random nodes.
+Json linearAxesRecord(const LinearAxisErrors& errors);
+
 /// A whole machine as its declared contributors make it, for the exact simulator (`simulate
 /// --contributors`): on top of `truth` (its location errors, anything else it sets), the probe's
 /// pretravel by direction and the linear axes of 000 Eqs. (22)-(23) over the plan's trigger span

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 #include <set>
 #include <stdexcept>
 
@@ -129,23 +130,30 @@ Json outlierScreenJson(const OutlierScreen& s, const OutlierOptions& o) {
                   {"residual_um", std::round(e.residual_um * 1e6) / 1e6},
                   {"t", std::round(e.t * 1e4) / 1e4},
                   {"reason", "beyond the threshold: a chip or dirt on the surface; left out of the fit"}});
-  Json j = {{"test", o.statistic ? "|t| of each touch against everything the others predict for it under the declared "
-                                    "covariance of the touches (generalized least squares deletion residual) against the "
-                                    "normal quantile at alpha / (2 N), worst first, refitted after each"
-                                  : "|residual| / declared repeatability against the normal quantile at alpha / (2 N), "
-                                    "worst first, refitted after each"},
-          {"declaration", o.declaration.empty() ? fmt::format("declared: repeatability only ({:.3f} um)", o.sigma_um)
-                                                : o.declaration},
+  OutlierOptions named = o;
+  if (named.declaration.empty()) named.declaration = fmt::format("declared: repeatability only ({:.3f} um)", o.sigma_um);
+  return screenJson(s, named,
+                    o.statistic ? "|t| of each touch against everything the others predict for it under the declared "
+                                  "covariance of the touches (generalized least squares deletion residual) against the "
+                                  "normal quantile at alpha / (2 N), worst first, refitted after each"
+                                : "|residual| / declared repeatability against the normal quantile at alpha / (2 N), "
+                                  "worst first, refitted after each",
+                    "touches", std::move(ex), s.text());
+}
+
+Json screenJson(const OutlierScreen& s, const OutlierOptions& o, const std::string& test, const std::string& counted,
+                Json excluded, const std::string& summary) {
+  return {{"test", test},
+          {"declaration", o.declaration},
           {"sigma_um", o.sigma_um},
           {"alpha", o.alpha},
           {"threshold_t", std::round(s.threshold_t * 1e4) / 1e4},
-          {"touches", s.touches},
+          {counted, s.touches},
           {"max_fraction", o.max_fraction},
           {"too_many", s.too_many},
           {"beyond", s.beyond},
-          {"excluded", ex},
-          {"summary", s.text()}};
-  return j;
+          {"excluded", std::move(excluded)},
+          {"summary", summary}};
 }
 
 }  // namespace rotacal

@@ -72,4 +72,11 @@ OutlierScreen screenOutliers(
 /// The screen as REPORT.json's `outliers` block.
 Json outlierScreenJson(const OutlierScreen& screen, const OutlierOptions& options);
 
+/// The fields every screen's REPORT.json block shares (what was tested and against what, the
+/// threshold, how many beyond, the excluded list the cycle describes in its own terms): one form
+/// for the touch cycles' screen and the readings' screens of the other instruments. `counted` names
+/// what the screen counts ("touches", "values").
+Json screenJson(const OutlierScreen& screen, const OutlierOptions& options, const std::string& test,
+                const std::string& counted, Json excluded, const std::string& summary);
+
 }  // namespace rotacal

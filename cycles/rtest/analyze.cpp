@@ -460,19 +460,11 @@ Json rtestScreenJson(const ProbePlan& plan, const RtestScreen& s) {
                   {"t", std::round(e.t * 1e3) / 1e3},
                   {"reason", "beyond the threshold: a gross reading (a sensor glitch); left out of every fit"}});
   }
-  return {{"test", "each pose reading's value against what the rest of its cycle predicts for it under the declared noise "
-                   "per reading (deletion residual) against the normal quantile at alpha / (2 N), worst first, refitted "
-                   "after each; the reset and re-read rows are the re-read check's"},
-          {"declaration", s.options.declaration},
-          {"sigma_um", s.options.sigma_um},
-          {"alpha", s.options.alpha},
-          {"threshold_t", std::round(s.screen.threshold_t * 1e4) / 1e4},
-          {"values", s.screen.touches},
-          {"max_fraction", s.options.max_fraction},
-          {"too_many", s.screen.too_many},
-          {"beyond", s.screen.beyond},
-          {"excluded", ex},
-          {"summary", rtestScreenText(plan, s)}};
+  return screenJson(s.screen, s.options,
+                    "each pose reading's value against what the rest of its cycle predicts for it under the declared "
+                    "noise per reading (deletion residual) against the normal quantile at alpha / (2 N), worst first, "
+                    "refitted after each; the reset and re-read rows are the re-read check's",
+                    "values", std::move(ex), rtestScreenText(plan, s));
 }
 
 std::string rtestScreenText(const ProbePlan& plan, const RtestScreen& s) {

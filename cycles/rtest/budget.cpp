@@ -103,23 +103,7 @@ Json rtestDrawJson(const RtestDraw& d) {
   j["sensor_response_minus_identity_ppm_or_urad"] = S;
   j["sphere_offset_um"] = {r6(mmToUm(d.sphere_offset_mm.x())), r6(mmToUm(d.sphere_offset_mm.y())), r6(mmToUm(d.sphere_offset_mm.z()))};
   j["cycle_drift_um"] = {r6(mmToUm(d.cycle_drift_mm.x())), r6(mmToUm(d.cycle_drift_mm.y())), r6(mmToUm(d.cycle_drift_mm.z()))};
-  if (d.linear) {
-    const LinearAxisErrors& e = d.linear_errors;
-    Json lin = {{"scale_um_per_m", {r6(e.scale.x() * 1e6), r6(e.scale.y() * 1e6), r6(e.scale.z() * 1e6)}},
-                {"squareness_um_per_m", {{"S_xy", r6(e.S_xy * 1e6)}, {"S_xz", r6(e.S_xz * 1e6)}, {"S_yz", r6(e.S_yz * 1e6)}}}};
-    Json nodes = Json::object();
-    for (int a = 0; a < 3; ++a) {
-      const AxisNodes& n = e.nodes[static_cast<size_t>(a)];
-      if (n.spacing_mm <= 0) continue;
-      Json values = Json::array();
-      for (size_t k = 0; k < n.mm[0].size(); ++k)
-        values.push_back({r6(mmToUm(n.mm[0][k])), r6(mmToUm(n.mm[1][k])), r6(mmToUm(n.mm[2][k]))});
-      nodes[std::string(1, "XYZ"[a])] = {{"spacing_mm", n.spacing_mm}, {"first_node_mm", n.spacing_mm * n.first},
-                                         {"values_um_xyz", values}};
-    }
-    lin["random_nodes"] = nodes;
-    j["linear_axes"] = lin;
-  }
+  if (d.linear) j["linear_axes"] = linearAxesRecord(d.linear_errors);
   return j;
 }
 

@@ -125,23 +125,7 @@ Json tooltipDrawJson(const TooltipDraw& d) {
                                {"transverse_beam_out_of_plane", r6(d.out_t * 1e6)},
                                {"z_beam_in_plane", r6(d.in_z * 1e6)},
                                {"z_beam_out_of_plane", r6(d.out_z * 1e6)}};
-  if (d.linear) {
-    const LinearAxisErrors& e = d.linear_errors;
-    Json lin = {{"scale_um_per_m", {r6(e.scale.x() * 1e6), r6(e.scale.y() * 1e6), r6(e.scale.z() * 1e6)}},
-                {"squareness_um_per_m", {{"S_xy", r6(e.S_xy * 1e6)}, {"S_xz", r6(e.S_xz * 1e6)}, {"S_yz", r6(e.S_yz * 1e6)}}}};
-    Json nodes = Json::object();
-    for (int a = 0; a < 3; ++a) {
-      const AxisNodes& n = e.nodes[static_cast<size_t>(a)];
-      if (n.spacing_mm <= 0) continue;
-      Json values = Json::array();
-      for (size_t k = 0; k < n.mm[0].size(); ++k)
-        values.push_back({r6(mmToUm(n.mm[0][k])), r6(mmToUm(n.mm[1][k])), r6(mmToUm(n.mm[2][k]))});
-      nodes[std::string(1, "XYZ"[a])] = {{"spacing_mm", n.spacing_mm}, {"first_node_mm", n.spacing_mm * n.first},
-                                         {"values_um_xyz", values}};
-    }
-    lin["random_nodes"] = nodes;
-    j["linear_axes"] = lin;
-  }
+  if (d.linear) j["linear_axes"] = linearAxesRecord(d.linear_errors);
   return j;
 }
 

@@ -127,19 +127,11 @@ Json tooltipScreenJson(const ProbePlan& plan, const TooltipScreen& s) {
                   {"reason", "beyond the threshold: a gross reading (a laser glitch, a chip on the sphere); the reading "
                              "(both components) is left out of every fit"}});
   }
-  return {{"test", "each read value (transverse and Z apart) against what every other value predicts for it under the "
-                   "declared noise (generalized least squares deletion residual of the joint model) against the normal "
-                   "quantile at alpha / (2 N), worst first, refitted after each; the reading of a value beyond leaves"},
-          {"declaration", s.options.declaration},
-          {"sigma_um", s.options.sigma_um},
-          {"alpha", s.options.alpha},
-          {"threshold_t", std::round(s.screen.threshold_t * 1e4) / 1e4},
-          {"values", s.screen.touches},
-          {"max_fraction", s.options.max_fraction},
-          {"too_many", s.screen.too_many},
-          {"beyond", s.screen.beyond},
-          {"excluded", ex},
-          {"summary", tooltipScreenText(plan, s)}};
+  return screenJson(s.screen, s.options,
+                    "each read value (transverse and Z apart) against what every other value predicts for it under the "
+                    "declared noise (generalized least squares deletion residual of the joint model) against the normal "
+                    "quantile at alpha / (2 N), worst first, refitted after each; the reading of a value beyond leaves",
+                    "values", std::move(ex), tooltipScreenText(plan, s));
 }
 
 std::string tooltipScreenText(const ProbePlan& plan, const TooltipScreen& s) {
