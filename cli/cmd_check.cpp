@@ -31,9 +31,14 @@ namespace rotacal {
 constexpr size_t kMaxProgramLineChars = 1024;
 
 ProgramCheckResult verifyProgram(const std::string& text, const std::string& dialect, const MachineModel& machine,
-                                 const ProbePlan* plan, bool rotacal_number, const GeometricErrors* errors) {
+                                 const ProbePlan* plan, bool rotacal_number, const GeometricErrors* errors,
+                                 const std::optional<Eigen::Vector3d>& part_program_origin) {
   ProgramCheckSetup s = programCheckSetup(machine, dialect, ctl::numbersPrograms(dialect), plan, rotacal_number);
   if (errors) s.errors = *errors;
+  if (part_program_origin) {
+    s.part_program = true;
+    s.program_origin_m_mm = *part_program_origin;
+  }
   ProgramCheckResult r = checkProgram(ctl::readMotions(dialect, text), s);
   // What no control reads: an empty program, a line beyond the longest block any of the dialects
   // takes (compensate's limit, 1024 characters; LinuxCNC stops at 255).
@@ -55,8 +60,8 @@ ProgramCheckResult verifyProgram(const std::string& text, const std::string& dia
 
 void requireSafeProgram(const std::string& text, const std::string& file, const std::string& dialect,
                         const MachineModel& machine, const ProbePlan* plan, bool rotacal_number,
-                        const GeometricErrors* errors) {
-  const ProgramCheckResult r = verifyProgram(text, dialect, machine, plan, rotacal_number, errors);
+                        const GeometricErrors* errors, const std::optional<Eigen::Vector3d>& part_program_origin) {
+  const ProgramCheckResult r = verifyProgram(text, dialect, machine, plan, rotacal_number, errors, part_program_origin);
   if (r.violations.empty()) return;
   const ProgramViolation& v = r.violations.front();
   throw InputError(file, v.line,

@@ -3,6 +3,7 @@
 // identified location errors moves the tool as the nominal machine would have
 // (postproc/compensate_program.hpp, docs/compensation.md).
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -11,10 +12,12 @@
 #include "cli/command.hpp"
 #include "cli/output.hpp"
 #include "controllers/common.hpp"
+#include "controllers/motion_reader.hpp"
 #include "core/errors.hpp"
 #include "core/json_io.hpp"
 #include "core/machine.hpp"
 #include "core/units.hpp"
+#include "history/store.hpp"
 #include "postproc/compensate_program.hpp"
 #include "postproc/report_errors.hpp"
 
@@ -58,9 +61,47 @@ std::vector<double> parseTriple(const std::string& opt, const std::string& text)
   return v;
 }
 
+// A report older than this is flagged: a machine's location errors move with crashes,
+// maintenance and the seasons, and a compensation for last quarter's machine is a guess.
+constexpr double kReportAgeFlagDays = 30.0;
+
+// The report must be of this machine: its identity and kinematics, as analyze recorded them.
+void requireSameMachine(const JsonDoc& report, const MachineModel& machine, const std::string& machine_file) {
+  const Json& j = report.value;
+  if (!j.is_object() || !j.contains("machine_model") || !j["machine_model"].is_object()) return;
+  const Json& mm = j["machine_model"];
+  const std::string name = mm.contains("name") && mm["name"].is_string() ? mm["name"].get<std::string>() : "";
+  const std::string kin = mm.contains("kinematics") && mm["kinematics"].is_string() ? mm["kinematics"].get<std::string>() : "";
+  if (name != machine.name || kin != kinematicsName(machine.kinematics))
+    report.fail(j, "machine_model", fmt::format("the report was measured on machine '{}' ({}); --machine {} is '{}' ({}): "
+                                                "a compensation is for the machine that was measured",
+                                                name, kin, machine_file, machine.name,
+                                                kinematicsName(machine.kinematics)));
+}
+
+// When the report was analyzed, and whether that is old.
+std::string reportAgeNote(const JsonDoc& report, double now_s) {
+  const Json& j = report.value;
+  if (!j.is_object() || !j.contains("analyzed_utc") || !j["analyzed_utc"].is_string())
+    return report.file + " records no date (analyze records one since this version): how old it is is not known";
+  double t = 0.0;
+  try {
+    t = history::parseIsoTime(j["analyzed_utc"].get<std::string>());
+  } catch (const std::invalid_argument& e) {
+    report.fail(j, "analyzed_utc", e.what());
+  }
+  const double days = (now_s - t) / 86400.0;
+  if (days > kReportAgeFlagDays)
+    return fmt::format("{} was analyzed {} ({:.0f} days ago, more than {:.0f}): the machine may have moved since; "
+                       "measure again before cutting",
+                       report.file, j["analyzed_utc"].get<std::string>(), days, kReportAgeFlagDays);
+  return {};
+}
+
 int cmdCompensate(const Common& c, const std::string& program_file, const std::vector<std::string>& report_files,
                   const std::string& machine_file, const std::string& dialect, const std::string& origin,
-                  const std::string& out, bool force, double max_deviation_um) {
+                  const std::string& out, bool force, double max_deviation_um,
+                  const std::vector<std::string>& table_holds) {
   const NcSyntax syntax = syntaxOf(dialect);
   std::vector<std::string> inputs = {program_file};
   for (const auto& r : report_files) inputs.push_back(r);
@@ -79,7 +120,21 @@ int cmdCompensate(const Common& c, const std::string& program_file, const std::v
       report.fail(report.value, "", "the report does not carry its machine ('machine_model', written by analyze since "
                                     "this version): give --machine MACHINE.json");
   }
-  const ReportErrors read = errorsFromReports(reports, machine.kinematics, force);
+  if (!machine_file.empty())
+    for (const auto& r : reports) requireSameMachine(r, machine, machine_file);
+  for (const std::string& h : table_holds) {
+    bool known = false;
+    for (const auto& r : machine.rotary)
+      for (const auto& n : componentErrorNames(r.name)) known = known || n == h;
+    if (!known)
+      throw CLI::ValidationError("--table-holds", "'" + h + "' is no component error of this machine's rotary axes "
+                                                  "(e.g. ECC: the C axis's angular positioning)");
+  }
+  ReportErrors read = errorsFromReports(reports, machine.kinematics, force, table_holds);
+  for (const auto& r : reports) {
+    const std::string age = reportAgeNote(r, nowUnixS());
+    if (!age.empty()) read.notes.push_back(age);
+  }
   const GeometricErrors& errors = read.errors;
   ProgramCompensationOptions opt;
   if (!origin.empty()) {
@@ -110,15 +165,25 @@ int cmdCompensate(const Common& c, const std::string& program_file, const std::v
   for (const auto& n : read.notes) opt.header.push_back(n);
   const std::string text = readTextFile(program_file);
   const ProgramCompensation r = compensateProgram(text, program_file, machine, errors, syntax, opt);
+  // A program without a probing move is a part program: checked as one (the tool's point against
+  // the table; no probe, no calibration artefact on the table), from its own zero. A probing
+  // program keeps the probing checks.
+  bool probing = false;
+  for (const auto& m : ctl::readMotions(dialect, text)) probing = probing || m.kind == nc::Motion::Kind::Probe;
+  const std::optional<Eigen::Vector3d> part =
+      probing ? std::nullopt : std::optional<Eigen::Vector3d>(opt.program_origin_m_mm);
   // The input, on the nominal machine it was written for: what makes it unsafe is named at its
   // own line (the rewrite's lines are not the user's).
-  requireSafeProgram(text, program_file, dialect, machine, nullptr, false);
+  requireSafeProgram(text, program_file, dialect, machine, nullptr, false, nullptr, part);
   // The program verifier (`rotacal check`) on the rewrite, before it is written: the guards follow
   // their moves, strokes, clearances on the machine's set-up - the machine with the errors it is
   // compensated for, where it keeps its planned gaps. The input's program number is kept.
-  requireSafeProgram(r.text, out, dialect, machine, nullptr, false, &errors);
+  requireSafeProgram(r.text, out, dialect, machine, nullptr, false, &errors, part);
   writeFileAtomic(out, r.text);
   for (const auto& n : read.notes) say(c, fmt::format("compensate: note: {}\n", n));
+  if (!probing)
+    say(c, "compensate: a part program (no probing move): checked as one, the tool's point against the table, no "
+           "probe and no calibration artefact\n");
   say(c, fmt::format("compensate: {} of {} motion blocks rewritten ({} left as written: machine-coordinate moves or "
                      "before every axis was known); largest shift {:.2f} um, largest rotary change {:.2f} mdeg, tool "
                      "direction not restorable by the rotary axes up to {:.2f} urad; {} no-trigger check statements "
@@ -145,6 +210,7 @@ std::vector<Command> compensateCommands(CLI::App& app, const Common& common) {
     std::vector<std::string> reports;
     bool force = false;
     double max_deviation_um = 0.2;
+    std::vector<std::string> table_holds;
   };
   auto a = std::make_shared<Args>();
   auto* cmd = app.add_subcommand("compensate", "rewrite an NC program to cancel the identified location errors");
@@ -161,11 +227,14 @@ std::vector<Command> compensateCommands(CLI::App& app, const Common& common) {
   cmd->add_option("--max-deviation-um", a->max_deviation_um,
                   "split a feed move that turns a rotary axis where it would leave the nominal path by more (um)")
       ->check(CLI::Range(0.001, 1000.0));
+  cmd->add_option("--table-holds", a->table_holds,
+                  "a component error the controller's compensation table holds (e.g. ECC, loaded from `rotacal "
+                  "comp-table`): left out here, so that it is compensated once; repeat for several");
   cmd->add_flag("--force", a->force,
                 "compensate location errors beyond the plausibility limit of the offsets writers (0.5 mm, 100 mdeg)");
   return {{cmd, [a, &common] {
              return cmdCompensate(common, a->program, a->reports, a->machine, a->dialect, a->origin, a->out, a->force,
-                                  a->max_deviation_um);
+                                  a->max_deviation_um, a->table_holds);
            }}};
 }
 

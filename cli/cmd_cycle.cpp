@@ -23,6 +23,7 @@
 #include "core/machine.hpp"
 #include "core/probe_plan.hpp"
 #include "cycles/cycle.hpp"
+#include "history/store.hpp"
 #include "postproc/compensate_program.hpp"
 #include "postproc/report_errors.hpp"
 
@@ -270,6 +271,8 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
         "results of the program compensated for these reports' errors, read back as the original program's: the "
         "errors identified are what the compensation left";
   }
+  // When the data were analyzed: compensate flags a report that has grown old.
+  docs.doc["analyzed_utc"] = history::isoTime(nowUnixS());
   OutputSet outputs(inputs);
   outputs.add("--json", json_out, docs.doc.dump(1) + "\n");
   addHtml(outputs, html_out, docs.doc);

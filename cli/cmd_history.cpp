@@ -44,7 +44,16 @@ std::vector<Command> historyCommands(CLI::App& app, const Common& common) {
   };
   return {{add, [a, &common, dbPath] {
              const JsonDoc doc = readJsonFile(a->report);
-             double t = static_cast<double>(std::time(nullptr));
+             // The calibration's time: given, or when its report was analyzed, or now.
+             double t = nowUnixS();
+             if (a->time.empty() && doc.value.is_object() && doc.value.contains("analyzed_utc") &&
+                 doc.value["analyzed_utc"].is_string()) {
+               try {
+                 t = history::parseIsoTime(doc.value["analyzed_utc"].get<std::string>());
+               } catch (const std::invalid_argument& e) {
+                 failFile(a->report, std::string("analyzed_utc: ") + e.what());
+               }
+             }
              if (!a->time.empty()) {
                try {
                  t = history::parseIsoTime(a->time);

@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <functional>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -78,13 +79,16 @@ inline const Dialect& dialectOrFail(const std::string& name) {
 /// `rotacal_number`, a program number must be one of rotacal's cycles' (compensate, which also
 /// rewrites programs rotacal did not write, keeps the number it was given and asks for none).
 /// `errors` (may be null): simulate on the machine with these location errors (compensate's).
+/// `part_program_origin` (set: a part program, ProgramCheckSetup::part_program, with its zero there).
 ProgramCheckResult verifyProgram(const std::string& text, const std::string& dialect, const MachineModel& machine,
-                                 const ProbePlan* plan, bool rotacal_number, const GeometricErrors* errors = nullptr);
+                                 const ProbePlan* plan, bool rotacal_number, const GeometricErrors* errors = nullptr,
+                                 const std::optional<Eigen::Vector3d>& part_program_origin = std::nullopt);
 /// Throws InputError(file, line, ...) with the first violation of verifyProgram and their count:
 /// `generate` and `compensate` call it before they write, so an unsafe program is never written.
 void requireSafeProgram(const std::string& text, const std::string& file, const std::string& dialect,
                         const MachineModel& machine, const ProbePlan* plan, bool rotacal_number,
-                        const GeometricErrors* errors = nullptr);
+                        const GeometricErrors* errors = nullptr,
+                        const std::optional<Eigen::Vector3d>& part_program_origin = std::nullopt);
 /// The one line `check` prints for a clean program.
 std::string checkSummary(const std::string& file, const std::string& text, const ProgramCheckResult& result);
 

@@ -5,6 +5,8 @@
 // first two as they were. `--json -` sends a document to stdout so that a pipeline can read it
 // (the readable summary then stays off stdout); stdout is written only after the files.
 #include <cstdio>
+#include <cstdlib>
+#include <ctime>
 #include <filesystem>
 #include <string>
 #include <utility>
@@ -16,6 +18,17 @@
 #include "report/html_report.hpp"
 
 namespace rotacal {
+
+/// Now (s since 1970, UTC), or SOURCE_DATE_EPOCH when it is set (reproducible outputs: the
+/// convention of reproducible-builds.org), for the dates documents record.
+inline double nowUnixS() {
+  if (const char* e = std::getenv("SOURCE_DATE_EPOCH")) {
+    char* end = nullptr;
+    const long long v = std::strtoll(e, &end, 10);
+    if (end != e && *end == '\0' && v >= 0) return static_cast<double>(v);
+  }
+  return static_cast<double>(std::time(nullptr));
+}
 
 class OutputSet {
  public:

@@ -59,6 +59,13 @@ class Dialect {
   /// inverse-time feed, number); returns "LINE: problem" strings, empty when clean.
   virtual std::vector<std::string> check(const std::string& program_text, const ProbePlan& plan,
                                          const nc::Shape& shape) const = 0;
+
+  /// A statement the control executes without effect on the machine, which `compensate` writes
+  /// into every program it rewrites and refuses to find in its input: evidence of a compensated
+  /// program that survives stripping its comments. Empty where the dialect has no such statement
+  /// (every variable there is shared with the machine's own macros): the comment mark is then
+  /// the only evidence, and a program stripped of it cannot be told from an original.
+  virtual std::string compensationMark() const { return {}; }
 };
 
 /// The dialect by name: csv, linuxcnc, fanuc. Throws std::invalid_argument for others.

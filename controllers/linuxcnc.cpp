@@ -78,6 +78,10 @@ class LinuxCncDialect final : public Dialect {
   std::string_view programExtension() const override { return ".ngc"; }
   std::string_view resultsExtension() const override { return ".txt"; }
 
+  // A named parameter local to the program (LinuxCNC: its scope ends with the program): read by
+  // nothing, it changes nothing on the machine.
+  std::string compensationMark() const override { return "#<rotacal_compensated> = 1"; }
+
   std::vector<std::string> commentLines(std::string_view text) const override {
     std::vector<std::string> out;
     // 2 characters spare for the "- " guard of comment().

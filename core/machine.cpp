@@ -131,6 +131,8 @@ MachineModel machineFrom(const JsonDoc& doc, const Json& j) {
     m.rotary.push_back(r);
   }
   m.table_diameter_mm = numberOr(doc, j, "table_diameter_mm", 500.0, Limits::positive(2 * kMaxCoordinateMm, "mm"));
+  if (j.contains("table_top_z_mm"))
+    m.table_top_z_mm = requireNumber(doc, j, "table_top_z_mm", Limits::symmetric(kMaxCoordinateMm, "mm"));
   if (!j.contains("probe")) doc.fail(j, "", "missing object 'probe'");
   const Json& p = requireObject(doc, j, "probe");
   const Limits probe_len = Limits::positive(kMaxProbeLengthMm, "mm");
@@ -243,6 +245,7 @@ Json machineToJson(const MachineModel& m) {
   }
   j["rotary_axes"] = rot;
   j["table_diameter_mm"] = m.table_diameter_mm;
+  if (m.table_top_z_mm) j["table_top_z_mm"] = *m.table_top_z_mm;
   j["probe"] = {{"ball_diameter_mm", m.probe.ball_diameter_mm},
                 {"stylus_length_mm", m.probe.stylus_length_mm},
                 {"body_clearance_mm", m.probe.body_clearance_mm},

@@ -70,6 +70,9 @@ struct MachineModel {
   AxisRange x, y, z;                     // machine frame, origin at the rotary-axis intersection, mm
   std::vector<RotaryAxis> rotary;        // e.g. A then C
   double table_diameter_mm = 500.0;
+  /// Height of the table's top in the workpiece frame (mm; MACHINE.json "table_top_z_mm"). Unset:
+  /// the artefact's bottom (the column stands on the table), or not known without one.
+  std::optional<double> table_top_z_mm;
   ProbeSpec probe;
   Feeds feeds;
   double clearance_mm = 10.0;            // above the artefact for moves between points

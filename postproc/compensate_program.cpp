@@ -137,17 +137,29 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
     return syntax.comment == NcSyntax::Comment::Parentheses ? "(" + c + ")" : ";" + c;
   };
 
+  const std::string mark = dialect.compensationMark();
+  // Upper case without blanks: how the control reads a statement (LinuxCNC ignores both).
+  auto squeezed = [](std::string_view t) {
+    std::string out;
+    for (char ch : upper(t))
+      if (ch != ' ' && ch != '\t') out += ch;
+    return out;
+  };
   for (const auto& b : blocks) {
     if (b.raw.size() > kMaxLineChars)
       fail(b.line, fmt::format("line of {} characters: longer than any control accepts (LinuxCNC: 255) and than the "
                                "{} the rewrite reads",
                                b.raw.size(), kMaxLineChars));
-    // Compensating twice applies the errors twice: the mark this function writes refuses it.
+    // Compensating twice applies the errors twice: the marks this function writes refuse it.
     for (const auto& c : b.comments)
       if (upper(c).find(kCompensatedMarker) != std::string::npos)
         fail(b.line, fmt::format("the program is already compensated (comment {}): compensating it again would "
                                  "apply the location errors twice; compensate the original program",
                                  kCompensatedMarker));
+    if (!mark.empty() && squeezed(b.raw).find(squeezed(mark)) != std::string::npos)
+      fail(b.line, fmt::format("the program is already compensated (statement {}): compensating it again would apply "
+                               "the location errors twice; compensate the original program",
+                               mark));
   }
 
   // Header: after the program's identification (a leading '%', a Fanuc/Okuma O-number line, a
@@ -163,6 +175,7 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
       dialect.commentLines(std::string(kCompensatedMarker) +
                            ": rewritten by rotacal compensate for the geometric errors below. Never compensate it "
                            "again; run it only on the uncompensated machine");
+  if (!mark.empty()) header.push_back(mark);
   for (const auto& h : options.header)
     for (auto& l : dialect.commentLines(h)) header.push_back(std::move(l));
   // Zero errors change no word: the program is returned as it was, byte for byte, without the

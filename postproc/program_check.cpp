@@ -21,12 +21,17 @@ constexpr double kRotaryStrokeTolDeg = 1e-6;
 constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
 
 // What the probe can hit, in the workpiece (table) frame: it turns with the rotary table.
+// How deep below its top the table is modelled as solid for a part program: enough that a path
+// crossing the top is inside it by far more than the sweep's resolution.
+constexpr double kTableSlabMm = 10.0;
+
 struct Obstacle {
   enum class Shape { Box, Sphere, Disc } shape = Shape::Box;
   std::string name;
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   Eigen::Vector3d half = Eigen::Vector3d::Zero();  // Box
   double radius = 0.0;                             // Sphere, Disc (a disc in the plane z = centre.z)
+  double depth = 0.0;                              // Disc: a solid slab below the plane this deep (0: a disc)
 
   // Signed distance (negative inside); the disc has no inside. Each is a convex function of the
   // point (distance to a convex set), so its minimum along a segment is found by golden section.
@@ -38,6 +43,11 @@ struct Obstacle {
       }
       case Shape::Sphere: return (p - centre).norm() - radius;
       case Shape::Disc: {
+        if (depth > 0.0) {  // a capped cylinder from the plane down by `depth`
+          const double qr = std::hypot(p.x() - centre.x(), p.y() - centre.y()) - radius;
+          const double qz = std::abs(p.z() - (centre.z() - depth / 2)) - depth / 2;
+          return std::hypot(std::max(qr, 0.0), std::max(qz, 0.0)) + std::min(std::max(qr, qz), 0.0);
+        }
         const double dr = std::max(std::hypot(p.x() - centre.x(), p.y() - centre.y()) - radius, 0.0);
         return std::hypot(dr, p.z() - centre.z());
       }
@@ -50,7 +60,8 @@ struct Obstacle {
     switch (shape) {
       case Shape::Box: return (centre.cwiseAbs() + half).norm();
       case Shape::Sphere: return centre.norm() + radius;
-      case Shape::Disc: return std::hypot(centre.head<2>().norm() + radius, centre.z());
+      case Shape::Disc:
+        return std::hypot(centre.head<2>().norm() + radius, std::max(std::abs(centre.z()), std::abs(centre.z() - depth)));
     }
     return 0.0;
   }
@@ -68,7 +79,8 @@ struct Obstacle {
       case Shape::Sphere: return (T * centre).z() + radius;
       case Shape::Disc: {
         const double nz = (T.linear() * Eigen::Vector3d::UnitZ()).z();
-        return (T * centre).z() + radius * std::sqrt(std::max(0.0, 1.0 - nz * nz));
+        const double rim = radius * std::sqrt(std::max(0.0, 1.0 - nz * nz));
+        return std::max((T * centre).z(), (T * (centre - Eigen::Vector3d(0, 0, depth))).z()) + rim;
       }
     }
     return 0.0;
@@ -112,9 +124,11 @@ struct Gap {
 
 class Simulator {
  public:
-  Simulator(const MachineModel& m, std::vector<Obstacle> obstacles, std::optional<GeometricErrors> errors)
-      : m_(m), obstacles_(std::move(obstacles)), errors_(std::move(errors)), r_(m.probe.ball_radius_mm()),
-        len_(m.probe.stylus_length_mm) {}
+  // A part program's tool is a point: its radius and length are the tool's, which the program's
+  // tool table holds and rotacal does not.
+  Simulator(const MachineModel& m, std::vector<Obstacle> obstacles, std::optional<GeometricErrors> errors, bool point)
+      : m_(m), obstacles_(std::move(obstacles)), errors_(std::move(errors)), r_(point ? 0.0 : m.probe.ball_radius_mm()),
+        len_(point ? 0.0 : m.probe.stylus_length_mm) {}
 
   // The workpiece frame in the machine frame: nominal, or on the machine with its location errors
   // (a compensated program is written for that machine).
@@ -187,24 +201,32 @@ std::vector<Obstacle> obstaclesOf(const ProgramCheckSetup& s) {
   // guards, feeds and numbers are still checked). With it, Simulator::gap carries the ball by
   // the head's offset.
   if (m.kinematics == Kinematics::HeadAB && !m.head) return out;
-  if (m.artefact) {
+  // A part program on a head machine: its X Y Z read the pivot and the tool hangs from it by its
+  // own length, which the tool table holds: nothing to place against the table.
+  if (s.part_program && m.head) return out;
+  if (m.artefact && s.artefact_on_table && !s.part_program) {
     const SquareColumn& c = *m.artefact;
-    if (s.artefact_on_table) {
-      Obstacle b;
-      b.name = "the artefact";
-      b.centre = c.top_centre_w - Eigen::Vector3d(0, 0, c.size_mm.z() / 2);
-      b.half = c.size_mm / 2;
-      out.push_back(b);
-    }
-    // The column stands on the table: its bottom face is the table's top.
+    Obstacle b;
+    b.name = "the artefact";
+    b.centre = c.top_centre_w - Eigen::Vector3d(0, 0, c.size_mm.z() / 2);
+    b.half = c.size_mm / 2;
+    out.push_back(b);
+  }
+  // The table's top: declared, or the column's bottom face (it stands on the table).
+  std::optional<double> top = m.table_top_z_mm;
+  if (!top && m.artefact) top = m.artefact->top_centre_w.z() - m.artefact->size_mm.z();
+  if (top) {
     Obstacle t;
     t.shape = Obstacle::Shape::Disc;
     t.name = "the table";
-    t.centre = Eigen::Vector3d(0, 0, c.top_centre_w.z() - c.size_mm.z());
+    t.centre = Eigen::Vector3d(0, 0, *top);
     t.radius = m.table_diameter_mm / 2;
+    // A part program's tool must not cross the top: the table as a slab (a probe keeps its gap
+    // above the top, where the two are one).
+    if (s.part_program) t.depth = kTableSlabMm;
     out.push_back(t);
   }
-  if (s.plan) {
+  if (s.plan && !s.part_program) {
     std::set<int> seen;
     for (const auto& p : s.plan->points)
       if (p.sphere && seen.insert(p.sphere->id).second) {
@@ -259,11 +281,13 @@ ProgramCheckResult checkProgram(const std::vector<nc::Motion>& motions, const Pr
   const MachineModel& m = *setup.machine;
   ProgramCheckResult res;
   const Simulator sim(m, obstaclesOf(setup),
-                      setup.errors && hasPapersLocationErrors(m.kinematics) ? setup.errors : std::nullopt);
+                      setup.errors && hasPapersLocationErrors(m.kinematics) ? setup.errors : std::nullopt,
+                      setup.part_program);
   res.obstacles = static_cast<int>(sim.size());
   const double planned = std::min(m.clearance_mm, m.approach_mm);
-  res.required_gap_mm = planned - std::min(kCompensationAllowanceMm, 0.5 * planned);
+  res.required_gap_mm = setup.part_program ? 0.0 : planned - std::min(kCompensationAllowanceMm, 0.5 * planned);
   const double need = res.required_gap_mm;
+  const Eigen::Vector3d& origin = setup.program_origin_m_mm;
   auto violation = [&](int line, std::string what) { res.violations.push_back({line, std::move(what)}); };
 
   // Where the program starts: X, Y and Z are wherever the operator left them (the first move
@@ -291,14 +315,15 @@ ProgramCheckResult checkProgram(const std::vector<nc::Motion>& motions, const Pr
     for (const auto& [ax, v] : a.rot) rot_rad += std::abs(*b.rot.at(ax) - *v) * kDegToRad;
     // Distance from the rotary axes; with location errors the axes are off the origin by their
     // offsets (at most the plausibility limit, 0.5 mm, unless forced): 10 mm covers them.
-    const double rho = std::max(p0.norm(), p1.norm()) + ballDropBelowAxes(m) + sim.stylus() + (setup.errors ? 10.0 : 0.0);
+    const double rho = std::max((p0 + origin).norm(), (p1 + origin).norm()) + ballDropBelowAxes(m) + sim.stylus() +
+                       (setup.errors ? 10.0 : 0.0);
     const double D = (p1 - p0).norm() + rot_rad * rho;  // mm per unit s, for any point of the probe
     auto at = [&](double s) {
       Config c = a;
       for (int i = 0; i < 3; ++i) c.xyz[static_cast<size_t>(i)] = (1 - s) * p0[i] + s * p1[i];
       for (auto& [ax, v] : c.rot) v = (1 - s) * *a.rot.at(ax) + s * *b.rot.at(ax);
       ++res.swept_samples;
-      return sim.gap(c.p(), c.pose());
+      return sim.gap(c.p() + origin, c.pose());
     };
     double s = 0.0;
     for (;;) {
@@ -331,9 +356,10 @@ ProgramCheckResult checkProgram(const std::vector<nc::Motion>& motions, const Pr
     const AxisRange* ranges[3] = {&m.x, &m.y, &m.z};
     for (int i = 0; i < 3; ++i) {
       const auto& v = c.xyz[static_cast<size_t>(i)];
-      if (v && !ranges[i]->contains(*v, kStrokeTolMm))
-        violation(line, fmt::format("{} = {:.4f} mm is outside the {} stroke [{:g}, {:g}] mm", names[i], *v, names[i],
-                                    ranges[i]->min, ranges[i]->max));
+      if (v && !ranges[i]->contains(*v + origin[i], kStrokeTolMm))
+        violation(line, fmt::format("{} = {:.4f} mm{} is outside the {} stroke [{:g}, {:g}] mm", names[i], *v,
+                                    origin[i] == 0.0 ? std::string() : fmt::format(" (machine {:.4f} mm)", *v + origin[i]),
+                                    names[i], ranges[i]->min, ranges[i]->max));
     }
     for (const auto& r : m.rotary) {
       const auto& v = c.rot.at(r.name);
@@ -383,7 +409,7 @@ ProgramCheckResult checkProgram(const std::vector<nc::Motion>& motions, const Pr
     if (a.known() && b.known()) {
       // First the end gaps, to know the floor: never nearer than the required gap, or than where
       // the move starts or ends when that is nearer (leaving a touch, setting up the next one).
-      const double g0 = sim.gap(a.p(), a.pose()).mm, g1 = sim.gap(b.p(), b.pose()).mm;
+      const double g0 = sim.gap(a.p() + origin, a.pose()).mm, g1 = sim.gap(b.p() + origin, b.pose()).mm;
       const double floor = std::min({need, g0, g1});
       const SweepResult r = sweep(a, b, floor, false);
       if (r.min_lb < floor - kSweepResolutionMm - 1e-9)
@@ -400,6 +426,7 @@ ProgramCheckResult checkProgram(const std::vector<nc::Motion>& motions, const Pr
     }
     // Part of the position is not known yet (the program's first moves): what the probe clears
     // at any X, Y and, while the angle is unknown or turning, at any table angle.
+    if (setup.part_program && !a.xyz[2]) return;  // the operator's set-up: a part program starts where they stand
     if (!a.xyz[2] && !b.xyz[2]) {
       violation(mo.line, "a move before the program has set Z: the first move must take Z alone to a safe height");
       return;
@@ -413,13 +440,14 @@ ProgramCheckResult checkProgram(const std::vector<nc::Motion>& motions, const Pr
     const double zmin = a.xyz[2] ? std::min(*a.xyz[2], *b.xyz[2]) : *b.xyz[2];
     const bool turning = a.pose().A != b.pose().A || a.pose().B != b.pose().B || a.pose().C != b.pose().C;
     const bool known = a.rotKnown() && b.rotKnown();
-    const double lb = sim.gapBelow(zmin, known ? std::optional<Pose>(a.pose()) : std::nullopt,
+    const double lb = sim.gapBelow(zmin + origin.z(), known ? std::optional<Pose>(a.pose()) : std::nullopt,
                                    known ? std::optional<Pose>(b.pose()) : std::nullopt);
     ++res.swept_samples;
     if (lb < need)
-      violation(mo.line, fmt::format("X, Y{} not known yet here: the probe at Z {:.3f} mm clears what it may pass over "
+      violation(mo.line, fmt::format("X, Y{} not known yet here: the {} at Z {:.3f} mm clears what it may pass over "
                                      "by only {:.3f} mm (it must keep {:.3f} mm at any position)",
-                                     turning ? " or the table angle" : "", zmin, lb, need));
+                                     turning ? " or the table angle" : "", setup.part_program ? "tool" : "probe",
+                                     zmin, lb, need));
     else
       res.min_clearance_mm = std::min(res.min_clearance_mm, lb);
   };

@@ -51,6 +51,15 @@ struct ProgramCheckSetup {
   /// The machine's identified location errors: the program is simulated on that machine (a
   /// compensated program is written for it, and keeps its planned gaps there). Unset: nominal.
   std::optional<GeometricErrors> errors;
+  /// A part program (it has no probing move): what moves is the tool's controlled point, no probe
+  /// ball or stylus; no calibration artefact stands on the table (parts are cut without it); the
+  /// table (MachineModel::table_top_z_mm, else the artefact's bottom) is the obstacle, and the
+  /// point must not enter it (no required gap: a cut may run down to the table). A move before Z
+  /// is known is the operator's set-up, not proven.
+  bool part_program = false;
+  /// Machine position of the program's zero relative to the rotary-axis intersection (mm): the
+  /// program's X Y Z plus this are the machine's (compensate's --program-origin).
+  Eigen::Vector3d program_origin_m_mm = Eigen::Vector3d::Zero();
 };
 
 struct ProgramViolation {

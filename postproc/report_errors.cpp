@@ -1,7 +1,9 @@
 #include "postproc/report_errors.hpp"
 
 #include <cmath>
+#include <map>
 #include <optional>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -74,26 +76,44 @@ FullLocation readFullLocation(const JsonDoc& doc, Kinematics k, bool force) {
     const Json& order = requireArray(doc, ub, "order");
     const Json& units = requireArray(doc, ub, "units");
     const Json& cov = requireArray(doc, ub, "covariance");
-    if (order.size() != static_cast<size_t>(kNumLocationErrors) || units.size() != order.size() ||
-        cov.size() != order.size())
-      doc.fail(ub, "covariance", fmt::format("the covariance must be {0} x {0} in the order of 'order'", kNumLocationErrors));
-    std::array<int, kNumLocationErrors> index{};
-    std::array<double, kNumLocationErrors> scale{};  // report unit -> mm or rad
+    if (units.size() != order.size() || cov.size() != order.size())
+      doc.fail(ub, "covariance", "the covariance must be n x n in the order of 'order', with a unit per name");
+    // A covariance may be of a larger fit (one sphere's fits the sphere's set-up and the linear
+    // axes' squareness beside the location errors, under their ISO 230-7 names): each location
+    // error is found under its own name or the fit's name its entry gives ('parameter'), and
+    // its block is their covariance (the marginal of a normal is its sub-block).
+    std::map<std::string, int> name_to_error;
+    for (int i = 0; i < kNumLocationErrors; ++i) {
+      const std::string name(locationParameters(k)[static_cast<size_t>(i)].name);
+      name_to_error[name] = i;
+      const Json& entry = errs[name];
+      if (entry.contains("parameter") && entry["parameter"].is_string())
+        name_to_error[entry["parameter"].get<std::string>()] = i;
+    }
+    std::vector<int> index(order.size(), -1);
+    std::vector<double> scale(order.size(), 0.0);  // report unit -> mm or rad
+    std::array<bool, kNumLocationErrors> found{};
     for (size_t a = 0; a < order.size(); ++a) {
       if (!order[a].is_string()) doc.fail(ub, "order", "'order' must list parameter names");
-      index[a] = parameterIndex(k, order[a].get<std::string>());
-      if (index[a] < 0) doc.fail(ub, "order", "'" + order[a].get<std::string>() + "' is not a location error");
+      const auto it = name_to_error.find(order[a].get<std::string>());
+      if (it == name_to_error.end()) continue;
+      index[a] = it->second;
+      found[static_cast<size_t>(it->second)] = true;
       const std::string u = units[a].is_string() ? units[a].get<std::string>() : "";
       scale[a] = u == "um" ? 1e-3 : u == "mdeg" ? mdegToRad(1.0) : 0.0;
       if (scale[a] == 0.0) doc.fail(ub, "units", "covariance units must be um or mdeg");
     }
+    for (int i = 0; i < kNumLocationErrors; ++i)
+      if (!found[static_cast<size_t>(i)])
+        doc.fail(ub, "order", fmt::format("the covariance has no row for {} (under its name or its entry's 'parameter')",
+                                          locationParameters(k)[static_cast<size_t>(i)].name));
     Eigen::Matrix<double, kNumLocationErrors, kNumLocationErrors> c;
     for (size_t a = 0; a < order.size(); ++a) {
       if (!cov[a].is_array() || cov[a].size() != order.size())
         doc.fail(ub, "covariance", fmt::format("row {} of the covariance must have {} numbers", a + 1, order.size()));
       for (size_t b = 0; b < order.size(); ++b) {
         if (!cov[a][b].is_number()) doc.fail(ub, "covariance", "the covariance must hold numbers");
-        c(index[a], index[b]) = cov[a][b].get<double>() * scale[a] * scale[b];
+        if (index[a] >= 0 && index[b] >= 0) c(index[a], index[b]) = cov[a][b].get<double>() * scale[a] * scale[b];
       }
     }
     if (!c.allFinite() || (c - c.transpose()).cwiseAbs().maxCoeff() > 1e-9 * (c.cwiseAbs().maxCoeff() + 1e-300))
@@ -216,7 +236,8 @@ bool namesAxisLocation(const Json& errs) {
 
 }  // namespace
 
-ReportErrors errorsFromReports(const std::vector<JsonDoc>& reports, Kinematics k, bool force) {
+ReportErrors errorsFromReports(const std::vector<JsonDoc>& reports, Kinematics k, bool force,
+                               const std::vector<std::string>& held_by_controller) {
   if (reports.empty()) throw std::invalid_argument("errorsFromReports: no report");
   ReportErrors out;
   std::optional<FullLocation> full;
@@ -226,6 +247,20 @@ ReportErrors errorsFromReports(const std::vector<JsonDoc>& reports, Kinematics k
     guardJson(doc, [&] {
       checkFormat(doc);
       const Json& j = doc.value;
+      // A report of a compensated program's results holds what that compensation left, not the
+      // machine's errors: applied to a program it would cancel the residual and lose the first
+      // correction, and a compensated program is not compensated again.
+      if (j.contains("compensated_with")) {
+        std::string with;
+        if (j["compensated_with"].is_array())
+          for (const auto& f : j["compensated_with"])
+            if (f.is_string()) with += (with.empty() ? "" : ", ") + f.get<std::string>();
+        doc.fail(j, "compensated_with",
+                 fmt::format("a residual report: its results were measured with a program compensated for {}, so its "
+                             "values are what that compensation left, not the machine's errors; compensate the original "
+                             "program for {} (this report verifies that compensation)",
+                             with.empty() ? "another report" : with, with.empty() ? "that report" : with));
+      }
       if (!hasPapersLocationErrors(k))
         doc.fail(j, j.contains("machine_model") ? "machine_model" : "location_errors",
                  fmt::format("a spindle-head machine ({}) has no table location errors to compensate: compensate "
@@ -341,6 +376,26 @@ ReportErrors errorsFromReports(const std::vector<JsonDoc>& reports, Kinematics k
                                     "not beyond it (give a report with all {} location errors as well)",
                                     axis_file, targets[0], targets[1], targets[2], targets[3], zero, kNumLocationErrors));
   }
+  // What a controller table already holds (`comp-table` loaded on the control) is not compensated
+  // again in the program: the two routes split the errors between them.
+  for (const std::string& held : held_by_controller) {
+    bool taken = false;
+    for (auto& comp : out.errors.components) {
+      const auto names = componentErrorNames(comp.axis);
+      for (size_t c = 0; c < names.size(); ++c)
+        if (names[c] == held) {
+          for (auto& v : comp.values) v[static_cast<Eigen::Index>(c)] = 0.0;
+          for (auto& v : comp.u) v[static_cast<Eigen::Index>(c)] = 0.0;
+          taken = true;
+        }
+    }
+    out.notes.push_back(taken ? fmt::format("{} is held by the controller's compensation table: left out of the program's "
+                                            "compensation (applied once, by the table)",
+                                            held)
+                              : fmt::format("{} is held by the controller's table, and no report gives it: nothing to "
+                                            "leave out",
+                                            held));
+  }
   try {
     out.errors.validate();
   } catch (const std::invalid_argument& e) {
@@ -350,7 +405,7 @@ ReportErrors errorsFromReports(const std::vector<JsonDoc>& reports, Kinematics k
 }
 
 GeometricErrors errorsFromReport(const JsonDoc& report, Kinematics kinematics, bool force) {
-  return errorsFromReports({report}, kinematics, force).errors;
+  return errorsFromReports({report}, kinematics, force, {}).errors;
 }
 
 }  // namespace rotacal

@@ -11,6 +11,8 @@
 //    dx_CB, dy_CB, a_CB, b_BY), the others zero: exact where that cycle measured (tilt 0), and
 //    said so. Beside a full report it is a cross-check: the difference is noted with both u;
 //  - `component_errors` (EXC ... ECC at sampled angles): the component errors of that axis.
+// A covariance may be larger than the location errors' (a fit with more parameters): each
+// location error's row is found under its name or the fit's name its entry gives ('parameter').
 // Each kind may come from one report only. Every value must be plausible as a correction
 // (the offsets writers' limit: 0.5 mm, 100 mdeg) unless `force`.
 #include <string>
@@ -29,8 +31,13 @@ struct ReportErrors {
   std::vector<std::string> notes;
 };
 
+/// `held_by_controller`: component errors (ISO names, e.g. ECC) a compensation table on the
+/// control already holds; they are left out, so that each error is compensated once.
+/// A residual report (`analyze --compensated-with`) is refused: it holds what a compensation
+/// left, not the machine's errors.
 /// Throws InputError(report file, line, why) naming the report and the entry.
-ReportErrors errorsFromReports(const std::vector<JsonDoc>& reports, Kinematics kinematics, bool force);
+ReportErrors errorsFromReports(const std::vector<JsonDoc>& reports, Kinematics kinematics, bool force,
+                               const std::vector<std::string>& held_by_controller = {});
 
 /// The errors of one report (errorsFromReports of that report alone).
 GeometricErrors errorsFromReport(const JsonDoc& report, Kinematics kinematics, bool force);

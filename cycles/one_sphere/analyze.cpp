@@ -301,7 +301,10 @@ Json sphereReportJson(const ProbePlan& plan, const SphereCycleResult& r, const U
     for (int i = 0; i < kNumLocationErrors; ++i) {
       const std::string& model = r.names[static_cast<size_t>(r.location_index_in_x[static_cast<size_t>(i)])].name;
       const std::string paper(locationParameters(plan.machine.kinematics)[static_cast<size_t>(i)].name);
-      if (!kp.contains(model) || !kp[model].contains("u_c") || !j["location_errors"].contains(paper)) continue;
+      if (!kp.contains(model) || !j["location_errors"].contains(paper)) continue;
+      // The fit's own name of it: the uncertainty's covariance is in the fit's names.
+      j["location_errors"][paper]["parameter"] = model;
+      if (!kp[model].contains("u_c")) continue;
       for (const char* f : {"u", "u_a", "u_b", "u_c", "u_between", "U", "k"}) j["location_errors"][paper][f] = kp[model][f];
     }
   Json unseen = Json::array();
