@@ -323,6 +323,10 @@ std::vector<std::string> MacroBDialect::check(const std::string& text, const Pro
       }
     if (b.control) {
       if (!b.oword.empty()) problem(b.line, "o-word control ('o.. if') is LinuxCNC, not Macro B");
+      // rotacal's programs never loop: a WHILE may never end, and its body runs an unknown
+      // number of times.
+      if (b.keyword == "WHILE" || b.keyword == "DO" || b.keyword == "END")
+        problem(b.line, fmt::format("{}: a WHILE loop the verifier cannot bound", ctl::trim(b.code)));
       if (b.code.find("#<") != std::string::npos) problem(b.line, "named parameters #<..> are not Macro B");
       if (b.keyword == "DPRNT") {
         if (f_.lookahead_g103 && !g103)
@@ -365,7 +369,8 @@ std::vector<std::string> MacroBDialect::check(const std::string& text, const Pro
     if (b.hasWord('G', 103)) g103 = b.hasWord('P', 1);
     // What the verifier cannot follow is not passed (docs/safety.md): a subprogram or macro call
     // runs moves it never sees.
-    for (const auto& [letter, code] : {std::pair{'M', 98}, {'M', 198}, {'G', 65}, {'G', 66}, {'M', 99}})
+    // M97 is Haas' call of a block of the same program.
+    for (const auto& [letter, code] : {std::pair{'M', 98}, {'M', 97}, {'M', 198}, {'G', 65}, {'G', 66}, {'M', 99}})
       if (b.hasWord(letter, code))
         problem(b.line, fmt::format("{}{}: a subprogram or macro call the verifier cannot follow", letter, code));
     for (const auto& w : b.words) {
