@@ -427,8 +427,17 @@ class HeidenhainDialect final : public Dialect {
         const std::string label = cm[4].str();
         for (size_t q = 0; ok && q < chk.lines.size(); ++q) {
           if (chk.code[q] != "LBL " + label) continue;
-          for (size_t r = next(q); r < chk.lines.size() && chk.code[r].rfind("LBL ", 0) != 0; r = next(r))
-            if (chk.code[r] == "STOP") stops = true;
+          // As the control runs the section: a jump, a call or an end before its STOP never stops.
+          for (size_t r = next(q); r < chk.lines.size() && chk.code[r].rfind("LBL ", 0) != 0; r = next(r)) {
+            const std::string& t = chk.code[r];
+            if (t == "STOP") {
+              stops = true;
+              break;
+            }
+            if (t.find("GOTO") != std::string::npos || t.find("CALL ") != std::string::npos ||
+                t.find(" M30") != std::string::npos || t.find(" M2") != std::string::npos || t.rfind("END PGM", 0) == 0)
+              break;
+          }
         }
         ok = ok && stops;
       }

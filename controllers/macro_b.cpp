@@ -390,7 +390,9 @@ std::vector<std::string> MacroBDialect::check(const std::string& text, const Pro
     bool ok = false;
     for (const size_t j : ctl::nextBlocks(blocks, i, 8)) {
       const nc::Block& c = blocks[j];
-      if (!c.control) break;
+      // Only the end-point assignments come between the move and its test: a GOTO there (even
+      // one the block-delete switch may skip) jumps past the alarm as the control runs it.
+      if (!c.control || (c.keyword != "#" && c.keyword != "IF") || c.block_delete) break;
       for (int a = 0; a < 3; ++a)
         if (c.code.find(fmt::format("#{}", 5061 + a)) != std::string::npos) reads[a] = true;
       if (c.keyword != "IF") continue;

@@ -255,7 +255,8 @@ class OkumaDialect final : public ctl::TaggedResultsDialect {
       }
       bool ok = next[0] == "VC1=VSKPX" && next[1] == "VC2=VSKPY" && next[2] == "VC3=VSKPZ" &&
                 next[3].rfind("VC4=VC1", 0) == 0 && next[4].rfind("VC5=VC2", 0) == 0 && next[5].rfind("VC6=VC3", 0) == 0 &&
-                next[6].rfind("IF [VC4*VC4+VC5*VC5+VC6*VC6 GT ", 0) == 0 && next[10].rfind("VUACM[1]=", 0) == 0 &&
+                next[6].rfind("IF [VC4*VC4+VC5*VC5+VC6*VC6 GT ", 0) == 0 && next[7].rfind("PUT '", 0) == 0 &&
+                next[8] == "WRITE C" && next[9] == "CLOSE C" && next[10].rfind("VUACM[1]=", 0) == 0 &&
                 next[11].rfind("VDOUT[992]=", 0) == 0;
       if (ok) {
         const std::string label = ctl::trim(next[6].substr(next[6].find("] N") + 2));

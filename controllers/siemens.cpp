@@ -290,8 +290,15 @@ class SiemensDialect final : public ctl::TaggedResultsDialect {
         const std::string label = g == std::string::npos ? "" : ctl::trim(next[7].substr(g + 6));
         for (size_t q = 0; q < chk.lines.size(); ++q) {
           if (chk.code[q] != label + ":") continue;
-          for (size_t r = chk.nextCode(q); r < chk.lines.size() && chk.code[r].back() != ':'; r = chk.nextCode(r))
-            if (chk.code[r] == "M0") stops = true;
+          // As the control runs the section: a jump or an end before its M0 never stops.
+          for (size_t r = chk.nextCode(q); r < chk.lines.size() && chk.code[r].back() != ':'; r = chk.nextCode(r)) {
+            const std::string& t = chk.code[r];
+            if (t == "M0") {
+              stops = true;
+              break;
+            }
+            if (t.find("GOTO") != std::string::npos || t == "M30" || t == "M2" || t == "M17" || t == "RET") break;
+          }
         }
       }
       if (!ok || !stops)
