@@ -373,9 +373,6 @@ class HeidenhainDialect final : public Dialect {
       const size_t sc = rest.find(';');
       chk.code[i] = ctl::trim(sc == std::string::npos ? rest : rest.substr(0, sc));
     }
-    std::set<std::string> labels;
-    for (const auto& s : chk.code)
-      if (s.rfind("LBL ", 0) == 0) labels.insert(s.substr(4));
     static const std::regex begin(R"(^BEGIN PGM (\w+) (MM|INCH)$)");
     static const std::regex endpgm(R"(^END PGM (\w+) (MM|INCH)$)");
     std::smatch bm, em;
@@ -430,8 +427,17 @@ class HeidenhainDialect final : public Dialect {
         const std::string label = cm[4].str();
         for (size_t q = 0; ok && q < chk.lines.size(); ++q) {
           if (chk.code[q] != "LBL " + label) continue;
-          for (size_t r = next(q); r < chk.lines.size() && chk.code[r].rfind("LBL ", 0) != 0; r = next(r))
-            if (chk.code[r] == "STOP") stops = true;
+          // As the control runs the section: a jump, a call or an end before its STOP never stops.
+          for (size_t r = next(q); r < chk.lines.size() && chk.code[r].rfind("LBL ", 0) != 0; r = next(r)) {
+            const std::string& t = chk.code[r];
+            if (t == "STOP") {
+              stops = true;
+              break;
+            }
+            if (t.find("GOTO") != std::string::npos || t.find("CALL ") != std::string::npos ||
+                t.find(" M30") != std::string::npos || t.find(" M2") != std::string::npos || t.rfind("END PGM", 0) == 0)
+              break;
+          }
         }
         ok = ok && stops;
       }
@@ -439,10 +445,25 @@ class HeidenhainDialect final : public Dialect {
         chk.problem(n, "TCH PROBE 0 is not followed by TCH PROBE 0.1 and the no-trigger check "
                        "(FN 11/12: IF +Q10 GT/LT end GOTO LBL n, LBL n ... STOP)");
     }
+    std::map<std::string, int> label_line;
+    for (size_t i = 0; i < chk.lines.size(); ++i)
+      if (chk.code[i].rfind("LBL ", 0) == 0) label_line.emplace(chk.code[i].substr(4), chk.lines[i].number);
+    static const std::regex call(R"((^|\s)(CALL (LBL|PGM)|SEL PGM|CYCL CALL|PGM CALL)\b)");
     for (size_t i = 0; i < chk.lines.size(); ++i) {
+      const int n = chk.lines[i].number;
       const size_t g = chk.code[i].find("GOTO LBL ");
-      if (g != std::string::npos && !labels.count(chk.code[i].substr(g + 9)))
-        chk.problem(chk.lines[i].number, fmt::format("jump to the undefined label {}", chk.code[i].substr(g + 9)));
+      if (g != std::string::npos) {
+        const auto it = label_line.find(chk.code[i].substr(g + 9));
+        if (it == label_line.end())
+          chk.problem(n, fmt::format("jump to the undefined label {}", chk.code[i].substr(g + 9)));
+        // rotacal jumps forward only, to a section that stops: a jump back may never end.
+        else if (it->second <= n)
+          chk.problem(n, fmt::format("GOTO LBL {} jumps back to line {}: a loop the verifier cannot bound", it->first,
+                                     it->second));
+      }
+      std::smatch cm;
+      if (std::regex_search(chk.code[i], cm, call))
+        chk.problem(n, fmt::format("{}: a subprogram or label call the verifier cannot follow", cm[2].str()));
     }
     chk.probeCount(probes, shape.probes, "TCH PROBE 0 cycles");
     if (shape.inverse_time) chk.problem(1, ctl::inverseTimeRefusal(kDialect));

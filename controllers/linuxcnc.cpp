@@ -17,6 +17,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <regex>
 #include <set>
 #include <stdexcept>
 
@@ -499,6 +500,26 @@ class LinuxCncDialect final : public Dialect {
           }
         }
       }
+      // What the verifier cannot follow is not passed (docs/safety.md): a subroutine's moves are
+      // never seen, and a loop may never end (rotacal writes o-word IFs only).
+      if (b.control && !b.oword.empty()) {
+        const std::string& k = b.keyword;
+        if (k == "CALL" || k == "SUB" || k == "ENDSUB" || k == "RETURN")
+          problem(b.line, fmt::format("o{} {}: a subroutine the verifier cannot follow", b.oword, ctl::lower(k)));
+        else if (k == "WHILE" || k == "ENDWHILE" || k == "DO" || k == "BREAK" || k == "CONTINUE")
+          problem(b.line, fmt::format("o{} {}: a loop the verifier cannot bound", b.oword, ctl::lower(k)));
+        else if (k == "REPEAT") {
+          // An R-test's repeat [n] with a literal count ends; its body returns to where it started.
+          static const std::regex counted(R"(^O\s*\S+\s+REPEAT\s*\[\s*\d+\s*\]\s*$)");
+          if (!std::regex_match(ctl::upper(b.code), counted))
+            problem(b.line,
+                    fmt::format("o{} repeat without a literal count: a loop the verifier cannot bound", b.oword));
+        }
+      }
+      if (!b.control)
+        for (const auto& [letter, code] : {std::pair{'M', 98}, {'M', 99}})
+          if (b.hasWord(letter, code))
+            problem(b.line, fmt::format("{}{}: a subprogram call the verifier cannot follow", letter, code));
       if (b.control || b.words.empty()) continue;
       // G38.4/G38.5 probe away from the piece; G38.3 does not stop the program by itself, which
       // the #5070 check below makes up for (the double touch's first touch uses it).
@@ -528,7 +549,9 @@ class LinuxCncDialect final : public Dialect {
         std::string cond;
         for (char ch : ctl::upper(c.code))
           if (ch != ' ' && ch != '\t') cond += ch;
-        if (cond.find("[#5070NE1]") == std::string::npos) continue;
+        // The whole condition: one joined to it ([[#5070 NE 1] AND [0]]) may never be true.
+        const size_t kw = cond.rfind("IF[");
+        if (kw == std::string::npos || cond.substr(kw + 2) != "[#5070NE1]") continue;
         for (size_t k = j + 1; k < blocks.size(); ++k) {
           const nc::Block& d = blocks[k];
           if (d.control && d.keyword == "ENDIF" && ctl::upper(d.oword) == ctl::upper(c.oword)) break;

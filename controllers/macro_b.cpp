@@ -323,6 +323,10 @@ std::vector<std::string> MacroBDialect::check(const std::string& text, const Pro
       }
     if (b.control) {
       if (!b.oword.empty()) problem(b.line, "o-word control ('o.. if') is LinuxCNC, not Macro B");
+      // rotacal's programs never loop: a WHILE may never end, and its body runs an unknown
+      // number of times.
+      if (b.keyword == "WHILE" || b.keyword == "DO" || b.keyword == "END")
+        problem(b.line, fmt::format("{}: a WHILE loop the verifier cannot bound", ctl::trim(b.code)));
       if (b.code.find("#<") != std::string::npos) problem(b.line, "named parameters #<..> are not Macro B");
       if (b.keyword == "DPRNT") {
         if (f_.lookahead_g103 && !g103)
@@ -365,7 +369,8 @@ std::vector<std::string> MacroBDialect::check(const std::string& text, const Pro
     if (b.hasWord('G', 103)) g103 = b.hasWord('P', 1);
     // What the verifier cannot follow is not passed (docs/safety.md): a subprogram or macro call
     // runs moves it never sees.
-    for (const auto& [letter, code] : {std::pair{'M', 98}, {'M', 198}, {'G', 65}, {'G', 66}, {'M', 99}})
+    // M97 is Haas' call of a block of the same program.
+    for (const auto& [letter, code] : {std::pair{'M', 98}, {'M', 97}, {'M', 198}, {'G', 65}, {'G', 66}, {'M', 99}})
       if (b.hasWord(letter, code))
         problem(b.line, fmt::format("{}{}: a subprogram or macro call the verifier cannot follow", letter, code));
     for (const auto& w : b.words) {
@@ -385,7 +390,9 @@ std::vector<std::string> MacroBDialect::check(const std::string& text, const Pro
     bool ok = false;
     for (const size_t j : ctl::nextBlocks(blocks, i, 8)) {
       const nc::Block& c = blocks[j];
-      if (!c.control) break;
+      // Only the end-point assignments come between the move and its test: a GOTO there (even
+      // one the block-delete switch may skip) jumps past the alarm as the control runs it.
+      if (!c.control || (c.keyword != "#" && c.keyword != "IF") || c.block_delete) break;
       for (int a = 0; a < 3; ++a)
         if (c.code.find(fmt::format("#{}", 5061 + a)) != std::string::npos) reads[a] = true;
       if (c.keyword != "IF") continue;

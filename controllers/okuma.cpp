@@ -26,7 +26,9 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <limits>
+#include <map>
 #include <regex>
 #include <set>
 #include <stdexcept>
@@ -189,11 +191,11 @@ class OkumaDialect final : public ctl::TaggedResultsDialect {
       if (quote) chk.problem(chk.lines[i].number, "quote not closed");
       chk.code[i] = ctl::trim(c);
     }
-    std::set<std::string> labels;
+    std::map<std::string, int> labels;  // label -> its line
     static const std::regex label_re(R"(^(N\d+) )");
-    for (const auto& c : chk.code) {
+    for (size_t i = 0; i < chk.code.size(); ++i) {
       std::smatch m;
-      if (std::regex_search(c, m, label_re)) labels.insert(m[1].str());
+      if (std::regex_search(chk.code[i], m, label_re)) labels.emplace(m[1].str(), chk.lines[i].number);
     }
     static const std::regex motion(R"(^G(00|01|31)( [XYZABC]-?\d+\.\d+)+( F\d+\.\d+)?$)");
     std::string motion_text;
@@ -220,22 +222,52 @@ class OkumaDialect final : public ctl::TaggedResultsDialect {
       const size_t g = s.find("] N");
       if (s.rfind("IF ", 0) == 0 && (g == std::string::npos || !labels.count(ctl::trim(s.substr(g + 2)))))
         chk.problem(n, "IF without a defined label to jump to");
+      // rotacal's programs jump forward only, past an alarm: a jump back may never end, and a
+      // subprogram runs moves the verifier never sees.
+      {
+        static const std::regex jump(R"((^|\s|\])(GOTO\s+)?(N\d+)$)");
+        std::smatch jm;
+        const bool is_goto = s.rfind("GOTO", 0) == 0;
+        if ((s.rfind("IF ", 0) == 0 || is_goto) && std::regex_search(s, jm, jump)) {
+          const auto it = labels.find(jm[3].str());
+          if (it != labels.end() && it->second <= n)
+            chk.problem(n, fmt::format("jump to {} back at line {}: a loop the verifier cannot bound", jm[3].str(),
+                                       it->second));
+          else if (it == labels.end() && is_goto)
+            chk.problem(n, fmt::format("GOTO {}: no block {} in the program", jm[3].str(), jm[3].str()));
+        } else if (is_goto) {
+          chk.problem(n, "GOTO without a label N..");
+        }
+        static const std::regex call(R"((^|\s)(CALL|RTS|MODIN|M98)\b)");
+        if (std::regex_search(s, jm, call))
+          chk.problem(n, fmt::format("{}: a subprogram call the verifier cannot follow", jm[2].str()));
+      }
       if (s.rfind("G31 ", 0) != 0) continue;
       ++probes;
       if (s.find(" F") == std::string::npos) chk.problem(n, "G31 without F on its block");
       std::vector<std::string> next;
+      std::vector<int> next_line;
       size_t j = i;
       for (int c = 0; c < 13; ++c) {
         j = chk.nextCode(j);
         next.push_back(j < chk.lines.size() ? chk.code[j] : "");
+        next_line.push_back(j < chk.lines.size() ? chk.lines[j].number : n);
       }
       bool ok = next[0] == "VC1=VSKPX" && next[1] == "VC2=VSKPY" && next[2] == "VC3=VSKPZ" &&
                 next[3].rfind("VC4=VC1", 0) == 0 && next[4].rfind("VC5=VC2", 0) == 0 && next[5].rfind("VC6=VC3", 0) == 0 &&
-                next[6].rfind("IF [VC4*VC4+VC5*VC5+VC6*VC6 GT ", 0) == 0 && next[10].rfind("VUACM[1]=", 0) == 0 &&
+                next[6].rfind("IF [VC4*VC4+VC5*VC5+VC6*VC6 GT ", 0) == 0 && next[7].rfind("PUT '", 0) == 0 &&
+                next[8] == "WRITE C" && next[9] == "CLOSE C" && next[10].rfind("VUACM[1]=", 0) == 0 &&
                 next[11].rfind("VDOUT[992]=", 0) == 0;
       if (ok) {
         const std::string label = ctl::trim(next[6].substr(next[6].find("] N") + 2));
         ok = next[12].rfind(label + " ", 0) == 0;
+        // The jump past the alarm on the squared distance GT a positive tolerance: at or below
+        // zero it is always taken, and the alarm can never be raised.
+        const double tol = std::strtod(next[6].c_str() + next[6].find(" GT ") + 4, nullptr);
+        if (ok && !(tol > 0.0))
+          chk.problem(next_line[6],
+                      "the no-trigger check must jump past its alarm on the squared distance GT a positive tolerance: "
+                      "as written the alarm can never be raised");
       }
       if (!ok)
         chk.problem(n, "G31 is not followed by the no-trigger check (VSKPX-Z read, IF [distance GT ..] N.., "

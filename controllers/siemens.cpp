@@ -25,7 +25,9 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <limits>
+#include <map>
 #include <regex>
 #include <set>
 #include <stdexcept>
@@ -195,9 +197,10 @@ class SiemensDialect final : public ctl::TaggedResultsDialect {
       const size_t sc = chk.lines[i].text.find(';');
       chk.code[i] = ctl::trim(sc == std::string::npos ? chk.lines[i].text : chk.lines[i].text.substr(0, sc));
     }
-    std::set<std::string> labels;
+    std::map<std::string, int> labels;  // label -> its line
     for (size_t i = 0; i < chk.lines.size(); ++i)
-      if (!chk.code[i].empty() && chk.code[i].back() == ':') labels.insert(chk.code[i].substr(0, chk.code[i].size() - 1));
+      if (!chk.code[i].empty() && chk.code[i].back() == ':')
+        labels.emplace(chk.code[i].substr(0, chk.code[i].size() - 1), chk.lines[i].number);
     static const std::regex motion(R"(^(MEAS=1 )?G[01]( [XYZABC]-?\d+(\.\d+)?)+( F\d+(\.\d+)?)?$)");
     static const std::regex axis_word(R"(\b([XYZABCF])(-?\d+(\.\d*)?)\b)");
     std::string motion_text;  // X/Y/Z/A/B/C motion lines for the stroke check, same line numbers
@@ -226,10 +229,27 @@ class SiemensDialect final : public ctl::TaggedResultsDialect {
       }
       static const std::regex g93(R"(\bG93\b)");
       if (!shape.inverse_time && std::regex_search(s, g93)) chk.problem(n, "G93 inverse time: rotacal probes and positions under G94 only");
-      for (const std::string kw : {"GOTOF ", "GOTOB "}) {
+      // GOTOF searches forward, GOTOB back, GOTO both: rotacal's programs jump forward only, past
+      // an alarm; a jump back may never end.
+      for (const std::string kw : {"GOTOF ", "GOTOB ", "GOTO "}) {
         const size_t g = s.find(kw);
-        if (g != std::string::npos && !labels.count(ctl::trim(s.substr(g + kw.size()))))
-          chk.problem(n, fmt::format("jump to the undefined label '{}'", ctl::trim(s.substr(g + kw.size()))));
+        if (g == std::string::npos || (g > 0 && s[g - 1] != ' ')) continue;
+        const std::string label = ctl::trim(s.substr(g + kw.size()));
+        const auto it = labels.find(label);
+        if (it == labels.end() || (kw == "GOTOF " && it->second <= n))
+          chk.problem(n, fmt::format("jump to the undefined label '{}'", label));
+        else if (it->second <= n)
+          chk.problem(n, fmt::format("{}{} jumps back to line {}: a loop the verifier cannot bound", kw, label,
+                                     it->second));
+      }
+      {
+        static const std::regex loop(R"(^(WHILE|ENDWHILE|LOOP|ENDLOOP|FOR|ENDFOR|REPEAT|UNTIL)\b)");
+        static const std::regex call(R"(^(CALL|PCALL|MCALL|EXTCALL|L\d+|M98|M17|RET)\b)");
+        std::smatch km;
+        if (std::regex_search(s, km, loop))
+          chk.problem(n, fmt::format("{}: a loop the verifier cannot bound", km[1].str()));
+        if (std::regex_search(s, km, call))
+          chk.problem(n, fmt::format("{}: a subprogram call the verifier cannot follow", km[1].str()));
       }
       const bool is_motion = s.rfind("G0 ", 0) == 0 || s.rfind("G1 ", 0) == 0 || s.rfind("MEAS=", 0) == 0;
       if (is_motion) {
@@ -248,22 +268,37 @@ class SiemensDialect final : public ctl::TaggedResultsDialect {
       // Then: STOPRE, the three $AA_MW reads, the distances, the IF ... GOTOF NOHIT<id>, whose
       // label section writes NOT-TRIGGERED and stops with M0.
       std::vector<std::string> next;
+      int check_line = n;  // the line of the IF
       size_t j = i;
       for (int c = 0; c < 8; ++c) {
         j = chk.nextCode(j);
         next.push_back(j < chk.lines.size() ? chk.code[j] : "");
+        if (j < chk.lines.size()) check_line = chk.lines[j].number;
       }
       const bool ok = next[0] == "STOPRE" && next[1] == "R90=$AA_MW[X]" && next[2] == "R91=$AA_MW[Y]" &&
                       next[3] == "R92=$AA_MW[Z]" && next[4].rfind("R93=R90", 0) == 0 && next[5].rfind("R94=R91", 0) == 0 &&
                       next[6].rfind("R95=R92", 0) == 0 && next[7].rfind(meas_check, 0) == 0;
       bool stops = false;
       if (ok) {
+        // The alarm on the squared distance below a positive tolerance: at or below zero that half
+        // is never true, and the alarm rests on $AC_MEA alone.
+        const double tol = std::strtod(next[7].c_str() + meas_check.size(), nullptr);
+        if (!(tol > 0.0))
+          chk.problem(check_line, "the no-trigger check must alarm on the squared distance below a positive "
+                                  "tolerance: as written that half of it is never true");
         const size_t g = next[7].find("GOTOF ");
         const std::string label = g == std::string::npos ? "" : ctl::trim(next[7].substr(g + 6));
         for (size_t q = 0; q < chk.lines.size(); ++q) {
           if (chk.code[q] != label + ":") continue;
-          for (size_t r = chk.nextCode(q); r < chk.lines.size() && chk.code[r].back() != ':'; r = chk.nextCode(r))
-            if (chk.code[r] == "M0") stops = true;
+          // As the control runs the section: a jump or an end before its M0 never stops.
+          for (size_t r = chk.nextCode(q); r < chk.lines.size() && chk.code[r].back() != ':'; r = chk.nextCode(r)) {
+            const std::string& t = chk.code[r];
+            if (t == "M0") {
+              stops = true;
+              break;
+            }
+            if (t.find("GOTO") != std::string::npos || t == "M30" || t == "M2" || t == "M17" || t == "RET") break;
+          }
         }
       }
       if (!ok || !stops)

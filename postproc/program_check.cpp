@@ -409,7 +409,14 @@ ProgramCheckResult checkProgram(const std::vector<nc::Motion>& motions, const Pr
     if (a.known() && b.known()) {
       // First the end gaps, to know the floor: never nearer than the required gap, or than where
       // the move starts or ends when that is nearer (leaving a touch, setting up the next one).
-      const double g0 = sim.gap(a.p() + origin, a.pose()).mm, g1 = sim.gap(b.p() + origin, b.pose()).mm;
+      const double g0 = sim.gap(a.p() + origin, a.pose()).mm;
+      const Gap end_gap = sim.gap(b.p() + origin, b.pose());
+      const double g1 = end_gap.mm;
+      // Only a probing move stops at a surface; any other move that ends inside one has hit it.
+      if (g1 < -kSweepResolutionMm)
+        violation(mo.line, fmt::format("this move ends {:.3f} mm inside {}: only a guarded probing move may reach a "
+                                       "surface",
+                                       -g1, end_gap.what ? end_gap.what->name : "an obstacle"));
       const double floor = std::min({need, g0, g1});
       const SweepResult r = sweep(a, b, floor, false);
       if (r.min_lb < floor - kSweepResolutionMm - 1e-9)
@@ -564,6 +571,14 @@ ProgramCheckResult checkProgram(const std::vector<nc::Motion>& motions, const Pr
     const SweepResult r = sweep(start, end, 0.0, true);
     if (r.g0 <= 0.0)
       violation(mo.line, fmt::format("probing move starts in contact with {}", r.nearest ? r.nearest->name : "an obstacle"));
+    // A probe that never triggers (a broken cable, a dead battery) runs to the end point: the
+    // stylus deflects by the overtravel and no more. The contact found above says nothing of
+    // that case; the end must lie no deeper than the overtravel (and what compensate may shift).
+    const double deepest = m.overtravel_mm + kCompensationAllowanceMm + kSweepResolutionMm;
+    if (const Gap ge = sim.gap(end.p(), end.pose()); ge.mm < -deepest)
+      violation(mo.line, fmt::format("probing move ends {:.3f} mm inside {}: a probe that does not trigger is driven "
+                                     "past its overtravel ({:.3f} mm)",
+                                     -ge.mm, ge.what ? ge.what->name : "an obstacle", m.overtravel_mm));
     if (r.contact_s < 0) {
       if (setup.plan)
         violation(mo.line, fmt::format("probing move reaches no surface (it ends {:.3f} mm from the nearest): it cannot "
