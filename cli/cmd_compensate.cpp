@@ -3,6 +3,8 @@
 // identified location errors moves the tool as the nominal machine would have
 // (postproc/compensate_program.hpp, docs/compensation.md).
 #include <memory>
+#include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -17,25 +19,18 @@
 #include "core/units.hpp"
 #include "postproc/compensate_program.hpp"
 #include "postproc/report_errors.hpp"
+#include "tasks/compensate.hpp"
 
 namespace rotacal {
 namespace {
 
-// The syntax the rewrite needs from a word-address dialect. Heidenhain Klartext (L X+.. Y+..)
-// is not word-address G-code and the neutral csv is no program: both are refused.
+// The dialect's syntax (tasks/compensate.hpp), refused as a usage error of --dialect.
 NcSyntax syntaxOf(const std::string& dialect) {
-  NcSyntax s;
-  s.dialect = dialect;
-  if (dialect == "linuxcnc" || dialect == "fanuc" || dialect == "haas" || dialect == "okuma") return s;
-  if (dialect == "siemens") {
-    s.comment = NcSyntax::Comment::Semicolon;
-    return s;
+  try {
+    return ncSyntaxOf(dialect);
+  } catch (const std::invalid_argument& e) {
+    throw CLI::ValidationError("--dialect", e.what());
   }
-  if (dialect == "heidenhain")
-    throw CLI::ValidationError("--dialect", "heidenhain: Klartext programs are not rewritten; enter the kinematics "
-                                            "values of `analyze --offsets` instead (docs/compensation.md)");
-  throw CLI::ValidationError("--dialect", "'" + dialect + "' has no NC programs to compensate (linuxcnc, fanuc, haas, "
-                                          "siemens, okuma)");
 }
 
 std::vector<double> parseTriple(const std::string& opt, const std::string& text) {
@@ -68,72 +63,20 @@ int cmdCompensate(const Common& c, const std::string& program_file, const std::v
   checkOutputs({{"-o", out}}, inputs);  // -o on an input is a usage error, before anything is read
   std::vector<JsonDoc> reports;
   for (const auto& r : report_files) reports.push_back(readJsonFile(r));
-  MachineModel machine;
-  if (!machine_file.empty()) {
-    machine = loadMachine(machine_file);
-  } else {
-    const JsonDoc& report = reports.front();
-    if (report.value.is_object() && report.value.contains("machine_model"))
-      machine = machineFromJson(report, report.value["machine_model"]);
-    else
-      report.fail(report.value, "", "the report does not carry its machine ('machine_model', written by analyze since "
-                                    "this version): give --machine MACHINE.json");
-  }
-  const ReportErrors read = errorsFromReports(reports, machine.kinematics, force);
-  const GeometricErrors& errors = read.errors;
+  std::optional<MachineModel> machine;
+  if (!machine_file.empty()) machine = loadMachine(machine_file);
+  const CompensationInputs in = compensationInputs(reports, machine, force);
   ProgramCompensationOptions opt;
   if (!origin.empty()) {
     const auto v = parseTriple("--program-origin", origin);
     opt.program_origin_m_mm = Eigen::Vector3d(v[0], v[1], v[2]);
   }
   opt.subdivision.max_deviation_mm = umToMm(max_deviation_um);
-  // The reports' paths are outside text: the dialect's comment form keeps only its safe characters.
-  for (const auto& s : read.sources) opt.header.push_back(s);
-  std::string values = "location errors:";
-  for (int i = 0; i < kNumLocationErrors; ++i) {
-    const auto& p = locationParameters(machine.kinematics)[i];
-    values += fmt::format("{} {} {:.2f} {}", i == 0 ? "" : ",", p.name, errors.location.reportValue(i), reportUnit(p.kind));
-  }
-  opt.header.push_back(values);
-  for (const auto& comp : errors.components) {
-    // The largest magnitude of each component error over the sampled angles.
-    std::string line = fmt::format("component errors of {}, largest over the turn:", comp.axis);
-    const auto names = componentErrorNames(comp.axis);
-    for (int k = 0; k < kNumComponentErrors; ++k) {
-      double worst = 0.0;
-      for (const auto& v : comp.values) worst = std::max(worst, std::abs(v[k]));
-      line += fmt::format("{} {} {:.2f} {}", k == 0 ? "" : ",", names[static_cast<size_t>(k)],
-                          k < 3 ? mmToUm(worst) : radToMdeg(worst), k < 3 ? "um" : "mdeg");
-    }
-    opt.header.push_back(line);
-  }
-  for (const auto& n : read.notes) opt.header.push_back(n);
+  opt.header = in.header;
   const std::string text = readTextFile(program_file);
-  const ProgramCompensation r = compensateProgram(text, program_file, machine, errors, syntax, opt);
-  // The input, on the nominal machine it was written for: what makes it unsafe is named at its
-  // own line (the rewrite's lines are not the user's).
-  requireSafeProgram(text, program_file, dialect, machine, nullptr, false);
-  // The program verifier (`rotacal check`) on the rewrite, before it is written: the guards follow
-  // their moves, strokes, clearances on the machine's set-up - the machine with the errors it is
-  // compensated for, where it keeps its planned gaps. The input's program number is kept.
-  requireSafeProgram(r.text, out, dialect, machine, nullptr, false, &errors);
+  const ProgramCompensation r = compensateVerified(text, program_file, out, dialect, syntax, in, opt);
   writeFileAtomic(out, r.text);
-  for (const auto& n : read.notes) say(c, fmt::format("compensate: note: {}\n", n));
-  say(c, fmt::format("compensate: {} of {} motion blocks rewritten ({} left as written: machine-coordinate moves or "
-                     "before every axis was known); largest shift {:.2f} um, largest rotary change {:.2f} mdeg, tool "
-                     "direction not restorable by the rotary axes up to {:.2f} urad; {} no-trigger check statements "
-                     "moved with their probing moves (up to {:.2f} um) -> {}\n",
-                     r.compensated_blocks, r.motion_blocks, r.uncompensated_blocks, mmToUm(r.max_shift_mm),
-                     r.max_rotary_change_deg * 1000.0, r.max_direction_residual_rad * 1e6, r.rewritten_checks,
-                     mmToUm(r.max_check_shift_mm), out));
-  say(c, fmt::format("compensate: {} feed moves split into {} more lines (a move unsplit would leave the nominal path by "
-                     "up to {:.3f} um; written: {:.3f} um, tolerance {:.3f} um)\n",
-                     r.split_blocks, r.added_blocks, mmToUm(r.max_unsplit_deviation_mm), mmToUm(r.max_path_deviation_mm),
-                     max_deviation_um));
-  if (errors.location_covariance)
-    say(c, fmt::format("compensate: the identification's uncertainty leaves the compensated tool point uncertain by up "
-                       "to {:.2f} um (k = 2) at this program's end points\n",
-                       2.0 * mmToUm(r.max_position_u_mm)));
+  for (const auto& line : compensateMessages(in, r, out, max_deviation_um)) say(c, line);
   return 0;
 }
 
