@@ -74,13 +74,22 @@ set(rotacal_library_package librotacal${PROJECT_VERSION_MAJOR})
 set(CPACK_DEBIAN_LIBRARY_PACKAGE_NAME ${rotacal_library_package})
 set(CPACK_DEBIAN_LIBRARY_PACKAGE_SECTION libs)
 set(CPACK_DEBIAN_LIBRARY_PACKAGE_SHLIBDEPS ON)
-# The shlibs file: dpkg-shlibdeps of a post's package finds librotacal0 through it.
-set(CPACK_DEBIAN_PACKAGE_GENERATE_SHLIBS ON)
-set(CPACK_DEBIAN_PACKAGE_GENERATE_SHLIBS_POLICY ">=")
+# The shlibs file, through which dpkg-shlibdeps gives a post's package its Depends on the
+# library: written here rather than by CPack (CPACK_DEBIAN_PACKAGE_GENERATE_SHLIBS), whose one
+# relation cannot say the compatibility rule: this version up to the next minor while the major
+# is 0 (the SONAME does not change with the minor), else up to the next major.
+if(PROJECT_VERSION_MAJOR EQUAL 0)
+  math(EXPR rotacal_next_minor "${PROJECT_VERSION_MINOR} + 1")
+  set(rotacal_abi_end 0.${rotacal_next_minor})
+else()
+  math(EXPR rotacal_abi_end "${PROJECT_VERSION_MAJOR} + 1")
+endif()
+file(WRITE ${PROJECT_BINARY_DIR}/debian-control/shlibs
+  "librotacal ${PROJECT_VERSION_MAJOR} ${rotacal_library_package} (>= ${PROJECT_VERSION}), ${rotacal_library_package} (<< ${rotacal_abi_end}~)\n")
 # The ldconfig trigger Debian's packages use (lintian: lacks-ldconfig-trigger). CPack also
 # writes a postinst and postrm that call ldconfig; the trigger makes that call redundant, not
 # wrong (lintian's warning maintscript-calls-ldconfig).
-set(CPACK_DEBIAN_LIBRARY_PACKAGE_CONTROL_EXTRA ${PROJECT_SOURCE_DIR}/cmake/debian/triggers)
+set(CPACK_DEBIAN_LIBRARY_PACKAGE_CONTROL_EXTRA ${PROJECT_SOURCE_DIR}/cmake/debian/triggers ${PROJECT_BINARY_DIR}/debian-control/shlibs)
 set(CPACK_DEBIAN_LIBRARY_DESCRIPTION
   "compensation library of rotacal for CAM post-processors
 The shared library of rotacal that a CAM post-processor loads: NC programs

@@ -184,7 +184,12 @@ dpkg-deb -c "$LIBDEB" >"$TMP/lib.list"
 grep -q "/usr/lib/.*$SONAME -> $(basename "$REAL")\$" "$TMP/lib.list" || fail "$LIBDEB lacks the link $SONAME"
 grep -q "/usr/lib/.*$(basename "$REAL")\$" "$TMP/lib.list" || fail "$LIBDEB lacks $(basename "$REAL")"
 if grep -q -E '(\.hpp|\.cmake|librotacal\.so)$' "$TMP/lib.list"; then fail "$LIBDEB carries development files"; fi
-step "$(basename "$LIBDEB"): $(stat -c %s "$LIBDEB") bytes, Depends: $(dpkg-deb -f "$LIBDEB" Depends)"
+# What a post's package will depend on (dpkg-shlibdeps reads it): the compatibility rule.
+SHLIBS=$(dpkg-deb -I "$LIBDEB" shlibs) || fail "$LIBDEB has no shlibs file"
+[[ "$SHLIBS" == "librotacal $MAJOR librotacal$MAJOR (>= $VERSION), librotacal$MAJOR (<< "* ]] ||
+  fail "$LIBDEB: shlibs is '$SHLIBS'"
+[ "$(dpkg-deb -I "$LIBDEB" triggers)" = "activate-noawait ldconfig" ] || fail "$LIBDEB has no ldconfig trigger"
+step "$(basename "$LIBDEB"): $(stat -c %s "$LIBDEB") bytes, Depends: $(dpkg-deb -f "$LIBDEB" Depends); shlibs: $SHLIBS"
 
 dpkg-deb -c "$DEV" >"$TMP/dev.list"  # a list first: grep -q closing the pipe would fail dpkg-deb
 grep -q '/usr/include/rotacal/rotacal.hpp$' "$TMP/dev.list" || fail "$DEV lacks the headers"
