@@ -136,6 +136,10 @@ int cmdCompTable(const Common& c, const std::string& report_file, const std::str
                                  ctl::fixed(table.rows.front().controller_deg, 3),
                                  ctl::fixed(table.rows.back().controller_deg, 3), table.max_error_mdeg, out);
   for (const auto& s : table.setup) text += "  set: " + s + "\n";
+  // The other route must not apply it again (docs/compensation.md: each error once).
+  text += fmt::format("  with this table loaded, compensate programs with `--table-holds E{0}{0}`: the table applies "
+                      "E{0}{0} to every program\n",
+                      axis);
   say(c, text);
   return 0;
 }

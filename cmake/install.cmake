@@ -1,81 +1,122 @@
-# Install, export and package (a library for CAM posts).
+# Install, export and package (a library for CAM posts: docs/library.md).
 #
-#   cmake --install build --prefix PREFIX   bin/rotacal, the static libraries a post-processor
-#                                           links, their headers under include/rotacal/ (core/...,
-#                                           gcode/..., controllers/..., postproc/...), and
+#   cmake --install build --prefix PREFIX   bin/rotacal; lib/librotacal.so.<version> with its
+#                                           SONAME link librotacal.so.<major> and the link
+#                                           librotacal.so; the public headers include/rotacal/*.hpp;
 #                                           lib/cmake/rotacal/rotacalConfig.cmake: in a consumer,
-#                                           find_package(rotacal) gives rotacal::core,
-#                                           rotacal::gcode, rotacal::controllers, rotacal::postproc.
+#                                           find_package(rotacal 0.1) gives rotacal::rotacal.
 #   cpack -G DEB (in the build dir)         rotacal_<version>_<arch>.deb: the command-line tool;
-#                                           rotacal-dev_<version>_<arch>.deb: libraries, headers,
-#                                           CMake package.
-# Two install components keep the tool's package free of the build dependencies: `runtime`
-# (the executable) and `development` (the rest). scripts/package-check.sh proves both.
+#                                           librotacal0_<version>_<arch>.deb: the shared library;
+#                                           rotacal-dev_<version>_<arch>.deb: headers, the
+#                                           librotacal.so link, CMake package.
+# Three install components, as Debian packages a library (policy 8.1, 8.4): `runtime` (the
+# executable, which links the internal libraries statically and so needs no librotacal0),
+# `library` (what a post loads at run time, in a package named after the SONAME, so that two
+# ABIs could be installed side by side) and `development` (what a post is built with).
+# scripts/package-check.sh proves all three, and runs lintian on them.
+# The internal libraries (core, gcode, controllers, postproc, ...) and their headers are not
+# installed: their types (Eigen, nlohmann::json) are no interface to promise.
 include(CMakePackageConfigHelpers)
 
-# Exported as rotacal::<name>, the names the build already uses as aliases. postproc links
-# controllers and gcode publicly, so all four are exported; report, history and cycles stay
-# private to the tool.
-set(rotacal_exported_libraries rotacal_core rotacal_gcode rotacal_controllers rotacal_postproc)
-# Position-independent code: a post is often a plugin (a shared library the CAM system loads), and
-# objects compiled for an executable (Debian's default PIE) cannot be linked into one.
-foreach(lib ${rotacal_exported_libraries})
-  string(REPLACE "rotacal_" "" export_name ${lib})
-  set_target_properties(${lib} PROPERTIES EXPORT_NAME ${export_name} POSITION_INDEPENDENT_CODE ON)
-endforeach()
-
 install(TARGETS rotacal RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} COMPONENT runtime)
-install(TARGETS ${rotacal_exported_libraries} EXPORT rotacalTargets
-  ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT development)
-# The headers keep their paths relative to the source root: they include each other as
-# "core/x.hpp". Every header of the four folders is installed (a new one needs no line here).
-foreach(dir core gcode controllers postproc)
-  install(DIRECTORY ${PROJECT_SOURCE_DIR}/${dir}/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/rotacal/${dir}
-    COMPONENT development FILES_MATCHING PATTERN "*.hpp")
-endforeach()
+# Debian policy 8.1: a shared library is not executable (644).
+install(TARGETS rotacal_shared EXPORT rotacalTargets
+  LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT library NAMELINK_COMPONENT development
+  PERMISSIONS OWNER_READ OWNER_WRITE GROUP_READ WORLD_READ)
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/include/rotacal/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/rotacal
+  COMPONENT development FILES_MATCHING PATTERN "*.hpp")
+install(FILES ${PROJECT_BINARY_DIR}/include/rotacal/version.hpp DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/rotacal
+  COMPONENT development)
 
 set(rotacal_cmake_dir ${CMAKE_INSTALL_LIBDIR}/cmake/rotacal)
 install(EXPORT rotacalTargets NAMESPACE rotacal:: DESTINATION ${rotacal_cmake_dir} COMPONENT development)
 configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/rotacalConfig.cmake.in
   ${PROJECT_BINARY_DIR}/rotacalConfig.cmake INSTALL_DESTINATION ${rotacal_cmake_dir})
-# 0.x: SameMajorVersion treats every 0.y as compatible with every other; the API is young, so a
-# consumer that needs an exact minor asks for it (find_package(rotacal 0.1 EXACT)).
+# The compatibility rule (docs/library.md): SOVERSION is the major; while the major is 0 the minor
+# is the ABI, so find_package(rotacal 0.1) accepts 0.1.z only (SameMajorVersion would take any 0.y).
+if(PROJECT_VERSION_MAJOR EQUAL 0)
+  set(rotacal_compatibility SameMinorVersion)
+else()
+  set(rotacal_compatibility SameMajorVersion)
+endif()
 write_basic_package_version_file(${PROJECT_BINARY_DIR}/rotacalConfigVersion.cmake
-  VERSION ${PROJECT_VERSION} COMPATIBILITY SameMajorVersion)
+  VERSION ${PROJECT_VERSION} COMPATIBILITY ${rotacal_compatibility})
 install(FILES ${PROJECT_BINARY_DIR}/rotacalConfig.cmake ${PROJECT_BINARY_DIR}/rotacalConfigVersion.cmake
   DESTINATION ${rotacal_cmake_dir} COMPONENT development)
 
-# Debian packages (cpack -G DEB). The tool's Depends come from dpkg-shlibdeps on the binary (the
-# shared libraries it really loads: libc, libstdc++, libgcc, libfmt, libsqlite3); the -dev
-# package's are the packages whose CMake configs rotacalConfig.cmake finds.
+# Debian packages (cpack -G DEB). The tool's and the library's Depends come from dpkg-shlibdeps on
+# their binaries (the shared libraries they really load: libc, libstdc++, libgcc, libfmt, and
+# libsqlite3 for the tool); the -dev package depends on the library of its exact version.
 set(CPACK_PACKAGE_NAME rotacal)
 set(CPACK_PACKAGE_VENDOR "rotacal")
 # The address the commits of this repository carry; replace it when the project has a public one.
 set(CPACK_PACKAGE_CONTACT "rotacal dev <dev@rotacal>")
 set(CPACK_DEBIAN_PACKAGE_MAINTAINER "${CPACK_PACKAGE_CONTACT}")
 set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
-set(CPACK_STRIP_FILES ON)  # the executable (install strips executables only: the static libraries keep their symbols)
+set(CPACK_STRIP_FILES ON)  # the executable and the shared library: their symbols are no use to a user
 set(CPACK_DEB_COMPONENT_INSTALL ON)
-set(CPACK_COMPONENTS_ALL runtime development)
+set(CPACK_COMPONENTS_ALL runtime library development)
 set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)  # <name>_<version>_<arch>.deb
 set(CPACK_DEBIAN_PACKAGE_SECTION science)
 set(CPACK_DEBIAN_RUNTIME_PACKAGE_NAME rotacal)
 set(CPACK_DEBIAN_RUNTIME_PACKAGE_SHLIBDEPS ON)
 # Per package: a synopsis line, then the extended description (CPack indents it; no package-wide
 # CPACK_PACKAGE_DESCRIPTION_SUMMARY, which CPack would put before each synopsis).
+# Extended lines within 79 characters (CPack indents them by one; lintian reads 80 as too long).
 set(CPACK_DEBIAN_RUNTIME_DESCRIPTION
   "calibrate the rotary axes of five-axis machine tools with a touch probe
-rotacal plans a probing cycle, writes it as an NC program for the controller (LinuxCNC, Fanuc,
-Haas, Siemens, Heidenhain, Okuma), reads back what the controller recorded, identifies the
-ISO 230-7 location errors of the rotary axes with their uncertainty, and writes the
-compensation: offsets in the controller's own form, or the NC program rewritten.")
+rotacal plans a probing cycle, writes it as an NC program for the controller
+(LinuxCNC, Fanuc, Haas, Siemens, Heidenhain, Okuma), reads back what the
+controller recorded, identifies the ISO 230-7 location errors of the rotary
+axes with their uncertainty, and writes the compensation: offsets in the
+controller's own form, or the NC program rewritten.")
+set(rotacal_library_package librotacal${PROJECT_VERSION_MAJOR})
+set(CPACK_DEBIAN_LIBRARY_PACKAGE_NAME ${rotacal_library_package})
+set(CPACK_DEBIAN_LIBRARY_PACKAGE_SECTION libs)
+set(CPACK_DEBIAN_LIBRARY_PACKAGE_SHLIBDEPS ON)
+# The shlibs file, through which dpkg-shlibdeps gives a post's package its Depends on the
+# library: written here rather than by CPack (CPACK_DEBIAN_PACKAGE_GENERATE_SHLIBS), whose one
+# relation cannot say the compatibility rule: this version up to the next minor while the major
+# is 0 (the SONAME does not change with the minor), else up to the next major.
+if(PROJECT_VERSION_MAJOR EQUAL 0)
+  math(EXPR rotacal_next_minor "${PROJECT_VERSION_MINOR} + 1")
+  set(rotacal_abi_end 0.${rotacal_next_minor})
+else()
+  math(EXPR rotacal_abi_end "${PROJECT_VERSION_MAJOR} + 1")
+endif()
+file(WRITE ${PROJECT_BINARY_DIR}/debian-control/shlibs
+  "librotacal ${PROJECT_VERSION_MAJOR} ${rotacal_library_package} (>= ${PROJECT_VERSION}), ${rotacal_library_package} (<< ${rotacal_abi_end}~)\n")
+# The ldconfig trigger Debian's packages use (lintian: lacks-ldconfig-trigger). CPack also
+# writes a postinst and postrm that call ldconfig; the trigger makes that call redundant, not
+# wrong (lintian's warning maintscript-calls-ldconfig).
+set(CPACK_DEBIAN_LIBRARY_PACKAGE_CONTROL_EXTRA ${PROJECT_SOURCE_DIR}/cmake/debian/triggers ${PROJECT_BINARY_DIR}/debian-control/shlibs)
+set(CPACK_DEBIAN_LIBRARY_DESCRIPTION
+  "compensation library of rotacal for CAM post-processors
+The shared library of rotacal that a CAM post-processor loads: NC programs
+compensated for the location errors of the rotary axes that rotacal
+identified (as `rotacal compensate` writes them), single poses compensated,
+and the program verifier of `rotacal check`.")
 set(CPACK_DEBIAN_DEVELOPMENT_PACKAGE_NAME rotacal-dev)
 set(CPACK_DEBIAN_DEVELOPMENT_PACKAGE_SECTION libdevel)
-set(CPACK_DEBIAN_DEVELOPMENT_PACKAGE_DEPENDS
-  "libeigen3-dev (>= 3.3), libfmt-dev, nlohmann-json3-dev (>= 3.10), libboost-dev (>= 1.74)")
+set(CPACK_DEBIAN_DEVELOPMENT_PACKAGE_DEPENDS "${rotacal_library_package} (= ${PROJECT_VERSION})")
 set(CPACK_DEBIAN_DEVELOPMENT_DESCRIPTION
-  "compensation library of rotacal for CAM post-processors
-Static libraries, headers and CMake package of rotacal: find_package(rotacal) gives
-rotacal::core (kinematics, location errors, per-pose compensation, REPORT.json reading) and
-rotacal::postproc (errors of a REPORT.json, NC program rewriting).")
+  "compensation library of rotacal for CAM post-processors (development files)
+Headers and CMake package of librotacal: find_package(rotacal) gives
+rotacal::rotacal, a C++17 interface of standard-library types only
+(rotacal/rotacal.hpp): NC programs compensated for a REPORT.json, single
+poses compensated, programs verified.")
+# Every package carries its copyright and changelog (Debian policy 12.5, 12.7).
+string(TIMESTAMP rotacal_changelog_date "%a, %d %b %Y %H:%M:%S +0000" UTC)  # SOURCE_DATE_EPOCH when set
+foreach(component runtime library development)
+  string(TOUPPER ${component} c)
+  set(pkg ${CPACK_DEBIAN_${c}_PACKAGE_NAME})
+  set(doc ${PROJECT_BINARY_DIR}/debian-doc/${pkg})
+  configure_file(${PROJECT_SOURCE_DIR}/cmake/debian/copyright ${doc}/copyright COPYONLY)
+  configure_file(${PROJECT_SOURCE_DIR}/cmake/debian/changelog.in ${doc}/changelog @ONLY)
+  # gzip -9n (no name or time in its header), at configure time: cpack builds no target first.
+  execute_process(COMMAND gzip -9nc ${doc}/changelog OUTPUT_FILE ${doc}/changelog.gz COMMAND_ERROR_IS_FATAL ANY)
+  # A native package's changelog is changelog.gz (Debian policy 12.7: the version has no revision).
+  install(FILES ${doc}/copyright ${doc}/changelog.gz DESTINATION ${CMAKE_INSTALL_DATAROOTDIR}/doc/${pkg}
+    COMPONENT ${component})
+endforeach()
 include(CPack)

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "core/iso_time.hpp"
 #include "core/json_io.hpp"
 
 struct sqlite3;
@@ -36,11 +37,9 @@ struct Calibration {
 /// $XDG_DATA_HOME/rotacal/history.sqlite, or ~/.local/share/rotacal/history.sqlite.
 std::string defaultDatabasePath();
 
-/// Unix seconds <-> ISO 8601 UTC ("2026-11-25T19:46:44Z"; a date alone is midnight UTC).
-/// parseIsoTime throws std::invalid_argument on anything else, including dates that do not
-/// exist (2024-02-30, 2023-02-29) and years outside 1970..9999.
-double parseIsoTime(const std::string& text);
-std::string isoTime(double unix_s);
+/// The calibrations' times (core/iso_time.hpp).
+using ::rotacal::isoTime;
+using ::rotacal::parseIsoTime;
 
 /// A calibration from the content of a REPORT.json (rotacal-report/1); throws InputError naming
 /// the file and line of what is missing.

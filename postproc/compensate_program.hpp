@@ -43,6 +43,7 @@ struct ProgramCompensationOptions {
 
 struct ProgramCompensation {
   std::string text;
+  bool part_program = false;    // no probing move: checked as a part program (tasks/compensate.hpp)
   int motion_blocks = 0;        // blocks with axis words
   int compensated_blocks = 0;   // rewritten
   int uncompensated_blocks = 0; // passed unchanged: machine-coordinate moves (G53, G28, G30) or

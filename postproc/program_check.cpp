@@ -575,7 +575,7 @@ ProgramCheckResult checkProgram(const std::vector<nc::Motion>& motions, const Pr
     // stylus deflects by the overtravel and no more. The contact found above says nothing of
     // that case; the end must lie no deeper than the overtravel (and what compensate may shift).
     const double deepest = m.overtravel_mm + kCompensationAllowanceMm + kSweepResolutionMm;
-    if (const Gap ge = sim.gap(end.p(), end.pose()); ge.mm < -deepest)
+    if (const Gap ge = sim.gap(end.p() + origin, end.pose()); ge.mm < -deepest)
       violation(mo.line, fmt::format("probing move ends {:.3f} mm inside {}: a probe that does not trigger is driven "
                                      "past its overtravel ({:.3f} mm)",
                                      -ge.mm, ge.what ? ge.what->name : "an obstacle", m.overtravel_mm));

@@ -12,8 +12,9 @@ $SUDO apt-get update
 # browser); libpng-dev: their screenshot check; libsqlite3-dev: `rotacal history`;
 # libboost-math-dev: the distributions of core/statistics.cpp (header-only); clang and
 # libclang-rt-14-dev: libFuzzer and the sanitizer runtimes of scripts/fuzz.sh (tests/fuzz);
-# dpkg-dev (dpkg-shlibdeps) and file: the Depends of `cpack -G DEB` (scripts/package-check.sh).
+# dpkg-dev (dpkg-shlibdeps) and file: the Depends of `cpack -G DEB`; lintian: Debian's checks of
+# those packages (both scripts/package-check.sh).
 $SUDO apt-get install -y --no-install-recommends \
   build-essential cmake libeigen3-dev libfmt-dev nlohmann-json3-dev libcli11-dev \
   libgtest-dev libgmock-dev linuxcnc-uspace linuxcnc-uspace-dev \
-  libsqlite3-dev libpng-dev chromium libboost-math-dev clang libclang-rt-14-dev dpkg-dev file
+  libsqlite3-dev libpng-dev chromium libboost-math-dev clang libclang-rt-14-dev dpkg-dev file lintian

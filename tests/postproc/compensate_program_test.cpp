@@ -491,6 +491,19 @@ TEST(CompensateProgram, ACompensatedProgramIsMarkedAndNotCompensatedAgain) {
   size_t marker_line = 1;
   for (size_t p = 0; p < once.find("ROTACAL-COMPENSATED"); ++p) marker_line += once[p] == '\n';
   EXPECT_EQ(m.rfind(fmt::format("once.ngc:{}: the program is already compensated", marker_line), 0), 0u) << m;
+  // Stripped of its comments (a DNC filter, a hand edit), LinuxCNC's program still carries its
+  // statement, and is refused at it.
+  std::string stripped;
+  for (std::istringstream in(once); std::getline(in, m);)
+    if (m.empty() || m[0] != '(') stripped += m + "\n";
+  ASSERT_EQ(stripped.find("ROTACAL-COMPENSATED"), std::string::npos);
+  m.clear();
+  try {
+    compensateProgram(stripped, "stripped.ngc", f.plan.machine, f.errors, NcSyntax{"linuxcnc"}, {});
+  } catch (const InputError& e) {
+    m = e.what();
+  }
+  EXPECT_NE(m.find("the program is already compensated (statement #<rotacal_compensated> = 1)"), std::string::npos) << m;
   // Fanuc's upper-case form and Siemens's ';' comments carry it too.
   for (const char* d : {"fanuc", "siemens"}) {
     const std::string text = dialectByName(d).writeProgram(test::cycleProgram(f.plan, d));

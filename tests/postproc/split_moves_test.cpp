@@ -214,7 +214,10 @@ TEST(SplitMoves, ZeroErrorsReproduceEveryDialectsProgramByteForByte) {
     while (first < a.size() && a[first] == b[first]) ++first;
     const size_t header = b.size() - a.size();
     for (size_t i = first; i < a.size(); ++i) ASSERT_EQ(a[i], b[i + header]) << d << " line " << i + 1;
-    for (size_t i = first; i < first + header; ++i) EXPECT_NE(b[i].find_first_of("(;"), std::string::npos) << d;
+    // The header: comments, and the dialect's statement of a compensated program where it has one.
+    for (size_t i = first; i < first + header; ++i)
+      EXPECT_TRUE(b[i].find_first_of("(;") != std::string::npos || b[i] == dialectByName(d).compensationMark())
+          << d << ": " << b[i];
   }
 }
 
