@@ -179,8 +179,9 @@ LoopSetup loopSetup(const std::string& machine_file) {
   return s;
 }
 
-LoopResult runLoop(const LoopSetup& setup, std::uint64_t seed, double noise_um) {
-  const TrueMachine tm = draw(seed);
+LoopResult runLoop(const LoopSetup& setup, std::uint64_t seed, double noise_um, bool with_eya) {
+  TrueMachine tm = draw(seed);
+  if (!with_eya) tm.eya.clear();
   const JsonDoc r1 = analyzed(setup.touch154, tm, noise_um, 2 * seed + 1, "touch154");
   const JsonDoc r3 = analyzed(setup.spheres3, tm, noise_um, 2 * seed + 2, "spheres3");
   const GeometricErrors both = errorsFromReports({r1, r3}, Kinematics::TableAC, false).errors;

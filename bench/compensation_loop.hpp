@@ -27,6 +27,8 @@ struct LoopResult {
 /// Draws machine `seed` (location errors, the C axis's component errors of 001's size, an error
 /// motion of the A axis no cycle models), measures it with both cycles at `noise_um`, analyzes,
 /// compensates and evaluates. Throws what the cycles throw.
-LoopResult runLoop(const LoopSetup& setup, std::uint64_t seed, double noise_um);
+/// `with_eya` false: the same machine without the A axis's error motion (what limits the worst
+/// machines, measured by comparing the two).
+LoopResult runLoop(const LoopSetup& setup, std::uint64_t seed, double noise_um, bool with_eya = true);
 
 }  // namespace rotacal

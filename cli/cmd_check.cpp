@@ -31,7 +31,9 @@ namespace rotacal {
 namespace {
 
 int cmdCheck(const Common& c, const std::string& program_file, const std::string& dialect,
-             const std::string& machine_file, const std::string& plan_file) {
+             const std::string& machine_file, const std::string& plan_file, bool part_program) {
+  if (part_program && !plan_file.empty())
+    throw CLI::ValidationError("--part-program", "a part program has no cycle plan: give one of --plan, --part-program");
   const Dialect& d = dialectOrFail(dialect);
   if (d.name() == "csv") throw CLI::ValidationError("--dialect", "csv has no NC programs to check");
   const MachineModel machine = loadMachine(machine_file);
@@ -56,7 +58,11 @@ int cmdCheck(const Common& c, const std::string& program_file, const std::string
     checked.artefact = plan->machine.artefact;
   }
   const std::string text = readTextFile(program_file);
-  ProgramCheckResult r = verifyProgram(text, dialect, checked, plan ? &*plan : nullptr, true);
+  // A part program (postproc/program_check.hpp): the tool's point against the table, from the
+  // program's zero at the rotary-axis intersection, as rotacal's own programs; no program number.
+  ProgramCheckResult r =
+      part_program ? verifyProgram(text, dialect, checked, nullptr, false, nullptr, Eigen::Vector3d::Zero())
+                   : verifyProgram(text, dialect, checked, plan ? &*plan : nullptr, true);
   // The dialect's own rules (comments, brackets, labels and jump targets, decimal points, the
   // no-trigger alarms it writes), against what the plan's program must show: the checker
   // `generate` runs before it writes, so a hand-edited program is not passed on its motion alone.
@@ -95,6 +101,12 @@ int cmdCheck(const Common& c, const std::string& program_file, const std::string
                          : fmt::format("{} (and {} more violations, listed on stdout)", v.problem, r.violations.size() - 1));
   }
   say(c, checkSummary(program_file, text, r));
+  if (part_program) {
+    say(c, fmt::format("{}: checked as a part program: the tool's point against the table, no probe, no calibration "
+                       "artefact\n",
+                       program_file));
+    return 0;
+  }
   say(c, plan ? fmt::format("{}: the {} checker's rules (comments, brackets, labels, alarms): ok against the plan\n",
                             program_file, d.name())
               : fmt::format("{}: the {} checker's rules (comments, brackets, labels, alarms): not checked (give --plan)\n",
@@ -107,6 +119,7 @@ int cmdCheck(const Common& c, const std::string& program_file, const std::string
 std::vector<Command> checkCommands(CLI::App& app, const Common& common) {
   struct Args {
     std::string program, dialect, machine, plan;
+    bool part_program = false;
   };
   auto a = std::make_shared<Args>();
   auto* cmd = app.add_subcommand("check", "verify an NC program on the machine: clearances swept along every move, "
@@ -116,7 +129,12 @@ std::vector<Command> checkCommands(CLI::App& app, const Common& common) {
   cmd->add_option("--machine", a->machine, "MACHINE.json")->required();
   cmd->add_option("--plan", a->plan, "PLAN.json: the cycle's number, the spheres it touches; every probing move must "
                                      "reach a surface");
-  return {{cmd, [a, &common] { return cmdCheck(common, a->program, a->dialect, a->machine, a->plan); }}};
+  cmd->add_flag("--part-program", a->part_program,
+                "check a part program: the tool's point against the table (MACHINE.json table_top_z_mm, else the "
+                "artefact's foot), no probe and no calibration artefact; X Y Z from the rotary-axis intersection");
+  return {{cmd, [a, &common] {
+             return cmdCheck(common, a->program, a->dialect, a->machine, a->plan, a->part_program);
+           }}};
 }
 
 }  // namespace rotacal

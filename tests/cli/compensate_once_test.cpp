@@ -115,12 +115,20 @@ TEST_F(CompensateOnce, APartProgramThroughWhereTheArtefactStoodIsCompensatedWith
   const auto probing = sh("check " + p("ring.ngc") + " --dialect linuxcnc --machine " + machine);
   EXPECT_NE(probing.code, 0) << probing.out;
   EXPECT_NE(probing.out.find("the artefact"), std::string::npos) << probing.out;
+  // `check --part-program` checks it as compensate does.
+  const auto part = sh("check " + p("ring.ngc") + " --dialect linuxcnc --machine " + machine + " --part-program");
+  EXPECT_EQ(part.code, 0) << part.out;
+  EXPECT_NE(part.out.find("checked as a part program"), std::string::npos) << part.out;
+
   // The table is still there: the ring cut 30 mm below the table's top (the column's bottom,
   // z 20 mm) is refused, naming the first move that enters it, and nothing is written.
   std::ofstream(p("deep.ngc")) << tiltedRing(m, -10.0);
   compensate(p("deep.ngc"), p("report.json"), p("deep_c.ngc"), " --machine " + machine);
   EXPECT_TRUE(refused(last, 1, "the table", p("deep_c.ngc")));
   EXPECT_NE(last.out.find("deep.ngc:7:"), std::string::npos) << last.out;  // G1 Z down to the ring
+  const auto deep = sh("check " + p("deep.ngc") + " --dialect linuxcnc --machine " + machine + " --part-program");
+  EXPECT_EQ(deep.code, 1) << deep.out;
+  EXPECT_NE(deep.out.find("deep.ngc:7:"), std::string::npos) << deep.out;
 }
 
 TEST_F(CompensateOnce, AReportOfAnotherMachineOrAResidualReportIsRefusedAndAnOldOneIsFlagged) {
