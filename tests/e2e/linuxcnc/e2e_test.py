@@ -47,7 +47,10 @@
       poses) -> generate --dialect linuxcnc -> run unchanged on LinuxCNC whose virtual probe plays
       the sphere on its stem on the table of truth_bc.json (002 Eq. (2) location errors of the B and
       the C axis) -> the program's own LOG -> analyze --dialect linuxcnc. Asserts: every trigger
-      0 .. F x 1 ms past the exact contact; all 8 location errors within 0.5 um / 0.05 mdeg.
+      0 .. F x 1 ms past the exact contact; all 8 location errors within 0.5 um / 0.05 mdeg. Beside
+      it, the same program on the controller whose own joint compensation tables make the linear
+      axes' positioning errors (000 Eq. (22), Table 5's sizes, drawn here): every trigger 0 .. F x 1 ms
+      past the contact computed with the tables, the offsets written, U covering the truth.
 
 Exit 0 pass, 1 fail, 77 skip (LinuxCNC, halcompile or root missing: CTest SKIP_RETURN_CODE).
 """
@@ -570,6 +573,107 @@ def kins_readback_bc(a, work, plan_path):
     return out
 
 
+CONTRIB_LINEAR = os.path.join(HERE, "contributors_linear.json")
+LINEAR_SEED = 1   # fixed before the first run; the controller and the probe are deterministic
+LINEAR_JOINT_RANGE_MM = (-600.0, 600.0)   # config/lcsim_xyzbc.ini's joint limits: the tables cover them
+
+
+def draw_linear_comp(dirpath, seed):
+    """000 Eq. (22)'s positioning errors of X, Y and Z at 000 Table 5's sizes, drawn here (not by
+    rotacal, which is under test): per axis a node spacing p uniform in [20, 50] mm, nodes Q_i = p i
+    over the joint's limits and beyond, values N(0, 2 um) plus the scale N(0, 1 um/100 mm) x Q_i,
+    linearly interpolated between nodes, as the controller interpolates its table (the scale, being
+    linear, is exact there). Written as LinuxCNC's COMP_FILE_TYPE = 0 rows 'nominal forward reverse'
+    with forward = reverse = nominal - e: the controller then drives the motor to joint + e(joint)
+    (motor = joint + nominal - actual), and the probe reads the motor (run.sh --linear-comp), so the
+    axis stands e past where the controller believes. Returns the largest |e| (um)."""
+    import random
+    rng = random.Random(seed)
+    os.makedirs(dirpath, exist_ok=True)
+    largest = 0.0
+    for j in range(3):
+        p = rng.uniform(20.0, 50.0)
+        scale = rng.gauss(0.0, 1.0e-3 / 100.0)
+        i0 = int(math.floor(LINEAR_JOINT_RANGE_MM[0] / p)) - 1
+        i1 = int(math.ceil(LINEAR_JOINT_RANGE_MM[1] / p)) + 1
+        with open(os.path.join(dirpath, "joint%d.comp" % j), "w") as f:
+            for i in range(i0, i1 + 1):
+                q = p * i
+                e = rng.gauss(0.0, 2.0e-3) + scale * q
+                largest = max(largest, abs(e) * 1000.0)
+                f.write("%.6f %.6f %.6f\n" % (q, q - e, q - e))
+    return largest
+
+
+def linear_axes_session(a, work):
+    """The controller makes the linear axes' errors (its own joint compensation tables) under the
+    same injected location errors: the analysis, given what the controller makes as its declared
+    contributors, still writes the offsets, and its U covers the truth: at least 6 of the 8 within
+    U (a 95 % U each: 3 or more outside has probability 0.6 %) and every one within 2 U (a normal
+    beyond 3.9 sigma: 1e-4). Returns its figures."""
+    comp = os.path.join(work, "linear_comp")
+    largest = draw_linear_comp(comp, LINEAR_SEED)
+    # the machine as the controller makes it: the probe's repeatability is the servo period's
+    # lateness (contributors_linear.json), one quantity in the machine file and the declaration
+    with open(MACHINE_BC) as f:
+        m = json.load(f)
+    m["probe"]["repeatability_um"] = 0.05
+    machine = os.path.join(work, "machine_linear.json")
+    with open(machine, "w") as f:
+        json.dump(m, f, indent=1)
+    plan, ngc = os.path.join(work, "plan_linear.json"), os.path.join(work, "one_sphere_linear.ngc")
+    cmd = [a.rotacal, "plan", "--cycle", "one_sphere", "--machine", machine, "-o", plan]
+    for kv in ONE_SPHERE_BC_SET:
+        cmd += ["--set", kv]
+    sh(cmd)
+    sh([a.rotacal, "generate", "--plan", plan, "--dialect", "linuxcnc", "-o", ngc])
+    run = os.path.join(work, "run_linear")
+    _, t = sh([RUN, "--ngc", ngc, "--truth", TRUTH_BC, "--machine", machine, "--plan", plan, "--out", run,
+               "--linear-comp", comp, "--timeout", "300"])
+    return {"comp": comp, "plan": plan, "run": run, "machine": machine, "largest_um": largest, "run_s": t}
+
+
+def check_linear_axes_session(a, work, s):
+    with open(s["plan"]) as f:
+        n_points = len(json.load(f)["points"])
+    # the controller applied its tables: every trigger is 0 .. F x 1 ms past the contact computed
+    # with them (and would be several um off without them)
+    lat = lateness_cmd(work, s["run"], s["plan"], "one_sphere", ["--linear-comp", s["comp"]])
+    check(lat["points"] == n_points and lat["over_um"]["min"] >= -0.001 and lat["over_um"]["max"] <= 0.168,
+          "linear axes in the controller's tables (largest %.2f um): every trigger 0 .. 0.167 um past the contact "
+          "computed with the tables: %.3f .. %.3f um" % (s["largest_um"], lat["over_um"]["min"], lat["over_um"]["max"]))
+    plain = lateness_cmd(work, s["run"], s["plan"], "one_sphere", [], name="lateness_without_tables.json")
+    check(max(abs(plain["over_um"]["min"]), abs(plain["over_um"]["max"])) > 0.5,
+          "without the tables the same triggers are off by up to %.2f um: the tables acted"
+          % max(abs(plain["over_um"]["min"]), abs(plain["over_um"]["max"])))
+    rep, off = os.path.join(work, "report_linear.json"), os.path.join(work, "offsets_linear.hal")
+    sh([a.rotacal, "analyze", "--plan", s["plan"], "--results", os.path.join(s["run"], "rotacal_one_sphere.txt"),
+        "--dialect", "linuxcnc", "--contributors", CONTRIB_LINEAR, "--json", rep, "--offsets", off])
+    check(os.path.exists(off), "the offsets are written on the machine the controller makes")
+    with open(rep) as f:
+        le = json.load(f)["location_errors"]
+    want = injected(TRUTH_BC)
+    within, within2, rows = 0, 0, {}
+    for name, w in want.items():
+        d, U = le[name]["value"] - w, le[name]["U"]
+        within += abs(d) <= U
+        within2 += abs(d) <= 2 * U
+        rows[name] = {"identified_minus_injected": d, "U": U}
+        print("  %-6s identified - injected %+8.4f, U %.4f %s" % (name, d, U, le[name]["unit"]))
+    check(within >= 6 and within2 == 8, "U covers the truth: %d of 8 within U (>= 6), %d within 2 U (all)"
+          % (within, within2))
+    return {"lateness": lat, "lateness_without_tables": plain, "errors": rows, "largest_um": s["largest_um"],
+            "run_s": s["run_s"]}
+
+
+def lateness_cmd(work, run_dir, plan, cycle, extra, name="lateness_tables.json"):
+    out = os.path.join(run_dir, name)
+    sh(["/usr/bin/python3", os.path.join(HERE, "scripts", "lateness.py"), "--params", os.path.join(run_dir, "params.json"),
+        "--plan", plan, "--results", os.path.join(run_dir, "rotacal_%s.txt" % cycle), "--json", out] + extra)
+    with open(out) as f:
+        return json.load(f)["summary"]
+
+
 def run_one_sphere_bc(a):
     work = a.work
     plan, ngc = os.path.join(work, "plan.json"), os.path.join(work, "one_sphere.ngc")
@@ -582,10 +686,12 @@ def run_one_sphere_bc(a):
         n_points = len(json.load(f)["points"])
     run = os.path.join(work, "run")
     # the read-back (two short sessions) and the cycle's session need nothing of each other: side by side
-    readback, (_, t) = side_by_side(
+    # and the session whose controller carries the linear axes' errors in its own tables
+    readback, (_, t), linear = side_by_side(
         lambda: kins_readback_bc(a, work, plan),
         lambda: sh([RUN, "--ngc", ngc, "--truth", TRUTH_BC, "--machine", MACHINE_BC, "--plan", plan, "--out", run,
-                    "--timeout", "300"]))
+                    "--timeout", "300"]),
+        lambda: linear_axes_session(a, work))
     figures = {"readback": readback}
     figures["run_s"] = t
     figures["lateness"] = lateness(work, run, plan, cycle="one_sphere", points=n_points,
@@ -606,6 +712,7 @@ def run_one_sphere_bc(a):
     compare(got, want, "one_sphere on LinuxCNC (xyzbc-trt-kins), injected B and C location errors")
     figures.update({"identified": got, "injected": want, "unseparable": r.get("unseparable"),
                     "points": n_points, "location_errors_note": r.get("location_errors_note")})
+    figures["linear_axes"] = check_linear_axes_session(a, work, linear)
     with open(os.path.join(work, "figures.json"), "w") as f:
         json.dump(figures, f, indent=1)
     print("one_sphere B/C on LinuxCNC: %d touches, LinuxCNC session %.0f s" % (n_points, t))

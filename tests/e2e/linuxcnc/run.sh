@@ -7,7 +7,7 @@
 #
 # Usage: run.sh --ngc PROGRAM --truth TRUTH.json --machine MACHINE.json --out DIR
 #               [--plan PLAN.json] [--pre-ngc OFFSETS.ngc] [--timeout S] [--comp-build DIR]
-#               [--c-from-motor] [--comp-file TABLE] [--kins-tcp] [--setp FILE]
+#               [--c-from-motor] [--comp-file TABLE] [--linear-comp DIR] [--kins-tcp] [--setp FILE]
 #   --ngc FILE        the program (rotacal generate --dialect linuxcnc); it runs as written
 #   --truth FILE      rotacal-truth/1: the true machine and piece (scripts/truth_params.py)
 #   --machine FILE    rotacal-machine/1: the nominal piece and probe ball
@@ -21,6 +21,9 @@
 #                     compensation table) instead of the joint command
 #   --comp-file TABLE joint 4 (C) loads TABLE: COMP_FILE = TABLE, COMP_FILE_TYPE = 0 in [JOINT_4]
 #                     (rotacal comp-table --dialect linuxcnc); implies --c-from-motor
+#   --linear-comp DIR joints 0, 1, 2 (X, Y, Z) load DIR/joint0.comp, joint1.comp, joint2.comp
+#                     (COMP_FILE_TYPE = 0) and the probe reads X, Y, Z from their motor commands:
+#                     the controller itself makes the linear axes' positioning errors
 #   --kins-tcp        start in the trunnion (TCP) kinematics instead of identity (the INI
 #                     without sparm=identityfirst): for the conventions read-back only
 #   --setp FILE       'setp PIN VALUE' lines applied after the truth's (read-back: rot-point,
@@ -36,7 +39,7 @@ HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 PY=/usr/bin/python3          # Debian's interpreter: it has the linuxcnc and hal modules
 export PYTHONDONTWRITEBYTECODE=1   # no __pycache__ in the source tree
 
-NGC="" PRE="" TRUTH="" MACHINE="" PLAN="" OUT="" TIMEOUT=900 BUILD=/tmp/rotacal-e2e-comp C_MOTOR=0 COMP="" TCP=0 SETP="" ISOLATE=1
+NGC="" PRE="" TRUTH="" MACHINE="" PLAN="" OUT="" TIMEOUT=900 BUILD=/tmp/rotacal-e2e-comp C_MOTOR=0 COMP="" LINCOMP="" TCP=0 SETP="" ISOLATE=1
 while [ $# -gt 0 ]; do
     case "$1" in
         --ngc) NGC="$2"; shift 2;;
@@ -49,10 +52,11 @@ while [ $# -gt 0 ]; do
         --comp-build) BUILD="$2"; shift 2;;
         --c-from-motor) C_MOTOR=1; shift;;
         --comp-file) COMP="$2"; C_MOTOR=1; shift 2;;
+        --linear-comp) LINCOMP="$2"; shift 2;;
         --kins-tcp) TCP=1; shift;;
         --setp) SETP="$2"; shift 2;;
         --shared) ISOLATE=0; shift;;
-        -h|--help) sed -n '2,31p' "$0" | sed 's/^# \{0,1\}//'; exit 0;;
+        -h|--help) sed -n '2,34p' "$0" | sed 's/^# \{0,1\}//'; exit 0;;
         *) echo "run.sh: unknown option $1 (see --help)" >&2; exit 3;;
     esac
 done
@@ -65,6 +69,10 @@ NGC="$(abspath "$NGC")" TRUTH="$(abspath "$TRUTH")" MACHINE="$(abspath "$MACHINE
 [ -n "$PRE" ] && PRE="$(abspath "$PRE")"
 [ -n "$PLAN" ] && PLAN="$(abspath "$PLAN")"
 [ -n "$COMP" ] && COMP="$(abspath "$COMP")"
+if [ -n "$LINCOMP" ]; then
+    for j in 0 1 2; do [ -f "$LINCOMP/joint$j.comp" ] || die "file not found: $LINCOMP/joint$j.comp"; done
+    LINCOMP="$(cd "$LINCOMP" && pwd)"
+fi
 
 command -v linuxcnc >/dev/null || die "linuxcnc not found (Debian package linuxcnc-uspace)"
 command -v halcompile >/dev/null || die "halcompile not found (Debian package linuxcnc-uspace-dev)"
@@ -131,11 +139,19 @@ if [ -n "$COMP" ]; then
     sed -i "s#^\[JOINT_4\]\$#[JOINT_4]\nCOMP_FILE = $OUT/config/joint4.comp\nCOMP_FILE_TYPE = 0#" "$OUT/config/$INI"
     grep -q '^COMP_FILE = ' "$OUT/config/$INI" || die "could not add COMP_FILE to [JOINT_4]"
 fi
+if [ -n "$LINCOMP" ]; then
+    # the linear joints' compensation tables: the controller adds them to the motor commands
+    for j in 0 1 2; do
+        cp "$LINCOMP/joint$j.comp" "$OUT/config/joint$j.comp" || die "cannot copy $LINCOMP/joint$j.comp"
+        sed -i "s#^\[JOINT_$j\]\$#[JOINT_$j]\nCOMP_FILE = $OUT/config/joint$j.comp\nCOMP_FILE_TYPE = 0#" "$OUT/config/$INI"
+        grep -q "^COMP_FILE = $OUT/config/joint$j.comp" "$OUT/config/$INI" || die "could not add COMP_FILE to [JOINT_$j]"
+    done
+fi
 cp "$HERE/config/lcsim.tbl" "$OUT/config/"
 # the program's relative LOGOPEN file resolves in the INI's directory
 LOGNAME_="$(sed -n 's/^[[:space:]]*([Ll][Oo][Gg][Oo][Pp][Ee][Nn],\([^)]*\)).*/\1/p' "$NGC" | head -1)"
 
-export LCSIM_NGC="$NGC" LCSIM_PRE_NGC="$PRE" LCSIM_OUT="$OUT" LCSIM_PARAMS_HAL="$OUT/params.hal" LCSIM_C_FROM_MOTOR="$C_MOTOR"
+export LCSIM_NGC="$NGC" LCSIM_PRE_NGC="$PRE" LCSIM_OUT="$OUT" LCSIM_PARAMS_HAL="$OUT/params.hal" LCSIM_C_FROM_MOTOR="$C_MOTOR" LCSIM_XYZ_FROM_MOTOR="$([ -n "$LINCOMP" ] && echo 1 || echo 0)"
 export LCSIM_TIMEOUT=$(( TIMEOUT > 40 ? TIMEOUT - 30 : TIMEOUT * 3 / 4 ))   # the driver's own limit
 # rtapi_app refuses to run as root unless given a fallback uid
 export RTAPI_UID="${RTAPI_UID:-65534}"

@@ -11,6 +11,7 @@
 # Environment (exported by ../run.sh):
 #   LCSIM_PARAMS_HAL  setp file generated from the truth (truth_params.py + lcsim_params.py)
 #   LCSIM_C_FROM_MOTOR 1: the probe reads C from joint.4.motor-pos-cmd (run.sh --c-from-motor)
+#   LCSIM_XYZ_FROM_MOTOR 1: X, Y, Z from joints 0-2's motor-pos-cmd (run.sh --linear-comp)
 
 # --- motion, kinematics ------------------------------------------------------
 # the INI value is a Tcl list (one element per occurrence): split "module sparm=..." into words
@@ -39,10 +40,24 @@ loadrt vtouchprobe
 # after motion-controller: the sample taken here (commanded joint positions
 # of this period) is the one motion reads next period, when it also records
 # carte_pos_fb = fwd(same joint positions) as the probe point
-addf vtouchprobe.0 servo-thread
-net :jx joint.0.pos-cmd => vtouchprobe.0.joint-x
-net :jy joint.1.pos-cmd => vtouchprobe.0.joint-y
-net :jz joint.2.pos-cmd => vtouchprobe.0.joint-z
+# X, Y, Z: the joints' commands, or with LCSIM_XYZ_FROM_MOTOR=1 their motors' commands, which carry
+# their compensation tables (run.sh --linear-comp): the linear axes' positioning errors are then
+# the controller's own, as on a machine whose scales are read at the motor
+if {[info exists ::env(LCSIM_XYZ_FROM_MOTOR)] && $::env(LCSIM_XYZ_FROM_MOTOR) == 1} {
+    # the joint's command plus what motion adds for its table (joint.N.backlash-filt): the motor's
+    # command without its homing offset (Z homes at HOME_OFFSET 300 with its motor at 0)
+    loadrt sum2 names=vtp-x,vtp-y,vtp-z
+    foreach {j s} {0 x 1 y 2 z} {
+        addf vtp-$s servo-thread
+        net :jm$j joint.$j.pos-cmd => vtp-$s.in0
+        net :jb$j joint.$j.backlash-filt => vtp-$s.in1
+        net :jt$j vtp-$s.out => vtouchprobe.0.joint-$s
+    }
+} else {
+    net :jx joint.0.pos-cmd => vtouchprobe.0.joint-x
+    net :jy joint.1.pos-cmd => vtouchprobe.0.joint-y
+    net :jz joint.2.pos-cmd => vtouchprobe.0.joint-z
+}
 # joint 3 is the tilt axis, A (xyzac) or B (xyzbc): the probe's (pA, uA) line is that axis
 net :ja joint.3.pos-cmd => vtouchprobe.0.joint-a
 # C: the joint's command (default), or with LCSIM_C_FROM_MOTOR=1 the motor's command, which
@@ -54,6 +69,8 @@ if {[info exists ::env(LCSIM_C_FROM_MOTOR)] && $::env(LCSIM_C_FROM_MOTOR) == 1} 
 } else {
     net :jc joint.4.pos-cmd => vtouchprobe.0.joint-c
 }
+# after motion-controller (and the sums above, when present)
+addf vtouchprobe.0 servo-thread
 net :probe vtouchprobe.0.probe => motion.probe-input
 
 # --- parameters: nominal kinematics + true machine/artefact ------------------

@@ -3,7 +3,7 @@
 first contact of the TRUE machine and piece (params.json), on the plan's probing line.
 
 Usage: lateness.py --params params.json --plan PLAN.json --results rotacal_touch154.txt
-                   [--offsets OFFSETS.ngc] [--json out.json]
+                   [--offsets OFFSETS.ngc] [--linear-comp DIR] [--json out.json]
 
 The recorded touch moves along the plan's approach line through the nominal trigger (both the
 single and the double touch: the second touch starts on that line, retract_mm back from where
@@ -60,9 +60,12 @@ def main():
     ap.add_argument("--plan", required=True)
     ap.add_argument("--results", required=True)
     ap.add_argument("--offsets")
+    ap.add_argument("--linear-comp", help="DIR with joint0..2.comp: the linear joints' tables (run.sh --linear-comp)")
     ap.add_argument("--json")
     a = ap.parse_args()
     p = G.load_params(a.params)
+    if a.linear_comp:
+        p["linear_comp"] = [G.read_comp_table(os.path.join(a.linear_comp, "joint%d.comp" % j)) for j in range(3)]
     with open(a.plan) as f:
         plan = json.load(f)
     got = read_log(a.results)
