@@ -621,12 +621,7 @@ def linear_axes_session(a, work):
     machine = os.path.join(work, "machine_linear.json")
     with open(machine, "w") as f:
         json.dump(m, f, indent=1)
-    plan, ngc = os.path.join(work, "plan_linear.json"), os.path.join(work, "one_sphere_linear.ngc")
-    cmd = [a.rotacal, "plan", "--cycle", "one_sphere", "--machine", machine, "-o", plan]
-    for kv in ONE_SPHERE_BC_SET:
-        cmd += ["--set", kv]
-    sh(cmd)
-    sh([a.rotacal, "generate", "--plan", plan, "--dialect", "linuxcnc", "-o", ngc])
+    plan, ngc = plan_one_sphere_bc(a, machine, work, "_linear")
     run = os.path.join(work, "run_linear")
     _, t = sh([RUN, "--ngc", ngc, "--truth", TRUTH_BC, "--machine", machine, "--plan", plan, "--out", run,
                "--linear-comp", comp, "--timeout", "300"])
@@ -674,14 +669,20 @@ def lateness_cmd(work, run_dir, plan, cycle, extra, name="lateness_tables.json")
         return json.load(f)["summary"]
 
 
-def run_one_sphere_bc(a):
-    work = a.work
-    plan, ngc = os.path.join(work, "plan.json"), os.path.join(work, "one_sphere.ngc")
-    cmd = [a.rotacal, "plan", "--cycle", "one_sphere", "--machine", MACHINE_BC, "-o", plan]
+def plan_one_sphere_bc(a, machine, work, tag=""):
+    """The case's short one_sphere plan (ONE_SPHERE_BC_SET) and its LinuxCNC program."""
+    plan, ngc = os.path.join(work, "plan%s.json" % tag), os.path.join(work, "one_sphere%s.ngc" % tag)
+    cmd = [a.rotacal, "plan", "--cycle", "one_sphere", "--machine", machine, "-o", plan]
     for kv in ONE_SPHERE_BC_SET:
         cmd += ["--set", kv]
     sh(cmd)
     sh([a.rotacal, "generate", "--plan", plan, "--dialect", "linuxcnc", "-o", ngc])
+    return plan, ngc
+
+
+def run_one_sphere_bc(a):
+    work = a.work
+    plan, ngc = plan_one_sphere_bc(a, MACHINE_BC, work)
     with open(plan) as f:
         n_points = len(json.load(f)["points"])
     run = os.path.join(work, "run")
