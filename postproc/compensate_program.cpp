@@ -25,6 +25,10 @@ namespace {
 constexpr double kRotaryStrokeTolDeg = 1e-9;
 // Written at the top of every compensated program, refused in an input program.
 constexpr const char* kCompensatedMarker = "ROTACAL-COMPENSATED";
+// Across the approach, how far apart the compensated and the uncompensated probing lines must be at
+// a touch for it to tell which program ran: far above the program's printed 0.1 um and the
+// controller's recorded 0.001 um, below any compensation worth making.
+constexpr double kProbingLineSeparationMm = 1e-3;
 // Longest input line read. No control in controllers.md takes more than LinuxCNC's 255
 // characters; a line of 100 kB would overflow the stack inside std::regex (recursive matcher).
 constexpr size_t kMaxLineChars = 1024;
@@ -645,6 +649,28 @@ MeasurementRun undoCompensation(const ProbePlan& plan, const MeasurementRun& run
     t.position_m_mm = T_m_w_nominal(errors.kinematics(), q) * (T_m_w(errors, it->second).inverse() * x) -
                       options.program_origin_m_mm;
   }
+  // The results must be of the compensated program. A controller records positions on the line
+  // it ran: the compensated program's touches lie on the plan's probing lines once read back, the
+  // uncompensated program's before. Read back as compensated, the latter would identify the
+  // errors minus the compensation - a residual near zero, a false "verified".
+  int decisive = 0, on_nominal = 0;
+  for (size_t i = 0; i < out.points.size(); ++i) {
+    const ProbePoint& p = *plan.findPoint(out.points[i].point_id);
+    auto across = [&](const Eigen::Vector3d& x) {
+      const Eigen::Vector3d d = x - p.trigger_m_mm;
+      return (d - d.dot(p.approach_m) * p.approach_m).norm();
+    };
+    const double raw = across(run.points[i].position_m_mm), undone = across(out.points[i].position_m_mm);
+    if (std::abs(raw - undone) < kProbingLineSeparationMm) continue;
+    ++decisive;
+    if (raw < undone) ++on_nominal;
+  }
+  if (2 * on_nominal > decisive)
+    throw std::invalid_argument(fmt::format(
+        "{} of the {} touches where the two programs' probing lines differ by {:.1f} um or more lie on the "
+        "uncompensated program's lines: these are not the results of the program compensated for these errors "
+        "(analyze them without --compensated-with)",
+        on_nominal, decisive, kProbingLineSeparationMm * 1000.0));
   return out;
 }
 

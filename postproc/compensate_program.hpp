@@ -83,7 +83,10 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
 /// it) is mapped to T_m_w(0, q) T_m_w(errors, q')^-1 x', where the nominal machine would have
 /// recorded the same contact. Analyzed with the original plan, these results identify what the
 /// compensation left: the true errors minus `errors`, to first order (`analyze
-/// --compensated-with`, docs/compensation.md).
+/// --compensated-with`, docs/compensation.md). Throws std::invalid_argument when the results are
+/// the uncompensated program's: most touches where the two programs' probing lines lie 1 um or
+/// more apart across the approach lie on the uncompensated line (a controller records positions
+/// on the line it ran).
 MeasurementRun undoCompensation(const ProbePlan& plan, const MeasurementRun& run, const GeometricErrors& errors,
                                 const NcSyntax& syntax, const ProgramCompensationOptions& options = {});
 

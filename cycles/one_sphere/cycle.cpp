@@ -59,7 +59,7 @@ class Sphere final : public Cycle {
       out.offsets_refused = fmt::format(
           "a {} machine's kinematic parameters go into the control's kinematics description (Heidenhain's kinematics "
           "table, Siemens' $TC_CARR, Fanuc's TCP parameters), which rotacal does not write yet: none of these forms is "
-          "confirmed in shared/reference/controllers.md; enter REPORT.json's kinematic_parameters by hand",
+          "confirmed in rotacal's sources (docs/dialects.md); enter REPORT.json's kinematic_parameters by hand",
           kinematicsName(plan.machine.kinematics));
       return out;
     }

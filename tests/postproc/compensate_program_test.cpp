@@ -554,5 +554,23 @@ TEST(CompensateProgram, TheCompensatedProgramsResultsIdentifyWhatTheCompensation
   EXPECT_GT(std::abs(naive.reportValue(2) - 0.0), 1.0);  // dz_AY: not near zero
 }
 
+// The other mistake: the uncompensated program's results given as the compensated program's.
+// Read back, they would identify the errors minus the compensation, near zero: a false
+// "verified". The controller's records lie on the probing lines it ran, and those are the
+// plan's: refused, naming how many touches tell.
+TEST(CompensateProgram, TheUncompensatedProgramsResultsAreNotTakenForTheCompensatedOnes) {
+  const Fixture f;
+  Truth t = f.piece;
+  t.errors = f.errors;
+  const MeasurementRun original = simulate(f.plan, t, SimulationOptions{});
+  std::string m;
+  try {
+    undoCompensation(f.plan, original, GeometricErrors(f.errors), NcSyntax{"linuxcnc"});
+  } catch (const std::invalid_argument& e) {
+    m = e.what();
+  }
+  EXPECT_NE(m.find("lie on the uncompensated program's lines"), std::string::npos) << m;
+}
+
 }  // namespace
 }  // namespace rotacal
