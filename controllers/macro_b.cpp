@@ -102,8 +102,8 @@ std::string MacroBDialect::writeProgram(const nc::Program& p) const {
   w.line("%");
   w.line(fmt::format("O{:0{}}({})", number, f_.program_digits, safeText("ROTACAL " + p.cycle)));
   w.provenance(p, f_.title);  // upper case, as every Macro B comment
-  w.comment("X Y Z = PROBE BALL CENTRE IN MACHINE COORDINATES: G54 AT THE INTERSECTION OF THE ROTARY AXES, "
-            "ROTARY OFFSETS 0, NO TCP OR TILTED PLANE ACTIVE");
+  w.comment("MACHINE COORDINATES: G54 AS THE WORK OFFSET LINE ABOVE SAYS, ROTARY OFFSETS 0, NO TCP OR TILTED PLANE "
+            "ACTIVE");
   for (const auto& n : f_.notes) w.comment(n);
   w.comment(fmt::format("USES LOCAL VARIABLES 1 TO 3 AND RETAINED VARIABLES {} TO {}: THEY MUST BE FREE",
                         f_.store_base, store_top));

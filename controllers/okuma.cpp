@@ -89,8 +89,7 @@ class OkumaDialect final : public ctl::TaggedResultsDialect {
     };
     w.line(fmt::format("O{} (ROTACAL)", ctl::programNumber(p)));
     w.provenance(p, "okuma OSP-P300 user task");
-    w.comment("X Y Z = probe ball centre in machine coordinates: work offset at the intersection of the rotary "
-              "axes, no TCP or tilted plane active");
+    w.comment("machine coordinates: the work offset as the line above says, no TCP or tilted plane active");
     w.comment(fmt::format("results: FWRITC to MD1:{}.TXT - output commands UNVERIFIED; uses VC1 to VC7", file));
     w.comment("a point that does not trigger raises a user alarm");
     w.line(inch ? "G20" : "G21");

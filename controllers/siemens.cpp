@@ -94,8 +94,8 @@ class SiemensDialect final : public ctl::TaggedResultsDialect {
     };
     w.line(fmt::format("; %_N_{}_MPF", prog));
     w.provenance(p, "siemens (Sinumerik 840D sl / ONE)");
-    w.comment("X Y Z = probe ball centre in machine coordinates: G54 at the intersection of the rotary axes, "
-              "no TRAORI, no CYCLE800 plane, no toolcarrier active");
+    w.comment("machine coordinates: G54 as the work offset line above says, no TRAORI, no CYCLE800 plane, no "
+              "toolcarrier active");
     w.comment(fmt::format("results: WRITE to file {} next to this program (one line per call); no time", file));
     w.comment("uses R90-R95; a point that does not trigger writes NOT-TRIGGERED and stops with a message");
     w.line("DEF INT ERR");

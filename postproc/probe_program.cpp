@@ -42,6 +42,36 @@ std::vector<std::string> angleSignLines(const MachineModel& m, const std::string
   return out;
 }
 
+std::string angleConvention(Kinematics k) {
+  switch (k) {
+    case Kinematics::TableAC: return "000 Eq. (1)";
+    case Kinematics::TableBC: return "002 Eq. (2)";
+    case Kinematics::HeadAB:
+    case Kinematics::HeadTable: return "ISO 841: the head turns by +angle";
+  }
+  return {};
+}
+
+std::vector<std::string> setupLines(const MachineModel& m) {
+  if (m.head) {
+    const std::string zero = m.kinematics == Kinematics::HeadTable
+                                 ? "X0 Y0 on the C axis of the table, Z0 where MACHINE.json's frame has it"
+                                 : "X0 Y0 Z0 at MACHINE.json's machine-frame origin";
+    return {
+        fmt::format("work offset: {}, no rotation", zero),
+        fmt::format("X Y Z = the head's pivot [the head axes' intersection with the spindle axis], NOT the ball: the "
+                    "ball centre hangs {:.3f} mm from it along the tilted spindle; no tool length compensation",
+                    m.head->pivot_to_ball_mm),
+    };
+  }
+  return {
+      "work offset: X0 Y0 Z0 at the intersection of the rotary axes, no rotation",
+      m.probe.tool_number ? fmt::format("X Y Z = the probe-ball centre, through tool {}'s length to the ball centre",
+                                        m.probe.tool_number)
+                          : std::string("X Y Z = the probe-ball centre [controlled point, no length compensation]"),
+  };
+}
+
 nc::Op pathMoveOp(const Waypoint& w, const MachineModel& m, double k) {
   nc::Op op;
   op.xyz = w.position_m * k;
@@ -78,16 +108,15 @@ nc::Program probeProgram(const ProbePlan& plan, const std::string& dialect) {
   for (const auto& r : m.rotary) prog.rotary_axes.push_back(r.name);
   prog.header = {
       fmt::format("rotacal {} probing cycle, {} points, {} poses", plan.cycle, plan.points.size(), plan.poses.size()),
-      fmt::format("machine: {}", m.name),
-      "work offset: origin at the intersection of the rotary axes, no rotation",
-      m.probe.tool_number ? fmt::format("probe: tool {} with its length to the ball centre", m.probe.tool_number)
-                          : "probe: controlled point = probe ball centre (no length compensation)",
-      fmt::format("ball diameter {:.3f} mm, probing feed {:.1f} mm/min", m.probe.ball_diameter_mm, m.feeds.probing_mm_min),
+      fmt::format("machine: {} [{}]", m.name, kinematicsName(m.kinematics)),
   };
+  for (const auto& l : setupLines(m)) prog.header.push_back(l);
+  prog.header.push_back(
+      fmt::format("ball diameter {:.3f} mm, probing feed {:.1f} mm/min", m.probe.ball_diameter_mm, m.feeds.probing_mm_min));
   if (m.retract_mm > 0)
     prog.header.push_back(fmt::format("double touch: back off {:.3f} mm, second touch at {:.1f} mm/min is recorded",
                                       m.retract_mm, m.feeds.probing_slow_mm_min));
-  for (const auto& l : angleSignLines(m, dialect, "000 Eq. (1)")) prog.header.push_back(l);
+  for (const auto& l : angleSignLines(m, dialect, angleConvention(m.kinematics))) prog.header.push_back(l);
   const auto path = plannedPath(plan);
   for (const auto& w : path) {
     nc::Op op = pathMoveOp(w, m, k);

@@ -33,4 +33,15 @@ std::string poseNameAt(const ProbePlan& plan, const Pose& pose);
 /// (`source` names that convention's equation, may be empty).
 std::vector<std::string> angleSignLines(const MachineModel& machine, const std::string& dialect, const std::string& source);
 
+/// The convention the plan's angles follow on this kinematics: the papers' chain of a tilting
+/// table (000 Eq. (1), 002 Eq. (2)) or, for a head, ISO 841 (the head turns by +angle).
+std::string angleConvention(Kinematics kinematics);
+
+/// What the program's X Y Z are and where its work offset must put them, derived from the
+/// machine: on a table machine the probe-ball centre (through the probe's tool length when it has
+/// a tool number) with the zero at the rotary axes' intersection; on a head machine the head's
+/// pivot, the ball hanging pivot_to_ball_mm from it along the spindle. Every cycle's program
+/// header states these, so that no operator sets up a head machine as a table.
+std::vector<std::string> setupLines(const MachineModel& machine);
+
 }  // namespace rotacal

@@ -26,8 +26,7 @@ nc::Program rtestProgram(const ProbePlan& plan, const std::string& dialect) {
   prog.header = {
       fmt::format("rotacal static R-test cycle (002), {} poses per cycle, {} cycle(s)", plan.points.size(), sched.cycles()),
       fmt::format("machine: {}", m.name),
-      "work offset: origin at the intersection of the rotary axes, no rotation",
-      fmt::format("sphere {:.3f} mm on the spindle; X Y Z = sphere centre; nest at {:.3f} {:.3f} {:.3f} mm on the table",
+      fmt::format("sphere {:.3f} mm on the spindle, in the probe's place; nest at {:.3f} {:.3f} {:.3f} mm on the table",
                   m.probe.ball_diameter_mm, nest.x(), nest.y(), nest.z()),
       fmt::format("each pose: enter along the nest axis, dwell, READ = trigger the R-test logger [pose id]"),
       rtestResetReads(plan)
@@ -41,7 +40,9 @@ nc::Program rtestProgram(const ProbePlan& plan, const std::string& dialect) {
                                       "{:g} deg/min in between",
                                       sched.interval_s / 60.0, sched.duration_s / 3600.0, tilt, sched.recip_from_deg,
                                       sched.recip_to_deg, sched.recip_feed_deg_min));
-  for (const auto& l : angleSignLines(m, dialect, "")) prog.header.push_back(l);
+  // X Y Z read the sphere's centre as they would the probe's (setupLines: a head's pivot on a head)
+  for (const auto& l : setupLines(m)) prog.header.insert(prog.header.begin() + 2, l);
+  for (const auto& l : angleSignLines(m, dialect, angleConvention(m.kinematics))) prog.header.push_back(l);
   auto comment = [&](const std::string& t) { prog.ops.push_back(commentOp(t)); };
   auto index = [&](const Pose& pose, bool tilt_only, double feed) {
     prog.ops.push_back(indexOp(m, pose, dialect, tilt_only ? tilt : 0, feed));

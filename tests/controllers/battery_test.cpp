@@ -4,11 +4,19 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <stdexcept>
+#include <sstream>
+#include <cctype>
 #include <limits>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include <fmt/format.h>
+
+#include "controllers/dialect.hpp"
+#include "core/machine.hpp"
+#include "cycles/cycle.hpp"
 #include "dialect_battery.hpp"
 #include "test_util.hpp"
 
@@ -121,6 +129,73 @@ INSTANTIATE_TEST_SUITE_P(Dialects, EveryDialect,
                                      // %F without a width
                                      {{1, "P1 X53.5840 Y-235.0000 Z150.0000"}}}),
                          [](const ::testing::TestParamInfo<Printed>& info) { return info.param.dialect; });
+
+// Every program's header says what its X Y Z are and where the zero goes, for the machine it was
+// planned on: the probe-ball centre at the rotary axes' intersection on a table, the head's pivot
+// with the ball hanging pivot_to_ball_mm from it on a head (an operator who sets up a head machine
+// as a table puts the ball that far from where the plan expects it), and the convention its angles
+// follow. Read from each dialect's text as the operator reads it (comment delimiters, block
+// numbers, line breaks and case aside); expected values from the machine file, not from the code
+// that writes the header.
+TEST(ProgramHeader, EveryKinematicsAndDialectStatesItsControlledPointZeroAndAngleConvention) {
+  auto readable = [](const std::string& text) {
+    std::string out;
+    std::istringstream in(text);
+    std::string line;
+    while (std::getline(in, line)) {
+      size_t i = 0;
+      while (i < line.size() && std::isdigit(static_cast<unsigned char>(line[i]))) ++i;  // Heidenhain's block number
+      for (; i < line.size(); ++i) {
+        const char ch = line[i];
+        if (ch == '(' || ch == ')' || ch == ';' || ch == '[' || ch == ']') continue;
+        out += static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+      }
+      out += ' ';
+    }
+    std::string squeezed;
+    for (char ch : out)
+      if (!(ch == ' ' && !squeezed.empty() && squeezed.back() == ' ')) squeezed += ch;
+    return squeezed;
+  };
+  int checked = 0;
+  for (const char* name : {"ac_trunnion", "bc_trunnion", "bc_head_table", "ab_head", "head_ab"}) {
+    const MachineModel m = loadMachine(test::sourcePath(std::string("examples/machines/") + name + ".json"));
+    ProbePlan plan;
+    try {
+      plan = makePlan("one_sphere", m, {});
+    } catch (const std::invalid_argument&) {
+      continue;  // head_ab.json carries a tester's sphere, no probe: no probing program
+    }
+    const bool head = m.kinematics == Kinematics::HeadTable || m.kinematics == Kinematics::HeadAB;
+    for (const std::string& d : dialectNames()) {
+      if (d == "csv") continue;
+      std::string text;
+      try {
+        text = dialectByName(d).writeProgram(test::cycleProgram(plan, d));
+      } catch (const std::invalid_argument&) {
+        continue;  // a dialect that cannot express this machine's program refuses it (and says why)
+      }
+      const std::string h = readable(text);
+      const std::string where = std::string(name) + " / " + d;
+      if (head) {
+        EXPECT_NE(h.find("PIVOT"), std::string::npos) << where;
+        EXPECT_NE(h.find("NOT THE BALL"), std::string::npos) << where;
+        EXPECT_NE(h.find(fmt::format("{:.3f} MM FROM IT", m.head->pivot_to_ball_mm)), std::string::npos) << where;
+        EXPECT_EQ(h.find("INTERSECTION OF THE ROTARY AXES"), std::string::npos) << where;
+        EXPECT_NE(h.find("ISO 841"), std::string::npos) << where;
+      } else {
+        EXPECT_NE(h.find("BALL CENTRE"), std::string::npos) << where;
+        EXPECT_NE(h.find("INTERSECTION OF THE ROTARY AXES"), std::string::npos) << where;
+        EXPECT_EQ(h.find("PIVOT"), std::string::npos) << where;
+        EXPECT_NE(h.find(m.kinematics == Kinematics::TableAC ? "000 EQ. 1" : "002 EQ. 2"), std::string::npos)
+            << where << ": " << h.substr(0, 600);
+      }
+      ++checked;
+    }
+  }
+  // 4 machines with a probe x 6 dialects, less what a dialect refuses (Heidenhain cycle 0 on the A/B head)
+  EXPECT_GE(checked, 20);
+}
 
 }  // namespace
 }  // namespace rotacal
