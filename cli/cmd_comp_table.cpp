@@ -84,7 +84,8 @@ ctl::AngularPositionErrors angularErrorFromReport(const JsonDoc& report, char ax
 // ----
 
 int cmdCompTable(const Common& c, const std::string& report_file, const std::string& dialect, const std::string& axis_text,
-                 const std::string& machine_file, double step_deg, const std::string& out, bool force) {
+                 const std::string& machine_file, double step_deg, const std::string& out, bool force,
+                 bool write_insignificant) {
   if (const std::string why = ctl::compTableRefusal(dialect); !why.empty()) throw CLI::ValidationError("--dialect", why);
   if (step_deg != 0.0)
     if (const std::string why = ctl::stepRefusal(step_deg); !why.empty()) throw CLI::ValidationError("--step-deg", why);
@@ -105,6 +106,18 @@ int cmdCompTable(const Common& c, const std::string& report_file, const std::str
   } else {
     report.fail(report.value, "", "the report does not carry its machine ('machine_model', written by analyze): give "
                                   "--machine MACHINE.json (it says how the control counts the axis)");
+  }
+  // A table of pure noise turns the axis by what the measurement cannot tell from zero: written
+  // only on request. Significant: beyond its expanded uncertainty U = 2 u (about 95 %) at one
+  // angle at least.
+  if (!write_insignificant && !errors.u_mdeg.empty()) {
+    bool beyond = false;
+    for (size_t i = 0; i < errors.error_mdeg.size(); ++i)
+      beyond = beyond || std::abs(errors.error_mdeg[i]) > 2.0 * errors.u_mdeg[i];
+    if (!beyond)
+      failFile(out, fmt::format("not written: E{0}{0} lies within its expanded uncertainty (2 u) at every angle of "
+                                "{1}: the table would turn the axis by noise (--write-insignificant writes it anyway)",
+                                axis, report_file));
   }
   const std::string machine_src = machine_file.empty() ? report_file : machine_file;
   if (!machine.hasRotary(axis))
@@ -150,7 +163,7 @@ std::vector<Command> compTableCommands(CLI::App& app, const Common& common) {
   struct Args {
     std::string report, dialect, axis = "C", machine, out;
     double step_deg = 0.0;
-    bool force = false;
+    bool force = false, write_insignificant = false;
   };
   auto a = std::make_shared<Args>();
   auto* cmd = app.add_subcommand("comp-table",
@@ -163,8 +176,11 @@ std::vector<Command> compTableCommands(CLI::App& app, const Common& common) {
   cmd->add_option("--step-deg", a->step_deg, "table spacing in deg, dividing 360 (default 5)");
   cmd->add_option("-o,--output", a->out, "FILE: the table")->required();
   cmd->add_flag("--force", a->force, "write an error beyond the plausibility limit (100 mdeg)");
+  cmd->add_flag("--write-insignificant", a->write_insignificant,
+                "write the table although the error lies within its expanded uncertainty at every angle");
   return {{cmd, [a, &common] {
-             return cmdCompTable(common, a->report, a->dialect, a->axis, a->machine, a->step_deg, a->out, a->force);
+             return cmdCompTable(common, a->report, a->dialect, a->axis, a->machine, a->step_deg, a->out, a->force,
+                                 a->write_insignificant);
            }}};
 }
 

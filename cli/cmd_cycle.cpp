@@ -214,7 +214,7 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
                const std::string& dialect_name, const std::string& method, const std::string& json_out,
                const std::string& text_out, const std::string& offsets_out, bool force, const std::string& html_out,
                const std::string& contributors_file, int mc_runs, std::uint64_t mc_seed,
-               const std::vector<std::string>& compensated_with) {
+               const std::vector<std::string>& compensated_with, bool write_insignificant) {
   std::vector<std::string> inputs = results;
   inputs.push_back(plan_file);
   if (!contributors_file.empty()) inputs.push_back(contributors_file);
@@ -283,6 +283,21 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
                                                                           : docs.offsets_refused));
   if (!offsets_out.empty() && !docs.offsets_refused.empty() && !force)
     failFile(offsets_out, "not written: " + docs.offsets_refused + " (--force writes it)");
+  // Offsets that would change values only inside their own U move the machine by what the
+  // measurement cannot tell from zero: the data do not show the machine differs from its nominal.
+  if (!offsets_out.empty() && docs.offsets && !write_insignificant && docs.doc.contains("location_errors")) {
+    std::string beyond;
+    bool judged = false;
+    for (const auto& [name, e] : docs.doc["location_errors"].items()) {
+      if (!e.contains("U") || !e.contains("value") || !e["U"].is_number() || !e["value"].is_number()) continue;
+      judged = true;
+      if (std::abs(e["value"].get<double>()) > e["U"].get<double>()) beyond += (beyond.empty() ? "" : ", ") + name;
+    }
+    if (judged && beyond.empty())
+      failFile(offsets_out, "not written: every location error lies within its own U (REPORT.json): the data do not "
+                            "show the machine differs from its nominal, so the offsets would move it by noise; leave "
+                            "them as they are (--write-insignificant writes them anyway)");
+  }
   if (!offsets_out.empty() && docs.offsets) {
     OffsetRequest req;
     req.plan = &plan;
@@ -347,7 +362,7 @@ std::vector<Command> cycleCommands(CLI::App& app, const Common& common) {
     std::vector<std::string> sets, results, compensated_with;
     double noise_um = 0.0, start_s = 0.0, alpha = JudgeOptions{}.alpha;
     std::uint64_t seed = 1, machine_seed = 1;
-    bool force = false;
+    bool force = false, write_insignificant = false;
   };
   auto a = std::make_shared<Args>();
   std::vector<Command> cmds;
@@ -402,6 +417,8 @@ std::vector<Command> cycleCommands(CLI::App& app, const Common& common) {
   ana->add_option("--text", a->text_out, "the readable summary, also printed on stdout");
   ana->add_option("--offsets", a->offsets_out, "compensation in the dialect's own form");
   ana->add_flag("--force", a->force, "write offsets beyond the plausibility limit");
+  ana->add_flag("--write-insignificant", a->write_insignificant,
+                "write offsets although every location error lies within its own U");
   ana->add_option("--contributors", a->contributors_file,
                   "CONTRIB.json: the Type B contributors (default: the machine's `contributors`; docs/uncertainty.md)");
   ana->add_option("--mc-runs", a->mc_runs, "Monte Carlo runs of the Type B uncertainty (default 2000)");
@@ -412,7 +429,7 @@ std::vector<Command> cycleCommands(CLI::App& app, const Common& common) {
   cmds.push_back({ana, [a, &common] {
                     return cmdAnalyze(common, a->plan_file, a->results, a->dialect, a->method, a->json_out, a->text_out,
                                       a->offsets_out, a->force, a->html_out, a->contributors_file, a->mc_runs,
-                                      a->mc_seed, a->compensated_with);
+                                      a->mc_seed, a->compensated_with, a->write_insignificant);
                   }});
 
   auto* dia = app.add_subcommand("diagnose", "find what the model misses, name the cause, extend the model, measure the gain");

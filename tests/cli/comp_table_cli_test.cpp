@@ -71,8 +71,11 @@ TEST_F(CompTableCli, WritesTheSpheres3ReportsEccAsALinuxcncTableAndKeepsTheOldOn
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_EQ(slurp(out + ".bak"), first);
   EXPECT_NE(slurp(out), first);
-  // the analysed report itself (no E_CC injected: a table of nearly zeros) is accepted too
+  // the analysed report itself (no E_CC injected: a table of noise within its U at every angle) is
+  // refused, nothing written, and written only on request
   r = sh("-q comp-table --report " + p("report.json") + " --dialect siemens -o " + p("c.ini"));
+  EXPECT_TRUE(refused(r, 1, "within its expanded uncertainty", p("c.ini")));
+  r = sh("-q comp-table --report " + p("report.json") + " --dialect siemens --write-insignificant -o " + p("c.ini"));
   EXPECT_EQ(r.code, 0) << r.out;
   r = sh("-q comp-table --report " + p("known.json") + " --dialect fanuc --machine " + machine + " -o " + p("c.txt"));
   EXPECT_EQ(r.code, 0) << r.out;
