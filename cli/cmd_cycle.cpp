@@ -22,6 +22,7 @@
 #include "core/limits.hpp"
 #include "core/machine.hpp"
 #include "core/probe_plan.hpp"
+#include "core/verdict.hpp"
 #include "cycles/cycle.hpp"
 #include "history/store.hpp"
 #include "postproc/compensate_program.hpp"
@@ -214,7 +215,8 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
                const std::string& dialect_name, const std::string& method, const std::string& json_out,
                const std::string& text_out, const std::string& offsets_out, bool force, const std::string& html_out,
                const std::string& contributors_file, int mc_runs, std::uint64_t mc_seed,
-               const std::vector<std::string>& compensated_with, bool write_insignificant) {
+               const std::vector<std::string>& compensated_with, bool write_insignificant,
+               const std::string& tolerance_text) {
   std::vector<std::string> inputs = results;
   inputs.push_back(plan_file);
   if (!contributors_file.empty()) inputs.push_back(contributors_file);
@@ -270,6 +272,37 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
     docs.doc["compensated_with_note"] =
         "results of the program compensated for these reports' errors, read back as the original program's: the "
         "errors identified are what the compensation left";
+  }
+  // The answer first: per parameter, adjust or leave, against the tolerance (--tolerance, else
+  // MACHINE.json's) by ISO 14253-1 with the report's own U.
+  {
+    LocationTolerance tol = plan.machine.tolerance;
+    if (!tolerance_text.empty()) {
+      const size_t comma = tolerance_text.find(',');
+      auto number = [&](const std::string& t) -> std::optional<double> {
+        if (t.empty()) return std::nullopt;
+        try {
+          size_t used = 0;
+          const double v = std::stod(t, &used);
+          if (used == t.size() && v > 0) return v;
+        } catch (const std::exception&) {
+        }
+        throw CLI::ValidationError("--tolerance", "expected LENGTH_UM,ANGLE_MDEG (positive; either may be empty), got '" +
+                                                      tolerance_text + "'");
+      };
+      if (comma == std::string::npos) throw CLI::ValidationError("--tolerance", "expected LENGTH_UM,ANGLE_MDEG, got '" +
+                                                                                    tolerance_text + "'");
+      tol.length_um = number(tolerance_text.substr(0, comma));
+      tol.angle_mdeg = number(tolerance_text.substr(comma + 1));
+    }
+    const Json& judged = docs.doc.contains("location_errors") ? docs.doc["location_errors"]
+                         : docs.doc.contains("kinematic_parameters") ? docs.doc["kinematic_parameters"]
+                                                                    : Json(nullptr);
+    Json verdict = verdictJson(judged, tol);
+    if (!verdict.is_null()) {
+      docs.text = verdictText(verdict) + "\n" + docs.text;
+      docs.doc["verdict"] = std::move(verdict);
+    }
   }
   // When the data were analyzed: compensate flags a report that has grown old.
   docs.doc["analyzed_utc"] = history::isoTime(nowUnixS());
@@ -356,7 +389,7 @@ int cmdDiagnose(const Common& c, const std::string& plan_file, const std::vector
 std::vector<Command> cycleCommands(CLI::App& app, const Common& common) {
   struct Args {
     std::string cycle, machine_file, plan_file, dialect, out, truth_file, method, json_out, text_out, offsets_out,
-        html_out, contributors_file, truth_out;
+        html_out, contributors_file, truth_out, tolerance;
     int mc_runs = 2000;
     std::uint64_t mc_seed = 1;
     std::vector<std::string> sets, results, compensated_with;
@@ -417,6 +450,9 @@ std::vector<Command> cycleCommands(CLI::App& app, const Common& common) {
   ana->add_option("--text", a->text_out, "the readable summary, also printed on stdout");
   ana->add_option("--offsets", a->offsets_out, "compensation in the dialect's own form");
   ana->add_flag("--force", a->force, "write offsets beyond the plausibility limit");
+  ana->add_option("--tolerance", a->tolerance,
+                  "LENGTH_UM,ANGLE_MDEG: the tolerances the verdict decides against (ISO 14253-1 with U; default "
+                  "MACHINE.json's \"tolerance\"; either may be empty)");
   ana->add_flag("--write-insignificant", a->write_insignificant,
                 "write offsets although every location error lies within its own U");
   ana->add_option("--contributors", a->contributors_file,
@@ -429,7 +465,7 @@ std::vector<Command> cycleCommands(CLI::App& app, const Common& common) {
   cmds.push_back({ana, [a, &common] {
                     return cmdAnalyze(common, a->plan_file, a->results, a->dialect, a->method, a->json_out, a->text_out,
                                       a->offsets_out, a->force, a->html_out, a->contributors_file, a->mc_runs,
-                                      a->mc_seed, a->compensated_with, a->write_insignificant);
+                                      a->mc_seed, a->compensated_with, a->write_insignificant, a->tolerance);
                   }});
 
   auto* dia = app.add_subcommand("diagnose", "find what the model misses, name the cause, extend the model, measure the gain");

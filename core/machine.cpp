@@ -131,6 +131,12 @@ MachineModel machineFrom(const JsonDoc& doc, const Json& j) {
     m.rotary.push_back(r);
   }
   m.table_diameter_mm = numberOr(doc, j, "table_diameter_mm", 500.0, Limits::positive(2 * kMaxCoordinateMm, "mm"));
+  if (j.contains("tolerance")) {
+    const Json& t = requireObject(doc, j, "tolerance");
+    if (t.contains("length_um")) m.tolerance.length_um = requireNumber(doc, t, "length_um", Limits::positive(1e6, "um"));
+    if (t.contains("angle_mdeg")) m.tolerance.angle_mdeg = requireNumber(doc, t, "angle_mdeg", Limits::positive(1e6, "mdeg"));
+    if (!m.tolerance.any()) doc.fail(j, "tolerance", "give length_um, angle_mdeg or both");
+  }
   if (j.contains("table_top_z_mm"))
     m.table_top_z_mm = requireNumber(doc, j, "table_top_z_mm", Limits::symmetric(kMaxCoordinateMm, "mm"));
   if (!j.contains("probe")) doc.fail(j, "", "missing object 'probe'");
@@ -246,6 +252,12 @@ Json machineToJson(const MachineModel& m) {
   j["rotary_axes"] = rot;
   j["table_diameter_mm"] = m.table_diameter_mm;
   if (m.table_top_z_mm) j["table_top_z_mm"] = *m.table_top_z_mm;
+  if (m.tolerance.any()) {
+    Json t = Json::object();
+    if (m.tolerance.length_um) t["length_um"] = *m.tolerance.length_um;
+    if (m.tolerance.angle_mdeg) t["angle_mdeg"] = *m.tolerance.angle_mdeg;
+    j["tolerance"] = t;
+  }
   j["probe"] = {{"ball_diameter_mm", m.probe.ball_diameter_mm},
                 {"stylus_length_mm", m.probe.stylus_length_mm},
                 {"body_clearance_mm", m.probe.body_clearance_mm},

@@ -10,6 +10,7 @@
 #include "core/error_model.hpp"
 #include "core/contributors.hpp"
 #include "core/json_io.hpp"
+#include "core/verdict.hpp"
 
 namespace rotacal {
 
@@ -84,6 +85,9 @@ struct MachineModel {
   /// The Type B contributors the owner declares: inline, or a contributors file named
   /// relative to MACHINE.json. Plans carry them inline. Absent: reports say u_B was not evaluated.
   std::optional<ContributorSet> contributors;
+  /// The owner's tolerances on the location errors (MACHINE.json "tolerance": {"length_um",
+  /// "angle_mdeg"}): the report's verdict decides against them (core/verdict.hpp).
+  LocationTolerance tolerance;
 
   const RotaryAxis& rotaryAxis(char name) const;  // throws std::invalid_argument
   bool hasRotary(char name) const;

@@ -380,8 +380,21 @@ std::vector<Figure> runFigures(const Json& doc) {
   return out;
 }
 
+// The answer first: per parameter, adjust or leave (REPORT.json "verdict", core/verdict.hpp).
+std::string verdictBlock(const Json& doc) {
+  if (!doc.contains("verdict") || !doc["verdict"].is_object()) return {};
+  const Json& v = doc["verdict"];
+  std::string s = "<h2 id=\"verdict\">Verdict</h2>\n<p class=\"note\">" + escape(str(v, "summary")) + "</p>\n<table>" +
+                  row({"parameter", "value", "U", "unit", "tolerance", "verdict"}, true);
+  for (const auto& [name, p] : v["parameters"].items())
+    s += row({escape(name), numCell(dbl(p, "value"), 3), numCell(dbl(p, "U"), 3), escape(str(p, "unit")),
+              p.contains("tolerance") ? numCell(dbl(p, "tolerance"), 3) : std::string("-"), escape(str(p, "verdict"))});
+  s += "</table>\n<p class=\"note\">" + escape(str(v, "rule")) + "</p>\n";
+  return s;
+}
+
 std::string analyzeBody(const Json& doc) {
-  std::string s;
+  std::string s = verdictBlock(doc);
   const Json mm = doc.value("machine_model", Json::object());
   const Json sum = doc.value("summary", Json::object());
   s += "<h2>Machine and plan</h2><table>";
