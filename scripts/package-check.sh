@@ -176,7 +176,8 @@ SYNOPSIS=${DESC%%$'\n'*}
 [ "$(dpkg-deb -f "$DEB" Version)" = "$VERSION" ] || fail "$DEB: Version is not $VERSION"
 X=$TMP/extracted
 dpkg-deb -x "$DEB" "$X"
-[ "$("$X/usr/bin/rotacal" --version)" = "rotacal $VERSION" ] || fail "the packaged rotacal --version is not 'rotacal $VERSION'"
+[[ "$("$X/usr/bin/rotacal" --version)" =~ ^rotacal\ $VERSION\ \(git\ [^\ ]+\)$ ]] ||
+  fail "the packaged rotacal --version is not 'rotacal $VERSION (git REVISION)'"
 "$X/usr/bin/rotacal" compensate --help >/dev/null || fail "the packaged rotacal compensate --help fails"
 step "$(basename "$DEB"): $(stat -c %s "$DEB") bytes, Depends: $DEPENDS"
 
