@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "cli/command.hpp"
+#include "git_revision.hpp"  // ROTACAL_GIT_REVISION (cli/CMakeLists.txt)
 
 #ifndef ROTACAL_VERSION
 #define ROTACAL_VERSION "0.0.0"
@@ -14,7 +15,7 @@
 int main(int argc, char** argv) {
   using namespace rotacal;
   CLI::App app{"rotacal: calibrate the rotary axes of five-axis machine tools with the machine's touch probe"};
-  app.set_version_flag("--version", std::string("rotacal ") + ROTACAL_VERSION);
+  app.set_version_flag("--version", std::string("rotacal ") + ROTACAL_VERSION + " (git " + ROTACAL_GIT_REVISION + ")");
   app.require_subcommand(1);
   app.fallthrough();  // global flags (--quiet) also after the subcommand
   Common common;

@@ -19,6 +19,19 @@
 include(CMakePackageConfigHelpers)
 
 install(TARGETS rotacal RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} COMPONENT runtime)
+# With the tool: its manual pages (rotacal.1.gz, rotacal-<command>.1.gz: help2man from its --help
+# at build time, target rotacal_man, cli/CMakeLists.txt), its bash completion, its documents
+# (README, licence, changelog) and the example machines a shop starts from.
+if(TARGET rotacal_man)
+  install(DIRECTORY ${PROJECT_BINARY_DIR}/cli/man/ DESTINATION ${CMAKE_INSTALL_MANDIR}/man1 COMPONENT runtime
+    FILES_MATCHING PATTERN "*.1.gz")
+endif()
+install(FILES ${PROJECT_SOURCE_DIR}/cli/completion/rotacal.bash RENAME rotacal
+  DESTINATION ${CMAKE_INSTALL_DATAROOTDIR}/bash-completion/completions COMPONENT runtime)
+install(FILES ${PROJECT_SOURCE_DIR}/README.md ${PROJECT_SOURCE_DIR}/LICENSE ${PROJECT_SOURCE_DIR}/CHANGELOG.md
+  DESTINATION ${CMAKE_INSTALL_DATAROOTDIR}/doc/rotacal COMPONENT runtime)
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/examples/machines DESTINATION ${CMAKE_INSTALL_DATAROOTDIR}/doc/rotacal/examples
+  COMPONENT runtime FILES_MATCHING PATTERN "*.json")
 # Debian policy 8.1: a shared library is not executable (644).
 install(TARGETS rotacal_shared EXPORT rotacalTargets
   LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT library NAMELINK_COMPONENT development

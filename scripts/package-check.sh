@@ -11,7 +11,9 @@
 #      (equal to the printed 0.1 um / 0.1 mdeg), and the comparison shown to fail on the
 #      uncompensated program;
 #   3. `cpack -G DEB`: rotacal_<version>_<arch>.deb (the tool: files, Depends, Maintainer, the
-#      extracted binary's --version), librotacal<major>_<version>_<arch>.deb (the library and its
+#      extracted binary's --version; a manual page per command that man renders without a warning,
+#      the bash completion matching the binary's commands and options, README, LICENSE, CHANGELOG,
+#      the example machines), librotacal<major>_<version>_<arch>.deb (the library and its
 #      SONAME link) and rotacal-dev_<version>_<arch>.deb (extracted with the library, the example
 #      built against them and giving the same output); lintian on the three where it is installed
 #      (an error fails, warnings are printed); `apt-get install -s` of the three resolves.
@@ -24,8 +26,10 @@ BUILD=$(cd "${1:-build}" && pwd)
 START=$(date +%s)
 # What the packages hold, and only that (the install rules do not build:
 # CMAKE_SKIP_INSTALL_ALL_DEPENDENCY).
-cmake --build "$BUILD" --target rotacal rotacal_shared -j"$(nproc)" >/dev/null ||
-  { echo "package-check: cannot build rotacal and librotacal in $BUILD" >&2; exit 1; }
+# rotacal_man: the manual pages (help2man, which scripts/install-deps.sh installs: without it the
+# build dir has no such target).
+cmake --build "$BUILD" --target rotacal rotacal_shared rotacal_man -j"$(nproc)" >/dev/null ||
+  { echo "package-check: cannot build rotacal, librotacal and the manual pages (help2man installed?) in $BUILD" >&2; exit 1; }
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
 fail() { echo "package-check: FAIL: $*" >&2; exit 1; }
@@ -176,8 +180,34 @@ SYNOPSIS=${DESC%%$'\n'*}
 [ "$(dpkg-deb -f "$DEB" Version)" = "$VERSION" ] || fail "$DEB: Version is not $VERSION"
 X=$TMP/extracted
 dpkg-deb -x "$DEB" "$X"
-[ "$("$X/usr/bin/rotacal" --version)" = "rotacal $VERSION" ] || fail "the packaged rotacal --version is not 'rotacal $VERSION'"
+[[ "$("$X/usr/bin/rotacal" --version)" =~ ^rotacal\ $VERSION\ \(git\ [^\ ]+\)$ ]] ||
+  fail "the packaged rotacal --version is not 'rotacal $VERSION (git REVISION)'"
 "$X/usr/bin/rotacal" compensate --help >/dev/null || fail "the packaged rotacal compensate --help fails"
+# What a shop gets with the tool: a manual page per command (gzipped), each rendered by man without
+# a warning; the bash completion, which bash accepts and which names every command and option of
+# the packaged binary; the documents; the example machines.
+COMMANDS=$("$X/usr/bin/rotacal" --help | awk '/^Subcommands:/ { s = 1; next } s && /^  [a-z]/ { print $1 }')
+for page in rotacal $(printf 'rotacal-%s\n' $COMMANDS); do
+  grep -q " \./usr/share/man/man1/$page\.1\.gz\$" "$TMP/deb.list" || fail "$DEB has no manual page $page.1.gz"
+done
+N_MAN=$(grep -c '/usr/share/man/man1/.*\.1\.gz$' "$TMP/deb.list")
+for page in "$X"/usr/share/man/man1/*.1.gz; do
+  MAN_WARN=$(LC_ALL=C.UTF-8 MANWIDTH=80 man --warnings -E UTF-8 -l "$page" 2>&1 >/dev/null) || fail "man -l $page fails: $MAN_WARN"
+  [ -z "$MAN_WARN" ] || fail "man -l $(basename "$page") warns: $MAN_WARN"
+done
+MAN_LINES=$(LC_ALL=C.UTF-8 MANWIDTH=80 man -l "$X/usr/share/man/man1/rotacal-compensate.1.gz" 2>/dev/null | wc -l)
+[ "$MAN_LINES" -gt 20 ] || fail "man -l rotacal-compensate.1.gz renders $MAN_LINES lines"
+COMPLETION=$X/usr/share/bash-completion/completions/rotacal
+[ -f "$COMPLETION" ] || fail "$DEB has no bash completion"
+bash -n "$COMPLETION" || fail "bash -n rejects the packaged completion"
+COMP_OUT=$(bash "$SRC/tests/cli/completion_test.sh" "$X/usr/bin/rotacal" "$COMPLETION" 2>&1) ||
+  fail "the packaged completion does not match the packaged rotacal: $COMP_OUT"
+for f in README.md LICENSE CHANGELOG.md copyright changelog.gz examples/machines/ac_trunnion.json; do
+  [ -f "$X/usr/share/doc/rotacal/$f" ] || fail "$DEB has no /usr/share/doc/rotacal/$f"
+done
+N_EX=$(ls "$X"/usr/share/doc/rotacal/examples/machines/*.json | wc -l)
+[ "$N_EX" = "$(ls "$SRC"/examples/machines/*.json | wc -l)" ] || fail "$DEB has $N_EX of the example machines"
+step "$(basename "$DEB"): $N_MAN manual pages (each rendered by man -l without a warning), the bash completion (${COMP_OUT#completion_test: OK: }), README, LICENSE, CHANGELOG, $N_EX example machines"
 step "$(basename "$DEB"): $(stat -c %s "$DEB") bytes, Depends: $DEPENDS"
 
 dpkg-deb -c "$LIBDEB" >"$TMP/lib.list"

@@ -74,6 +74,9 @@ TEST_F(Manners, Version) {
   const Out v = runCommand(cli + " --version");
   EXPECT_EQ(v.code, 0);
   EXPECT_EQ(v.out.rfind("rotacal ", 0), 0u) << v.out;
+  // "rotacal X.Y.Z (git REV)": the revision it was built from, or "unknown" outside a checkout.
+  EXPECT_NE(v.out.find(" (git "), std::string::npos) << v.out;
+  EXPECT_EQ(v.out.find(" (git )"), std::string::npos) << v.out;
 }
 
 }  // namespace
