@@ -51,7 +51,7 @@ _rotacal() {
       ;;
     --seed | --noise-um | --start-s | --machine-seed | --mc-runs | --mc-seed | --alpha | --runs | --threads | \
       --points | --a-deg | --c-deg | --exchange-passes | --sweep | --max-deviation-um | --step-deg | \
-      --program-origin | --time | --machine-id | --set | --methods | --table-holds)
+      --program-origin | --time | --machine-id | --set | --methods | --table-holds | --tolerance)
       return  # a number or a name: nothing to offer
       ;;
     -o | --output | --machine | --plan | --truth | --contributors | --truth-out | --results | --json | --html | \
@@ -68,7 +68,7 @@ _rotacal() {
     plan) opts="--cycle --machine --set -o --output" ;;
     generate) opts="--plan --dialect -o --output" ;;
     simulate) opts="--plan --truth --noise-um --seed --start-s --contributors --machine-seed --truth-out --dialect -o --output" ;;
-    analyze) opts="--plan --results --dialect --method --json --html --text --offsets --force --contributors --mc-runs --mc-seed --compensated-with" ;;
+    analyze) opts="--plan --results --dialect --method --json --html --text --offsets --force --write-insignificant --tolerance --contributors --mc-runs --mc-seed --compensated-with" ;;
     diagnose) opts="--plan --results --dialect --json --html --text --alpha --contributors" ;;
     uncertainty) opts="--plan --contributors --runs --seed --combined-only --json --exact --threads --methods --truth --text" ;;
     design) opts="--cycle --machine --contributors --points --criterion --a-deg --c-deg --exchange-passes --sweep --runs --seed -o --output --json" ;;
@@ -82,7 +82,7 @@ _rotacal() {
       esac
       ;;
     check) opts="--dialect --machine --plan --part-program" ;;
-    comp-table) opts="--report --dialect --axis --machine --step-deg -o --output --force" ;;
+    comp-table) opts="--report --dialect --axis --machine --step-deg -o --output --force --write-insignificant" ;;
   esac
   [[ -n $cmd ]] && opts="$opts -h --help -q --quiet"
   # A positional argument (report's document, check's program, history add's report): a file name.
