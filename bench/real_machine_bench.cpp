@@ -327,6 +327,8 @@ int main(int argc, char** argv) {
     int returned = 0;       // analyze returned (a REPORT.json)
     int returned_with = 0;  // ... with the chip's touch in the fit
     int refused = 0;        // analyze refused the data
+    // Coverage of U on the analyses with the chip left out (what a report of such data claims).
+    std::vector<int> in_U, counted;
   };
   ChipTally chip20, chip1mm;
   const std::vector<Counted> cover = countedParameters(args.cycle);
@@ -425,6 +427,15 @@ int main(int argc, char** argv) {
         tally->returned += c.ok;
         tally->returned_with += c.ok && !caught;
         tally->refused += !c.ok;
+        if (c.ok && caught) {
+          tally->in_U.resize(cover.size(), 0);
+          tally->counted.resize(cover.size(), 0);
+          for (size_t k = 0; k < cover.size(); ++k)
+            if (const auto v = reported(c.doc, cover[k].name)) {
+              ++tally->counted[k];
+              tally->in_U[k] += std::abs(v->value - cover[k].truth(m)) <= v->U;
+            }
+        }
         if (!c.written)
           ++refusals[fmt::format("{:g} um chip: ", height_mm * 1e3) +
                      (c.ok ? c.refused.substr(0, std::min<size_t>(c.refused.find(':'), 60)) : "analyze refused: " + c.error.substr(0, 80))];
@@ -489,6 +500,12 @@ int main(int argc, char** argv) {
       std::printf("| %s | %.1f %% | %.1f %% | %.3f | %.3f | %s |\n", cover[k].name.c_str(), pct(in_U[k], counted[k]),
                   pct(in_uc[k], counted[k]), std::sqrt(err2[k] / counted[k]), std::sqrt(U2[k] / counted[k]),
                   cover[k].unit.c_str());
+  if (args.chips)
+    for (auto [what, tally] : {std::pair{"20 um", &chip20}, std::pair{"1 mm", &chip1mm}})
+      for (size_t k = 0; k < tally->counted.size(); ++k)
+        if (tally->counted[k] > 0)
+          std::printf("- %s chip left out, analyzed: %s within U on %d of %d (%.1f %%)\n", what, cover[k].name.c_str(),
+                      tally->in_U[k], tally->counted[k], pct(tally->in_U[k], tally->counted[k]));
   std::printf("\nWhat fires (chip-free machines):\n");
   std::printf("- outlier screen threshold |t|: %s\n",
               threshold.v.empty() ? "no outlier screen in this cycle's analyze" : threshold.text(2).c_str());
