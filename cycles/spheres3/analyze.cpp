@@ -831,7 +831,8 @@ Spheres3Screen screenSpheres3Touches(const ProbePlan& plan, const std::vector<Me
       try {
         r = identifySpheres3(plan, runs, oh);
       } catch (const std::invalid_argument& e) {
-        // This touch cannot be left out (its sphere would keep fewer than 4): the screen keeps it.
+        // This touch cannot be left out (its sphere would fix fewer than two coordinates of its centre,
+        // or the model would lose a parameter): the screen keeps it.
         out.summary.termination = Termination::RankDeficient;
         out.summary.message = e.what();
         return out;
