@@ -906,13 +906,24 @@ Spheres3Screen screenSpheres3Touches(const ProbePlan& plan, const std::vector<Me
       if (consistent(trial)) confident.push_back(q.id);
     }
     if (confident.empty()) continue;
-    held = others;
-    for (int q : confident) held.emplace_back(run, q);
-    std::sort(held.begin(), held.end());
-    if (confident.size() > 1) {
-      const ProbePoint* p = plan.findPoint(confident.front());
-      s.ambiguous.push_back({run, sphere, p->pose.C, confident});
+    Key all = others;
+    for (int q : confident) all.emplace_back(run, q);
+    std::sort(all.begin(), all.end());
+    const double c_deg = plan.findPoint(confident.front())->pose.C;
+    if (confident.size() > 1 && !problemFor(all)) {
+      // All of them cannot be left out (the sphere would fix fewer than two coordinates of its
+      // centre there, and the table's pose at that angle would go unfixed). The screen's own pick
+      // already makes the data consistent at its level: it stands, reported with the set. A set
+      // this wide comes of a touch barely beyond the threshold, not of a gross chip, whose
+      // deletion alone is the only one that clears the data.
+      std::vector<int> picked;
+      for (const auto& h : held)
+        if (h.first == run && groupOf(h.second) == std::make_pair(pose, sphere)) picked.push_back(h.second);
+      s.ambiguous.push_back({run, sphere, c_deg, confident, picked});
+      continue;
     }
+    held = all;
+    if (confident.size() > 1) s.ambiguous.push_back({run, sphere, c_deg, confident, {}});
   }
   // The excluded list as left out now: each touch against the model fitted without it, at the
   // statistic the screen left it out at (or, for a touch added here, its own in the fit with its
@@ -959,12 +970,22 @@ Spheres3Screen screenSpheres3Touches(const ProbePlan& plan, const std::vector<Me
 }
 
 std::string Spheres3Ambiguity::text() const {
-  std::string list;
-  for (int id : point_ids) list += fmt::format("{}{}", list.empty() ? "" : ", ", id);
-  return fmt::format("sphere {} at C = {:g} deg{}: points {} left out: one of them hit a chip or dirt (the deletion of "
-                     "each alone makes the data consistent with the declared noise, so the data cannot tell which); "
-                     "the sphere's centre at that angle is measured only where its other touches fix it",
-                     sphere, c_deg, run > 0 ? fmt::format(" (run {})", run + 1) : std::string(), list);
+  const auto listOf = [](const std::vector<int>& ids) {
+    std::string list;
+    for (int id : ids) list += fmt::format("{}{}", list.empty() ? "" : ", ", id);
+    return list;
+  };
+  const std::string where = fmt::format("sphere {} at C = {:g} deg{}", sphere, c_deg,
+                                        run > 0 ? fmt::format(" (run {})", run + 1) : std::string());
+  if (!left_out.empty())
+    return fmt::format("{}: one of points {} is beyond the declared noise (the deletion of each alone makes the data "
+                       "consistent with it, so the data cannot tell which), and without all of them the sphere's "
+                       "centre there is not fixed: the screen's pick, point{} {}, is left out",
+                       where, listOf(point_ids), left_out.size() == 1 ? "" : "s", listOf(left_out));
+  return fmt::format("{}: points {} left out: one of them hit a chip or dirt (the deletion of each alone makes the "
+                     "data consistent with the declared noise, so the data cannot tell which); the sphere's centre at "
+                     "that angle is measured only where its other touches fix it",
+                     where, listOf(point_ids));
 }
 
 std::string Spheres3Screen::keptBeyondText() const {

@@ -235,12 +235,15 @@ Eigen::VectorXd spheres3OutlierStatistic(const Spheres3TouchProblem& p);
 /// either makes the sphere look narrower along their line by the same amount; only where its
 /// centre then sits tells them apart, and the other two spheres at that angle may not see that
 /// shift beyond the noise. All are left out, the sphere's centre along their line not measured
-/// at that angle.
+/// at that angle (or, where all cannot be, the screen's own pick: `left_out`).
 struct Spheres3Ambiguity {
   int run = 0;
   int sphere = 0;  // 1..3
   double c_deg = 0.0;
   std::vector<int> point_ids;
+  /// Empty: all of point_ids are left out. Else all cannot be (the sphere would fix fewer than
+  /// two coordinates of its centre there) and these, the screen's own pick, are.
+  std::vector<int> left_out;
   std::string text() const;
 };
 
@@ -249,7 +252,7 @@ struct Spheres3Screen {
   /// The touches left out: the screen's own (worst first), then per sphere and angle with a touch
   /// left out the touches whose deletion alone makes the data consistent (the chip's confidence
   /// set at the screen's level): one, and that one is the chip; several, and all are left out
-  /// (`ambiguous`).
+  /// (`ambiguous`), or the screen's pick where all cannot be.
   OutlierScreen screen;
   std::vector<Spheres3Ambiguity> ambiguous;
   /// Why the data cannot be analysed with these touches left out (empty: they can): the

@@ -59,7 +59,7 @@ class Spheres3 final : public Cycle {
     Json ambiguous = Json::array();
     for (const auto& a : screened.ambiguous) {
       ambiguous.push_back({{"run", a.run + 1}, {"sphere", a.sphere}, {"c_deg", a.c_deg}, {"points", a.point_ids},
-                           {"reason", a.text()}});
+                           {"left_out", a.left_out.empty() ? a.point_ids : a.left_out}, {"reason", a.text()}});
       for (auto& e : out.doc["outliers"]["excluded"])
         if (e.value("run", 0) == a.run + 1 &&
             std::find(a.point_ids.begin(), a.point_ids.end(), e.value("point", 0)) != a.point_ids.end())
