@@ -9,7 +9,7 @@
 //
 // Run: build/bench/rotacal_real_machine_bench [--machines N] [--mc-runs R] [--seed S]
 //        [--contributors FILE] [--dialect D] [--sd-um X] [--sd-mdeg X] [--no-chips] [--verbose]
-//        [--cycle touch154|one_sphere] [--dump DIR] [--off LIST]
+//        [--cycle touch154|one_sphere|spheres3] [--dump DIR] [--off LIST]
 // --off switches contributors of the generator off (setup, form, linear_axes, pretravel,
 // repeatability, roughness; comma-separated), to see which one a failure is owed to.
 // --dump writes the first machine's PLAN.json, RESULTS, TRUTH.json, REPORT.json and DIAGNOSIS.json,
@@ -29,6 +29,7 @@
 #include <map>
 #include <optional>
 #include <random>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -68,7 +69,7 @@ struct Args {
   std::fprintf(stderr,
                "rotacal_real_machine_bench: %s\nusage: rotacal_real_machine_bench [--machines N] [--mc-runs R] [--seed S] "
                "[--contributors FILE] [--machine FILE] [--dialect D] [--sd-um X] [--sd-mdeg X] [--no-chips] [--verbose]\n"
-               "       [--cycle touch154|one_sphere] [--dump DIR] [--off setup,form,linear_axes,pretravel,repeatability,roughness]\n",
+               "       [--cycle touch154|one_sphere|spheres3] [--dump DIR] [--off setup,form,linear_axes,pretravel,repeatability,roughness]\n",
                why);
   std::exit(2);
 }
@@ -219,8 +220,25 @@ struct Counted {
   std::string name, unit;
   std::function<double(const ind::Machine&)> truth;
 };
-std::vector<Counted> countedParameters() {
+// The drawn truth of one of 000's location errors by name, report units.
+double truthOf(const ind::Machine& m, const std::string& name) {
+  const auto& params = locationParameters(Kinematics::TableAC);
+  for (size_t k = 0; k < params.size(); ++k)
+    if (params[k].name == name) return m.location.reportValue(static_cast<int>(k));
+  throw std::logic_error("no location error " + name);
+}
+std::vector<Counted> countedParameters(const std::string& cycle) {
   std::vector<Counted> c;
+  if (cycle == "spheres3") {
+    // spheres3 reports the C axis's location (001 Table 1); on this A/C machine at A = 0 it is
+    // 000's chain to first order (cycles/spheres3/analyze.hpp, docs/e2e-linuxcnc.md's comp_table):
+    // Oxc = dx_AY, Oyc = dy_AY + dy_CA, Sxc = a_AY, Syc = b_AY + b_CA.
+    c.push_back({"Oxc", "um", [](const ind::Machine& m) { return truthOf(m, "dx_AY"); }});
+    c.push_back({"Oyc", "um", [](const ind::Machine& m) { return truthOf(m, "dy_AY") + truthOf(m, "dy_CA"); }});
+    c.push_back({"Sxc", "mdeg", [](const ind::Machine& m) { return truthOf(m, "a_AY"); }});
+    c.push_back({"Syc", "mdeg", [](const ind::Machine& m) { return truthOf(m, "b_AY") + truthOf(m, "b_CA"); }});
+    return c;
+  }
   const auto& params = locationParameters(Kinematics::TableAC);
   for (size_t k = 0; k < params.size(); ++k)
     c.push_back({std::string(params[k].name), std::string(reportUnit(params[k].kind)),
@@ -305,9 +323,15 @@ int main(int argc, char** argv) {
   std::map<std::string, int> causes, refusals;
   struct ChipTally {
     int n = 0, caught = 0, written = 0, written_from_chip = 0, gave_up = 0;
+    int isolated = 0;       // the chip's touch and nothing else left out
+    int returned = 0;       // analyze returned (a REPORT.json)
+    int returned_with = 0;  // ... with the chip's touch in the fit
+    int refused = 0;        // analyze refused the data
+    // Coverage of U on the analyses with the chip left out (what a report of such data claims).
+    std::vector<int> in_U, counted;
   };
   ChipTally chip20, chip1mm;
-  const std::vector<Counted> cover = countedParameters();
+  const std::vector<Counted> cover = countedParameters(args.cycle);
   std::vector<int> in_U(cover.size(), 0), in_uc(cover.size(), 0), counted(cover.size(), 0);
   std::vector<double> err2(cover.size(), 0.0), U2(cover.size(), 0.0);
   Quantiles beyond, removed_count, chi2_dof, excess_rms, residual_rms, threshold;
@@ -399,11 +423,27 @@ int main(int argc, char** argv) {
         tally->written += c.written;
         tally->written_from_chip += c.written && !caught;
         tally->gave_up += c.too_many;
+        tally->isolated += caught && c.excluded.size() == 1;
+        tally->returned += c.ok;
+        tally->returned_with += c.ok && !caught;
+        tally->refused += !c.ok;
+        if (c.ok && caught) {
+          tally->in_U.resize(cover.size(), 0);
+          tally->counted.resize(cover.size(), 0);
+          for (size_t k = 0; k < cover.size(); ++k)
+            if (const auto v = reported(c.doc, cover[k].name)) {
+              ++tally->counted[k];
+              tally->in_U[k] += std::abs(v->value - cover[k].truth(m)) <= v->U;
+            }
+        }
         if (!c.written)
           ++refusals[fmt::format("{:g} um chip: ", height_mm * 1e3) +
                      (c.ok ? c.refused.substr(0, std::min<size_t>(c.refused.find(':'), 60)) : "analyze refused: " + c.error.substr(0, 80))];
-        chip_line += fmt::format(" chip {:g} um at {}: {}{}", height_mm * 1e3, id, caught ? "caught" : "missed",
-                                 c.written ? (caught ? ", written" : ", WRITTEN") : ", refused");
+        chip_line += fmt::format(" chip {:g} um at {}: {}{}{}", height_mm * 1e3, id, caught ? "caught" : "missed",
+                                 caught && c.excluded.size() > 1 ? fmt::format(" ({} left out)", c.excluded.size()) : "",
+                                 c.written ? (caught ? ", written" : ", WRITTEN")
+                                 : c.ok    ? (caught ? ", analyzed" : ", ANALYZED")
+                                           : ", refused");
       }
     }
     if (args.verbose || (i + 1) % 20 == 0)
@@ -445,6 +485,13 @@ int main(int argc, char** argv) {
     row("1 mm chip caught", chip1mm.caught, chip1mm.n, "100 %");
     row("1 mm chip: offsets written", chip1mm.written, chip1mm.n, "");
     row("1 mm chip: offsets written with the chip in the fit", chip1mm.written_from_chip, chip1mm.n, "0");
+    // Where a cycle writes no offsets (spheres3), what reaches an output is the report itself.
+    row("20 um chip: the chip's touch alone left out", chip20.isolated, chip20.n, "");
+    row("20 um chip: analyzed (a report) with the chip in the fit", chip20.returned_with, chip20.n, "0");
+    row("20 um chip: analyze refused the data", chip20.refused, chip20.n, "");
+    row("1 mm chip: the chip's touch alone left out", chip1mm.isolated, chip1mm.n, "");
+    row("1 mm chip: analyzed (a report) with the chip in the fit", chip1mm.returned_with, chip1mm.n, "0");
+    row("1 mm chip: analyze refused the data", chip1mm.refused, chip1mm.n, "");
   }
   std::printf("\nCoverage of analyze's U (chip-free machines; truth = the drawn location errors):\n\n");
   std::printf("| parameter | within U | within u_c | rms error | rms U | unit |\n|---|---|---|---|---|---|\n");
@@ -453,6 +500,12 @@ int main(int argc, char** argv) {
       std::printf("| %s | %.1f %% | %.1f %% | %.3f | %.3f | %s |\n", cover[k].name.c_str(), pct(in_U[k], counted[k]),
                   pct(in_uc[k], counted[k]), std::sqrt(err2[k] / counted[k]), std::sqrt(U2[k] / counted[k]),
                   cover[k].unit.c_str());
+  if (args.chips)
+    for (auto [what, tally] : {std::pair{"20 um", &chip20}, std::pair{"1 mm", &chip1mm}})
+      for (size_t k = 0; k < tally->counted.size(); ++k)
+        if (tally->counted[k] > 0)
+          std::printf("- %s chip left out, analyzed: %s within U on %d of %d (%.1f %%)\n", what, cover[k].name.c_str(),
+                      tally->in_U[k], tally->counted[k], pct(tally->in_U[k], tally->counted[k]));
   std::printf("\nWhat fires (chip-free machines):\n");
   std::printf("- outlier screen threshold |t|: %s\n",
               threshold.v.empty() ? "no outlier screen in this cycle's analyze" : threshold.text(2).c_str());

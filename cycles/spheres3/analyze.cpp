@@ -1,6 +1,7 @@
 #include "cycles/spheres3/analyze.hpp"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 #include <Eigen/SVD>
 #include <algorithm>
@@ -9,7 +10,9 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <stdexcept>
+#include <tuple>
 #include <utility>
 
 #include <fmt/format.h>
@@ -155,10 +158,99 @@ struct Model {
   }
 };
 
+// The centre's information per unit touch variance from the touches' unit normals (centre to
+// touch), the radius eliminated: N^T (I - 1 1^T / k) N.
+Eigen::Matrix3d centreInformation(const std::vector<Eigen::Vector3d>& pts, const Eigen::Vector3d& c) {
+  Eigen::Matrix3d nn = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (const auto& t : pts) {
+    const Eigen::Vector3d n = (t - c).normalized();
+    nn += n * n.transpose();
+    sum += n;
+  }
+  return nn - sum * sum.transpose() / static_cast<double>(pts.size());
+}
+
+// A sphere whose touches do not fix its whole centre (one left out by the screen): Gauss-Newton
+// on |t_j - c| - rho over the radius and the centre's coordinates the touches fix (the directions
+// of centreInformation at or above kSpheres3MeasuredFloor); the rest stays at `start`, which the
+// touches' distances do not depend on to first order. Returns the fit, the measured directions'
+// information and the projector onto the unmeasured ones.
+SphereFit fitPartialSphere(const std::vector<Eigen::Vector3d>& pts, const Eigen::Vector3d& start, double rho0,
+                           Eigen::Matrix3d* information, Eigen::Matrix3d* unmeasured, int* measured) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(centreInformation(pts, start));
+  std::vector<int> keep;
+  for (int i = 0; i < 3; ++i)
+    if (eig.eigenvalues()[i] >= kSpheres3MeasuredFloor) keep.push_back(i);
+  const int d = static_cast<int>(keep.size());
+  const int k = static_cast<int>(pts.size());
+  if (d < 2 || k < d + 1)
+    throw std::invalid_argument(fmt::format("{} touches fix {} coordinate{} of the centre (at least 2 needed)", k, d,
+                                            d == 1 ? "" : "s"));
+  Eigen::MatrixXd V(3, d);
+  for (int i = 0; i < d; ++i) V.col(i) = eig.eigenvectors().col(keep[static_cast<size_t>(i)]);
+  SphereFit f;
+  Eigen::Vector3d c = start;
+  double rho = rho0;
+  Eigen::VectorXd res(k);
+  for (f.iterations = 0; f.iterations < 50; ++f.iterations) {
+    Eigen::MatrixXd J(k, d + 1);
+    for (int j = 0; j < k; ++j) {
+      const Eigen::Vector3d n = (pts[static_cast<size_t>(j)] - c).normalized();
+      res[j] = (pts[static_cast<size_t>(j)] - c).norm() - rho;
+      J.row(j).head(d) = -(n.transpose() * V);
+      J(j, d) = -1.0;
+    }
+    const Eigen::VectorXd step = J.colPivHouseholderQr().solve(-res);
+    c += V * step.head(d);
+    rho += step[d];
+    if (step.norm() < 1e-12) {
+      f.converged = true;
+      break;
+    }
+  }
+  for (int j = 0; j < k; ++j) res[j] = (pts[static_cast<size_t>(j)] - c).norm() - rho;
+  f.centre_mm = c;
+  f.rho_mm = rho;
+  f.radius_fitted = true;
+  f.triggers = k;
+  f.dof = k - d - 1;
+  f.rss_mm2 = res.squaredNorm();
+  f.residual_rms_um = mmToUm(std::sqrt(f.rss_mm2 / k));
+  const Eigen::MatrixXd A = V.transpose() * centreInformation(pts, c) * V;  // d x d
+  *information = V * A * V.transpose();
+  f.cov_centre_per_sigma2 = V * A.inverse() * V.transpose();
+  *unmeasured = Eigen::Matrix3d::Identity() - V * V.transpose();
+  *measured = d;
+  return f;
+}
+
+// Observation key (run, angle, sphere) -> where stage 2 put the sphere: the start of the
+// coordinates a partial sphere does not measure.
+using CentreStarts = std::map<std::tuple<int, int, int>, Eigen::Vector3d>;
+
+Spheres3Result identifyOnce(const ProbePlan& plan, const std::vector<MeasurementRun>& runs, const Spheres3Options& opt,
+                            const CentreStarts* starts);
+
 }  // namespace
 
 Spheres3Result identifySpheres3(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
                                 const Spheres3Options& opt) {
+  Spheres3Result r = identifyOnce(plan, runs, opt, nullptr);
+  // A sphere measuring only part of its centre started the rest at the nominal pose; the touches'
+  // distances depend on it only through their small offsets from the sphere's equator and pole
+  // (0.1 mm off there moves a distance by up to 0.4 um), so once more from where stage 2 puts it.
+  CentreStarts starts;
+  for (const auto& o : r.observations)
+    if (o.measured < 3) starts[{o.run, o.angle, o.sphere}] = o.fit.centre_mm - o.residual_mm;
+  if (starts.empty()) return r;
+  return identifyOnce(plan, runs, opt, &starts);
+}
+
+namespace {
+
+Spheres3Result identifyOnce(const ProbePlan& plan, const std::vector<MeasurementRun>& runs, const Spheres3Options& opt,
+                            const CentreStarts* starts) {
   requireValid(opt, "spheres3 options");
   if (plan.cycle != "spheres3") throw std::invalid_argument("plan is not a spheres3 plan (cycle '" + plan.cycle + "')");
   if (runs.empty()) throw std::invalid_argument("no results");
@@ -217,8 +309,16 @@ Spheres3Result identifySpheres3(const ProbePlan& plan, const std::vector<Measure
           ids.push_back(id);
           pts.push_back(it->second->position_m_mm);
         }
-        const Eigen::Vector3d guess = T_m_w_nominal(plan.machine.kinematics, plan.findPoint(ids.front())->pose) *
-                                      r.nominal_w_mm[static_cast<size_t>(s)];
+        if (ids.size() < 2)
+          throw std::invalid_argument(fmt::format("{}: sphere {} at C = {:g} deg (points {}..{}): {} touches left",
+                                                  runs[run].source, s + 1, r.c_deg[static_cast<size_t>(a)],
+                                                  all_ids.front(), all_ids.back(), ids.size()));
+        Eigen::Vector3d guess = T_m_w_nominal(plan.machine.kinematics, plan.findPoint(ids.front())->pose) *
+                                r.nominal_w_mm[static_cast<size_t>(s)];
+        if (starts) {
+          const auto st = starts->find({static_cast<int>(run), a, s});
+          if (st != starts->end()) guess = st->second;
+        }
         Spheres3Observation o;
         o.run = static_cast<int>(run);
         o.angle = a;
@@ -226,7 +326,18 @@ Spheres3Result identifySpheres3(const ProbePlan& plan, const std::vector<Measure
         o.point_ids = ids;
         o.held_point_ids = held;
         try {
-          o.fit = fitSphereCentre(pts, guess, {r.nominal_radius_mm + ball, true, 50});
+          // Only a held-out touch can leave a sphere short of a centre (the plan's five fix it).
+          const bool partial = !held.empty() && (pts.size() < 4 || Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(
+                                                                         centreInformation(pts, guess))
+                                                                             .eigenvalues()
+                                                                             .minCoeff() < kSpheres3MeasuredFloor);
+          if (partial) {
+            o.fit = fitPartialSphere(pts, guess, r.nominal_radius_mm + ball, &o.information_per_sigma2, &o.unmeasured,
+                                     &o.measured);
+          } else {
+            o.fit = fitSphereCentre(pts, guess, {r.nominal_radius_mm + ball, true, 50});
+            o.information_per_sigma2 = o.fit.cov_centre_per_sigma2.inverse();
+          }
         } catch (const std::invalid_argument& e) {
           throw std::invalid_argument(fmt::format("{}: sphere {} at C = {:g} deg (points {}..{}): {}", runs[run].source,
                                                   s + 1, r.c_deg[static_cast<size_t>(a)], all_ids.front(), all_ids.back(),
@@ -259,15 +370,24 @@ Spheres3Result identifySpheres3(const ProbePlan& plan, const std::vector<Measure
   const int np = model.size();
   r.parameters = np;
   std::vector<Eigen::Matrix3d> whiten;  // L^-1 with cov_unit = L L^T
+  int measured_coordinates = 0;
   std::vector<const Spheres3Observation*> fitted;
   for (const auto& o : r.observations) {
     if (o.held_out) continue;
     fitted.push_back(&o);
-    const Eigen::LLT<Eigen::Matrix3d> llt(o.fit.cov_centre_per_sigma2);
-    whiten.push_back(llt.matrixL().solve(Eigen::Matrix3d::Identity()));
+    if (o.measured == 3) {
+      const Eigen::LLT<Eigen::Matrix3d> llt(o.fit.cov_centre_per_sigma2);
+      whiten.push_back(llt.matrixL().solve(Eigen::Matrix3d::Identity()));
+    } else {
+      // W^T W = the information, of rank `measured`: no weight where the touches fix nothing.
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(o.information_per_sigma2);
+      whiten.push_back(eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal() * eig.eigenvectors().transpose());
+    }
+    measured_coordinates += o.measured;
   }
   const int m = 3 * static_cast<int>(fitted.size());
-  if (m < np) throw std::invalid_argument(fmt::format("{} centre coordinates cannot fix {} parameters", m, np));
+  if (measured_coordinates < np)
+    throw std::invalid_argument(fmt::format("{} centre coordinates cannot fix {} parameters", measured_coordinates, np));
   Eigen::VectorXd th = Eigen::VectorXd::Zero(np);
   for (int i = 0; i < 3; ++i) th.segment<3>(4 + 3 * i) = r.nominal_w_mm[static_cast<size_t>(i)];
   Eigen::VectorXd scale(np);
@@ -322,7 +442,7 @@ Spheres3Result identifySpheres3(const ProbePlan& plan, const std::vector<Measure
 
   const Eigen::VectorXd f = residuals(th);
   const double s2 = std::pow(umToMm(r.sigma_used_um), 2);
-  r.dof = m - np;
+  r.dof = measured_coordinates - np;
   r.chi2 = f.squaredNorm() / s2;
   // Covariance of th: sigma^2 (J^T W J)^-1, from the SVD of the scaled whitened J.
   const Eigen::VectorXd inv_s2 = svd.singularValues().cwiseInverse().cwiseAbs2();
@@ -359,8 +479,8 @@ Spheres3Result identifySpheres3(const ProbePlan& plan, const std::vector<Measure
       ss_hold += o.residual_mm.squaredNorm();
       n_hold += 3;
     } else {
-      ss_fit += o.residual_mm.squaredNorm();
-      n_fit += 3;
+      ss_fit += ((Eigen::Matrix3d::Identity() - o.unmeasured) * o.residual_mm).squaredNorm();
+      n_fit += o.measured;
     }
     if (o.run == 0) {
       r.volumetric_before_um(o.angle, o.sphere) = mmToUm((o.fit.centre_mm - Dc(-c) * s).norm());
@@ -373,6 +493,8 @@ Spheres3Result identifySpheres3(const ProbePlan& plan, const std::vector<Measure
   r.holdout_rms_um = n_hold ? mmToUm(std::sqrt(ss_hold / n_hold)) : 0.0;
   return r;
 }
+
+}  // namespace
 
 // ---- Report -------------------------------------------------------------------------------
 
@@ -560,20 +682,37 @@ Spheres3TouchProblem spheres3TouchProblem(const std::vector<MeasurementRun>& run
   for (size_t k = 0; k < runs.size(); ++k)
     for (const auto& t : runs[k].points) trigger[k][t.point_id] = t.position_m_mm;
   const int n_angles = static_cast<int>(r.c_deg.size());
-  // Columns: 6 per angle (table motion), 9 (sphere positions), one radius per sphere fit.
+  // One radius (R + r) per sphere and run: the same sphere touched by the same ball from the same
+  // machine directions at every angle, so a chip that makes one angle's fitted radius smaller
+  // stands out against the other angles' (stage 1 fits it per angle and cannot tell). The
+  // residuals read from each radius's mean over the angles; its column takes up the rest.
+  std::map<std::pair<int, int>, std::pair<double, int>> rho_sum;  // (run, sphere) -> (sum, count)
+  for (const auto& o : r.observations) {
+    auto& [sum, count] = rho_sum[{o.run, o.sphere}];
+    sum += o.fit.rho_mm;
+    ++count;
+  }
+  std::map<std::pair<int, int>, Eigen::Index> radius_col;
+  for (const auto& [key, sc] : rho_sum) radius_col.emplace(key, static_cast<Eigen::Index>(radius_col.size()));
+  const auto rhoOf = [&](const Spheres3Observation& o) {
+    const auto& [sum, count] = rho_sum.at({o.run, o.sphere});
+    return sum / count;
+  };
+  // Columns: 6 per angle (table motion), 9 (sphere positions), one radius per sphere and run.
   const Eigen::Index radius0 = 6 * n_angles + 9;
   std::vector<Eigen::RowVectorXd> rows;
   std::vector<double> res;
   std::vector<std::pair<int, int>> kept;  // (run, plan index) for the covariance
-  const Eigen::Index cols = radius0 + static_cast<Eigen::Index>(r.observations.size());
+  const Eigen::Index cols = radius0 + static_cast<Eigen::Index>(radius_col.size());
   for (size_t q = 0; q < r.observations.size(); ++q) {
     const Spheres3Observation& o = r.observations[q];
     const Eigen::Vector3d c = o.fit.centre_mm - o.residual_mm;  // where the stage-2 model puts the sphere
     const double cr = degToRad(r.c_deg[static_cast<size_t>(o.angle)]);
     const Eigen::Matrix3d R = spheres3Table_m_w(Eigen::Vector4d::Zero(), ComponentVector::Zero(), cr).linear();
+    const double rho = rhoOf(o);
     const auto residualOf = [&](int id) {
       const Eigen::Vector3d& t = trigger[static_cast<size_t>(o.run)].at(id);
-      return std::make_pair(mmToUm((t - c).norm() - o.fit.rho_mm), Eigen::Vector3d((t - c).normalized()));
+      return std::make_pair(mmToUm((t - c).norm() - rho), Eigen::Vector3d((t - c).normalized()));
     };
     for (int id : o.point_ids) {
       const auto [e, n] = residualOf(id);
@@ -581,7 +720,7 @@ Spheres3TouchProblem spheres3TouchProblem(const std::vector<MeasurementRun>& run
       row.segment<3>(6 * o.angle) = n.transpose();
       row.segment<3>(6 * o.angle + 3) = c.cross(n).transpose();
       row.segment<3>(6 * n_angles + 3 * o.sphere) = n.transpose() * R;
-      row[radius0 + static_cast<Eigen::Index>(q)] = 1.0;
+      row[radius0 + radius_col.at({o.run, o.sphere})] = 1.0;
       rows.push_back(row);
       res.push_back(e);
       out.touches.emplace_back(o.run, id);
@@ -603,7 +742,7 @@ Spheres3TouchProblem spheres3TouchProblem(const std::vector<MeasurementRun>& run
   for (const auto& t : componentTerms(ComponentModel::Full, n_angles))
     if (t.k <= Spheres3DiagnosisOptions{}.max_harmonic) smooth.push_back(t);
   const Eigen::Index ns = 13 + static_cast<Eigen::Index>(smooth.size());
-  out.J_smooth = Eigen::MatrixXd::Zero(m, ns + static_cast<Eigen::Index>(r.observations.size()));
+  out.J_smooth = Eigen::MatrixXd::Zero(m, ns + static_cast<Eigen::Index>(radius_col.size()));
   const double hl = umToMm(1e-4), ha = 1e-7;
   const ComponentVector zero = ComponentVector::Zero();
   Eigen::Index row = 0;
@@ -618,7 +757,7 @@ Spheres3TouchProblem spheres3TouchProblem(const std::vector<MeasurementRun>& run
     const Eigen::Vector3d c0 = at(r.location, zero, sw);
     for (size_t k = 0; k < o.point_ids.size(); ++k)
       out.residual_smooth_um[row + static_cast<Eigen::Index>(k)] =
-          mmToUm((trigger[static_cast<size_t>(o.run)].at(o.point_ids[k]) - c0).norm() - o.fit.rho_mm);
+          mmToUm((trigger[static_cast<size_t>(o.run)].at(o.point_ids[k]) - c0).norm() - rhoOf(o));
     Eigen::MatrixXd D(3, ns);  // d centre / d parameter, mm per mm or rad
     for (int i = 0; i < 4; ++i) {
       const double h = i < 2 ? hl : ha;
@@ -643,7 +782,7 @@ Spheres3TouchProblem spheres3TouchProblem(const std::vector<MeasurementRun>& run
     for (size_t k = 0; k < o.point_ids.size(); ++k, ++row) {
       const Eigen::Vector3d n = out.J.row(row).segment<3>(6 * o.angle).transpose();  // the touch's normal
       out.J_smooth.row(row).head(ns) = n.transpose() * D;
-      out.J_smooth(row, ns + static_cast<Eigen::Index>(q)) = 1.0;
+      out.J_smooth(row, ns + radius_col.at({o.run, o.sphere})) = 1.0;
     }
   }
 
@@ -692,7 +831,8 @@ Spheres3Screen screenSpheres3Touches(const ProbePlan& plan, const std::vector<Me
       try {
         r = identifySpheres3(plan, runs, oh);
       } catch (const std::invalid_argument& e) {
-        // This touch cannot be left out (its sphere would keep fewer than 4): the screen keeps it.
+        // This touch cannot be left out (its sphere would fix fewer than two coordinates of its centre,
+        // or the model would lose a parameter): the screen keeps it.
         out.summary.termination = Termination::RankDeficient;
         out.summary.message = e.what();
         return out;
@@ -717,21 +857,135 @@ Spheres3Screen screenSpheres3Touches(const ProbePlan& plan, const std::vector<Me
   };
   s.screen = screenOutliers(fit, s.options);
   if (s.screen.too_many) return s;
+  // The problem of the fit holding `held` out (made once), or null when that fit fails.
+  const auto problemFor = [&](const Key& held) -> const Spheres3TouchProblem* {
+    if (problems->find(held) == problems->end()) {
+      const std::set<std::pair<int, int>> out(held.begin(), held.end());
+      const IdentificationResult f =
+          fit([out](int run, const ProbePoint& p) { return out.count({run, p.id}) > 0; });
+      if (f.summary.termination != Termination::Converged) return nullptr;
+    }
+    const auto it = problems->find(held);
+    return it == problems->end() ? nullptr : &it->second;
+  };
+  const auto consistent = [&](const Key& held) {
+    const Spheres3TouchProblem* p = problemFor(held);
+    return p && (spheres3OutlierStatistic(*p).array().abs() <= s.screen.threshold_t).all();
+  };
+  // The screen leaves out the worst touch first, but a chip on one side of a sphere makes the
+  // sphere look narrower along that line whichever of the two opposite touches it sits under:
+  // within its sphere's five touches a chip on +X and one on -X read the same, and only where the
+  // sphere's centre then sits (against the other two spheres at that angle) tells them apart. So
+  // per sphere and angle with a touch left out, every touch of it is tried alone in its place:
+  // those whose deletion alone leaves no touch beyond the threshold are the chip's confidence set
+  // at the screen's own level (under a single chip there, the right one fails to pass with at
+  // most the screen's alpha). One: it is the chip (the screen's worst or not). Several: the data cannot
+  // tell which; all are left out. None: the screen's own choice stands (more than one bad touch).
+  Key held;
+  for (const auto& e : s.screen.excluded) held.emplace_back(e.run, e.point_id);
+  std::sort(held.begin(), held.end());
+  const auto groupOf = [&](int id) {
+    const ProbePoint* p = plan.findPoint(id);
+    return std::make_pair(p->pose_name, p->sphere ? p->sphere->id : 0);
+  };
+  std::map<std::pair<int, int>, double> first_t;  // (run, id) -> the statistic the screen left it out at
+  for (const auto& e : s.screen.excluded) first_t[{e.run, e.point_id}] = e.t;
+  std::set<std::tuple<int, std::string, int>> done;
+  for (const auto& [run, id] : Key(held)) {
+    const auto [pose, sphere] = groupOf(id);
+    if (!done.insert({run, pose, sphere}).second) continue;
+    Key others;
+    for (const auto& h : held)
+      if (!(h.first == run && groupOf(h.second) == std::make_pair(pose, sphere))) others.push_back(h);
+    std::vector<int> confident;
+    for (const auto& q : plan.points) {
+      if (q.pose_name != pose || !q.sphere || q.sphere->id != sphere) continue;
+      Key trial = others;
+      trial.emplace_back(run, q.id);
+      std::sort(trial.begin(), trial.end());
+      if (consistent(trial)) confident.push_back(q.id);
+    }
+    if (confident.empty()) continue;
+    Key all = others;
+    for (int q : confident) all.emplace_back(run, q);
+    std::sort(all.begin(), all.end());
+    const double c_deg = plan.findPoint(confident.front())->pose.C;
+    if (confident.size() > 1 && !problemFor(all)) {
+      // All of them cannot be left out (the sphere would fix fewer than two coordinates of its
+      // centre there, and the table's pose at that angle would go unfixed). The screen's own pick
+      // already makes the data consistent at its level: it stands, reported with the set. A set
+      // this wide comes of a touch barely beyond the threshold, not of a gross chip, whose
+      // deletion alone is the only one that clears the data.
+      std::vector<int> picked;
+      for (const auto& h : held)
+        if (h.first == run && groupOf(h.second) == std::make_pair(pose, sphere)) picked.push_back(h.second);
+      s.ambiguous.push_back({run, sphere, c_deg, confident, picked});
+      continue;
+    }
+    held = all;
+    if (confident.size() > 1) s.ambiguous.push_back({run, sphere, c_deg, confident, {}});
+  }
+  // The excluded list as left out now: each touch against the model fitted without it, at the
+  // statistic the screen left it out at (or, for a touch added here, its own in the fit with its
+  // sphere's touches all in).
+  const Spheres3TouchProblem* last = problemFor(held);
+  if (!last) {
+    std::string list;
+    for (const auto& a : s.ambiguous) list += (list.empty() ? "" : "; ") + a.text();
+    s.refused = fmt::format("outlier screen: {}; without them the sphere's centre at that angle is not fixed, nor the "
+                            "table's pose there: clean the sphere and measure again",
+                            list.empty() ? "the touches left out cannot all be done without" : list);
+    return s;
+  }
+  std::vector<ExcludedTouch> excluded;
+  for (const auto& [run, id] : held) {
+    ExcludedTouch e{run, id, 0.0, 0.0};
+    for (const auto& [touch, res] : last->held)
+      if (touch == std::make_pair(run, id)) e.residual_um = res;
+    const auto ft = first_t.find({run, id});
+    if (ft != first_t.end()) {
+      e.t = ft->second;
+    } else {
+      Key in;
+      for (const auto& h : held)
+        if (!(h.first == run && groupOf(h.second) == groupOf(id))) in.push_back(h);
+      if (const Spheres3TouchProblem* p = problemFor(in)) {
+        const Eigen::VectorXd t = spheres3OutlierStatistic(*p);
+        for (size_t j = 0; j < p->touches.size(); ++j)
+          if (p->touches[j] == std::make_pair(run, id)) e.t = t[static_cast<Eigen::Index>(j)];
+      }
+    }
+    excluded.push_back(e);
+  }
+  s.screen.excluded = excluded;
   // A touch beyond the threshold that could not be left out (the screen keeps a touch whose
-  // removal leaves the fit without a parameter: a top touch alone sets its sphere's height at its
-  // angle, and the full model needs every angle's three heights) is named here: the data must
-  // not be analysed with it.
-  Key last;
-  for (const auto& e : s.screen.excluded) last.emplace_back(e.run, e.point_id);
-  std::sort(last.begin(), last.end());
-  const auto it = problems->find(last);
-  if (it == problems->end()) throw std::logic_error("spheres3 outlier screen: its last fit was never made");
-  const Eigen::VectorXd t = spheres3OutlierStatistic(it->second);
+  // removal leaves the fit without a parameter) is named here: the data must not be analysed
+  // with it.
+  const Eigen::VectorXd t = spheres3OutlierStatistic(*last);
   for (Eigen::Index j = 0; j < t.size(); ++j)
     if (std::abs(t[j]) > s.screen.threshold_t)
-      s.kept_beyond.push_back({it->second.touches[static_cast<size_t>(j)].first, it->second.touches[static_cast<size_t>(j)].second,
-                               it->second.residual_um[j], t[j]});
+      s.kept_beyond.push_back({last->touches[static_cast<size_t>(j)].first, last->touches[static_cast<size_t>(j)].second,
+                               last->residual_um[j], t[j]});
   return s;
+}
+
+std::string Spheres3Ambiguity::text() const {
+  const auto listOf = [](const std::vector<int>& ids) {
+    std::string list;
+    for (int id : ids) list += fmt::format("{}{}", list.empty() ? "" : ", ", id);
+    return list;
+  };
+  const std::string where = fmt::format("sphere {} at C = {:g} deg{}", sphere, c_deg,
+                                        run > 0 ? fmt::format(" (run {})", run + 1) : std::string());
+  if (!left_out.empty())
+    return fmt::format("{}: one of points {} is beyond the declared noise (the deletion of each alone makes the data "
+                       "consistent with it, so the data cannot tell which), and without all of them the sphere's "
+                       "centre there is not fixed: the screen's pick, point{} {}, is left out",
+                       where, listOf(point_ids), left_out.size() == 1 ? "" : "s", listOf(left_out));
+  return fmt::format("{}: points {} left out: one of them hit a chip or dirt (the deletion of each alone makes the "
+                     "data consistent with the declared noise, so the data cannot tell which); the sphere's centre at "
+                     "that angle is measured only where its other touches fix it",
+                     where, listOf(point_ids));
 }
 
 std::string Spheres3Screen::keptBeyondText() const {
@@ -740,9 +994,9 @@ std::string Spheres3Screen::keptBeyondText() const {
   for (const auto& e : kept_beyond)
     list += fmt::format("{}point {}{} (t {:.1f})", list.empty() ? "" : ", ", e.point_id,
                         e.run > 0 ? fmt::format(" of run {}", e.run + 1) : std::string(), std::abs(e.t));
-  return fmt::format("outlier screen: {} beyond {:.2f} x the declared noise, but the model cannot do without {} (a "
-                     "top touch alone sets its sphere's height at its angle): a chip or dirt there would go wholly into "
-                     "the component errors; clean the sphere and measure again",
+  return fmt::format("outlier screen: {} beyond {:.2f} x the declared noise, but the model cannot do without {} (its "
+                     "sphere's centre at that angle, or the table's pose there, would not be fixed): a chip or dirt there "
+                     "would go into the errors; clean the sphere and measure again",
                      list, screen.threshold_t, kept_beyond.size() == 1 ? "it" : "them");
 }
 

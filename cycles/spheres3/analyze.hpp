@@ -88,7 +88,11 @@ struct Spheres3Options {
   double step_tolerance_mm = 1e-9;    // largest position change of a step (1e-6 um)
   int hold_out_angle = -1;            // index of an angle left out of the fit (predicted only)
   /// Touches left out of their sphere's fit (the outlier screen's): the sphere's centre and
-  /// radius from the others (4 fix them exactly). A sphere left with fewer than 4 is refused.
+  /// radius from the others. Where the others do not fix the whole centre (the top touch left
+  /// out: the four side touches fix x, y and the radius, not the height; a pair of opposite side
+  /// touches left out: nothing fixes the centre along their line), the sphere gives stage 2 the
+  /// coordinates they fix and no weight along the rest (Spheres3Observation::measured). Fewer than
+  /// two coordinates fixed is refused.
   std::function<bool(int run, const ProbePoint& point)> hold_out_touch;
 
   bool validate(std::string* why) const;
@@ -103,7 +107,23 @@ struct Spheres3Observation {
   std::vector<int> held_point_ids;  // Spheres3Options::hold_out_touch's
   Eigen::Vector3d residual_mm = Eigen::Vector3d::Zero();  // measured centre - model
   bool held_out = false;
+  /// How many coordinates of the centre the fitted touches fix (3 unless touches were held out),
+  /// and the projector onto those they do not fix: there fit.centre_mm is the stage-2 model's own
+  /// prediction (the touches' distances do not depend on it to first order), and stage 2 gives
+  /// it no weight.
+  int measured = 3;
+  Eigen::Matrix3d unmeasured = Eigen::Matrix3d::Zero();
+  /// The centre's information per unit touch variance (inverse of fit.cov_centre_per_sigma2 when
+  /// all three are fixed; of rank `measured` otherwise): what stage 2 weighs the centre by.
+  Eigen::Matrix3d information_per_sigma2 = Eigen::Matrix3d::Zero();
 };
+
+/// A fitted sphere's touches fix a direction of its centre when the centre's information (the
+/// touches' normals, the radius eliminated) along it is at least this many squared direction
+/// cosines. A side pair fixes its line with 2, a top touch the height with 0.8 (5 touches) or
+/// 0.67 (3); a direction no touch faces has only the second-order geometry of the touches not
+/// lying exactly at the equator (about 1e-5): fixed by the layout, never by the data.
+inline constexpr double kSpheres3MeasuredFloor = 0.1;
 
 struct Spheres3Result {
   ComponentModel model = ComponentModel::Full;
@@ -166,9 +186,10 @@ Spheres3Noise spheres3DeclaredNoise(const ProbePlan& plan, const ContributorSet*
 
 /// The identification seen touch by touch, what the outlier screen and the whitened adequacy
 /// test read: each fitted touch's residual against its sphere as the stage-2 model places it,
-/// |t_j - c_model| - rho (um, rho the touch's stage-1 radius), in observation order; J the span
-/// of the full model linearised there: per C angle a rigid motion of the table (3 translations,
-/// 3 rotations), the three spheres' positions on the table, and each sphere fit's radius (the
+/// |t_j - c_model| - rho (um, rho its sphere's stage-1 radius averaged over the angles), in
+/// observation order; J the span of the full model linearised there: per C angle a rigid motion
+/// of the table (3 translations, 3 rotations), the three spheres' positions on the table, and one
+/// radius per sphere and run (the same sphere and ball at every angle; the
 /// full component model has exactly the rank of N rigid poses plus the inter-sphere distances,
 /// so the two spans agree); the declared covariance of the residuals (um^2).
 struct Spheres3TouchProblem {
@@ -178,10 +199,10 @@ struct Spheres3TouchProblem {
   /// height at its angle, and the table's height and tilt at each angle take any three heights):
   /// a chip there goes wholly into the component errors. Those touches are tested against the
   /// smooth model instead: the location errors, the spheres' positions, the component errors up to
-  /// the diagnosis's max_harmonic (an oval or trefoil bearing, a wobble) and the sphere fits' radii.
+  /// the diagnosis's max_harmonic (an oval or trefoil bearing, a wobble) and the spheres' radii.
   Eigen::MatrixXd J_smooth;
   /// Each touch's residual against a member of the smooth model (the identified location errors
-  /// and spheres, no component error; the stage-1 radius), um: what J_smooth's test reads.
+  /// and spheres, no component error; the sphere's mean stage-1 radius), um: what J_smooth's test reads.
   Eigen::VectorXd residual_smooth_um;
   /// Per row: the share of the touch's whitened weight the full model leaves (P_ii / (S^-1)_ii);
   /// below kSpheres3FullShareFloor the touch is screened against J_smooth.
@@ -208,9 +229,36 @@ inline constexpr double kSpheres3FullShareFloor = 0.1;
 /// full model, or under the smooth one where the full model leaves the touch no redundancy.
 Eigen::VectorXd spheres3OutlierStatistic(const Spheres3TouchProblem& p);
 
+/// Touches of one sphere at one angle of which the data say one hit a chip but not which: each
+/// one's deletion alone makes the data consistent with the declaration (the screen's test at its
+/// level, no touch beyond its threshold). Two opposite side touches are the usual pair: a chip on
+/// either makes the sphere look narrower along their line by the same amount; only where its
+/// centre then sits tells them apart, and the other two spheres at that angle may not see that
+/// shift beyond the noise. All are left out, the sphere's centre along their line not measured
+/// at that angle (or, where all cannot be, the screen's own pick: `left_out`).
+struct Spheres3Ambiguity {
+  int run = 0;
+  int sphere = 0;  // 1..3
+  double c_deg = 0.0;
+  std::vector<int> point_ids;
+  /// Empty: all of point_ids are left out. Else all cannot be (the sphere would fix fewer than
+  /// two coordinates of its centre there) and these, the screen's own pick, are.
+  std::vector<int> left_out;
+  std::string text() const;
+};
+
 struct Spheres3Screen {
   OutlierOptions options;
+  /// The touches left out: the screen's own (worst first), then per sphere and angle with a touch
+  /// left out the touches whose deletion alone makes the data consistent (the chip's confidence
+  /// set at the screen's level): one, and that one is the chip; several, and all are left out
+  /// (`ambiguous`), or the screen's pick where all cannot be.
   OutlierScreen screen;
+  std::vector<Spheres3Ambiguity> ambiguous;
+  /// Why the data cannot be analysed with these touches left out (empty: they can): the
+  /// touches left out leave a sphere at an angle fixing fewer than two coordinates of its centre,
+  /// and without that sphere the table's pose at that angle is not fixed.
+  std::string refused;
   /// Touches beyond the threshold in the screen's last fit that it could not leave out (the fit
   /// cannot do without them): analyze refuses such data, naming them (keptBeyondText).
   std::vector<ExcludedTouch> kept_beyond;

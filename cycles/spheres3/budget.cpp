@@ -100,27 +100,64 @@ Spheres3LinearMap linearSpheres3(const ProbePlan& plan, const Spheres3Result& r)
   Eigen::MatrixXd centre_map = Eigen::MatrixXd::Zero(m, np_points);
   Eigen::MatrixXd whiten = Eigen::MatrixXd::Zero(m, m);
   out.residual = Eigen::MatrixXd::Zero(np_points, np_points);
+  // The touches the analysis left out (the outlier screen's, first run's) are left out here too:
+  // their shifts reach nothing, and a sphere whose other touches fix only part of its centre
+  // passes on only that part (as identifySpheres3 weighs it), so that U is the estimator's own.
+  std::map<int, const Spheres3Observation*> analysed;  // group -> the first run's observation
+  for (const auto& o : r.observations)
+    if (o.run == 0) analysed[o.angle * 3 + o.sphere] = &o;
   for (int g = 0; g < n_angles * 3; ++g) {
-    const auto& ids = group[static_cast<size_t>(g)];
+    const Spheres3Observation* o = analysed.count(g) ? analysed.at(g) : nullptr;
+    std::vector<int> ids;
+    for (int i : group[static_cast<size_t>(g)]) {
+      const int id = plan.points[static_cast<size_t>(i)].id;
+      if (!o || std::find(o->held_point_ids.begin(), o->held_point_ids.end(), id) == o->held_point_ids.end())
+        ids.push_back(i);
+    }
     std::vector<Eigen::Vector3d> pts;
     for (int i : ids) pts.push_back(ideal.points[static_cast<size_t>(i)].position_m_mm);
     const Eigen::Vector3d guess =
         predict(r, parameters(r), g % 3, degToRad(r.c_deg[static_cast<size_t>(g / 3)]));
-    const SphereFit fit = fitSphereCentre(pts, guess, {rho, true, 50});
     const int n = static_cast<int>(ids.size());
     std::vector<Eigen::Vector3d> approaches;
     for (int i : ids) approaches.push_back(plan.points[static_cast<size_t>(i)].approach_m);
-    const SphereFitMap sm = linearSphereFit(pts, approaches, fit);
-    const Eigen::MatrixXd& dc = sm.centre;
-    const Eigen::MatrixXd& res = sm.residual;
+    Eigen::MatrixXd dc, res;
+    if (!o || o->measured == 3) {
+      const SphereFit fit = fitSphereCentre(pts, guess, {rho, true, 50});
+      const SphereFitMap sm = linearSphereFit(pts, approaches, fit);
+      dc = sm.centre;
+      res = sm.residual;
+      out.stage1_dof += fit.dof;
+      const Eigen::LLT<Eigen::Matrix3d> llt(fit.cov_centre_per_sigma2);
+      whiten.block<3, 3>(3 * g, 3 * g) = llt.matrixL().solve(Eigen::Matrix3d::Identity());
+    } else {
+      // The fit over the radius and the measured directions V alone (the ideal touches lie on
+      // the sphere around the identified centre): J = [-n^T V, -1].
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(Eigen::Matrix3d::Identity() - o->unmeasured);
+      Eigen::MatrixXd V(3, o->measured);
+      for (int i = 0, c = 0; i < 3; ++i)
+        if (eig.eigenvalues()[i] > 0.5 && c < o->measured) V.col(c++) = eig.eigenvectors().col(i);
+      Eigen::MatrixXd J(n, o->measured + 1);
+      Eigen::VectorXd nu(n);
+      for (int j = 0; j < n; ++j) {
+        const Eigen::Vector3d nj = (pts[static_cast<size_t>(j)] - guess).normalized();
+        J.row(j).head(o->measured) = -(nj.transpose() * V);
+        J(j, o->measured) = -1.0;
+        nu[j] = nj.dot(approaches[static_cast<size_t>(j)]);
+      }
+      const Eigen::MatrixXd pinv = J.completeOrthogonalDecomposition().pseudoInverse();
+      dc = -V * pinv.topRows(o->measured) * nu.asDiagonal();
+      res = (Eigen::MatrixXd::Identity(n, n) - J * pinv) * nu.asDiagonal();
+      out.stage1_dof += n - o->measured - 1;
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> info(o->information_per_sigma2);
+      whiten.block<3, 3>(3 * g, 3 * g) =
+          info.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal() * info.eigenvectors().transpose();
+    }
     for (int j = 0; j < n; ++j) {
       centre_map.block(3 * g, ids[static_cast<size_t>(j)], 3, 1) = dc.col(j);
       for (int k = 0; k < n; ++k)
         out.residual(ids[static_cast<size_t>(k)], ids[static_cast<size_t>(j)]) = res(k, j);
     }
-    out.stage1_dof += fit.dof;
-    const Eigen::LLT<Eigen::Matrix3d> llt(fit.cov_centre_per_sigma2);
-    whiten.block<3, 3>(3 * g, 3 * g) = llt.matrixL().solve(Eigen::Matrix3d::Identity());
   }
 
   // Stage 2: the weighted least squares' own map at the identified parameters,

@@ -7,6 +7,8 @@
 #include "cycles/probing.hpp"
 #include "postproc/probe_program.hpp"
 
+#include <algorithm>
+
 #include <fmt/format.h>
 
 #include "core/errors.hpp"
@@ -46,12 +48,25 @@ class Spheres3 final : public Cycle {
     const Spheres3Noise noise = spheres3NoiseOrFail(plan, r.contributors);
     const Spheres3Screen screened = screenSpheres3Touches(plan, runs, noise, opt);
     const OutlierScreen& screen = screened.screen;
+    if (!screened.refused.empty()) throw InputError(r.results.front().path, 0, screened.refused);
     if (!screened.kept_beyond.empty()) throw InputError(r.results.front().path, 0, screened.keptBeyondText());
     opt.hold_out_touch = screen.holdOut();
     const Spheres3Result res = identifySpheres3(plan, runs, opt);
     CycleDocuments out;
     out.doc = spheres3ReportJson(plan, res, pathsOf(r.results));
     out.doc["outliers"] = outlierScreenJson(screen, screened.options);
+    // Touches left out as one of several the data cannot tell apart carry that reason.
+    Json ambiguous = Json::array();
+    for (const auto& a : screened.ambiguous) {
+      ambiguous.push_back({{"run", a.run + 1}, {"sphere", a.sphere}, {"c_deg", a.c_deg}, {"points", a.point_ids},
+                           {"left_out", a.left_out.empty() ? a.point_ids : a.left_out}, {"reason", a.text()}});
+      for (auto& e : out.doc["outliers"]["excluded"])
+        if (e.value("run", 0) == a.run + 1 &&
+            std::find(a.point_ids.begin(), a.point_ids.end(), e.value("point", 0)) != a.point_ids.end())
+          e["reason"] = a.text();
+      out.warnings.push_back("outlier screen: " + a.text());
+    }
+    out.doc["outliers"]["ambiguous"] = ambiguous;
     const Spheres3TouchProblem tp = spheres3TouchProblem(runs, res, noise);
     out.doc["declared_noise"] = declaredNoiseJson(noise.trigger, testAgainstDeclared(tp.residual_um, tp.J, tp.covariance_um2));
     if (!screen.excluded.empty() || screen.too_many) out.warnings.push_back(screen.text());

@@ -180,6 +180,60 @@ TEST(Spheres3Identification, RecoversLocationAndComponentErrorsNoiseFree) {
   EXPECT_GT(r.volumetric_before_um.maxCoeff(), 10.0);
 }
 
+TEST(Spheres3Identification, ASphereMissingATouchGivesWhatItsOtherTouchesFix) {
+  // The outlier screen leaves out a top touch (a chip there) or two opposite side touches (a chip
+  // under one of them, the data not telling which). On exact data (the simulator's truth, location
+  // and component errors, spheres off their nominal places) the identification with them held out
+  // still recovers the truth to the same tolerances as with every touch: the sphere at that angle
+  // then weighs only the coordinates its other touches fix (x, y without the top; y, z without
+  // the X pair), which the other spheres' and angles' data complete.
+  const ProbePlan plan = spheresPlan();
+  const LocationErrors e = test::table4Mean();
+  const ComponentTruth ct = someComponentErrors();
+  Truth truth = truthWithComponents(e, ct);
+  truth.sphere_center_error_w_mm = {{1, {0.05, -0.02, 0.01}}, {2, {-0.03, 0.04, -0.02}}, {3, {0.0, 0.01, 0.03}}};
+  const MeasurementRun run = simulate(plan, truth, {});
+  // Touch order per sphere and angle: +X side, +Y, -X, -Y, top (plan.hpp); point ids in plan order.
+  const int top = plan.points[5 * 3 * 4 + 5 * 1 + 4].id;  // sphere 2 at the fifth angle
+  const int x_plus = plan.points[5 * 3 * 7 + 5 * 2 + 0].id, x_minus = plan.points[5 * 3 * 7 + 5 * 2 + 2].id;  // sphere 3, eighth angle
+  ASSERT_LT(plan.points[5 * 3 * 4 + 5 * 1 + 4].approach_m.z(), -0.99);
+  ASSERT_GT(std::abs(plan.points[5 * 3 * 7 + 5 * 2].approach_m.x()), 0.99);
+  ASSERT_GT(std::abs(plan.points[5 * 3 * 7 + 5 * 2 + 2].approach_m.x()), 0.99);
+  Spheres3Options o;
+  o.hold_out_touch = [&](int, const ProbePoint& p) { return p.id == top || p.id == x_plus || p.id == x_minus; };
+  const Spheres3Result r = identifySpheres3(plan, {run}, o);
+  EXPECT_EQ(r.rank, r.parameters);
+  int partial = 0;
+  for (const auto& ob : r.observations) {
+    if (ob.measured == 3) continue;
+    ++partial;
+    EXPECT_EQ(ob.measured, 2);
+    // The coordinate not measured: the height without the top (to the spheres' tilt in the
+    // machine frame, a few urad), the X line without the X pair.
+    const Eigen::Vector3d axis = ob.angle == 4 ? Eigen::Vector3d::UnitZ() : Eigen::Vector3d::UnitX();
+    EXPECT_NEAR((ob.unmeasured * axis).norm(), 1.0, 1e-3) << ob.angle;
+    EXPECT_EQ(ob.held_point_ids.size(), ob.angle == 4 ? 1u : 2u);
+  }
+  EXPECT_EQ(partial, 2);
+  const Eigen::Vector4d want = expectedLocation(e);
+  EXPECT_NEAR(mmToUm(r.location[0]), mmToUm(want[0]), 0.027);
+  EXPECT_NEAR(mmToUm(r.location[1]), mmToUm(want[1]), 0.027);
+  EXPECT_NEAR(radToMdeg(r.location[2]), radToMdeg(want[2]), 5e-4);
+  EXPECT_NEAR(radToMdeg(r.location[3]), radToMdeg(want[3]), 5e-4);
+  for (size_t a = 0; a < r.c_deg.size(); ++a) {
+    const ComponentVector v = ct.at(degToRad(r.c_deg[a]));
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(mmToUm(r.values(static_cast<Eigen::Index>(a), k)), mmToUm(v[k]), 5e-3) << componentNames()[k] << a;
+    for (int k = 3; k < 6; ++k)
+      EXPECT_NEAR(radToMdeg(r.values(static_cast<Eigen::Index>(a), k)), radToMdeg(v[k]), 1e-3)
+          << componentNames()[k] << a;
+  }
+  EXPECT_LT(r.residual_rms_um, 1e-4);
+  // Three side touches of one sphere fix fewer than two coordinates with the radius: refused.
+  o.hold_out_touch = [&](int, const ProbePoint& p) { return p.id == top || p.id - top == -1 || p.id - top == -2; };
+  EXPECT_THROW(identifySpheres3(plan, {run}, o), std::invalid_argument);
+}
+
 TEST(Spheres3Identification, VolumetricErrorBeforeIsTheTrueDisplacement) {
   // Only component errors and sphere placement: the fitted sphere positions are the true ones, so
   // the "before" volumetric error is |T_true s - Dc(-C) s| computed here independently.
