@@ -112,6 +112,22 @@ def sh(cmd, expect=0):
     return r, time.monotonic() - t0
 
 
+def session(cmd):
+    """A LinuxCNC session (run.sh ... --out DIR ...), run once more when its only error is
+    LinuxCNC's task read-ahead race (LinuxCNC/linuxcnc issues #3650, #662, #263; a fix is proposed
+    in pull request #3971): it stops a correct probing program at random, rarely, more often on a
+    loaded machine. Any other failure fails the case."""
+    run = cmd[cmd.index("--out") + 1]
+    r, t = sh(cmd, expect=None)
+    if r.returncode == 1 and lcsim_errors(run) == [QUEUE_RACE]:
+        print("note: LinuxCNC stopped with %r (a known race of its task, not of the program): running the "
+              "session once more" % QUEUE_RACE, flush=True)
+        r, t = sh(cmd, expect=None)
+    if r.returncode != 0:
+        raise SystemExit("FAIL: exit %d (expected 0): %s" % (r.returncode, " ".join(cmd)))
+    return r, t
+
+
 NAMES_AC = ("dx_AY", "dy_AY", "dz_AY", "dy_CA", "a_AY", "b_AY", "c_AY", "b_CA")
 NAMES_BC = ("dx_BY", "dy_CB", "dz_BY", "dx_CB", "a_BY", "b_BY", "c_BY", "a_CB")
 
@@ -188,7 +204,7 @@ def run_touch154(a):
 
     # 1. identification through the controller
     run1 = os.path.join(work, "run1")
-    _, t1 = sh([RUN, "--ngc", ngc, "--truth", TRUTH, "--machine", MACHINE, "--out", run1, "--timeout", "300"])
+    _, t1 = session([RUN, "--ngc", ngc, "--truth", TRUTH, "--machine", MACHINE, "--out", run1, "--timeout", "300"])
     figures["run1_s"] = t1
     figures["lateness1"] = lateness(work, run1, plan)
     rep1, offsets = os.path.join(work, "report1.json"), os.path.join(work, "offsets.ngc")
@@ -210,9 +226,9 @@ def run_touch154(a):
     sh([a.rotacal, "compensate", "--program", ngc, "--report", rep1, "--dialect", "linuxcnc", "-o", comp])
     run2, run3 = os.path.join(work, "run2"), os.path.join(work, "run3")
     (_, t2), (_, t3) = side_by_side(
-        lambda: sh([RUN, "--pre-ngc", offsets, "--ngc", ngc, "--truth", TRUTH, "--machine", MACHINE, "--out", run2,
+        lambda: session([RUN, "--pre-ngc", offsets, "--ngc", ngc, "--truth", TRUTH, "--machine", MACHINE, "--out", run2,
                     "--timeout", "300"]),
-        lambda: sh([RUN, "--ngc", comp, "--truth", TRUTH, "--machine", MACHINE, "--out", run3, "--timeout", "300"]))
+        lambda: session([RUN, "--ngc", comp, "--truth", TRUTH, "--machine", MACHINE, "--out", run3, "--timeout", "300"]))
     figures["run2_s"] = t2
     # the controller's own G54 after the offsets program: X Y Z A of the G10 line
     with open(os.path.join(run2, "driver_status.json")) as f:
@@ -328,15 +344,7 @@ def run_comp_table(a):
         run = os.path.join(work, tag)
         cmd = [RUN, "--pre-ngc", turn, "--ngc", program, "--truth", TRUTH_ECC, "--machine", MACHINE, "--plan", plan,
                "--out", run, "--timeout", "600"] + extra
-        r, t = sh(cmd, expect=None)
-        if r.returncode == 1 and lcsim_errors(run) == [QUEUE_RACE]:
-            # LinuxCNC's task read-ahead race (LinuxCNC/linuxcnc issues #3650, #662, #263; fix proposed in
-            # pull request #3971): it stops a correct probing program at random, rarely. One rerun.
-            print("note: LinuxCNC stopped with %r (a known race of its task, not of the program): running the "
-                  "session once more" % QUEUE_RACE, flush=True)
-            r, t = sh(cmd, expect=None)
-        if r.returncode != 0:
-            raise SystemExit("FAIL: exit %d (expected 0): %s" % (r.returncode, " ".join(cmd)))
+        r, t = session(cmd)
         rep = os.path.join(work, tag + "_report.json")
         sh([a.rotacal, "analyze", "--plan", plan, "--results", os.path.join(run, "rotacal_spheres3.txt"),
             "--dialect", "linuxcnc", "--json", rep] + (["--compensated-with", compensated_with] if compensated_with else []))
@@ -509,7 +517,7 @@ def kins_readback_bc(a, work, plan_path):
                 for k, v in zip(("a-px", "a-py", "a-pz", "c-px", "c-py", "c-pz"), (rx_ + dx, ry_, rz_ + dz, rx_, ry_, rz_)):
                     f.write("setp vtouchprobe.0.%s %.12g\n" % (k, v))
             cmd += ["--setp", setp]
-        _, t = sh(cmd)
+        _, t = session(cmd)
         parts = {}
         with open(os.path.join(work, "readback_" + tag, "kins_readback.txt")) as f:
             for line in f:
@@ -623,7 +631,7 @@ def linear_axes_session(a, work):
         json.dump(m, f, indent=1)
     plan, ngc = plan_one_sphere_bc(a, machine, work, "_linear")
     run = os.path.join(work, "run_linear")
-    _, t = sh([RUN, "--ngc", ngc, "--truth", TRUTH_BC, "--machine", machine, "--plan", plan, "--out", run,
+    _, t = session([RUN, "--ngc", ngc, "--truth", TRUTH_BC, "--machine", machine, "--plan", plan, "--out", run,
                "--linear-comp", comp, "--timeout", "300"])
     return {"comp": comp, "plan": plan, "run": run, "machine": machine, "largest_um": largest, "run_s": t}
 
@@ -690,7 +698,7 @@ def run_one_sphere_bc(a):
     # and the session whose controller carries the linear axes' errors in its own tables
     readback, (_, t), linear = side_by_side(
         lambda: kins_readback_bc(a, work, plan),
-        lambda: sh([RUN, "--ngc", ngc, "--truth", TRUTH_BC, "--machine", MACHINE_BC, "--plan", plan, "--out", run,
+        lambda: session([RUN, "--ngc", ngc, "--truth", TRUTH_BC, "--machine", MACHINE_BC, "--plan", plan, "--out", run,
                     "--timeout", "300"]),
         lambda: linear_axes_session(a, work))
     figures = {"readback": readback}
@@ -733,7 +741,7 @@ def run_one_sphere_ac(a):
     with open(plan) as f:
         n_points = len(json.load(f)["points"])
     run = os.path.join(work, "run")
-    _, t = sh([RUN, "--ngc", ngc, "--truth", TRUTH, "--machine", MACHINE, "--plan", plan, "--out", run,
+    _, t = session([RUN, "--ngc", ngc, "--truth", TRUTH, "--machine", MACHINE, "--plan", plan, "--out", run,
                "--timeout", "300"])
     figures = {"run_s": t, "points": n_points}
     figures["lateness"] = lateness(work, run, plan, cycle="one_sphere", points=n_points,
