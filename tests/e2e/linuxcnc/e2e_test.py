@@ -688,6 +688,20 @@ def plan_one_sphere_bc(a, machine, work, tag=""):
     return plan, ngc
 
 
+def analyze_one_sphere(a, work, plan, run, truth, chain):
+    """analyze of a one_sphere session: the report, its location errors checked to be the truth's
+    eight (of `chain`), the truth's values and what the plan holds at nominal (unseparable)."""
+    rep = os.path.join(work, "report.json")
+    sh([a.rotacal, "analyze", "--plan", plan, "--results", os.path.join(run, "rotacal_one_sphere.txt"),
+        "--dialect", "linuxcnc", "--json", rep])
+    with open(rep) as f:
+        r = json.load(f)
+    want = injected(truth)
+    check(sorted(want) == sorted(r["location_errors"]), "the report carries the 8 location errors of %s: %s"
+          % (chain, sorted(r["location_errors"])))
+    return rep, r, want, sorted(u["held"] for u in r.get("unseparable", []))
+
+
 def run_one_sphere_bc(a):
     work = a.work
     plan, ngc = plan_one_sphere_bc(a, MACHINE_BC, work)
@@ -705,17 +719,9 @@ def run_one_sphere_bc(a):
     figures["run_s"] = t
     figures["lateness"] = lateness(work, run, plan, cycle="one_sphere", points=n_points,
                                    across_um=ROUNDING_ACROSS_UM, machine=MACHINE_BC)
-    rep = os.path.join(work, "report.json")
-    sh([a.rotacal, "analyze", "--plan", plan, "--results", os.path.join(run, "rotacal_one_sphere.txt"),
-        "--dialect", "linuxcnc", "--json", rep])
-    with open(rep) as f:
-        r = json.load(f)
-    want = injected(TRUTH_BC)
-    check(sorted(want) == sorted(r["location_errors"]), "the report carries the 8 location errors of 002 Eq. (2): %s"
-          % sorted(r["location_errors"]))
+    rep, r, want, held = analyze_one_sphere(a, work, plan, run, TRUTH_BC, "002 Eq. (2)")
     # what one sphere cannot separate: C's zero (with the sphere's set-up) and C's tilt about B (with
     # B's zero); 002 Eq. (2) carries neither, so the truth injects neither
-    held = sorted(u["held"] for u in r.get("unseparable", []))
     check(held == ["B0C", "C0C"], "the report holds exactly B0C and C0C at nominal (unseparable): %s" % held)
     got = identified(rep)
     compare(got, want, "one_sphere on LinuxCNC (xyzbc-trt-kins), injected B and C location errors")
@@ -746,15 +752,7 @@ def run_one_sphere_ac(a):
     figures = {"run_s": t, "points": n_points}
     figures["lateness"] = lateness(work, run, plan, cycle="one_sphere", points=n_points,
                                    across_um=ROUNDING_ACROSS_UM, machine=MACHINE)
-    rep = os.path.join(work, "report.json")
-    sh([a.rotacal, "analyze", "--plan", plan, "--results", os.path.join(run, "rotacal_one_sphere.txt"),
-        "--dialect", "linuxcnc", "--json", rep])
-    with open(rep) as f:
-        r = json.load(f)
-    want = injected(TRUTH)
-    check(sorted(want) == sorted(r["location_errors"]), "the report carries the 8 location errors of 000 Eq. (1): %s"
-          % sorted(r["location_errors"]))
-    held = sorted(u["held"] for u in r.get("unseparable", []))
+    rep, r, want, held = analyze_one_sphere(a, work, plan, run, TRUTH, "000 Eq. (1)")
     print("what one sphere cannot separate on this plan (held at nominal): %s" % held)
     got = identified(rep)
     compare(got, want, "one_sphere on LinuxCNC (xyzac-trt-kins), 000 Table 4's location errors")
