@@ -148,6 +148,25 @@ Eigen::Vector4d expectedLocation(const LocationErrors& e) {
   return {e.get("dx_AY"), e.get("dy_AY") + e.get("dy_CA"), e.get("a_AY"), e.get("b_AY") + e.get("b_CA")};
 }
 
+// The exact data's truth recovered: the C axis's location to 1e-3 of the error size (0.027 um for
+// the offsets, Oyc = 27.1 um; 5e-4 mdeg for the tilts) and the component errors at every angle to
+// 1e-3 of their size (about 5 um, 1 mdeg).
+void expectRecovers(const Spheres3Result& r, const LocationErrors& e, const ComponentTruth& ct) {
+  const Eigen::Vector4d want = expectedLocation(e);
+  EXPECT_NEAR(mmToUm(r.location[0]), mmToUm(want[0]), 0.027);
+  EXPECT_NEAR(mmToUm(r.location[1]), mmToUm(want[1]), 0.027);
+  EXPECT_NEAR(radToMdeg(r.location[2]), radToMdeg(want[2]), 5e-4);
+  EXPECT_NEAR(radToMdeg(r.location[3]), radToMdeg(want[3]), 5e-4);
+  for (size_t a = 0; a < r.c_deg.size(); ++a) {
+    const ComponentVector v = ct.at(degToRad(r.c_deg[a]));
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(mmToUm(r.values(static_cast<Eigen::Index>(a), k)), mmToUm(v[k]), 5e-3) << componentNames()[k] << a;
+    for (int k = 3; k < 6; ++k)
+      EXPECT_NEAR(radToMdeg(r.values(static_cast<Eigen::Index>(a), k)), radToMdeg(v[k]), 1e-3)
+          << componentNames()[k] << a;
+  }
+}
+
 TEST(Spheres3Identification, RecoversLocationAndComponentErrorsNoiseFree) {
   const ProbePlan plan = spheresPlan();
   const LocationErrors e = test::table4Mean();
@@ -158,21 +177,7 @@ TEST(Spheres3Identification, RecoversLocationAndComponentErrorsNoiseFree) {
   const Spheres3Result r = identifySpheres3(plan, {run}, {});
   EXPECT_EQ(r.parameters, 6 * 12 + 3);
   EXPECT_EQ(r.rank, r.parameters);
-  const Eigen::Vector4d want = expectedLocation(e);
-  // 1e-3 of the error size: 0.027 um for the offsets (Oyc = 27.1 um), 5e-4 mdeg for the tilts.
-  EXPECT_NEAR(mmToUm(r.location[0]), mmToUm(want[0]), 0.027);
-  EXPECT_NEAR(mmToUm(r.location[1]), mmToUm(want[1]), 0.027);
-  EXPECT_NEAR(radToMdeg(r.location[2]), radToMdeg(want[2]), 5e-4);
-  EXPECT_NEAR(radToMdeg(r.location[3]), radToMdeg(want[3]), 5e-4);
-  // Component errors at every angle, to 1e-3 of their size (about 5 um, 1 mdeg).
-  for (size_t a = 0; a < r.c_deg.size(); ++a) {
-    const ComponentVector v = ct.at(degToRad(r.c_deg[a]));
-    for (int k = 0; k < 3; ++k)
-      EXPECT_NEAR(mmToUm(r.values(static_cast<Eigen::Index>(a), k)), mmToUm(v[k]), 5e-3) << componentNames()[k] << a;
-    for (int k = 3; k < 6; ++k)
-      EXPECT_NEAR(radToMdeg(r.values(static_cast<Eigen::Index>(a), k)), radToMdeg(v[k]), 1e-3)
-          << componentNames()[k] << a;
-  }
+  expectRecovers(r, e, ct);
   // The fit explains the exact data; the linearisation has converged.
   EXPECT_LT(r.residual_rms_um, 1e-4);
   EXPECT_LT(mmToUm(r.last_step_mm), 1e-6);
@@ -215,19 +220,7 @@ TEST(Spheres3Identification, ASphereMissingATouchGivesWhatItsOtherTouchesFix) {
     EXPECT_EQ(ob.held_point_ids.size(), ob.angle == 4 ? 1u : 2u);
   }
   EXPECT_EQ(partial, 2);
-  const Eigen::Vector4d want = expectedLocation(e);
-  EXPECT_NEAR(mmToUm(r.location[0]), mmToUm(want[0]), 0.027);
-  EXPECT_NEAR(mmToUm(r.location[1]), mmToUm(want[1]), 0.027);
-  EXPECT_NEAR(radToMdeg(r.location[2]), radToMdeg(want[2]), 5e-4);
-  EXPECT_NEAR(radToMdeg(r.location[3]), radToMdeg(want[3]), 5e-4);
-  for (size_t a = 0; a < r.c_deg.size(); ++a) {
-    const ComponentVector v = ct.at(degToRad(r.c_deg[a]));
-    for (int k = 0; k < 3; ++k)
-      EXPECT_NEAR(mmToUm(r.values(static_cast<Eigen::Index>(a), k)), mmToUm(v[k]), 5e-3) << componentNames()[k] << a;
-    for (int k = 3; k < 6; ++k)
-      EXPECT_NEAR(radToMdeg(r.values(static_cast<Eigen::Index>(a), k)), radToMdeg(v[k]), 1e-3)
-          << componentNames()[k] << a;
-  }
+  expectRecovers(r, e, ct);
   EXPECT_LT(r.residual_rms_um, 1e-4);
   // Three side touches of one sphere fix fewer than two coordinates with the radius: refused.
   o.hold_out_touch = [&](int, const ProbePoint& p) { return p.id == top || p.id - top == -1 || p.id - top == -2; };
