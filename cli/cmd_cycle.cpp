@@ -111,7 +111,8 @@ void warn(const std::vector<std::string>& warnings) {
 }
 
 int cmdPlan(const Common& c, const std::string& cycle_name, const std::string& machine_file,
-            const std::vector<std::string>& sets, const std::string& out) {
+            const std::vector<std::string>& sets, const std::string& out, bool show_options) {
+  if (out.empty() && !show_options) throw CLI::ValidationError("-o", "PLAN.json is required (or --show-options)");
   const Cycle* cycle = nullptr;
   try {
     cycle = &cycleByName(cycle_name);
@@ -132,6 +133,14 @@ int cmdPlan(const Common& c, const std::string& cycle_name, const std::string& m
     for (const auto& [key, value] : options)
       if (what.find(key) != std::string::npos) throw std::runtime_error("--set: " + what);
     failFile(machine_file, what);
+  }
+  // The options this plan uses, defaults included: what --set can change, on this machine.
+  if (show_options) {
+    std::string text = fmt::format("{} options on {} (the values this plan uses; change with --set KEY=VALUE):\n",
+                                   plan.cycle, machine.name);
+    for (const auto& [key, value] : plan.options) text += fmt::format("  {}={}\n", key, value);
+    std::fputs(text.c_str(), stdout);
+    if (out.empty()) return 0;
   }
   outputs.add("-o", out, planToJson(plan).dump(1) + "\n");
   outputs.commit();
@@ -395,7 +404,7 @@ std::vector<Command> cycleCommands(CLI::App& app, const Common& common) {
     std::vector<std::string> sets, results, compensated_with;
     double noise_um = 0.0, start_s = 0.0, alpha = JudgeOptions{}.alpha;
     std::uint64_t seed = 1, machine_seed = 1;
-    bool force = false, write_insignificant = false;
+    bool force = false, write_insignificant = false, show_options = false;
   };
   auto a = std::make_shared<Args>();
   std::vector<Command> cmds;
@@ -410,8 +419,12 @@ std::vector<Command> cycleCommands(CLI::App& app, const Common& common) {
   plan->add_option("--cycle", a->cycle, cycleList())->required();
   plan->add_option("--machine", a->machine_file, "MACHINE.json")->required();
   plan->add_option("--set", a->sets, "cycle option KEY=VALUE (repeatable), e.g. side_depth_mm=25");
-  plan->add_option("-o,--output", a->out, "PLAN.json")->required();
-  cmds.push_back({plan, [a, &common] { return cmdPlan(common, a->cycle, a->machine_file, a->sets, a->out); }});
+  plan->add_option("-o,--output", a->out, "PLAN.json (required unless --show-options)");
+  plan->add_flag("--show-options", a->show_options,
+                 "print the cycle's options with the values this plan uses (its defaults on this machine)");
+  cmds.push_back({plan, [a, &common] {
+                    return cmdPlan(common, a->cycle, a->machine_file, a->sets, a->out, a->show_options);
+                  }});
 
   auto* gen = app.add_subcommand("generate", "write the NC program of a plan in a controller dialect");
   gen->add_option("--plan", a->plan_file, "PLAN.json")->required();

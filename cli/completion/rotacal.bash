@@ -65,7 +65,7 @@ _rotacal() {
   local opts
   case $cmd in
     "") opts="$commands -h --help --version -q --quiet" ;;
-    plan) opts="--cycle --machine --set -o --output" ;;
+    plan) opts="--cycle --machine --set -o --output --show-options" ;;
     generate) opts="--plan --dialect -o --output" ;;
     simulate) opts="--plan --truth --noise-um --seed --start-s --contributors --machine-seed --truth-out --dialect -o --output" ;;
     analyze) opts="--plan --results --dialect --method --json --html --text --offsets --force --write-insignificant --tolerance --contributors --mc-runs --mc-seed --compensated-with" ;;

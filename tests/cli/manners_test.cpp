@@ -79,5 +79,21 @@ TEST_F(Manners, Version) {
   EXPECT_EQ(v.out.find(" (git )"), std::string::npos) << v.out;
 }
 
+// `plan --show-options` lists what --set can change with the values the plan uses (its defaults
+// on this machine): the same as the options the written PLAN.json records.
+TEST_F(Manners, PlanShowsItsOptionsWithTheValuesThePlanUses) {
+  const std::string bc = test::sourcePath("examples/machines/bc_head_table.json");
+  const std::string written = (dir / "os_plan.json").string();
+  ASSERT_EQ(runCommand(cli + " -q plan --cycle one_sphere --machine " + bc + " -o " + written).code, 0);
+  const Out shown = runCommand(cli + " plan --cycle one_sphere --machine " + bc + " --show-options");
+  ASSERT_EQ(shown.code, 0) << shown.out;
+  const nlohmann::json options = test::loadJson(written)["options"];
+  ASSERT_GE(options.size(), 3u);
+  for (const auto& [key, value] : options.items())
+    EXPECT_NE(shown.out.find("  " + key + "=" + value.get<std::string>() + "\n"), std::string::npos) << key;
+  // Without it, the plan's file is required: a usage error.
+  EXPECT_EQ(runCommand(cli + " plan --cycle one_sphere --machine " + bc).code, 2);
+}
+
 }  // namespace
 }  // namespace rotacal
