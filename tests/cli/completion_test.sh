@@ -66,7 +66,8 @@ for cmd in $LIST; do
   subcommands | grep -qx -- "$cmd" || fail "the script completes '$cmd', which rotacal --help does not list"
 done
 
-# Sourced: what it offers (compopt only works inside a real completion: stubbed).
+# Sourced: what it offers. compopt works only inside a real completion, so the shell here defines it
+# as a no-op (it sets display options, not the words offered).
 complete_words() {  # complete_words WORD...: the completions of the last word
   bash -c '
     compopt() { :; }

@@ -148,6 +148,14 @@ Eigen::Vector4d expectedLocation(const LocationErrors& e) {
   return {e.get("dx_AY"), e.get("dy_AY") + e.get("dy_CA"), e.get("a_AY"), e.get("b_AY") + e.get("b_CA")};
 }
 
+// Exact data: the simulator's truth with location and component errors, the spheres off their
+// nominal places.
+MeasurementRun exactRun(const ProbePlan& plan, const LocationErrors& e, const ComponentTruth& ct) {
+  Truth truth = truthWithComponents(e, ct);
+  truth.sphere_center_error_w_mm = {{1, {0.05, -0.02, 0.01}}, {2, {-0.03, 0.04, -0.02}}, {3, {0.0, 0.01, 0.03}}};
+  return simulate(plan, truth, {});
+}
+
 // The exact data's truth recovered: the C axis's location to 1e-3 of the error size (0.027 um for
 // the offsets, Oyc = 27.1 um; 5e-4 mdeg for the tilts) and the component errors at every angle to
 // 1e-3 of their size (about 5 um, 1 mdeg).
@@ -171,9 +179,7 @@ TEST(Spheres3Identification, RecoversLocationAndComponentErrorsNoiseFree) {
   const ProbePlan plan = spheresPlan();
   const LocationErrors e = test::table4Mean();
   const ComponentTruth ct = someComponentErrors();
-  Truth truth = truthWithComponents(e, ct);
-  truth.sphere_center_error_w_mm = {{1, {0.05, -0.02, 0.01}}, {2, {-0.03, 0.04, -0.02}}, {3, {0.0, 0.01, 0.03}}};
-  const MeasurementRun run = simulate(plan, truth, {});
+  const MeasurementRun run = exactRun(plan, e, ct);
   const Spheres3Result r = identifySpheres3(plan, {run}, {});
   EXPECT_EQ(r.parameters, 6 * 12 + 3);
   EXPECT_EQ(r.rank, r.parameters);
@@ -195,9 +201,7 @@ TEST(Spheres3Identification, ASphereMissingATouchGivesWhatItsOtherTouchesFix) {
   const ProbePlan plan = spheresPlan();
   const LocationErrors e = test::table4Mean();
   const ComponentTruth ct = someComponentErrors();
-  Truth truth = truthWithComponents(e, ct);
-  truth.sphere_center_error_w_mm = {{1, {0.05, -0.02, 0.01}}, {2, {-0.03, 0.04, -0.02}}, {3, {0.0, 0.01, 0.03}}};
-  const MeasurementRun run = simulate(plan, truth, {});
+  const MeasurementRun run = exactRun(plan, e, ct);
   // Touch order per sphere and angle: +X side, +Y, -X, -Y, top (plan.hpp); point ids in plan order.
   const int top = plan.points[5 * 3 * 4 + 5 * 1 + 4].id;  // sphere 2 at the fifth angle
   const int x_plus = plan.points[5 * 3 * 7 + 5 * 2 + 0].id, x_minus = plan.points[5 * 3 * 7 + 5 * 2 + 2].id;  // sphere 3, eighth angle
