@@ -32,6 +32,9 @@ install(FILES ${PROJECT_SOURCE_DIR}/README.md ${PROJECT_SOURCE_DIR}/LICENSE ${PR
   DESTINATION ${CMAKE_INSTALL_DATAROOTDIR}/doc/rotacal COMPONENT runtime)
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/examples/machines DESTINATION ${CMAKE_INSTALL_DATAROOTDIR}/doc/rotacal/examples
   COMPONENT runtime FILES_MATCHING PATTERN "*.json")
+# The README's links lead into docs/ (the operator guides first), so docs/ travels beside it.
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs DESTINATION ${CMAKE_INSTALL_DATAROOTDIR}/doc/rotacal
+  COMPONENT runtime FILES_MATCHING PATTERN "*.md" PATTERN "*.png")
 # Debian policy 8.1: a shared library is not executable (644).
 install(TARGETS rotacal_shared EXPORT rotacalTargets
   LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT library NAMELINK_COMPONENT development

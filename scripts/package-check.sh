@@ -205,9 +205,13 @@ COMP_OUT=$(bash "$SRC/tests/cli/completion_test.sh" "$X/usr/bin/rotacal" "$COMPL
 for f in README.md LICENSE CHANGELOG.md copyright changelog.gz examples/machines/ac_trunnion.json; do
   [ -f "$X/usr/share/doc/rotacal/$f" ] || fail "$DEB has no /usr/share/doc/rotacal/$f"
 done
+# Every link of the packaged README that stays inside the package must lead to a packaged file.
+for link in $(grep -o '](\(docs/[^)#]*\)' "$X/usr/share/doc/rotacal/README.md" | sed 's/^](//'); do
+  [ -f "$X/usr/share/doc/rotacal/$link" ] || fail "$DEB: README links to $link, which is not in the package"
+done
 N_EX=$(ls "$X"/usr/share/doc/rotacal/examples/machines/*.json | wc -l)
 [ "$N_EX" = "$(ls "$SRC"/examples/machines/*.json | wc -l)" ] || fail "$DEB has $N_EX of the example machines"
-step "$(basename "$DEB"): $N_MAN manual pages (each rendered by man -l without a warning), the bash completion (${COMP_OUT#completion_test: OK: }), README, LICENSE, CHANGELOG, $N_EX example machines"
+step "$(basename "$DEB"): $N_MAN manual pages (each rendered by man -l without a warning), the bash completion (${COMP_OUT#completion_test: OK: }), README with docs/, LICENSE, CHANGELOG, $N_EX example machines"
 step "$(basename "$DEB"): $(stat -c %s "$DEB") bytes, Depends: $DEPENDS"
 
 dpkg-deb -c "$LIBDEB" >"$TMP/lib.list"
