@@ -424,8 +424,10 @@ std::string analyzeBody(const Json& doc) {
 
   // A cycle whose table holds other than location errors in ISO 230-7's sense (position-dependent
   // errors, a pivot length) names it (REPORT.json "errors_heading").
-  s += "<h2>" + escape(doc.contains("errors_heading") ? str(doc, "errors_heading") : std::string("Identified location errors")) +
-       "</h2>\n";
+  // A cycle that identifies no machine errors (the probe's qualification) gets no empty heading.
+  if (doc.contains("location_errors") || doc.contains("location_errors_note") || doc.contains("errors_heading"))
+    s += "<h2>" + escape(doc.contains("errors_heading") ? str(doc, "errors_heading") : std::string("Identified location errors")) +
+         "</h2>\n";
   std::vector<std::pair<std::string, const Json*>> others;
   if (doc.contains("other_methods"))
     for (const auto& [name, o] : doc["other_methods"].items())

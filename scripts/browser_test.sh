@@ -22,5 +22,10 @@ pages=(*.html)
 status=0
 for page in "${pages[@]}"; do
   bash "$SRC/scripts/browser_check.sh" "$PNG_STATS" "$page" "${page%.html}.png" "$MIN_SVG" || status=1
+  # Every analysis answers first: its verdict block opens the page.
+  if [[ $page == analyze_* ]] && ! grep -q 'id="verdict"' "$page"; then
+    echo "browser_test: $page has no verdict block"
+    status=1
+  fi
 done
 exit $status

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <memory>
 #include <stdexcept>
@@ -326,6 +327,69 @@ Json sphereReportJson(const ProbePlan& plan, const SphereCycleResult& r, const U
         values[q] = toReport(r.names[i].kind, r.x[static_cast<Eigen::Index>(i)]);
   j["uncertainty"] = budgetJson(b, values);
   return j;
+}
+
+Json sphereFiguresJson(const ProbePlan& plan, const SphereCycleResult& r, double white_sd_um) {
+  // Each touch's residual against each rotary axis the plan turns and against time: a pattern in
+  // the angle is what the model misses (diagnose names it), scatter within the band is the probe's.
+  struct Touch {
+    const ProbePoint* point;
+    double t_s, residual_um;
+  };
+  std::vector<Touch> fitted, left_out;
+  for (size_t j = 0; j < r.residuals_um.size(); ++j)
+    fitted.push_back({&plan.points[static_cast<size_t>(r.point_index[j])], r.t_s[j], r.residuals_um[j]});
+  for (const auto& h : r.held_out) {
+    const ProbePoint& p = plan.points[static_cast<size_t>(h.point_index)];
+    left_out.push_back({&p, p.t_s, h.residual_um});
+  }
+  const auto series = [](const std::string& name, const std::vector<Touch>& touches, const std::function<double(const Touch&)>& x) {
+    std::vector<double> xs, ys;
+    for (const auto& t : touches) {
+      xs.push_back(round6(x(t)));
+      ys.push_back(round6(t.residual_um));
+    }
+    return Json{{"name", name}, {"style", "points"}, {"x", xs}, {"y", ys}};
+  };
+  const auto figure = [&](const std::string& id, const std::string& title, const std::string& x_label,
+                          const std::string& x_unit, const std::function<double(const Touch&)>& x) {
+    Json ser = Json::array({series("touches fitted", fitted, x)});
+    if (!left_out.empty()) ser.push_back(series("left out by the outlier screen", left_out, x));
+    double lo = 0.0, hi = 0.0;
+    bool first = true;
+    for (const auto* set : {&fitted, &left_out})
+      for (const auto& t : *set) {
+        const double v = x(t);
+        lo = first ? v : std::min(lo, v);
+        hi = first ? v : std::max(hi, v);
+        first = false;
+      }
+    Json fig = {{"id", id},
+                {"title", title},
+                {"x", {{"label", x_label}, {"unit", x_unit}}},
+                {"y", {{"label", "residual"}, {"unit", "um"}}},
+                {"series", ser}};
+    if (white_sd_um > 0.0 && hi > lo)
+      fig["bands"] = Json::array({{{"name", fmt::format("+-2 x the declared per-touch scatter ({:.2f} um)", white_sd_um)},
+                                   {"x", {round6(lo), round6(hi)}},
+                                   {"lo", {round6(-2 * white_sd_um), round6(-2 * white_sd_um)}},
+                                   {"hi", {round6(2 * white_sd_um), round6(2 * white_sd_um)}}}});
+    return fig;
+  };
+  Json figs = Json::array();
+  for (const char axis : {'A', 'B', 'C'}) {
+    bool turns = false;
+    for (const auto& p : plan.points) turns = turns || std::abs(p.pose.angle(axis) - plan.points.front().pose.angle(axis)) > 1e-9;
+    if (!turns) continue;
+    figs.push_back(figure(fmt::format("one_sphere_residual_{}", static_cast<char>(axis - 'A' + 'a')), fmt::format("Residual of each touch against {}", axis),
+                          std::string(1, axis), "deg", [axis](const Touch& t) { return t.point->pose.angle(axis); }));
+  }
+  figs.push_back(figure("one_sphere_residual_time", "Residual of each touch against time", "time", "min",
+                        [](const Touch& t) { return t.t_s / 60.0; }));
+  for (auto& f : figs)
+    f["note"] = "the ball centre's distance from the fitted sphere's centre less the two radii (outward positive). "
+                "The declared scatter is the white per-touch part; the linear axes' declared errors add a shared part on top.";
+  return figs;
 }
 
 std::string sphereText(const SphereCycleResult& r, const UncertaintyBudget& b) {

@@ -106,6 +106,10 @@ SphereScreen screenSphereTouches(const ProbePlan& plan, const std::vector<Measur
 
 Json sphereReportJson(const ProbePlan& plan, const SphereCycleResult& r, const UncertaintyBudget& b,
                       const std::vector<std::string>& files);
+/// REPORT.json's figures: each touch's residual against every rotary axis the plan turns and
+/// against time, the touches left out beside the fitted ones, a band of +-2 white_sd_um (the
+/// declared per-touch scatter; none when 0).
+Json sphereFiguresJson(const ProbePlan& plan, const SphereCycleResult& r, double white_sd_um);
 std::string sphereText(const SphereCycleResult& r, const UncertaintyBudget& b);
 
 }  // namespace rotacal

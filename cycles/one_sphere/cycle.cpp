@@ -30,7 +30,7 @@ class Sphere final : public Cycle {
  public:
   Sphere() : Cycle({"one_sphere", "rotacal's own: both rotary axes' ISO 230-7 location errors and the probe's radius from one sphere",
                      {"examples/machines/ac_trunnion.json", {}},
-                     7019,  // 7000 + the issue that specifies it (19)
+                     7019,  // O7019: its own slot in the control's memory
                      makeSpherePlan, probeProgram, spherePlanRules()}) {}
 
   CycleDocuments analyze(const AnalyzeRequest& r) const override {
@@ -53,6 +53,7 @@ class Sphere final : public Cycle {
     const SphereFittedProblem f = sphereFittedProblem(noise, res);
     const DeclaredNoiseTest test = testAgainstDeclared(f.residual_um, f.J, f.covariance_um2);
     out.doc["declared_noise"] = declaredNoiseJson(noise, test);
+    out.doc["figures"] = sphereFiguresJson(plan, res, std::sqrt(noise.white_um2));
     if (!screen.excluded.empty() || screen.too_many) out.warnings.push_back(screen.text());
     if (!hasPapersLocationErrors(plan.machine.kinematics)) {
       // No writer takes a head's kinematics yet: controllers.md has no verified form of them.

@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -356,6 +357,11 @@ Json probeQualReportJson(const ProbePlan& plan, const ProbeQualification& q, con
                                             {"note", "probe_qual: rms of the pretravel by direction about its mean, "
                                                      "less what the repeatability alone gives it"}}}};
   j["fit"] = {{"touches", q.touches}, {"approach_directions", q.directions}, {"dof", q.dof}};
+  // The envelope's figures every report shows: the touches used and their rms residual.
+  double ss = 0.0;
+  for (const double r : q.residuals_um) ss += r * r;
+  j["points_used"] = q.touches;
+  j["residual_rms_um"] = round6(q.residuals_um.empty() ? 0.0 : std::sqrt(ss / static_cast<double>(q.residuals_um.size())));
   Json ex = Json::array();
   for (const auto& e : q.screen.excluded)
     ex.push_back({{"run", e.run + 1},
@@ -378,6 +384,110 @@ Json probeQualReportJson(const ProbePlan& plan, const ProbeQualification& q, con
                    {"excluded", ex},
                    {"summary", q.screen.text()}};
   return j;
+}
+
+Json probeQualFiguresJson(const ProbePlan& plan, const ProbeQualification& q) {
+  const int repeats_per_run = probeQualLayoutOf(plan).repeats;
+  Json figs = Json::array();
+  // The horizontal approaches' pretravel around the sphere: lobing is a pattern in the azimuth.
+  std::vector<double> az, pre, u;
+  for (const auto& p : q.by_direction) {
+    if (std::abs(p.approach.z()) > 1e-9) continue;
+    const double a = std::atan2(-p.approach.y(), -p.approach.x()) * 180.0 / M_PI;
+    az.push_back(round6(a < -1e-9 ? a + 360.0 : std::abs(a)));
+    pre.push_back(round6(p.pretravel_um));
+    u.push_back(round6(p.u_um));
+  }
+  if (!az.empty()) {
+    const auto [lo, hi] = std::minmax_element(az.begin(), az.end());
+    figs.push_back({{"id", "probe_qual_pretravel"},
+                    {"title", "Pretravel by approach direction"},
+                    {"x", {{"label", "contact azimuth"}, {"unit", "deg"}}},
+                    {"y", {{"label", "pretravel"}, {"unit", "um"}}},
+                    {"series", Json::array({{{"name", "horizontal approach (u_c)"}, {"style", "points"}, {"x", az}, {"y", pre}, {"u", u}},
+                                            {{"name", "mean: the effective radius's deficit"},
+                                             {"style", "line"},
+                                             {"x", {*lo, *hi}},
+                                             {"y", {round6(q.mean_pretravel_um), round6(q.mean_pretravel_um)}}}})},
+                    {"note", fmt::format("late triggers positive; lobing rms {:.3f} um, of which the repeatability alone gives "
+                                         "{:.3f} um. The first harmonic is a centre offset and sits in the sphere's centre.",
+                                         q.lobing_rms_um, q.lobing_rms_noise_um)}});
+  }
+  // Each touch against its own repeats: the scatter the repeatability pools, and the chips left out.
+  std::map<int, std::pair<double, int>> by_touch;
+  for (size_t j = 0; j < q.residuals_um.size(); ++j) {
+    auto& m = by_touch[q.touch_of[j]];
+    m.first += q.residuals_um[j];
+    ++m.second;
+  }
+  std::vector<double> rep, dev;
+  for (size_t j = 0; j < q.residuals_um.size(); ++j) {
+    const auto& m = by_touch[q.touch_of[j]];
+    rep.push_back(q.repeat_of[j] + 1);
+    dev.push_back(round6(q.residuals_um[j] - m.first / m.second));
+  }
+  Json series = Json::array({{{"name", "touches kept"}, {"style", "points"}, {"x", rep}, {"y", dev}}});
+  std::vector<double> ex_rep, ex_dev;
+  for (const auto& e : q.screen.excluded) {
+    ex_rep.push_back(e.run * repeats_per_run + e.repeat + 1);  // as repeat_of counts them
+    ex_dev.push_back(round6(e.deviation_um));
+  }
+  if (!ex_rep.empty()) series.push_back({{"name", "left out (a chip or dirt)"}, {"style", "points"}, {"x", ex_rep}, {"y", ex_dev}});
+  if (!rep.empty()) {
+    const auto [lo, hi] = std::minmax_element(rep.begin(), rep.end());
+    const double s2 = 2 * q.repeatability_um;
+    Json fig = {{"id", "probe_qual_repeats"},
+                {"title", "Each touch against the mean of its own repeats"},
+                {"x", {{"label", "repeat"}, {"unit", "no."}}},
+                {"y", {{"label", "deviation along the approach"}, {"unit", "um"}}},
+                {"series", series},
+                {"note", fmt::format("the band is +-2 x the pooled repeatability {:.3f} um", q.repeatability_um)}};
+    if (*hi > *lo)
+      fig["bands"] = Json::array({{{"name", "+-2 x repeatability"}, {"x", {*lo, *hi}}, {"lo", {-s2, -s2}}, {"hi", {s2, s2}}}});
+    figs.push_back(fig);
+  }
+  return figs;
+}
+
+Json probeQualVerdictJson(const ProbeQualification& q, double declared_repeatability_um) {
+  // The repeatability against MACHINE.json's by its own 95 % interval (chi-square): the value
+  // every other cycle's screen and uncertainty read. The mean pretravel against its U: whether
+  // the ball diameter MACHINE.json holds should change.
+  const double U_pre = kCoverageFactor * q.u_mean_pretravel_um;
+  std::string rep_verdict;
+  if (declared_repeatability_um <= 0)
+    rep_verdict = "none declared: copy machine_probe.repeatability_um into MACHINE.json";
+  else if (declared_repeatability_um < q.repeatability_lo_um)
+    rep_verdict = fmt::format("larger than the declared {:.3f} um: copy machine_probe.repeatability_um into MACHINE.json",
+                              declared_repeatability_um);
+  else if (declared_repeatability_um > q.repeatability_hi_um)
+    rep_verdict = fmt::format("smaller than the declared {:.3f} um: MACHINE.json may take machine_probe.repeatability_um",
+                              declared_repeatability_um);
+  else
+    rep_verdict = fmt::format("consistent with the declared {:.3f} um: leave as is", declared_repeatability_um);
+  const bool pre_significant = std::abs(q.mean_pretravel_um) > U_pre;
+  const std::string pre_verdict =
+      pre_significant ? fmt::format("significant: the effective ball diameter is {:.4f} mm (machine_probe.ball_diameter_mm)",
+                                    q.effective_ball_diameter_mm)
+                      : "not significant: leave the ball diameter as is";
+  Json params = {{"repeatability",
+                  {{"value", round6(q.repeatability_um)},
+                   {"U", round6(std::max(q.repeatability_hi_um - q.repeatability_um, q.repeatability_um - q.repeatability_lo_um))},
+                   {"unit", "um"},
+                   {"verdict", rep_verdict}}},
+                 {"mean_pretravel",
+                  {{"value", round6(q.mean_pretravel_um)}, {"U", round6(U_pre)}, {"unit", "um"}, {"verdict", pre_verdict}}}};
+  const bool rep_changes = rep_verdict.rfind("consistent", 0) != 0;
+  std::string summary = rep_changes || pre_significant
+                            ? std::string("update MACHINE.json's probe section: ") +
+                                  (rep_changes ? "repeatability_um" : "") + (rep_changes && pre_significant ? ", " : "") +
+                                  (pre_significant ? "ball_diameter_mm" : "")
+                            : std::string("the probe is as MACHINE.json declares it: leave as is");
+  return {{"rule", "repeatability: the declared value against the measured one's 95 % interval (chi-square; U here is its "
+                   "larger half-width); mean pretravel: significant where |value| > U = k u_c"},
+          {"parameters", params},
+          {"summary", summary},
+          {"tolerance", nullptr}};
 }
 
 std::string probeQualText(const ProbeQualification& q) {

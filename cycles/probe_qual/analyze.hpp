@@ -102,6 +102,13 @@ ProbeQualification qualifyProbe(const ProbePlan& plan, const std::vector<Measure
                                 const ProbeQualOptions& options = {});
 
 Json probeQualReportJson(const ProbePlan& plan, const ProbeQualification& q, const std::vector<std::string>& files);
+/// REPORT.json's figures: the horizontal pretravel against the contact azimuth (with u_c and the
+/// mean), and each touch's deviation from the mean of its repeats by repeat (the kept and the left out).
+Json probeQualFiguresJson(const ProbePlan& plan, const ProbeQualification& q);
+/// REPORT.json's verdict block (core/verdict.hpp's shape): whether MACHINE.json's probe section
+/// should change: its repeatability against the measured one's 95 % interval, the ball diameter
+/// where the mean pretravel exceeds its U.
+Json probeQualVerdictJson(const ProbeQualification& q, double declared_repeatability_um);
 std::string probeQualText(const ProbeQualification& q);
 
 }  // namespace rotacal

@@ -3,6 +3,7 @@
 // the contributors' probe entries.
 #include "core/declared_noise.hpp"
 #include "core/errors.hpp"
+#include "core/verdict.hpp"
 #include "core/singleton.hpp"
 #include "cycles/cycle.hpp"
 #include "cycles/probing.hpp"
@@ -28,7 +29,10 @@ class ProbeQual final : public Cycle {
     const ProbePlan& plan = *r.plan;
     const ProbeQualification q = qualifyProbe(plan, readProbeRuns(plan, r.results, *r.dialect));
     const std::vector<std::string> files = pathsOf(r.results);
-    CycleDocuments out = documents(probeQualReportJson(plan, q, files), probeQualText(q));
+    const Json verdict = probeQualVerdictJson(q, plan.machine.probe.repeatability_um);
+    CycleDocuments out = documents(probeQualReportJson(plan, q, files), verdictText(verdict) + "\n" + probeQualText(q));
+    out.doc["verdict"] = verdict;
+    out.doc["figures"] = probeQualFiguresJson(plan, q);
     // A chip left out is named on stderr: the repeatability copied into MACHINE.json is the rest's.
     if (!q.screen.excluded.empty() || q.screen.too_many) out.warnings.push_back(q.screen.text());
     return out;

@@ -156,6 +156,22 @@ TEST(OneSphereRealMachine, NoGrossErrorReachesTheOffsets) {
       for (const auto& e : rep.doc["outliers"]["excluded"]) named = named || e["point"].get<int>() == b.plan.points[k].id;
       caught += named ? 1 : 0;
       EXPECT_TRUE(named) << "machine " << m << ", " << what << ": " << rep.doc["outliers"]["summary"].get<std::string>();
+      if (named && along == -1.0) {
+        // The report's figure against A shows the chip where the simulator put it: among the
+        // touches left out, at its pose's A, about 1000 um outward (the chip stops the ball early,
+        // away from the sphere; the linear axes' declared errors move it by a few um).
+        const Json& figs = rep.doc["figures"];
+        ASSERT_GE(figs.size(), 3u);
+        EXPECT_EQ(figs[0]["id"], "one_sphere_residual_a");
+        ASSERT_EQ(figs[0]["series"].size(), 2u);
+        EXPECT_EQ(figs[0]["series"][0]["x"].size(), n - rep.doc["outliers"]["excluded"].size());
+        const Json& left = figs[0]["series"][1];
+        bool shown = false;
+        for (size_t i = 0; i < left["x"].size(); ++i)
+          shown = shown || (std::abs(left["x"][i].get<double>() - b.plan.points[k].pose.A) < 1e-6 &&
+                            std::abs(left["y"][i].get<double>() - 1000.0) < 10.0);
+        EXPECT_TRUE(shown) << "machine " << m << ": " << left.dump();
+      }
       if (!rep.offsets_refused.empty() || !rep.offsets) continue;
       // The clean measurement of the same machine with that touch held out: what the offsets
       // must be when the screen left out the chipped touch and nothing else.

@@ -8,6 +8,7 @@
 //  - the judge says nothing of clean data, finds a drift between two runs, and says the model is
 //    inadequate when the declared repeatability is half the real one;
 //  - the plan refuses a ring whose starts the ball cannot reach from above, and a count out of range.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -167,6 +168,64 @@ TEST(ProbeQual, AChipIsLeftOutAndTheRepeatabilityStaysTheCleanOnes) {
               kCases, kChip_um, named, inside, worst_unscreened);
   EXPECT_EQ(named, kCases);
   EXPECT_GT(worst_unscreened, 2.0);
+}
+
+TEST(ProbeQual, TheVerdictSaysWhetherMachineJsonsProbeSectionShouldChange) {
+  // MACHINE.json declares 0.7 um. A probe scattering twice that is "larger than declared" on every
+  // qualification (the 95 % interval's lower end at 68 dof is about 0.83 s: 1.2 um); one
+  // scattering as declared is "consistent" as often as the interval holds the truth (95 %; over
+  // 40 qualifications at least 34, 3 sd of the binomial below). A noise-free probe with a mean
+  // pretravel of 1.5 um gets the ball diameter nominal - 3 um, computed here.
+  const MachineModel m = acMachine();
+  ASSERT_DOUBLE_EQ(m.probe.repeatability_um, 0.7);
+  const ProbePlan plan = makePlan("probe_qual", m, {});
+  Truth t = test::truthWith(test::table4Mean());
+  int larger = 0, consistent = 0;
+  constexpr int kCases = 40;
+  for (int k = 0; k < kCases; ++k) {
+    t.noise_um = 1.4;
+    const Json v2 = probeQualVerdictJson(qualifyProbe(plan, {simulate(plan, t, {static_cast<std::uint64_t>(300 + k)})}), 0.7);
+    larger += v2["parameters"]["repeatability"]["verdict"].get<std::string>().rfind("larger than the declared 0.700 um", 0) == 0;
+    EXPECT_NE(v2["summary"].get<std::string>().find("repeatability_um"), std::string::npos) << v2.dump();
+    t.noise_um = 0.7;
+    const Json v1 = probeQualVerdictJson(qualifyProbe(plan, {simulate(plan, t, {static_cast<std::uint64_t>(300 + k)})}), 0.7);
+    consistent += v1["parameters"]["repeatability"]["verdict"].get<std::string>().rfind("consistent", 0) == 0;
+  }
+  EXPECT_EQ(larger, kCases);
+  EXPECT_GE(consistent, 34);
+  t.noise_um = 0.0;
+  t.pretravel_by_direction_um = truePretravel;
+  const Json v = probeQualVerdictJson(qualifyProbe(plan, {simulate(plan, t, {1})}), 0.7);
+  const std::string diameter = fmt::format("{:.4f} mm", m.probe.ball_diameter_mm - 2 * umToMm(kMean_um));
+  EXPECT_NE(v["parameters"]["mean_pretravel"]["verdict"].get<std::string>().find(diameter), std::string::npos) << v.dump();
+  EXPECT_NE(v["summary"].get<std::string>().find("ball_diameter_mm"), std::string::npos);
+  std::printf("verdict on %d qualifications: 1.4 um probe larger than declared %d, 0.7 um probe consistent %d\n", kCases,
+              larger, consistent);
+}
+
+TEST(ProbeQual, TheFiguresShowEachDirectionAndEveryTouch) {
+  // The pretravel figure holds the 8 horizontal directions at their azimuths with the fitted
+  // pretravel (noise-free: the truth's, computed here from the azimuth); the repeats figure holds
+  // every touch, 5 repeats, each touch's deviation from its repeats' mean 0 on noise-free data.
+  const ProbePlan plan = makePlan("probe_qual", acMachine(), {});
+  Truth t = test::truthWith(test::table4Mean());
+  t.pretravel_by_direction_um = truePretravel;
+  const ProbeQualification q = qualifyProbe(plan, {simulate(plan, t, {1})});
+  const Json figs = probeQualFiguresJson(plan, q);
+  ASSERT_EQ(figs.size(), 2u);
+  const Json& pre = figs[0]["series"][0];
+  ASSERT_EQ(pre["x"].size(), 8u);
+  for (size_t i = 0; i < 8; ++i) {
+    const double az = pre["x"][i].get<double>() * M_PI / 180.0;
+    EXPECT_NEAR(pre["y"][i].get<double>(), kMean_um + kLobe_um * std::cos(3.0 * az), 1e-5) << i;
+  }
+  const Json& rep = figs[1]["series"][0];
+  ASSERT_EQ(rep["x"].size(), 85u);
+  for (size_t i = 0; i < 85; ++i) {
+    EXPECT_GE(rep["x"][i].get<double>(), 1.0);
+    EXPECT_LE(rep["x"][i].get<double>(), 5.0);
+    EXPECT_NEAR(rep["y"][i].get<double>(), 0.0, 1e-5);
+  }
 }
 
 TEST(ProbeQual, TheScreenKeepsItsRateOnCleanProbes) {
