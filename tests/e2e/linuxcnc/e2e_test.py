@@ -733,33 +733,146 @@ def run_one_sphere_bc(a):
     print("one_sphere B/C on LinuxCNC: %d touches, LinuxCNC session %.0f s" % (n_points, t))
 
 
+GUIDE = os.path.join(HERE, "..", "..", "..", "docs", "guide", "linuxcnc.md")
+GUIDE_MACHINE = "examples/machines/ac_trunnion.json"   # the guide's MACHINE.json, here the e2e controller's
+
+
+def guide_commands(path=GUIDE):
+    """The rotacal command lines of the guide's code blocks, in order (a trailing backslash joins
+    the next line; comments and prose inside a block are not commands)."""
+    cmds, block, pending = [], False, ""
+    for line in open(path).read().split("\n"):
+        t = line.strip()
+        if t.startswith("```"):
+            block, pending = not block, ""
+            continue
+        if not block:
+            continue
+        t = pending + t
+        if t.endswith("\\"):
+            pending = t[:-1].rstrip() + " "
+            continue
+        pending = ""
+        if t.startswith("rotacal "):
+            cmds.append(t)
+    return cmds
+
+
+def guide_step(cmds, prefix, contains=""):
+    """The guide's first command starting with `prefix` (and holding `contains`): a guide that no
+    longer shows it fails the case, so the test follows the page."""
+    for c in cmds:
+        if c.startswith(prefix) and contains in c:
+            return c
+    raise SystemExit("FAIL: docs/guide/linuxcnc.md no longer shows a command %r%s" %
+                     (prefix, " with " + contains if contains else ""))
+
+
+def run_guide_command(a, work, cmd, env=None, **replace):
+    """One of the guide's commands, as written, run in `work`: `rotacal` is the binary under test,
+    the guide's MACHINE.json the e2e controller's machine, and `replace` swaps one word for another
+    (an output's name: the guide says the offsets' form follows the extension)."""
+    import shlex
+    words = shlex.split(cmd)
+    words = [a.rotacal] + [MACHINE if w == GUIDE_MACHINE else replace.get(w, w) for w in words[1:]]
+    print("$ (guide) " + cmd + ("   [%s]" % ", ".join("%s -> %s" % kv for kv in replace.items()) if replace else ""),
+          flush=True)
+    r = subprocess.run(words, cwd=work, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                       env=dict(os.environ, **(env or {})))
+    print(r.stdout.rstrip(), flush=True)
+    if r.returncode != 0:
+        raise SystemExit("FAIL: the guide's command exits %d: %s" % (r.returncode, cmd))
+    return r.stdout
+
+
 def run_one_sphere_ac(a):
-    """The A/C table on xyzac-trt-kins with the one_sphere cycle: the bundled default plan on the
-    e2e machine (a sphere on its stem at (120, 0, 80) mm beside the column), the program unchanged,
-    the virtual probe playing truth_table4.json (000 Table 4's location errors; its set-up moves
-    only the column). The mapping A = -A*, C = -C* is the one the touch154 case checks; here every
-    trigger lies 0 .. F x 1 ms past the exact contact computed with it, and all 8 location errors
-    are identified within 0.5 um / 0.05 mdeg."""
+    """docs/guide/linuxcnc.md followed as written on the A/C table (xyzac-trt-kins): its commands are
+    read from the page and run in order, MACHINE.json being the e2e controller's (step 1 is the
+    user's), the controller's virtual probe playing truth_table4.json (000 Table 4's location
+    errors; its set-up moves only the column): plan one_sphere (68 touches), generate and check the
+    program, run it unchanged, bring the LOG back, analyze with offsets. Asserts: every trigger
+    0 .. F x 1 ms past the exact contact (A = -A*, C = -C*, the mapping the touch154 case checks),
+    the verdict first, all 8 location errors within 0.5 um / 0.05 mdeg, the HAL offsets naming the
+    xyzac-trt-kins pins. Then step 10's re-measurements side by side: the same program after the
+    offsets' G54 shift (the four shifted errors within the tolerance of zero, the others unchanged)
+    and the program compensated by step 9's commands (all 8 within it of zero, read with
+    --compensated-with); and the history kept by step 10's commands."""
     work = a.work
+    cmds = guide_commands()
+    for name in os.listdir(work):
+        p = os.path.join(work, name)
+        if os.path.isfile(p):
+            os.remove(p)   # the guide's outputs start afresh (an earlier run's would become .bak)
+    # steps 2 and 4: plan, generate, check
+    run_guide_command(a, work, guide_step(cmds, "rotacal plan --cycle one_sphere"))
+    run_guide_command(a, work, guide_step(cmds, "rotacal generate"))
+    out = run_guide_command(a, work, guide_step(cmds, "rotacal check", "one_sphere.ngc"))
+    check("ok" in out, "the guide's `rotacal check` passes the program it generated")
     plan, ngc = os.path.join(work, "plan.json"), os.path.join(work, "one_sphere.ngc")
-    sh([a.rotacal, "plan", "--cycle", "one_sphere", "--machine", MACHINE, "-o", plan])
-    sh([a.rotacal, "generate", "--plan", plan, "--dialect", "linuxcnc", "-o", ngc])
     with open(plan) as f:
         n_points = len(json.load(f)["points"])
+    # step 5: send the program; step 7: bring the LOG back
     run = os.path.join(work, "run")
     _, t = session([RUN, "--ngc", ngc, "--truth", TRUTH, "--machine", MACHINE, "--plan", plan, "--out", run,
-               "--timeout", "300"])
+                    "--timeout", "300"])
+    shutil.copy(os.path.join(run, "rotacal_one_sphere.txt"), work)
     figures = {"run_s": t, "points": n_points}
     figures["lateness"] = lateness(work, run, plan, cycle="one_sphere", points=n_points,
                                    across_um=ROUNDING_ACROSS_UM, machine=MACHINE)
-    rep, r, want, held = analyze_one_sphere(a, work, plan, run, TRUTH, "000 Eq. (1)")
+    # step 8: analyze with offsets, the verdict first
+    analyze = guide_step(cmds, "rotacal analyze", "rotacal_one_sphere.txt")
+    run_guide_command(a, work, analyze)
+    rep = os.path.join(work, "REPORT.json")
+    with open(rep) as f:
+        r = json.load(f)
+    with open(os.path.join(work, "REPORT.txt")) as f:
+        check(f.read().startswith("verdict"), "REPORT.txt opens with the verdict (the guide: read the verdict first)")
+    check("verdict" in r, "REPORT.json carries the verdict block")
+    want = injected(TRUTH)
+    check(sorted(want) == sorted(r["location_errors"]), "the report carries the 8 location errors of 000 Eq. (1): %s"
+          % sorted(r["location_errors"]))
+    held = sorted(u["held"] for u in r.get("unseparable", []))
     print("what one sphere cannot separate on this plan (held at nominal): %s" % held)
     got = identified(rep)
-    compare(got, want, "one_sphere on LinuxCNC (xyzac-trt-kins), 000 Table 4's location errors")
-    figures.update({"identified": got, "injected": want, "unseparable": r.get("unseparable")})
+    compare(got, want, "one_sphere on LinuxCNC (xyzac-trt-kins) by the guide, 000 Table 4's location errors")
+    with open(os.path.join(work, "offsets.hal")) as f:
+        hal = f.read()
+    check(all("setp xyzac-trt-kins.%s " % pin in hal for pin in ("x-rot-point", "y-rot-point", "z-rot-point")),
+          "offsets.hal sets the xyzac-trt-kins pins the guide names")
+    # step 8's other form (the guide: the form follows the extension), then step 9's commands
+    run_guide_command(a, work, analyze, **{"offsets.hal": "offsets.ngc", "REPORT.json": "REPORT_ngc.json",
+                                           "REPORT.txt": "REPORT_ngc.txt", "REPORT.html": "REPORT_ngc.html"})
+    run_guide_command(a, work, guide_step(cmds, "rotacal compensate"))
+    run_guide_command(a, work, guide_step(cmds, "rotacal check", "one_sphere_comp.ngc"))
+    # step 10: the same program after the offsets, and the compensated program, side by side
+    run2, run3 = os.path.join(work, "run2"), os.path.join(work, "run3")
+    side_by_side(
+        lambda: session([RUN, "--pre-ngc", os.path.join(work, "offsets.ngc"), "--ngc", ngc, "--truth", TRUTH,
+                         "--machine", MACHINE, "--plan", plan, "--out", run2, "--timeout", "300"]),
+        lambda: session([RUN, "--ngc", os.path.join(work, "one_sphere_comp.ngc"), "--truth", TRUTH, "--machine",
+                         MACHINE, "--plan", plan, "--out", run3, "--timeout", "300"]))
+    rep2, rep3 = os.path.join(work, "report_after_offsets.json"), os.path.join(work, "report_compensated.json")
+    sh([a.rotacal, "analyze", "--plan", plan, "--results", os.path.join(run2, "rotacal_one_sphere.txt"),
+        "--dialect", "linuxcnc", "--json", rep2])
+    got2 = identified(rep2)
+    compare(got2, {k: (0.0 if k in SHIFTED else v) for k, v in want.items()},
+            "the same program after the guide's offsets.ngc (G54 shift)")
+    sh([a.rotacal, "analyze", "--plan", plan, "--results", os.path.join(run3, "rotacal_one_sphere.txt"),
+        "--dialect", "linuxcnc", "--json", rep3, "--compensated-with", rep])
+    got3 = identified(rep3)
+    compare(got3, {k: 0.0 for k in want}, "the guide's compensated program (what the compensation left)")
+    # step 10: the history, where the guide says it lands
+    env = {"XDG_DATA_HOME": os.path.join(work, "xdg")}
+    run_guide_command(a, work, guide_step(cmds, "rotacal history add"), env=env)
+    run_guide_command(a, work, guide_step(cmds, "rotacal history show"), env=env)
+    check(os.path.exists(os.path.join(work, "xdg", "rotacal", "history.sqlite")),
+          "the history database is where the guide says ($XDG_DATA_HOME/rotacal/history.sqlite)")
+    check(os.path.exists(os.path.join(work, "TREND.html")), "history show wrote TREND.html")
+    figures.update({"identified": got, "injected": want, "unseparable": r.get("unseparable"),
+                    "after_offsets": got2, "compensated": got3})
     with open(os.path.join(work, "figures.json"), "w") as f:
         json.dump(figures, f, indent=1)
-    print("one_sphere A/C on LinuxCNC: %d touches, LinuxCNC session %.0f s" % (n_points, t))
+    print("docs/guide/linuxcnc.md on LinuxCNC (A/C): %d touches, first session %.0f s" % (n_points, t))
 
 
 def run_no_trigger(a):
