@@ -9,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include "core/least_squares.hpp"
 #include "core/units.hpp"
 #include "core/report_envelope.hpp"
 
@@ -137,8 +138,10 @@ struct GnResult {
   std::vector<std::pair<int, int>> kept;
 };
 
-/// Gauss-Newton over the active parameters, on the observations `use` accepts.
-GnResult gaussNewton(const Problem& p, Eigen::VectorXd x, const std::vector<bool>& active,
+/// The least squares over the active parameters, on the observations `use` accepts, by the
+/// shared engine (core/least_squares): r = reading - model in um, unweighted (the noise is one
+/// per reading; its size scales the covariance afterwards).
+GnResult gaussNewton(const Problem& p, const Eigen::VectorXd& x0, const std::vector<bool>& active,
                      const std::function<bool(const Problem::Obs&)>& use, const TooltipFitOptions& opt) {
   std::vector<int> cols;
   for (int i = 0; i < static_cast<int>(active.size()); ++i)
@@ -153,39 +156,54 @@ GnResult gaussNewton(const Problem& p, Eigen::VectorXd x, const std::vector<bool
   g.used = 0;
   for (const auto* b : obs) g.used += (std::isfinite(b->t_um) ? 1 : 0) + (std::isfinite(b->z_um) ? 1 : 0);
   g.active = n;
-  Eigen::MatrixXd jac(m, n);
-  Eigen::VectorXd res(m);
-  auto evaluate = [&](const Eigen::VectorXd& xx) {
+  const auto full = [&](const Eigen::VectorXd& xa) {
+    Eigen::VectorXd x = x0;
+    for (int c = 0; c < n; ++c) x[cols[static_cast<size_t>(c)]] = xa[c];
+    return x;
+  };
+  // r = reading - model; J_r_x = -d model / dx over the active columns.
+  const ResidualFunction residuals = [&](const Eigen::VectorXd& xa, Eigen::VectorXd& res, Eigen::MatrixXd* jac) {
+    const Eigen::VectorXd x = full(xa);
+    res.resize(m);
+    if (jac) jac->resize(m, n);
     for (size_t i = 0; i < obs.size(); ++i) {
-      const Eigen::Vector2d mdl = p.model(*obs[i], xx);
+      const Eigen::Vector2d mdl = p.model(*obs[i], x);
       const bool t = std::isfinite(obs[i]->t_um), z = std::isfinite(obs[i]->z_um);
       res(2 * i) = t ? obs[i]->t_um - mdl[0] : 0.0;
       res(2 * i + 1) = z ? obs[i]->z_um - mdl[1] : 0.0;
-      const auto full = p.jacobian(*obs[i], xx);
+      if (!jac) continue;
+      const auto d = p.jacobian(*obs[i], x);
       for (int c = 0; c < n; ++c) {
-        jac(2 * i, c) = t ? full(0, cols[c]) : 0.0;
-        jac(2 * i + 1, c) = z ? full(1, cols[c]) : 0.0;
+        (*jac)(2 * i, c) = t ? -d(0, cols[static_cast<size_t>(c)]) : 0.0;
+        (*jac)(2 * i + 1, c) = z ? -d(1, cols[static_cast<size_t>(c)]) : 0.0;
       }
     }
   };
-  for (g.iterations = 1; g.iterations <= opt.max_iterations; ++g.iterations) {
-    evaluate(x);
-    // Column scaling keeps the mixed units (rad, mm) well conditioned.
-    Eigen::VectorXd scale = jac.colwise().norm().transpose();
+  Eigen::VectorXd xa0(n);
+  for (int c = 0; c < n; ++c) xa0[c] = x0[cols[static_cast<size_t>(c)]];
+  {
+    // A parameter no reading sees is the caller's mistake, not a direction to hold: say so.
+    Eigen::VectorXd r;
+    Eigen::MatrixXd J;
+    residuals(xa0, r, &J);
     for (int c = 0; c < n; ++c)
-      if (!(scale[c] > 0)) throw std::invalid_argument("tooltip fit: a parameter has no data (singular)");
-    const Eigen::MatrixXd js = jac * scale.cwiseInverse().asDiagonal();
-    const Eigen::VectorXd step = js.colPivHouseholderQr().solve(res).cwiseQuotient(scale);
-    for (int c = 0; c < n; ++c) x[cols[c]] += step[c];
-    g.last_step = step.cwiseAbs().maxCoeff();
-    if (g.last_step < opt.step_tol) {
-      g.converged = true;
-      break;
-    }
+      if (!(J.col(c).norm() > 0)) throw std::invalid_argument("tooltip fit: a parameter has no data (singular)");
   }
-  if (g.iterations > opt.max_iterations) g.iterations = opt.max_iterations;
-  evaluate(x);
-  g.x = x;
+  LeastSquaresOptions lo;
+  lo.max_iterations = opt.max_iterations;
+  lo.step_tolerance = opt.step_tol;
+  const LeastSquaresResult fit = solveLeastSquares(residuals, xa0, lo);
+  if (fit.summary.termination == LeastSquaresTermination::InvalidInput)
+    throw std::invalid_argument("tooltip fit: " + fit.summary.message);
+  if (fit.summary.rank < n) throw std::invalid_argument("tooltip fit: the parameters are not identifiable from these readings");
+  g.converged = fit.summary.usable();
+  g.iterations = fit.summary.iterations;
+  Eigen::VectorXd res;
+  Eigen::MatrixXd jac;
+  residuals(fit.x, res, &jac);
+  // What one more Gauss-Newton step would move (mm, rad): the linearisation's check at the end.
+  g.last_step = n > 0 ? (jac.completeOrthogonalDecomposition().solve(-res)).cwiseAbs().maxCoeff() : 0.0;
+  g.x = full(fit.x);
   g.rss = res.squaredNorm();
   std::vector<int> rows;
   for (size_t i = 0; i < obs.size(); ++i)
@@ -195,14 +213,10 @@ GnResult gaussNewton(const Problem& p, Eigen::VectorXd x, const std::vector<bool
         g.kept.emplace_back(obs[i]->run, 2 * obs[i]->k + c);
       }
   g.kept_residual = res(rows);
-  g.kept_J = jac(rows, Eigen::all);
-  const Eigen::MatrixXd ata = jac.transpose() * jac;
-  Eigen::FullPivLU<Eigen::MatrixXd> lu(ata);
-  if (lu.rank() < n) throw std::invalid_argument("tooltip fit: the parameters are not identifiable from these readings");
-  const Eigen::MatrixXd inv = lu.inverse();
-  g.cov_unit = Eigen::MatrixXd::Zero(x.size(), x.size());
+  g.kept_J = -jac(rows, Eigen::all);  // d model / dx, as the judge and the budget read it
+  g.cov_unit = Eigen::MatrixXd::Zero(x0.size(), x0.size());
   for (int a = 0; a < n; ++a)
-    for (int b = 0; b < n; ++b) g.cov_unit(cols[a], cols[b]) = inv(a, b);
+    for (int b = 0; b < n; ++b) g.cov_unit(cols[static_cast<size_t>(a)], cols[static_cast<size_t>(b)]) = fit.covariance(a, b);
   return g;
 }
 
@@ -241,8 +255,6 @@ std::vector<bool> activeFor(const Problem& p, bool pivot, int excluded) {
   return active;
 }
 
-// Regularised incomplete beta I_x(a, b) by Lentz's continued fraction (Numerical Recipes 6.4).
-
 double r6(double v) { return std::isfinite(v) ? std::round(v * 1e6) / 1e6 : v; }
 Json num(double v) { return std::isfinite(v) ? Json(r6(v)) : Json(nullptr); }
 
@@ -263,17 +275,15 @@ TooltipModelEval evaluateTooltipModel(const ProbePlan& plan, const std::vector<T
   return e;
 }
 
-bool TooltipFitOptions::validate(std::string* why) const {
-  if (max_iterations < 1 || !(step_tol > 0) || sigma_floor_um < 0) {
-    if (why) *why = "tooltip fit options: max_iterations >= 1, step_tol > 0, sigma_floor_um >= 0";
-    return false;
-  }
-  return true;
+std::string TooltipFitOptions::validate() const {
+  if (max_iterations < 1) return "tooltip fit options: max_iterations must be at least 1";
+  if (!(step_tol > 0)) return "tooltip fit options: step_tol must be positive";
+  if (!(sigma_floor_um >= 0)) return "tooltip fit options: sigma_floor_um must not be negative";
+  return {};
 }
 
 TooltipFit fitTooltip(const ProbePlan& plan, const std::vector<TooltipRun>& runs, const TooltipFitOptions& options) {
-  std::string why;
-  if (!options.validate(&why)) throw std::invalid_argument(why);
+  if (const std::string why = options.validate(); !why.empty()) throw std::invalid_argument(why);
   const Problem p = makeProblem(plan, runs);
   const std::vector<bool> active = activeFor(p, options.fit_pivot_length, -1);
   const GnResult g = gaussNewton(p, Eigen::VectorXd::Zero(p.J() + 1), active, [](const Problem::Obs&) { return true; },

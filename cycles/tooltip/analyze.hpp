@@ -24,10 +24,14 @@ namespace rotacal {
 struct TooltipFitOptions {
   bool fit_pivot_length = true;  // false: 004's model (angular errors only)
   int max_iterations = 20;
-  double step_tol = 1e-12;       // stop when the step is below this (mm, rad)
+  // The engine's step tolerance (core/least_squares): stop when a step changes no reading's model
+  // value by more than this (um). The model values reach the radius (381 mm = 3.8e5 um), whose
+  // double rounding is 6e-11 um: 1e-9 um stops at the rounding, far below any laser's resolution.
+  double step_tol = 1e-9;
   double sigma_floor_um = 0.0;   // lower bound of the noise used for uncertainties and tests
 
-  bool validate(std::string* why) const;
+  /// Empty when valid; otherwise what is wrong, naming the field (as LeastSquaresOptions).
+  std::string validate() const;
 };
 
 struct TooltipFit {
@@ -42,7 +46,7 @@ struct TooltipFit {
   int dof = 0;
   double residual_rms_um = 0.0;
   double sigma_um = 0.0;         // noise used for the uncertainties
-  double last_step_um = 0.0;     // size of the last Gauss-Newton step (linearisation check)
+  double last_step_um = 0.0;     // largest parameter change (mm, rad) one more Gauss-Newton step would make at the solution
   std::vector<double> res_t_um, res_z_um;  // residual per reading (data - model; NaN where not read)
   std::vector<double> model_t_um, model_z_um;  // the model per reading (0 at the zero readings)
   /// The values fitted (read, not a zero reading): (run, 2 k + c) with k the plan point and c = 0
