@@ -72,6 +72,7 @@ LeastSquaresResult solveLeastSquares(const ResidualFunction& f, const Eigen::Vec
     svd.setThreshold(o.rank_tolerance);
     // Gauss-Newton: J dx = -r, minimum norm in the scaled parameters.
     const Eigen::VectorXd step_scaled = svd.solve(-r);
+    const Eigen::VectorXd before = out.x;
     out.x += s.cwiseInverse().asDiagonal() * step_scaled;
     out.summary.iterations = it;
     const double cost_before = 0.5 * r.squaredNorm();
@@ -82,7 +83,8 @@ LeastSquaresResult solveLeastSquares(const ResidualFunction& f, const Eigen::Vec
       return out;
     }
     const double cost = 0.5 * r.squaredNorm();
-    if (step_scaled.norm() < o.step_tolerance || std::abs(cost_before - cost) <= o.function_tolerance * cost_before) {
+    if (step_scaled.norm() < o.step_tolerance || std::abs(cost_before - cost) <= o.function_tolerance * cost_before ||
+        (o.converged && o.converged(before, out.x))) {
       out.summary.termination = LeastSquaresTermination::Converged;
       break;
     }

@@ -25,6 +25,10 @@ struct LeastSquaresOptions {
   /// 1e-9: four decades above double rounding of a 1e-16-relative Jacobian squared, and far
   /// below the smallest ratio a designed plan has (1e-4).
   double rank_tolerance = 1e-9;
+  /// A problem's own measure of convergence, asked after every step beside the tolerances above
+  /// (Ceres' IterationCallback returning SOLVER_TERMINATE_SUCCESSFULLY): given x before and after
+  /// the step, true stops the solve as converged. Empty: the tolerances alone decide.
+  std::function<bool(const Eigen::VectorXd& before, const Eigen::VectorXd& after)> converged;
   /// Empty when valid; otherwise what is wrong, naming the field (Ceres' Options::IsValid).
   std::string validate() const;
 };

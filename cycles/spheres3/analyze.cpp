@@ -20,6 +20,7 @@
 #include "core/contributor_draw.hpp"
 #include "core/transforms.hpp"
 #include "core/report_envelope.hpp"
+#include "core/least_squares.hpp"
 #include "core/units.hpp"
 #include "cycles/spheres3/diagnose.hpp"
 #include "core/require_valid.hpp"
@@ -402,52 +403,65 @@ Spheres3Result identifyOnce(const ProbePlan& plan, const std::vector<Measurement
     }
     return f;
   };
-  Eigen::MatrixXd Js(m, np);  // whitened, column-scaled J of the prediction
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd;
-  for (int it = 0; it < opt.max_iterations; ++it) {
-    const Eigen::VectorXd f = residuals(th);
+  // The shared engine (core/least_squares) on the whitened residuals, the Jacobian by central
+  // differences of the exact model (step 1e-3 of each parameter's typical size). Converged when a
+  // step moves no sphere centre at any angle by more than step_tolerance_mm: the measure of this
+  // model's linearisation, in the unit the spheres are measured in (the engine's own tolerances off).
+  const auto jacobian = [&](const Eigen::VectorXd& t) {
+    Eigen::MatrixXd J(m, np);
     for (int p = 0; p < np; ++p) {
-      // Central difference of the exact model; step 1e-3 of the parameter's typical size.
       const double h = 1e-3 * scale[p];
-      Eigen::VectorXd tp = th, tm = th;
+      Eigen::VectorXd tp = t, tm = t;
       tp[p] += h;
       tm[p] -= h;
-      Js.col(p) = -(residuals(tp) - residuals(tm)) / (2 * h) * scale[p];
+      J.col(p) = (residuals(tp) - residuals(tm)) / (2 * h);
     }
-    svd.compute(Js, Eigen::ComputeThinU | Eigen::ComputeThinV);
-    const auto& sv = svd.singularValues();
-    r.rank = 0;
-    for (int i = 0; i < sv.size(); ++i)
-      if (sv[i] > 1e-9 * sv[0]) ++r.rank;
-    r.condition = sv[0] / sv[sv.size() - 1];
-    if (r.rank < np)
-      throw std::invalid_argument(fmt::format("the spheres3 model is rank deficient ({} of {} parameters identifiable)",
-                                              r.rank, np));
-    const Eigen::VectorXd step = scale.cwiseProduct(svd.solve(f));
-    th += step;
-    r.iterations = it + 1;
-    // How far the step moves any sphere centre (mm): the convergence measure of the linearisation.
-    double move = 0.0;
+    return J;
+  };
+  const auto move = [&](const Eigen::VectorXd& before, const Eigen::VectorXd& after) {
+    double most = 0.0;
     for (int i = 0; i < 3; ++i)
-      for (double c : r.c_deg) {
-        Eigen::VectorXd t0 = th - step;
-        move = std::max(move, (model.predict(th, i, degToRad(c)) - model.predict(t0, i, degToRad(c))).norm());
-      }
-    r.last_step_mm = move;
-    if (move < opt.step_tolerance_mm) break;
-  }
-  if (r.last_step_mm >= opt.step_tolerance_mm)
+      for (double c : r.c_deg)
+        most = std::max(most, (model.predict(after, i, degToRad(c)) - model.predict(before, i, degToRad(c))).norm());
+    return most;
+  };
+  LeastSquaresOptions lo;
+  lo.max_iterations = opt.max_iterations;
+  lo.step_tolerance = std::numeric_limits<double>::min();
+  lo.function_tolerance = 0.0;
+  lo.converged = [&](const Eigen::VectorXd& before, const Eigen::VectorXd& after) {
+    r.last_step_mm = move(before, after);
+    return r.last_step_mm < opt.step_tolerance_mm;
+  };
+  const LeastSquaresResult solved = solveLeastSquares(
+      [&](const Eigen::VectorXd& t, Eigen::VectorXd& res, Eigen::MatrixXd* J) {
+        res = residuals(t);
+        if (J) *J = jacobian(t);
+      },
+      th, lo);
+  r.iterations = solved.summary.iterations;
+  r.rank = solved.summary.rank;
+  if (r.rank < np)
+    throw std::invalid_argument(fmt::format("the spheres3 model is rank deficient ({} of {} parameters identifiable)",
+                                            r.rank, np));
+  if (!solved.summary.usable())
     throw std::invalid_argument(fmt::format("spheres3 fit did not converge in {} iterations (last step {:.3g} um)",
                                             opt.max_iterations, mmToUm(r.last_step_mm)));
+  th = solved.x;
+  {
+    // The condition of the column-scaled whitened Jacobian at the solution, as the report states it.
+    Eigen::MatrixXd Js = jacobian(th);
+    for (int p = 0; p < np; ++p) Js.col(p) *= scale[p];
+    const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(Js).singularValues();
+    r.condition = sv[0] / sv[sv.size() - 1];
+  }
 
   const Eigen::VectorXd f = residuals(th);
   const double s2 = std::pow(umToMm(r.sigma_used_um), 2);
   r.dof = measured_coordinates - np;
   r.chi2 = f.squaredNorm() / s2;
-  // Covariance of th: sigma^2 (J^T W J)^-1, from the SVD of the scaled whitened J.
-  const Eigen::VectorXd inv_s2 = svd.singularValues().cwiseInverse().cwiseAbs2();
-  const Eigen::MatrixXd cov_scaled = svd.matrixV() * inv_s2.asDiagonal() * svd.matrixV().transpose();
-  r.covariance = s2 * scale.asDiagonal() * cov_scaled * scale.asDiagonal();
+  // Covariance of th: sigma^2 (J^T W J)^-1 (the engine's, for whitened residuals of unit variance).
+  r.covariance = s2 * solved.covariance;
   const Eigen::VectorXd u = r.covariance.diagonal().cwiseSqrt();
   r.location = th.head<4>();
   r.location_u = u.head<4>();

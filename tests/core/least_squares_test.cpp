@@ -91,6 +91,46 @@ TEST(LeastSquares, NonlinearCurveIsRecoveredFromNoiseFreeData) {
   EXPECT_GT(res.summary.initial_cost, 0.1);
 }
 
+TEST(LeastSquares, AProblemsOwnConvergenceMeasureStopsTheSolve) {
+  // The curve above with the tolerances off: the problem's own measure (no parameter moves by
+  // more than 1e-6 in a step) alone decides. Gauss-Newton converges quadratically here, so when it
+  // stops the estimate is within the last step's size squared, far below 1e-6, of the truth; the
+  // measure is asked once per step with the x before and after it. A measure never met runs out
+  // of iterations, and says so.
+  const Eigen::Vector3d truth(2.0, 0.7, -0.3);
+  const Eigen::VectorXd t = Eigen::VectorXd::LinSpaced(25, 0.0, 6.0);
+  const auto f = [&](const Eigen::VectorXd& x, Eigen::VectorXd& r, Eigen::MatrixXd* J) {
+    const Eigen::ArrayXd e = (-x[1] * t.array()).exp();
+    r = (x[0] * e + x[2]).matrix() - (truth[0] * (-truth[1] * t.array()).exp() + truth[2]).matrix();
+    if (J) {
+      J->resize(t.size(), 3);
+      J->col(0) = e.matrix();
+      J->col(1) = (-x[0] * t.array() * e).matrix();
+      J->col(2).setOnes();
+    }
+  };
+  LeastSquaresOptions o;
+  o.step_tolerance = 1e-300;
+  o.function_tolerance = 0.0;
+  int asked = 0;
+  double last_move = 0.0;
+  o.converged = [&](const Eigen::VectorXd& before, const Eigen::VectorXd& after) {
+    ++asked;
+    last_move = (after - before).cwiseAbs().maxCoeff();
+    return last_move < 1e-6;
+  };
+  const LeastSquaresResult res = solveLeastSquares(f, Eigen::Vector3d(1.2, 1.0, 0.0), o);
+  ASSERT_TRUE(res.summary.usable()) << res.summary.briefReport();
+  EXPECT_EQ(asked, res.summary.iterations);
+  EXPECT_LT(last_move, 1e-6);
+  EXPECT_LT((res.x - truth).cwiseAbs().maxCoeff(), 1e-9);
+  o.converged = [](const Eigen::VectorXd&, const Eigen::VectorXd&) { return false; };
+  o.max_iterations = 7;
+  const LeastSquaresResult never = solveLeastSquares(f, Eigen::Vector3d(1.2, 1.0, 0.0), o);
+  EXPECT_EQ(never.summary.termination, LeastSquaresTermination::MaxIterations);
+  EXPECT_EQ(never.summary.iterations, 7);
+}
+
 TEST(LeastSquares, InvalidOptionsAreRefusedNamingTheField) {
   const auto f = [](const Eigen::VectorXd& x, Eigen::VectorXd& r, Eigen::MatrixXd* J) {
     r = x;
