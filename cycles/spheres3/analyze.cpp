@@ -191,25 +191,35 @@ SphereFit fitPartialSphere(const std::vector<Eigen::Vector3d>& pts, const Eigen:
   Eigen::MatrixXd V(3, d);
   for (int i = 0; i < d; ++i) V.col(i) = eig.eigenvectors().col(keep[static_cast<size_t>(i)]);
   SphereFit f;
-  Eigen::Vector3d c = start;
-  double rho = rho0;
+  // The shared engine over (the measured coordinates, the radius); converged when a step moves
+  // them by less than 1e-12 mm, the engine's own tolerances off.
+  const auto centre = [&](const Eigen::VectorXd& x) { return Eigen::Vector3d(start + V * x.head(d)); };
+  LeastSquaresOptions lo;
+  lo.max_iterations = 50;
+  lo.step_tolerance = std::numeric_limits<double>::min();
+  lo.function_tolerance = 0.0;
+  lo.converged = [](const Eigen::VectorXd& before, const Eigen::VectorXd& after) { return (after - before).norm() < 1e-12; };
+  Eigen::VectorXd x0 = Eigen::VectorXd::Zero(d + 1);
+  x0[d] = rho0;
+  const LeastSquaresResult solved = solveLeastSquares(
+      [&](const Eigen::VectorXd& x, Eigen::VectorXd& r, Eigen::MatrixXd* J) {
+        const Eigen::Vector3d cx = centre(x);
+        r.resize(k);
+        if (J) J->resize(k, d + 1);
+        for (int j = 0; j < k; ++j) {
+          const Eigen::Vector3d n = (pts[static_cast<size_t>(j)] - cx).normalized();
+          r[j] = (pts[static_cast<size_t>(j)] - cx).norm() - x[d];
+          if (!J) continue;
+          J->row(j).head(d) = -(n.transpose() * V);
+          (*J)(j, d) = -1.0;
+        }
+      },
+      x0, lo);
+  f.iterations = solved.summary.iterations;
+  f.converged = solved.summary.usable();
+  const Eigen::Vector3d c = centre(solved.x);
+  const double rho = solved.x[d];
   Eigen::VectorXd res(k);
-  for (f.iterations = 0; f.iterations < 50; ++f.iterations) {
-    Eigen::MatrixXd J(k, d + 1);
-    for (int j = 0; j < k; ++j) {
-      const Eigen::Vector3d n = (pts[static_cast<size_t>(j)] - c).normalized();
-      res[j] = (pts[static_cast<size_t>(j)] - c).norm() - rho;
-      J.row(j).head(d) = -(n.transpose() * V);
-      J(j, d) = -1.0;
-    }
-    const Eigen::VectorXd step = J.colPivHouseholderQr().solve(-res);
-    c += V * step.head(d);
-    rho += step[d];
-    if (step.norm() < 1e-12) {
-      f.converged = true;
-      break;
-    }
-  }
   for (int j = 0; j < k; ++j) res[j] = (pts[static_cast<size_t>(j)] - c).norm() - rho;
   f.centre_mm = c;
   f.rho_mm = rho;
