@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <Eigen/Eigenvalues>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <stdexcept>
 
@@ -12,6 +13,7 @@
 #include "core/report_envelope.hpp"
 #include "core/transforms.hpp"
 #include "core/uncertainty_budget.hpp"
+#include "core/least_squares.hpp"
 #include "core/units.hpp"
 #include "cycles/probing.hpp"
 
@@ -503,33 +505,54 @@ SpaceframeAnalysis analyzeSpaceframe(const ProbePlan& plan, const std::vector<Me
   const std::vector<int> active = activeParameters(layout.nominal_from == "initial");
   const int np = static_cast<int>(active.size());
   a.summary.parameters = np;
-  Eigen::MatrixXd J(m, np);  // d(model)/d(parameter in report units), mm per unit
-  Eigen::VectorXd res = residuals(x);
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd;
-  a.summary.termination = "max_iterations";
-  for (int it = 0; it < options.max_iterations; ++it) {
-    J = frameJacobian(plan, a.points, layout.origin_w_mm, FrameModel::fromVector(kin, x), active, options.finite_step_scale);
-    svd.compute(J, Eigen::ComputeThinU | Eigen::ComputeThinV);
-    const auto& sv = svd.singularValues();
-    const double tol = options.rank_tolerance * sv[0];
+  // d(model)/d(parameter in report units), mm per unit, and its rank and condition (singular
+  // values below rank_tolerance x the largest dropped).
+  const auto jacobianAt = [&](const ModelVector& v) {
+    return frameJacobian(plan, a.points, layout.origin_w_mm, FrameModel::fromVector(kin, v), active, options.finite_step_scale);
+  };
+  const auto rankOf = [&](const Eigen::MatrixXd& J) {
+    const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(J).singularValues();
     int rank = 0;
-    for (int i = 0; i < sv.size(); ++i) rank += sv[i] > tol ? 1 : 0;
+    for (int i = 0; i < sv.size(); ++i) rank += sv[i] > options.rank_tolerance * sv[0] ? 1 : 0;
     a.summary.rank = rank;
-    a.summary.condition = sv[rank - 1] > 0 ? sv[0] / sv[rank - 1] : INFINITY;
-    if (rank < np) {
-      a.summary.termination = "rank_deficient";
-      break;
-    }
-    const Eigen::VectorXd step_units = svd.solve(res);  // J step = res
-    for (int k = 0; k < np; ++k) x[active[k]] += step_units[k] / unit[active[k]];
+    a.summary.condition = rank > 0 && sv[rank - 1] > 0 ? sv[0] / sv[rank - 1] : INFINITY;
+    return rank;
+  };
+  Eigen::VectorXd res = residuals(x);
+  Eigen::MatrixXd cov_units;  // (J^T J)^-1 over the active parameters, report units
+  if (rankOf(jacobianAt(x)) < np) {
+    a.summary.termination = "rank_deficient";
+  } else {
+    // The shared engine (core/least_squares) over the active parameters in report units, r = the
+    // model's centres - the measured ones; converged when no parameter moves by 1e-6 um / mdeg /
+    // um/m in a step: far below any resolution, above the floor the sphere fits (converged to
+    // 1e-13 mm) leave in the central differences. The engine's own tolerances are off.
+    const auto full = [&](const Eigen::VectorXd& p) {
+      ModelVector v = ModelVector::Zero();
+      for (int k = 0; k < np; ++k) v[active[static_cast<size_t>(k)]] = p[k] / unit[active[static_cast<size_t>(k)]];
+      return v;
+    };
+    LeastSquaresOptions lo;
+    lo.max_iterations = options.max_iterations;
+    lo.rank_tolerance = options.rank_tolerance;
+    lo.step_tolerance = std::numeric_limits<double>::min();
+    lo.function_tolerance = 0.0;
+    lo.converged = [](const Eigen::VectorXd& before, const Eigen::VectorXd& after) {
+      return (after - before).cwiseAbs().maxCoeff() < 1e-6;
+    };
+    const LeastSquaresResult solved = solveLeastSquares(
+        [&](const Eigen::VectorXd& p, Eigen::VectorXd& r, Eigen::MatrixXd* J) {
+          const ModelVector v = full(p);
+          r = -residuals(v);
+          if (J) *J = jacobianAt(v);
+        },
+        Eigen::VectorXd::Zero(np), lo);
+    x = full(solved.x);
     res = residuals(x);
-    a.summary.iterations = it + 1;
-    // 1e-6 um / mdeg / um/m: far below any resolution, above the floor the sphere fits (converged
-    // to 1e-13 mm) leave in the central differences.
-    if (step_units.cwiseAbs().maxCoeff() < 1e-6) {
-      a.summary.termination = "converged";
-      break;
-    }
+    a.summary.iterations = solved.summary.iterations;
+    a.summary.termination = solved.summary.usable() ? "converged" : "max_iterations";
+    if (rankOf(jacobianAt(x)) < np) a.summary.termination = "rank_deficient";
+    cov_units = solved.covariance;
   }
   a.summary.observations = m;
   a.summary.dof = m - a.summary.rank;
@@ -539,11 +562,8 @@ SpaceframeAnalysis analyzeSpaceframe(const ProbePlan& plan, const std::vector<Me
   if (a.summary.termination != "rank_deficient") {
     // u (k = 1) from the a-posteriori noise: cov = sigma^2 (J^T J)^-1, J in mm per report unit;
     // stored in mm / rad / 1 like the model.
-    const Eigen::MatrixXd V = svd.matrixV();
-    const Eigen::VectorXd s2 = svd.singularValues().cwiseAbs2();
     for (int k = 0; k < np; ++k)
-      a.u[active[k]] = umToMm(a.summary.sigma_um) * std::sqrt((V.row(k).transpose().cwiseAbs2().cwiseQuotient(s2)).sum()) /
-                       unit[active[k]];
+      a.u[active[k]] = umToMm(a.summary.sigma_um) * std::sqrt(cov_units(k, k)) / unit[active[k]];
   }
   // How much of dL the identified model explains: dL minus the dL of the model's readings.
   std::vector<Eigen::Vector3d> predicted;
