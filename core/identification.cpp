@@ -4,6 +4,7 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <cstdlib>
 #include <map>
@@ -13,6 +14,7 @@
 #include <fmt/format.h>
 
 #include "core/simulation.hpp"
+#include "core/least_squares.hpp"
 #include "core/units.hpp"
 
 namespace rotacal {
@@ -308,14 +310,13 @@ IdentificationResult leastSquares(const ProbePlan& plan, const std::vector<Obser
   Eigen::MatrixXd J;
   Eigen::VectorXd scale;
   Eigen::JacobiSVD<Eigen::MatrixXd> svd;
-  out.summary.termination = Termination::MaxIterations;
-  for (int it = 0; it < options.max_iterations; ++it) {
+  // The column-scaled SVD of J at theta: its rank and condition, as the summary states them.
+  const auto decompose = [&]() {
     model.updateNormals(theta);
     model.evaluate(theta, &res, &J);
     scale = J.colwise().norm().transpose();
     for (int j = 0; j < n; ++j) scale[j] = scale[j] > 0 ? 1.0 / scale[j] : 1.0;
-    const Eigen::MatrixXd Js = J * scale.asDiagonal();
-    svd.compute(Js, Eigen::ComputeThinU | Eigen::ComputeThinV);
+    svd.compute(J * scale.asDiagonal(), Eigen::ComputeThinU | Eigen::ComputeThinV);
     const auto& sv = svd.singularValues();
     const double tol = options.rank_tolerance * sv[0];
     int rank = 0;
@@ -323,42 +324,59 @@ IdentificationResult leastSquares(const ProbePlan& plan, const std::vector<Obser
       if (sv[i] > tol) ++rank;
     out.summary.rank = rank;
     out.summary.condition = rank > 0 ? sv[0] / sv[rank - 1] : INFINITY;
-    if (rank < n || m < n) {
-      // Name the location errors that take part in the null space.
-      std::set<std::string> names;
-      const auto& V = svd.matrixV();
-      const auto& params = locationParameters(plan.machine.kinematics);
-      for (long c = rank; c < V.cols(); ++c) {
-        for (int j = 0; j < kNumLocationErrors; ++j)
-          if (std::abs(V(j, c)) > 0.05) names.insert(std::string(params[j].name));
-        for (int j = 0; j < model.extensionCount(); ++j)
-          if (std::abs(V(kNumLocationErrors + j, c)) > 0.05) names.insert(model.extensionParameters()[static_cast<size_t>(j)].name);
-      }
-      out.unidentifiable.assign(names.begin(), names.end());
-      out.summary.termination = Termination::RankDeficient;
-      std::string list;
-      for (const auto& s : out.unidentifiable) list += (list.empty() ? "" : ", ") + s;
-      out.summary.message = names.empty()
-                                ? fmt::format("the plan leaves {} nuisance combination(s) unidentifiable", n - rank)
-                                : "the plan cannot identify " + list + " (they move no trigger independently)";
-      return out;
+    return rank;
+  };
+  if (const int rank = decompose(); rank < n || m < n) {
+    // Name the location errors that take part in the null space.
+    std::set<std::string> names;
+    const auto& V = svd.matrixV();
+    const auto& params = locationParameters(plan.machine.kinematics);
+    for (long c = rank; c < V.cols(); ++c) {
+      for (int j = 0; j < kNumLocationErrors; ++j)
+        if (std::abs(V(j, c)) > 0.05) names.insert(std::string(params[j].name));
+      for (int j = 0; j < model.extensionCount(); ++j)
+        if (std::abs(V(kNumLocationErrors + j, c)) > 0.05) names.insert(model.extensionParameters()[static_cast<size_t>(j)].name);
     }
-    svd.setThreshold(options.rank_tolerance);
-    const Eigen::VectorXd step_scaled = svd.solve(res);
-    const Eigen::VectorXd step = scale.asDiagonal() * step_scaled;
-    theta += step;
-    out.summary.iterations = it + 1;
-    const double effect = (J * step).cwiseAbs().maxCoeff();
-    if (effect < options.step_tolerance) {
-      out.summary.termination = Termination::Converged;
-      break;
-    }
+    out.unidentifiable.assign(names.begin(), names.end());
+    out.summary.termination = Termination::RankDeficient;
+    std::string list;
+    for (const auto& s : out.unidentifiable) list += (list.empty() ? "" : ", ") + s;
+    out.summary.message = names.empty()
+                              ? fmt::format("the plan leaves {} nuisance combination(s) unidentifiable", n - rank)
+                              : "the plan cannot identify " + list + " (they move no trigger independently)";
+    return out;
   }
-  model.updateNormals(theta);
-  model.evaluate(theta, &res, &J);
-  scale = J.colwise().norm().transpose();
-  for (int j = 0; j < n; ++j) scale[j] = scale[j] > 0 ? 1.0 / scale[j] : 1.0;
-  svd.compute(J * scale.asDiagonal(), Eigen::ComputeThinU | Eigen::ComputeThinV);
+  // The shared engine (core/least_squares), r = predicted - measured (mm), the contact normals
+  // updated at every evaluation. Converged when a step changes no predicted trigger by more than
+  // step_tolerance (mm), the step's effect through the Jacobian it was taken with; the engine's
+  // own tolerances are off.
+  Eigen::MatrixXd J_step, J_now;  // the Jacobian at the x a step starts from, and at the latest x
+  LeastSquaresOptions lo;
+  lo.max_iterations = options.max_iterations;
+  lo.rank_tolerance = options.rank_tolerance;
+  lo.step_tolerance = std::numeric_limits<double>::min();
+  lo.function_tolerance = 0.0;
+  lo.converged = [&](const Eigen::VectorXd& before, const Eigen::VectorXd& after) {
+    return (J_step * (after - before)).cwiseAbs().maxCoeff() < options.step_tolerance;
+  };
+  const LeastSquaresResult solved = solveLeastSquares(
+      [&](const Eigen::VectorXd& x, Eigen::VectorXd& r, Eigen::MatrixXd* Jr) {
+        Eigen::VectorXd measured_minus_predicted;
+        Eigen::MatrixXd Jx;
+        model.updateNormals(x);
+        model.evaluate(x, &measured_minus_predicted, &Jx);
+        r = -measured_minus_predicted;
+        if (Jr) {
+          J_step = std::move(J_now);  // the previous evaluation's: the one the next step is judged by
+          J_now = Jx;
+          *Jr = std::move(Jx);
+        }
+      },
+      theta, lo);
+  theta = solved.x;
+  out.summary.iterations = solved.summary.iterations;
+  out.summary.termination = solved.summary.usable() ? Termination::Converged : Termination::MaxIterations;
+  decompose();
   const double rss = res.squaredNorm();
   out.summary.cost = 0.5 * rss;
   out.summary.dof = static_cast<int>(m) - n;
