@@ -2,9 +2,12 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include <fmt/format.h>
+
+#include "core/least_squares.hpp"
 
 namespace rotacal {
 
@@ -16,36 +19,52 @@ SphereFit fitSphereCentre(const std::vector<Eigen::Vector3d>& t, const Eigen::Ve
   if (static_cast<int>(t.size()) < 4)
     throw std::invalid_argument(fmt::format("sphere fit needs at least 4 triggers, got {}", t.size()));
   const int n = static_cast<int>(t.size());
-  Eigen::Vector3d c = start;
-  double rho = o.rho_mm;
   SphereFit f;
-  Eigen::MatrixXd J(n, np);
-  Eigen::VectorXd r(n);
-  for (int it = 0; it < o.max_iterations; ++it) {
+  // The shared engine (core/least_squares) over the centre (and the radius), r = |t - c| - rho;
+  // converged when a step moves them by less than 1e-13 mm, the engine's own tolerances off.
+  const auto unpack = [&](const Eigen::VectorXd& x, Eigen::Vector3d* c, double* rho) {
+    *c = x.head<3>();
+    *rho = fit_r ? x[3] : o.rho_mm;
+  };
+  const ResidualFunction radial = [&](const Eigen::VectorXd& x, Eigen::VectorXd& r, Eigen::MatrixXd* J) {
+    Eigen::Vector3d c;
+    double rho = 0.0;
+    unpack(x, &c, &rho);
+    r.resize(n);
+    if (J) J->resize(n, np);
     for (int i = 0; i < n; ++i) {
-      const Eigen::Vector3d d = t[i] - c;
-      const double dn = d.norm();
-      r[i] = dn - rho;
-      J.row(i).head<3>() = -d.transpose() / dn;  // d(|t - c|)/dc
-      if (fit_r) J(i, 3) = -1.0;
+      const Eigen::Vector3d d = t[static_cast<size_t>(i)] - c;
+      r[i] = d.norm() - rho;
+      if (!J) continue;
+      J->row(i).head<3>() = -d.transpose() / d.norm();  // d(|t - c|)/dc
+      if (fit_r) (*J)(i, 3) = -1.0;
     }
-    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(J);
-    if (qr.rank() < np) throw std::invalid_argument("sphere fit: the triggers do not fix the centre (singular layout)");
-    const Eigen::VectorXd step = qr.solve(-r);
-    c += step.head<3>();
-    if (fit_r) rho += step[3];
-    f.iterations = it + 1;
-    if (step.norm() < 1e-13) {
-      f.converged = true;
-      break;
-    }
+  };
+  Eigen::VectorXd x0(np);
+  x0.head<3>() = start;
+  if (fit_r) x0[3] = o.rho_mm;
+  {
+    Eigen::VectorXd r;
+    Eigen::MatrixXd J;
+    radial(x0, r, &J);
+    if (Eigen::ColPivHouseholderQR<Eigen::MatrixXd>(J).rank() < np)
+      throw std::invalid_argument("sphere fit: the triggers do not fix the centre (singular layout)");
   }
-  for (int i = 0; i < n; ++i) {
-    const Eigen::Vector3d d = t[i] - c;
-    r[i] = d.norm() - rho;
-    J.row(i).head<3>() = -d.transpose() / d.norm();
-    if (fit_r) J(i, 3) = -1.0;
-  }
+  LeastSquaresOptions lo;
+  lo.max_iterations = o.max_iterations;
+  lo.step_tolerance = std::numeric_limits<double>::min();
+  lo.function_tolerance = 0.0;
+  lo.converged = [](const Eigen::VectorXd& before, const Eigen::VectorXd& after) { return (after - before).norm() < 1e-13; };
+  const LeastSquaresResult solved = solveLeastSquares(radial, x0, lo);
+  if (solved.summary.rank < np) throw std::invalid_argument("sphere fit: the triggers do not fix the centre (singular layout)");
+  f.iterations = solved.summary.iterations;
+  f.converged = solved.summary.usable();
+  Eigen::Vector3d c;
+  double rho = 0.0;
+  unpack(solved.x, &c, &rho);
+  Eigen::VectorXd r;
+  Eigen::MatrixXd J;
+  radial(solved.x, r, &J);
   f.centre_mm = c;
   f.rho_mm = rho;
   f.radius_fitted = fit_r;
