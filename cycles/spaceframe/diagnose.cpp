@@ -1,5 +1,6 @@
 #include "cycles/spaceframe/diagnose.hpp"
 
+#include <limits>
 #include <Eigen/Dense>
 #include <cmath>
 #include <algorithm>
@@ -8,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include "core/least_squares.hpp"
 #include "core/report_envelope.hpp"
 #include "core/units.hpp"
 #include "cycles/judge_contract.hpp"
@@ -89,31 +91,50 @@ struct Problem {
   }
 };
 
-// Weighted Gauss-Newton on every centre, from zero. Returns the Jacobian of the last iterate for
-// the held-out refits.
+// Weighted least squares on every centre, from zero, by the shared engine (core/least_squares):
+// r = the whitened residual w, over the active parameters in report units. Converged when no
+// parameter moves by 1e-6 um / mdeg / um/m in a step (far below any resolution), the engine's own
+// tolerances off. Returns the Jacobian at the solution for the held-out refits.
 SpaceframeFit fitAll(const Problem& pb, const std::vector<int>& active, double sigma_um, Eigen::MatrixXd* J_out) {
   SpaceframeFit f;
   f.active = active;
-  ModelVector x = ModelVector::Zero();
+  const auto np = static_cast<Eigen::Index>(active.size());
+  const auto full = [&](const Eigen::VectorXd& p) {
+    ModelVector x = ModelVector::Zero();
+    for (Eigen::Index k = 0; k < np; ++k) x[active[static_cast<size_t>(k)]] = p[k] / pb.unit[active[static_cast<size_t>(k)]];
+    return x;
+  };
+  // The last two evaluations (w and pb.jacobian = -dw/dp): how far the step's linear prediction
+  // missed the residual it reached (the linearisation's check).
+  Eigen::VectorXd w_prev, w_now;
+  Eigen::MatrixXd J_prev, J_now;
+  LeastSquaresOptions lo;
+  lo.max_iterations = 10;
+  lo.rank_tolerance = 1e-10;
+  lo.step_tolerance = std::numeric_limits<double>::min();
+  lo.function_tolerance = 0.0;
+  lo.converged = [&](const Eigen::VectorXd& before, const Eigen::VectorXd& after) {
+    const Eigen::VectorXd step = after - before;
+    f.linearisation_um = (w_now - (w_prev - J_prev * step)).cwiseAbs().maxCoeff();
+    return step.cwiseAbs().maxCoeff() < 1e-6;
+  };
+  const LeastSquaresResult solved = solveLeastSquares(
+      [&](const Eigen::VectorXd& p, Eigen::VectorXd& r, Eigen::MatrixXd* J) {
+        const ModelVector x = full(p);
+        Eigen::VectorXd w;
+        pb.residuals(x, &w, nullptr);
+        w_prev = std::move(w_now);
+        J_prev = std::move(J_now);
+        w_now = w;
+        J_now = pb.jacobian(x, active);
+        r = w;
+        if (J) *J = -J_now;
+      },
+      Eigen::VectorXd::Zero(np), lo);
+  f.converged = solved.summary.usable();
+  f.rank = solved.summary.rank;
+  const ModelVector x = full(solved.x);
   Eigen::VectorXd w, plain;
-  pb.residuals(x, &w, nullptr);
-  Eigen::MatrixXd J;
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd;
-  for (int it = 0; it < 10; ++it) {
-    J = pb.jacobian(x, active);
-    svd.compute(J, Eigen::ComputeThinU | Eigen::ComputeThinV);
-    svd.setThreshold(1e-10);
-    f.rank = static_cast<int>(svd.rank());
-    const Eigen::VectorXd step = svd.solve(w);
-    const Eigen::VectorXd predicted = w - J * step;
-    for (size_t k = 0; k < active.size(); ++k) x[active[k]] += step[static_cast<Eigen::Index>(k)] / pb.unit[active[k]];
-    pb.residuals(x, &w, nullptr);
-    f.linearisation_um = (w - predicted).cwiseAbs().maxCoeff();
-    if (step.cwiseAbs().maxCoeff() < 1e-6) {  // 1e-6 um / mdeg / um/m: far below any resolution
-      f.converged = true;
-      break;
-    }
-  }
   pb.residuals(x, &w, &plain);
   f.model = FrameModel::fromVector(pb.kin, x);
   const int m = static_cast<int>(w.size());
@@ -122,14 +143,9 @@ SpaceframeFit fitAll(const Problem& pb, const std::vector<int>& active, double s
   f.residual_rms_um = std::sqrt(plain.squaredNorm() / m);
   // u (k = 1) with the a-posteriori noise: cov = s^2 (J^T J)^-1 in report units.
   const double s_post = f.dof > 0 ? std::sqrt(w.squaredNorm() / f.dof) : 0.0;
-  const Eigen::MatrixXd V = svd.matrixV();
-  const Eigen::VectorXd sv = svd.singularValues();
-  for (size_t k = 0; k < active.size(); ++k) {
-    double v = 0.0;
-    for (int j = 0; j < f.rank; ++j) v += V(static_cast<Eigen::Index>(k), j) * V(static_cast<Eigen::Index>(k), j) / (sv[j] * sv[j]);
-    f.u[active[k]] = s_post * std::sqrt(v) / pb.unit[active[k]];
-  }
-  *J_out = J;
+  for (Eigen::Index k = 0; k < np; ++k)
+    f.u[active[static_cast<size_t>(k)]] = s_post * std::sqrt(solved.covariance(k, k)) / pb.unit[active[static_cast<size_t>(k)]];
+  *J_out = J_now;
   return f;
 }
 
