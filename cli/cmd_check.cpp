@@ -35,7 +35,8 @@ int cmdCheck(const Common& c, const std::string& program_file, const std::string
   if (part_program && !plan_file.empty())
     throw CLI::ValidationError("--part-program", "a part program has no cycle plan: give one of --plan, --part-program");
   const Dialect& d = dialectOrFail(dialect);
-  if (d.name() == "csv") throw CLI::ValidationError("--dialect", "csv has no NC programs to check");
+  if (!d.hasPrograms())
+    throw CLI::ValidationError("--dialect", std::string(d.name()) + " has no NC programs to check");
   const MachineModel machine = loadMachine(machine_file);
   std::optional<ProbePlan> plan;
   if (!plan_file.empty()) {

@@ -408,11 +408,12 @@ std::vector<Command> cycleCommands(CLI::App& app, const Common& common) {
   };
   auto a = std::make_shared<Args>();
   std::vector<Command> cmds;
-  const std::string results_dialects = "csv | " + [] {
-    std::string s;
-    for (const auto& n : dialectNames())
-      if (n != "csv") s += (s.empty() ? "" : " | ") + n;
-    return s;
+  // The neutral results first, then the controllers'.
+  const std::string results_dialects = [] {
+    std::string neutral, controllers;
+    for (const Dialect* d : dialects())
+      (d->hasPrograms() ? controllers : neutral) += (" | " + std::string(d->name()));
+    return (neutral + controllers).substr(3);
   }();
 
   auto* plan = app.add_subcommand("plan", "make the probing plan of a cycle for a machine");

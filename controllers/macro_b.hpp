@@ -36,7 +36,7 @@ struct MacroBFlavor {
 
 class MacroBDialect : public Dialect {
  public:
-  explicit MacroBDialect(MacroBFlavor flavor) : f_(std::move(flavor)) {}
+  MacroBDialect(MacroBFlavor flavor, DialectIdentity identity) : Dialect(std::move(identity)), f_(std::move(flavor)) {}
   std::string_view name() const override { return f_.name; }
   std::string_view programExtension() const override { return ".nc"; }
   std::string_view resultsExtension() const override { return ".txt"; }
@@ -54,6 +54,8 @@ class MacroBDialect : public Dialect {
 };
 
 namespace macro_b {
+/// The no-trigger check of a G31 skip: #1-#3 = skip position #5061-#5063 minus the end point.
+inline const EndPointCheck kEndPointCheck{{"#1", "#2", "#3"}, {"#5061", "#5062", "#5063"}};
 /// Upper-case comment lines "(...)" of at most 80 characters in Fanuc's safe character set.
 std::vector<std::string> comments(std::string_view text);
 /// DPRNT text: A-Z 0-9 and '-', '.', '/'.
