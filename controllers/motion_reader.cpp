@@ -16,7 +16,7 @@ namespace rotacal::ctl {
 namespace {
 
 // Heidenhain's no-trigger test compares cycle 0's result with the end point moved this far
-// back toward the start (controllers/heidenhain.cpp writes it so): the end point it guards is
+// back toward the start (controllers/heidenhain/dialect.cpp writes it so): the end point it guards is
 // the literal moved forward again by the same amount.
 constexpr double kHeidenhainNoTriggerMm = 0.01;
 
