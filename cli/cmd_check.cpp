@@ -126,7 +126,7 @@ std::vector<Command> checkCommands(CLI::App& app, const Common& common) {
   auto* cmd = app.add_subcommand("check", "verify an NC program on the machine: clearances swept along every move, "
                                           "guarded probing moves with their checks, strokes, feeds, program number");
   cmd->add_option("program", a->program, "PROGRAM: the NC program")->required();
-  cmd->add_option("--dialect", a->dialect, "linuxcnc | fanuc | haas | siemens | heidenhain | okuma")->required();
+  cmd->add_option("--dialect", a->dialect, programDialectChoices())->required();
   cmd->add_option("--machine", a->machine, "MACHINE.json")->required();
   cmd->add_option("--plan", a->plan, "PLAN.json: the cycle's number, the spheres it touches; every probing move must "
                                      "reach a surface");

@@ -429,7 +429,7 @@ std::vector<Command> cycleCommands(CLI::App& app, const Common& common) {
 
   auto* gen = app.add_subcommand("generate", "write the NC program of a plan in a controller dialect");
   gen->add_option("--plan", a->plan_file, "PLAN.json")->required();
-  gen->add_option("--dialect", a->dialect, "linuxcnc | fanuc | haas | siemens | heidenhain | okuma")->required();
+  gen->add_option("--dialect", a->dialect, programDialectChoices())->required();
   gen->add_option("-o,--output", a->out, "PROGRAM")->required();
   cmds.push_back({gen, [a, &common] { return cmdGenerate(common, a->plan_file, a->dialect, a->out); }});
 
