@@ -31,7 +31,6 @@ CompTable compTable(const CompTableRequest& r, const PeriodicInterpolant& E, dou
   return t;
 }
 
-
 }  // namespace
 }  // namespace ctl
 

@@ -83,7 +83,6 @@ CompTable compTable(const CompTableRequest& r, const PeriodicInterpolant& E, dou
   return t;
 }
 
-
 }  // namespace
 }  // namespace ctl
 
@@ -106,10 +105,7 @@ MacroBFlavor fanucFlavor() {
 }
 
 DialectIdentity fanucIdentity() {
-  DialectIdentity d;
-  d.language = ProgramLanguage::IsoGcode;
-  d.numbers_programs = true;
-  d.end_point_check = macro_b::kEndPointCheck;
+  DialectIdentity d = macro_b::identity();
   d.comp_table = ctl::compTable;
   return d;
 }

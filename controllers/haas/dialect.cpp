@@ -51,10 +51,7 @@ MacroBFlavor haasFlavor() {
 }
 
 DialectIdentity haasIdentity() {
-  DialectIdentity d;
-  d.language = ProgramLanguage::IsoGcode;
-  d.numbers_programs = true;
-  d.end_point_check = macro_b::kEndPointCheck;
+  DialectIdentity d = macro_b::identity();
   d.comp_table_refusal = "no source gives a user-loadable rotary compensation table for NGC (docs/dialects.md); give "
                          "the table of --dialect csv to Haas service";
   return d;

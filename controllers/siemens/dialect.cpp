@@ -80,7 +80,6 @@ CompTable compTable(const CompTableRequest& r, const PeriodicInterpolant& E, dou
   return t;
 }
 
-
 }  // namespace
 }  // namespace ctl
 
