@@ -130,7 +130,8 @@ CompensateResult compensate(const CompensateRequest& request) {
 
 CheckResult check(const CheckRequest& request) {
   return translated([&] {
-    if (dialectByName(request.dialect).name() == "csv") throw Error("", 0, "csv has no NC programs to check");
+    if (const Dialect& d = dialectByName(request.dialect); !d.hasPrograms())
+      throw Error("", 0, std::string(d.name()) + " has no NC programs to check");
     const std::optional<MachineModel> machine = machineOf(request.machine);
     const ProgramCheckResult r =
         verifyProgram(request.program.text, request.dialect, *machine, nullptr, request.rotacal_program);

@@ -35,7 +35,8 @@ int cmdCheck(const Common& c, const std::string& program_file, const std::string
   if (part_program && !plan_file.empty())
     throw CLI::ValidationError("--part-program", "a part program has no cycle plan: give one of --plan, --part-program");
   const Dialect& d = dialectOrFail(dialect);
-  if (d.name() == "csv") throw CLI::ValidationError("--dialect", "csv has no NC programs to check");
+  if (!d.hasPrograms())
+    throw CLI::ValidationError("--dialect", std::string(d.name()) + " has no NC programs to check");
   const MachineModel machine = loadMachine(machine_file);
   std::optional<ProbePlan> plan;
   if (!plan_file.empty()) {
@@ -125,7 +126,7 @@ std::vector<Command> checkCommands(CLI::App& app, const Common& common) {
   auto* cmd = app.add_subcommand("check", "verify an NC program on the machine: clearances swept along every move, "
                                           "guarded probing moves with their checks, strokes, feeds, program number");
   cmd->add_option("program", a->program, "PROGRAM: the NC program")->required();
-  cmd->add_option("--dialect", a->dialect, "linuxcnc | fanuc | haas | siemens | heidenhain | okuma")->required();
+  cmd->add_option("--dialect", a->dialect, programDialectChoices())->required();
   cmd->add_option("--machine", a->machine, "MACHINE.json")->required();
   cmd->add_option("--plan", a->plan, "PLAN.json: the cycle's number, the spheres it touches; every probing move must "
                                      "reach a surface");

@@ -106,7 +106,9 @@ std::vector<Command> compensateCommands(CLI::App& app, const Common& common) {
   cmd->add_option("--report", a->reports,
                   "REPORT.json of analyze; repeat to combine (location errors from one, component errors from another)")
       ->required();
-  cmd->add_option("--dialect", a->dialect, "linuxcnc | fanuc | haas | siemens | okuma")->required();
+  cmd->add_option("--dialect", a->dialect,
+                  dialectChoices([](const Dialect& d) { return isWordAddress(d.language()); }))
+      ->required();
   cmd->add_option("--machine", a->machine, "MACHINE.json (default: the machine recorded in the report)");
   cmd->add_option("--program-origin", a->origin,
                   "X,Y,Z (mm): machine position of the program zero relative to the rotary-axis intersection (default "

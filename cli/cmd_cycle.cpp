@@ -408,11 +408,12 @@ std::vector<Command> cycleCommands(CLI::App& app, const Common& common) {
   };
   auto a = std::make_shared<Args>();
   std::vector<Command> cmds;
-  const std::string results_dialects = "csv | " + [] {
-    std::string s;
-    for (const auto& n : dialectNames())
-      if (n != "csv") s += (s.empty() ? "" : " | ") + n;
-    return s;
+  // The neutral results first, then the controllers'.
+  const std::string results_dialects = [] {
+    std::string neutral, controllers;
+    for (const Dialect* d : dialects())
+      (d->hasPrograms() ? controllers : neutral) += (" | " + std::string(d->name()));
+    return (neutral + controllers).substr(3);
   }();
 
   auto* plan = app.add_subcommand("plan", "make the probing plan of a cycle for a machine");
@@ -428,7 +429,7 @@ std::vector<Command> cycleCommands(CLI::App& app, const Common& common) {
 
   auto* gen = app.add_subcommand("generate", "write the NC program of a plan in a controller dialect");
   gen->add_option("--plan", a->plan_file, "PLAN.json")->required();
-  gen->add_option("--dialect", a->dialect, "linuxcnc | fanuc | haas | siemens | heidenhain | okuma")->required();
+  gen->add_option("--dialect", a->dialect, programDialectChoices())->required();
   gen->add_option("-o,--output", a->out, "PROGRAM")->required();
   cmds.push_back({gen, [a, &common] { return cmdGenerate(common, a->plan_file, a->dialect, a->out); }});
 

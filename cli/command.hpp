@@ -43,6 +43,19 @@ inline void say(const Common& c, const std::string& text) {
   if (!c.quiet) std::fputs(text.c_str(), stdout);
 }
 
+/// The dialects `keep` accepts, in the registry's order, as --help lists a choice: "a | b | c".
+template <class Keep>
+std::string dialectChoices(Keep keep) {
+  std::string s;
+  for (const Dialect* d : dialects())
+    if (keep(*d)) s += (s.empty() ? "" : " | ") + std::string(d->name());
+  return s;
+}
+/// The dialects that write NC programs.
+inline std::string programDialectChoices() {
+  return dialectChoices([](const Dialect& d) { return d.hasPrograms(); });
+}
+
 inline const Dialect& dialectOrFail(const std::string& name) {
   try {
     return dialectByName(name);

@@ -560,13 +560,16 @@ void requireRapidIndex(const nc::Op& op, std::string_view dialect) {
 }
 
 std::string inverseTimeRefusal(std::string_view dialect) {
-  const char* why = dialect == "okuma"        ? "inverse-time feed (G93) is UNVERIFIED for OSP (controllers.md Sec. 6.5)"
-                    : dialect == "heidenhain" ? "inverse-time feed is not verified for Klartext (controllers.md Sec. 5.5)"
-                                              : nullptr;
-  if (!why) return "";
-  return fmt::format("{}: {}, so a program that moves under inverse time is refused for this dialect; use linuxcnc, "
-                     "fanuc, haas or siemens",
-                     dialect, why);
+  const Dialect* d = findDialect(dialect);
+  if (!d || d->inverseTimeRefusal().empty()) return "";
+  std::vector<std::string> writing;
+  for (const Dialect* o : dialects())
+    if (o->hasPrograms() && o->inverseTimeRefusal().empty()) writing.emplace_back(o->name());
+  std::string use;
+  for (size_t i = 0; i < writing.size(); ++i)
+    use += (i == 0 ? "" : i + 1 == writing.size() ? " or " : ", ") + writing[i];
+  return fmt::format("{}: {}, so a program that moves under inverse time is refused for this dialect; use {}", dialect,
+                     d->inverseTimeRefusal(), use);
 }
 
 void requireInverseTimeAllowed(const nc::Program& program, std::string_view dialect) {
@@ -614,10 +617,9 @@ bool isProbingBlock(const nc::Block& b) {
 }
 
 std::optional<EndPointCheck> endPointCheck(std::string_view dialect) {
-  if (dialect == "fanuc" || dialect == "haas") return EndPointCheck{{"#1", "#2", "#3"}, {"#5061", "#5062", "#5063"}};
-  if (dialect == "okuma") return EndPointCheck{{"VC4", "VC5", "VC6"}, {"VC1", "VC2", "VC3"}};
-  if (dialect == "siemens") return EndPointCheck{{"R93", "R94", "R95"}, {"R90", "R91", "R92"}};
-  return std::nullopt;
+  const Dialect* d = findDialect(dialect);
+  if (!d) return std::nullopt;
+  return d->endPointCheck();
 }
 
 std::string endPointCheckStatement(const EndPointCheck& form, int axis, double end, int decimals) {

@@ -252,8 +252,8 @@ class ModeGuard {
 /// writer and checker: G93 is written where controllers.md names it for the control - LinuxCNC
 /// (verified with rs274), Haas ([HaasMan]), Fanuc and Siemens (only their "F on every G93 block"
 /// rule is UNVERIFIED, and rotacal writes F on every block) - and refused where G93 itself is
-/// UNVERIFIED: Okuma (Sec. 6.5) and Heidenhain (Sec. 5.5): a program that moves under G93 is
-/// refused there, with this reason.
+/// UNVERIFIED (the dialect's DialectIdentity::inverse_time_refusal): a program that moves under
+/// G93 is refused there, with this reason and the dialects that write it.
 std::string inverseTimeRefusal(std::string_view dialect);
 /// Throws std::invalid_argument(inverseTimeRefusal(dialect)) when `program` switches to inverse
 /// time and the dialect refuses it.
@@ -277,13 +277,10 @@ bool isProbingBlock(const nc::Block& block);
 /// the distance between the probe's stop and the end point. An untriggered move stops exactly
 /// at its end point, so the test guards only while these literals are the move's own end point:
 /// whatever moves the end point (`rotacal compensate`) must rewrite them with it.
-struct EndPointCheck {
-  std::array<std::string, 3> difference;  // variables holding stop - end, X Y Z
-  std::array<std::string, 3> measured;    // variables holding the probe's stop, X Y Z
-};
-/// The form of `dialect`; nullopt for linuxcnc (G38.2 raises an error by itself), heidenhain
-/// (cycle 0's check is written around the pre-position; its programs are never rewritten) and
-/// csv (no program).
+/// Its variables are the dialect's (DialectIdentity::end_point_check).
+using rotacal::EndPointCheck;
+/// The form of the dialect named `dialect`; nullopt where it has none (its identity) or no such
+/// dialect exists.
 std::optional<EndPointCheck> endPointCheck(std::string_view dialect);
 /// The statement of `axis` (0..2) comparing with end point coordinate `end`, e.g.
 /// "#2=#5062+235.0000".
@@ -403,7 +400,7 @@ class TaggedResultsDialect : public Dialect {
     std::string_view eol;
     std::string_view second_header_why;  // parseTaggedResults'
   };
-  explicit TaggedResultsDialect(const Form& form) : form_(form) {}
+  TaggedResultsDialect(const Form& form, DialectIdentity identity) : Dialect(std::move(identity)), form_(form) {}
   std::string_view name() const override { return form_.name; }
   std::string_view programExtension() const override { return form_.program_extension; }
   std::string_view resultsExtension() const override { return ".txt"; }

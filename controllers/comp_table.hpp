@@ -44,7 +44,7 @@ class PeriodicInterpolant {
 
 struct CompTableRequest {
   AngularPositionErrors errors;
-  std::string dialect;          // linuxcnc, fanuc, siemens, csv (heidenhain, okuma, haas: refused)
+  std::string dialect;          // one of compTableDialects() (the others are refused)
   int controller_sign = 1;      // commanded controller angle = sign * papers' angle
   double step_deg = 0.0;        // table spacing in the control's counting; 0 = the dialect's default
   /// Extent of the LinuxCNC table in the control's counting (deg). Empty range (lo >= hi): one
@@ -79,12 +79,30 @@ double controllerError_deg(const PeriodicInterpolant& E_mdeg, int controller_sig
 /// offsets writers (kMaxAngleCorrectionMdeg) without force.
 CompTable writeCompTable(const CompTableRequest& request);
 
-/// The dialects that write a table, for --help and messages.
+/// The dialects that write a table, for --help and messages: the controllers' own forms in the
+/// registry's order, then the neutral one.
 const std::vector<std::string>& compTableDialects();
 
-/// Why `dialect` gets no table ("" when it gets one): heidenhain, okuma and haas have no form in
-/// the sources; anything else not in compTableDialects() is unknown.
+/// Why `dialect` gets no table ("" when it gets one): the dialect's comp_table_refusal where it
+/// has no form in the sources; anything else not in compTableDialects() is unknown.
 std::string compTableRefusal(const std::string& dialect);
+
+// ---- What every dialect's table form (DialectIdentity::comp_table) is written with ----
+
+/// The table's points over one turn: 360 / step_deg. Throws std::invalid_argument when the step is
+/// not > 0 and <= 90 deg or does not divide 360 deg into whole steps.
+int compTableStepsPerTurn(double step_deg);
+
+/// `count` rows from `lo` every `step` deg (control's counting) and the largest |e| among them.
+struct CompTableGrid {
+  std::vector<CompTableRow> rows;
+  double max_abs_mdeg = 0.0;
+};
+CompTableGrid compTableGrid(const PeriodicInterpolant& E_mdeg, int controller_sign, double lo, double step, int count);
+
+/// Where a table comes from, one line each, for its comments: axis, source, spacing, uncertainty.
+std::vector<std::string> compTableProvenance(const CompTableRequest& request, const PeriodicInterpolant& E_mdeg,
+                                             double step);
 
 /// Why a table spacing cannot be used ("" when it can): it must be > 0, at most 90 deg and divide
 /// 360 deg into whole steps.

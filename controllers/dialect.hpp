@@ -2,9 +2,12 @@
 // One place per controller dialect: how a probing program is spelled, what the controller
 // writes back and how to read it, how compensation is written in the controller's own form,
 // and a strict checker for generated programs. core/ never sees any of this.
+#include <array>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "core/error_model.hpp"
@@ -25,8 +28,54 @@ struct OffsetRequest {
   std::string path;                         // the output file: a dialect may pick its form by extension
 };
 
+namespace ctl {
+struct CompTableRequest;
+class PeriodicInterpolant;
+struct CompTable;
+}  // namespace ctl
+
+/// The language a dialect's programs are written in: which reader follows a program back
+/// (controllers/motion_reader.hpp) and whether `compensate` can rewrite one.
+enum class ProgramLanguage {
+  None,       // no NC programs: the neutral results and offsets only
+  IsoGcode,   // word-address G-code, comments in parentheses, G20/G21 for the unit
+  Sinumerik,  // word-address G-code with MEAS= probing, G70/G700 for inch, comments after ';'
+  Klartext,   // Heidenhain conversational: not word-address, never rewritten
+};
+
+/// Word-address G-code, the language `compensate` rewrites and the word-address reader follows.
+constexpr bool isWordAddress(ProgramLanguage l) { return l == ProgramLanguage::IsoGcode || l == ProgramLanguage::Sinumerik; }
+
+/// The variables of a no-trigger check written as an end-point comparison after each probing
+/// move (the probe's stop minus the programmed end, per axis, then a test on the differences).
+struct EndPointCheck {
+  std::array<std::string, 3> difference;  // variables holding stop - end, X Y Z
+  std::array<std::string, 3> measured;    // variables holding the probe's stop, X Y Z
+};
+
+/// What a dialect is, as data: what the code outside the dialect asks of it (the verifier, the
+/// program rewriter, the compensation tables, the command line) reads it here, never its name.
+struct DialectIdentity {
+  ProgramLanguage language = ProgramLanguage::IsoGcode;
+  /// Whether its programs carry a program number (O word): the control stores them by number.
+  bool numbers_programs = false;
+  /// The no-trigger check's variables; nullopt where the probing move raises the error itself
+  /// (G38.2), where the check is written otherwise (Klartext's cycle 0) or there is no program.
+  std::optional<EndPointCheck> end_point_check;
+  /// Why a program moving under inverse-time feed (G93) is refused; empty where it is written.
+  std::string_view inverse_time_refusal;
+  /// Why `compensate` does not rewrite its programs, when they are not word-address G-code.
+  std::string_view rewrite_refusal;
+  /// The rotary compensation table in the dialect's form; nullptr where there is none.
+  ctl::CompTable (*comp_table)(const ctl::CompTableRequest& request, const ctl::PeriodicInterpolant& error_mdeg,
+                               double step_deg) = nullptr;
+  /// Why there is no compensation table (comp_table == nullptr), and what to do instead.
+  std::string_view comp_table_refusal;
+};
+
 class Dialect {
  public:
+  explicit Dialect(DialectIdentity identity) : identity_(std::move(identity)) {}
   virtual ~Dialect() = default;
   virtual std::string_view name() const = 0;
   virtual std::string_view programExtension() const = 0;  // ".ngc", ".nc", ...
@@ -66,10 +115,26 @@ class Dialect {
   /// (every variable there is shared with the machine's own macros): the comment mark is then
   /// the only evidence, and a program stripped of it cannot be told from an original.
   virtual std::string compensationMark() const { return {}; }
+
+  ProgramLanguage language() const { return identity_.language; }
+  bool hasPrograms() const { return identity_.language != ProgramLanguage::None; }
+  bool numbersPrograms() const { return identity_.numbers_programs; }
+  const std::optional<EndPointCheck>& endPointCheck() const { return identity_.end_point_check; }
+  std::string_view inverseTimeRefusal() const { return identity_.inverse_time_refusal; }
+  std::string_view rewriteRefusal() const { return identity_.rewrite_refusal; }
+  bool hasCompTable() const { return identity_.comp_table != nullptr; }
+  const DialectIdentity& identity() const { return identity_; }
+
+ private:
+  DialectIdentity identity_;
 };
 
-/// The dialect by name: csv, linuxcnc, fanuc. Throws std::invalid_argument for others.
+/// The dialect by name. Throws std::invalid_argument listing the names for others.
 const Dialect& dialectByName(std::string_view name);
+/// The same, nullptr for a name no dialect has.
+const Dialect* findDialect(std::string_view name);
+/// Every dialect, in the registry's order, and their names.
+const std::vector<const Dialect*>& dialects();
 std::vector<std::string> dialectNames();
 
 }  // namespace rotacal

@@ -1,6 +1,6 @@
 #pragma once
-// The dialect objects behind dialectByName(), and the few free functions of the dialects that
-// tests and tools need directly (controllers/dialect.hpp stays the fixed interface).
+// The few free functions of the dialects that tests and tools need directly
+// (controllers/dialect.hpp stays the fixed interface; controllers/registry.cpp lists the dialects).
 #include <map>
 #include <string>
 #include <utility>
@@ -9,14 +9,6 @@
 #include "controllers/dialect.hpp"
 
 namespace rotacal {
-
-const Dialect& csvDialect();
-const Dialect& linuxcncDialect();
-const Dialect& fanucDialect();
-const Dialect& haasDialect();
-const Dialect& siemensDialect();
-const Dialect& heidenhainDialect();
-const Dialect& okumaDialect();
 
 /// Changes (mm) of the Haas MRZP settings 255, 256, 257 (X, Y, Z of the rotary centre): the
 /// tilting axis's pivot, A/C: (dx_AY, dy_AY, dz_AY), B/C: (dx_BY, dy_CB, dz_BY). dy_CA / dx_CB

@@ -96,7 +96,7 @@ std::string MacroBDialect::writeProgram(const nc::Program& p) const {
   // point", i.e. no trigger: (10 um)^2 in mm, (0.001 in)^2 in inch. A triggered move stops
   // the overtravel (mm, not um) before its end; an untriggered one stops at the end exactly.
   const std::string no_trigger_sq = inch ? "0.000001" : "0.0001";
-  const auto end_check = ctl::endPointCheck(f_.name);
+  const auto end_check = endPointCheck();
   if (!end_check) throw std::invalid_argument(fmt::format("{}: no no-trigger check form", f_.name));
 
   w.line("%");

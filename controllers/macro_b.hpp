@@ -23,7 +23,7 @@
 namespace rotacal {
 
 struct MacroBFlavor {
-  std::string name;                 // dialect name: "fanuc"
+  std::string name;                 // the dialect's name, as registered
   std::string tag;                  // in the results header: "FANUC"
   std::string title;                // in the program's first comment
   int program_digits = 4;           // O1234 (Fanuc), O01234 (Haas: O + 5 digits)
@@ -36,7 +36,7 @@ struct MacroBFlavor {
 
 class MacroBDialect : public Dialect {
  public:
-  explicit MacroBDialect(MacroBFlavor flavor) : f_(std::move(flavor)) {}
+  MacroBDialect(MacroBFlavor flavor, DialectIdentity identity) : Dialect(std::move(identity)), f_(std::move(flavor)) {}
   std::string_view name() const override { return f_.name; }
   std::string_view programExtension() const override { return ".nc"; }
   std::string_view resultsExtension() const override { return ".txt"; }
@@ -54,6 +54,15 @@ class MacroBDialect : public Dialect {
 };
 
 namespace macro_b {
+/// What every Macro B dialect is: ISO G-code in numbered programs, each G31 skip followed by
+/// its no-trigger check (#1-#3 = skip position #5061-#5063 minus the end point).
+inline DialectIdentity identity() {
+  DialectIdentity d;
+  d.language = ProgramLanguage::IsoGcode;
+  d.numbers_programs = true;
+  d.end_point_check = EndPointCheck{{"#1", "#2", "#3"}, {"#5061", "#5062", "#5063"}};
+  return d;
+}
 /// Upper-case comment lines "(...)" of at most 80 characters in Fanuc's safe character set.
 std::vector<std::string> comments(std::string_view text);
 /// DPRNT text: A-Z 0-9 and '-', '.', '/'.

@@ -9,13 +9,14 @@
 #include <fmt/format.h>
 
 #include "controllers/common.hpp"
+#include "controllers/dialect.hpp"
 #include "gcode/reader.hpp"
 
 namespace rotacal::ctl {
 namespace {
 
 // Heidenhain's no-trigger test compares cycle 0's result with the end point moved this far
-// back toward the start (controllers/heidenhain.cpp writes it so): the end point it guards is
+// back toward the start (controllers/heidenhain/dialect.cpp writes it so): the end point it guards is
 // the literal moved forward again by the same amount.
 constexpr double kHeidenhainNoTriggerMm = 0.01;
 
@@ -31,10 +32,10 @@ nc::Motion motionAt(nc::Motion::Kind kind, int line, std::string why = "") {
 
 nc::Motion unreadable(int line, std::string why) { return motionAt(nc::Motion::Kind::Unreadable, line, std::move(why)); }
 
-std::vector<nc::Motion> readWordAddress(std::string_view dialect, const std::string& text) {
-  const bool siemens = dialect == "siemens";
-  const bool numbered = numbersPrograms(dialect);
-  const std::optional<EndPointCheck> form = endPointCheck(dialect);
+std::vector<nc::Motion> readWordAddress(const Dialect& dialect, const std::string& text) {
+  const bool siemens = dialect.language() == ProgramLanguage::Sinumerik;
+  const bool numbered = dialect.numbersPrograms();
+  const std::optional<EndPointCheck>& form = dialect.endPointCheck();
   std::vector<nc::Motion> out;
   bool inch = false, incremental = false, inverse_time = false;
   std::optional<nc::Motion::Kind> modal;  // G0 / G1 in force
@@ -339,12 +340,16 @@ bool isStatement(const std::string& code, bool if_is_statement) {
   return !(name.size() == 1 && std::string("XYZABC").find(name) != std::string::npos);
 }
 
-bool numbersPrograms(std::string_view dialect) { return dialect == "fanuc" || dialect == "haas" || dialect == "okuma"; }
+bool numbersPrograms(std::string_view dialect) {
+  const Dialect* d = findDialect(dialect);
+  return d && d->numbersPrograms();
+}
 
 std::vector<nc::Motion> readMotions(std::string_view dialect, const std::string& text) {
-  if (dialect == "linuxcnc" || dialect == "fanuc" || dialect == "haas" || dialect == "okuma" || dialect == "siemens")
-    return readWordAddress(dialect, text);
-  if (dialect == "heidenhain") return readHeidenhain(text);
+  const Dialect* d = findDialect(dialect);
+  const ProgramLanguage language = d ? d->language() : ProgramLanguage::None;
+  if (isWordAddress(language)) return readWordAddress(*d, text);
+  if (language == ProgramLanguage::Klartext) return readHeidenhain(text);
   throw std::invalid_argument("dialect '" + std::string(dialect) + "' has no NC programs to read");
 }
 

@@ -1,10 +1,9 @@
 #pragma once
 // Reads a generated (or compensated) program back into neutral motions (gcode/motion.hpp) for
-// the program verifier: one reader for the word-address dialects (linuxcnc, fanuc, haas, okuma,
-// siemens: gcode/reader.hpp's blocks plus each dialect's probing words and no-trigger checks) and
-// one for Heidenhain Klartext. A free function keyed on the dialect's name rather than a new
-// virtual of Dialect: it adds to controllers/ without touching the dialect classes, and the
-// word-address dialects share one implementation.
+// the program verifier: one reader for the word-address languages (gcode/reader.hpp's blocks plus
+// each dialect's probing words and no-trigger checks) and one for Heidenhain Klartext, chosen by
+// the dialect's ProgramLanguage. A free function keyed on the dialect's name rather than a new
+// virtual of Dialect: the dialects of one language share one implementation.
 #include <string>
 #include <string_view>
 #include <vector>
@@ -25,7 +24,8 @@ std::vector<nc::Motion> readMotions(std::string_view dialect, const std::string&
 /// to an axis letter (X=10, Siemens) is a motion, never a statement.
 bool isStatement(const std::string& code, bool if_is_statement);
 
-/// Whether the dialect's programs carry a program number (O word): fanuc, haas, okuma.
+/// Whether the dialect's programs carry a program number (O word; Dialect::numbersPrograms), false
+/// for a name no dialect has.
 bool numbersPrograms(std::string_view dialect);
 
 }  // namespace rotacal::ctl

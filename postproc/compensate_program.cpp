@@ -100,10 +100,11 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
   if (errors.kinematics() != machine.kinematics)
     throw std::invalid_argument("compensate: the location errors are for another kinematics than the machine");
   errors.validate();
-  if (syntax.dialect == "heidenhain" || syntax.dialect == "csv")
+  const Dialect* named = findDialect(syntax.dialect);
+  if (named && !isWordAddress(named->language()))
     throw std::invalid_argument("compensate: '" + syntax.dialect + "' programs are not word-address G-code");
   const Dialect& dialect = dialectByName(syntax.dialect);
-  const std::optional<ctl::EndPointCheck> end_check = ctl::endPointCheck(syntax.dialect);
+  const std::optional<ctl::EndPointCheck> end_check = dialect.endPointCheck();
   const std::vector<nc::Block> blocks = nc::readProgram(text);
   ProgramCompensation out;
   Modal m;

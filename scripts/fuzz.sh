@@ -56,11 +56,14 @@ mkdir -p "$S"/{fuzz_results,fuzz_rtest_results,fuzz_tooltip_results,fuzz_program
 W=$S/work
 # prefix BYTE FILE OUT: OUT = one selector byte (decimal) followed by FILE
 prefix() { { printf "\\$(printf '%03o' "$1")"; cat "$2"; } >"$3"; }
-DIALECTS=(csv linuxcnc fanuc haas siemens heidenhain okuma)
-PROGRAM_DIALECTS=(linuxcnc fanuc haas siemens heidenhain okuma)
+# The dialects in the registry's order, as the tool's --help lists them (the harnesses pick by that
+# order): every dialect reads results, those with programs are the ones `generate` takes.
+dialectsOf() { "$RC" "$1" --help | sed -n 's/^ *--dialect TEXT REQUIRED *//p' | tr -d '|'; }
+read -r -a DIALECTS <<<"$(dialectsOf simulate)"
+read -r -a PROGRAM_DIALECTS <<<"$(dialectsOf generate)"
 BASE=tests/data/bad/base  # the plans the results harnesses read against (tests/fuzz/fuzz_plans.hpp)
 W=$S/work
-# results of every dialect: fuzz_results's selector byte = plan index * 7 + dialect index
+# results of every dialect: fuzz_results's selector byte = plan index * (number of dialects) + dialect index
 for pi in 0 1; do
   plan=$BASE/small.plan.json
   [ $pi = 1 ] && plan=$BASE/spheres3.plan.json
@@ -68,7 +71,7 @@ for pi in 0 1; do
     d=${DIALECTS[$di]}
     if "$RC" -q simulate --plan "$plan" --truth examples/truth/table4_mean.json --noise-um 0.5 --dialect "$d" \
          -o "$W/$pi.$d.res" 2>/dev/null; then
-      prefix $((pi * 7 + di)) "$W/$pi.$d.res" "$S/fuzz_results/$pi.$d"
+      prefix $((pi * ${#DIALECTS[@]} + di)) "$W/$pi.$d.res" "$S/fuzz_results/$pi.$d"
     fi
   done
 done

@@ -24,7 +24,10 @@ cp "$root/examples/truth/table4_mean.json" "$work/"
 cd "$work"
 mkdir gen
 "$rotacal" plan --cycle touch154 --machine machines/ac_trunnion.json -o gen/plan.json >/dev/null
-for d in csv linuxcnc fanuc haas siemens heidenhain okuma; do
+# Every dialect, as the tool lists them (simulate takes them all); each names its files' extensions
+# below, and a dialect without its line stops the script.
+dialects=$("$rotacal" simulate --help | sed -n 's/^ *--dialect TEXT REQUIRED *//p' | tr -d '|')
+for d in $dialects; do
   case $d in
     csv) prog="" res=.csv off=.csv ;;
     linuxcnc) prog=.ngc res=.txt off=.hal ;;
@@ -32,6 +35,7 @@ for d in csv linuxcnc fanuc haas siemens heidenhain okuma; do
     siemens) prog=.mpf res=.txt off=.mpf ;;
     heidenhain) prog=.h res=.txt off=.h ;;
     okuma) prog=.min res=.txt off=.min ;;
+    *) echo "golden.sh: add the file extensions of dialect $d" >&2; exit 1 ;;
   esac
   mkdir "gen/$d"
   if [ -n "$prog" ]; then
@@ -44,7 +48,7 @@ for d in csv linuxcnc fanuc haas siemens heidenhain okuma; do
 done
 mkdir -p "$out"
 cp gen/plan.json "$out/plan.json"
-for d in csv linuxcnc fanuc haas siemens heidenhain okuma; do
+for d in $dialects; do
   rm -rf "${out:?}/$d"
   cp -r "gen/$d" "$out/$d"
 done

@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "core/errors.hpp"
+#include "controllers/dialect.hpp"
 #include "controllers/motion_reader.hpp"
 #include "core/iso_time.hpp"
 #include "core/units.hpp"
@@ -15,21 +16,24 @@
 
 namespace rotacal {
 
-// Heidenhain Klartext (L X+.. Y+..) is not word-address G-code and the neutral csv is no
-// program: both are refused.
+// Only word-address G-code is rewritten: a program of another language (Klartext) is refused with
+// its dialect's reason, and a dialect without programs (the neutral csv) with the list of those
+// that have them.
 NcSyntax ncSyntaxOf(const std::string& dialect) {
   NcSyntax s;
   s.dialect = dialect;
-  if (dialect == "linuxcnc" || dialect == "fanuc" || dialect == "haas" || dialect == "okuma") return s;
-  if (dialect == "siemens") {
-    s.comment = NcSyntax::Comment::Semicolon;
+  const Dialect* d = findDialect(dialect);
+  const ProgramLanguage language = d ? d->language() : ProgramLanguage::None;
+  if (isWordAddress(language)) {
+    if (language == ProgramLanguage::Sinumerik) s.comment = NcSyntax::Comment::Semicolon;
     return s;
   }
-  if (dialect == "heidenhain")
-    throw std::invalid_argument("heidenhain: Klartext programs are not rewritten; enter the kinematics "
-                                "values of `analyze --offsets` instead (docs/compensation.md)");
-  throw std::invalid_argument("'" + dialect + "' has no NC programs to compensate (linuxcnc, fanuc, haas, "
-                              "siemens, okuma)");
+  if (d && !d->rewriteRefusal().empty())
+    throw std::invalid_argument(dialect + ": " + std::string(d->rewriteRefusal()));
+  std::string rewritten;
+  for (const Dialect* o : dialects())
+    if (isWordAddress(o->language())) rewritten += (rewritten.empty() ? "" : ", ") + std::string(o->name());
+  throw std::invalid_argument("'" + dialect + "' has no NC programs to compensate (" + rewritten + ")");
 }
 
 namespace {

@@ -12,6 +12,7 @@
 #include <tuple>
 
 #include "cli_run.hpp"
+#include "dialect_lists.hpp"
 
 namespace rotacal {
 namespace {
@@ -176,7 +177,7 @@ TEST(CheckCli, SpaceframeProgramsPassWithTheirPlanInEveryDialect) {
   ASSERT_EQ(sh("plan --cycle spaceframe --machine " + kMachine + " --set phi_list=-90,0 --set theta_list=0,90,180,270 -o " +
                d.p("plan.json")).code,
             0);
-  for (const char* dialect : {"linuxcnc", "fanuc", "haas", "siemens", "heidenhain", "okuma"}) {
+  for (const std::string& dialect : test::programDialects()) {
     const std::string prog = d.p(std::string("sf.") + dialect);
     ASSERT_EQ(sh("generate --plan " + d.p("plan.json") + " --dialect " + dialect + " -o " + prog).code, 0) << dialect;
     const auto r = sh("check " + prog + " --dialect " + dialect + " --machine " + kMachine + " --plan " + d.p("plan.json"));

@@ -2,7 +2,7 @@
 # The bash completion (cli/completion/rotacal.bash) against the tool, so that the two cannot drift:
 # bash -n accepts it; it names every command `rotacal --help` lists and every option each
 # `rotacal COMMAND [SUB] --help` lists (history's add and show included); and, sourced, it
-# completes a command, an option of a command and a dialect.
+# completes a command, an option of a command and, after --dialect, the dialects --help lists.
 # Usage: tests/cli/completion_test.sh ROTACAL COMPLETION_SCRIPT
 set -euo pipefail
 R=$1
@@ -81,6 +81,14 @@ complete_words() {  # complete_words WORD...: the completions of the last word
 [ "$(complete_words rotacal history add --mach)" = --machine-id ] || fail "'rotacal history add --mach' does not complete"
 complete_words rotacal analyze --dialect "" | grep -qx csv || fail "analyze --dialect does not offer csv"
 if complete_words rotacal compensate --dialect "" | grep -qx heidenhain; then fail "compensate --dialect offers heidenhain"; fi
+
+# The dialects it offers after --dialect are those the command's --help lists (from the registry).
+for c in $(subcommands); do
+  want=$("$R" "$c" --help | sed -n 's/^ *--dialect TEXT[A-Z ]* \{2,\}//p' | sed 's/ (.*//' | tr -d '|' | xargs -n1 | sort | xargs)
+  [ -n "$want" ] || continue
+  got=$(complete_words rotacal "$c" --dialect "" | sort | xargs)
+  [ "$got" = "$want" ] || fail "'rotacal $c --dialect' completes to '$got'; its --help lists '$want'"
+done
 
 [ "$fails" = 0 ] || exit 1
 echo "completion_test: OK: $n_cmd commands and $n_opt options of rotacal --help all in $(basename "$S")"

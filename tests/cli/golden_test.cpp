@@ -38,7 +38,7 @@ using ShellRun = test::CliRun;
 ShellRun sh(const std::string& cmd) { return test::runCommand(cmd + " 2>&1"); }
 
 
-const std::vector<std::string> kDialects = {"csv", "linuxcnc", "fanuc", "haas", "siemens", "heidenhain", "okuma"};
+const std::vector<std::string> kDialects = dialectNames();
 
 std::string resultsName(const std::string& d) { return d == "csv" ? "results.csv" : "results.txt"; }
 

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "cli_run.hpp"
+#include "dialect_lists.hpp"
 
 namespace rotacal {
 namespace {
@@ -25,7 +26,7 @@ using test::slurp;
 
 const std::string kMachine = std::string(ROTACAL_SOURCE_DIR) + "/examples/machines/ac_trunnion.json";
 const std::string kManifest = std::string(ROTACAL_SOURCE_DIR) + "/tests/data/unsafe/MANIFEST.tsv";
-const std::vector<std::string> kDialects = {"linuxcnc", "fanuc", "haas", "siemens", "heidenhain", "okuma"};
+const std::vector<std::string> kDialects = test::programDialects();
 
 struct Case {
   int manifest_line = 0;

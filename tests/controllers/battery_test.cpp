@@ -3,6 +3,7 @@
 // checker on the generated programs.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <sstream>
@@ -18,6 +19,7 @@
 #include "core/machine.hpp"
 #include "cycles/cycle.hpp"
 #include "dialect_battery.hpp"
+#include "dialect_lists.hpp"
 #include "test_util.hpp"
 
 namespace rotacal {
@@ -85,50 +87,63 @@ TEST_P(EveryDialect, RecoversInjectedErrors) { test::expectRecovery(d(), test::a
 
 TEST_P(EveryDialect, GeneratedProgramsPassTheChecker) { test::expectCleanPrograms(d()); }
 
-INSTANTIATE_TEST_SUITE_P(Dialects, EveryDialect,
-                         ::testing::Values(
-                             // DPRNT [44] and [35] (000's units), #3001 in whole ms; CR LF like
-                             // a punch.
-                             Printed{"fanuc", 4, 25.4, 5, test::Clock::Milliseconds,
-                                     {"ROTACAL-RESULTS DIALECT FANUC CYCLE TOUCH154 POINTS 154 UNIT MM",
-                                      "DATE 20231007 TIME 132000", "P1 X  53.5840 Y-235.0000 Z 150.0000 T     900"},
-                                     "END",
-                                     // leading zeros (parameter 6001) and [80]'s trailing point;
-                                     // 2026-11-22 01:41:19 + 12.345 s (Python's datetime)
-                                     {{1, "DATE 20261122 TIME 014119"}, {2, "P1 X0053.5840 Y-0235.0000 Z  150.0000 T 12345."}},
-                                     848626879.0 + 12.345},
-                             Printed{"haas", 4, 25.4, 5, test::Clock::Milliseconds,
-                                     {"ROTACAL-RESULTS DIALECT HAAS CYCLE TOUCH154 POINTS 154 UNIT MM"}},
-                             // Klartext programs are written in MM whatever the machine, and so
-                             // are their results; FN 16 prints the decimal comma of a German
-                             // language setting.
-                             Printed{"heidenhain", 4, 1.0, 4, test::Clock::Seconds,
-                                     {"ROTACAL HEIDENHAIN CYCLE TOUCH154 POINTS 154 UNIT MM",
-                                      "P    1 X   53,5840 Y -235,0000 Z  150,0000", "T20231007 132000"},
-                                     "END",
-                                     // a point or a comma, an explicit sign; 2024-02-29 23:59:59
-                                     // (Python's datetime)
-                                     {{1, "P1 X53.5840 Y-235,0000 Z +150.0000"}, {2, "T20240229 235959"}},
-                                     762566399.0},
-                             // LOG's %.6f, the angles of point 1's pose with LinuxCNC's sign, the
-                             // probe's state; no clock, nothing after the last point.
-                             Printed{"linuxcnc", 6, 25.4, 6, test::Clock::None,
-                                     {"rotacal-results/1 dialect=linuxcnc cycle=touch154 points=154 unit=mm",
-                                      "P1 53.584010 -235.000000 150.000000 0.0000 0.0000 1"},
-                                     ""},
-                             Printed{"okuma", 4, 25.4, 5, test::Clock::None,
-                                     {"ROTACAL-RESULTS DIALECT OKUMA CYCLE TOUCH154 POINTS 154 UNIT MM"},
-                                     "END",
-                                     // '+', spaces and leading zeros
-                                     {{1, "P1 X+53.5840 Y-235.0000 Z 0150.0000"}}},
-                             // SPRINT's %10.4F
-                             Printed{"siemens", 4, 25.4, 5, test::Clock::None,
-                                     {"ROTACAL-RESULTS DIALECT SIEMENS CYCLE TOUCH154 POINTS 154 UNIT MM",
-                                      "P1 X   53.5840 Y -235.0000 Z  150.0000"},
-                                     "END",
-                                     // %F without a width
-                                     {{1, "P1 X53.5840 Y-235.0000 Z150.0000"}}}),
+// What each controller prints, one entry a dialect with programs (the neutral csv's one form:
+// csv_test).
+const std::vector<Printed> kPrinted = {
+    // DPRNT [44] and [35] (000's units), #3001 in whole ms; CR LF like
+    // a punch.
+    Printed{"fanuc", 4, 25.4, 5, test::Clock::Milliseconds,
+            {"ROTACAL-RESULTS DIALECT FANUC CYCLE TOUCH154 POINTS 154 UNIT MM",
+             "DATE 20231007 TIME 132000", "P1 X  53.5840 Y-235.0000 Z 150.0000 T     900"},
+            "END",
+            // leading zeros (parameter 6001) and [80]'s trailing point;
+            // 2026-11-22 01:41:19 + 12.345 s (Python's datetime)
+            {{1, "DATE 20261122 TIME 014119"}, {2, "P1 X0053.5840 Y-0235.0000 Z  150.0000 T 12345."}},
+            848626879.0 + 12.345},
+    Printed{"haas", 4, 25.4, 5, test::Clock::Milliseconds,
+            {"ROTACAL-RESULTS DIALECT HAAS CYCLE TOUCH154 POINTS 154 UNIT MM"}},
+    // Klartext programs are written in MM whatever the machine, and so
+    // are their results; FN 16 prints the decimal comma of a German
+    // language setting.
+    Printed{"heidenhain", 4, 1.0, 4, test::Clock::Seconds,
+            {"ROTACAL HEIDENHAIN CYCLE TOUCH154 POINTS 154 UNIT MM",
+             "P    1 X   53,5840 Y -235,0000 Z  150,0000", "T20231007 132000"},
+            "END",
+            // a point or a comma, an explicit sign; 2024-02-29 23:59:59
+            // (Python's datetime)
+            {{1, "P1 X53.5840 Y-235,0000 Z +150.0000"}, {2, "T20240229 235959"}},
+            762566399.0},
+    // LOG's %.6f, the angles of point 1's pose with LinuxCNC's sign, the
+    // probe's state; no clock, nothing after the last point.
+    Printed{"linuxcnc", 6, 25.4, 6, test::Clock::None,
+            {"rotacal-results/1 dialect=linuxcnc cycle=touch154 points=154 unit=mm",
+             "P1 53.584010 -235.000000 150.000000 0.0000 0.0000 1"},
+            ""},
+    Printed{"okuma", 4, 25.4, 5, test::Clock::None,
+            {"ROTACAL-RESULTS DIALECT OKUMA CYCLE TOUCH154 POINTS 154 UNIT MM"},
+            "END",
+            // '+', spaces and leading zeros
+            {{1, "P1 X+53.5840 Y-235.0000 Z 0150.0000"}}},
+    // SPRINT's %10.4F
+    Printed{"siemens", 4, 25.4, 5, test::Clock::None,
+            {"ROTACAL-RESULTS DIALECT SIEMENS CYCLE TOUCH154 POINTS 154 UNIT MM",
+             "P1 X   53.5840 Y -235.0000 Z  150.0000"},
+            "END",
+            // %F without a width
+            {{1, "P1 X53.5840 Y-235.0000 Z150.0000"}}}};
+
+INSTANTIATE_TEST_SUITE_P(Dialects, EveryDialect, ::testing::ValuesIn(kPrinted),
                          [](const ::testing::TestParamInfo<Printed>& info) { return info.param.dialect; });
+
+// A dialect added to the registry without its entry above would escape the battery silently.
+TEST(EveryDialectBattery, TakesEveryDialectWithPrograms) {
+  std::vector<std::string> listed;
+  for (const auto& p : kPrinted) listed.push_back(p.dialect);
+  std::sort(listed.begin(), listed.end());
+  std::vector<std::string> want = test::programDialects();
+  std::sort(want.begin(), want.end());
+  EXPECT_EQ(listed, want);
+}
 
 // Every program's header says what its X Y Z are and where the zero goes, for the machine it was
 // planned on: the probe-ball centre at the rotary axes' intersection on a table, the head's pivot

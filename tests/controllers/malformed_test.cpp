@@ -348,7 +348,7 @@ TEST_P(Malformed, SwappedValuesAreOffTheirProbingMove) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllDialects, Malformed,
-                         ::testing::Values("csv", "linuxcnc", "fanuc", "haas", "siemens", "heidenhain", "okuma"),
+                         ::testing::ValuesIn(dialectNames()),
                          [](const auto& info) { return info.param; });
 
 TEST(MalformedMacroB, PunchCodesAroundTheOutputAreNotAnError) {

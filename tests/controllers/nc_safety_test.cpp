@@ -21,6 +21,7 @@
 #include "postproc/probe_program.hpp"
 #include "cycles/tooltip/program.hpp"
 #include "test_util.hpp"
+#include "dialect_lists.hpp"
 
 namespace rotacal {
 namespace {
@@ -106,7 +107,7 @@ const std::vector<std::string> kHostile = {"REPORT (1).json", "out/x\nG0 X0 Y0 Z
 const char* kHostileMachine = "mach)\nG0 Z-100 (x";
 
 TEST(OutsideText, NamesInOffsetsFilesNeverBecomeCode) {
-  for (const char* d : {"linuxcnc", "fanuc", "haas", "siemens", "heidenhain", "okuma"}) {
+  for (const std::string& d : test::programDialects()) {
     for (const std::string& path : {std::string("offsets.x"), std::string("offsets.hal"), std::string("offsets.ngc")}) {
       if (std::string(d) != "linuxcnc" && path != "offsets.x") continue;
       auto offsets = [&](const std::string& report, const std::string& machine) {
@@ -130,7 +131,7 @@ TEST(OutsideText, NamesInOffsetsFilesNeverBecomeCode) {
 }
 
 TEST(OutsideText, MachineNameInProgramsNeverBecomesCode) {
-  for (const char* d : {"linuxcnc", "fanuc", "haas", "siemens", "heidenhain", "okuma"}) {
+  for (const std::string& d : test::programDialects()) {
     ProbePlan plan = test::acPlan();
     plan.machine.name = "MACHINE";
     const std::string benign = dialectByName(d).writeProgram(test::cycleProgram(plan, d));
@@ -144,7 +145,7 @@ TEST(OutsideText, MachineNameInProgramsNeverBecomesCode) {
 TEST(OutsideText, ReportPathInACompensatedProgramNeverBecomesCode) {
   const ProbePlan plan = test::acPlan();
   const LocationErrors e = test::table4();
-  for (const char* d : {"linuxcnc", "fanuc", "haas", "siemens", "okuma"}) {
+  for (const std::string& d : test::wordAddressDialects()) {
     const std::string text = dialectByName(d).writeProgram(test::cycleProgram(plan, d));
     const NcSyntax syntax{d, 4, 5, 4, std::string(d) == "siemens" ? NcSyntax::Comment::Semicolon
                                                                    : NcSyntax::Comment::Parentheses};
@@ -164,7 +165,7 @@ TEST(OutsideText, ReportPathInACompensatedProgramNeverBecomesCode) {
 
 TEST(OutsideText, CommentLinesKeepOnlyEachDialectsSafeCharacters) {
   const std::string hostile = "a(b)c;d\"e\nf\rg\x01h\xc3\xa9i";
-  for (const char* d : {"linuxcnc", "fanuc", "haas", "siemens", "heidenhain", "okuma"}) {
+  for (const std::string& d : test::programDialects()) {
     const auto ls = dialectByName(d).commentLines(hostile + std::string(300, 'x'));
     ASSERT_GE(ls.size(), 2u) << d << ": long text is wrapped";
     for (const auto& l : ls) {

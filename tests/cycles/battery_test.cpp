@@ -72,8 +72,8 @@ TEST_P(CycleBattery, ProgramInEveryDialectPassesItsCheckerOrIsRefusedWithAReason
   const ProbePlan p = plan();
   int written = 0;
   for (const auto& name : dialectNames()) {
-    if (name == "csv") continue;
     const Dialect& d = dialectByName(name);
+    if (!d.hasPrograms()) continue;
     std::string text;
     nc::Shape shape;
     try {

@@ -1,5 +1,6 @@
 // The shape of the tree, checked so that it cannot regress: outside cycles/<name>/ and the
-// registry no source file names a cycle, and each layer imports only the layers below it.
+// registry no source file names a cycle, outside controllers/<name>/ and the dialects' registry no
+// string names a dialect, and each layer imports only the layers below it.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -10,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "controllers/dialect.hpp"
 #include "cycles/cycle.hpp"
 
 namespace rotacal {
@@ -92,6 +94,51 @@ TEST(Layering, NoCycleIsNamedOutsideItsFolderAndTheRegistry) {
   std::string all;
   for (const auto& m : found) all += m + "\n";
   EXPECT_TRUE(found.empty()) << found.size() << " mentions of a cycle outside cycles/<name>/:\n" << all;
+}
+
+// Every string literal that is exactly `name` ("FILE:LINE: text"): code that asks for a dialect by
+// name instead of asking the dialect (its DialectIdentity).
+std::vector<std::string> literals(const fs::path& file, const std::string& name) {
+  std::vector<std::string> out;
+  const std::string quoted = "\"" + name + "\"";
+  std::istringstream in(slurp(file));
+  std::string line;
+  for (int n = 1; std::getline(in, line); ++n)
+    if (line.find(quoted) != std::string::npos) out.push_back(file.string() + ":" + std::to_string(n) + ": " + line);
+  return out;
+}
+
+TEST(Layering, RegistryListsEveryDialectOnceByItsName) {
+  const auto names = dialectNames();
+  ASSERT_EQ(names.size(), dialects().size());
+  for (size_t i = 0; i < names.size(); ++i) {
+    EXPECT_EQ(&dialectByName(names[i]), dialects()[i]);
+    EXPECT_TRUE(fs::is_directory(fs::path(ROTACAL_SOURCE_DIR) / "controllers" / names[i])) << names[i];
+    for (size_t j = i + 1; j < names.size(); ++j) EXPECT_NE(names[i], names[j]);
+  }
+  EXPECT_EQ(findDialect("no_such_dialect"), nullptr);
+  EXPECT_THROW(dialectByName("no_such_dialect"), std::invalid_argument);
+}
+
+TEST(Layering, NoDialectIsNamedOutsideItsFolderAndTheRegistry) {
+  const fs::path controllers = fs::path(ROTACAL_SOURCE_DIR) / "controllers";
+  std::vector<std::string> found;
+  for (const std::string layer : {"core", "gcode", "controllers", "postproc", "cycles", "tasks", "report", "history",
+                                  "api", "include", "cli"})
+    for (const auto& f : sources(layer)) {
+      const fs::path rel = fs::relative(f, controllers);
+      if (rel == "registry.cpp") continue;
+      // A dialect's folder names itself (its results header, its messages), and only itself.
+      const std::string own = layer == "controllers" && rel.has_parent_path() ? rel.begin()->string() : "";
+      for (const auto& n : dialectNames())
+        if (n != own)
+          for (const auto& m : literals(f, n)) found.push_back(m);
+    }
+  std::string all;
+  for (const auto& m : found) all += m + "\n";
+  EXPECT_TRUE(found.empty()) << found.size() << " string literals naming a dialect outside controllers/<name>/ (ask the "
+                             << "dialect's identity instead, controllers/dialect.hpp):\n"
+                             << all;
 }
 
 // `#include "layer/..."` lines of a file.

@@ -11,6 +11,7 @@
 #include "cycles/check_rules.hpp"
 #include "cycles/cycle.hpp"
 #include "postproc/program_check.hpp"
+#include "dialect_lists.hpp"
 
 namespace rotacal::test {
 
@@ -20,7 +21,7 @@ inline int expectEveryDialectProgramPasses(const ProbePlan& plan, const std::str
                                            const std::string& reason = "") {
   const Cycle& cycle = cycleOfPlan(plan);
   int written = 0;
-  for (const std::string d : {"linuxcnc", "fanuc", "haas", "siemens", "heidenhain", "okuma"}) {
+  for (const std::string& d : test::programDialects()) {
     if (d == refused) {
       try {
         (void)dialectByName(d).writeProgram(cycle.program(plan, d));

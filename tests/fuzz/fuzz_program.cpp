@@ -1,8 +1,9 @@
 // NC programs: the word-address tokenizer (gcode/reader.hpp), each dialect's motion reader
 // (controllers/motion_reader.hpp: `rotacal check`) and the rewrite of `compensate`
-// (postproc/compensate_program.hpp). The first byte picks the dialect in the order below
-// (scripts/fuzz.sh prefixes its seeds the same way). The tokenizer and the motion reader never
+// (postproc/compensate_program.hpp). The first byte picks the dialect among those with programs,
+// in the registry's order (scripts/fuzz.sh prefixes its seeds the same way). The tokenizer and the motion reader never
 // throw (odd blocks are issues / Unreadable motions); compensate throws only InputError.
+#include "controllers/dialect.hpp"
 #include "controllers/motion_reader.hpp"
 #include "core/machine.hpp"
 #include "gcode/reader.hpp"
@@ -11,7 +12,12 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace rotacal;
-  static const char* const kDialects[] = {"linuxcnc", "fanuc", "haas", "siemens", "heidenhain", "okuma"};
+  static const std::vector<const Dialect*> kDialects = [] {
+    std::vector<const Dialect*> out;
+    for (const Dialect* d : dialects())
+      if (d->hasPrograms()) out.push_back(d);
+    return out;
+  }();
   static const MachineModel machine = loadMachine(fuzz::sourcePath("examples/machines/ac_trunnion.json"));
   static const LocationErrors errors = [] {
     LocationErrors e;
@@ -22,7 +28,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     return e;
   }();
   if (size < 1) return 0;
-  const std::string dialect = kDialects[data[0] % 6];
+  const Dialect& d = *kDialects[data[0] % kDialects.size()];
+  const std::string dialect(d.name());
   const std::string text = fuzz::asText(data + 1, size - 1);
   try {
     (void)nc::readProgram(text);
@@ -30,10 +37,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   } catch (const std::exception& e) {
     fuzz::finding("the program readers threw", e.what());
   }
-  if (dialect == "heidenhain") return 0;
+  if (!isWordAddress(d.language())) return 0;
   NcSyntax syntax;
   syntax.dialect = dialect;
-  if (dialect == "siemens") syntax.comment = NcSyntax::Comment::Semicolon;
+  if (d.language() == ProgramLanguage::Sinumerik) syntax.comment = NcSyntax::Comment::Semicolon;
   ProgramCompensationOptions opt;
   opt.header.push_back("fuzz");
   const std::string file = "program.nc";

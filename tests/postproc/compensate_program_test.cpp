@@ -25,6 +25,7 @@
 #include "postproc/probe_program.hpp"
 #include "rs274_run.hpp"
 #include "test_util.hpp"
+#include "dialect_lists.hpp"
 
 namespace rotacal {
 namespace {
@@ -291,7 +292,7 @@ TEST(CompensateProgram, EveryWordAddressDialectGetsTheSameGuardedEndPoints) {
   };
   const auto ref = endpoints("linuxcnc");
   ASSERT_EQ(ref.size(), plan.points.size());
-  for (const char* d : {"fanuc", "haas", "siemens", "okuma"}) {
+  for (const std::string& d : test::endPointCheckDialects()) {
     const auto v = endpoints(d);
     ASSERT_EQ(v.size(), ref.size()) << d;
     for (size_t i = 0; i < v.size(); ++i) EXPECT_LT((v[i] - ref[i]).norm(), 1e-9) << d << " point " << i + 1;
@@ -439,7 +440,7 @@ TEST(CompensateProgram, EveryDialectsCompensatedProgramPassesItsOwnChecker) {
     MachineModel m = test::acMachine();
     m.units = u;
     const ProbePlan plan = makePlan("touch154", m, {});
-    for (const char* d : {"linuxcnc", "fanuc", "haas", "okuma", "siemens"}) {
+    for (const std::string& d : test::wordAddressDialects()) {
       const Dialect& dialect = dialectByName(d);
       const std::string text = dialect.writeProgram(test::cycleProgram(plan, d));
       ASSERT_EQ(dialect.check(text, plan, test::shapeOf(plan, d)), std::vector<std::string>{}) << d;

@@ -21,6 +21,7 @@
 #include "postproc/compensate_program.hpp"
 #include "postproc/program_check.hpp"
 #include "test_util.hpp"
+#include "dialect_lists.hpp"
 
 namespace rotacal {
 namespace {
@@ -98,7 +99,7 @@ NcSyntax syntaxOf(const std::string& d) {
   return NcSyntax{d, 4, 5, 4, d == "siemens" ? NcSyntax::Comment::Semicolon : NcSyntax::Comment::Parentheses};
 }
 
-const std::vector<std::string> kProgramDialects = {"linuxcnc", "fanuc", "haas", "siemens", "heidenhain", "okuma"};
+const std::vector<std::string> kProgramDialects = test::programDialects();
 
 struct Written {
   std::string cycle, dialect, text;

@@ -24,6 +24,7 @@
 #include "postproc/compensate_program.hpp"
 #include "rs274_run.hpp"
 #include "test_util.hpp"
+#include "dialect_lists.hpp"
 
 namespace rotacal {
 namespace {
@@ -196,7 +197,7 @@ TEST(SplitMoves, ZeroErrorsReproduceEveryDialectsProgramByteForByte) {
   // Zero errors change no word: every dialect's program comes back as it was, without the mark.
   // Errors of 1 nm change the header only (the mark and the errors) and no line of the program.
   const ProbePlan plan = test::touch154Plan();
-  for (const std::string d : {"linuxcnc", "fanuc", "haas", "siemens", "okuma"}) {
+  for (const std::string& d : test::wordAddressDialects()) {
     const std::string program = dialectByName(d).writeProgram(test::cycleProgram(plan, d));
     NcSyntax syntax{d};
     if (d == "siemens") syntax.comment = NcSyntax::Comment::Semicolon;

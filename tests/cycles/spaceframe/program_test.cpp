@@ -38,7 +38,7 @@ TEST(SpaceframeDialects, EveryProgramPassesItsCheckerAndResultsRoundTrip) {
   for (int i = 0; i < 8; ++i) truth.errors.setReportValue(i, table4_mean[i]);
   const MeasurementRun run = simulate(plan, truth, {1});
   const SpaceframeAnalysis ref = analyzeSpaceframe(plan, {run});
-  for (const char* name : {"csv", "linuxcnc", "fanuc", "haas", "siemens", "heidenhain", "okuma"}) {
+  for (const std::string& name : dialectNames()) {
     const Dialect& d = dialectByName(name);
     if (std::string(name) != "csv") {
       const std::string text = d.writeProgram(test::cycleProgram(plan, name));

@@ -15,6 +15,7 @@
 
 #include "cli/cli_run.hpp"
 #include "test_util.hpp"
+#include "dialect_lists.hpp"
 
 namespace rotacal::test {
 namespace {
@@ -41,7 +42,7 @@ class Spheres3Cli : public ScratchTest {
 };
 
 TEST_F(Spheres3Cli, EveryDialectGeneratesAProgram) {
-  for (const char* d : {"linuxcnc", "fanuc", "haas", "siemens", "heidenhain", "okuma"}) {
+  for (const std::string& d : test::programDialects()) {
     const CliRun r = sh("generate --plan " + plan + " --dialect " + d + " -o " + (dir / d).string());
     EXPECT_EQ(r.code, 0) << d << ": " << r.out;
     EXPECT_NE(r.out.find("180 probing moves"), std::string::npos) << r.out;

@@ -15,6 +15,7 @@
 
 #include "cli/cli_run.hpp"
 #include "test_util.hpp"
+#include "dialect_lists.hpp"
 
 namespace rotacal::test {
 namespace {
@@ -26,7 +27,7 @@ TEST(TooltipCli, PlanGenerateSimulateAnalyzeDiagnose) {
   CliRun r = sh("plan --cycle tooltip --machine " + machine +
              " --set units=inch --set radius_mm=381 --set step_deg=5 --set end_deg=90 -o " + d + "/plan.json");
   ASSERT_EQ(r.code, 0) << r.out;
-  for (const char* dialect : {"linuxcnc", "fanuc", "haas", "siemens"}) {
+  for (const std::string& dialect : test::inverseTimeDialects()) {
     r = sh("generate --plan " + d + "/plan.json --dialect " + dialect + " -o " + d + "/p_" + dialect);
     EXPECT_EQ(r.code, 0) << dialect << ": " << r.out;
   }

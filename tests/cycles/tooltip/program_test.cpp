@@ -21,6 +21,7 @@
 #include "cycles/tooltip/program.hpp"
 #include "rs274_run.hpp"
 #include "test_util.hpp"
+#include "dialect_lists.hpp"
 
 namespace rotacal::test {
 namespace {
@@ -60,7 +61,7 @@ std::vector<std::string> motionLines(const std::string& program) {
 
 TEST(TooltipProgram, ReproducesTable1DigitForDigitInEveryIsoDialect) {
   const ProbePlan plan = table1Plan();
-  for (const char* d : {"linuxcnc", "fanuc", "haas", "siemens"}) {
+  for (const std::string& d : test::inverseTimeDialects()) {
     const Dialect& dialect = dialectByName(d);
     const std::string text = dialect.writeProgram(test::cycleProgram(plan, d));
     const auto lines = motionLines(text);

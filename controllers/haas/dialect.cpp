@@ -50,9 +50,16 @@ MacroBFlavor haasFlavor() {
   return f;
 }
 
+DialectIdentity haasIdentity() {
+  DialectIdentity d = macro_b::identity();
+  d.comp_table_refusal = "no source gives a user-loadable rotary compensation table for NGC (docs/dialects.md); give "
+                         "the table of --dialect csv to Haas service";
+  return d;
+}
+
 class HaasDialect final : public MacroBDialect {
  public:
-  HaasDialect() : MacroBDialect(haasFlavor()) {}
+  HaasDialect() : MacroBDialect(haasFlavor(), haasIdentity()) {}
 
   std::string writeOffsets(const OffsetRequest& r) const override {
     const ctl::OffsetBasis b(r);

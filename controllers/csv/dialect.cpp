@@ -7,12 +7,33 @@
 #include <stdexcept>
 
 #include "controllers/common.hpp"
+#include "controllers/comp_table.hpp"
 #include "controllers/dialects.hpp"
 #include "controllers/result_checks.hpp"
 #include "core/units.hpp"
 #include "core/singleton.hpp"
 
 namespace rotacal {
+namespace ctl {
+namespace {
+
+// The rotary compensation table in this control's form (controllers/comp_table.hpp).
+CompTable compTable(const CompTableRequest& r, const PeriodicInterpolant& E, double step) {
+  const int n = compTableStepsPerTurn(step);
+  const CompTableGrid g = compTableGrid(E, r.controller_sign, 0.0, step, n);
+  CompTable t;
+  t.rows = g.rows;
+  t.max_error_mdeg = g.max_abs_mdeg;
+  t.text = "controller_angle_deg,error_mdeg\n";
+  for (const auto& row : g.rows) t.text += fmt::format("{},{}\n", fixed(row.controller_deg, 6), fixed(row.error_deg * 1e3, 6));
+  t.setup = {"error_mdeg = actual - commanded angle in the control's counting; a control cancels it by commanding "
+             "-error_mdeg more"};
+  return t;
+}
+
+}  // namespace
+}  // namespace ctl
+
 namespace {
 
 constexpr const char* kHeader = "point,x_mm,y_mm,z_mm,t_s";
@@ -29,8 +50,16 @@ std::vector<std::string> splitCommas(const std::string& line) {
   return f;
 }
 
+DialectIdentity csvIdentity() {
+  DialectIdentity d;
+  d.language = ProgramLanguage::None;
+  d.comp_table = ctl::compTable;
+  return d;
+}
+
 class CsvDialect final : public Dialect {
  public:
+  CsvDialect() : Dialect(csvIdentity()) {}
   std::string_view name() const override { return "csv"; }
   std::string_view programExtension() const override { return ".csv"; }
   std::string_view resultsExtension() const override { return ".csv"; }

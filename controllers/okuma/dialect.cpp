@@ -69,11 +69,23 @@ std::vector<std::string> comments(std::string_view text) {
   return out;
 }
 
+DialectIdentity okumaIdentity() {
+  DialectIdentity d;
+  d.language = ProgramLanguage::IsoGcode;
+  d.numbers_programs = true;
+  d.end_point_check = EndPointCheck{{"VC4", "VC5", "VC6"}, {"VC1", "VC2", "VC3"}};
+  d.inverse_time_refusal = "inverse-time feed (G93) is UNVERIFIED for OSP (controllers.md Sec. 6.5)";
+  d.comp_table_refusal = "no source gives the OSP's pitch / rotary compensation table form (docs/dialects.md); give "
+                         "the table of --dialect csv to the machine builder";
+  return d;
+}
+
 class OkumaDialect final : public ctl::TaggedResultsDialect {
  public:
   // FWRITC appends: an old run stays in the file unless it is deleted.
   OkumaDialect()
-      : TaggedResultsDialect({kDialect, ".min", "OKUMA", safeName, 0, "\r\n", " (FWRITC appends: delete the old file)"}) {}
+      : TaggedResultsDialect({kDialect, ".min", "OKUMA", safeName, 0, "\r\n", " (FWRITC appends: delete the old file)"},
+                             okumaIdentity()) {}
   std::vector<std::string> commentLines(std::string_view text) const override { return comments(text); }
 
   std::string writeProgram(const nc::Program& p) const override {
@@ -121,7 +133,7 @@ class OkumaDialect final : public ctl::TaggedResultsDialect {
           w.line("VC1=VSKPX");
           w.line("VC2=VSKPY");
           w.line("VC3=VSKPZ");
-          for (int a = 0; a < 3; ++a) w.line(ctl::endPointCheckStatement(*ctl::endPointCheck(kDialect), a, x[a], 4));
+          for (int a = 0; a < 3; ++a) w.line(ctl::endPointCheckStatement(*endPointCheck(), a, x[a], 4));
           w.line(fmt::format("IF [VC4*VC4+VC5*VC5+VC6*VC6 GT {}] N{}", no_trigger_sq, kLabelBase + id));
           put(fmt::format("NOT-TRIGGERED P{}", id));
           w.line("CLOSE C");

@@ -22,12 +22,54 @@
 #include <stdexcept>
 
 #include "controllers/common.hpp"
+#include "controllers/comp_table.hpp"
 #include "controllers/dialects.hpp"
 #include "controllers/result_checks.hpp"
 #include "core/units.hpp"
 #include "core/singleton.hpp"
 
 namespace rotacal {
+namespace ctl {
+namespace {
+
+constexpr int kLinuxcncMaxEntries = 256;  // EMCMOT_COMP_SIZE (ini-config: "256 triplets per joint")
+
+// The rotary compensation table in this control's form (controllers/comp_table.hpp).
+CompTable compTable(const CompTableRequest& r, const PeriodicInterpolant& E, double step) {
+  double lo = r.range_lo_deg, hi = r.range_hi_deg;
+  if (!(lo < hi)) lo = -360.0, hi = 360.0;
+  lo = std::floor(lo / step + 1e-9) * step;  // a grid point, not beyond the range it covers
+  hi = std::ceil(hi / step - 1e-9) * step;
+  const long count = std::lround((hi - lo) / step) + 1;
+  if (count > kLinuxcncMaxEntries)
+    throw std::invalid_argument(fmt::format("{} table lines from {} to {} deg every {} deg: LinuxCNC takes at most {} per joint (choose a larger "
+                    "--step-deg)",
+                    count, fixed(lo, 3), fixed(hi, 3), fixed(step, 4), kLinuxcncMaxEntries));
+  const CompTableGrid g = compTableGrid(E, r.controller_sign, lo, step, static_cast<int>(count));
+  CompTable t;
+  t.rows = g.rows;
+  t.max_error_mdeg = g.max_abs_mdeg;
+  for (const auto& row : g.rows) {
+    const std::string actual = fixed(row.controller_deg + row.error_deg, 6);
+    t.text += fmt::format("{} {} {}\n", fixed(row.controller_deg, 6), actual, actual);
+  }
+  // After the data: LinuxCNC's loader stops at the first line that is not three numbers.
+  for (const auto& l : compTableProvenance(r, E, step)) t.text += "# " + l + "\n";
+  t.text += "# columns: nominal (commanded) joint position, actual position moving up, actual moving down (deg)\n";
+  t.text += "# LinuxCNC commands nominal - actual more; COMP_FILE_TYPE = 0; BACKLASH is then ignored\n";
+  t.text += "# after start-up turn the axis through one full revolution: the correction is then followed\n";
+  t.setup = {fmt::format("INI, the [JOINT_n] section of axis {}: COMP_FILE = <this file> and COMP_FILE_TYPE = 0 "
+                         "(BACKLASH of that joint is then not used)",
+                         r.errors.axis),
+             "after start-up turn the axis through one full revolution before measuring or cutting: LinuxCNC 2.9 "
+             "applies the correction only while the joint moves, and from rest it did not take a step of 3 mdeg "
+             "(observed); over a turn the correction passes zero and is followed from there on"};
+  return t;
+}
+
+}  // namespace
+}  // namespace ctl
+
 namespace {
 
 constexpr const char* kFormat = "rotacal-results/1";
@@ -73,8 +115,16 @@ std::string comment(std::string_view text) {
 
 std::string unitName(bool inch) { return inch ? "inch" : "mm"; }
 
+DialectIdentity linuxcncIdentity() {
+  DialectIdentity d;
+  d.language = ProgramLanguage::IsoGcode;
+  d.comp_table = ctl::compTable;  // G38.2 raises an error by itself: no end-point check
+  return d;
+}
+
 class LinuxCncDialect final : public Dialect {
  public:
+  LinuxCncDialect() : Dialect(linuxcncIdentity()) {}
   std::string_view name() const override { return kDialect; }
   std::string_view programExtension() const override { return ".ngc"; }
   std::string_view resultsExtension() const override { return ".txt"; }

@@ -99,8 +99,21 @@ std::string headerText(const std::string& cycle, int points) {
   return fmt::format("ROTACAL HEIDENHAIN CYCLE {} POINTS {} UNIT MM", safeName(cycle), points);
 }
 
+DialectIdentity heidenhainIdentity() {
+  DialectIdentity d;
+  d.language = ProgramLanguage::Klartext;  // cycle 0's check is written around the pre-position
+  d.inverse_time_refusal = "inverse-time feed is not verified for Klartext (controllers.md Sec. 5.5)";
+  d.rewrite_refusal = "Klartext programs are not rewritten; enter the kinematics values of `analyze --offsets` "
+                      "instead (docs/compensation.md)";
+  d.comp_table_refusal = "no compensation table form is given by the sources (the TNC's axis-error compensation "
+                         "tables are machine configuration, OEM-protected: docs/dialects.md); give the table of "
+                         "--dialect csv to the machine builder";
+  return d;
+}
+
 class HeidenhainDialect final : public Dialect {
  public:
+  HeidenhainDialect() : Dialect(heidenhainIdentity()) {}
   std::string_view name() const override { return kDialect; }
   std::string_view programExtension() const override { return ".h"; }
   std::string_view resultsExtension() const override { return ".txt"; }

@@ -33,11 +33,56 @@
 #include <stdexcept>
 
 #include "controllers/common.hpp"
+#include "controllers/comp_table.hpp"
 #include "controllers/dialects.hpp"
 #include "core/units.hpp"
 #include "core/singleton.hpp"
 
 namespace rotacal {
+const Dialect& siemensDialect();
+
+namespace ctl {
+namespace {
+
+constexpr int kSiemensMaxPoints = 10000;  // sanity bound only: MD38000 sets the real one
+
+// The rotary compensation table in this control's form (controllers/comp_table.hpp).
+CompTable compTable(const CompTableRequest& r, const PeriodicInterpolant& E, double step) {
+  const int n = compTableStepsPerTurn(step);
+  if (n + 1 > kSiemensMaxPoints) throw std::invalid_argument(fmt::format("{} interpolation points are too many", n + 1));
+  const CompTableGrid g = compTableGrid(E, r.controller_sign, 0.0, step, n + 1);
+  CompTable t;
+  t.rows = g.rows;
+  t.max_error_mdeg = g.max_abs_mdeg;
+  const std::string ax = std::string(1, r.errors.axis) + "1";  // machine axis name as in K3's example X1: UNVERIFIED
+  std::string& s = t.text;
+  s += "%_N_AX_EEC_INI\n";
+  std::string comment;
+  for (const auto& l : compTableProvenance(r, E, step)) comment += l + ". ";
+  comment += fmt::format("Value = positioning error (actual - commanded, deg): a positive value moves the axis in the "
+                         "negative direction. Load with MD32700 ENC_COMP_ENABLE = 0, MD38000 MM_ENC_COMP_MAX_POINTS >= {}, "
+                         "then MD32700 = 1.",
+                         n + 1);
+  for (const auto& l : siemensDialect().commentLines(comment)) s += l + "\n";
+  s += "CHANDATA(1)\n";
+  for (int k = 0; k <= n; ++k) {
+    const double v = k == n ? g.rows[0].error_deg : g.rows[k].error_deg;  // modulo: 360 = 0
+    s += fmt::format("$AA_ENC_COMP[0,{},{}]={}\n", k, ax, fixed(v, 6));
+  }
+  s += fmt::format("$AA_ENC_COMP_STEP[0,{}]={}\n", ax, fixed(step, 4));
+  s += fmt::format("$AA_ENC_COMP_MIN[0,{}]=0.0\n", ax);
+  s += fmt::format("$AA_ENC_COMP_MAX[0,{}]=360.0\n", ax);
+  s += fmt::format("$AA_ENC_COMP_IS_MODULO[0,{}]=1\n", ax);
+  s += "M17\n";
+  t.setup = {fmt::format("MD32700 $MA_ENC_COMP_ENABLE[0] = 0 for axis {0}, MD38000 $MA_MM_ENC_COMP_MAX_POINTS[0] >= {1} "
+                         "(memory reorganised at the next start-up), load the file, MD32700 = 1, reference the axis",
+                         ax, n + 1)};
+  return t;
+}
+
+}  // namespace
+}  // namespace ctl
+
 namespace {
 
 constexpr const char* kDialect = "siemens";
@@ -71,10 +116,18 @@ std::string safeName(std::string_view name) {
   return s;
 }
 
+DialectIdentity siemensIdentity() {
+  DialectIdentity d;
+  d.language = ProgramLanguage::Sinumerik;
+  d.end_point_check = EndPointCheck{{"R93", "R94", "R95"}, {"R90", "R91", "R92"}};
+  d.comp_table = ctl::compTable;
+  return d;
+}
+
 class SiemensDialect final : public ctl::TaggedResultsDialect {
  public:
   // SPRINT's %10.4F (inch %10.5F): right-aligned in 10 characters.
-  SiemensDialect() : TaggedResultsDialect({kDialect, ".mpf", "SIEMENS", safeName, 10, "\n", ""}) {}
+  SiemensDialect() : TaggedResultsDialect({kDialect, ".mpf", "SIEMENS", safeName, 10, "\n", ""}, siemensIdentity()) {}
   std::vector<std::string> commentLines(std::string_view text) const override { return comments(text); }
 
   std::string writeProgram(const nc::Program& p) const override {
@@ -134,7 +187,7 @@ class SiemensDialect final : public ctl::TaggedResultsDialect {
           w.line("R91=$AA_MW[Y]");
           w.line("R92=$AA_MW[Z]");
           for (int a = 0; a < 3; ++a)
-            w.line(ctl::endPointCheckStatement(*ctl::endPointCheck(kDialect), a, x[a], kDecimals));
+            w.line(ctl::endPointCheckStatement(*endPointCheck(), a, x[a], kDecimals));
           w.line(fmt::format("IF ($AC_MEA[1]==0) OR (R93*R93+R94*R94+R95*R95<{}) GOTOF NOHIT{}", no_trigger_sq, id));
           w.line(fmt::format("TXT=SPRINT(\"P{0} X%10.{1}F Y%10.{1}F Z%10.{1}F\",R90,R91,R92)", id, resultDecimals(inch)));
           w.line(write);
