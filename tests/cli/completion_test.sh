@@ -9,6 +9,8 @@ R=$1
 S=$2
 fails=0
 fail() { echo "completion_test: FAIL: $*" >&2; fails=$((fails + 1)); }
+# No `grep -q` after a pipe: it stops reading at the first match, the writer then dies of SIGPIPE
+# and, under pipefail, a match reads as a failure (at random, by timing).
 
 bash -n "$S" || { echo "completion_test: FAIL: bash -n rejects $S" >&2; exit 1; }
 
@@ -63,7 +65,7 @@ done
 [ "$n_cmd" -ge 10 ] || fail "only $n_cmd commands found in rotacal --help"
 # And no command in the script that the tool does not have.
 for cmd in $LIST; do
-  subcommands | grep -qx -- "$cmd" || fail "the script completes '$cmd', which rotacal --help does not list"
+  subcommands | grep -x -- "$cmd" >/dev/null || fail "the script completes '$cmd', which rotacal --help does not list"
 done
 
 # Sourced: what it offers. compopt works only inside a real completion, so the shell here defines it
@@ -79,8 +81,8 @@ complete_words() {  # complete_words WORD...: the completions of the last word
 [ "$(complete_words rotacal hi)" = history ] || fail "'rotacal hi' does not complete to history"
 [ "$(complete_words rotacal compensate --max)" = --max-deviation-um ] || fail "'rotacal compensate --max' does not complete"
 [ "$(complete_words rotacal history add --mach)" = --machine-id ] || fail "'rotacal history add --mach' does not complete"
-complete_words rotacal analyze --dialect "" | grep -qx csv || fail "analyze --dialect does not offer csv"
-if complete_words rotacal compensate --dialect "" | grep -qx heidenhain; then fail "compensate --dialect offers heidenhain"; fi
+complete_words rotacal analyze --dialect "" | grep -x csv >/dev/null || fail "analyze --dialect does not offer csv"
+if complete_words rotacal compensate --dialect "" | grep -x heidenhain >/dev/null; then fail "compensate --dialect offers heidenhain"; fi
 
 # The dialects it offers after --dialect are those the command's --help lists (from the registry).
 for c in $(subcommands); do
