@@ -7,6 +7,7 @@
 #include <cmath>
 #include <functional>
 #include <random>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -61,6 +62,14 @@ Eigen::Vector3d faceCentre_w(const SquareColumn& col, Face face) {
   const FaceFrame f = faceFrame(face);
   const double half_width = std::abs(f.n.x()) > 0.5 ? col.size_mm.x() / 2 : col.size_mm.y() / 2;
   return col.top_centre_w + half_width * f.n - Eigen::Vector3d(0, 0, col.size_mm.z() / 2);
+}
+
+// The set-up's turn: about X first, then Y, then Z (exact).
+Eigen::Matrix3d setupRotation(const Machine& m) {
+  const Eigen::Vector3d& r = m.setup_rotation_rad;
+  return (Eigen::AngleAxisd(r.z(), Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(r.y(), Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(r.x(), Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
 }
 
 Eigen::Matrix3d rotationOf(const Eigen::Matrix4d& T) { return T.topLeftCorner<3, 3>(); }
@@ -211,6 +220,24 @@ Machine cleanMachine(const LocationErrors& errors) {
   return m;
 }
 
+Eigen::Vector3d sphereCentre_w(const ProbePlan& plan, const ProbePoint& point, const Machine& m) {
+  if (!point.sphere) throw std::runtime_error("point " + std::to_string(point.id) + " touches no sphere");
+  const Eigen::Vector3d& c = point.sphere->center_w_mm;
+  if (plan.cycle != "spaceframe") return c + m.setup_translation_mm;
+  // The frame's origin on the table, as the plan states it ("x,y,z" mm).
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  const auto it = plan.options.find("origin_w_mm");
+  if (it == plan.options.end()) throw std::runtime_error("a spaceframe plan without origin_w_mm");
+  {
+    std::string text = it->second;
+    for (char& ch : text)
+      if (ch == ',') ch = ' ';
+    std::istringstream in(text);
+    if (!(in >> origin.x() >> origin.y() >> origin.z())) throw std::runtime_error("origin_w_mm: " + it->second);
+  }
+  return setupRotation(m) * (c - origin) + origin + m.setup_translation_mm;
+}
+
 FacePlane facePlane_m(const ProbePlan& plan, const ProbePoint& point, const Machine& m) {
   if (!plan.machine.artefact) throw std::runtime_error("the machine has no square column to probe");
   const SquareColumn& col = *plan.machine.artefact;
@@ -225,11 +252,7 @@ FacePlane facePlane_m(const ProbePlan& plan, const ProbePoint& point, const Mach
   const Eigen::Vector3d x_piece = centre + form.offset_mm * f.n;
   const Eigen::Vector3d n_piece = tilt * f.n;
   // The set-up: turned about the nominal top centre (X first, then Y, then Z), then shifted.
-  const Eigen::Vector3d& r = m.setup_rotation_rad;
-  const Eigen::Matrix3d R = (Eigen::AngleAxisd(r.z(), Eigen::Vector3d::UnitZ()) *
-                             Eigen::AngleAxisd(r.y(), Eigen::Vector3d::UnitY()) *
-                             Eigen::AngleAxisd(r.x(), Eigen::Vector3d::UnitX()))
-                                .toRotationMatrix();
+  const Eigen::Matrix3d R = setupRotation(m);
   const Eigen::Vector3d x_w = R * (x_piece - col.top_centre_w) + col.top_centre_w + m.setup_translation_mm;
   const Eigen::Vector3d n_w = R * n_piece;
   // The table at the commanded pose carries it into the machine frame.
@@ -252,12 +275,12 @@ MeasurementRun measure(const ProbePlan& plan, const Machine& m, const std::optio
     const Eigen::Vector3d u = p.approach_m.normalized();
     const Eigen::Vector3d& c0 = p.trigger_m_mm;
     // Where along the move the actual ball, at c0 + e when the reading is c0, first touches the
-    // surface raised by h: a face plane, or a sphere (its centre placed by the set-up's translation;
-    // a turn of the set-up moves a sphere's centre by nothing a sphere cycle does not fit).
+    // surface raised by h: a face plane, or a sphere (its centre placed by the set-up:
+    // sphereCentre_w).
     std::function<double(const Eigen::Vector3d&)> contact;
     if (p.sphere) {
       const Eigen::Matrix4d T = tableTransform(m.location, p.pose.A, p.pose.C);
-      const Eigen::Vector3d x = apply(T, p.sphere->center_w_mm + m.setup_translation_mm);
+      const Eigen::Vector3d x = apply(T, sphereCentre_w(plan, p, m));
       const double rho = r + p.sphere->radius_mm + h;
       // |d + s u| = rho, d = c0 + e - x: the smaller root (the ball comes from outside).
       contact = [x, rho, u, id = p.id](const Eigen::Vector3d& b0) {

@@ -130,6 +130,14 @@ struct FacePlane {
 };
 FacePlane facePlane_m(const ProbePlan& plan, const ProbePoint& point, const Machine& m);
 
+/// Where a sphere cycle's touched sphere really is on the table (workpiece frame, mm): its plan
+/// centre moved by the set-up. On the space frame (003: seven spheres on one plate) the whole frame
+/// is turned about its origin on the table (the plan option origin_w_mm, X first, then Y, then Z,
+/// exact) and shifted, so each sphere moves by its lever from the origin; a single sphere, or
+/// spheres3's three, move by the shift alone (a turn about the column's top centre is the set-up of
+/// the square column, not of those spheres).
+Eigen::Vector3d sphereCentre_w(const ProbePlan& plan, const ProbePoint& point, const Machine& m);
+
 /// The trigger of every plan point: the read ball-centre position (machine frame, mm) at which the
 /// actual ball, moving along the plan's approach line, touches the true face, or on a sphere
 /// cycle's point the true sphere (its centre moved by the set-up's translation) (exact contact,

@@ -8,14 +8,15 @@
 // random touch (20 um and 1 mm) and analyzed. Printed, not asserted: the figures of docs/real_machines.md.
 //
 // Run: build/bench/rotacal_real_machine_bench [--machines N] [--mc-runs R] [--seed S]
-//        [--contributors FILE] [--dialect D] [--sd-um X] [--sd-mdeg X] [--no-chips] [--verbose]
-//        [--cycle touch154|one_sphere|spheres3] [--dump DIR] [--off LIST]
+//        [--contributors FILE] [--machine FILE] [--dialect D] [--sd-um X] [--sd-mdeg X] [--no-chips] [--verbose]
+//        [--cycle touch154|one_sphere|spheres3|spaceframe] [--dump DIR] [--off LIST]
 // --off switches contributors of the generator off (setup, form, linear_axes, pretravel,
 // repeatability, roughness; comma-separated), to see which one a failure is owed to.
 // --dump writes the first machine's PLAN.json, RESULTS, TRUTH.json, REPORT.json and DIAGNOSIS.json,
 // so that the command line can be run on the same data (`rotacal analyze --plan DIR/PLAN.json ...`).
 // Defaults: 200 machines, 2000 Monte Carlo runs per analysis (the CLI's default), seeds 1..N,
-// examples/contributors/table5.json, linuxcnc; about 2 s per machine (three analyses and one
+// the cycle's bundled example machine and options and the contributors that machine declares
+// (examples/contributors/table5.json for the A/C cycles), linuxcnc; about 2 s per machine (three analyses and one
 // diagnosis). `--machines 20` is a quick check; `--mc-runs 500` cuts the analyses' time further.
 #include <algorithm>
 #include <chrono>
@@ -54,8 +55,10 @@ struct Args {
   int machines = 200;
   int mc_runs = 2000;
   std::uint64_t seed = 1;
-  std::string contributors = std::string(ROTACAL_SOURCE_DIR) + "/examples/contributors/table5.json";
-  std::string machine = std::string(ROTACAL_SOURCE_DIR) + "/examples/machines/ac_trunnion.json";
+  // Empty: the cycle's bundled example machine with its example options (`plan --cycle C` with no
+  // --machine), and the contributors that machine declares (else table5.json).
+  std::string contributors;
+  std::string machine;
   std::string dialect = "linuxcnc";
   double sd_um = 5.0, sd_mdeg = 0.5;
   std::string cycle = "touch154";
@@ -69,7 +72,7 @@ struct Args {
   std::fprintf(stderr,
                "rotacal_real_machine_bench: %s\nusage: rotacal_real_machine_bench [--machines N] [--mc-runs R] [--seed S] "
                "[--contributors FILE] [--machine FILE] [--dialect D] [--sd-um X] [--sd-mdeg X] [--no-chips] [--verbose]\n"
-               "       [--cycle touch154|one_sphere|spheres3] [--dump DIR] [--off setup,form,linear_axes,pretravel,repeatability,roughness]\n",
+               "       [--cycle touch154|one_sphere|spheres3|spaceframe] [--dump DIR] [--off setup,form,linear_axes,pretravel,repeatability,roughness]\n",
                why);
   std::exit(2);
 }
@@ -118,6 +121,7 @@ struct Analyzed {
   std::string refused;        // why not
   std::vector<int> excluded;  // point ids the outlier screen left out
   bool too_many = false;
+  bool held_back = false;     // REPORT.json's corrections_held_back: the data beyond the declaration
   int beyond = 0;
   double threshold_t = 0;
   Json doc;
@@ -142,6 +146,7 @@ Analyzed analyze(const Cycle& cycle, const ProbePlan& plan, const Dialect& d, co
   }
   a.ok = true;
   a.doc = docs.doc;
+  a.held_back = a.doc.contains("corrections_held_back");
   if (a.doc.contains("outliers")) {
     const Json& o = a.doc["outliers"];
     for (const auto& e : o.value("excluded", Json::array())) a.excluded.push_back(e.value("point", 0));
@@ -294,9 +299,17 @@ struct Quantiles {
 int main(int argc, char** argv) {
   const Args args = parse(argc, argv);
   const auto t0 = std::chrono::steady_clock::now();
-  const MachineModel machine = loadMachine(args.machine);
-  const ContributorSet contrib = loadContributors(args.contributors);
-  const ProbePlan plan = makePlan(args.cycle, machine, {});
+  // The cycle's bundled example: its machine and options (spaceframe's: ac_trunnion.json with
+  // phi_list=-90,-45,0), unless --machine names another (then no options, as before).
+  const CycleExample example = cycleByName(args.cycle).example();
+  const std::string machine_file =
+      args.machine.empty() ? std::string(ROTACAL_SOURCE_DIR) + "/" + example.machine : args.machine;
+  const MachineModel machine = loadMachine(machine_file);
+  const ContributorSet contrib =
+      !args.contributors.empty() ? loadContributors(args.contributors)
+      : machine.contributors     ? *machine.contributors
+                                 : loadContributors(std::string(ROTACAL_SOURCE_DIR) + "/examples/contributors/table5.json");
+  const ProbePlan plan = makePlan(args.cycle, machine, args.machine.empty() ? example.options : CycleOptions{});
   const Cycle& cycle = cycleOfPlan(plan);
   const Dialect& dialect = dialectByName(args.dialect);
   const DialectIO io = dialectIO(dialect);
@@ -318,7 +331,7 @@ int main(int argc, char** argv) {
     *flag = false;
   }
 
-  int n = 0, analyzed = 0, written = 0, screen_removed = 0, screen_gave_up = 0, diagnosed = 0, inadequate = 0,
+  int n = 0, analyzed = 0, not_held_back = 0, written = 0, screen_removed = 0, screen_gave_up = 0, diagnosed = 0, inadequate = 0,
       named = 0, no_effect = 0;
   std::map<std::string, int> causes, refusals;
   struct ChipTally {
@@ -354,6 +367,7 @@ int main(int argc, char** argv) {
       ++refusals["analyze refused: " + a.error.substr(0, 80)];
     } else {
       ++analyzed;
+      not_held_back += !a.held_back;
       if (a.written) ++written;
       else ++refusals[a.refused.substr(0, std::min<size_t>(a.refused.find(':') == std::string::npos ? 60 : a.refused.find(':'), 60))];
       if (!a.excluded.empty()) {
@@ -457,9 +471,11 @@ int main(int argc, char** argv) {
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
-  std::printf("rotacal_real_machine_bench: %s (%zu touches) on %s, contributors %s, dialect %s\n", args.cycle.c_str(),
-              plan.points.size(), args.machine.c_str(),
-              args.contributors.c_str(), args.dialect.c_str());
+  std::string options;
+  for (const auto& [k, v] : (args.machine.empty() ? example.options : CycleOptions{})) options += " --set " + k + "=" + v;
+  std::printf("rotacal_real_machine_bench: %s (%zu touches) on %s%s, contributors %s, dialect %s\n", args.cycle.c_str(),
+              plan.points.size(), machine_file.c_str(), options.c_str(),
+              contrib.file.empty() ? "(the machine's, inline)" : contrib.file.c_str(), args.dialect.c_str());
   if (!args.off.empty()) std::printf("switched off in the generator: %s\n", args.off.c_str());
   std::printf("%d machines (seeds %llu..%llu), location errors around 000 Table 4 (sd %g um, %g mdeg), analyze's Monte "
               "Carlo %d runs; %.0f s (%.1f s per machine)\n\n",
@@ -473,6 +489,9 @@ int main(int argc, char** argv) {
     std::printf("| %s | %d / %d | %.1f %% | %s |\n", what, k, of, pct(k, of), target);
   };
   row("offsets written (`analyze --offsets`, no --force)", written, n, ">= 99 %");
+  // A cycle that writes no offsets (spheres3, spaceframe, tooltip, rtest): what it would hand on
+  // is its report's values, held back when the data exceed the declaration.
+  row("analyze returned, nothing held back (no `corrections_held_back`)", not_held_back, n, "");
   row("`diagnose`: model_inadequate", inadequate, n, "<= 5 %");
   row("`diagnose`: a cause named", named, n, "<= 2 %");
   row("`diagnose`: no_significant_effect", no_effect, n, "");

@@ -13,6 +13,7 @@
 #include "core/machine.hpp"
 #include "core/simulation.hpp"
 #include "cycles/cycle.hpp"
+#include "cycles/spaceframe/analyze.hpp"
 
 namespace rotacal {
 namespace {
@@ -46,6 +47,14 @@ LocationErrors table4() {
   for (int i = 0; i < 8; ++i) e.setReportValue(parameterIndex(Kinematics::TableAC, names[i]), v[i]);
   return e;
 }
+
+struct Moments {
+  double sum = 0, sum2 = 0;
+  int n = 0;
+  void add(double x) { sum += x, sum2 += x * x, ++n; }
+  double mean() const { return sum / n; }
+  double var() const { return (sum2 - sum * sum / n) / (n - 1); }
+};
 
 double triggerShiftUm(const MeasurementRun& a, const MeasurementRun& nominal) {
   double worst = 0;
@@ -155,6 +164,91 @@ TEST(IndependentMachine, SphereTriggersEqualRotacalSimulate) {
   }
 }
 
+// The space frame's bundled plan (003's seven spheres, the reduced map of ac_trunnion.json): a
+// clean machine, then the frame set up off its place, turned about one axis at a time (where the
+// two conventions of a turn agree) about its origin and shifted, its spheres placed by the
+// cycle's own FrameModel (written for the identification, not for this generator), then the
+// linear axes' field as well: the same triggers as rotacal's `simulate` to 1e-6 um.
+const ProbePlan& spaceframe() {
+  static const ProbePlan plan = makePlan("spaceframe", loadMachine(kMachine), {{"phi_list", "-90,-45,0"}});
+  return plan;
+}
+TEST(IndependentMachine, SpaceframeTriggersEqualRotacalSimulate) {
+  const ProbePlan& plan = spaceframe();
+  ASSERT_GT(plan.points.size(), 700u);
+  const LocationErrors e = table4();
+  Truth truth;
+  truth.errors = e;
+  ind::Machine ours = ind::cleanMachine(e);
+  EXPECT_LT(maxDiffUm(ind::measure(plan, ours), simulate(plan, truth, {})), 1e-6);
+  const SpaceframeLayout layout = SpaceframeLayout::fromOptions(plan.options);
+  const ContributorSet c = loadContributors(kContrib);
+  for (int axis = 0; axis < 4; ++axis) {
+    ours = ind::cleanMachine(e);
+    ours.setup_translation_mm = Eigen::Vector3d(0.03, -0.02, 0.15);
+    if (axis < 3) ours.setup_rotation_rad[axis] = 2e-3 * (axis + 1);
+    if (axis == 3) {  // and with the linear axes' field drawn by this generator
+      ind::DrawOptions o;
+      o.setup = o.form = o.pretravel = o.repeatability = o.roughness = false;
+      const ind::Machine drawn = ind::drawMachine(c, plan.machine, o, 9);
+      ours.has_linear_axes = true;
+      ours.axes = drawn.axes;
+      ours.setup_rotation_rad = Eigen::Vector3d(0, 0, 1e-3);
+    }
+    FrameModel frame;
+    frame.setup_translation_mm = ours.setup_translation_mm;
+    frame.setup_rotation_rad = ours.setup_rotation_rad;
+    Truth t;
+    t.errors = e;
+    for (int s = 1; s <= 7; ++s) {
+      const Eigen::Vector3d p = layout.origin_w_mm + layout.frame.spheres_mm[static_cast<size_t>(s - 1)];
+      t.sphere_center_error_w_mm[s] = frame.placedCentre_w(p, s, layout.origin_w_mm) - p;
+    }
+    const ind::Machine& m = ours;
+    if (axis == 3) t.linear_axis_error = [&m](const Eigen::Vector3d& read) { return m.axes.error(read); };
+    const MeasurementRun theirs = simulate(plan, t, {});
+    EXPECT_LT(maxDiffUm(ind::measure(plan, ours), theirs), 1e-6) << "case " << axis;
+    // and the turn acts beyond the shift (um): a sphere 200 mm from the origin moves 0.4 mm
+    ind::Machine shifted = ours;
+    shifted.setup_rotation_rad.setZero();
+    EXPECT_GT(maxDiffUm(ind::measure(plan, shifted), theirs), 50.0) << "case " << axis;
+  }
+}
+
+// The frame's set-up draw against its closed form: each sphere's centre moves by the shift t plus
+// the turn r about the frame's origin, to first order t + r x l (l the sphere's lever from the
+// origin), so Var(d_x) = u_tx^2 + u_ry^2 l_z^2 + u_rz^2 l_y^2 and cyclically, with u from the
+// contributors file (setup_position, setup_orientation). 4000 machines; 4 standard errors.
+TEST(IndependentMachine, SpaceframeSetupDrawHasItsClosedFormSpread) {
+  const ProbePlan& plan = spaceframe();
+  const ContributorSet c = loadContributors(kContrib);
+  const SpaceframeLayout layout = SpaceframeLayout::fromOptions(plan.options);
+  const Contributor* pos = c.find("setup_position");
+  const Contributor* ori = c.find("setup_orientation");
+  ASSERT_TRUE(pos && ori);
+  const int N = 4000;
+  for (const int sphere : {1, 3, 7}) {
+    const ProbePoint* point = nullptr;
+    for (const auto& p : plan.points)
+      if (p.sphere->id == sphere) point = &p;
+    ASSERT_NE(point, nullptr);
+    const Eigen::Vector3d l = point->sphere->center_w_mm - layout.origin_w_mm;
+    std::array<Moments, 3> d;
+    for (int k = 0; k < N; ++k) {
+      const ind::Machine m = ind::drawMachine(c, plan.machine, {}, 5000 + static_cast<std::uint64_t>(k));
+      const Eigen::Vector3d x = ind::sphereCentre_w(plan, *point, m) - point->sphere->center_w_mm;
+      for (int i = 0; i < 3; ++i) d[static_cast<size_t>(i)].add(x[i]);
+    }
+    const double se = std::sqrt(2.0 / (N - 1));
+    for (int i = 0; i < 3; ++i) {
+      const int j = (i + 1) % 3, k = (i + 2) % 3;
+      const double v = std::pow(pos->u[i], 2) + std::pow(ori->u[j] * l[k], 2) + std::pow(ori->u[k] * l[j], 2);
+      EXPECT_NEAR(d[static_cast<size_t>(i)].var() / v, 1.0, 4 * se) << "sphere " << sphere << " axis " << i;
+      EXPECT_NEAR(d[static_cast<size_t>(i)].mean(), 0.0, 4 * std::sqrt(v / N));
+    }
+  }
+}
+
 // A chip of c under one touch moves that trigger back along the approach by c (to the
 // cosine of the face's tilt) and no other.
 TEST(IndependentMachine, ChipReadsTheSurfaceCloserAtItsTouchAlone) {
@@ -193,13 +287,6 @@ double interpolationFactor(double q, double p_min, double p_max) {
   return s / n;
 }
 
-struct Moments {
-  double sum = 0, sum2 = 0;
-  int n = 0;
-  void add(double x) { sum += x, sum2 += x * x, ++n; }
-  double mean() const { return sum / n; }
-  double var() const { return (sum2 - sum * sum / n) / (n - 1); }
-};
 
 // 000 Eq. (22)-(23) in closed form against the drawn machines: at a node the random part has the
 // declared variance u^2, midway between nodes u^2 / 2 (two independent nodes weighed 1/2 each);
