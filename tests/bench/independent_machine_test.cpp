@@ -14,6 +14,7 @@
 #include "core/simulation.hpp"
 #include "cycles/cycle.hpp"
 #include "cycles/spaceframe/analyze.hpp"
+#include "cycles/tooltip/plan.hpp"
 
 namespace rotacal {
 namespace {
@@ -247,6 +248,113 @@ TEST(IndependentMachine, SpaceframeSetupDrawHasItsClosedFormSpread) {
       EXPECT_NEAR(d[static_cast<size_t>(i)].mean(), 0.0, 4 * std::sqrt(v / N));
     }
   }
+}
+
+// The tool-tip test (004) on its bundled machine (head_ab.json), stepping A and stepping B: the
+// head's pivot-length and angular errors alone, then with this generator's linear axes under the
+// pivot and its tilted beams, give rotacal's simulateTooltip's readings (no noise) to 1e-6 um.
+const std::string kHead = std::string(ROTACAL_SOURCE_DIR) + "/examples/machines/head_ab.json";
+const std::string kTooltipContrib = std::string(ROTACAL_SOURCE_DIR) + "/examples/contributors/tooltip_004.json";
+
+double maxDiffUm(const TooltipRun& a, const TooltipRun& b) {
+  EXPECT_EQ(a.size(), b.size());
+  double worst = 0;
+  for (size_t i = 0; i < a.size() && i < b.size(); ++i) {
+    EXPECT_EQ(a[i].angle_deg, b[i].angle_deg);
+    worst = std::max({worst, std::abs(a[i].t_um - b[i].t_um), std::abs(a[i].z_um - b[i].z_um)});
+  }
+  return worst;
+}
+
+TEST(IndependentMachine, TooltipReadingsEqualRotacalSimulate) {
+  const MachineModel machine = loadMachine(kHead);
+  const ContributorSet c = loadContributors(kTooltipContrib);
+  for (const char* axis : {"A", "B"}) {
+    const ProbePlan plan = makePlan("tooltip", machine, {{"axis", axis}});
+    ASSERT_EQ(plan.points.size(), 19u);
+    for (const bool machine_terms : {false, true}) {
+      ind::HeadDrawOptions o;
+      o.per_reading = false;
+      o.linear_axes = o.alignment = machine_terms;
+      const ind::Head head = ind::drawHead(c, machine, o, 21);
+      TooltipTruth truth;
+      truth.dR_um = 1e3 * head.dR_mm;
+      truth.offset_mdeg = head.angular_mdeg[0];
+      truth.slope_mdeg_per_90deg = head.angular_mdeg[1];
+      truth.sin_mdeg = head.angular_mdeg[2];
+      truth.sin2_mdeg = head.angular_mdeg[3];
+      TooltipMachine theirs;
+      if (machine_terms) {
+        theirs.pivot_error_mm = [&head](const Eigen::Vector3d& p) { return head.axes.error(p); };
+        theirs.beam_t = head.beamT(axis[0]);
+        theirs.beam_z = head.beamZ(axis[0]);
+      }
+      const TooltipRun ours = ind::measureHead(plan, head);
+      EXPECT_LT(maxDiffUm(ours, simulateTooltip(plan, truth, 1, theirs)), 1e-6) << axis << machine_terms;
+      // and what is compared moves the readings (um): the head's errors, then the machine's terms
+      EXPECT_GT(maxDiffUm(ours, simulateTooltip(plan, TooltipTruth{}, 1)), 5.0);
+      if (machine_terms) {
+        EXPECT_GT(maxDiffUm(ours, simulateTooltip(plan, truth, 1)), 1.0);
+      }
+    }
+  }
+}
+
+// The per-reading scatter against its closed form: each beam's raw reading scatters by the laser's
+// own error, the sphere's form and the lateral coupling (tooltip_004.json, k = 1), s^2 their sum
+// of squares, and the laser is zeroed on the sweep's first reading, whose scatter every later
+// reading carries: Var = 2 s^2 per value, Cov = s^2 between two readings of one beam, 0 between
+// the beams. The beams' alignment: a tilt a towards the other in-plane axis reads a x that axis's
+// deviation, Var = u_a^2 d^2 to first order (d the aligned beams' reading there). The linear axes'
+// node values have the declared u of E_yy_rand and none where the file declares none.
+// 4000 machines; 4 standard errors.
+TEST(IndependentMachine, TooltipDrawHasItsClosedFormSpread) {
+  const MachineModel machine = loadMachine(kHead);
+  const ContributorSet c = loadContributors(kTooltipContrib);
+  const ProbePlan plan = makePlan("tooltip", machine, {});
+  const double s2 = std::pow(c.find("laser_resolution")->u[0], 2) + std::pow(c.find("laser_sphere_form")->u[0], 2) +
+                    std::pow(c.find("laser_lateral_coupling")->u[0], 2);  // mm^2
+  const double ua = c.find("laser_alignment")->u[0];
+  const int N = 4000;
+  const double se = std::sqrt(2.0 / (N - 1));
+  ind::HeadDrawOptions fixed;  // the head itself the same on every machine: dR 200 um, no angular error
+  fixed.dR_um = 200.0, fixed.sd_dR_um = 0.0, fixed.sd_mdeg = 0.0, fixed.angular_mdeg = {0, 0, 0, 0};
+  fixed.linear_axes = false;
+  ind::HeadDrawOptions scatter = fixed, aligned = fixed;
+  scatter.alignment = false;
+  aligned.per_reading = false;
+  ind::HeadDrawOptions none = aligned;
+  none.alignment = false;
+  const TooltipRun d = ind::measureHead(plan, ind::drawHead(c, machine, none, 1));
+  const size_t k = 9, l = 14;  // A = 45 and 70 deg
+  Moments tk, zk, cov_tl, at, az, node_yy;
+  std::vector<double> tl;
+  double yx_max = 0;
+  for (int i = 0; i < N; ++i) {
+    const std::uint64_t seed = 9000 + static_cast<std::uint64_t>(i);
+    const TooltipRun r = ind::measureHead(plan, ind::drawHead(c, machine, scatter, seed));
+    tk.add(r[k].t_um - d[k].t_um);
+    zk.add(r[k].z_um - d[k].z_um);
+    cov_tl.add((r[k].t_um - d[k].t_um) * (r[l].t_um - d[l].t_um));
+    const TooltipRun a = ind::measureHead(plan, ind::drawHead(c, machine, aligned, seed));
+    at.add(a[l].t_um - d[l].t_um);
+    az.add(a[k].z_um - d[k].z_um);
+    const ind::Head h = ind::drawHead(c, machine, {}, seed);
+    node_yy.add(h.axes.randomPart(1, 1, 2 * h.axes.spacing_mm[1]));
+    yx_max = std::max(yx_max, std::abs(h.axes.randomPart(1, 0, 2 * h.axes.spacing_mm[1])));
+  }
+  const double s2_um = 1e6 * s2;
+  EXPECT_NEAR(tk.var() / (2 * s2_um), 1.0, 4 * se);
+  EXPECT_NEAR(zk.var() / (2 * s2_um), 1.0, 4 * se);
+  EXPECT_NEAR(tk.mean(), 0.0, 4 * std::sqrt(2 * s2_um / N));
+  EXPECT_NEAR(cov_tl.mean() / s2_um, 1.0, 4 * std::sqrt(5.0 / N));
+  // the alignment reads the other in-plane component: t at 70 deg reads a x dz, z at 45 deg a x dy
+  ASSERT_GT(std::abs(d[l].z_um), 20.0);
+  ASSERT_GT(std::abs(d[k].t_um), 20.0);
+  EXPECT_NEAR(at.var() / std::pow(ua * d[l].z_um, 2), 1.0, 4 * se);
+  EXPECT_NEAR(az.var() / std::pow(ua * d[k].t_um, 2), 1.0, 4 * se);
+  EXPECT_NEAR(node_yy.var() / std::pow(c.find("E_yy_rand")->u[0], 2), 1.0, 4 * se);
+  EXPECT_EQ(yx_max, 0.0);
 }
 
 // A chip of c under one touch moves that trigger back along the approach by c (to the
