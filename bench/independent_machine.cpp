@@ -6,7 +6,9 @@
 
 #include <cmath>
 #include <functional>
+#include <map>
 #include <random>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -63,9 +65,45 @@ Eigen::Vector3d faceCentre_w(const SquareColumn& col, Face face) {
   return col.top_centre_w + half_width * f.n - Eigen::Vector3d(0, 0, col.size_mm.z() / 2);
 }
 
+// The set-up's turn: about X first, then Y, then Z (exact).
+Eigen::Matrix3d setupRotation(const Machine& m) {
+  const Eigen::Vector3d& r = m.setup_rotation_rad;
+  return (Eigen::AngleAxisd(r.z(), Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(r.y(), Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(r.x(), Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
 Eigen::Matrix3d rotationOf(const Eigen::Matrix4d& T) { return T.topLeftCorner<3, 3>(); }
 Eigen::Vector3d apply(const Eigen::Matrix4d& T, const Eigen::Vector3d& p) {
   return T.topLeftCorner<3, 3>() * p + T.topRightCorner<3, 1>();
+}
+
+// 000 Eq. (22)-(23) for one machine: per axis a node spacing uniform in the file's range, its
+// scale, the node values per error direction, then the three squarenesses (one fixed order).
+LinearAxes drawLinearAxes(const ContributorSet& c, const MachineModel& machine, Normal& n) {
+  const char* scale_id[3] = {"E_xx_lin", "E_yy_lin", "E_zz_lin"};
+  // rand_id[a][b]: E_ba,rand of axis a.
+  const char* rand_id[3][3] = {{"E_xx_rand", "E_yx_rand", "E_zx_rand"},
+                               {"E_xy_rand", "E_yy_rand", "E_zy_rand"},
+                               {"E_xz_rand", "E_yz_rand", "E_zz_rand"}};
+  const AxisRange strokes[3] = {machine.x, machine.y, machine.z};
+  LinearAxes ax;
+  for (int a = 0; a < 3; ++a) {
+    const double p = n.uniform(c.node_spacing_min_mm, c.node_spacing_max_mm);
+    ax.spacing_mm[a] = p;
+    ax.first[a] = static_cast<int>(std::floor(strokes[a].min / p)) - 2;
+    const int last = static_cast<int>(std::ceil(strokes[a].max / p)) + 2;
+    ax.scale[a] = declared(c, scale_id[a]) * n();
+    for (int b = 0; b < 3; ++b) {
+      const double u = declared(c, rand_id[a][b]);
+      auto& v = ax.node_mm[a][b];
+      for (int i = ax.first[a]; i <= last; ++i) v.push_back(u * n());
+    }
+  }
+  ax.S_xy = declared(c, "S_xy") * n();
+  ax.S_xz = declared(c, "S_xz") * n();
+  ax.S_yz = declared(c, "S_yz") * n();
+  return ax;
 }
 
 }  // namespace
@@ -164,28 +202,7 @@ Machine drawMachine(const ContributorSet& c, const MachineModel& machine, const 
                declared(c, "form_error", 1) * n()};
     if (o.form) f = d;
   }
-  const char* scale_id[3] = {"E_xx_lin", "E_yy_lin", "E_zz_lin"};
-  // rand_id[a][b]: E_ba,rand of axis a.
-  const char* rand_id[3][3] = {{"E_xx_rand", "E_yx_rand", "E_zx_rand"},
-                               {"E_xy_rand", "E_yy_rand", "E_zy_rand"},
-                               {"E_xz_rand", "E_yz_rand", "E_zz_rand"}};
-  const AxisRange strokes[3] = {machine.x, machine.y, machine.z};
-  LinearAxes ax;
-  for (int a = 0; a < 3; ++a) {
-    const double p = n.uniform(c.node_spacing_min_mm, c.node_spacing_max_mm);
-    ax.spacing_mm[a] = p;
-    ax.first[a] = static_cast<int>(std::floor(strokes[a].min / p)) - 2;
-    const int last = static_cast<int>(std::ceil(strokes[a].max / p)) + 2;
-    ax.scale[a] = declared(c, scale_id[a]) * n();
-    for (int b = 0; b < 3; ++b) {
-      const double u = declared(c, rand_id[a][b]);
-      auto& v = ax.node_mm[a][b];
-      for (int i = ax.first[a]; i <= last; ++i) v.push_back(u * n());
-    }
-  }
-  ax.S_xy = declared(c, "S_xy") * n();
-  ax.S_xz = declared(c, "S_xz") * n();
-  ax.S_yz = declared(c, "S_yz") * n();
+  LinearAxes ax = drawLinearAxes(c, machine, n);
   m.axes = ax;
   m.has_linear_axes = o.linear_axes;
   if (!o.linear_axes) {
@@ -211,6 +228,24 @@ Machine cleanMachine(const LocationErrors& errors) {
   return m;
 }
 
+Eigen::Vector3d sphereCentre_w(const ProbePlan& plan, const ProbePoint& point, const Machine& m) {
+  if (!point.sphere) throw std::runtime_error("point " + std::to_string(point.id) + " touches no sphere");
+  const Eigen::Vector3d& c = point.sphere->center_w_mm;
+  if (plan.cycle != "spaceframe") return c + m.setup_translation_mm;
+  // The frame's origin on the table, as the plan states it ("x,y,z" mm).
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  const auto it = plan.options.find("origin_w_mm");
+  if (it == plan.options.end()) throw std::runtime_error("a spaceframe plan without origin_w_mm");
+  {
+    std::string text = it->second;
+    for (char& ch : text)
+      if (ch == ',') ch = ' ';
+    std::istringstream in(text);
+    if (!(in >> origin.x() >> origin.y() >> origin.z())) throw std::runtime_error("origin_w_mm: " + it->second);
+  }
+  return setupRotation(m) * (c - origin) + origin + m.setup_translation_mm;
+}
+
 FacePlane facePlane_m(const ProbePlan& plan, const ProbePoint& point, const Machine& m) {
   if (!plan.machine.artefact) throw std::runtime_error("the machine has no square column to probe");
   const SquareColumn& col = *plan.machine.artefact;
@@ -225,11 +260,7 @@ FacePlane facePlane_m(const ProbePlan& plan, const ProbePoint& point, const Mach
   const Eigen::Vector3d x_piece = centre + form.offset_mm * f.n;
   const Eigen::Vector3d n_piece = tilt * f.n;
   // The set-up: turned about the nominal top centre (X first, then Y, then Z), then shifted.
-  const Eigen::Vector3d& r = m.setup_rotation_rad;
-  const Eigen::Matrix3d R = (Eigen::AngleAxisd(r.z(), Eigen::Vector3d::UnitZ()) *
-                             Eigen::AngleAxisd(r.y(), Eigen::Vector3d::UnitY()) *
-                             Eigen::AngleAxisd(r.x(), Eigen::Vector3d::UnitX()))
-                                .toRotationMatrix();
+  const Eigen::Matrix3d R = setupRotation(m);
   const Eigen::Vector3d x_w = R * (x_piece - col.top_centre_w) + col.top_centre_w + m.setup_translation_mm;
   const Eigen::Vector3d n_w = R * n_piece;
   // The table at the commanded pose carries it into the machine frame.
@@ -252,12 +283,12 @@ MeasurementRun measure(const ProbePlan& plan, const Machine& m, const std::optio
     const Eigen::Vector3d u = p.approach_m.normalized();
     const Eigen::Vector3d& c0 = p.trigger_m_mm;
     // Where along the move the actual ball, at c0 + e when the reading is c0, first touches the
-    // surface raised by h: a face plane, or a sphere (its centre placed by the set-up's translation;
-    // a turn of the set-up moves a sphere's centre by nothing a sphere cycle does not fit).
+    // surface raised by h: a face plane, or a sphere (its centre placed by the set-up:
+    // sphereCentre_w).
     std::function<double(const Eigen::Vector3d&)> contact;
     if (p.sphere) {
       const Eigen::Matrix4d T = tableTransform(m.location, p.pose.A, p.pose.C);
-      const Eigen::Vector3d x = apply(T, p.sphere->center_w_mm + m.setup_translation_mm);
+      const Eigen::Vector3d x = apply(T, sphereCentre_w(plan, p, m));
       const double rho = r + p.sphere->radius_mm + h;
       // |d + s u| = rho, d = c0 + e - x: the smaller root (the ball comes from outside).
       contact = [x, rho, u, id = p.id](const Eigen::Vector3d& b0) {
@@ -298,6 +329,108 @@ MeasurementRun measure(const ProbePlan& plan, const Machine& m, const std::optio
     t.position_m_mm = c0 + s * u;
     t.t_s = p.t_s;
     run.points.push_back(t);
+  }
+  return run;
+}
+
+double Head::angularErrorMdeg(double theta_deg) const {
+  const double th = theta_deg * kPi / 180.0;
+  return angular_mdeg[0] + angular_mdeg[1] * theta_deg / 90.0 + angular_mdeg[2] * std::sin(th) +
+         angular_mdeg[3] * std::sin(2 * th);
+}
+
+namespace {
+// The read plane of a stepping axis: its transverse axis (Y for A, X for B) and the axis out of
+// the plane (the stepping axis itself).
+int transverseOf(char axis) { return axis == 'A' ? 1 : 0; }
+int outOfPlaneOf(char axis) { return axis == 'A' ? 0 : 1; }
+}  // namespace
+
+Eigen::Vector3d Head::beamT(char axis) const {
+  Eigen::Vector3d b = Eigen::Vector3d::Unit(transverseOf(axis));
+  b.z() += beam_tilt_rad[0];
+  b[outOfPlaneOf(axis)] += beam_tilt_rad[1];
+  return b.normalized();
+}
+Eigen::Vector3d Head::beamZ(char axis) const {
+  Eigen::Vector3d b = Eigen::Vector3d::UnitZ();
+  b[transverseOf(axis)] += beam_tilt_rad[2];
+  b[outOfPlaneOf(axis)] += beam_tilt_rad[3];
+  return b.normalized();
+}
+
+Head drawHead(const ContributorSet& c, const MachineModel& machine, const HeadDrawOptions& o, std::uint64_t seed) {
+  // Every value is drawn whatever the options, in one fixed order (as drawMachine).
+  Normal n(seed);
+  Head h;
+  h.dR_mm = 1e-3 * (o.dR_um + o.sd_dR_um * n());
+  if (!o.pivot) h.dR_mm = 0.0;
+  for (size_t i = 0; i < 4; ++i) h.angular_mdeg[i] = o.angular_mdeg[i] + o.sd_mdeg * n();
+  const LinearAxes axes = drawLinearAxes(c, machine, n);
+  h.has_linear_axes = o.linear_axes;
+  if (o.linear_axes) h.axes = axes;
+  for (double& t : h.beam_tilt_rad) {
+    const double d = declared(c, "laser_alignment") * n();
+    if (o.alignment) t = d;
+  }
+  if (o.per_reading) {
+    h.laser_resolution_mm = declared(c, "laser_resolution");
+    h.sphere_form_mm = declared(c, "laser_sphere_form");
+    h.lateral_coupling_mm = declared(c, "laser_lateral_coupling");
+  }
+  h.reading_seed = n.raw();
+  return h;
+}
+
+TooltipRun measureHead(const ProbePlan& plan, const Head& h, const std::optional<ReadingChip>& chip) {
+  if (plan.cycle != "tooltip") throw std::runtime_error("measureHead reads a tooltip plan");
+  const auto option = [&](const char* key) {
+    const auto it = plan.options.find(key);
+    if (it == plan.options.end()) throw std::runtime_error(std::string("a tooltip plan without ") + key);
+    return it->second;
+  };
+  const char axis = option("axis").at(0);
+  if (axis != 'A' && axis != 'B') throw std::runtime_error("tooltip plan: axis " + option("axis"));
+  const double R = std::stod(option("radius_mm"));
+  const Eigen::Vector3d bt = h.beamT(axis), bz = h.beamZ(axis);
+  Normal draw(h.reading_seed);
+  // Per point: the tip where the head really puts it, and the two beams' raw readings of it.
+  struct Raw {
+    double angle_deg = 0, t_mm = 0, z_mm = 0;
+  };
+  std::vector<Raw> raw;
+  std::map<std::string, size_t> zero;  // the sweep's zero reading: its first pose at 0 deg
+  for (const ProbePoint& p : plan.points) {
+    const double theta = axis == 'A' ? p.pose.A : p.pose.B;
+    // 004 Sec. V: the tip hangs at R + dR below the pivot, the head turned to its command plus
+    // its angular positioning error; the pivot goes where the linear axes put its command.
+    double A = p.pose.A, B = p.pose.B;
+    (axis == 'A' ? A : B) += h.angularErrorMdeg(theta) / 1000.0;
+    const Eigen::Vector3d pivot = p.trigger_m_mm + (h.has_linear_axes ? h.axes.error(p.trigger_m_mm) : Eigen::Vector3d::Zero());
+    const Eigen::Vector3d tip = apply(Da(A * kPi / 180.0) * Db(B * kPi / 180.0), Eigen::Vector3d(0, 0, -(R + h.dR_mm))) + pivot;
+    const Eigen::Vector3d dev = tip - p.contact_w_mm;
+    Raw r;
+    r.angle_deg = theta;
+    r.t_mm = bt.dot(dev);
+    r.z_mm = bz.dot(dev);
+    for (double* v : {&r.t_mm, &r.z_mm}) {
+      const double n_res = draw(), n_form = draw(), n_coupling = draw();
+      *v += h.laser_resolution_mm * n_res + h.sphere_form_mm * n_form + h.lateral_coupling_mm * n_coupling;
+    }
+    if (chip && chip->point_id == p.id) (chip->z ? r.z_mm : r.t_mm) += chip->mm;
+    if (std::abs(theta) < 1e-9 && !zero.count(p.pose_name)) zero[p.pose_name] = raw.size();
+    raw.push_back(r);
+  }
+  TooltipRun run;
+  for (size_t k = 0; k < plan.points.size(); ++k) {
+    const auto it = zero.find(plan.points[k].pose_name);
+    if (it == zero.end()) throw std::runtime_error("tooltip plan: sweep " + plan.points[k].pose_name + " has no pose at 0 deg");
+    const Raw& z = raw[it->second];
+    TooltipReading r;
+    r.angle_deg = raw[k].angle_deg;
+    r.t_um = 1e3 * (raw[k].t_mm - z.t_mm);
+    r.z_um = 1e3 * (raw[k].z_mm - z.z_mm);
+    run.push_back(r);
   }
   return run;
 }

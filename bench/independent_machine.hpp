@@ -39,6 +39,7 @@
 #include "core/machine.hpp"
 #include "core/measurement.hpp"
 #include "core/probe_plan.hpp"
+#include "cycles/tooltip/plan.hpp"
 
 namespace rotacal::independent {
 
@@ -130,6 +131,14 @@ struct FacePlane {
 };
 FacePlane facePlane_m(const ProbePlan& plan, const ProbePoint& point, const Machine& m);
 
+/// Where a sphere cycle's touched sphere really is on the table (workpiece frame, mm): its plan
+/// centre moved by the set-up. On the space frame (003: seven spheres on one plate) the whole frame
+/// is turned about its origin on the table (the plan option origin_w_mm, X first, then Y, then Z,
+/// exact) and shifted, so each sphere moves by its lever from the origin; a single sphere, or
+/// spheres3's three, move by the shift alone (a turn about the column's top centre is the set-up of
+/// the square column, not of those spheres).
+Eigen::Vector3d sphereCentre_w(const ProbePlan& plan, const ProbePoint& point, const Machine& m);
+
 /// The trigger of every plan point: the read ball-centre position (machine frame, mm) at which the
 /// actual ball, moving along the plan's approach line, touches the true face, or on a sphere
 /// cycle's point the true sphere (its centre moved by the set-up's translation) (exact contact,
@@ -138,5 +147,66 @@ FacePlane facePlane_m(const ProbePlan& plan, const ProbePoint& point, const Mach
 /// but its own touch. t_s is the plan's. Throws std::runtime_error when a trigger would fall
 /// outside the probing move (the program would alarm).
 MeasurementRun measure(const ProbePlan& plan, const Machine& m, const std::optional<Chip>& chip = std::nullopt);
+
+/// The spindle head of 004 (Optodyne, the fixed-tool-tip test) on a head machine (head_ab.json):
+/// the head tilts in A (about X) and B (about Y) about a pivot, the tool tip (the centre of the
+/// spindle tester's precision sphere) hanging at R + dR below it (004 Sec. V: tip = P + Rx(A)
+/// Ry(B) (0, 0, -R), P the pivot), the stepping axis turning to its command plus an angular
+/// positioning error e(theta). The linear axes carrying the pivot are those of 000 Eq. (22)-(23)
+/// with what the contributors file declares (004 Sec. VII's machine positioning). A laser at
+/// 004's position 2 reads the sphere along two beams in the rotation plane (the transverse axis
+/// and Z), each tilted off its axis (laser_alignment, in and out of the plane), each reading
+/// scattered by the laser's own error, the sphere's form and the lateral coupling (per reading and
+/// beam), and zeroed at the sweep's first pose at 0 deg (004 Table 1's M0): that zero reading
+/// carries its own scatter into every later reading of its sweep.
+struct Head {
+  double dR_mm = 0.0;
+  /// e(theta) = c0 + c1 theta / 90 deg + c2 sin theta + c3 sin 2 theta (mdeg): 004 gives its
+  /// angular errors as a curve (Fig. 4), not in numbers.
+  std::array<double, 4> angular_mdeg{};
+  bool has_linear_axes = false;
+  LinearAxes axes;
+  /// The beams' tilts (rad): transverse beam towards Z and out of the plane; Z beam towards the
+  /// transverse axis and out of the plane.
+  std::array<double, 4> beam_tilt_rad{};
+  double laser_resolution_mm = 0.0, sphere_form_mm = 0.0, lateral_coupling_mm = 0.0;  // per reading and beam, k = 1
+  std::uint64_t reading_seed = 0;
+
+  double angularErrorMdeg(double theta_deg) const;
+  /// The beams' unit directions (machine frame) for a plan stepping `axis` ('A' or 'B').
+  Eigen::Vector3d beamT(char axis) const;
+  Eigen::Vector3d beamZ(char axis) const;
+};
+
+/// What to draw for a head, and around what: 004 gives no head errors in numbers, so the centre is
+/// docs/tooltip.md's worked example (dR 40 um; e = 3 + 5 theta/90 - 2 sin theta + 1.5 sin 2 theta
+/// mdeg) with a spread of 20 um and 1 mdeg per coefficient (k = 1).
+struct HeadDrawOptions {
+  double dR_um = 40.0, sd_dR_um = 20.0;
+  std::array<double, 4> angular_mdeg{3.0, 5.0, -2.0, 1.5};
+  double sd_mdeg = 1.0;
+  bool linear_axes = true, alignment = true, per_reading = true;
+  bool pivot = true;  // false: dR = 0 (drawn all the same, so every other draw stays)
+};
+
+/// Draws one head machine from the contributors (laser_resolution, laser_sphere_form,
+/// laser_lateral_coupling, laser_alignment, the linear axes' E_*_rand, E_*_lin, S_*), each normal
+/// with its declared u (k = 1), with its own seed.
+Head drawHead(const ContributorSet& contributors, const MachineModel& machine, const HeadDrawOptions& options,
+              std::uint64_t seed);
+
+/// A gross reading: the value of one beam (`z`: the Z beam, else the transverse one) at one plan
+/// point off by `mm`.
+struct ReadingChip {
+  int point_id = 0;
+  bool z = false;
+  double mm = 0.0;
+};
+
+/// The laser readings of a tooltip plan (um, the deviation of the tip along each beam, zeroed at
+/// the first pose at 0 deg of its sweep): exact head, pivot through the linear axes, tilted beams,
+/// the per-reading scatter from the head's reading_seed in plan order (three draws per beam and
+/// reading whatever is declared, so a chip or a switched-off term changes no other draw).
+TooltipRun measureHead(const ProbePlan& plan, const Head& head, const std::optional<ReadingChip>& chip = std::nullopt);
 
 }  // namespace rotacal::independent

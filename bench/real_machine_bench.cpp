@@ -8,14 +8,17 @@
 // random touch (20 um and 1 mm) and analyzed. Printed, not asserted: the figures of docs/real_machines.md.
 //
 // Run: build/bench/rotacal_real_machine_bench [--machines N] [--mc-runs R] [--seed S]
-//        [--contributors FILE] [--dialect D] [--sd-um X] [--sd-mdeg X] [--no-chips] [--verbose]
-//        [--cycle touch154|one_sphere|spheres3] [--dump DIR] [--off LIST]
+//        [--contributors FILE] [--machine FILE] [--dialect D] [--sd-um X] [--sd-mdeg X] [--no-chips] [--verbose]
+//        [--cycle touch154|one_sphere|spheres3|spaceframe|tooltip] [--dump DIR] [--off LIST]
 // --off switches contributors of the generator off (setup, form, linear_axes, pretravel,
-// repeatability, roughness; comma-separated), to see which one a failure is owed to.
+// repeatability, roughness; tooltip: linear_axes, alignment, laser (the per-reading terms), pivot
+// (the head's dR);
+// comma-separated), to see which one a failure is owed to.
 // --dump writes the first machine's PLAN.json, RESULTS, TRUTH.json, REPORT.json and DIAGNOSIS.json,
 // so that the command line can be run on the same data (`rotacal analyze --plan DIR/PLAN.json ...`).
 // Defaults: 200 machines, 2000 Monte Carlo runs per analysis (the CLI's default), seeds 1..N,
-// examples/contributors/table5.json, linuxcnc; about 2 s per machine (three analyses and one
+// the cycle's bundled example machine and options and the contributors that machine declares
+// (examples/contributors/table5.json for the A/C cycles), linuxcnc; about 2 s per machine (three analyses and one
 // diagnosis). `--machines 20` is a quick check; `--mc-runs 500` cuts the analyses' time further.
 #include <algorithm>
 #include <chrono>
@@ -40,6 +43,7 @@
 #include "core/contributors.hpp"
 #include "core/machine.hpp"
 #include "cycles/cycle.hpp"
+#include "cycles/tooltip/plan.hpp"
 
 #ifndef ROTACAL_SOURCE_DIR
 #define ROTACAL_SOURCE_DIR "."
@@ -54,8 +58,10 @@ struct Args {
   int machines = 200;
   int mc_runs = 2000;
   std::uint64_t seed = 1;
-  std::string contributors = std::string(ROTACAL_SOURCE_DIR) + "/examples/contributors/table5.json";
-  std::string machine = std::string(ROTACAL_SOURCE_DIR) + "/examples/machines/ac_trunnion.json";
+  // Empty: the cycle's bundled example machine with its example options (`plan --cycle C` with no
+  // --machine), and the contributors that machine declares (else table5.json).
+  std::string contributors;
+  std::string machine;
   std::string dialect = "linuxcnc";
   double sd_um = 5.0, sd_mdeg = 0.5;
   std::string cycle = "touch154";
@@ -69,7 +75,7 @@ struct Args {
   std::fprintf(stderr,
                "rotacal_real_machine_bench: %s\nusage: rotacal_real_machine_bench [--machines N] [--mc-runs R] [--seed S] "
                "[--contributors FILE] [--machine FILE] [--dialect D] [--sd-um X] [--sd-mdeg X] [--no-chips] [--verbose]\n"
-               "       [--cycle touch154|one_sphere|spheres3] [--dump DIR] [--off setup,form,linear_axes,pretravel,repeatability,roughness]\n",
+               "       [--cycle touch154|one_sphere|spheres3|spaceframe|tooltip] [--dump DIR] [--off setup,form,linear_axes,pretravel,repeatability,roughness,alignment,laser,pivot]\n",
                why);
   std::exit(2);
 }
@@ -110,6 +116,18 @@ DialectIO dialectIO(const Dialect& d) {
           [&d](const ProbePlan& plan, const MeasurementRun& run) { return d.writeResults(plan, run); }};
 }
 
+// The results file's name: the dialect's, or the tool-tip laser's neutral CSV (its readings come
+// from the laser system, whatever the dialect).
+std::string resultsName(const ProbePlan& plan, const Dialect& d) {
+  return plan.cycle == "tooltip" ? std::string("RESULTS.csv") : "RESULTS" + std::string(d.resultsExtension());
+}
+
+// One drawn machine: an A/C table (the probing cycles) or a spindle head (tooltip).
+struct Drawn {
+  ind::Machine m;
+  ind::Head head;
+};
+
 // What one analyze gave, as the command line would see it.
 struct Analyzed {
   bool ok = false;            // analyze returned (no refusal of the data as a whole)
@@ -118,16 +136,17 @@ struct Analyzed {
   std::string refused;        // why not
   std::vector<int> excluded;  // point ids the outlier screen left out
   bool too_many = false;
+  bool held_back = false;     // REPORT.json's corrections_held_back: the data beyond the declaration
   int beyond = 0;
   double threshold_t = 0;
   Json doc;
 };
 
 Analyzed analyze(const Cycle& cycle, const ProbePlan& plan, const Dialect& d, const DialectIO& io,
-                 const ContributorSet& contrib, const MeasurementRun& run, const Args& args, std::uint64_t mc_seed) {
+                 const ContributorSet& contrib, const std::string& results, const Args& args, std::uint64_t mc_seed) {
   AnalyzeRequest r;
   r.plan = &plan;
-  r.results = {{"RESULTS" + std::string(d.resultsExtension()), d.writeResults(plan, run)}};
+  r.results = {{resultsName(plan, d), results}};
   r.dialect = &io;
   r.contributors = &contrib;
   r.mc_runs = args.mc_runs;
@@ -142,6 +161,7 @@ Analyzed analyze(const Cycle& cycle, const ProbePlan& plan, const Dialect& d, co
   }
   a.ok = true;
   a.doc = docs.doc;
+  a.held_back = a.doc.contains("corrections_held_back");
   if (a.doc.contains("outliers")) {
     const Json& o = a.doc["outliers"];
     for (const auto& e : o.value("excluded", Json::array())) a.excluded.push_back(e.value("point", 0));
@@ -218,7 +238,9 @@ const Json* baselineAdequacy(const Json& doc) {
 // the report estimates it (one_sphere fits it), each with the drawn truth in report units.
 struct Counted {
   std::string name, unit;
-  std::function<double(const ind::Machine&)> truth;
+  std::function<double(const Drawn&)> truth;
+  /// Where the report has it, when not where reported() looks (tooltip's angular errors by angle).
+  std::function<std::optional<ValueU>(const Json&)> lookup;
 };
 // The drawn truth of one of 000's location errors by name, report units.
 double truthOf(const ind::Machine& m, const std::string& name) {
@@ -227,27 +249,48 @@ double truthOf(const ind::Machine& m, const std::string& name) {
     if (params[k].name == name) return m.location.reportValue(static_cast<int>(k));
   throw std::logic_error("no location error " + name);
 }
-std::vector<Counted> countedParameters(const std::string& cycle) {
+std::vector<Counted> countedParameters(const std::string& cycle, const ProbePlan& plan) {
   std::vector<Counted> c;
+  if (cycle == "tooltip") {
+    // The pivot-length error and the stepping axis's angular error at each commanded angle
+    // (REPORT.json angular_error[]; null where the screen left that angle's reading out).
+    c.push_back({"dR", "um", [](const Drawn& d) { return 1e3 * d.head.dR_mm; }, nullptr});
+    const char axis = plan.options.at("axis").at(0);
+    std::vector<double> angles;
+    for (const auto& p : plan.points) {
+      const double a = axis == 'A' ? p.pose.A : p.pose.B;
+      if (std::find(angles.begin(), angles.end(), a) == angles.end()) angles.push_back(a);
+    }
+    for (const double a : angles)
+      c.push_back({fmt::format("e_{}{:g}", axis, a), "mdeg", [a](const Drawn& d) { return d.head.angularErrorMdeg(a); },
+                   [a](const Json& doc) -> std::optional<ValueU> {
+                     for (const auto& e : doc.value("angular_error", Json::array()))
+                       if (std::abs(e.value("angle_deg", 1e9) - a) < 1e-9 && e.contains("value") && e["value"].is_number() &&
+                           e.contains("U") && e["U"].is_number())
+                         return ValueU{e["value"].get<double>(), e["U"].get<double>(), e.value("u_c", 0.0)};
+                     return std::nullopt;
+                   }});
+    return c;
+  }
   if (cycle == "spheres3") {
     // spheres3 reports the C axis's location (001 Table 1); on this A/C machine at A = 0 it is
     // 000's chain to first order (cycles/spheres3/analyze.hpp, docs/e2e-linuxcnc.md's comp_table):
     // Oxc = dx_AY, Oyc = dy_AY + dy_CA, Sxc = a_AY, Syc = b_AY + b_CA.
-    c.push_back({"Oxc", "um", [](const ind::Machine& m) { return truthOf(m, "dx_AY"); }});
-    c.push_back({"Oyc", "um", [](const ind::Machine& m) { return truthOf(m, "dy_AY") + truthOf(m, "dy_CA"); }});
-    c.push_back({"Sxc", "mdeg", [](const ind::Machine& m) { return truthOf(m, "a_AY"); }});
-    c.push_back({"Syc", "mdeg", [](const ind::Machine& m) { return truthOf(m, "b_AY") + truthOf(m, "b_CA"); }});
+    c.push_back({"Oxc", "um", [](const Drawn& d) { return truthOf(d.m, "dx_AY"); }, nullptr});
+    c.push_back({"Oyc", "um", [](const Drawn& d) { return truthOf(d.m, "dy_AY") + truthOf(d.m, "dy_CA"); }, nullptr});
+    c.push_back({"Sxc", "mdeg", [](const Drawn& d) { return truthOf(d.m, "a_AY"); }, nullptr});
+    c.push_back({"Syc", "mdeg", [](const Drawn& d) { return truthOf(d.m, "b_AY") + truthOf(d.m, "b_CA"); }, nullptr});
     return c;
   }
   const auto& params = locationParameters(Kinematics::TableAC);
   for (size_t k = 0; k < params.size(); ++k)
     c.push_back({std::string(params[k].name), std::string(reportUnit(params[k].kind)),
-                 [k](const ind::Machine& m) { return m.location.reportValue(static_cast<int>(k)); }});
+                 [k](const Drawn& d) { return d.m.location.reportValue(static_cast<int>(k)); }, nullptr});
   // A squareness S (mm/mm) is reported as the small angle it is, in mdeg.
   const double mdeg = 180.0 / 3.14159265358979323846 * 1e3;
-  c.push_back({"S_xy", "mdeg", [mdeg](const ind::Machine& m) { return m.axes.S_xy * mdeg; }});
-  c.push_back({"S_xz", "mdeg", [mdeg](const ind::Machine& m) { return m.axes.S_xz * mdeg; }});
-  c.push_back({"S_yz", "mdeg", [mdeg](const ind::Machine& m) { return m.axes.S_yz * mdeg; }});
+  c.push_back({"S_xy", "mdeg", [mdeg](const Drawn& d) { return d.m.axes.S_xy * mdeg; }, nullptr});
+  c.push_back({"S_xz", "mdeg", [mdeg](const Drawn& d) { return d.m.axes.S_xz * mdeg; }, nullptr});
+  c.push_back({"S_yz", "mdeg", [mdeg](const Drawn& d) { return d.m.axes.S_yz * mdeg; }, nullptr});
   return c;
 }
 
@@ -274,6 +317,20 @@ Json truthJson(const ind::Machine& m) {
             {"node_spacing_mm", {m.axes.spacing_mm[0], m.axes.spacing_mm[1], m.axes.spacing_mm[2]}}}}};
 }
 
+// A drawn head as TRUTH.json's tooltip object (docs/tooltip.md) plus what the generator drew beside it.
+Json headTruthJson(const ind::Head& h) {
+  return {{"format", "rotacal-truth/1"},
+          {"_comment", "drawn by bench/independent_machine (rotacal_real_machine_bench --dump)"},
+          {"tooltip",
+           {{"dR_um", 1e3 * h.dR_mm},
+            {"angular_error", {{"offset_mdeg", h.angular_mdeg[0]}, {"slope_mdeg_per_90deg", h.angular_mdeg[1]},
+                               {"sin_mdeg", h.angular_mdeg[2]}, {"sin2_mdeg", h.angular_mdeg[3]}}}}},
+          {"independent_generator",
+           {{"beam_tilt_urad", {1e6 * h.beam_tilt_rad[0], 1e6 * h.beam_tilt_rad[1], 1e6 * h.beam_tilt_rad[2], 1e6 * h.beam_tilt_rad[3]}},
+            {"node_spacing_mm", {h.axes.spacing_mm[0], h.axes.spacing_mm[1], h.axes.spacing_mm[2]}},
+            {"per_reading_um", {1e3 * h.laser_resolution_mm, 1e3 * h.sphere_form_mm, 1e3 * h.lateral_coupling_mm}}}}};
+}
+
 double pct(int k, int n) { return n > 0 ? 100.0 * k / n : 0.0; }
 
 struct Quantiles {
@@ -294,14 +351,23 @@ struct Quantiles {
 int main(int argc, char** argv) {
   const Args args = parse(argc, argv);
   const auto t0 = std::chrono::steady_clock::now();
-  const MachineModel machine = loadMachine(args.machine);
-  const ContributorSet contrib = loadContributors(args.contributors);
-  const ProbePlan plan = makePlan(args.cycle, machine, {});
+  // The cycle's bundled example: its machine and options (spaceframe's: ac_trunnion.json with
+  // phi_list=-90,-45,0), unless --machine names another (then no options, as before).
+  const CycleExample example = cycleByName(args.cycle).example();
+  const std::string machine_file =
+      args.machine.empty() ? std::string(ROTACAL_SOURCE_DIR) + "/" + example.machine : args.machine;
+  const MachineModel machine = loadMachine(machine_file);
+  const ContributorSet contrib =
+      !args.contributors.empty() ? loadContributors(args.contributors)
+      : machine.contributors     ? *machine.contributors
+                                 : loadContributors(std::string(ROTACAL_SOURCE_DIR) + "/examples/contributors/table5.json");
+  const ProbePlan plan = makePlan(args.cycle, machine, args.machine.empty() ? example.options : CycleOptions{});
   const Cycle& cycle = cycleOfPlan(plan);
   const Dialect& dialect = dialectByName(args.dialect);
   const DialectIO io = dialectIO(dialect);
 
   ind::DrawOptions draw;
+  ind::HeadDrawOptions head_draw;
   draw.sd_um = args.sd_um;
   draw.sd_mdeg = args.sd_mdeg;
   for (size_t b = 0, e; b <= args.off.size() && !args.off.empty(); b = e + 1) {
@@ -313,12 +379,30 @@ int main(int argc, char** argv) {
                  : w == "pretravel" ? &draw.pretravel
                  : w == "repeatability" ? &draw.repeatability
                  : w == "roughness" ? &draw.roughness
+                 : w == "alignment" ? &head_draw.alignment
+                 : w == "laser" ? &head_draw.per_reading
+                 : w == "pivot" ? &head_draw.pivot
                  : nullptr;
+    if (w == "linear_axes") head_draw.linear_axes = false;
     if (!flag) usage(("--off: unknown contributor " + w).c_str());
     *flag = false;
   }
 
-  int n = 0, analyzed = 0, written = 0, screen_removed = 0, screen_gave_up = 0, diagnosed = 0, inadequate = 0,
+  const bool tooltip = plan.cycle == "tooltip";
+  // The results text of a drawn machine, with a chip of `mm` under point `id` (0: none): the
+  // probing cycles' triggers through the dialect's results writer, tooltip's laser readings
+  // through its neutral CSV writer (what `simulate` writes for each).
+  const auto resultsOf = [&](const Drawn& d, int id, bool chip_z, double mm) -> std::string {
+    if (tooltip)
+      return tooltipResultsText(plan, ind::measureHead(plan, d.head, id ? std::optional<ind::ReadingChip>(ind::ReadingChip{id, chip_z, mm})
+                                                                         : std::nullopt));
+    return dialect.writeResults(plan, ind::measure(plan, d.m, id ? std::optional<ind::Chip>(ind::Chip{id, mm}) : std::nullopt));
+  };
+  std::vector<int> chip_points;
+  for (const auto& p : plan.points)
+    if (!tooltip || std::abs(plan.options.at("axis") == "A" ? p.pose.A : p.pose.B) > 1e-9) chip_points.push_back(p.id);
+
+  int n = 0, analyzed = 0, not_held_back = 0, written = 0, screen_removed = 0, screen_gave_up = 0, diagnosed = 0, inadequate = 0,
       named = 0, no_effect = 0;
   std::map<std::string, int> causes, refusals;
   struct ChipTally {
@@ -326,12 +410,13 @@ int main(int argc, char** argv) {
     int isolated = 0;       // the chip's touch and nothing else left out
     int returned = 0;       // analyze returned (a REPORT.json)
     int returned_with = 0;  // ... with the chip's touch in the fit
+    int handed_on = 0;      // ... and nothing held back: the chip reaches what the cycle hands on
     int refused = 0;        // analyze refused the data
     // Coverage of U on the analyses with the chip left out (what a report of such data claims).
     std::vector<int> in_U, counted;
   };
   ChipTally chip20, chip1mm;
-  const std::vector<Counted> cover = countedParameters(args.cycle);
+  const std::vector<Counted> cover = countedParameters(args.cycle, plan);
   std::vector<int> in_U(cover.size(), 0), in_uc(cover.size(), 0), counted(cover.size(), 0);
   std::vector<double> err2(cover.size(), 0.0), U2(cover.size(), 0.0);
   Quantiles beyond, removed_count, chi2_dof, excess_rms, residual_rms, threshold;
@@ -339,21 +424,25 @@ int main(int argc, char** argv) {
 
   for (int i = 0; i < args.machines; ++i) {
     const std::uint64_t seed = args.seed + static_cast<std::uint64_t>(i);
-    const ind::Machine m = ind::drawMachine(contrib, machine, draw, seed);
+    Drawn drawn;
+    if (tooltip) drawn.head = ind::drawHead(contrib, machine, head_draw, seed);
+    else drawn.m = ind::drawMachine(contrib, machine, draw, seed);
+    const ind::Machine& m = drawn.m;
     ++n;
-    const MeasurementRun clean = ind::measure(plan, m);
+    const std::string clean = resultsOf(drawn, 0, false, 0.0);
     const Analyzed a = analyze(cycle, plan, dialect, io, contrib, clean, args, seed);
     const bool dump = i == 0 && !args.dump.empty();
     if (dump) {
       writeFile(args.dump, "PLAN.json", planToJson(plan).dump(1) + "\n");
-      writeFile(args.dump, "RESULTS" + std::string(dialect.resultsExtension()), dialect.writeResults(plan, clean));
-      writeFile(args.dump, "TRUTH.json", truthJson(m).dump(1) + "\n");
+      writeFile(args.dump, resultsName(plan, dialect), clean);
+      writeFile(args.dump, "TRUTH.json", (tooltip ? headTruthJson(drawn.head) : truthJson(m)).dump(1) + "\n");
       writeFile(args.dump, "REPORT.json", a.doc.dump(1) + "\n");
     }
     if (!a.ok) {
       ++refusals["analyze refused: " + a.error.substr(0, 80)];
     } else {
       ++analyzed;
+      not_held_back += !a.held_back;
       if (a.written) ++written;
       else ++refusals[a.refused.substr(0, std::min<size_t>(a.refused.find(':') == std::string::npos ? 60 : a.refused.find(':'), 60))];
       if (!a.excluded.empty()) {
@@ -366,9 +455,9 @@ int main(int argc, char** argv) {
       }
       if (a.doc.contains("outliers")) threshold.add(a.threshold_t);
       for (size_t k = 0; k < cover.size(); ++k) {
-        const auto v = reported(a.doc, cover[k].name);
+        const auto v = cover[k].lookup ? cover[k].lookup(a.doc) : reported(a.doc, cover[k].name);
         if (!v) continue;
-        const double e = std::abs(v->value - cover[k].truth(m));
+        const double e = std::abs(v->value - cover[k].truth(drawn));
         ++counted[k];
         in_U[k] += e <= v->U;
         in_uc[k] += e <= v->u_c;
@@ -379,7 +468,7 @@ int main(int argc, char** argv) {
 
     DiagnoseRequest dr;
     dr.plan = &plan;
-    dr.results = {{"RESULTS" + std::string(dialect.resultsExtension()), dialect.writeResults(plan, clean)}};
+    dr.results = {{resultsName(plan, dialect), clean}};
     dr.dialect = &io;
     dr.contributors = &contrib;  // as `diagnose` reads the machine's (or --contributors)
     std::string verdict = "refused";
@@ -413,9 +502,14 @@ int main(int argc, char** argv) {
     if (args.chips) {
       // The chip's touch: one of the plan's, drawn from the machine's own seed.
       std::mt19937_64 pick(seed ^ 0x9e3779b97f4a7c15ULL);
-      const int id = plan.points[std::uniform_int_distribution<size_t>(0, plan.points.size() - 1)(pick)].id;
+      // On tooltip: a reading off by the chip's size along one beam (transverse or Z, drawn
+      // next), at a pose other than its sweep's zero (there the laser is zeroed: a chip would
+      // move every later reading of the sweep, not one).
+      const std::vector<int>& candidates = chip_points;
+      const int id = candidates[std::uniform_int_distribution<size_t>(0, candidates.size() - 1)(pick)];
+      const bool chip_z = std::uniform_int_distribution<int>(0, 1)(pick) == 1;
       for (auto [height_mm, tally] : {std::pair{0.020, &chip20}, std::pair{1.0, &chip1mm}}) {
-        const MeasurementRun chipped = ind::measure(plan, m, ind::Chip{id, height_mm});
+        const std::string chipped = resultsOf(drawn, id, chip_z, height_mm);
         const Analyzed c = analyze(cycle, plan, dialect, io, contrib, chipped, args, seed);
         ++tally->n;
         const bool caught = std::find(c.excluded.begin(), c.excluded.end(), id) != c.excluded.end();
@@ -426,23 +520,25 @@ int main(int argc, char** argv) {
         tally->isolated += caught && c.excluded.size() == 1;
         tally->returned += c.ok;
         tally->returned_with += c.ok && !caught;
+        tally->handed_on += c.ok && !caught && !c.held_back;
         tally->refused += !c.ok;
         if (c.ok && caught) {
           tally->in_U.resize(cover.size(), 0);
           tally->counted.resize(cover.size(), 0);
           for (size_t k = 0; k < cover.size(); ++k)
-            if (const auto v = reported(c.doc, cover[k].name)) {
+            if (const auto v = cover[k].lookup ? cover[k].lookup(c.doc) : reported(c.doc, cover[k].name)) {
               ++tally->counted[k];
-              tally->in_U[k] += std::abs(v->value - cover[k].truth(m)) <= v->U;
+              tally->in_U[k] += std::abs(v->value - cover[k].truth(drawn)) <= v->U;
             }
         }
         if (!c.written)
           ++refusals[fmt::format("{:g} um chip: ", height_mm * 1e3) +
                      (c.ok ? c.refused.substr(0, std::min<size_t>(c.refused.find(':'), 60)) : "analyze refused: " + c.error.substr(0, 80))];
-        chip_line += fmt::format(" chip {:g} um at {}: {}{}{}", height_mm * 1e3, id, caught ? "caught" : "missed",
+        chip_line += fmt::format(" chip {:g} um at {}{}: {}{}{}", height_mm * 1e3, id,
+                                 tooltip ? (chip_z ? " (dz)" : " (dt)") : "", caught ? "caught" : "missed",
                                  caught && c.excluded.size() > 1 ? fmt::format(" ({} left out)", c.excluded.size()) : "",
                                  c.written ? (caught ? ", written" : ", WRITTEN")
-                                 : c.ok    ? (caught ? ", analyzed" : ", ANALYZED")
+                                 : c.ok    ? (caught ? ", analyzed" : c.held_back ? ", ANALYZED (held back)" : ", ANALYZED")
                                            : ", refused");
       }
     }
@@ -457,14 +553,21 @@ int main(int argc, char** argv) {
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
-  std::printf("rotacal_real_machine_bench: %s (%zu touches) on %s, contributors %s, dialect %s\n", args.cycle.c_str(),
-              plan.points.size(), args.machine.c_str(),
-              args.contributors.c_str(), args.dialect.c_str());
+  std::string options;
+  for (const auto& [k, v] : (args.machine.empty() ? example.options : CycleOptions{})) options += " --set " + k + "=" + v;
+  std::printf("rotacal_real_machine_bench: %s (%zu touches) on %s%s, contributors %s, dialect %s\n", args.cycle.c_str(),
+              plan.points.size(), machine_file.c_str(), options.c_str(),
+              contrib.file.empty() ? "(the machine's, inline)" : contrib.file.c_str(), args.dialect.c_str());
   if (!args.off.empty()) std::printf("switched off in the generator: %s\n", args.off.c_str());
-  std::printf("%d machines (seeds %llu..%llu), location errors around 000 Table 4 (sd %g um, %g mdeg), analyze's Monte "
-              "Carlo %d runs; %.0f s (%.1f s per machine)\n\n",
-              n, static_cast<unsigned long long>(args.seed), static_cast<unsigned long long>(args.seed + n - 1), args.sd_um,
-              args.sd_mdeg, args.mc_runs, seconds, seconds / n);
+  const std::string around =
+      tooltip ? fmt::format("a head with dR around {:g} um (sd {:g} um) and angular-error coefficients around {:g}, {:g}, {:g}, "
+                            "{:g} mdeg (sd {:g} mdeg)",
+                            head_draw.dR_um, head_draw.sd_dR_um, head_draw.angular_mdeg[0], head_draw.angular_mdeg[1],
+                            head_draw.angular_mdeg[2], head_draw.angular_mdeg[3], head_draw.sd_mdeg)
+              : fmt::format("location errors around 000 Table 4 (sd {:g} um, {:g} mdeg)", args.sd_um, args.sd_mdeg);
+  std::printf("%d machines (seeds %llu..%llu), %s, analyze's Monte Carlo %d runs; %.0f s (%.1f s per machine)\n\n", n,
+              static_cast<unsigned long long>(args.seed), static_cast<unsigned long long>(args.seed + n - 1), around.c_str(),
+              args.mc_runs, seconds, seconds / n);
   if (analyzed < n || diagnosed < n)
     std::printf("analyze returned on %d of %d machines, diagnose on %d (the others refused the data: listed below)\n\n",
                 analyzed, n, diagnosed);
@@ -473,6 +576,9 @@ int main(int argc, char** argv) {
     std::printf("| %s | %d / %d | %.1f %% | %s |\n", what, k, of, pct(k, of), target);
   };
   row("offsets written (`analyze --offsets`, no --force)", written, n, ">= 99 %");
+  // A cycle that writes no offsets (spheres3, spaceframe, tooltip, rtest): what it would hand on
+  // is its report's values, held back when the data exceed the declaration.
+  row("analyze returned, nothing held back (no `corrections_held_back`)", not_held_back, n, "");
   row("`diagnose`: model_inadequate", inadequate, n, "<= 5 %");
   row("`diagnose`: a cause named", named, n, "<= 2 %");
   row("`diagnose`: no_significant_effect", no_effect, n, "");
@@ -488,9 +594,11 @@ int main(int argc, char** argv) {
     // Where a cycle writes no offsets (spheres3), what reaches an output is the report itself.
     row("20 um chip: the chip's touch alone left out", chip20.isolated, chip20.n, "");
     row("20 um chip: analyzed (a report) with the chip in the fit", chip20.returned_with, chip20.n, "0");
+    row("20 um chip: analyzed with the chip in the fit, nothing held back", chip20.handed_on, chip20.n, "0");
     row("20 um chip: analyze refused the data", chip20.refused, chip20.n, "");
     row("1 mm chip: the chip's touch alone left out", chip1mm.isolated, chip1mm.n, "");
     row("1 mm chip: analyzed (a report) with the chip in the fit", chip1mm.returned_with, chip1mm.n, "0");
+    row("1 mm chip: analyzed with the chip in the fit, nothing held back", chip1mm.handed_on, chip1mm.n, "0");
     row("1 mm chip: analyze refused the data", chip1mm.refused, chip1mm.n, "");
   }
   std::printf("\nCoverage of analyze's U (chip-free machines; truth = the drawn location errors):\n\n");
