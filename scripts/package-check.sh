@@ -215,8 +215,10 @@ step "$(basename "$DEB"): $N_MAN manual pages (each rendered by man -l without a
 step "$(basename "$DEB"): $(stat -c %s "$DEB") bytes, Depends: $DEPENDS"
 
 dpkg-deb -c "$LIBDEB" >"$TMP/lib.list"
-grep -q "/usr/lib/.*$SONAME -> $(basename "$REAL")\$" "$TMP/lib.list" || fail "$LIBDEB lacks the link $SONAME"
-grep -q "/usr/lib/.*$(basename "$REAL")\$" "$TMP/lib.list" || fail "$LIBDEB lacks $(basename "$REAL")"
+# Debian policy 9.1.1: shared libraries in the multiarch directory.
+MULTIARCH=$(dpkg-architecture -qDEB_HOST_MULTIARCH)
+grep -q "/usr/lib/$MULTIARCH/$SONAME -> $(basename "$REAL")\$" "$TMP/lib.list" || fail "$LIBDEB lacks the link $SONAME in /usr/lib/$MULTIARCH"
+grep -q "/usr/lib/$MULTIARCH/$(basename "$REAL")\$" "$TMP/lib.list" || fail "$LIBDEB lacks /usr/lib/$MULTIARCH/$(basename "$REAL")"
 if grep -q -E '(\.hpp|\.cmake|librotacal\.so)$' "$TMP/lib.list"; then fail "$LIBDEB carries development files"; fi
 # What a post's package will depend on (dpkg-shlibdeps reads it): the compatibility rule.
 SHLIBS=$(dpkg-deb -I "$LIBDEB" shlibs) || fail "$LIBDEB has no shlibs file"
@@ -228,7 +230,7 @@ step "$(basename "$LIBDEB"): $(stat -c %s "$LIBDEB") bytes, Depends: $(dpkg-deb 
 dpkg-deb -c "$DEV" >"$TMP/dev.list"  # a list first: grep -q closing the pipe would fail dpkg-deb
 grep -q '/usr/include/rotacal/rotacal.hpp$' "$TMP/dev.list" || fail "$DEV lacks the headers"
 grep -q '/rotacalConfig.cmake$' "$TMP/dev.list" || fail "$DEV lacks rotacalConfig.cmake"
-grep -q "/usr/lib/.*librotacal.so -> $SONAME\$" "$TMP/dev.list" || fail "$DEV lacks the link librotacal.so"
+grep -q "/usr/lib/$MULTIARCH/librotacal.so -> $SONAME\$" "$TMP/dev.list" || fail "$DEV lacks the link librotacal.so in /usr/lib/$MULTIARCH"
 if grep -q -E '/usr/bin/|/usr/include/rotacal/[a-z_]+/' "$TMP/dev.list"; then fail "$DEV carries the executable or internal headers"; fi
 XD=$TMP/extracted-dev
 dpkg-deb -x "$DEV" "$XD"
