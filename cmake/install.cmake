@@ -1,9 +1,9 @@
 # Install, export and package (a library for CAM posts: docs/library.md).
 #
-#   cmake --install build --prefix PREFIX   bin/rotacal; lib/librotacal.so.<version> with its
+#   cmake --install build --prefix PREFIX   bin/rotacal; lib/<multiarch>/librotacal.so.<version> with its
 #                                           SONAME link librotacal.so.<major> and the link
 #                                           librotacal.so; the public headers include/rotacal/*.hpp;
-#                                           lib/cmake/rotacal/rotacalConfig.cmake: in a consumer,
+#                                           lib/<multiarch>/cmake/rotacal/rotacalConfig.cmake: in a consumer,
 #                                           find_package(rotacal 0.1) gives rotacal::rotacal.
 #   cpack -G DEB (in the build dir)         rotacal_<version>_<arch>.deb: the command-line tool;
 #                                           librotacal0_<version>_<arch>.deb: the shared library;
