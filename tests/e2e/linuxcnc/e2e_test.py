@@ -59,6 +59,7 @@ import concurrent.futures
 import json
 import math
 import os
+import shlex
 import shutil
 import subprocess
 import sys
@@ -772,7 +773,6 @@ def run_guide_command(a, work, cmd, env=None, **replace):
     """One of the guide's commands, as written, run in `work`: `rotacal` is the binary under test,
     the guide's MACHINE.json the e2e controller's machine, and `replace` swaps one word for another
     (an output's name: the guide says the offsets' form follows the extension)."""
-    import shlex
     words = shlex.split(cmd)
     words = [a.rotacal] + [MACHINE if w == GUIDE_MACHINE else replace.get(w, w) for w in words[1:]]
     print("$ (guide) " + cmd + ("   [%s]" % ", ".join("%s -> %s" % kv for kv in replace.items()) if replace else ""),
