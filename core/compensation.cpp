@@ -4,27 +4,30 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include <fmt/format.h>
 
+#include "core/least_squares.hpp"
+#include "core/require_valid.hpp"
 #include "core/units.hpp"
 
 namespace rotacal {
 
-void CompensationOptions::validate() const {
-  if (!(std::abs(tool_axis_m.norm() - 1.0) < 1e-9))
-    throw std::invalid_argument("CompensationOptions: tool_axis_m must be a unit vector");
-  if (max_iterations < 1) throw std::invalid_argument("CompensationOptions: max_iterations must be >= 1");
-  if (!(step_tolerance_rad > 0)) throw std::invalid_argument("CompensationOptions: step_tolerance_rad must be > 0");
-  if (!(singular_blend_deg > 0 && singular_blend_deg < 45))
-    throw std::invalid_argument("CompensationOptions: singular_blend_deg must be in (0, 45) deg");
+bool CompensationOptions::validate(std::string* why) const {
+  if (!(std::abs(tool_axis_m.norm() - 1.0) < 1e-9)) return invalidBecause(why, "tool_axis_m must be a unit vector");
+  if (max_iterations < 1) return invalidBecause(why, "max_iterations must be >= 1");
+  if (!(step_tolerance_rad > 0)) return invalidBecause(why, "step_tolerance_rad must be > 0");
+  if (!(singular_blend_deg > 0 && singular_blend_deg < 45)) return invalidBecause(why, "singular_blend_deg must be in (0, 45) deg");
+  return true;
 }
 
-void SubdivisionOptions::validate() const {
-  if (!(max_deviation_mm > 0)) throw std::invalid_argument("SubdivisionOptions: max_deviation_mm must be > 0");
-  if (samples_per_piece < 1) throw std::invalid_argument("SubdivisionOptions: samples_per_piece must be >= 1");
-  if (max_pieces < 1) throw std::invalid_argument("SubdivisionOptions: max_pieces must be >= 1");
+bool SubdivisionOptions::validate(std::string* why) const {
+  if (!(max_deviation_mm > 0)) return invalidBecause(why, "max_deviation_mm must be > 0");
+  if (samples_per_piece < 1) return invalidBecause(why, "samples_per_piece must be >= 1");
+  if (max_pieces < 1) return invalidBecause(why, "max_pieces must be >= 1");
+  return true;
 }
 
 namespace {
@@ -75,7 +78,7 @@ double toolDirectionError(const GeometricErrors& errors, const Pose& pose, const
 
 CompensatedCommand compensatePose(const GeometricErrors& errors, const Pose& nominal_pose,
                                   const CompensationOptions& options) {
-  options.validate();
+  requireValid(options, "CompensationOptions");
   const GeometricErrors nominal(LocationErrors{errors.kinematics(), ErrorVector::Zero()});
   const Eigen::Vector3d& k = options.tool_axis_m;
   const Eigen::Vector3d t0 = toolInWorkpiece(nominal, nominal_pose, k);
@@ -88,26 +91,40 @@ CompensatedCommand compensatePose(const GeometricErrors& errors, const Pose& nom
   const double x = s_min / s1;
   const double lambda = x < 1.0 ? s1 * (1.0 - x * x) * (1.0 - x * x) : 0.0;
   const Eigen::Vector2d v_weak = svd0.matrixV().col(1);
-  const Eigen::Matrix2d D = lambda * lambda * v_weak * v_weak.transpose();
+
+  // min |t(q) - t0|^2 + lambda^2 (v_weak . dq)^2 over dq = q - q_nominal (rad) by the shared
+  // engine: the damping is one more residual row. Converged on the angle update itself (the
+  // cost does not vanish where the damped axis leaves a direction error).
+  const Eigen::RowVector2d damping_row = lambda * v_weak.transpose();
+  auto poseAt = [&](const Eigen::VectorXd& dq) {
+    Pose q = nominal_pose;
+    q.*axes[0] += radToDeg(dq[0]);
+    q.*axes[1] += radToDeg(dq[1]);
+    return q;
+  };
+  const ResidualFunction residuals = [&](const Eigen::VectorXd& dq, Eigen::VectorXd& r, Eigen::MatrixXd* J) {
+    const Pose q = poseAt(dq);
+    r.resize(4);
+    r.head<3>() = toolInWorkpiece(errors, q, k) - t0;
+    r[3] = damping_row.dot(dq.head<2>());
+    if (J) {
+      J->resize(4, 2);
+      J->topRows<3>() = J_t_q(errors, q, k);
+      J->row(3) = damping_row;
+    }
+  };
+  LeastSquaresOptions solver;
+  solver.max_iterations = options.max_iterations;
+  solver.function_tolerance = 0.0;
+  solver.step_tolerance = std::numeric_limits<double>::min();
+  solver.converged = [&](const Eigen::VectorXd& before, const Eigen::VectorXd& after) {
+    return (after - before).cwiseAbs().maxCoeff() < options.step_tolerance_rad;
+  };
+  const LeastSquaresResult solved = solveLeastSquares(residuals, Eigen::Vector2d::Zero(), solver);
 
   CompensatedCommand out;
-  out.pose = nominal_pose;
-  // Gauss-Newton on min |t(q) - t0|^2 + lambda^2 (v_weak . (q - q_nominal))^2, q in rad.
-  for (int it = 0; it < options.max_iterations; ++it) {
-    const Eigen::Vector3d r = toolInWorkpiece(errors, out.pose, k) - t0;
-    const Eigen::Matrix<double, 3, 2> J = J_t_q(errors, out.pose, k);
-    const Eigen::Vector2d dq(degToRad(out.pose.*axes[0] - nominal_pose.*axes[0]),
-                             degToRad(out.pose.*axes[1] - nominal_pose.*axes[1]));
-    const Eigen::Matrix2d N = J.transpose() * J + D;
-    const Eigen::Vector2d g = J.transpose() * r + D * dq;
-    // Exactly at a singular pose without damping (a blend of 0 is refused, so only through
-    // a degenerate J of the errors themselves) the pseudo-inverse keeps the step minimal.
-    const Eigen::Vector2d step = N.completeOrthogonalDecomposition().solve(g);
-    out.pose.*axes[0] -= radToDeg(step[0]);
-    out.pose.*axes[1] -= radToDeg(step[1]);
-    out.iterations = it + 1;
-    if (step.cwiseAbs().maxCoeff() < options.step_tolerance_rad) break;
-  }
+  out.pose = poseAt(solved.x);
+  out.iterations = solved.summary.iterations;
   out.direction_residual_rad = toolDirectionError(errors, out.pose, nominal_pose, k);
   return out;
 }
@@ -135,8 +152,8 @@ double pieceDeviation(const GeometricErrors& errors, const MachineCommand& from,
 CompensatedMove compensateMove(const GeometricErrors& errors, const MachineCommand& from, const MachineCommand& to,
                                const CompensationOptions& options, const SubdivisionOptions& subdivision,
                                const PoseRounding& rounding) {
-  options.validate();
-  subdivision.validate();
+  requireValid(options, "CompensationOptions");
+  requireValid(subdivision, "SubdivisionOptions");
   auto endAt = [&](double s, double* residual) {
     const MachineCommand nominal = lerp(from, to, s);
     const CompensatedCommand cc = compensatePose(errors, nominal.pose, options);

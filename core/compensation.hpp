@@ -10,7 +10,7 @@
 // direction t_w = R_m_w(0, q)^T k (k: spindle axis, machine frame). Compensation finds
 //   q' with R_m_w(e, q')^T k = t_w   (two rotary angles for a 2-DOF direction), then
 //   x' = T_m_w(e, q') p_w            (exact: the controlled point lands on p_w whatever q' is).
-// Everything exact (full HTMs); q' by Gauss-Newton on the exact direction. The errors are the
+// Everything exact (full HTMs); q' by the shared estimation engine (core/least_squares) on the exact direction. The errors are the
 // location errors and, where a cycle identified them, the component errors of a rotary axis
 // (core/geometric_errors.hpp).
 //
@@ -30,6 +30,7 @@
 #include <Eigen/Geometry>
 
 #include <functional>
+#include <string>
 #include <vector>
 
 #include "core/geometric_errors.hpp"
@@ -44,8 +45,8 @@ struct CompensationOptions {
   /// (above). Near the singular pose that axis then moves at most about 1.25 / sin(2 deg) = 36
   /// times the tilt it restores (the undamped solve needs 1 / sin A times: unbounded at A = 0).
   double singular_blend_deg = 2.0;
-  /// Throws std::invalid_argument naming the bad field.
-  void validate() const;
+  /// False (and why, naming the field) when a field is out of range.
+  bool validate(std::string* why) const;
 };
 
 struct CompensatedCommand {
@@ -84,7 +85,7 @@ struct SubdivisionOptions {
   double max_deviation_mm = 0.2e-3;
   int samples_per_piece = 8;  // interior points at which each piece is evaluated
   int max_pieces = 1000;      // a move needing more is refused (compensateMove throws)
-  void validate() const;      // throws std::invalid_argument naming the field
+  bool validate(std::string* why) const;  // false (and why, naming the field) when out of range
 };
 
 struct CompensatedMove {

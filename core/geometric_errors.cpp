@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include "core/require_valid.hpp"
 #include "core/transforms.hpp"
 #include "core/units.hpp"
 
@@ -27,24 +28,25 @@ std::array<std::string, kNumComponentErrors> componentErrorNames(char axis) {
   return {"EX" + a, "EY" + a, "EZ" + a, "EA" + a, "EB" + a, "EC" + a};
 }
 
-void ComponentErrors::validate() const {
-  if (axisIndex(axis) < 0) throw std::invalid_argument(fmt::format("component errors of axis '{}': not A, B or C", axis));
+bool ComponentErrors::validate(std::string* why) const {
+  if (axisIndex(axis) < 0) return invalidBecause(why, fmt::format("component errors of axis '{}': not A, B or C", axis));
   if (angle_deg.size() < 3)
-    throw std::invalid_argument(fmt::format("component errors of {}: {} angles, at least 3 are needed over the turn",
+    return invalidBecause(why, fmt::format("component errors of {}: {} angles, at least 3 are needed over the turn",
                                             axis, angle_deg.size()));
   if (values.size() != angle_deg.size() || (!u.empty() && u.size() != angle_deg.size()))
-    throw std::invalid_argument(fmt::format("component errors of {}: {} angles but {} values and {} uncertainties",
+    return invalidBecause(why, fmt::format("component errors of {}: {} angles but {} values and {} uncertainties",
                                             axis, angle_deg.size(), values.size(), u.size()));
   for (size_t i = 0; i < angle_deg.size(); ++i) {
     if (!std::isfinite(angle_deg[i]) || !values[i].allFinite() || (!u.empty() && !u[i].allFinite()))
-      throw std::invalid_argument(fmt::format("component errors of {}: a value at angle #{} is not finite", axis, i + 1));
+      return invalidBecause(why, fmt::format("component errors of {}: a value at angle #{} is not finite", axis, i + 1));
     if (i > 0 && !(angle_deg[i] > angle_deg[i - 1]))
-      throw std::invalid_argument(fmt::format("component errors of {}: the angles must ascend ({} deg after {} deg)", axis,
+      return invalidBecause(why, fmt::format("component errors of {}: the angles must ascend ({} deg after {} deg)", axis,
                                               angle_deg[i], angle_deg[i - 1]));
   }
   if (!(angle_deg.back() - angle_deg.front() < kTurnDeg))
-    throw std::invalid_argument(fmt::format("component errors of {}: the angles span {} deg, more than a turn", axis,
+    return invalidBecause(why, fmt::format("component errors of {}: the angles span {} deg, more than a turn", axis,
                                             angle_deg.back() - angle_deg.front()));
+  return true;
 }
 
 bool ComponentErrors::equallySpaced() const {
@@ -92,22 +94,23 @@ const ComponentErrors* GeometricErrors::componentsOf(char axis) const {
   return nullptr;
 }
 
-void GeometricErrors::validate() const {
+bool GeometricErrors::validate(std::string* why) const {
   std::vector<char> moved;
   for (const auto& f : kinematicChain(location.kinematics))
     if (f.source == ChainFactor::Source::NegativeAxis) moved.push_back("ABC"[f.index]);
   for (size_t i = 0; i < components.size(); ++i) {
-    components[i].validate();
+    if (!components[i].validate(why)) return false;
     bool ok = false;
     for (char c : moved) ok = ok || c == components[i].axis;
     if (!ok)
-      throw std::invalid_argument(fmt::format("component errors of {}: the {} kinematics has no {} axis",
+      return invalidBecause(why, fmt::format("component errors of {}: the {} kinematics has no {} axis",
                                               components[i].axis, kinematicsName(location.kinematics),
                                               components[i].axis));
     for (size_t j = 0; j < i; ++j)
       if (components[j].axis == components[i].axis)
-        throw std::invalid_argument(fmt::format("component errors of {} given twice", components[i].axis));
+        return invalidBecause(why, fmt::format("component errors of {} given twice", components[i].axis));
   }
+  return true;
 }
 
 Eigen::Isometry3d componentTransform(const ComponentVector& v) {

@@ -40,9 +40,9 @@ struct ComponentErrors {
   std::vector<ComponentVector> values; // mm / rad at each angle
   std::vector<ComponentVector> u;      // standard uncertainty (k = 1) at each angle; empty if unknown
 
-  /// Throws std::invalid_argument naming what is wrong (fewer than 3 angles, not ascending,
-  /// more than a turn, sizes that differ, a value that is not finite).
-  void validate() const;
+  /// False, and why (fewer than 3 angles, not ascending, more than a turn, sizes that differ, a
+  /// value that is not finite), when the table cannot be used.
+  bool validate(std::string* why) const;
   /// True when the angles are equally spaced over the full turn (trigonometric interpolation).
   bool equallySpaced() const;
   /// The component errors at any angle (deg).
@@ -62,8 +62,8 @@ struct GeometricErrors {
 
   Kinematics kinematics() const { return location.kinematics; }
   const ComponentErrors* componentsOf(char axis) const;
-  /// Throws std::invalid_argument: an axis the kinematics does not turn, two tables for one axis.
-  void validate() const;
+  /// False, and why: an axis the kinematics does not turn, two tables for one axis, a bad table.
+  bool validate(std::string* why) const;
 };
 
 /// T_m_w of the machine with these errors: the location chain with each axis's T_E inserted

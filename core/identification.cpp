@@ -36,16 +36,6 @@ Method methodFromName(std::string_view name) {
                               "' (expected closed_form, lsq_rigid_setup, lsq_per_point)");
 }
 
-std::string_view terminationName(Termination t) {
-  switch (t) {
-    case Termination::Converged: return "converged";
-    case Termination::MaxIterations: return "max_iterations";
-    case Termination::RankDeficient: return "rank_deficient";
-    case Termination::InvalidInput: return "invalid_input";
-  }
-  return "?";
-}
-
 bool IdentificationOptions::validate(std::string* why) const {
   auto fail = [&](const std::string& w) {
     if (why) *why = w;

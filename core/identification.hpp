@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "core/error_model.hpp"
+#include "core/least_squares.hpp"
 #include "core/measurement.hpp"
 #include "core/model_extension.hpp"
 #include "core/probe_plan.hpp"
@@ -47,23 +48,6 @@ struct IdentificationOptions {
   bool validate(std::string* why) const;
 };
 
-enum class Termination { Converged, MaxIterations, RankDeficient, InvalidInput };
-std::string_view terminationName(Termination t);
-
-struct IdentificationSummary {
-  Termination termination = Termination::InvalidInput;
-  std::string message;
-  int iterations = 0;
-  int observations = 0;
-  int parameters = 0;       // location errors + nuisance
-  int rank = 0;
-  double condition = 0.0;   // of the column-scaled Jacobian
-  double cost = 0.0;        // 0.5 * sum of squared residuals, mm^2
-  double residual_rms_um = 0.0;
-  double sigma_um = 0.0;    // a-posteriori noise: sqrt(RSS / dof)
-  int dof = 0;
-};
-
 struct PointResidual {
   int run = 0;
   int point_id = 0;
@@ -85,7 +69,7 @@ struct IdentificationResult {
   Eigen::MatrixXd extension_correlation;
   double holdout_rms_um = 0.0;              // rms of the held-out residuals (0 when none)
   int holdout_points = 0;
-  IdentificationSummary summary;
+  FitSummary summary;  // rms and sigma in um; cost in mm^2 (0.5 x RSS)
   Method method = Method::LeastSquaresPerPoint;
 };
 

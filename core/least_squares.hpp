@@ -29,23 +29,32 @@ struct LeastSquaresOptions {
   /// (Ceres' IterationCallback returning SOLVER_TERMINATE_SUCCESSFULLY): given x before and after
   /// the step, true stops the solve as converged. Empty: the tolerances alone decide.
   std::function<bool(const Eigen::VectorXd& before, const Eigen::VectorXd& after)> converged;
-  /// Empty when valid; otherwise what is wrong, naming the field (Ceres' Options::IsValid).
-  std::string validate() const;
+  /// False, and what is wrong naming the field, when invalid (Ceres' Options::IsValid).
+  bool validate(std::string* why) const;
 };
 
-enum class LeastSquaresTermination { Converged, MaxIterations, InvalidInput };
-std::string_view terminationName(LeastSquaresTermination t);
+/// Why a fit stopped. The engine itself ends Converged, MaxIterations or InvalidInput; a
+/// problem that needs every parameter it fits says RankDeficient when the data leave one unseen.
+enum class Termination { Converged, MaxIterations, RankDeficient, InvalidInput };
+std::string_view terminationName(Termination t);  // "converged", "max_iterations", "rank_deficient", "invalid_input"
 
-struct LeastSquaresSummary {
-  LeastSquaresTermination termination = LeastSquaresTermination::InvalidInput;
-  int iterations = 0;
-  int num_residuals = 0;
-  int num_parameters = 0;
-  int rank = 0;                 // of J_r_x at the solution
-  double initial_cost = 0.0;    // 0.5 |r|^2 at the start
-  double final_cost = 0.0;
+/// What every fit reports (Ceres' Solver::Summary), the engine's and the problems' that wrap it:
+/// the engine fills the counts, rank, condition and costs; a problem whose residuals are lengths
+/// adds their rms and the a-posteriori noise, and may set its own dof and message.
+struct FitSummary {
+  Termination termination = Termination::InvalidInput;
   std::string message;          // why it stopped, or what is invalid
-  bool usable() const { return termination == LeastSquaresTermination::Converged; }
+  int iterations = 0;
+  int observations = 0;         // residuals
+  int parameters = 0;
+  int rank = 0;                 // of J_r_x at the solution, column-scaled
+  double condition = 0.0;       // of the column-scaled J_r_x over its rank
+  double initial_cost = 0.0;    // 0.5 |r|^2 at the start
+  double cost = 0.0;            // 0.5 |r|^2 at the solution
+  int dof = 0;                  // observations - parameters (a problem may count otherwise)
+  double residual_rms_um = 0.0; // problems whose residuals are lengths
+  double sigma_um = 0.0;        // a-posteriori noise sqrt(RSS / dof), the same
+  bool usable() const { return termination == Termination::Converged; }
   std::string briefReport() const;
 };
 
@@ -60,7 +69,7 @@ struct LeastSquaresResult {
   /// Columns: a basis of the directions of x the data cannot see (J v = 0), each of unit length
   /// in the scaled parameters and mapped back to parameter units.
   Eigen::MatrixXd null_space;
-  LeastSquaresSummary summary;
+  FitSummary summary;
 };
 
 LeastSquaresResult solveLeastSquares(const ResidualFunction& residuals, const Eigen::VectorXd& x0,

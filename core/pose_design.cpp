@@ -9,13 +9,15 @@
 #include <stdexcept>
 #include <utility>
 
+#include "core/require_valid.hpp"
+
 namespace rotacal {
 
-std::string PoseDesignOptions::validate() const {
-  if (poses < 1) return "poses must be >= 1";
-  if (exchange_passes < 0) return "exchange_passes must be >= 0";
-  if (!(centre_sd_mm.minCoeff() > 0)) return "centre_sd_mm must be > 0 in X, Y and Z";
-  return {};
+bool PoseDesignOptions::validate(std::string* why) const {
+  if (poses < 1) return invalidBecause(why, "poses must be >= 1");
+  if (exchange_passes < 0) return invalidBecause(why, "exchange_passes must be >= 0");
+  if (!(centre_sd_mm.minCoeff() > 0)) return invalidBecause(why, "centre_sd_mm must be > 0 in X, Y and Z");
+  return true;
 }
 
 namespace {
@@ -107,7 +109,7 @@ FreeColumns freeColumns(const Eigen::MatrixXd& Jall, const std::vector<Identifia
 
 Prepared prepare(const std::vector<Eigen::MatrixXd>& rows, const std::vector<IdentifiabilityParameter>& names,
                  const PoseDesignOptions& o) {
-  if (const std::string bad = o.validate(); !bad.empty()) throw std::invalid_argument("pose design: " + bad);
+  requireValid(o, "pose design");
   checkRows(rows, names);
   Prepared p;
   const FreeColumns f = freeColumns(stackRows(rows, everyCandidate(rows.size()), static_cast<Eigen::Index>(names.size())),
@@ -125,7 +127,7 @@ Prepared prepare(const std::vector<Eigen::MatrixXd>& rows, const std::vector<Ide
 // A centre reading per pose: J_X_p whitened by the declared centre noise.
 std::vector<Eigen::MatrixXd> centreRows(const KinematicModel& m, const std::vector<Pose>& candidates,
                                         const PoseDesignOptions& o) {
-  if (const std::string bad = o.validate(); !bad.empty()) throw std::invalid_argument("pose design: " + bad);
+  requireValid(o, "pose design");
   std::vector<Eigen::MatrixXd> rows;
   for (const auto& pose : candidates)
     rows.emplace_back(o.centre_sd_mm.cwiseInverse().asDiagonal() * J_X_p(m, Eigen::VectorXd::Zero(m.size()), pose));
@@ -198,11 +200,13 @@ PoseDesign designPoses(const KinematicModel& m, const std::vector<Pose>& candida
   return designPoses(centreRows(m, candidates, o), modelNames(m), o);
 }
 
-std::string PoseBudgetOptions::validate(Eigen::Index parameters) const {
-  if (exchange_passes < 0) return "exchange_passes must be >= 0";
-  if (weight.size() != parameters) return fmt::format("weight has {} entries for {} parameters", weight.size(), parameters);
-  if (!(weight.minCoeff() >= 0) || !(weight.maxCoeff() > 0)) return "weight must be >= 0 and count some parameter";
-  return {};
+bool PoseBudgetOptions::validate(Eigen::Index parameters, std::string* why) const {
+  if (exchange_passes < 0) return invalidBecause(why, "exchange_passes must be >= 0");
+  if (weight.size() != parameters)
+    return invalidBecause(why, fmt::format("weight has {} entries for {} parameters", weight.size(), parameters));
+  if (!(weight.minCoeff() >= 0) || !(weight.maxCoeff() > 0))
+    return invalidBecause(why, "weight must be >= 0 and count some parameter");
+  return true;
 }
 
 namespace {
@@ -221,7 +225,7 @@ BudgetProblem prepareBudget(const std::vector<Eigen::MatrixXd>& rows, const std:
                             const Eigen::MatrixXd& covariance, const PoseBudgetOptions& o) {
   BudgetProblem b;
   b.np = static_cast<Eigen::Index>(names.size());
-  if (const std::string bad = o.validate(b.np); !bad.empty()) throw std::invalid_argument("pose design: " + bad);
+  if (std::string bad; !o.validate(b.np, &bad)) throw std::invalid_argument("pose design: " + bad);
   checkRows(rows, names);
   Eigen::Index total = 0;
   for (const auto& R : rows) b.first.push_back(total), b.count.push_back(R.rows()), total += R.rows();

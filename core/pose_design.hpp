@@ -6,6 +6,7 @@
 // names them) and, for the chosen poses, u per parameter for the declared reading noise: the
 // figure KinematicsOpt's valuation number stands for, in um and mdeg.
 #include <Eigen/Core>
+#include <string>
 #include <vector>
 
 #include "core/identifiability.hpp"
@@ -20,7 +21,7 @@ struct PoseDesignOptions {
   Eigen::Vector3d centre_sd_mm = Eigen::Vector3d::Constant(0.0005);
   std::vector<int> hold_first;  // as identifiability()
   /// Empty when valid; otherwise what is wrong, naming the field.
-  std::string validate() const;
+  bool validate(std::string* why) const;
 };
 
 struct PoseDesign {
@@ -60,7 +61,7 @@ struct PoseBudgetOptions {
   Eigen::VectorXd weight;  // per parameter, 1 / its reference u^2 (model units); 0: not counted
   std::vector<int> hold_first;
   /// Empty when valid; otherwise what is wrong, naming the field.
-  std::string validate(Eigen::Index parameters) const;
+  bool validate(Eigen::Index parameters, std::string* why) const;
 };
 
 /// rows_mm: candidate k's rows of J_r_p (mm per model unit, not whitened); covariance: of every

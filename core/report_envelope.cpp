@@ -9,6 +9,19 @@ namespace rotacal {
 
 double round6(double v) { return std::round(v * 1e6) / 1e6; }
 
+Json fitSummaryJson(const FitSummary& s) {
+  return {{"termination", std::string(terminationName(s.termination))},
+          {"message", s.message},
+          {"iterations", s.iterations},
+          {"observations", s.observations},
+          {"parameters", s.parameters},
+          {"rank", s.rank},
+          {"condition", std::isfinite(s.condition) ? Json(s.condition) : Json(nullptr)},
+          {"dof", s.dof},
+          {"sigma_um", round6(s.sigma_um)},
+          {"residual_rms_um", round6(s.residual_rms_um)}};
+}
+
 Json documentEnvelope(std::string_view format, const ProbePlan& plan, const std::vector<std::string>& result_files) {
   Json j;
   j["format"] = std::string(format);
@@ -16,6 +29,13 @@ Json documentEnvelope(std::string_view format, const ProbePlan& plan, const std:
   j["machine"] = plan.machine.name;
   j["machine_model"] = machineToJson(plan.machine);
   j["results"] = result_files;
+  return j;
+}
+
+Json locationErrorValues(const LocationErrors& e) {
+  Json j = Json::object();
+  const auto& params = locationParameters(e.kinematics);
+  for (int i = 0; i < kNumLocationErrors; ++i) j[std::string(params[i].name)] = e.reportValue(i);
   return j;
 }
 

@@ -78,6 +78,11 @@ struct KinematicModel;
 /// table_transform and head_ball set, nothing else.
 Truth truthOfModel(const KinematicModel& model, const Eigen::VectorXd& p);
 
+/// Whether the truth's location errors are all its table carries: no drift, no pose-dependent
+/// (component) errors, no full table transform. Only then is `errors` what a fit of the location
+/// errors should find.
+inline bool locationErrorsAreConstant(const Truth& t) { return !t.drift && !t.pose_dependent && !t.table_transform; }
+
 Truth truthFromJson(const JsonDoc& doc, Kinematics kinematics);
 /// The truth of a machine: for head_table (and head_ab with a "head") its "location_errors" are
 /// the ISO 230-7 parameters of core/kinematic_model.hpp (X0C .. dL, Y0A .. dL), which set

@@ -8,12 +8,13 @@
 #include <fmt/format.h>
 
 #include "core/least_squares.hpp"
+#include "core/require_valid.hpp"
 
 namespace rotacal {
 
 SphereFit fitSphereCentre(const std::vector<Eigen::Vector3d>& t, const Eigen::Vector3d& start,
                           const SphereFitOptions& o) {
-  if (!o.validate()) throw std::invalid_argument("sphere fit: rho_mm must be positive");
+  requireValid(o, "sphere fit");
   const bool fit_r = o.fit_radius;  // 4 triggers in 3 directions fix centre and radius
   const int np = fit_r ? 4 : 3;
   if (static_cast<int>(t.size()) < 4)

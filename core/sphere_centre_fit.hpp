@@ -3,7 +3,10 @@
 // touched, so it lies at rho = R + r (sphere radius + ball radius) from the sphere centre. Exact
 // geometry, Gauss-Newton on |t_i - c| - rho.
 #include <Eigen/Core>
+#include <string>
 #include <vector>
+
+#include "core/require_valid.hpp"
 
 namespace rotacal {
 
@@ -11,7 +14,11 @@ struct SphereFitOptions {
   double rho_mm = 0.0;       // nominal R + r; start value of the fitted radius
   bool fit_radius = true;    // fit rho too (4 triggers then fix it exactly; 5 leave one dof)
   int max_iterations = 50;
-  bool validate() const { return rho_mm > 0 && max_iterations > 0; }
+  bool validate(std::string* why) const {
+    if (!(rho_mm > 0)) return invalidBecause(why, "rho_mm must be > 0");
+    if (max_iterations < 1) return invalidBecause(why, "max_iterations must be >= 1");
+    return true;
+  }
 };
 
 struct SphereFit {

@@ -79,6 +79,10 @@ struct Simulated {
   /// The truth simulated, with what was drawn from the contributors (`drawn`); null when the
   /// cycle's simulator draws no machine (the CLI then refuses --contributors).
   Json truth;
+  /// What the simulated machine carries that analyze reports, by the report's own keys and
+  /// names, in its units: {"location_errors": {"dx_AY": 14.6, ...}, "mean_pretravel": 0.5}. A test
+  /// compares a report with it; a key the report does not state is not compared.
+  Json injected = Json::object();
 };
 
 struct AnalyzeRequest {
@@ -179,6 +183,9 @@ inline CycleDocuments documents(Json doc, std::string text) {
 struct CycleExample {
   std::string machine;
   CycleOptions options;
+  /// A TRUTH.json the example machine can be simulated with (source-relative): errors of the
+  /// size the cycle's source measured, for the battery's recovery test and the docs' examples.
+  std::string truth;
 };
 
 /// What a cycle is, as data: each cycle hands it to Cycle's constructor, and every verb reads it

@@ -9,6 +9,7 @@
 
 #include "core/contributor_draw.hpp"
 #include "core/errors.hpp"
+#include "core/report_envelope.hpp"
 #include "core/simulation.hpp"
 
 namespace rotacal {
@@ -53,6 +54,9 @@ Simulated simulateProbing(const SimulateRequest& r) {
               fmt::format("simulated {} triggers (noise {:.3f} um, seed {}{}) as {} results", run.points.size(),
                           truth.noise_um, r.seed, drawn, r.dialect->name),
               truth_json};
+  if (locationErrorsAreConstant(truth)) s.injected["location_errors"] = locationErrorValues(truth.errors);
+  // The mean pretravel is the truth's own only when no direction adds its part.
+  if (!truth.pretravel_by_direction_um) s.injected["mean_pretravel"] = truth.pretravel_um;
   return s;
 }
 

@@ -15,6 +15,7 @@
 #include "controllers/motion_reader.hpp"
 #include "controllers/dialect.hpp"
 #include "core/errors.hpp"
+#include "core/require_valid.hpp"
 #include "core/units.hpp"
 #include "gcode/reader.hpp"
 
@@ -91,200 +92,239 @@ std::pair<int, std::string> splitProblem(const std::string& p) {
   return {-1, p};
 }
 
-}  // namespace
-
-ProgramCompensation compensateProgram(const std::string& text, const std::string& file, const MachineModel& machine,
-                                      const GeometricErrors& errors, const NcSyntax& syntax,
-                                      const ProgramCompensationOptions& options) {
-  options.pose.validate();
-  if (errors.kinematics() != machine.kinematics)
-    throw std::invalid_argument("compensate: the location errors are for another kinematics than the machine");
-  errors.validate();
-  const Dialect* named = findDialect(syntax.dialect);
-  if (named && !isWordAddress(named->language()))
-    throw std::invalid_argument("compensate: '" + syntax.dialect + "' programs are not word-address G-code");
-  const Dialect& dialect = dialectByName(syntax.dialect);
-  const std::optional<ctl::EndPointCheck> end_check = dialect.endPointCheck();
-  const std::vector<nc::Block> blocks = nc::readProgram(text);
-  ProgramCompensation out;
-  Modal m;
-  m.inch = machine.units == LengthUnit::Inch;
-  std::vector<char> rotary_letters;
-  for (const auto& r : machine.rotary) {
-    rotary_letters.push_back(r.name);
-    m.rotary[r.name] = std::nullopt;
-  }
-  auto isRotary = [&](char c) { return m.rotary.count(c) > 0; };
-  // The rotary words as last printed: a block rewritten at a compensated pose must also carry a
-  // rotary word the block lacks when the machine is not yet at the compensated angle.
-  std::map<char, std::string> printed_rotary;
-  // The linear words likewise (G90 program coordinates, mm, as printed): a linear word the block
-  // lacks is written only where the compensated position differs from the one last commanded,
-  // so zero errors reproduce the program line for line.
-  std::array<std::optional<double>, 3> printed_linear;
-  auto linearIndex = [](char c) { return c == 'X' ? 0 : c == 'Y' ? 1 : c == 'Z' ? 2 : -1; };
-  auto notePrinted = [&](const nc::Block& b) {
-    for (const auto& w : b.words) {
-      const int i = linearIndex(w.letter);
-      if (i < 0) continue;
-      if (m.incremental || !w.value) printed_linear[static_cast<size_t>(i)].reset();
-      else printed_linear[static_cast<size_t>(i)] = *w.value * (m.inch ? kMmPerInch : 1.0);
+// The rewrite of one program, as named steps: the input is refused if it was compensated before;
+// each block is then read (the modal state and the nominal command it leaves), compensated (the
+// pose, the position, their strokes, a turning feed move split along the nominal path) and printed
+// as the dialect spells it; a probing move's no-trigger check is rewritten with its move; last,
+// the dialect's own checker judges the rewrite against the input.
+class ProgramRewrite {
+ public:
+  ProgramRewrite(const std::string& text, const std::string& file, const MachineModel& machine,
+                 const GeometricErrors& errors, const NcSyntax& syntax, const ProgramCompensationOptions& options)
+      : text_(text), file_(file), machine_(machine), errors_(errors), syntax_(syntax), options_(options),
+        dialect_(dialectByName(syntax.dialect)), end_check_(dialect_.endPointCheck()), blocks_(nc::readProgram(text)) {
+    modal_.inch = machine.units == LengthUnit::Inch;
+    for (const auto& r : machine.rotary) {
+      rotary_letters_.push_back(r.name);
+      modal_.rotary[r.name] = std::nullopt;
     }
-    for (const auto& w : b.words)
-      if (isRotary(w.letter)) printed_rotary[w.letter] = w.text;
-  };
-  auto fail = [&](int line, const std::string& why) -> void { throw InputError(file, line, why); };
-  // Cache: the compensated pose depends only on the nominal pose.
-  std::map<std::array<double, 3>, CompensatedCommand> pose_cache;
-
-  // The program's own comments, kept on a rewritten line.
-  auto comment = [&](const std::string& c) {
-    return syntax.comment == NcSyntax::Comment::Parentheses ? "(" + c + ")" : ";" + c;
-  };
-
-  const std::string mark = dialect.compensationMark();
-  // Upper case without blanks: how the control reads a statement (LinuxCNC ignores both).
-  auto squeezed = [](std::string_view t) {
-    std::string out;
-    for (char ch : upper(t))
-      if (ch != ' ' && ch != '\t') out += ch;
-    return out;
-  };
-  for (const auto& b : blocks) {
-    if (b.raw.size() > kMaxLineChars)
-      fail(b.line, fmt::format("line of {} characters: longer than any control accepts (LinuxCNC: 255) and than the "
-                               "{} the rewrite reads",
-                               b.raw.size(), kMaxLineChars));
-    // Compensating twice applies the errors twice: the marks this function writes refuse it.
-    for (const auto& c : b.comments)
-      if (upper(c).find(kCompensatedMarker) != std::string::npos)
-        fail(b.line, fmt::format("the program is already compensated (comment {}): compensating it again would "
-                                 "apply the location errors twice; compensate the original program",
-                                 kCompensatedMarker));
-    if (!mark.empty() && squeezed(b.raw).find(squeezed(mark)) != std::string::npos)
-      fail(b.line, fmt::format("the program is already compensated (statement {}): compensating it again would apply "
-                               "the location errors twice; compensate the original program",
-                               mark));
   }
 
-  // Header: after the program's identification (a leading '%', a Fanuc/Okuma O-number line, a
-  // Siemens transfer line "; %_N_NAME_MPF"), in the dialect's own comment form.
-  auto identifies = [](const nc::Block& b) {
-    if (b.percent) return true;
-    if (!b.control && !b.words.empty() && b.words.front().letter == 'O') return true;
-    return b.code.empty() && b.comments.size() == 1 && ctl::trim(b.comments[0]).rfind("%_N_", 0) == 0;
-  };
-  size_t header_at = 0;
-  while (header_at < blocks.size() && identifies(blocks[header_at])) ++header_at;
-  std::vector<std::string> header =
-      dialect.commentLines(std::string(kCompensatedMarker) +
-                           ": rewritten by rotacal compensate for the geometric errors below. Never compensate it "
-                           "again; run it only on the uncompensated machine");
-  if (!mark.empty()) header.push_back(mark);
-  for (const auto& h : options.header)
-    for (auto& l : dialect.commentLines(h)) header.push_back(std::move(l));
-  // Zero errors change no word: the program is returned as it was, byte for byte, without the
-  // mark (compensating it again, for any errors, is then right).
-  bool zero = errors.location.values.isZero(0.0);
-  for (const auto& c : errors.components)
-    for (const auto& v : c.values) zero = zero && v.isZero(0.0);
-  if (zero) header.clear();
+  ProgramCompensation run() {
+    refuseCompensatedInput();
+    prepareHeader();
+    for (size_t bi = 0; bi < blocks_.size(); ++bi) {
+      if (bi == header_at_) emitHeader();
+      emitting_line_ = blocks_[bi].line;
+      if (pending_ && rewrotePendingCheck(blocks_[bi])) continue;
+      nc::Block b;
+      std::string prefix;
+      if (!motionPart(blocks_[bi], &b, &prefix)) continue;
+      rewriteBlock(b, prefix);
+    }
+    closePending("before the end of the program");
+    if (header_at_ >= blocks_.size()) emitHeader();
+    out_.text = std::move(result_);
+    recheckWithDialect();
+    return std::move(out_);
+  }
 
-  std::string result;
-  std::vector<int> source_line;  // per output line: the input line it comes from, 0 for the header
-  int emitting_line = 0;
-  auto emit = [&](const std::string& line) {
-    result += line;
-    result += '\n';
-    source_line.push_back(emitting_line);
+ private:
+  // The program's own word for a position: the controlled point's rounded, printed coordinates.
+  struct PrintedPose {
+    Pose q_cmd;                               // the compensated pose as printed, papers' convention
+    std::map<char, std::string> rotary_text;  // the rotary words' values as printed
   };
-  auto emitHeader = [&] {
-    emitting_line = 0;
-    for (const auto& h : header) emit(h);
+  // A feed move split where the joint-space line would leave the nominal path.
+  struct Split {
+    std::vector<std::pair<Eigen::Vector3d, std::map<char, std::string>>> pieces;  // all but the last end
+    double feed_factor = 1.0;  // G93: each piece takes its share of the block's time
   };
 
-  std::optional<PendingCheck> pending;
+  [[noreturn]] void fail(int line, const std::string& why) const { throw InputError(file_, line, why); }
+  bool isRotary(char c) const { return modal_.rotary.count(c) > 0; }
+  static int linearIndex(char c) { return c == 'X' ? 0 : c == 'Y' ? 1 : c == 'Z' ? 2 : -1; }
+  double unitMm() const { return modal_.inch ? kMmPerInch : 1.0; }
+  int lengthDecimals() const { return modal_.inch ? syntax_.length_decimals_inch : syntax_.length_decimals_mm; }
+  // The program's own comments, kept on a rewritten line.
+  std::string comment(const std::string& c) const {
+    return syntax_.comment == NcSyntax::Comment::Parentheses ? "(" + c + ")" : ";" + c;
+  }
+  static const nc::Word* lastWord(const nc::Block& b, char letter) {
+    const nc::Word* last = nullptr;
+    for (const auto& w : b.words)
+      if (w.letter == letter) last = &w;
+    return last;
+  }
+  static void appendWord(std::string& line, const std::string& word) {
+    line += (line.empty() || line.back() == '/' || line.back() == ' ' ? "" : " ") + word;
+  }
+
+  // ---- Before the first block ----
+
+  // Compensating twice applies the errors twice: the marks this rewrite writes refuse it.
+  void refuseCompensatedInput() const {
+    const std::string mark = dialect_.compensationMark();
+    // Upper case without blanks: how the control reads a statement (LinuxCNC ignores both).
+    auto squeezed = [](std::string_view t) {
+      std::string out;
+      for (char ch : upper(t))
+        if (ch != ' ' && ch != '\t') out += ch;
+      return out;
+    };
+    for (const auto& b : blocks_) {
+      if (b.raw.size() > kMaxLineChars)
+        fail(b.line, fmt::format("line of {} characters: longer than any control accepts (LinuxCNC: 255) and than "
+                                 "the {} the rewrite reads",
+                                 b.raw.size(), kMaxLineChars));
+      for (const auto& c : b.comments)
+        if (upper(c).find(kCompensatedMarker) != std::string::npos)
+          fail(b.line, fmt::format("the program is already compensated (comment {}): compensating it again would "
+                                   "apply the location errors twice; compensate the original program",
+                                   kCompensatedMarker));
+      if (!mark.empty() && squeezed(b.raw).find(squeezed(mark)) != std::string::npos)
+        fail(b.line, fmt::format("the program is already compensated (statement {}): compensating it again would "
+                                 "apply the location errors twice; compensate the original program",
+                                 mark));
+    }
+  }
+
+  // The header goes after the program's identification (a leading '%', a Fanuc/Okuma O-number
+  // line, a Siemens transfer line "; %_N_NAME_MPF"), in the dialect's own comment form. Zero
+  // errors change no word: the program is returned as it was, byte for byte, without the mark
+  // (compensating it again, for any errors, is then right).
+  void prepareHeader() {
+    auto identifies = [](const nc::Block& b) {
+      if (b.percent) return true;
+      if (!b.control && !b.words.empty() && b.words.front().letter == 'O') return true;
+      return b.code.empty() && b.comments.size() == 1 && ctl::trim(b.comments[0]).rfind("%_N_", 0) == 0;
+    };
+    while (header_at_ < blocks_.size() && identifies(blocks_[header_at_])) ++header_at_;
+    header_ = dialect_.commentLines(std::string(kCompensatedMarker) +
+                                    ": rewritten by rotacal compensate for the geometric errors below. Never "
+                                    "compensate it again; run it only on the uncompensated machine");
+    const std::string mark = dialect_.compensationMark();
+    if (!mark.empty()) header_.push_back(mark);
+    for (const auto& h : options_.header)
+      for (auto& l : dialect_.commentLines(h)) header_.push_back(std::move(l));
+    bool zero = errors_.location.values.isZero(0.0);
+    for (const auto& c : errors_.components)
+      for (const auto& v : c.values) zero = zero && v.isZero(0.0);
+    if (zero) header_.clear();
+  }
+
+  void emit(const std::string& line) {
+    result_ += line;
+    result_ += '\n';
+    source_line_.push_back(emitting_line_);
+  }
+
+  void emitHeader() {
+    emitting_line_ = 0;
+    for (const auto& h : header_) emit(h);
+  }
+
+  // ---- A probing move's no-trigger check ----
+
+  // The block after a rewritten probing move: when it is a statement of the move's check, it is
+  // given the new end point (true); anything else is for the next step (false).
+  bool rewrotePendingCheck(const nc::Block& block) {
+    const auto st = ctl::parseEndPointCheckStatement(*end_check_, block.code);
+    if (!st) return false;
+    const auto a = static_cast<size_t>(st->axis);
+    const double tol = 0.5 * std::pow(10.0, -st->decimals) + 1e-9;
+    if (std::abs(st->end - pending_->old_end[st->axis]) > tol)
+      fail(block.line, fmt::format("this no-trigger check compares {} with {} but the probing move at line {} ends at "
+                                   "{}: the rewrite cannot tell what it guards",
+                                   "XYZ"[a], st->end, pending_->move_line,
+                                   fixedText(pending_->old_end[st->axis], st->decimals)));
+    if (pending_->rewritten[a])
+      fail(block.line, fmt::format("a second {} statement in the no-trigger check of the probing move at line {}",
+                                   "XYZ"[a], pending_->move_line));
+    pending_->rewritten[a] = true;
+    // The leading N word, if any, stays.
+    const size_t at = upper(block.code).find(upper(end_check_->difference[a]));
+    std::string line = block.code.substr(0, at) +
+                       ctl::endPointCheckStatement(*end_check_, st->axis, pending_->new_end[st->axis], pending_->decimals);
+    for (const auto& c : block.comments) line += " " + comment(c);
+    emit(line);
+    ++out_.rewritten_checks;
+    return true;
+  }
+
   // Before the next move: the previous probing move's check must have been rewritten, or it
   // would compare the probe's stop with the old end point and pass a probe that never triggered.
-  auto closePending = [&](const std::string& where) {
-    if (!pending) return;
+  void closePending(const std::string& where) {
+    if (!pending_) return;
     for (int a = 0; a < 3; ++a)
-      if (!pending->rewritten[static_cast<size_t>(a)])
-        fail(pending->move_line,
+      if (!pending_->rewritten[static_cast<size_t>(a)])
+        fail(pending_->move_line,
              fmt::format("the probing move's end point moves, but its no-trigger check ('{}' for {}) was not found "
                          "{}: left as written it would pass a probe that never triggered; give the check right after "
                          "the move in the form rotacal writes",
-                         ctl::endPointCheckStatement(*end_check, a, pending->old_end[a], 4), "XYZ"[a], where));
-    pending.reset();
-  };
+                         ctl::endPointCheckStatement(*end_check_, a, pending_->old_end[a], 4), "XYZ"[a], where));
+    pending_.reset();
+  }
 
-  std::optional<double> work_offset;  // G54 ... as first selected
-  // The nominal command at the end of the last compensated block (machine frame): where a feed
-  // move to be split starts.
-  std::optional<MachineCommand> last_nominal;
-  for (size_t bi = 0; bi < blocks.size(); ++bi) {
-    if (bi == header_at) emitHeader();
-    emitting_line = blocks[bi].line;
-    if (pending) {
-      if (const auto st = ctl::parseEndPointCheckStatement(*end_check, blocks[bi].code)) {
-        const auto a = static_cast<size_t>(st->axis);
-        const double tol = 0.5 * std::pow(10.0, -st->decimals) + 1e-9;
-        if (std::abs(st->end - pending->old_end[st->axis]) > tol)
-          fail(blocks[bi].line,
-               fmt::format("this no-trigger check compares {} with {} but the probing move at line {} ends at {}: "
-                           "the rewrite cannot tell what it guards",
-                           "XYZ"[a], st->end, pending->move_line, fixedText(pending->old_end[st->axis], st->decimals)));
-        if (pending->rewritten[a])
-          fail(blocks[bi].line, fmt::format("a second {} statement in the no-trigger check of the probing move at line {}",
-                                            "XYZ"[a], pending->move_line));
-        pending->rewritten[a] = true;
-        // The leading N word, if any, stays.
-        const std::string code_upper = upper(blocks[bi].code);
-        const size_t at = code_upper.find(upper(end_check->difference[a]));
-        std::string line = blocks[bi].code.substr(0, at) +
-                           ctl::endPointCheckStatement(*end_check, st->axis, pending->new_end[st->axis], pending->decimals);
-        for (const auto& c : blocks[bi].comments) line += " " + comment(c);
-        emit(line);
-        ++out.rewritten_checks;
-        continue;
-      }
+  // A rewritten probing move's check must follow it (closePending refuses a program where not).
+  void armCheck(const nc::Block& b, bool measuring_prefix, const Eigen::Vector3d& x_nom, const Eigen::Vector3d& x_new) {
+    if (!end_check_ || !isGuardedMove(b, measuring_prefix)) return;
+    PendingCheck p;
+    p.move_line = b.line;
+    p.old_end = x_nom / unitMm();
+    p.new_end = x_new / unitMm();
+    p.decimals = lengthDecimals();
+    out_.max_check_shift_mm = std::max(out_.max_check_shift_mm, (x_new - x_nom).norm());
+    pending_ = p;
+  }
+
+  // ---- Reading a block ----
+
+  // The motion part of a block (false: the block carries none and was written as it is).
+  // Statements of the richer dialects (Siemens DEF/IF/WRITE/R90=..., Okuma VC1=.../PUT/FWRITC,
+  // labels) pass as written. A Siemens measuring prefix (MEAS=1 G1 ...) is kept in `prefix` and
+  // the move behind it is the motion part.
+  bool motionPart(const nc::Block& block, nc::Block* b, std::string* prefix) {
+    static const std::regex measuring(R"(^\s*(N\d+\s+)?(MEAS|MEAW)\s*=\s*-?\d+\s+)", std::regex::icase);
+    *b = block;
+    std::smatch mm;
+    if (std::regex_search(block.raw, mm, measuring)) {
+      *prefix = mm.str(0);
+      const std::vector<nc::Block> move = nc::readProgram(block.raw.substr(prefix->size()));
+      if (move.empty() || move.front().words.empty())
+        fail(block.line, fmt::format("'{}' without a move after it: a measuring prefix belongs on a motion block",
+                                     upper(std::string_view(*prefix).substr(0, prefix->find_last_not_of(" \t") + 1))));
+      *b = move.front();
+      b->line = block.line;
+      b->raw = block.raw;
+      return true;
     }
-    nc::Block b = blocks[bi];
-    // Statements of the richer dialects (Siemens DEF/IF/WRITE/R90=..., Okuma VC1=.../PUT/FWRITC,
-    // labels) carry no motion: they pass as written. A Siemens measuring prefix (MEAS=1 G1 ...)
-    // is kept and the move behind it rewritten.
-    std::string prefix;
-    {
-      static const std::regex measuring(R"(^\s*(N\d+\s+)?(MEAS|MEAW)\s*=\s*-?\d+\s+)", std::regex::icase);
-      std::smatch mm;
-      if (std::regex_search(b.raw, mm, measuring)) {
-        prefix = mm.str(0);
-        const int line_no = b.line;
-        const std::vector<nc::Block> move = nc::readProgram(b.raw.substr(prefix.size()));
-        if (move.empty() || move.front().words.empty())
-          fail(line_no, fmt::format("'{}' without a move after it: a measuring prefix belongs on a motion block",
-                                    upper(std::string_view(prefix).substr(0, prefix.find_last_not_of(" \t") + 1))));
-        b = move.front();
-        b.line = line_no;
-        b.raw = blocks[bi].raw;
-      } else if (ctl::isStatement(b.code, true)) {
-        emit(b.raw);
-        continue;
-      }
+    if (ctl::isStatement(block.code, true)) {
+      emit(block.raw);
+      return false;
     }
-    // Frame changes first: the tokenizer reads TRAORI as words T, R, A, ... and would name those.
+    return true;
+  }
+
+  // Frame changes first: the tokenizer reads TRAORI as words T, R, A, ... and would name those.
+  void refuseFrameChanges(const nc::Block& b) const {
     const std::string code_upper = upper(b.code);
     for (const char* kw : {"TRAORI", "TRANSMIT", "TRACYL", "CYCLE800", "ROT ", "AROT", "TRANS ", "ATRANS"})
       if (code_upper.find(kw) != std::string::npos)
         fail(b.line, fmt::format("{} changes the coordinate frame inside the program: compensate a program in plain "
                                  "machine coordinates, or through the kinematics (analyze --offsets)",
                                  std::string(kw)));
-    if (!b.issues.empty()) fail(b.line, b.issues.front());
-    if (b.control || b.percent || b.words.empty()) {
-      emit(b.raw);
-      continue;
-    }
-    bool machine_coords = false, home = false;
+  }
+
+  struct BlockModes {
+    bool machine_coords = false;  // G53
+    bool home = false;            // G28 / G30
+  };
+
+  // The G words: the modal state they set, and what this block alone does.
+  BlockModes readGWords(const nc::Block& b) {
+    BlockModes modes;
+    Modal& m = modal_;
     for (const auto& w : b.words) {
       if (w.letter != 'G') continue;
       if (!w.value) fail(b.line, "a G word that is an expression cannot be followed");
@@ -301,15 +341,15 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
       } else if (is(93)) m.inverse_time = true;
       else if (is(94) || is(95)) m.inverse_time = false;
       else if (is(2) || is(3)) m.motion = Modal::Motion::Arc;
-      else if (is(53)) machine_coords = true;
-      else if (is(28) || is(30)) home = true;
+      else if (is(53)) modes.machine_coords = true;
+      else if (is(28) || is(30)) modes.home = true;
       else if ((g >= 54 && g <= 59.3) || is(505)) {
         // The work offset the program zero (--program-origin) is: chosen once, before any move.
-        if ((work_offset && std::abs(*work_offset - g) > 1e-9) || (!work_offset && out.motion_blocks > 0))
+        if ((work_offset_ && std::abs(*work_offset_ - g) > 1e-9) || (!work_offset_ && out_.motion_blocks > 0))
           fail(b.line, fmt::format("G{} changes the work offset inside the program: the rewrite knows one program "
                                    "zero (--program-origin); compensate each work offset's part separately",
                                    w.text));
-        work_offset = g;
+        work_offset_ = g;
       } else if (is(10) || is(92) || is(52))
         fail(b.line, fmt::format("G{} changes an offset inside the program: the rewrite cannot know the new program "
                                  "zero; set offsets before the program and give --program-origin",
@@ -319,317 +359,421 @@ ProgramCompensation compensateProgram(const std::string& text, const std::string
                                  "compensated by the control's kinematics, not by rewriting (analyze --offsets)",
                                  w.text));
     }
-    // Axis words of this block.
+    return modes;
+  }
+
+  // Whether the block has axis words; each must be a literal.
+  bool hasAxisWords(const nc::Block& b) const {
     bool has_axis = false;
     for (const auto& w : b.words) {
-      const bool lin = w.letter == 'X' || w.letter == 'Y' || w.letter == 'Z';
-      if (!lin && !isRotary(w.letter)) continue;
+      if (linearIndex(w.letter) < 0 && !isRotary(w.letter)) continue;
       has_axis = true;
       if (!w.value)
         fail(b.line, fmt::format("{}{} is an expression or a parameter: compensate needs literal coordinates",
                                  w.letter, w.text));
     }
-    if (!has_axis) {
-      emit(b.raw);
-      continue;
-    }
-    closePending(fmt::format("before the next move at line {}", b.line));
-    ++out.motion_blocks;
-    const double unit_mm = m.inch ? kMmPerInch : 1.0;
-    if (machine_coords || home) {
-      // Machine-coordinate moves (tool change, parking) do not address the workpiece: unchanged,
-      // and the axes they move are no longer known in program coordinates.
-      for (const auto& w : b.words) {
-        if (w.letter == 'X') m.xyz_mm[0].reset();
-        else if (w.letter == 'Y') m.xyz_mm[1].reset();
-        else if (w.letter == 'Z') m.xyz_mm[2].reset();
-        else if (isRotary(w.letter)) m.rotary[w.letter].reset();
-      }
-      if (home)
-        for (auto& v : m.xyz_mm) v.reset();
-      last_nominal.reset();
-      ++out.uncompensated_blocks;
-      notePrinted(b);
-      // Machine coordinates are not program coordinates: what they moved is no longer known.
-      for (const auto& w : b.words)
-        if (linearIndex(w.letter) >= 0) printed_linear[static_cast<size_t>(linearIndex(w.letter))].reset();
-      if (home) printed_linear = {};
-      emit(b.raw);
-      continue;
-    }
-    if (m.motion == Modal::Motion::Arc)
-      fail(b.line, "an arc (G2/G3) cannot be compensated point by point: on the machine with errors its plane is "
-                   "tilted; output linear moves (G1) from CAM, or compensate through the kinematics (analyze --offsets)");
-    // The nominal command before and after this block.
-    const std::array<std::optional<double>, 3> before = m.xyz_mm;
+    return has_axis;
+  }
+
+  // The rotary and linear words as last printed: a block rewritten at a compensated pose must also
+  // carry a rotary word the block lacks when the machine is not yet at the compensated angle; a
+  // linear word the block lacks is written only where the compensated position differs from the
+  // one last commanded, so zero errors reproduce the program line for line.
+  void notePrinted(const nc::Block& b) {
     for (const auto& w : b.words) {
-      const int i = w.letter == 'X' ? 0 : w.letter == 'Y' ? 1 : w.letter == 'Z' ? 2 : -1;
-      if (i >= 0) {
-        const double v = *w.value * unit_mm;
-        if (m.incremental) {
-          if (m.xyz_mm[i]) m.xyz_mm[i] = *m.xyz_mm[i] + v;
-        } else {
-          m.xyz_mm[i] = v;
-        }
+      const int i = linearIndex(w.letter);
+      if (i < 0) continue;
+      if (modal_.incremental || !w.value) printed_linear_[static_cast<size_t>(i)].reset();
+      else printed_linear_[static_cast<size_t>(i)] = *w.value * unitMm();
+    }
+    for (const auto& w : b.words)
+      if (isRotary(w.letter)) printed_rotary_[w.letter] = w.text;
+  }
+
+  // Machine-coordinate moves (tool change, parking) do not address the workpiece: unchanged, and
+  // the axes they move are no longer known in program coordinates.
+  void passMachineCoordinateMove(const nc::Block& b, bool home) {
+    for (const auto& w : b.words) {
+      if (const int i = linearIndex(w.letter); i >= 0) modal_.xyz_mm[static_cast<size_t>(i)].reset();
+      else if (isRotary(w.letter)) modal_.rotary[w.letter].reset();
+    }
+    if (home)
+      for (auto& v : modal_.xyz_mm) v.reset();
+    last_nominal_.reset();
+    ++out_.uncompensated_blocks;
+    notePrinted(b);
+    for (const auto& w : b.words)
+      if (linearIndex(w.letter) >= 0) printed_linear_[static_cast<size_t>(linearIndex(w.letter))].reset();
+    if (home) printed_linear_ = {};
+    emit(b.raw);
+  }
+
+  // The nominal command after this block (program coordinates, mm; rotary axes in the papers'
+  // convention); false when some axis is not known yet (the block then passes unchanged).
+  bool advanceNominal(const nc::Block& b, const std::array<std::optional<double>, 3>& before) {
+    Modal& m = modal_;
+    for (const auto& w : b.words) {
+      if (const int i = linearIndex(w.letter); i >= 0) {
+        const double v = *w.value * unitMm();
+        auto& x = m.xyz_mm[static_cast<size_t>(i)];
+        if (!m.incremental) x = v;
+        else if (x) x = *x + v;
       } else if (isRotary(w.letter)) {
         if (m.incremental)
           fail(b.line, fmt::format("an incremental (G91) move of {} cannot be compensated: command rotary axes in G90",
                                    w.letter));
-        m.rotary[w.letter] = *w.value * machine.controllerSign(w.letter, syntax.dialect);
+        m.rotary[w.letter] = *w.value * machine_.controllerSign(w.letter, syntax_.dialect);
       }
     }
     bool known = m.xyz_mm[0] && m.xyz_mm[1] && m.xyz_mm[2];
     for (const auto& [c, v] : m.rotary) known = known && v.has_value();
     if (m.incremental) known = known && before[0] && before[1] && before[2];
-    if (!known) {
-      last_nominal.reset();
-      ++out.uncompensated_blocks;
+    return known;
+  }
+
+  // ---- One block ----
+
+  void rewriteBlock(const nc::Block& b, const std::string& prefix) {
+    refuseFrameChanges(b);
+    if (!b.issues.empty()) fail(b.line, b.issues.front());
+    if (b.control || b.percent || b.words.empty()) {
+      emit(b.raw);
+      return;
+    }
+    const BlockModes modes = readGWords(b);
+    if (!hasAxisWords(b)) {
+      emit(b.raw);
+      return;
+    }
+    closePending(fmt::format("before the next move at line {}", b.line));
+    ++out_.motion_blocks;
+    if (modes.machine_coords || modes.home) {
+      passMachineCoordinateMove(b, modes.home);
+      return;
+    }
+    if (modal_.motion == Modal::Motion::Arc)
+      fail(b.line, "an arc (G2/G3) cannot be compensated point by point: on the machine with errors its plane is "
+                   "tilted; output linear moves (G1) from CAM, or compensate through the kinematics (analyze --offsets)");
+    const std::array<std::optional<double>, 3> before = modal_.xyz_mm;
+    if (!advanceNominal(b, before)) {
+      last_nominal_.reset();
+      ++out_.uncompensated_blocks;
       notePrinted(b);
       emit(b.raw);
-      continue;
+      return;
     }
+    compensateBlock(b, prefix, before);
+  }
+
+  void compensateBlock(const nc::Block& b, const std::string& prefix, const std::array<std::optional<double>, 3>& before) {
     Pose q;
-    for (const auto& [c, v] : m.rotary) poseAxis(q, c) = *v;
+    for (const auto& [c, v] : modal_.rotary) poseAxis(q, c) = *v;
+    const PrintedPose printed = printedCompensatedPose(q, b.line);
+    out_.max_direction_residual_rad =
+        std::max(out_.max_direction_residual_rad, toolDirectionError(errors_, printed.q_cmd, q, options_.pose.tool_axis_m));
+    const Eigen::Vector3d x_nom(*modal_.xyz_mm[0], *modal_.xyz_mm[1], *modal_.xyz_mm[2]);
+    const Eigen::Vector3d x_new = compensatedXyz(q, printed.q_cmd, modal_.xyz_mm);
+    out_.max_shift_mm = std::max(out_.max_shift_mm, (x_new - x_nom).norm());
+    checkLinearStrokes(x_new + options_.program_origin_m_mm, b.line, "the compensated {} {:.4f} mm is outside the stroke "
+                                                                      "[{}, {}] mm of MACHINE.json");
+    const Eigen::Vector3d words = modal_.incremental ? Eigen::Vector3d(x_new - compensatedXyz(q, printed.q_cmd, before)) : x_new;
+    notePositionUncertainty(q, printed.q_cmd, x_nom);
+    const MachineCommand nominal_end{x_nom + options_.program_origin_m_mm, q};
+    const Split split = splitTurningMove(b, prefix, nominal_end);
+    last_nominal_ = nominal_end;
+    emit(rewrittenLine(b, prefix, words, printed, split));
+    if (!split.pieces.empty()) {
+      // The remaining pieces, the last one the block's own end; G1 is modal from the first line.
+      for (size_t k = 1; k <= split.pieces.size(); ++k) {
+        std::string piece = k < split.pieces.size() ? axisWords(split.pieces[k].first, split.pieces[k].second)
+                                                    : axisWords(words, printed.rotary_text);
+        if (modal_.inverse_time) piece += " F" + feedText(*lastWord(b, 'F'), split.feed_factor);
+        emit(piece);
+      }
+      for (char c : rotary_letters_) printed_rotary_[c] = printed.rotary_text.at(c);
+    }
+    for (int i = 0; i < 3; ++i) {
+      if (modal_.incremental) printed_linear_[static_cast<size_t>(i)].reset();
+      else printed_linear_[static_cast<size_t>(i)] = parsedBack(fixedText(x_new[i] / unitMm(), lengthDecimals())) * unitMm();
+    }
+    ++out_.compensated_blocks;
+    armCheck(b, !prefix.empty(), x_nom, x_new);
+  }
+
+  // ---- Compensating ----
+
+  // The compensated pose of nominal pose q as it will be printed (the position is computed for
+  // exactly those angles), its rotary words inside MACHINE.json's strokes: the compensation may
+  // push an angle that sits on a stroke end past it (A-110.0005 on a [-110, 20] axis).
+  PrintedPose printedCompensatedPose(const Pose& q, int line) {
     const std::array<double, 3> key{q.A, q.B, q.C};
-    auto it = pose_cache.find(key);
-    if (it == pose_cache.end()) it = pose_cache.emplace(key, compensatePose(errors, q, options.pose)).first;
+    auto it = pose_cache_.find(key);
+    if (it == pose_cache_.end()) it = pose_cache_.emplace(key, compensatePose(errors_, q, options_.pose)).first;
     const CompensatedCommand& cc = it->second;
-    // The rotary words as they will be printed; the position is computed for exactly those.
-    Pose q_cmd = q;
-    std::map<char, std::string> rotary_text;
-    for (char c : rotary_letters) {
-      const int sign = machine.controllerSign(c, syntax.dialect);
+    PrintedPose p{q, {}};
+    for (char c : rotary_letters_) {
+      const int sign = machine_.controllerSign(c, syntax_.dialect);
       Pose tmp = cc.pose;
-      const std::string t = fixedText(sign * poseAxis(tmp, c), syntax.angle_decimals);
-      rotary_text[c] = t;
-      poseAxis(q_cmd, c) = sign * parsedBack(t);
-      out.max_rotary_change_deg = std::max(out.max_rotary_change_deg, std::abs(poseAxis(q_cmd, c) - poseAxis(q, c)));
+      const std::string t = fixedText(sign * poseAxis(tmp, c), syntax_.angle_decimals);
+      p.rotary_text[c] = t;
+      poseAxis(p.q_cmd, c) = sign * parsedBack(t);
+      Pose nominal = q;
+      out_.max_rotary_change_deg = std::max(out_.max_rotary_change_deg, std::abs(poseAxis(p.q_cmd, c) - poseAxis(nominal, c)));
     }
-    // Stroke check of the rotary words as printed: the compensation may push an angle that sits
-    // on a stroke end past it (A-110.0005 on a [-110, 20] axis).
-    for (char c : rotary_letters) {
-      const RotaryAxis& axis = machine.rotaryAxis(c);
-      const double paper = poseAxis(q_cmd, c);
+    for (char c : rotary_letters_) {
+      const RotaryAxis& axis = machine_.rotaryAxis(c);
+      const double paper = poseAxis(p.q_cmd, c);
       if (!axis.continuous && !axis.stroke_deg.contains(paper, kRotaryStrokeTolDeg))
-        fail(b.line, fmt::format("the compensated {}{} (papers' convention {:.4f} deg) is outside the stroke [{}, {}] "
-                                 "deg of MACHINE.json",
-                                 c, rotary_text[c], paper, axis.stroke_deg.min, axis.stroke_deg.max));
+        fail(line, fmt::format("the compensated {}{} (papers' convention {:.4f} deg) is outside the stroke [{}, {}] deg "
+                               "of MACHINE.json",
+                               c, p.rotary_text[c], paper, axis.stroke_deg.min, axis.stroke_deg.max));
     }
-    out.max_direction_residual_rad =
-        std::max(out.max_direction_residual_rad, toolDirectionError(errors, q_cmd, q, options.pose.tool_axis_m));
-    auto compensate = [&](const std::array<std::optional<double>, 3>& xyz) {
-      const Eigen::Vector3d x_m(*xyz[0], *xyz[1], *xyz[2]);
-      return Eigen::Vector3d(compensatedPosition(errors, q, x_m + options.program_origin_m_mm, q_cmd) -
-                             options.program_origin_m_mm);
-    };
-    const Eigen::Vector3d x_nom(*m.xyz_mm[0], *m.xyz_mm[1], *m.xyz_mm[2]);
-    const Eigen::Vector3d x_new = compensate(m.xyz_mm);
-    out.max_shift_mm = std::max(out.max_shift_mm, (x_new - x_nom).norm());
-    // Stroke check of the endpoint the machine will actually be commanded to. Only the printing
-    // may round it outward (half a unit of the last printed decimal): a soft limit alarms on
-    // anything more.
-    const int dec = m.inch ? syntax.length_decimals_inch : syntax.length_decimals_mm;
-    const double print_tol_mm = 0.5 * std::pow(10.0, -dec) * unit_mm + 1e-9;
-    const Eigen::Vector3d x_machine = x_new + options.program_origin_m_mm;
-    const std::array<const AxisRange*, 3> strokes{&machine.x, &machine.y, &machine.z};
+    return p;
+  }
+
+  // The compensated program coordinates of nominal program coordinates `xyz` at nominal pose q,
+  // the machine commanded to q_cmd.
+  Eigen::Vector3d compensatedXyz(const Pose& q, const Pose& q_cmd, const std::array<std::optional<double>, 3>& xyz) const {
+    const Eigen::Vector3d x_m(*xyz[0], *xyz[1], *xyz[2]);
+    return compensatedPosition(errors_, q, x_m + options_.program_origin_m_mm, q_cmd) - options_.program_origin_m_mm;
+  }
+
+  // The end point the machine will actually be commanded to, inside the strokes. Only the
+  // printing may round it outward (half a unit of the last printed decimal): a soft limit alarms
+  // on anything more. `what` formats the axis, the value and the stroke's ends.
+  void checkLinearStrokes(const Eigen::Vector3d& x_machine, int line, fmt::string_view what) const {
+    const double print_tol_mm = 0.5 * std::pow(10.0, -lengthDecimals()) * unitMm() + 1e-9;
+    const std::array<const AxisRange*, 3> strokes{&machine_.x, &machine_.y, &machine_.z};
     for (int i = 0; i < 3; ++i)
-      if (!strokes[i]->contains(x_machine[i], print_tol_mm))
-        fail(b.line, fmt::format("the compensated {} {:.4f} mm is outside the stroke [{}, {}] mm of MACHINE.json",
-                                 "XYZ"[i], x_machine[i], strokes[i]->min, strokes[i]->max));
-    Eigen::Vector3d words = x_new;
-    if (m.incremental) words = x_new - compensate(before);
-    if (errors.location_covariance) {
-      const Eigen::Vector3d p_w = T_m_w_nominal(errors.kinematics(), q).inverse() * (x_nom + options.program_origin_m_mm);
-      const auto J = J_pm_e(errors.location, q_cmd, p_w);
-      const Eigen::Matrix3d C = J * (*errors.location_covariance) * J.transpose();
-      out.max_position_u_mm =
-          std::max(out.max_position_u_mm, std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(C).eigenvalues().maxCoeff())));
-    }
-    // A feed move that turns a rotary axis: the straight joint-space move between compensated
-    // ends leaves the nominal path in between; split it where it would leave it by more than
-    // the tolerance (core/compensation.hpp). The pieces' ends are printed as the block's are.
-    std::vector<std::pair<Eigen::Vector3d, std::map<char, std::string>>> pieces;  // all but the last
-    double piece_feed_factor = 1.0;
-    const MachineCommand nominal_end{x_nom + options.program_origin_m_mm, q};
+      if (!strokes[static_cast<size_t>(i)]->contains(x_machine[i], print_tol_mm)) {
+        const char axis = "XYZ"[i];
+        const double value = x_machine[i], min = strokes[static_cast<size_t>(i)]->min, max = strokes[static_cast<size_t>(i)]->max;
+        fail(line, fmt::vformat(what, fmt::make_format_args(axis, value, min, max)));
+      }
+  }
+
+  // The standard uncertainty of the compensated controlled point, from the location errors'
+  // covariance (largest axis of J C J^T), where the errors carry one.
+  void notePositionUncertainty(const Pose& q, const Pose& q_cmd, const Eigen::Vector3d& x_nom) {
+    if (!errors_.location_covariance) return;
+    const Eigen::Vector3d p_w = T_m_w_nominal(errors_.kinematics(), q).inverse() * (x_nom + options_.program_origin_m_mm);
+    const auto J = J_pm_e(errors_.location, q_cmd, p_w);
+    const Eigen::Matrix3d C = J * (*errors_.location_covariance) * J.transpose();
+    out_.max_position_u_mm = std::max(
+        out_.max_position_u_mm, std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(C).eigenvalues().maxCoeff())));
+  }
+
+  // A feed move that turns a rotary axis: the straight joint-space move between compensated ends
+  // leaves the nominal path in between; split it where it would leave it by more than the
+  // tolerance (core/compensation.hpp). The pieces' ends are printed as the block's are.
+  Split splitTurningMove(const nc::Block& b, const std::string& prefix, const MachineCommand& nominal_end) {
+    Split split;
     bool turns = false;
-    if (last_nominal)
-      for (char c : rotary_letters) turns = turns || std::abs(poseAxis(last_nominal->pose, c) - poseAxis(q, c)) > 1e-12;
-    if (options.subdivide && last_nominal && turns && !m.rapid) {
-      if (m.guarded || !prefix.empty())
-        fail(b.line, "a probing move that turns a rotary axis: probe at a fixed rotary pose");
-      auto rounding = [&](const Pose& p) {
-        Pose r = p;
-        for (char c : rotary_letters) {
-          const int sign = machine.controllerSign(c, syntax.dialect);
-          poseAxis(r, c) = sign * parsedBack(fixedText(sign * poseAxis(r, c), syntax.angle_decimals));
-        }
-        return r;
-      };
-      CompensatedMove move;
-      try {
-        move = compensateMove(errors, *last_nominal, nominal_end, options.pose, options.subdivision, rounding);
-      } catch (const std::runtime_error& e) {
-        fail(b.line, e.what());
+    if (last_nominal_)
+      for (char c : rotary_letters_) {
+        Pose last = last_nominal_->pose, end = nominal_end.pose;
+        turns = turns || std::abs(poseAxis(last, c) - poseAxis(end, c)) > 1e-12;
       }
-      out.max_unsplit_deviation_mm = std::max(out.max_unsplit_deviation_mm, move.unsplit_deviation_mm);
-      out.max_path_deviation_mm = std::max(out.max_path_deviation_mm, move.max_deviation_mm);
-      if (move.ends.size() > 1) {
-        if (m.incremental) fail(b.line, "a G91 move that turns a rotary axis cannot be split: command it in G90");
-        for (const auto& w : b.words)
-          if (w.letter == 'M' && w.value &&
-              (*w.value == 0 || *w.value == 1 || *w.value == 2 || *w.value == 30 || *w.value == 60))
-            fail(b.line, fmt::format("this move must be split to stay on the nominal path, but M{} acts after the "
-                                     "move: put it on a line of its own",
-                                     w.text));
-        ++out.split_blocks;
-        out.added_blocks += static_cast<int>(move.ends.size()) - 1;
-        if (m.inverse_time) piece_feed_factor = static_cast<double>(move.ends.size());
-        for (size_t k = 0; k + 1 < move.ends.size(); ++k) {
-          std::map<char, std::string> rt;
-          for (char c : rotary_letters) {
-            const int sign = machine.controllerSign(c, syntax.dialect);
-            rt[c] = fixedText(sign * poseAxis(move.ends[k].pose, c), syntax.angle_decimals);
-            const RotaryAxis& axis = machine.rotaryAxis(c);
-            if (!axis.continuous && !axis.stroke_deg.contains(poseAxis(move.ends[k].pose, c), kRotaryStrokeTolDeg))
-              fail(b.line, fmt::format("a piece of this split move puts {} at {} deg, outside the stroke [{}, {}] deg "
-                                       "of MACHINE.json",
-                                       c, poseAxis(move.ends[k].pose, c), axis.stroke_deg.min, axis.stroke_deg.max));
-          }
-          const Eigen::Vector3d xm = move.ends[k].x_m_mm;
-          for (int i = 0; i < 3; ++i)
-            if (!strokes[i]->contains(xm[i], print_tol_mm))
-              fail(b.line, fmt::format("a piece of this split move puts {} at {:.4f} mm, outside the stroke [{}, {}] mm "
-                                       "of MACHINE.json",
-                                       "XYZ"[i], xm[i], strokes[i]->min, strokes[i]->max));
-          pieces.emplace_back(xm - options.program_origin_m_mm, rt);
-        }
+    if (!options_.subdivide || !last_nominal_ || !turns || modal_.rapid) return split;
+    if (modal_.guarded || !prefix.empty()) fail(b.line, "a probing move that turns a rotary axis: probe at a fixed rotary pose");
+    auto rounding = [this](const Pose& p) {
+      Pose r = p;
+      for (char c : rotary_letters_) {
+        const int sign = machine_.controllerSign(c, syntax_.dialect);
+        poseAxis(r, c) = sign * parsedBack(fixedText(sign * poseAxis(r, c), syntax_.angle_decimals));
       }
+      return r;
+    };
+    CompensatedMove move;
+    try {
+      move = compensateMove(errors_, *last_nominal_, nominal_end, options_.pose, options_.subdivision, rounding);
+    } catch (const std::runtime_error& e) {
+      fail(b.line, e.what());
     }
-    last_nominal = nominal_end;
-    auto axisWords = [&](const Eigen::Vector3d& w, const std::map<char, std::string>& rt) {
-      std::string a;
-      for (int i = 0; i < 3; ++i) a += fmt::format("{}{}{}", a.empty() ? "" : " ", "XYZ"[i], fixedText(w[i] / unit_mm, dec));
-      for (char c : rotary_letters) a += fmt::format(" {}{}", c, rt.at(c));
-      return a;
-    };
-    // G93: each piece takes its share of the block's time, F = 1 / time.
-    auto feedText = [&](const nc::Word& f) {
-      const size_t dot = f.text.find('.');
-      const int decimals = std::max(3, dot == std::string::npos ? 0 : static_cast<int>(f.text.size() - dot - 1));
-      return fixedText(*f.value * piece_feed_factor, decimals);
-    };
-    const nc::Word* feed_word = nullptr;
+    out_.max_unsplit_deviation_mm = std::max(out_.max_unsplit_deviation_mm, move.unsplit_deviation_mm);
+    out_.max_path_deviation_mm = std::max(out_.max_path_deviation_mm, move.max_deviation_mm);
+    if (move.ends.size() <= 1) return split;
+    if (modal_.incremental) fail(b.line, "a G91 move that turns a rotary axis cannot be split: command it in G90");
     for (const auto& w : b.words)
-      if (w.letter == 'F') feed_word = &w;
-    if (m.inverse_time && !pieces.empty() && (feed_word == nullptr || !feed_word->value))
-      fail(b.line, "an inverse-time (G93) move to be split needs its F word as a number on the block");
+      if (w.letter == 'M' && w.value && (*w.value == 0 || *w.value == 1 || *w.value == 2 || *w.value == 30 || *w.value == 60))
+        fail(b.line, fmt::format("this move must be split to stay on the nominal path, but M{} acts after the move: "
+                                 "put it on a line of its own",
+                                 w.text));
+    ++out_.split_blocks;
+    out_.added_blocks += static_cast<int>(move.ends.size()) - 1;
+    if (modal_.inverse_time) split.feed_factor = static_cast<double>(move.ends.size());
+    for (size_t k = 0; k + 1 < move.ends.size(); ++k) {
+      std::map<char, std::string> rt;
+      Pose end = move.ends[k].pose;
+      for (char c : rotary_letters_) {
+        const int sign = machine_.controllerSign(c, syntax_.dialect);
+        rt[c] = fixedText(sign * poseAxis(end, c), syntax_.angle_decimals);
+        const RotaryAxis& axis = machine_.rotaryAxis(c);
+        if (!axis.continuous && !axis.stroke_deg.contains(poseAxis(end, c), kRotaryStrokeTolDeg))
+          fail(b.line, fmt::format("a piece of this split move puts {} at {} deg, outside the stroke [{}, {}] deg of "
+                                   "MACHINE.json",
+                                   c, poseAxis(end, c), axis.stroke_deg.min, axis.stroke_deg.max));
+      }
+      checkLinearStrokes(move.ends[k].x_m_mm, b.line, "a piece of this split move puts {} at {:.4f} mm, outside the "
+                                                      "stroke [{}, {}] mm of MACHINE.json");
+      split.pieces.emplace_back(move.ends[k].x_m_mm - options_.program_origin_m_mm, rt);
+    }
+    if (modal_.inverse_time) {
+      const nc::Word* f = lastWord(b, 'F');
+      if (f == nullptr || !f->value) fail(b.line, "an inverse-time (G93) move to be split needs its F word as a number on the block");
+    }
+    return split;
+  }
+
+  // ---- Printing ----
+
+  std::string axisWords(const Eigen::Vector3d& w, const std::map<char, std::string>& rotary_text) const {
+    std::string a;
+    for (int i = 0; i < 3; ++i)
+      a += fmt::format("{}{}{}", a.empty() ? "" : " ", "XYZ"[i], fixedText(w[i] / unitMm(), lengthDecimals()));
+    for (char c : rotary_letters_) a += fmt::format(" {}{}", c, rotary_text.at(c));
+    return a;
+  }
+
+  // G93: each piece takes its share of the block's time, F = 1 / time.
+  static std::string feedText(const nc::Word& f, double factor) {
+    const size_t dot = f.text.find('.');
+    const int decimals = std::max(3, dot == std::string::npos ? 0 : static_cast<int>(f.text.size() - dot - 1));
+    return fixedText(*f.value * factor, decimals);
+  }
+
+  // The block's axis words at the compensated command (a word the block lacks only where the
+  // command moved it), its other words and comments as written; a split block's first piece.
+  std::string rewrittenLine(const nc::Block& b, const std::string& prefix, const Eigen::Vector3d& words,
+                            const PrintedPose& printed, const Split& split) {
+    const bool split_move = !split.pieces.empty();
+    const int dec = lengthDecimals();
     std::string line = prefix + (b.block_delete ? "/" : "");
     bool axes_written = false;
     for (const auto& w : b.words) {
-      const bool lin = w.letter == 'X' || w.letter == 'Y' || w.letter == 'Z';
-      if (!pieces.empty() && w.letter == 'F' && m.inverse_time) {
-        line += (line.empty() || line.back() == '/' || line.back() == ' ' ? "" : " ") + std::string("F") + feedText(w);
+      const bool axis_word = linearIndex(w.letter) >= 0 || isRotary(w.letter);
+      if (split_move && w.letter == 'F' && modal_.inverse_time) {
+        appendWord(line, "F" + feedText(w, split.feed_factor));
         continue;
       }
-      if ((lin || isRotary(w.letter)) && !pieces.empty()) {
-        if (axes_written) continue;
-        axes_written = true;
-        line += (line.empty() || line.back() == '/' || line.back() == ' ' ? "" : " ") +
-                axisWords(pieces.front().first, pieces.front().second);
+      if (!axis_word) {
+        appendWord(line, std::string(1, w.letter) + w.text);
         continue;
       }
-      if (lin || isRotary(w.letter)) {
-        if (axes_written) continue;
-        axes_written = true;
-        std::string a;
-        for (int i = 0; i < 3; ++i) {
-          bool in_block = false;
-          for (const auto& w2 : b.words) in_block = in_block || w2.letter == "XYZ"[i];
-          const std::string t = fixedText(words[i] / unit_mm, dec);
-          const auto& pl = printed_linear[static_cast<size_t>(i)];
-          const bool moved = m.incremental ? parsedBack(t) != 0.0 : !pl || std::abs(*pl - parsedBack(t) * unit_mm) > 1e-12;
-          if (in_block || moved) a += fmt::format("{}{}{}", a.empty() ? "" : " ", "XYZ"[i], t);
+      if (axes_written) continue;
+      axes_written = true;
+      if (split_move) {
+        appendWord(line, axisWords(split.pieces.front().first, split.pieces.front().second));
+        continue;
+      }
+      std::string a;
+      for (int i = 0; i < 3; ++i) {
+        const bool in_block = b.find("XYZ"[i]) != nullptr;
+        const std::string t = fixedText(words[i] / unitMm(), dec);
+        const auto& pl = printed_linear_[static_cast<size_t>(i)];
+        const bool moved =
+            modal_.incremental ? parsedBack(t) != 0.0 : !pl || std::abs(*pl - parsedBack(t) * unitMm()) > 1e-12;
+        if (in_block || moved) a += fmt::format("{}{}{}", a.empty() ? "" : " ", "XYZ"[i], t);
+      }
+      for (char c : rotary_letters_) {
+        const bool in_block = b.find(c) != nullptr;
+        const std::string& t = printed.rotary_text.at(c);
+        const auto pr = printed_rotary_.find(c);
+        const bool moved = pr == printed_rotary_.end() || std::abs(parsedBack(pr->second) - parsedBack(t)) > 1e-12;
+        if (moved && !in_block && modal_.incremental)
+          fail(b.line, fmt::format("the compensated {} must be commanded before this incremental (G91) move: give the "
+                                   "rotary axes in a G90 block first",
+                                   c));
+        if (in_block || moved) {
+          a += fmt::format("{}{}{}", a.empty() ? "" : " ", c, t);
+          printed_rotary_[c] = t;
         }
-        for (char c : rotary_letters) {
-          bool in_block = false;
-          for (const auto& w2 : b.words) in_block = in_block || w2.letter == c;
-          const auto pr = printed_rotary.find(c);
-          const bool moved = pr == printed_rotary.end() || std::abs(parsedBack(pr->second) - parsedBack(rotary_text[c])) > 1e-12;
-          if (moved && !in_block && m.incremental)
-            fail(b.line, fmt::format("the compensated {} must be commanded before this incremental (G91) move: "
-                                     "give the rotary axes in a G90 block first",
-                                     c));
-          if (in_block || moved) {
-            a += fmt::format("{}{}{}", a.empty() ? "" : " ", c, rotary_text[c]);
-            printed_rotary[c] = rotary_text[c];
-          }
-        }
-        line += (line.empty() || line.back() == '/' || line.back() == ' ' ? "" : " ") + a;
-        continue;
       }
-      line += (line.empty() || line.back() == '/' || line.back() == ' ' ? "" : " ") + std::string(1, w.letter) + w.text;
+      appendWord(line, a);
     }
     for (const auto& c : b.comments) line += " " + comment(c);
-    emit(line);
-    if (!pieces.empty()) {
-      // The remaining pieces, the last one the block's own end; G1 is modal from the first line.
-      for (size_t k = 1; k <= pieces.size(); ++k) {
-        std::string piece = k < pieces.size() ? axisWords(pieces[k].first, pieces[k].second) : axisWords(words, rotary_text);
-        if (m.inverse_time) piece += " F" + feedText(*feed_word);
-        emit(piece);
-      }
-      for (char c : rotary_letters) printed_rotary[c] = rotary_text[c];
-    }
-    for (int i = 0; i < 3; ++i) {
-      if (m.incremental) printed_linear[static_cast<size_t>(i)].reset();
-      else printed_linear[static_cast<size_t>(i)] = parsedBack(fixedText(x_new[i] / unit_mm, dec)) * unit_mm;
-    }
-    ++out.compensated_blocks;
-    if (end_check && isGuardedMove(b, !prefix.empty())) {
-      PendingCheck p;
-      p.move_line = b.line;
-      p.old_end = x_nom / unit_mm;
-      p.new_end = x_new / unit_mm;
-      p.decimals = dec;
-      out.max_check_shift_mm = std::max(out.max_check_shift_mm, (x_new - x_nom).norm());
-      pending = p;
-    }
+    return line;
   }
-  closePending("before the end of the program");
-  if (header_at >= blocks.size()) emitHeader();
-  out.text = std::move(result);
+
+  // ---- After the last block ----
 
   // The dialect's own checker, on the input and on the rewrite: the rewrite may add no problem
   // (a rotacal program, clean before, stays clean; a foreign program keeps its own problems).
   // What the input shows stands in for its neutral program: the rewrite must show the same.
-  ProbePlan plan;
-  plan.machine = machine;
-  nc::Shape shape;
-  for (const auto& b : blocks) {
-    shape.probes += ctl::isProbingBlock(b);
-    shape.inverse_time = shape.inverse_time || b.hasWord('G', 93);
+  void recheckWithDialect() const {
+    ProbePlan plan;
+    plan.machine = machine_;
+    nc::Shape shape;
+    for (const auto& b : blocks_) {
+      shape.probes += ctl::isProbingBlock(b);
+      shape.inverse_time = shape.inverse_time || b.hasWord('G', 93);
+    }
+    plan.points.resize(shape.probes);
+    std::set<std::pair<int, std::string>> known;
+    for (const auto& p : dialect_.check(text_, plan, shape)) known.insert(splitProblem(p));
+    for (const auto& p : dialect_.check(out_.text, plan, shape)) {
+      auto [line, what] = splitProblem(p);
+      const bool mapped = line >= 1 && static_cast<size_t>(line) <= source_line_.size();
+      const int src = mapped ? source_line_[static_cast<size_t>(line) - 1] : line;
+      if (mapped && src == 0)
+        fail(header_at_ < blocks_.size() ? blocks_[header_at_].line : static_cast<int>(blocks_.size()) + 1,
+             fmt::format("the header comment rotacal writes here fails the {} checker: {}", syntax_.dialect, what));
+      if (!known.count({src, what}))
+        fail(std::max(src, 1), fmt::format("the rewritten line fails the {} checker: {}", syntax_.dialect, what));
+    }
   }
-  plan.points.resize(shape.probes);
-  std::set<std::pair<int, std::string>> known;
-  for (const auto& p : dialect.check(text, plan, shape)) known.insert(splitProblem(p));
-  for (const auto& p : dialect.check(out.text, plan, shape)) {
-    auto [line, what] = splitProblem(p);
-    const bool mapped = line >= 1 && static_cast<size_t>(line) <= source_line.size();
-    const int src = mapped ? source_line[static_cast<size_t>(line) - 1] : line;
-    if (mapped && src == 0)
-      fail(header_at < blocks.size() ? blocks[header_at].line : static_cast<int>(blocks.size()) + 1,
-           fmt::format("the header comment rotacal writes here fails the {} checker: {}", syntax.dialect, what));
-    if (!known.count({src, what}))
-      fail(std::max(src, 1), fmt::format("the rewritten line fails the {} checker: {}", syntax.dialect, what));
-  }
-  return out;
+
+  // What the rewrite reads.
+  const std::string& text_;
+  const std::string& file_;
+  const MachineModel& machine_;
+  const GeometricErrors& errors_;
+  const NcSyntax& syntax_;
+  const ProgramCompensationOptions& options_;
+  const Dialect& dialect_;
+  const std::optional<ctl::EndPointCheck> end_check_;
+  const std::vector<nc::Block> blocks_;
+  std::vector<char> rotary_letters_;
+  // Where it is in the program.
+  Modal modal_;
+  std::map<char, std::string> printed_rotary_;
+  std::array<std::optional<double>, 3> printed_linear_;  // G90 program coordinates, mm, as printed
+  std::optional<double> work_offset_;                     // G54 ... as first selected
+  // The nominal command at the end of the last compensated block (machine frame): where a feed
+  // move to be split starts.
+  std::optional<MachineCommand> last_nominal_;
+  std::optional<PendingCheck> pending_;
+  // The compensated pose depends only on the nominal pose.
+  std::map<std::array<double, 3>, CompensatedCommand> pose_cache_;
+  // What it writes.
+  std::vector<std::string> header_;
+  size_t header_at_ = 0;
+  std::string result_;
+  std::vector<int> source_line_;  // per output line: the input line it comes from, 0 for the header
+  int emitting_line_ = 0;
+  ProgramCompensation out_;
+};
+
+}  // namespace
+
+ProgramCompensation compensateProgram(const std::string& text, const std::string& file, const MachineModel& machine,
+                                      const GeometricErrors& errors, const NcSyntax& syntax,
+                                      const ProgramCompensationOptions& options) {
+  requireValid(options.pose, "CompensationOptions");
+  if (errors.kinematics() != machine.kinematics)
+    throw std::invalid_argument("compensate: the location errors are for another kinematics than the machine");
+  if (std::string why; !errors.validate(&why)) throw std::invalid_argument(why);
+  const Dialect* named = findDialect(syntax.dialect);
+  if (named && !isWordAddress(named->language()))
+    throw std::invalid_argument("compensate: '" + syntax.dialect + "' programs are not word-address G-code");
+  return ProgramRewrite(text, file, machine, errors, syntax, options).run();
 }
 
 MeasurementRun undoCompensation(const ProbePlan& plan, const MeasurementRun& run, const GeometricErrors& errors,
                                 const NcSyntax& syntax, const ProgramCompensationOptions& options) {
   if (errors.kinematics() != plan.machine.kinematics)
     throw std::invalid_argument("the compensation's errors are for another kinematics than the plan's machine");
-  errors.validate();
+  if (std::string why; !errors.validate(&why)) throw std::invalid_argument(why);
   std::map<std::array<double, 3>, Pose> printed;  // nominal pose -> compensated pose as printed
   MeasurementRun out = run;
   for (auto& t : out.points) {

@@ -216,11 +216,7 @@ ComponentErrors readComponents(const JsonDoc& doc, bool force) {
       doc.fail(ce, "", fmt::format("'component_errors' lacks {}: a missing one is not zero",
                                    componentErrorNames(*axis)[static_cast<size_t>(c)]));
   out.axis = *axis;
-  try {
-    out.validate();
-  } catch (const std::invalid_argument& e) {
-    doc.fail(ce, "", e.what());
-  }
+  if (std::string why; !out.validate(&why)) doc.fail(ce, "", why);
   return out;
 }
 
@@ -396,11 +392,8 @@ ReportErrors errorsFromReports(const std::vector<JsonDoc>& reports, Kinematics k
                                             "leave out",
                                             held));
   }
-  try {
-    out.errors.validate();
-  } catch (const std::invalid_argument& e) {
-    throw InputError(component_file.empty() ? reports.front().file : component_file, 1, e.what());
-  }
+  if (std::string why; !out.errors.validate(&why))
+    throw InputError(component_file.empty() ? reports.front().file : component_file, 1, why);
   return out;
 }
 

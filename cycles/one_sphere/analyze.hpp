@@ -34,7 +34,7 @@ struct SphereCycleResult {
   Eigen::VectorXd x;                            // mm, rad (held ones at 0), then dR in mm
   Identifiability identifiability;
   Eigen::MatrixXd cov_per_sigma2;               // covariance of x per unit reading variance (mm^2 per mm^2)
-  LeastSquaresSummary summary;
+  FitSummary summary;
   int touches = 0;
   int dof = 0;
   double residual_sd_um = 0.0;

@@ -29,7 +29,7 @@ DeclaredNoise sphereNoiseOrFail(const ProbePlan& plan, const ContributorSet* dec
 class Sphere final : public Cycle {
  public:
   Sphere() : Cycle({"one_sphere", "rotacal's own: both rotary axes' ISO 230-7 location errors and the probe's radius from one sphere",
-                     {"examples/machines/ac_trunnion.json", {}},
+                     {"examples/machines/ac_trunnion.json", {}, "examples/truth/table4_mean.json"},
                      7019,  // O7019: its own slot in the control's memory
                      makeSpherePlan, probeProgram, spherePlanRules()}) {}
 

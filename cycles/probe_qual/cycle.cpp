@@ -19,7 +19,7 @@ class ProbeQual final : public Cycle {
  public:
   ProbeQual() : Cycle({"probe_qual",
                        "ISO 230-10: the probe's repeatability, effective radius and pretravel by direction on one sphere",
-                       {"examples/machines/ac_trunnion.json", {}},
+                       {"examples/machines/ac_trunnion.json", {}, "examples/truth/probe_pretravel.json"},
                        7230,  // 7000 + 230 (ISO 230-10, the probing system's test)
                        makeProbeQualPlan, probeProgram, probeQualPlanRules(),
                        "probe_qual qualifies the probe: its figures go to MACHINE.json's probe section and the "

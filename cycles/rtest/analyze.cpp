@@ -11,6 +11,7 @@
 
 #include "core/contributor_draw.hpp"
 #include "core/report_envelope.hpp"
+#include "core/require_valid.hpp"
 #include "core/statistics.hpp"
 #include "core/units.hpp"
 
@@ -214,11 +215,12 @@ DeclaredNoise rtestDeclaredNoise(const ProbePlan& plan, const ContributorSet* de
   return d;
 }
 
-void RtestFitOptions::validate() const {
-  if (!(sensor_sigma_um > 0)) throw std::invalid_argument("rtest fit: sensor_sigma_um must be > 0");
+bool RtestFitOptions::validate(std::string* why) const {
+  if (!(sensor_sigma_um > 0)) return invalidBecause(why, "sensor_sigma_um must be > 0");
   if (!(reading_sigma_um >= 0) || !std::isfinite(reading_sigma_um))
-    throw std::invalid_argument("rtest fit: reading_sigma_um must be >= 0");
-  if (!(reset_alpha > 0 && reset_alpha < 1)) throw std::invalid_argument("rtest fit: reset_alpha must be in (0, 1)");
+    return invalidBecause(why, "reading_sigma_um must be >= 0");
+  if (!(reset_alpha > 0 && reset_alpha < 1)) return invalidBecause(why, "reset_alpha must be in (0, 1)");
+  return true;
 }
 
 namespace {
@@ -488,7 +490,7 @@ std::string rtestScreenText(const ProbePlan& plan, const RtestScreen& s) {
 }
 
 RtestAnalysis analyzeRtest(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, const RtestFitOptions& opt) {
-  opt.validate();
+  requireValid(opt, "rtest fit");
   if (plan.cycle != "rtest") throw std::invalid_argument("not an rtest plan");
   if (cycles.empty()) throw std::invalid_argument("rtest: no cycles to analyze");
   const Kinematics k = plan.machine.kinematics;

@@ -70,7 +70,7 @@ struct RtestFitOptions {
   /// noise-free simulated readings through the fixed estimator; a screen there would only cost time).
   bool screen = true;
   double screenSigmaUm() const { return reading_sigma_um > 0 ? reading_sigma_um : sensor_sigma_um; }
-  void validate() const;         // throws std::invalid_argument
+  bool validate(std::string* why) const;  // false, and why naming the field, when out of range
 };
 
 /// One cycle's estimate. value/u: 6 x (tilts), mm or rad, order of rtestParameterIndices.

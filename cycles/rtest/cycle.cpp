@@ -11,6 +11,8 @@
 #include "cycles/rtest/diagnose.hpp"
 #include "cycles/rtest/analyze.hpp"
 #include "cycles/rtest/budget.hpp"
+#include "core/report_envelope.hpp"
+#include "core/require_valid.hpp"
 #include "core/units.hpp"
 #include "core/simulation.hpp"
 #include "cycles/cycle.hpp"
@@ -46,7 +48,7 @@ double sensorSigma(const ProbePlan& plan) { return rtestSensorNoiseUm(plan); }
 class Rtest final : public Cycle {
  public:
   Rtest() : Cycle({"rtest", "002: the position-dependent errors of the tilt axis with an R-test, and their thermal drift",
-                    {"examples/machines/bc_trunnion.json", {}},
+                    {"examples/machines/bc_trunnion.json", {}, "examples/truth/bc_location.json"},
                     7002,  // 7000 + its source document (002)
                     makeRtestPlan, rtestProgram, rtestPlanRules(),
                     "the R-test cycle reports position-dependent errors and their drift; it writes no offsets (use "
@@ -94,10 +96,12 @@ class Rtest final : public Cycle {
     if (!truth_json.is_null()) truth_json["noise_um"] = o.noise_um;
     o.start_s = r.start_s.value_or(0.0);
     const RtestSeries s = onTruthFile(r.truth, [&] { return simulateRtest(plan, truth, extras, o); });
-    return {rtestResultsCsv(plan, s),
-            fmt::format("simulated {} R-test cycle(s) of {} readings (sensor noise {:.3f} um, seed {}{})", s.cycles.size(),
-                        plan.points.size(), o.noise_um, r.seed, drawn),
-            truth_json};
+    Simulated out{rtestResultsCsv(plan, s),
+                  fmt::format("simulated {} R-test cycle(s) of {} readings (sensor noise {:.3f} um, seed {}{})",
+                              s.cycles.size(), plan.points.size(), o.noise_um, r.seed, drawn),
+                  truth_json};
+    if (locationErrorsAreConstant(truth)) out.injected["location_errors"] = locationErrorValues(truth.errors);
+    return out;
   }
 
 
@@ -186,7 +190,7 @@ class Rtest final : public Cycle {
     o.reading_sigma_um = std::sqrt(noise.white_um2);
     o.declaration = noise.declaration;
     o.structured_um2 = noise.structured_um2;
-    o.validate();
+    requireValid(o, "rtest diagnosis");
     const RtestDiagnosis d = diagnoseRtest(plan, cycles, o);
     out.text = rtestDiagnosisText(plan, d);
     out.doc = rtestDiagnosisJson(plan, d);

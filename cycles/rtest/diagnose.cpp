@@ -8,16 +8,18 @@
 
 #include <fmt/format.h>
 
+#include "core/require_valid.hpp"
 #include "core/units.hpp"
 #include "cycles/judge_contract.hpp"
 
 namespace rotacal {
 
-void RtestDiagnosisOptions::validate() const {
-  std::string why;
-  if (!judge.validate(&why)) throw std::invalid_argument(why);
-  if (!(sensor_sigma_um > 0) || !std::isfinite(sensor_sigma_um)) throw std::invalid_argument("sensor_sigma_um must be > 0");
-  if (!(reading_sigma_um >= 0) || !std::isfinite(reading_sigma_um)) throw std::invalid_argument("reading_sigma_um must be >= 0");
+bool RtestDiagnosisOptions::validate(std::string* why) const {
+  if (!judge.validate(why)) return false;
+  if (!(sensor_sigma_um > 0) || !std::isfinite(sensor_sigma_um)) return invalidBecause(why, "sensor_sigma_um must be > 0");
+  if (!(reading_sigma_um >= 0) || !std::isfinite(reading_sigma_um))
+    return invalidBecause(why, "reading_sigma_um must be >= 0");
+  return true;
 }
 
 namespace {
@@ -217,7 +219,7 @@ RtestJudgeSetup rtestJudgeSetup(const ProbePlan& plan, const std::vector<RtestCy
 }
 
 RtestDiagnosis diagnoseRtest(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, const RtestDiagnosisOptions& o) {
-  o.validate();
+  requireValid(o, "rtest diagnosis");
   RtestDiagnosis d;
   RtestFitOptions fo;
   fo.sensor_sigma_um = o.sensor_sigma_um;

@@ -51,7 +51,7 @@ struct RtestDiagnosisOptions {
   /// cycle: the judge whitens by it beside reading_sigma_um (and the screen). Empty: none.
   Eigen::MatrixXd structured_um2;
   double readingSigmaUm() const { return reading_sigma_um > 0 ? reading_sigma_um : sensor_sigma_um; }
-  void validate() const;          // throws std::invalid_argument
+  bool validate(std::string* why) const;  // false, and why naming the field, when out of range
 };
 
 /// The judge's problem for a series, with the confounds' columns beside it (same rows).

@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 
 #include "core/report_envelope.hpp"
+#include "core/require_valid.hpp"
 #include "core/transforms.hpp"
 #include "core/uncertainty_budget.hpp"
 #include "core/least_squares.hpp"
@@ -343,9 +344,16 @@ using ModelVector = Eigen::Matrix<double, FrameModel::kSize, 1>;
 
 }  // namespace
 
+bool SpaceframeOptions::validate(std::string* why) const {
+  if (!(finite_step_scale > 0)) return invalidBecause(why, "finite_step_scale must be > 0");
+  if (max_iterations < 1) return invalidBecause(why, "max_iterations must be >= 1");
+  if (!(rank_tolerance > 0 && rank_tolerance < 1)) return invalidBecause(why, "rank_tolerance must be in (0, 1)");
+  return true;
+}
+
 SpaceframeAnalysis analyzeSpaceframe(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
                                      const SpaceframeOptions& options) {
-  if (!options.validate()) throw std::invalid_argument("spaceframe options: steps, iterations and tolerance must be positive");
+  requireValid(options, "spaceframe options");
   if (plan.cycle != "spaceframe") throw std::invalid_argument("plan is not a spaceframe plan");
   if (runs.empty()) throw std::invalid_argument("no results");
   const SpaceframeLayout layout = SpaceframeLayout::fromOptions(plan.options);
@@ -521,7 +529,7 @@ SpaceframeAnalysis analyzeSpaceframe(const ProbePlan& plan, const std::vector<Me
   Eigen::VectorXd res = residuals(x);
   Eigen::MatrixXd cov_units;  // (J^T J)^-1 over the active parameters, report units
   if (rankOf(jacobianAt(x)) < np) {
-    a.summary.termination = "rank_deficient";
+    a.summary.termination = Termination::RankDeficient;
   } else {
     // The shared engine (core/least_squares) over the active parameters in report units, r = the
     // model's centres - the measured ones; converged when no parameter moves by 1e-6 um / mdeg /
@@ -550,8 +558,8 @@ SpaceframeAnalysis analyzeSpaceframe(const ProbePlan& plan, const std::vector<Me
     x = full(solved.x);
     res = residuals(x);
     a.summary.iterations = solved.summary.iterations;
-    a.summary.termination = solved.summary.usable() ? "converged" : "max_iterations";
-    if (rankOf(jacobianAt(x)) < np) a.summary.termination = "rank_deficient";
+    a.summary.termination = solved.summary.usable() ? Termination::Converged : Termination::MaxIterations;
+    if (rankOf(jacobianAt(x)) < np) a.summary.termination = Termination::RankDeficient;
     cov_units = solved.covariance;
   }
   a.summary.observations = m;
@@ -559,7 +567,7 @@ SpaceframeAnalysis analyzeSpaceframe(const ProbePlan& plan, const std::vector<Me
   a.summary.residual_rms_um = mmToUm(std::sqrt(res.squaredNorm() / m));
   a.summary.sigma_um = a.summary.dof > 0 ? mmToUm(std::sqrt(res.squaredNorm() / a.summary.dof)) : 0.0;
   a.model = FrameModel::fromVector(kin, x);
-  if (a.summary.termination != "rank_deficient") {
+  if (a.summary.termination != Termination::RankDeficient) {
     // u (k = 1) from the a-posteriori noise: cov = sigma^2 (J^T J)^-1, J in mm per report unit;
     // stored in mm / rad / 1 like the model.
     for (int k = 0; k < np; ++k)
@@ -681,15 +689,7 @@ Json spaceframeReportJson(const SpaceframeAnalysis& a, const ProbePlan& plan, co
   j["linear_axis_scale"] = sc;
   j["residual_rms_um"] = round6(a.summary.residual_rms_um);
   j["points_used"] = a.triggers;
-  j["summary"] = {{"termination", a.summary.termination},
-                  {"iterations", a.summary.iterations},
-                  {"observations", a.summary.observations},
-                  {"parameters", a.summary.parameters},
-                  {"rank", a.summary.rank},
-                  {"condition", std::isfinite(a.summary.condition) ? Json(a.summary.condition) : Json(nullptr)},
-                  {"dof", a.summary.dof},
-                  {"sigma_um", round6(a.summary.sigma_um)},
-                  {"residual_rms_um", round6(a.summary.residual_rms_um)}};
+  j["summary"] = fitSummaryJson(a.summary);
   const auto& w = a.verdict.worst_index >= 0 ? a.lengths[a.verdict.worst_index] : LengthError{};
   const SpaceframeLayout lay = SpaceframeLayout::fromOptions(plan.options);
   j["lengths"] = {{"points", a.points.size()},
@@ -762,7 +762,7 @@ std::string spaceframeText(const SpaceframeAnalysis& a, const ProbePlan& plan, c
                    "{} non-conforming, {} inside the guard bands)\n\n",
                    a.verdict.max_U_um, a.length_sigma_um, lengthDecisionName(a.verdict.decision), a.verdict.conforming,
                    a.verdict.nonconforming, a.verdict.undecided);
-  s += fmt::format("identification ({}, rank {}/{}, {} dof), what explains dL ({}):\n", a.summary.termination,
+  s += fmt::format("identification ({}, rank {}/{}, {} dof), what explains dL ({}):\n", terminationName(a.summary.termination),
                    a.summary.rank, a.summary.parameters, a.summary.dof,
                    budget ? "+- u_c, k = 1" : "+- the fit's u, k = 1");
   const auto uOf = [&](const std::string& name, double fit) { return budget ? budget->uCOr(name, fit) : fit; };

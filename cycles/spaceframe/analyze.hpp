@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "core/least_squares.hpp"
 #include "core/error_model.hpp"
 #include "core/json_io.hpp"
 #include "core/measurement.hpp"
@@ -114,7 +115,7 @@ struct SpaceframeOptions {
   /// and the model predicts one centre for them. A sphere whose touches left fix no centre and
   /// radius at a pose (fewer than 4, or the 4 on its equator) leaves the fit there.
   std::set<int> held_out_ids;
-  bool validate() const { return finite_step_scale > 0 && max_iterations > 0 && rank_tolerance > 0; }
+  bool validate(std::string* why) const;  // false, and why naming the field, when out of range
 };
 
 /// Which parameters the least squares fits. Calibrated frame (nominal_from=table1): location
@@ -122,18 +123,6 @@ struct SpaceframeOptions {
 /// X and Y relative to Z, and every sphere's offset (which hold the setup): an isotropic scale
 /// of the machine and the frame's size are the same thing to the data, so Z is the reference.
 std::vector<int> activeParameters(bool frame_free);
-
-struct SpaceframeSummary {
-  std::string termination;           // "converged", "max_iterations", "rank_deficient"
-  int iterations = 0;
-  int observations = 0;              // 3 per centre
-  int parameters = 0;
-  int rank = 0;
-  double condition = 0.0;
-  int dof = 0;
-  double sigma_um = 0.0;             // a-posteriori, per centre coordinate
-  double residual_rms_um = 0.0;
-};
 
 struct SpaceframeAnalysis {
   std::vector<FramePoint> points;
@@ -146,7 +135,7 @@ struct SpaceframeAnalysis {
   double length_sigma_um = 0.0;                // per-touch scatter behind u(dL): declared, or the fits' when larger
   FrameModel model;                            // identified
   Eigen::Matrix<double, FrameModel::kSize, 1> u = Eigen::Matrix<double, FrameModel::kSize, 1>::Zero();  // k = 1, mm / rad / 1
-  SpaceframeSummary summary;
+  FitSummary summary;  // observations: 3 per centre; sigma_um per centre coordinate
   double dL_rms_um = 0.0;                      // before: the measured dL
   double dL_unexplained_rms_um = 0.0;          // dL minus the dL the identified model predicts
   int triggers = 0;

@@ -3,6 +3,7 @@
 
 #include "core/contributor_draw.hpp"
 #include "core/errors.hpp"
+#include "core/report_envelope.hpp"
 #include "core/simulation.hpp"
 #include "core/transforms.hpp"
 #include "cycles/spaceframe/analyze.hpp"
@@ -41,7 +42,7 @@ void holdBack(CycleDocuments* out, const std::string& why) {
 class Spaceframe final : public Cycle {
  public:
   Spaceframe() : Cycle({"spaceframe", "003: length errors of a 7-sphere frame against U = +-(A + K L), and what explains them",
-                         {"examples/machines/ac_trunnion.json", {{"phi_list", "-90,-45,0"}}},
+                         {"examples/machines/ac_trunnion.json", {{"phi_list", "-90,-45,0"}}, "examples/truth/table4_mean.json"},
                          7003,  // 7000 + its source document (003)
                          makeSpaceframePlan, probeProgram, {},
                          "a spaceframe analysis is a performance test: it writes no offsets (calibrate with touch154 "
@@ -84,13 +85,15 @@ class Spaceframe final : public Cycle {
     if (r.start_s) truth.start_time_s = *r.start_s;
     truth_json["noise_um"] = truth.noise_um;
     const MeasurementRun run = onTruthFile(r.truth, [&] { return rotacal::simulate(plan, truth, {r.seed}); });
-    return {r.dialect->write_results(plan, run),
+    Simulated s{r.dialect->write_results(plan, run),
             fmt::format("simulated {} triggers (noise {:.3f} um, seed {}, a machine drawn from {} (machine seed {})) as {} "
                         "results",
                         run.points.size(), truth.noise_um, r.seed,
                         r.contributors->file.empty() ? std::string("the machine's contributors") : r.contributors->file,
                         r.machine_seed, r.dialect->name),
             truth_json};
+    if (locationErrorsAreConstant(truth)) s.injected["location_errors"] = locationErrorValues(truth.errors);
+    return s;
   }
 
   CycleDocuments analyze(const AnalyzeRequest& r) const override {
@@ -119,7 +122,8 @@ class Spaceframe final : public Cycle {
     const Eigen::VectorXd values = spaceframeBudgetValues(plan, a);
     addSpaceframeBudget(&out.doc, b, values);
     out.text = spaceframeText(a, plan, &b) + "\n" + budgetText(b, values);
-    if (a.summary.termination != "converged") out.warnings.push_back("spaceframe identification " + a.summary.termination);
+    if (!a.summary.usable())
+      out.warnings.push_back("spaceframe identification " + std::string(terminationName(a.summary.termination)));
     out.doc["outliers"] = screened.json();
     out.text += screened.text() + "\n";
     if (!screened.screen.excluded.empty()) out.warnings.push_back(screened.text());

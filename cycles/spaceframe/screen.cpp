@@ -148,8 +148,8 @@ SpaceframeScreen screenSpaceframeTouches(const ProbePlan& plan, const std::vecto
     }
     // A plan whose identification is rank deficient as a whole is screened as it is; one that
     // loses a parameter without a touch keeps that touch.
-    if (!hold) base_rank_deficient = a.summary.termination == "rank_deficient";
-    if (hold && a.summary.termination == "rank_deficient" && !base_rank_deficient) {
+    if (!hold) base_rank_deficient = a.summary.termination == Termination::RankDeficient;
+    if (hold && a.summary.termination == Termination::RankDeficient && !base_rank_deficient) {
       out.summary.termination = Termination::RankDeficient;
       out.summary.message = "the identification lost a parameter";
       return out;

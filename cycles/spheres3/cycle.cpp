@@ -31,11 +31,31 @@ Spheres3Noise spheres3NoiseOrFail(const ProbePlan& plan, const ContributorSet* d
 class Spheres3 final : public Cycle {
  public:
   Spheres3() : Cycle({"spheres3", "001: the 4 location and 6 component errors of the C axis from three spheres",
-                       {"examples/machines/ac_trunnion.json", {}},
+                       {"examples/machines/ac_trunnion.json", {}, "examples/truth/table4_mean.json"},
                        7001,  // 7000 + its source document (001)
                        makeSpheres3Plan, probeProgram, spheres3PlanRules(),
                        "spheres3 identifies component errors as functions of C: they need the controller's rotary "
                        "compensation table, which no dialect writes yet"}) {}
+
+  Simulated simulate(const SimulateRequest& r) const override {
+    Simulated s = simulateProbing(r);
+    // What the report states of them: the C axis's average line at z = 0 (Oxc Oyc Sxc Syc), from
+    // the papers' chains at tilt 0 to first order (000 Eq. (1) on an A/C table, 002 Eq. (2) on a
+    // B/C table; the second order is below 1 nm for errors of tens of um and mdeg).
+    const Kinematics k = r.plan->machine.kinematics;
+    if (s.injected.contains("location_errors") && !hasPapersLocationErrors(k)) s.injected.erase("location_errors");
+    if (s.injected.contains("location_errors")) {
+      const Json e = s.injected["location_errors"];
+      const bool ac = k == Kinematics::TableAC;
+      auto at = [&e](const char* name) { return e.value(name, 0.0); };
+      s.injected["location_errors"] = {
+          {"Oxc", ac ? at("dx_AY") : at("dx_BY") + at("dx_CB")},
+          {"Oyc", ac ? at("dy_AY") + at("dy_CA") : at("dy_CB")},
+          {"Sxc", ac ? at("a_AY") : at("a_BY") + at("a_CB")},
+          {"Syc", ac ? at("b_AY") + at("b_CA") : at("b_BY")}};
+    }
+    return s;
+  }
 
   CycleDocuments analyze(const AnalyzeRequest& r) const override {
     const ProbePlan& plan = *r.plan;

@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "core/least_squares.hpp"
+#include "core/require_valid.hpp"
 #include "core/units.hpp"
 #include "core/report_envelope.hpp"
 
@@ -193,7 +194,7 @@ GnResult gaussNewton(const Problem& p, const Eigen::VectorXd& x0, const std::vec
   lo.max_iterations = opt.max_iterations;
   lo.step_tolerance = opt.step_tol;
   const LeastSquaresResult fit = solveLeastSquares(residuals, xa0, lo);
-  if (fit.summary.termination == LeastSquaresTermination::InvalidInput)
+  if (fit.summary.termination == Termination::InvalidInput)
     throw std::invalid_argument("tooltip fit: " + fit.summary.message);
   if (fit.summary.rank < n) throw std::invalid_argument("tooltip fit: the parameters are not identifiable from these readings");
   g.converged = fit.summary.usable();
@@ -275,15 +276,15 @@ TooltipModelEval evaluateTooltipModel(const ProbePlan& plan, const std::vector<T
   return e;
 }
 
-std::string TooltipFitOptions::validate() const {
-  if (max_iterations < 1) return "tooltip fit options: max_iterations must be at least 1";
-  if (!(step_tol > 0)) return "tooltip fit options: step_tol must be positive";
-  if (!(sigma_floor_um >= 0)) return "tooltip fit options: sigma_floor_um must not be negative";
-  return {};
+bool TooltipFitOptions::validate(std::string* why) const {
+  if (max_iterations < 1) return invalidBecause(why, "max_iterations must be at least 1");
+  if (!(step_tol > 0)) return invalidBecause(why, "step_tol must be positive");
+  if (!(sigma_floor_um >= 0)) return invalidBecause(why, "sigma_floor_um must not be negative");
+  return true;
 }
 
 TooltipFit fitTooltip(const ProbePlan& plan, const std::vector<TooltipRun>& runs, const TooltipFitOptions& options) {
-  if (const std::string why = options.validate(); !why.empty()) throw std::invalid_argument(why);
+  requireValid(options, "tooltip fit options");
   const Problem p = makeProblem(plan, runs);
   const std::vector<bool> active = activeFor(p, options.fit_pivot_length, -1);
   const GnResult g = gaussNewton(p, Eigen::VectorXd::Zero(p.J() + 1), active, [](const Problem::Obs&) { return true; },

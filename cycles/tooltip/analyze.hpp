@@ -30,8 +30,8 @@ struct TooltipFitOptions {
   double step_tol = 1e-9;
   double sigma_floor_um = 0.0;   // lower bound of the noise used for uncertainties and tests
 
-  /// Empty when valid; otherwise what is wrong, naming the field (as LeastSquaresOptions).
-  std::string validate() const;
+  /// False, and what is wrong naming the field, when invalid (as LeastSquaresOptions).
+  bool validate(std::string* why) const;
 };
 
 struct TooltipFit {

@@ -16,6 +16,7 @@
 #include "cycles/tooltip/screen.hpp"
 #include "cycles/cycle.hpp"
 #include "cycles/tooltip/program.hpp"
+#include "core/require_valid.hpp"
 #include "core/singleton.hpp"
 
 namespace rotacal {
@@ -41,7 +42,7 @@ class Tooltip final : public Cycle {
  public:
   Tooltip() : Cycle({"tooltip",
                       "004: angular positioning error and pivot length of a head's axis from a fixed-tool-tip program",
-                      {"examples/machines/head_ab.json", {}},
+                      {"examples/machines/head_ab.json", {}, "examples/truth/tooltip_dr.json"},
                       7004,  // 7000 + its source document (004)
                       makeTooltipPlan, tooltipProgram, tooltipPlanRules(),
                       "the tooltip cycle writes no offsets (a head's pivot length and angular errors go into the "
@@ -82,10 +83,12 @@ class Tooltip final : public Cycle {
     if (r.noise_um) truth.noise_um = *r.noise_um;
     if (!truth_json.is_null()) truth_json["noise_um"] = truth.noise_um;
     const TooltipRun run = onTruthFile(r.truth, [&] { return simulateTooltip(plan, truth, r.seed, machine); });
-    return {tooltipResultsText(plan, run),
-            fmt::format("simulated {} tool-tip readings (dR {:.3f} um, noise {:.3f} um, seed {}{})", run.size(),
-                        truth.dR_um, truth.noise_um, r.seed, drawn),
-            truth_json};
+    Simulated s{tooltipResultsText(plan, run),
+                fmt::format("simulated {} tool-tip readings (dR {:.3f} um, noise {:.3f} um, seed {}{})", run.size(),
+                            truth.dR_um, truth.noise_um, r.seed, drawn),
+                truth_json};
+    s.injected["location_errors"] = {{"dR", truth.dR_um}};
+    return s;
   }
 
   CycleDocuments analyze(const AnalyzeRequest& r) const override {
@@ -145,7 +148,7 @@ class Tooltip final : public Cycle {
     TooltipDiagnosisOptions o;
     o.judge.alpha = r.alpha;
     o.contributors = r.contributors;  // the declared noise; none: the plan's laser_noise_um alone
-    o.validate();
+    requireValid(o, "tooltip diagnosis");
     // The judge sees the readings the screen keeps (all of them when it found too many).
     const TooltipScreen screen = screenTooltipReadings(plan, runs, tooltipDeclaredNoise(plan, r.contributors, &runs.front()));
     const TooltipDiagnosis d = diagnoseTooltip({{&plan, withoutScreened(runs, screen)}}, o);

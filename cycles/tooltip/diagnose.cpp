@@ -7,16 +7,17 @@
 
 #include <fmt/format.h>
 
+#include "core/require_valid.hpp"
 #include "core/units.hpp"
 #include "cycles/judge_contract.hpp"
 #include "cycles/tooltip/noise.hpp"
 
 namespace rotacal {
 
-void TooltipDiagnosisOptions::validate() const {
-  std::string why;
-  if (!judge.validate(&why)) throw std::invalid_argument(why);
-  if (!(noise_um >= 0) || !std::isfinite(noise_um)) throw std::invalid_argument("the declared laser noise must be >= 0");
+bool TooltipDiagnosisOptions::validate(std::string* why) const {
+  if (!judge.validate(why)) return false;
+  if (!(noise_um >= 0) || !std::isfinite(noise_um)) return invalidBecause(why, "noise_um (the declared laser noise) must be >= 0");
+  return true;
 }
 
 namespace {
@@ -208,7 +209,7 @@ TooltipJudgeSetup tooltipJudgeSetup(const std::vector<TooltipSet>& sets, double 
 }
 
 TooltipDiagnosis diagnoseTooltip(const std::vector<TooltipSet>& sets, const TooltipDiagnosisOptions& o) {
-  o.validate();
+  requireValid(o, "tooltip diagnosis");
   if (sets.empty()) throw std::invalid_argument("tooltip diagnose: no results");
   TooltipDiagnosis d;
   const double noise =

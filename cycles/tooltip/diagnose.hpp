@@ -48,7 +48,7 @@ struct TooltipDiagnosisOptions {
   double noise_um = 0.0;  // declared laser noise; 0: the first plan's laser_noise_um
   /// The machine's declared contributors (null: the laser noise above alone).
   const ContributorSet* contributors = nullptr;
-  void validate() const;  // throws std::invalid_argument
+  bool validate(std::string* why) const;  // false, and why naming the field, when out of range
 };
 
 struct TooltipJudgeSetup {

@@ -39,7 +39,7 @@ Touch154Noise declaredNoiseOrFail(const ProbePlan& plan, const ContributorSet* d
 class Touch154 final : public Cycle {
  public:
   Touch154() : Cycle({"touch154", "000: the 8 location errors of an A/C table from 154 touches",
-                       {"examples/machines/ac_trunnion.json", {}},
+                       {"examples/machines/ac_trunnion.json", {}, "examples/truth/table4_mean.json"},
                        7154,  // the 154 touches of 000; the others are 7000 + their source document
                        makeTouch154Plan, probeProgram, touch154PlanRules()}) {}
   std::vector<std::string> aliases() const override { return {"touch_designed"}; }

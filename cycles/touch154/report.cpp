@@ -20,18 +20,6 @@ constexpr const char* kOwnFitU =
     "u here is this estimate's own fit (its covariance scaled by its residual), no Type B evaluated: not the report's "
     "u_c, which location_errors carries";
 
-Json summaryJson(const IdentificationSummary& s) {
-  return {{"termination", std::string(terminationName(s.termination))},
-          {"message", s.message},
-          {"iterations", s.iterations},
-          {"observations", s.observations},
-          {"parameters", s.parameters},
-          {"rank", s.rank},
-          {"condition", std::isfinite(s.condition) ? Json(s.condition) : Json(nullptr)},
-          {"dof", s.dof},
-          {"sigma_um", round6(s.sigma_um)},
-          {"residual_rms_um", round6(s.residual_rms_um)}};
-}
 
 }  // namespace
 
@@ -44,7 +32,7 @@ Json analysisToJson(const Analysis& a) {
   j["uncertainty"] = budgetJson(a.budget);
   j["residual_rms_um"] = round6(m.summary.residual_rms_um);
   j["points_used"] = m.summary.observations;
-  j["summary"] = summaryJson(m.summary);
+  j["summary"] = fitSummaryJson(m.summary);
   if (!a.per_run.empty()) {
     Json runs = Json::array();
     for (size_t r = 0; r < a.per_run.size(); ++r)
@@ -58,12 +46,12 @@ Json analysisToJson(const Analysis& a) {
     Json other = Json::object();
     for (const auto& o : a.other_methods) {
       if (o.summary.termination != Termination::Converged) {
-        other[std::string(methodName(o.method))] = {{"summary", summaryJson(o.summary)}};
+        other[std::string(methodName(o.method))] = {{"summary", fitSummaryJson(o.summary)}};
         continue;
       }
       other[std::string(methodName(o.method))] = {{"location_errors", locationErrorsJson(o.estimate, o.u)},
                                                   {"u_source", kOwnFitU},
-                                                  {"summary", summaryJson(o.summary)}};
+                                                  {"summary", fitSummaryJson(o.summary)}};
     }
     j["other_methods"] = other;
   }

@@ -115,14 +115,21 @@ TEST(Compensation, ZeroErrorsChangeNothing) {
 
 TEST(Compensation, OptionsAreValidated) {
   CompensationOptions o;
+  std::string why;
+  EXPECT_TRUE(o.validate(&why)) << why;
   o.tool_axis_m = Eigen::Vector3d(0, 0, 2);
-  EXPECT_THROW(o.validate(), std::invalid_argument);
+  EXPECT_FALSE(o.validate(&why));
+  EXPECT_NE(why.find("tool_axis_m"), std::string::npos) << why;
+  EXPECT_THROW(compensatePose(LocationErrors{}, Pose{}, o), std::invalid_argument);
   o = CompensationOptions{};
   o.singular_blend_deg = 0;
-  EXPECT_THROW(o.validate(), std::invalid_argument);
+  EXPECT_FALSE(o.validate(&why));
+  EXPECT_NE(why.find("singular_blend_deg"), std::string::npos) << why;
   SubdivisionOptions s;
+  EXPECT_TRUE(s.validate(&why)) << why;
   s.max_deviation_mm = 0;
-  EXPECT_THROW(s.validate(), std::invalid_argument);
+  EXPECT_FALSE(s.validate(&why));
+  EXPECT_NE(why.find("max_deviation_mm"), std::string::npos) << why;
 }
 
 }  // namespace

@@ -65,7 +65,8 @@ TEST(GeometricErrors, UnequalSpacingInterpolatesLinearlyOverTheTurn) {
 TEST(GeometricErrors, ComponentErrorsEnterBeforeTheAxisRotation) {
   GeometricErrors g(test::table4Mean());
   g.components.push_back(sampled(12));
-  g.validate();
+  std::string why;
+  ASSERT_TRUE(g.validate(&why)) << why;
   const LocationErrors& e = g.location;
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> A(-110.0, 20.0), C(-180.0, 180.0);
@@ -87,18 +88,24 @@ TEST(GeometricErrors, ComponentErrorsEnterBeforeTheAxisRotation) {
 
 TEST(GeometricErrors, InvalidTablesAreRefused) {
   ComponentErrors c = sampled(12);
+  std::string why;
+  EXPECT_TRUE(c.validate(&why)) << why;
   c.angle_deg[3] = c.angle_deg[2];
-  EXPECT_THROW(c.validate(), std::invalid_argument);
+  EXPECT_FALSE(c.validate(&why));
+  EXPECT_NE(why.find("ascend"), std::string::npos) << why;
   c = sampled(12);
   c.values.pop_back();
-  EXPECT_THROW(c.validate(), std::invalid_argument);
+  EXPECT_FALSE(c.validate(&why));
+  EXPECT_NE(why.find("values"), std::string::npos) << why;
   GeometricErrors g(test::table4Mean());
   ComponentErrors b = sampled(12);
   b.axis = 'B';  // an A/C table has no B axis
   g.components.push_back(b);
-  EXPECT_THROW(g.validate(), std::invalid_argument);
+  EXPECT_FALSE(g.validate(&why));
+  EXPECT_NE(why.find("has no B axis"), std::string::npos) << why;
   g.components = {sampled(12), sampled(12)};
-  EXPECT_THROW(g.validate(), std::invalid_argument);
+  EXPECT_FALSE(g.validate(&why));
+  EXPECT_NE(why.find("given twice"), std::string::npos) << why;
 }
 
 TEST(GeometricErrors, CompensationWithComponentErrorsLandsOnTheNominalPoint) {

@@ -87,7 +87,7 @@ TEST(LeastSquares, NonlinearCurveIsRecoveredFromNoiseFreeData) {
   const LeastSquaresResult res = solveLeastSquares(f, Eigen::Vector3d(1.2, 1.0, 0.0));
   ASSERT_TRUE(res.summary.usable()) << res.summary.briefReport();
   EXPECT_LT((res.x - truth).norm(), 1e-12);
-  EXPECT_LT(res.summary.final_cost, 1e-24);
+  EXPECT_LT(res.summary.cost, 1e-24);
   EXPECT_GT(res.summary.initial_cost, 0.1);
 }
 
@@ -127,7 +127,7 @@ TEST(LeastSquares, AProblemsOwnConvergenceMeasureStopsTheSolve) {
   o.converged = [](const Eigen::VectorXd&, const Eigen::VectorXd&) { return false; };
   o.max_iterations = 7;
   const LeastSquaresResult never = solveLeastSquares(f, Eigen::Vector3d(1.2, 1.0, 0.0), o);
-  EXPECT_EQ(never.summary.termination, LeastSquaresTermination::MaxIterations);
+  EXPECT_EQ(never.summary.termination, Termination::MaxIterations);
   EXPECT_EQ(never.summary.iterations, 7);
 }
 
@@ -139,12 +139,14 @@ TEST(LeastSquares, InvalidOptionsAreRefusedNamingTheField) {
   LeastSquaresOptions o;
   o.rank_tolerance = 0.0;
   const LeastSquaresResult res = solveLeastSquares(f, Eigen::VectorXd::Ones(2), o);
-  EXPECT_EQ(res.summary.termination, LeastSquaresTermination::InvalidInput);
+  EXPECT_EQ(res.summary.termination, Termination::InvalidInput);
   EXPECT_NE(res.summary.message.find("rank_tolerance"), std::string::npos);
   o = {};
   o.max_iterations = 0;
-  EXPECT_NE(o.validate().find("max_iterations"), std::string::npos);
-  EXPECT_TRUE(LeastSquaresOptions{}.validate().empty());
+  std::string why;
+  EXPECT_FALSE(o.validate(&why));
+  EXPECT_NE(why.find("max_iterations"), std::string::npos) << why;
+  EXPECT_TRUE(LeastSquaresOptions{}.validate(&why)) << why;
 }
 
 }  // namespace

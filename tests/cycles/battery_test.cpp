@@ -17,6 +17,7 @@
 #include "controllers/dialect.hpp"
 #include "core/errors.hpp"
 #include "core/machine.hpp"
+#include "core/statistics.hpp"
 #include "core/uncertainty_budget.hpp"
 #include "cycles/cycle.hpp"
 #include "report/html_report.hpp"
@@ -114,6 +115,68 @@ TEST_P(CycleBattery, SimulateAnalyzeDiagnoseAndReport) {
   const CycleDocuments dg = cycle().diagnose(dr);
   EXPECT_FALSE(dg.text.empty());
   EXPECT_NE(report::reportHtml(dg.doc).find("<html"), std::string::npos);
+}
+
+TEST_P(CycleBattery, AnalyzeRecoversWhatSimulateInjectedWithinItsUncertainty) {
+  // Threshold first. The example's truth (CycleExample::truth) is simulated with 0.3 um of probe
+  // noise and analyzed without declared contributors, so the report's u is the data's own (u_A):
+  // each value it states for what the simulation injected must lie within z u of the truth, with
+  // z = z(1 - alpha / (2n)) for the n values compared and alpha = 1 % (Bonferroni over the
+  // family): a cycle whose values and u are right fails on at most 1 % of seeds; a sign, unit or
+  // factor error in any value, or a u too small by half, fails. Every location error the report
+  // states is compared (none may be left out), and at least one value is.
+  const ProbePlan p = plan();
+  const CycleExample ex = cycle().example();
+  ASSERT_FALSE(ex.truth.empty()) << "the cycle's example names a truth file";
+  std::ifstream in(test::sourcePath(ex.truth));
+  ASSERT_TRUE(in) << ex.truth;
+  std::stringstream text;
+  text << in.rdbuf();
+  auto s = on<SimulateRequest>(p);
+  s.truth = {ex.truth, text.str()};
+  s.noise_um = 0.3;
+  s.seed = 11;
+  const Simulated sim = cycle().simulate(s);
+  auto a = on<AnalyzeRequest>(p);
+  a.results = {{"r1.txt", sim.results_text}};
+  a.contributors = nullptr;
+  const Json doc = cycle().analyze(a).doc;
+
+  struct Compared {
+    std::string at;
+    double value, u, truth;
+  };
+  std::vector<Compared> compared;
+  auto compare = [&](const std::string& at, const Json& entry, double truth) {
+    ASSERT_TRUE(entry.is_object() && entry.contains("value") && entry.contains("u")) << at << ": " << entry.dump();
+    compared.push_back({at, entry["value"].get<double>(), entry["u"].get<double>(), truth});
+  };
+  for (const auto& [key, injected] : sim.injected.items()) {
+    if (!doc.contains(key) || doc[key].is_null()) continue;
+    if (injected.is_number()) {
+      compare(key, doc[key], injected.get<double>());
+      continue;
+    }
+    for (const auto& [name, truth] : injected.items())
+      if (doc[key].contains(name)) compare(key + "." + name, doc[key][name], truth.get<double>());
+  }
+  if (doc.contains("location_errors") && doc["location_errors"].is_object()) {
+    for (const auto& [name, e] : doc["location_errors"].items()) {
+      EXPECT_TRUE(sim.injected.contains("location_errors") && sim.injected["location_errors"].contains(name))
+          << "the report states location error " << name << " but the simulation says nothing of it";
+    }
+  }
+  ASSERT_GE(compared.size(), 1u) << "nothing injected that the report states";
+  const double z = normalQuantile(1.0 - 0.01 / (2.0 * static_cast<double>(compared.size())));
+  double worst = 0.0;
+  for (const auto& c : compared) worst = std::max(worst, std::abs(c.value - c.truth) / c.u);
+  std::printf("%s: %zu values compared, largest |identified - injected| / u = %.2f (bound z = %.2f)\n",
+              GetParam().c_str(), compared.size(), worst, z);
+  for (const auto& c : compared) {
+    EXPECT_GT(c.u, 0.0) << c.at;
+    EXPECT_LE(std::abs(c.value - c.truth), z * c.u)
+        << c.at << ": identified " << c.value << ", injected " << c.truth << ", u " << c.u << ", z " << z;
+  }
 }
 
 TEST_P(CycleBattery, MalformedResultsAreRejectedNamingTheFile) {

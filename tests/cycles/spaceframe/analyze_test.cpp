@@ -217,7 +217,7 @@ TEST(SpaceframeAnalysis, RecoversLocationScaleAndSetupErrorsNoiseFree) {
   FrameModel truth_model;
   const Truth truth = knownTruth(plan, truth_model);
   const SpaceframeAnalysis a = analyzeSpaceframe(plan, {simulate(plan, truth, {1})});
-  EXPECT_EQ(a.summary.termination, "converged");
+  EXPECT_EQ(a.summary.termination, Termination::Converged);
   EXPECT_EQ(a.summary.rank, FrameModel::kRigidSize);
   const auto est = a.model.toVector(), ref = truth_model.toVector();
   for (int i = 0; i < FrameModel::kSize; ++i)  // the sphere offsets stay 0: the frame is calibrated
@@ -438,7 +438,7 @@ TEST(SpaceframeAnalysis, SelfCalibrationIdentifiesTheFrameToo) {
   truth.linear_axis_error = [sc](const Eigen::Vector3d& c) { return Eigen::Vector3d(sc.cwiseProduct(c)); };
   truth.sphere_center_error_w_mm = {{3, Eigen::Vector3d(0.012, -0.008, 0.02)}, {5, Eigen::Vector3d(-0.01, 0.0, -0.015)}};
   const SpaceframeAnalysis a = analyzeSpaceframe(plan, {simulate(plan, truth, {1})});
-  EXPECT_EQ(a.summary.termination, "converged");
+  EXPECT_EQ(a.summary.termination, Termination::Converged);
   EXPECT_EQ(a.summary.rank, 31);
   // Location errors: the translations also shrink by 1 / (1 + s_z) (30 um x 30e-6: 1e-6 um).
   for (int i = 0; i < kNumLocationErrors; ++i)
