@@ -22,7 +22,7 @@
 #include "cycles/touch154/causes.hpp"
 #include "cycles/touch154/closed_form.hpp"
 #include "core/contributors.hpp"
-#include "core/identification.hpp"
+#include "cycles/touch154/identification.hpp"
 #include "core/machine.hpp"
 #include "cycles/touch154/design.hpp"
 #include "core/probe_plan.hpp"

@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/identification.hpp"
+#include "core/probe_plan.hpp"
 #include "core/rng.hpp"
 #include "core/units.hpp"
 

@@ -58,7 +58,7 @@ struct FitSummary {
   std::string briefReport() const;
 };
 
-/// r(x) and, when J is not null, J_r_x (num_residuals x num_parameters).
+/// r(x) and, when J is not null, J_r_x (observations x parameters).
 using ResidualFunction = std::function<void(const Eigen::VectorXd& x, Eigen::VectorXd& r, Eigen::MatrixXd* J)>;
 
 struct LeastSquaresResult {

@@ -56,20 +56,18 @@ std::vector<std::pair<int, int>> heldOutTouches(const std::vector<PointResidual>
   return k;
 }
 
-OutlierScreen screenOutliers(
-    const std::function<IdentificationResult(const std::function<bool(int, const ProbePoint&)>&)>& fit,
-    const OutlierOptions& options) {
+OutlierScreen screenOutliers(const std::function<ScreenedFit(const HoldOutRule&)>& fit, const OutlierOptions& options) {
   std::string why;
   if (!options.validate(&why)) throw std::invalid_argument(why);
   OutlierScreen s;
-  IdentificationResult r = fit(nullptr);
+  ScreenedFit r = fit(nullptr);
   for (const auto& p : r.residuals) s.touches += p.held_out ? 0 : 1;
   if (s.touches == 0) return s;
   s.threshold_t = normalQuantile(1.0 - options.alpha / (2.0 * s.touches));
   const int cap = static_cast<int>(std::floor(options.max_fraction * s.touches));
   s.declaration = options.declaration;
   // Each fitted touch and its statistic, in the residuals' order.
-  auto statistics = [&](const IdentificationResult& fit, std::vector<const PointResidual*>* fitted) {
+  auto statistics = [&](const ScreenedFit& fit, std::vector<const PointResidual*>* fitted) {
     fitted->clear();
     for (const auto& p : fit.residuals)
       if (!p.held_out) fitted->push_back(&p);
@@ -83,7 +81,7 @@ OutlierScreen screenOutliers(
     for (size_t i = 0; i < fitted->size(); ++i) t[static_cast<Eigen::Index>(i)] = (*fitted)[i]->residual_um / options.sigma_um;
     return t;
   };
-  auto beyondIn = [&](const IdentificationResult& fit) {
+  auto beyondIn = [&](const ScreenedFit& fit) {
     std::vector<const PointResidual*> fitted;
     const Eigen::VectorXd t = statistics(fit, &fitted);
     return static_cast<int>((t.array().abs() > s.threshold_t).count());
@@ -107,7 +105,7 @@ OutlierScreen screenOutliers(
       return s;
     }
     s.excluded.push_back({worst->run, worst->point_id, worst->residual_um, t[at]});
-    IdentificationResult next = fit(s.holdOut());
+    ScreenedFit next = fit(s.holdOut());
     if (next.summary.termination != Termination::Converged) {
       // Leaving this touch out broke the fit (a point the model cannot do without): keep it.
       s.excluded.pop_back();

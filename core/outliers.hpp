@@ -21,10 +21,29 @@
 #include <string>
 #include <vector>
 
-#include "core/identification.hpp"
 #include "core/json_io.hpp"
+#include "core/least_squares.hpp"
+#include "core/probe_plan.hpp"
 
 namespace rotacal {
+
+struct PointResidual {
+  int run = 0;
+  int point_id = 0;
+  double residual_um = 0.0;  // measured - model, along the approach
+  double t_h = 0.0;          // observation time, hours relative to the data's mean time
+  bool held_out = false;     // predicted, not fitted
+};
+
+/// What the screen reads of a fit: whether it converged, and the residual of every touch (the
+/// fitted ones and those held out). Every cycle's fit gives it, whatever else it estimates.
+struct ScreenedFit {
+  FitSummary summary;
+  std::vector<PointResidual> residuals;
+};
+
+/// Which touches a fit leaves out: true for (run, point) held out.
+using HoldOutRule = std::function<bool(int run, const ProbePoint& point)>;
 
 struct OutlierOptions {
   double sigma_um = 0.7;      // declared per-touch scatter, k = 1, when `statistic` is empty
@@ -34,7 +53,7 @@ struct OutlierOptions {
   /// under the declared noise: core/declared_noise.hpp's deletionStatistics on the declared
   /// covariance, so that the linear axes' shared errors are not taken for chips. Empty:
   /// residual / sigma_um (the touches independent, with the per-touch scatter alone).
-  std::function<Eigen::VectorXd(const IdentificationResult& fit)> statistic;
+  std::function<Eigen::VectorXd(const ScreenedFit& fit)> statistic;
   /// What the statistic tests against, for the report ("declared: repeatability only ...").
   std::string declaration;
   bool validate(std::string* why) const;
@@ -54,8 +73,8 @@ struct OutlierScreen {
   bool too_many = false;    // still beyond after max_fraction left out: none excluded
   int beyond = 0;           // touches beyond the threshold in the last fit, when too_many
   std::string declaration;  // OutlierOptions::declaration
-  /// The rule to give IdentificationOptions::hold_out for the excluded touches (null when none).
-  std::function<bool(int run, const ProbePoint& point)> holdOut() const;
+  /// The hold-out rule of a fit for the excluded touches (null when none).
+  HoldOutRule holdOut() const;
   std::string text() const;  // one line for the report
 };
 
@@ -65,9 +84,7 @@ std::vector<std::pair<int, int>> heldOutTouches(const std::vector<PointResidual>
 
 /// Runs `fit` (an identification with the given hold-out rule) repeatedly; returns the screen.
 /// `fit` is called with a null rule first.
-OutlierScreen screenOutliers(
-    const std::function<IdentificationResult(const std::function<bool(int, const ProbePoint&)>&)>& fit,
-    const OutlierOptions& options);
+OutlierScreen screenOutliers(const std::function<ScreenedFit(const HoldOutRule&)>& fit, const OutlierOptions& options);
 
 /// The screen as REPORT.json's `outliers` block.
 Json outlierScreenJson(const OutlierScreen& screen, const OutlierOptions& options);

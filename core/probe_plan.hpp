@@ -14,6 +14,7 @@
 #include "core/error_model.hpp"
 #include "core/json_io.hpp"
 #include "core/machine.hpp"
+#include "core/measurement.hpp"
 
 namespace rotacal {
 
@@ -121,5 +122,10 @@ double parseNumber(const std::string& key, const std::string& text);
 /// 1e-06") when a plan of that many touches or poses would exceed kMaxPlanPoints or
 /// kMaxPlanPoses. Called with the predicted counts before a plan is built.
 void requirePlanSize(const std::string& options, double points, double poses);
+
+/// Measured scalar of a trigger: its displacement along the approach from the nominal trigger (mm).
+inline double alongApproach(const ProbePoint& point, const TriggerPoint& trigger) {
+  return point.approach_m.dot(trigger.position_m_mm - point.trigger_m_mm);
+}
 
 }  // namespace rotacal

@@ -32,7 +32,7 @@ if ! command -v "$CXX_" >/dev/null; then
   exit 1
 fi
 # -O1 -gline-tables-only: what libFuzzer's documentation uses; a third less compile time than
-# -O2 -g (core/identification.cpp: 53 s of CPU instead of 77 s), with file:line in every report.
+# -O2 -g (cycles/touch154/identification.cpp: 53 s of CPU instead of 77 s), with file:line in every report.
 SAN="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer -O1 -gline-tables-only"
 cmake -S . -B "$B" -DCMAKE_BUILD_TYPE=None -DCMAKE_C_COMPILER="$CC_" -DCMAKE_CXX_COMPILER="$CXX_" \
   -DROTACAL_FUZZ=ON -DROTACAL_BUILD_TESTS=OFF -DROTACAL_BUILD_BENCH=OFF -DROTACAL_WERROR=OFF \

@@ -213,7 +213,7 @@ SphereScreen screenSphereTouches(const ProbePlan& plan, const std::vector<Measur
   const auto fits = std::make_shared<std::map<Key, std::shared_ptr<const SphereCycleResult>>>();
   const auto keyOf = [](const std::vector<PointResidual>& residuals) { return heldOutTouches(residuals); };
   const auto fit = [&](const std::function<bool(int, const ProbePoint&)>& hold) {
-    IdentificationResult out;
+    ScreenedFit out;
     std::shared_ptr<const SphereCycleResult> r;
     if (!hold) {
       r = std::make_shared<const SphereCycleResult>(identifySphereCycle(plan, runs));
@@ -239,7 +239,7 @@ SphereScreen screenSphereTouches(const ProbePlan& plan, const std::vector<Measur
   SphereScreen s;
   s.options.sigma_um = std::sqrt(noise.white_um2);
   s.options.declaration = noise.declaration;
-  s.options.statistic = [fits, keyOf, noise](const IdentificationResult& f) {
+  s.options.statistic = [fits, keyOf, noise](const ScreenedFit& f) {
     const auto it = fits->find(keyOf(f.residuals));
     if (it == fits->end()) throw std::logic_error("sphere outlier screen: a statistic asked of a fit never made");
     const SphereFittedProblem p = sphereFittedProblem(noise, *it->second);

@@ -400,7 +400,7 @@ RtestScreen screenRtestReadings(const ProbePlan& plan, const std::vector<RtestCy
   // Each fit's statistics, by the values it held out (the screen asks for them after the fit).
   std::map<std::vector<std::pair<int, int>>, Eigen::VectorXd> stats;
   auto fit = [&](const std::function<bool(int, const ProbePoint&)>& hold_out) {
-    IdentificationResult res;
+    ScreenedFit res;
     res.summary.termination = Termination::Converged;
     std::vector<double> t_all;
     for (size_t c = 0; c < designs.size(); ++c) {
@@ -444,7 +444,7 @@ RtestScreen screenRtestReadings(const ProbePlan& plan, const std::vector<RtestCy
   out.options.alpha = kRtestScreenAlpha;
   out.options.max_fraction = kRtestScreenMaxFraction;
   out.options.declaration = declaration;
-  out.options.statistic = [&stats](const IdentificationResult& f) { return stats.at(heldOutTouches(f.residuals)); };
+  out.options.statistic = [&stats](const ScreenedFit& f) { return stats.at(heldOutTouches(f.residuals)); };
   out.screen = screenOutliers(fit, out.options);
   out.options.statistic = nullptr;  // it reads this call's fits
   return out;

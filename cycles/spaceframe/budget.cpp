@@ -10,7 +10,7 @@
 
 #include "core/contributor_draw.hpp"
 #include "core/error_model.hpp"
-#include "core/identification.hpp"
+#include "core/probe_plan.hpp"
 #include "core/rng.hpp"
 #include "core/sphere_centre_fit.hpp"
 #include "core/units.hpp"

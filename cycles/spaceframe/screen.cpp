@@ -129,7 +129,7 @@ SpaceframeScreen screenSpaceframeTouches(const ProbePlan& plan, const std::vecto
   const auto keyOf = [](const std::vector<PointResidual>& residuals) { return heldOutTouches(residuals); };
   bool base_rank_deficient = false;
   const auto fit = [&](const std::function<bool(int, const ProbePoint&)>& hold) {
-    IdentificationResult out;
+    ScreenedFit out;
     SpaceframeOptions o = options;
     if (hold)
       for (size_t k = 0; k < runs.size(); ++k)
@@ -167,7 +167,7 @@ SpaceframeScreen screenSpaceframeTouches(const ProbePlan& plan, const std::vecto
   SpaceframeScreen s;
   s.options.sigma_um = std::sqrt(noise.touch.white_um2);
   s.options.declaration = noise.touch.declaration;
-  s.options.statistic = [problems, keyOf](const IdentificationResult& f) {
+  s.options.statistic = [problems, keyOf](const ScreenedFit& f) {
     const auto it = problems->find(keyOf(f.residuals));
     if (it == problems->end()) throw std::logic_error("spaceframe outlier screen: a statistic asked of a fit never made");
     return deletionStatistics(it->second.residual_um, it->second.J, it->second.covariance_um2);

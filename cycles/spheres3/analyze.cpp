@@ -845,7 +845,7 @@ Spheres3Screen screenSpheres3Touches(const ProbePlan& plan, const std::vector<Me
   o.step_tolerance_mm = std::max(o.step_tolerance_mm, umToMm(1e-3));
   o.max_iterations = std::max(o.max_iterations, 50);
   const auto fit = [&](const std::function<bool(int, const ProbePoint&)>& hold) {
-    IdentificationResult out;
+    ScreenedFit out;
     Spheres3Options oh = o;
     oh.hold_out_touch = hold;
     std::optional<Spheres3Result> r;
@@ -874,7 +874,7 @@ Spheres3Screen screenSpheres3Touches(const ProbePlan& plan, const std::vector<Me
   Spheres3Screen s;
   s.options.sigma_um = std::sqrt(noise.trigger.white_um2);
   s.options.declaration = noise.trigger.declaration;
-  s.options.statistic = [problems, keyOf](const IdentificationResult& f) {
+  s.options.statistic = [problems, keyOf](const ScreenedFit& f) {
     const auto it = problems->find(keyOf(f.residuals));
     if (it == problems->end()) throw std::logic_error("spheres3 outlier screen: a statistic asked of a fit never made");
     return spheres3OutlierStatistic(it->second);
@@ -885,7 +885,7 @@ Spheres3Screen screenSpheres3Touches(const ProbePlan& plan, const std::vector<Me
   const auto problemFor = [&](const Key& held) -> const Spheres3TouchProblem* {
     if (problems->find(held) == problems->end()) {
       const std::set<std::pair<int, int>> out(held.begin(), held.end());
-      const IdentificationResult f =
+      const ScreenedFit f =
           fit([out](int run, const ProbePoint& p) { return out.count({run, p.id}) > 0; });
       if (f.summary.termination != Termination::Converged) return nullptr;
     }

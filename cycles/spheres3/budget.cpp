@@ -8,7 +8,7 @@
 
 #include <fmt/format.h>
 
-#include "core/identification.hpp"
+#include "core/probe_plan.hpp"
 #include "core/report_envelope.hpp"
 #include "core/rng.hpp"
 #include "core/sphere_centre_fit.hpp"

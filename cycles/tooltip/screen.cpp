@@ -63,7 +63,7 @@ TooltipScreen screenTooltipReadings(const ProbePlan& plan, const std::vector<Too
           if (hold_out(static_cast<int>(r), t) || hold_out(static_cast<int>(r), z))
             held.insert({static_cast<int>(r), static_cast<int>(k)});
         }
-    IdentificationResult res;
+    ScreenedFit res;
     res.summary.termination = Termination::Converged;
     TooltipFit f;
     try {
@@ -98,7 +98,7 @@ TooltipScreen screenTooltipReadings(const ProbePlan& plan, const std::vector<Too
   out.options.alpha = kTooltipScreenAlpha;
   out.options.max_fraction = kTooltipScreenMaxFraction;
   out.options.declaration = noise.declaration;
-  out.options.statistic = [&stats](const IdentificationResult& f) { return stats.at(heldOutTouches(f.residuals)); };
+  out.options.statistic = [&stats](const ScreenedFit& f) { return stats.at(heldOutTouches(f.residuals)); };
   out.screen = screenOutliers(fit, out.options);
   out.options.statistic = nullptr;  // it reads this call's fits
   return out;

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "core/contributors.hpp"
-#include "core/identification.hpp"
+#include "cycles/touch154/identification.hpp"
 #include "core/probe_plan.hpp"
 #include "core/uncertainty_budget.hpp"
 

@@ -25,7 +25,7 @@
 #include <string>
 #include <vector>
 
-#include "core/model_extension.hpp"
+#include "cycles/touch154/model_extension.hpp"
 
 namespace rotacal {
 

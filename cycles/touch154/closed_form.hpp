@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "core/identification.hpp"
+#include "cycles/touch154/identification.hpp"
 #include "core/error_model.hpp"
 #include "core/measurement.hpp"
 #include "core/probe_plan.hpp"

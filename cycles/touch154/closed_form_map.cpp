@@ -6,7 +6,7 @@
 #include <stdexcept>
 
 #include "cycles/touch154/closed_form.hpp"
-#include "core/identification.hpp"
+#include "cycles/touch154/identification.hpp"
 #include "core/simulation.hpp"
 
 namespace rotacal {

@@ -6,9 +6,9 @@
 #include <stdexcept>
 
 #include "core/errors.hpp"
-#include "core/identification.hpp"
+#include "cycles/touch154/identification.hpp"
 #include "core/outliers.hpp"
-#include "core/point_deviations.hpp"
+#include "cycles/touch154/point_deviations.hpp"
 #include "core/units.hpp"
 #include "cycles/touch154/budget.hpp"
 #include "cycles/touch154/closed_form.hpp"
@@ -64,7 +64,7 @@ class Touch154 final : public Cycle {
     oo.sigma_um = std::sqrt(noise.noise.white_um2);
     oo.declaration = noise.noise.declaration;
     if (noise.basis.size())
-      oo.statistic = [&noise](const IdentificationResult& fit) { return touch154OutlierStatistic(noise, fit); };
+      oo.statistic = [&noise](const ScreenedFit& fit) { return touch154OutlierStatistic(noise, fit); };
     const OutlierScreen screen = screenOutliers(
         [&](const std::function<bool(int, const ProbePoint&)>& hold) {
           IdentificationOptions o = opt;

@@ -84,7 +84,7 @@ FittedReadings fittedProblem(const Touch154Noise& n, const std::vector<PointResi
   return f;
 }
 
-Eigen::VectorXd touch154OutlierStatistic(const Touch154Noise& n, const IdentificationResult& fit) {
+Eigen::VectorXd touch154OutlierStatistic(const Touch154Noise& n, const ScreenedFit& fit) {
   const FittedReadings f = fittedProblem(n, fit.residuals);
   return deletionStatistics(f.residual_um, f.J, f.covariance_um2);
 }

@@ -9,7 +9,7 @@
 
 #include "core/contributors.hpp"
 #include "core/declared_noise.hpp"
-#include "core/identification.hpp"
+#include "cycles/touch154/identification.hpp"
 #include "core/probe_plan.hpp"
 
 namespace rotacal {
@@ -45,6 +45,6 @@ struct FittedReadings {
 FittedReadings fittedProblem(const Touch154Noise& n, const std::vector<PointResidual>& residuals);
 
 /// The outlier statistic of each fitted touch of `fit` (deletionStatistics). Requires a basis.
-Eigen::VectorXd touch154OutlierStatistic(const Touch154Noise& n, const IdentificationResult& fit);
+Eigen::VectorXd touch154OutlierStatistic(const Touch154Noise& n, const ScreenedFit& fit);
 
 }  // namespace rotacal

@@ -18,10 +18,10 @@
 #include <string>
 #include <vector>
 
-#include "core/identification.hpp"
+#include "cycles/touch154/identification.hpp"
 #include "core/judge.hpp"
 #include "core/json_io.hpp"
-#include "core/model_extension.hpp"
+#include "cycles/touch154/model_extension.hpp"
 #include "cycles/touch154/declared.hpp"
 
 namespace rotacal {

@@ -4,7 +4,7 @@
 #include <vector>
 
 #include "cycles/touch154/closed_form.hpp"
-#include "core/identification.hpp"
+#include "cycles/touch154/identification.hpp"
 #include "core/json_io.hpp"
 #include "core/report_envelope.hpp"
 #include "core/uncertainty_budget.hpp"

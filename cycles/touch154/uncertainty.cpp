@@ -21,7 +21,7 @@
 #include "cycles/touch154/causes.hpp"
 #include "cycles/touch154/closed_form.hpp"
 #include "cycles/touch154/closed_form_map.hpp"
-#include "core/identification.hpp"
+#include "cycles/touch154/identification.hpp"
 #include "core/units.hpp"
 #include "core/require_valid.hpp"
 

@@ -24,7 +24,7 @@
 
 #include "cli_run.hpp"
 #include "controllers/dialects.hpp"
-#include "core/identification.hpp"
+#include "cycles/touch154/identification.hpp"
 #include "test_util.hpp"
 
 namespace rotacal {

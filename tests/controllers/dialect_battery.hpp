@@ -17,7 +17,7 @@
 
 #include "controllers/dialects.hpp"
 #include "core/errors.hpp"
-#include "core/identification.hpp"
+#include "cycles/touch154/identification.hpp"
 #include "core/simulation.hpp"
 #include "core/units.hpp"
 #include "ctl_test_util.hpp"

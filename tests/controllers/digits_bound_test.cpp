@@ -18,7 +18,7 @@
 #include <string>
 
 #include "controllers/dialects.hpp"
-#include "core/identification.hpp"
+#include "cycles/touch154/identification.hpp"
 #include "core/simulation.hpp"
 #include "core/units.hpp"
 #include "dialect_battery.hpp"

@@ -3,7 +3,7 @@
 // contact is found by bisection on its distance to the true face plane.
 #include <gtest/gtest.h>
 
-#include "core/identification.hpp"
+#include "core/probe_plan.hpp"
 #include "core/simulation.hpp"
 #include "test_util.hpp"
 

@@ -19,7 +19,7 @@
 
 #include "controllers/dialect.hpp"
 #include "core/errors.hpp"
-#include "core/identification.hpp"
+#include "cycles/touch154/identification.hpp"
 #include "core/simulation.hpp"
 #include "postproc/compensate_program.hpp"
 #include "postproc/probe_program.hpp"

@@ -11,7 +11,7 @@
 
 #include "core/contributor_draw.hpp"
 #include "core/contributors.hpp"
-#include "core/identification.hpp"
+#include "cycles/touch154/identification.hpp"
 #include "core/units.hpp"
 #include "cycles/cycle.hpp"
 #include "cycles/spaceframe/analyze.hpp"

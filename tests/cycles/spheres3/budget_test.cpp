@@ -10,7 +10,7 @@
 #include <cstdio>
 
 #include "core/contributors.hpp"
-#include "core/identification.hpp"
+#include "cycles/touch154/identification.hpp"
 #include "core/units.hpp"
 #include "cycles/cycle.hpp"
 #include "cycles/spheres3/analyze.hpp"

@@ -6,7 +6,7 @@
 
 #include <cmath>
 
-#include "core/identification.hpp"
+#include "cycles/touch154/identification.hpp"
 #include "core/units.hpp"
 #include "cycles/touch154/budget.hpp"
 #include "cycles/touch154/closed_form.hpp"

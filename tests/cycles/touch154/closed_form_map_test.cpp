@@ -6,7 +6,7 @@
 
 #include "cycles/touch154/closed_form.hpp"
 #include "cycles/touch154/closed_form_map.hpp"
-#include "core/identification.hpp"
+#include "cycles/touch154/identification.hpp"
 #include "core/rng.hpp"
 #include "test_util.hpp"
 
@@ -67,7 +67,7 @@ TEST(ClosedFormMap, OwnPattern3MapsEqualTheClosedFormsOwn) {
 TEST(ClosedFormMap, PaperPairsRecoverTheErrorsOfTheExactSimulator) {
   // 000's pose pairs (III -> VI only) are still a closed form of the eight errors: on the exact
   // simulator with 000 Table 4's errors it recovers them to its second-order bias (0.1 um,
-  // 0.02 mdeg, as the pooled closed form in tests/core/identification_test.cpp).
+  // 0.02 mdeg, as the pooled closed form in tests/cycles/touch154/identification_test.cpp).
   const ProbePlan plan = test::touch154Plan();
   const LocationErrors truth = test::table4Mean();
   const MeasurementRun run = simulate(plan, test::truthWith(truth), {});

@@ -4,7 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "cycles/touch154/closed_form.hpp"
-#include "core/identification.hpp"
+#include "cycles/touch154/identification.hpp"
 #include "test_util.hpp"
 
 namespace rotacal {

@@ -8,7 +8,7 @@
 #include <set>
 
 #include "core/contributors.hpp"
-#include "core/identification.hpp"
+#include "cycles/touch154/identification.hpp"
 #include "cycles/touch154/design.hpp"
 #include "core/rng.hpp"
 #include "cycles/touch154/uncertainty.hpp"
@@ -136,7 +136,7 @@ TEST(PlanDesign, BeatsRandomPlansOfTheSameBudget) {
 TEST(PlanDesign, DesignedPlanWorksThroughTheWholeChain) {
   // Exact simulator with 000 Table 4's errors, a misplaced piece and a tilted top, then identify()
   // (lsq_per_point, analyze's default): recovered to the rounding floor of Gauss-Newton
-  // (1e-6 um, 1e-7 mdeg; tests/core/identification_test.cpp) plus the second order of the face
+  // (1e-6 um, 1e-7 mdeg; tests/cycles/touch154/identification_test.cpp) plus the second order of the face
   // tilts (0.1 um, 0.01 mdeg as there).
   const DesignResult& d = design77();
   Truth t = test::truthWith(test::table4Mean());

@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "core/identification.hpp"
+#include "cycles/touch154/identification.hpp"
 #include "cycles/touch154/closed_form.hpp"
 #include "test_util.hpp"
 

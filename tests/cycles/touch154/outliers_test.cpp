@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "core/identification.hpp"
+#include "cycles/touch154/identification.hpp"
 #include "core/outliers.hpp"
 #include "core/simulation.hpp"
 #include "test_util.hpp"

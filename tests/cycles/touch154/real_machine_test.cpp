@@ -13,7 +13,7 @@
 
 #include "core/contributor_draw.hpp"
 #include "core/contributors.hpp"
-#include "core/identification.hpp"
+#include "cycles/touch154/identification.hpp"
 #include "core/outliers.hpp"
 #include "core/simulation.hpp"
 #include "core/units.hpp"
@@ -47,7 +47,7 @@ OutlierScreen screen(const ProbePlan& plan, const MeasurementRun& run, const Tou
   oo.sigma_um = plan.machine.probe.repeatability_um;
   if (noise) {
     oo.sigma_um = std::sqrt(noise->noise.white_um2);
-    oo.statistic = [noise](const IdentificationResult& f) { return touch154OutlierStatistic(*noise, f); };
+    oo.statistic = [noise](const ScreenedFit& f) { return touch154OutlierStatistic(*noise, f); };
     oo.declaration = noise->noise.declaration;
   }
   return screenOutliers(

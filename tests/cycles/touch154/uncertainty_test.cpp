@@ -16,7 +16,7 @@
 
 #include "cycles/touch154/closed_form.hpp"
 #include "core/contributors.hpp"
-#include "core/identification.hpp"
+#include "cycles/touch154/identification.hpp"
 #include "core/rng.hpp"
 #include "cycles/touch154/uncertainty.hpp"
 #include "test_util.hpp"

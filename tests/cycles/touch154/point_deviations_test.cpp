@@ -6,7 +6,7 @@
 // the table's angle.
 #include <gtest/gtest.h>
 
-#include "core/point_deviations.hpp"
+#include "cycles/touch154/point_deviations.hpp"
 #include "test_util.hpp"
 
 namespace rotacal {

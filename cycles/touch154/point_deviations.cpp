@@ -1,4 +1,4 @@
-#include "core/point_deviations.hpp"
+#include "cycles/touch154/point_deviations.hpp"
 
 #include <cmath>
 #include <map>

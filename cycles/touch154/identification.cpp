@@ -1,4 +1,4 @@
-#include "core/identification.hpp"
+#include "cycles/touch154/identification.hpp"
 
 #include <Eigen/Dense>
 #include <Eigen/SVD>
@@ -52,10 +52,6 @@ double observationTime_s(const ProbePlan& plan, int run, const ProbePoint& point
   if (std::isfinite(trigger.t_s)) return trigger.t_s;
   const double cycle = plan.points.empty() ? 0.0 : plan.points.back().t_s + 60.0;
   return point.t_s + run * cycle;
-}
-
-double alongApproach(const ProbePoint& point, const TriggerPoint& trigger) {
-  return point.approach_m.dot(trigger.position_m_mm - point.trigger_m_mm);
 }
 
 namespace {

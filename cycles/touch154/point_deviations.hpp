@@ -5,7 +5,7 @@
 // (000 Eq. (21), Figs. 8-9: setup and form cancel, the rotary axes' errors remain).
 #include <vector>
 
-#include "core/identification.hpp"
+#include "cycles/touch154/identification.hpp"
 #include "core/json_io.hpp"
 #include "core/measurement.hpp"
 #include "core/probe_plan.hpp"

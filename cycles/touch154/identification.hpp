@@ -17,8 +17,9 @@
 #include "core/error_model.hpp"
 #include "core/least_squares.hpp"
 #include "core/measurement.hpp"
-#include "core/model_extension.hpp"
+#include "core/outliers.hpp"
 #include "core/probe_plan.hpp"
+#include "cycles/touch154/model_extension.hpp"
 
 namespace rotacal {
 
@@ -48,20 +49,11 @@ struct IdentificationOptions {
   bool validate(std::string* why) const;
 };
 
-struct PointResidual {
-  int run = 0;
-  int point_id = 0;
-  double residual_um = 0.0;  // measured - model, along the approach
-  double t_h = 0.0;          // observation time, hours relative to the data's mean time
-  bool held_out = false;     // predicted, not fitted
-};
-
-struct IdentificationResult {
+struct IdentificationResult : ScreenedFit {  // summary: rms and sigma in um, cost in mm^2
   LocationErrors estimate;
   ErrorVector u = ErrorVector::Zero();  // standard uncertainty (k = 1), mm / rad
   Eigen::Matrix<double, kNumLocationErrors, kNumLocationErrors> covariance =
       Eigen::Matrix<double, kNumLocationErrors, kNumLocationErrors>::Zero();
-  std::vector<PointResidual> residuals;
   std::vector<std::string> unidentifiable;  // parameter names, when RankDeficient
   Eigen::VectorXd extension_values;         // internal units, in the order of the extensions' parameters
   Eigen::VectorXd extension_u;
@@ -69,7 +61,6 @@ struct IdentificationResult {
   Eigen::MatrixXd extension_correlation;
   double holdout_rms_um = 0.0;              // rms of the held-out residuals (0 when none)
   int holdout_points = 0;
-  FitSummary summary;  // rms and sigma in um; cost in mm^2 (0.5 x RSS)
   Method method = Method::LeastSquaresPerPoint;
 };
 
@@ -109,7 +100,5 @@ Linearisation lineariseAtBaseline(const ProbePlan& plan, const std::vector<Measu
 /// plan's t_s plus one cycle duration (plus one minute) per earlier repeat.
 double observationTime_s(const ProbePlan& plan, int run, const ProbePoint& point, const TriggerPoint& trigger);
 
-/// Measured scalar of a trigger: its displacement along the approach from the nominal trigger (mm).
-double alongApproach(const ProbePoint& point, const TriggerPoint& trigger);
 
 }  // namespace rotacal
