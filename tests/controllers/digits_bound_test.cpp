@@ -17,7 +17,7 @@
 #include <map>
 #include <string>
 
-#include "controllers/dialects.hpp"
+#include "controllers/dialect.hpp"
 #include "core/identification.hpp"
 #include "core/simulation.hpp"
 #include "core/units.hpp"
