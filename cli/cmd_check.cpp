@@ -15,7 +15,6 @@
 #include <fmt/format.h>
 
 #include "cli/command.hpp"
-#include "controllers/common.hpp"
 #include "controllers/motion_reader.hpp"
 #include "core/error_model.hpp"
 #include "core/errors.hpp"

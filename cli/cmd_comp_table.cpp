@@ -12,8 +12,8 @@
 
 #include "cli/command.hpp"
 #include "cli/output.hpp"
-#include "controllers/common.hpp"
 #include "controllers/comp_table.hpp"
+#include "controllers/text.hpp"
 #include "core/errors.hpp"
 #include "core/json_io.hpp"
 #include "core/machine.hpp"

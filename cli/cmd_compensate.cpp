@@ -12,7 +12,6 @@
 
 #include "cli/command.hpp"
 #include "cli/output.hpp"
-#include "controllers/common.hpp"
 #include "core/errors.hpp"
 #include "core/json_io.hpp"
 #include "core/machine.hpp"

@@ -25,8 +25,9 @@
 
 #include <fmt/format.h>
 
-#include "controllers/common.hpp"
 #include "controllers/dialect.hpp"
+#include "controllers/offsets.hpp"
+#include "controllers/text.hpp"
 
 namespace rotacal::ctl {
 namespace {

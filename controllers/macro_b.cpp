@@ -12,9 +12,14 @@
 #include <utility>
 #include <stdexcept>
 
-#include "controllers/common.hpp"
+#include "controllers/clock.hpp"
+#include "controllers/end_point_check.hpp"
+#include "controllers/program_checking.hpp"
+#include "controllers/program_writing.hpp"
 #include "controllers/result_checks.hpp"
-#include "controllers/dialects.hpp"
+#include "controllers/results_lines.hpp"
+#include "controllers/tagged_results.hpp"
+#include "controllers/text.hpp"
 #include "core/units.hpp"
 
 namespace rotacal {
@@ -73,6 +78,12 @@ std::string dprntText(std::string_view text) {
     s += ok ? c : '-';
   }
   return s;
+}
+
+std::string dprntNumber(double value, int integer_digits, int decimals) {
+  const std::string s = ctl::fixed(value, decimals);
+  const int width = integer_digits + (decimals > 0 ? decimals + 1 : 0);
+  return fmt::format("{:>{}}", s, width);
 }
 
 }  // namespace macro_b
@@ -204,8 +215,8 @@ std::string MacroBDialect::writeResults(const ProbePlan& plan, const Measurement
   const ctl::ClockStamp stamp = ctl::clockStamp(t0);
   std::string out = fmt::format("ROTACAL-RESULTS DIALECT {} CYCLE {} POINTS {} UNIT {}\r\nDATE {} TIME {}\r\n", f_.tag,
                                 dprntText(plan.cycle), plan.points.size(), unitName(inch),
-                                fanucDprntNumber(static_cast<double>(stamp.yyyymmdd), 8, 0),
-                                fanucDprntNumber(static_cast<double>(stamp.hhmmss), 6, 0));
+                                macro_b::dprntNumber(static_cast<double>(stamp.yyyymmdd), 8, 0),
+                                macro_b::dprntNumber(static_cast<double>(stamp.hhmmss), 6, 0));
   for (const auto& t : run.points) {
     if (!plan.findPoint(t.point_id)) throw std::invalid_argument(fmt::format("run point {} is not in the plan", t.point_id));
     const Eigen::Vector3d x = t.position_m_mm * k;
@@ -215,9 +226,9 @@ std::string MacroBDialect::writeResults(const ProbePlan& plan, const Measurement
       throw std::invalid_argument(fmt::format("point {} is {:.0f} ms after the first: the {} program prints #3001 as "
                                               "[{}0], at most {:.0f} ms",
                                               t.point_id, ms, f_.name, kTimeDigits, kMaxTimerMs));
-    out += fmt::format("P{} X{} Y{} Z{} T{}\r\n", t.point_id, fanucDprntNumber(x.x(), a, d),
-                       fanucDprntNumber(x.y(), a, d), fanucDprntNumber(x.z(), a, d),
-                       fanucDprntNumber(ms, kTimeDigits, 0));
+    out += fmt::format("P{} X{} Y{} Z{} T{}\r\n", t.point_id, macro_b::dprntNumber(x.x(), a, d),
+                       macro_b::dprntNumber(x.y(), a, d), macro_b::dprntNumber(x.z(), a, d),
+                       macro_b::dprntNumber(ms, kTimeDigits, 0));
   }
   out += "END\r\n";
   return out;

@@ -5,7 +5,7 @@
 // Each dialect supplies its flavour (program number, retained variables, look-ahead) and its
 // own offset writer (../shared/reference/controllers.md Sec. 2 and 3).
 //
-// Results, as the program's DPRNTs print them (rotacal's rendering, see fanucDprntNumber):
+// Results, as the program's DPRNTs print them (rotacal's rendering, see macro_b::dprntNumber):
 //   ROTACAL-RESULTS DIALECT FANUC CYCLE TOUCH154 POINTS 154 UNIT MM
 //   DATE 20261122 TIME  14119
 //   P17 X 123.4560 Y-200.0000 Z 173.0000 T   12345
@@ -67,6 +67,12 @@ inline DialectIdentity identity() {
 std::vector<std::string> comments(std::string_view text);
 /// DPRNT text: A-Z 0-9 and '-', '.', '/'.
 std::string dprntText(std::string_view text);
+/// A number as DPRNT prints #v[ab] (a integer digits, b decimals), in rotacal's chosen
+/// form: the sign (only when negative) directly before the digits, the whole right-aligned in
+/// a + (b > 0 ? b + 1 : 0) characters (leading spaces; wider when it does not fit), no decimal
+/// point when b == 0. E.g. [44]: 123.456 -> " 123.4560", -200 -> "-200.0000"; [90]: 12345 ->
+/// "    12345". UNVERIFIED against a real control (parameter 6001 changes padding and sign).
+std::string dprntNumber(double value, int integer_digits, int decimals);
 }  // namespace macro_b
 
 }  // namespace rotacal

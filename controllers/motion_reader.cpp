@@ -8,8 +8,9 @@
 
 #include <fmt/format.h>
 
-#include "controllers/common.hpp"
 #include "controllers/dialect.hpp"
+#include "controllers/end_point_check.hpp"
+#include "controllers/text.hpp"
 #include "gcode/reader.hpp"
 
 namespace rotacal::ctl {

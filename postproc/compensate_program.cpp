@@ -11,9 +11,11 @@
 
 #include <fmt/format.h>
 
-#include "controllers/common.hpp"
-#include "controllers/motion_reader.hpp"
 #include "controllers/dialect.hpp"
+#include "controllers/end_point_check.hpp"
+#include "controllers/motion_reader.hpp"
+#include "controllers/program_checking.hpp"
+#include "controllers/text.hpp"
 #include "core/errors.hpp"
 #include "core/require_valid.hpp"
 #include "core/units.hpp"

@@ -7,7 +7,7 @@
 
 #include <fmt/format.h>
 
-#include "controllers/common.hpp"
+#include "controllers/offsets.hpp"
 #include "core/errors.hpp"
 #include "core/units.hpp"
 

@@ -8,7 +8,6 @@
 
 #include <fmt/format.h>
 
-#include "controllers/common.hpp"
 #include "controllers/motion_reader.hpp"
 #include "core/errors.hpp"
 #include "cycles/check_rules.hpp"

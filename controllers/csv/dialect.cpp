@@ -6,12 +6,14 @@
 #include <limits>
 #include <stdexcept>
 
-#include "controllers/common.hpp"
 #include "controllers/comp_table.hpp"
-#include "controllers/dialects.hpp"
+#include "controllers/dialect.hpp"
+#include "controllers/offsets.hpp"
 #include "controllers/result_checks.hpp"
-#include "core/units.hpp"
+#include "controllers/results_lines.hpp"
+#include "controllers/text.hpp"
 #include "core/singleton.hpp"
+#include "core/units.hpp"
 
 namespace rotacal {
 namespace ctl {

@@ -4,7 +4,7 @@
 // results and checker: macro_b.cpp), compensation as an incremental G54 shift
 // (../shared/reference/controllers.md Sec. 2).
 //
-// Results, as the program's DPRNTs print them (rotacal's rendering, see fanucDprntNumber):
+// Results, as the program's DPRNTs print them (rotacal's rendering, see macro_b::dprntNumber):
 //   ROTACAL-RESULTS DIALECT FANUC CYCLE TOUCH154 POINTS 154 UNIT MM
 //   DATE 20261122 TIME  14119
 //   P17 X 123.4560 Y-200.0000 Z 173.0000 T   12345
@@ -18,12 +18,13 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "controllers/common.hpp"
 #include "controllers/comp_table.hpp"
-#include "controllers/dialects.hpp"
 #include "controllers/macro_b.hpp"
-#include "core/units.hpp"
+#include "controllers/offsets.hpp"
+#include "controllers/program_writing.hpp"
+#include "controllers/text.hpp"
 #include "core/singleton.hpp"
+#include "core/units.hpp"
 
 namespace rotacal {
 namespace ctl {
@@ -149,12 +150,6 @@ class FanucDialect final : public MacroBDialect {
 };
 
 }  // namespace
-
-std::string fanucDprntNumber(double value, int integer_digits, int decimals) {
-  const std::string s = ctl::fixed(value, decimals);
-  const int width = integer_digits + (decimals > 0 ? decimals + 1 : 0);
-  return fmt::format("{:>{}}", s, width);
-}
 
 const Dialect& fanucDialect() { return singleton<FanucDialect>(); }
 

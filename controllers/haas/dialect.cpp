@@ -22,11 +22,13 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "controllers/common.hpp"
-#include "controllers/dialects.hpp"
+#include "controllers/haas/mrzp.hpp"
 #include "controllers/macro_b.hpp"
-#include "core/units.hpp"
+#include "controllers/offsets.hpp"
+#include "controllers/program_writing.hpp"
+#include "controllers/text.hpp"
 #include "core/singleton.hpp"
+#include "core/units.hpp"
 
 namespace rotacal {
 namespace {

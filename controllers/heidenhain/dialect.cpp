@@ -42,11 +42,16 @@
 #include <set>
 #include <stdexcept>
 
-#include "controllers/common.hpp"
-#include "controllers/dialects.hpp"
+#include "controllers/clock.hpp"
+#include "controllers/heidenhain/format_files.hpp"
+#include "controllers/offsets.hpp"
+#include "controllers/program_checking.hpp"
+#include "controllers/program_writing.hpp"
 #include "controllers/result_checks.hpp"
-#include "core/units.hpp"
+#include "controllers/results_lines.hpp"
+#include "controllers/text.hpp"
 #include "core/singleton.hpp"
+#include "core/units.hpp"
 
 namespace rotacal {
 namespace {
@@ -58,6 +63,55 @@ constexpr const char* kDir = "TNC:\\ROTACAL\\";
 /// Distance (mm) short of the end point below which a result counts as "not triggered": a
 /// triggered probe stops the overtravel (mm) before the end, an untriggered one at or beyond it.
 constexpr double kNoTriggerMm = 0.01;
+
+/// Like parseNumber, also accepting a decimal comma instead of the point (Heidenhain prints
+/// "-293,733" with a German language setting) and a trailing point or comma ("12." "12,").
+std::optional<double> parseNumberComma(std::string_view token) {
+  std::string t(token);
+  if (std::count(t.begin(), t.end(), ',') + std::count(t.begin(), t.end(), '.') > 1) return std::nullopt;
+  for (auto& c : t)
+    if (c == ',') c = '.';
+  return ctl::parseNumber(t);
+}
+
+/// Converts a program's text lines into neutral blocks for strokeProblems: each entry is a line
+/// number and its X/Y/Z/A/B/C values (absolute, in the program's unit) of one motion endpoint.
+struct MotionEndpoint {
+  int line = 0;
+  std::vector<std::pair<char, double>> axes;
+};
+std::vector<nc::Block> motionBlocks(const std::vector<MotionEndpoint>& endpoints, bool inch) {
+  std::vector<nc::Block> blocks;
+  nc::Block unit;
+  unit.line = 0;
+  unit.code = inch ? "G20" : "G21";
+  unit.words.push_back({'G', inch ? "20" : "21", false, inch ? 20.0 : 21.0});
+  blocks.push_back(unit);
+  for (const auto& e : endpoints) {
+    nc::Block b;
+    b.line = e.line;
+    b.code = "motion";
+    for (const auto& [axis, v] : e.axes) b.words.push_back({axis, ctl::fixed(v, 6), true, v});
+    blocks.push_back(std::move(b));
+  }
+  return blocks;
+}
+
+/// Unit direction of a probing move (from the nominal trigger toward the end point) when it is
+/// along one machine axis: axis index 0..2 and sign +-1; nullopt when it is not axis-aligned
+/// within 1e-9.
+struct AxisDirection {
+  int axis = 0;
+  int sign = 1;
+};
+std::optional<AxisDirection> axisAligned(const Eigen::Vector3d& d) {
+  const double n = d.norm();
+  if (!(n > 0)) return std::nullopt;
+  const Eigen::Vector3d u = d / n;
+  for (int a = 0; a < 3; ++a)
+    if (std::abs(std::abs(u[a]) - 1.0) < 1e-9) return AxisDirection{a, u[a] > 0 ? 1 : -1};
+  return std::nullopt;
+}
 
 /// Signed Klartext number: "+51.0000", "-235.0000" (never "-0.0000").
 std::string H(double v, int decimals = 4) {
@@ -214,7 +268,7 @@ class HeidenhainDialect final : public Dialect {
             throw std::invalid_argument(fmt::format(
                 "point {}: cycle 0 records a single touch; a double touch (retract_mm > 0) is not implemented", id));
           if (!cur_known) throw std::invalid_argument(fmt::format("point {}: probing before any positioning move", id));
-          const auto dir = ctl::axisAligned(x - cur);
+          const auto dir = axisAligned(x - cur);
           if (!dir)
             throw std::invalid_argument(fmt::format(
                 "point {}: cycle 0 probes along one machine axis; this approach is not axis-aligned", id));
@@ -319,7 +373,7 @@ class HeidenhainDialect final : public Dialect {
       const auto f = ctl::letteredFields(s, "XYZ", file, line);
       Eigen::Vector3d x;
       for (int i = 0; i < 3; ++i) {
-        const auto v = ctl::parseNumberComma(f.fields[static_cast<size_t>(i)]);
+        const auto v = parseNumberComma(f.fields[static_cast<size_t>(i)]);
         if (!v)
           ctl::fail(file, line,
                     fmt::format("{} '{}' of point {} is not a number", "XYZ"[i], f.fields[static_cast<size_t>(i)], f.id));
@@ -397,7 +451,7 @@ class HeidenhainDialect final : public Dialect {
     static const std::regex word(R"(([XYZABC])([+-]?)(\d+(\.\d*)?))");
     static const std::regex probe0(R"(^TCH PROBE 0\.0 REF\. PLANE Q10 ([XYZ])([+-])$)");
     static const std::regex check(R"(^FN (11|12): IF \+Q10 (GT|LT) ([+-]\d+\.\d+) GOTO LBL (\d+)$)");
-    std::vector<ctl::MotionEndpoint> moves;
+    std::vector<MotionEndpoint> moves;
     int probes = 0;
     for (size_t i = 0; i < chk.lines.size(); ++i) {
       const std::string& s = chk.code[i];
@@ -406,7 +460,7 @@ class HeidenhainDialect final : public Dialect {
         chk.problem(n, "TCP or a tilted plane: the probe positions are machine coordinates");
       const bool positioning = s.rfind("L ", 0) == 0 || s.rfind("TCH PROBE 0.1 ", 0) == 0;
       if (positioning) {
-        ctl::MotionEndpoint e{n, {}};
+        MotionEndpoint e{n, {}};
         for (auto it = std::sregex_iterator(s.begin(), s.end(), word); it != std::sregex_iterator(); ++it) {
           const auto& w = *it;
           if (w[2].str().empty() || w[4].str().empty())
@@ -480,7 +534,7 @@ class HeidenhainDialect final : public Dialect {
     }
     chk.probeCount(probes, shape.probes, "TCH PROBE 0 cycles");
     if (shape.inverse_time) chk.problem(1, ctl::inverseTimeRefusal(kDialect));
-    for (auto& s : ctl::strokeProblems(ctl::motionBlocks(moves, inch), plan, kDialect)) chk.problems.push_back(std::move(s));
+    for (auto& s : ctl::strokeProblems(motionBlocks(moves, inch), plan, kDialect)) chk.problems.push_back(std::move(s));
     return std::move(chk.problems);
   }
 };

@@ -21,18 +21,31 @@
 #include <set>
 #include <stdexcept>
 
-#include "controllers/common.hpp"
 #include "controllers/comp_table.hpp"
-#include "controllers/dialects.hpp"
+#include "controllers/linuxcnc/hal.hpp"
+#include "controllers/offsets.hpp"
+#include "controllers/program_checking.hpp"
+#include "controllers/program_writing.hpp"
 #include "controllers/result_checks.hpp"
-#include "core/units.hpp"
+#include "controllers/results_lines.hpp"
+#include "controllers/text.hpp"
 #include "core/singleton.hpp"
+#include "core/units.hpp"
 
 namespace rotacal {
 namespace ctl {
 namespace {
 
 constexpr int kLinuxcncMaxEntries = 256;  // EMCMOT_COMP_SIZE (ini-config: "256 triplets per joint")
+
+/// Paper-convention angle of `axis` in a pose.
+double poseAngle(const Pose& pose, char axis) {
+  switch (axis) {
+    case 'A': return pose.A;
+    case 'B': return pose.B;
+    default: return pose.C;
+  }
+}
 
 // The rotary compensation table in this control's form (controllers/comp_table.hpp).
 CompTable compTable(const CompTableRequest& r, const PeriodicInterpolant& E, double step) {

@@ -33,10 +33,15 @@
 #include <set>
 #include <stdexcept>
 
-#include "controllers/common.hpp"
-#include "controllers/dialects.hpp"
-#include "core/units.hpp"
+#include "controllers/dialect.hpp"
+#include "controllers/end_point_check.hpp"
+#include "controllers/offsets.hpp"
+#include "controllers/program_checking.hpp"
+#include "controllers/program_writing.hpp"
+#include "controllers/tagged_results.hpp"
+#include "controllers/text.hpp"
 #include "core/singleton.hpp"
+#include "core/units.hpp"
 
 namespace rotacal {
 namespace {

@@ -98,7 +98,7 @@ nc::Program tooltipProgram(const ProbePlan& plan, const std::string& dialect) {
       // (absolute positions and angles rounded, increments their differences: no drift).
       for (int j = 1; j <= pieces; ++j) {
         Pose at = pt.pose;
-        // Angles are written with 4 decimals (controllers/common.cpp rotaryLinearWords).
+        // Angles are written with 4 decimals (controllers/program_writing.cpp rotaryLinearWords).
         const double angle = j == pieces ? angleOf(pt.pose)
                                          : roundTo(prev_angle + (angleOf(pt.pose) - prev_angle) * j / pieces, 4);
         (o.axis == 'A' ? at.A : at.B) = angle;

@@ -23,7 +23,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_run.hpp"
-#include "controllers/dialects.hpp"
+#include "controllers/dialect.hpp"
 #include "cycles/touch154/identification.hpp"
 #include "test_util.hpp"
 

@@ -130,7 +130,12 @@ const std::vector<Printed> kPrinted = {
              "P1 X   53.5840 Y -235.0000 Z  150.0000"},
             "END",
             // %F without a width
-            {{1, "P1 X53.5840 Y-235.0000 Z150.0000"}}}};
+            {{1, "P1 X53.5840 Y-235.0000 Z150.0000"}}}
+#ifdef ROTACAL_TEST_DIALECT_PRINTED
+// The entry of a dialect that only a test program registers (tests/controllers/throwaway/).
+#include ROTACAL_TEST_DIALECT_PRINTED
+#endif
+};
 
 INSTANTIATE_TEST_SUITE_P(Dialects, EveryDialect, ::testing::ValuesIn(kPrinted),
                          [](const ::testing::TestParamInfo<Printed>& info) { return info.param.dialect; });

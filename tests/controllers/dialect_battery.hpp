@@ -15,7 +15,7 @@
 #include <string>
 #include <utility>
 
-#include "controllers/dialects.hpp"
+#include "controllers/dialect.hpp"
 #include "core/errors.hpp"
 #include "cycles/touch154/identification.hpp"
 #include "core/simulation.hpp"

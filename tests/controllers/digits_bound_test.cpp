@@ -17,7 +17,7 @@
 #include <map>
 #include <string>
 
-#include "controllers/dialects.hpp"
+#include "controllers/dialect.hpp"
 #include "cycles/touch154/identification.hpp"
 #include "core/simulation.hpp"
 #include "core/units.hpp"

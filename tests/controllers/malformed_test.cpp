@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "controllers/common.hpp"
-#include "controllers/dialects.hpp"
+#include "controllers/text.hpp"
+#include "controllers/dialect.hpp"
 #include "controllers/result_checks.hpp"
 #include "core/errors.hpp"
 #include "ctl_test_util.hpp"

@@ -11,8 +11,8 @@
 #include <set>
 #include <sstream>
 
-#include "controllers/common.hpp"
-#include "controllers/dialects.hpp"
+#include "controllers/program_writing.hpp"
+#include "controllers/dialect.hpp"
 #include "core/errors.hpp"
 #include "ctl_test_util.hpp"
 #include "dialect_battery.hpp"

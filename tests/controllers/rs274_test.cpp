@@ -18,7 +18,7 @@
 #include <sstream>
 
 #include "cycles/cycle.hpp"
-#include "controllers/dialects.hpp"
+#include "controllers/dialect.hpp"
 #include "ctl_test_util.hpp"
 #include "postproc/probe_program.hpp"
 #include "rs274_run.hpp"

@@ -10,7 +10,7 @@
 
 #include <fmt/format.h>
 
-#include "controllers/common.hpp"
+#include "controllers/clock.hpp"
 #include "core/contributors.hpp"
 #include "core/errors.hpp"
 #include "core/json_io.hpp"

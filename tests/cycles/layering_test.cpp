@@ -1,6 +1,7 @@
 // The shape of the tree, checked so that it cannot regress: outside cycles/<name>/ and the
 // registry no source file names a cycle, outside controllers/<name>/ and the dialects' registry no
-// string names a dialect, and each layer imports only the layers below it.
+// string names a dialect, no product file includes a dialect's folder but that folder, and each
+// layer imports only the layers below it.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -138,6 +139,39 @@ TEST(Layering, NoDialectIsNamedOutsideItsFolderAndTheRegistry) {
   for (const auto& m : found) all += m + "\n";
   EXPECT_TRUE(found.empty()) << found.size() << " string literals naming a dialect outside controllers/<name>/ (ask the "
                              << "dialect's identity instead, controllers/dialect.hpp):\n"
+                             << all;
+}
+
+// The dialect folders a file includes from: "okuma" for `#include "controllers/okuma/..."`.
+std::vector<std::string> includedDialectFolders(const fs::path& file) {
+  std::vector<std::string> out;
+  const std::regex inc(R"(^\s*#\s*include\s+"controllers/([A-Za-z0-9_]+)/)");
+  std::istringstream in(slurp(file));
+  std::string line;
+  std::smatch m;
+  while (std::getline(in, line))
+    if (std::regex_search(line, m, inc)) out.push_back(m.str(1));
+  return out;
+}
+
+// What a dialect's folder holds is its own: another dialect that needs it would make the two one
+// dialect in two folders, and what the dialects share belongs in a file of controllers/ itself,
+// which (like every other product layer) asks the registry and includes no dialect's folder.
+TEST(Layering, NoDialectFolderIsIncludedFromOutsideIt) {
+  const fs::path controllers = fs::path(ROTACAL_SOURCE_DIR) / "controllers";
+  std::vector<std::string> found;
+  for (const std::string layer : {"core", "gcode", "controllers", "postproc", "cycles", "tasks", "report", "history",
+                                  "api", "include", "cli"})
+    for (const auto& f : sources(layer)) {
+      const fs::path rel = fs::relative(f, controllers);
+      const std::string own = layer == "controllers" && rel.has_parent_path() ? rel.begin()->string() : "";
+      for (const auto& folder : includedDialectFolders(f))
+        if (folder != own) found.push_back(f.string() + " includes controllers/" + folder + "/");
+    }
+  std::string all;
+  for (const auto& m : found) all += m + "\n";
+  EXPECT_TRUE(found.empty()) << found.size() << " includes of a dialect's folder from outside it (move what is shared "
+                             << "into a file of controllers/):\n"
                              << all;
 }
 

@@ -5,7 +5,6 @@
 
 #include <string>
 
-#include "controllers/common.hpp"
 #include "controllers/dialect.hpp"
 #include "controllers/motion_reader.hpp"
 #include "cycles/check_rules.hpp"

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "controllers/common.hpp"
+#include "controllers/end_point_check.hpp"
 #include "controllers/dialect.hpp"
 #include "controllers/motion_reader.hpp"
 #include "core/machine.hpp"

@@ -7,7 +7,7 @@
 #include <cmath>
 #include <random>
 
-#include "controllers/dialects.hpp"
+#include "controllers/dialect.hpp"
 #include "core/errors.hpp"
 #include "core/units.hpp"
 #include "ctl_test_util.hpp"

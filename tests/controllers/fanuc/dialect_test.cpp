@@ -10,7 +10,7 @@
 #include <map>
 #include <regex>
 
-#include "controllers/dialects.hpp"
+#include "controllers/macro_b.hpp"
 #include "core/errors.hpp"
 #include "core/units.hpp"
 #include "ctl_test_util.hpp"
@@ -29,12 +29,12 @@ constexpr double kTimerRoundingS = 0.5e-3 + 1e-12;
 const Dialect& fc() { return dialectByName("fanuc"); }
 
 TEST(FanucResults, DprntNumberIsRightAlignedWithTheSignBeforeTheDigits) {
-  EXPECT_EQ(fanucDprntNumber(123.456, 4, 4), " 123.4560");
-  EXPECT_EQ(fanucDprntNumber(-200.0, 4, 4), "-200.0000");
-  EXPECT_EQ(fanucDprntNumber(-12.34561, 4, 4), " -12.3456");
-  EXPECT_EQ(fanucDprntNumber(-0.00001, 4, 4), "   0.0000") << "never -0.0000";
-  EXPECT_EQ(fanucDprntNumber(12345.0, 9, 0), "    12345");
-  EXPECT_EQ(fanucDprntNumber(-1234.5, 4, 4), "-1234.5000") << "widened when it does not fit";
+  EXPECT_EQ(macro_b::dprntNumber(123.456, 4, 4), " 123.4560");
+  EXPECT_EQ(macro_b::dprntNumber(-200.0, 4, 4), "-200.0000");
+  EXPECT_EQ(macro_b::dprntNumber(-12.34561, 4, 4), " -12.3456");
+  EXPECT_EQ(macro_b::dprntNumber(-0.00001, 4, 4), "   0.0000") << "never -0.0000";
+  EXPECT_EQ(macro_b::dprntNumber(12345.0, 9, 0), "    12345");
+  EXPECT_EQ(macro_b::dprntNumber(-1234.5, 4, 4), "-1234.5000") << "widened when it does not fit";
 }
 
 TEST(FanucResults, DateOfTheFirstTriggerOnThe2000EpochAndCrLf) {

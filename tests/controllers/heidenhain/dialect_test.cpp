@@ -9,6 +9,7 @@
 #include <regex>
 
 #include "test_util.hpp"
+#include "controllers/heidenhain/format_files.hpp"
 #include "dialect_battery.hpp"
 
 namespace rotacal {

@@ -10,7 +10,7 @@
 #include <regex>
 
 #include "cycles/cycle.hpp"
-#include "controllers/dialects.hpp"
+#include "controllers/linuxcnc/hal.hpp"
 #include "core/errors.hpp"
 #include "core/units.hpp"
 #include "ctl_test_util.hpp"

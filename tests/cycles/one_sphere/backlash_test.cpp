@@ -14,7 +14,6 @@
 #include <cmath>
 #include <cstdio>
 
-#include "controllers/common.hpp"
 #include "controllers/dialect.hpp"
 #include "controllers/motion_reader.hpp"
 #include "core/rotary_backlash.hpp"

@@ -14,7 +14,6 @@
 #include <cstdio>
 #include <random>
 
-#include "controllers/common.hpp"
 #include "controllers/dialect.hpp"
 #include "controllers/motion_reader.hpp"
 #include "core/simulation.hpp"

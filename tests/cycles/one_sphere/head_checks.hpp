@@ -11,7 +11,6 @@
 #include <string>
 #include <vector>
 
-#include "controllers/common.hpp"
 #include "controllers/dialect.hpp"
 #include "controllers/motion_reader.hpp"
 #include "core/errors.hpp"

@@ -14,7 +14,7 @@
 #include <sstream>
 
 #include "cycles/cycle.hpp"
-#include "controllers/dialects.hpp"
+#include "controllers/dialect.hpp"
 #include "core/simulation.hpp"
 #include "cycles/spaceframe/analyze.hpp"
 #include "controllers/ctl_test_util.hpp"

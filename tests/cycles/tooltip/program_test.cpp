@@ -15,7 +15,7 @@
 #include <sstream>
 
 #include "cycles/cycle.hpp"
-#include "controllers/dialects.hpp"
+#include "controllers/dialect.hpp"
 #include "cycles/tooltip/plan.hpp"
 #include "core/units.hpp"
 #include "cycles/tooltip/program.hpp"

@@ -1,0 +1,30 @@
+#pragma once
+// The HAL side of LinuxCNC's offsets: the trt-kins component of a table machine, the changes of
+// its pins, and the setp lines of a HAL file read back.
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/error_model.hpp"
+
+namespace rotacal {
+
+/// LinuxCNC kinematics component of a table machine: "xyzac-trt-kins" or "xyzbc-trt-kins".
+std::string linuxcncKinsComponent(Kinematics kinematics);
+
+/// Changes (mm) of the trt-kins HAL pins that apply the identified location errors (added to
+/// the pins' previous values), in the order they are written:
+///  A/C: x-rot-point += dx_AY, y-rot-point += dy_AY + dy_CA, z-rot-point += dz_AY,
+///       y-offset += -dy_CA, z-offset += 0
+///       (A pivot = rot-point + offset = (dx_AY, dy_AY, dz_AY); the C axis passes through rot-point)
+///  B/C: x-rot-point += dx_BY + dx_CB, y-rot-point += dy_CB, z-rot-point += dz_BY,
+///       x-offset += -dx_CB, z-offset += 0
+///       (B pivot = rot-point + offset = (dx_BY, dy_CB, dz_BY); the C axis passes through rot-point)
+std::vector<std::pair<std::string, double>> linuxcncKinsChanges(const LocationErrors& identified);
+
+/// The `setp <component>.<pin> <value>` lines of a HAL file: pin -> value. '#' starts a comment.
+/// Throws std::invalid_argument("line N: ...") when such a line's value is not a number.
+std::map<std::string, double> parseHalSetp(const std::string& text, const std::string& component);
+
+}  // namespace rotacal

@@ -1,0 +1,75 @@
+#include "controllers/offsets.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <stdexcept>
+
+#include "controllers/text.hpp"
+#include "core/units.hpp"
+
+namespace rotacal::ctl {
+
+std::string implausibility(Kinematics kinematics, int index, double v) {
+  const auto& p = locationParameters(kinematics).at(static_cast<size_t>(index));
+  if (!std::isfinite(v)) return fmt::format("{} is not a finite number; nothing written", p.name);
+  if (p.kind == ParamKind::Length && std::abs(v) > kMaxLengthCorrectionMm)
+    return fmt::format("{} = {:.4f} mm exceeds the plausibility limit of {} mm: check the setup and the results, or "
+                       "force it",
+                       p.name, v, kMaxLengthCorrectionMm);
+  if (p.kind == ParamKind::Angle && std::abs(radToMdeg(v)) > kMaxAngleCorrectionMdeg)
+    return fmt::format("{} = {:.1f} mdeg exceeds the plausibility limit of {} mdeg: check the setup and the results, "
+                       "or force it",
+                       p.name, radToMdeg(v), kMaxAngleCorrectionMdeg);
+  return "";
+}
+
+void requirePlausible(const OffsetRequest& r) {
+  if (!r.plan) throw std::invalid_argument("offset request without a plan");
+  if (r.identified.kinematics != r.plan->machine.kinematics)
+    throw std::invalid_argument("identified errors are for another kinematics than the plan's machine");
+  for (int i = 0; i < kNumLocationErrors; ++i) {
+    const double v = r.identified.values[i];
+    if (r.force && std::isfinite(v)) continue;
+    const std::string why = implausibility(r.identified.kinematics, i, v);
+    if (!why.empty()) throw std::invalid_argument(why);
+  }
+}
+
+std::vector<std::string> identifiedLines(const OffsetRequest& r) {
+  std::vector<std::string> out;
+  const auto& params = locationParameters(r.identified.kinematics);
+  for (int i = 0; i < kNumLocationErrors; ++i) {
+    const ParamKind k = params[i].kind;
+    const double u = k == ParamKind::Length ? mmToUm(r.u[i]) : radToMdeg(r.u[i]);
+    out.push_back(fmt::format("{:<6} {:<8} {:>10} {:<4} +- {} {}", params[i].name, params[i].iso,
+                              fixed(r.identified.reportValue(i), 3), reportUnit(k),
+                              std::isfinite(u) ? fixed(u, 3) : std::string("?"), reportUnit(k)));
+  }
+  return out;
+}
+
+OffsetBasis::OffsetBasis(const OffsetRequest& r)
+    : plan((requirePlausible(r), *r.plan)),
+      machine(plan.machine),
+      e(r.identified),
+      ac(e.kinematics == Kinematics::TableAC),
+      inch(machine.units == LengthUnit::Inch),
+      k(inch ? 1.0 / kMmPerInch : 1.0),
+      tilt(ac ? 'A' : 'B') {}
+
+Eigen::Vector3d OffsetBasis::pivot() const {
+  return ac ? Eigen::Vector3d(e.get("dx_AY"), e.get("dy_AY"), e.get("dz_AY"))
+            : Eigen::Vector3d(e.get("dx_BY"), e.get("dy_CB"), e.get("dz_BY"));
+}
+
+Eigen::Vector3d OffsetBasis::second() const {
+  return ac ? Eigen::Vector3d(0, e.get("dy_CA"), 0) : Eigen::Vector3d(e.get("dx_CB"), 0, 0);
+}
+
+double OffsetBasis::zeroDeg(std::string_view dialect) const {
+  return (machine.hasRotary(tilt) ? machine.controllerSign(tilt, std::string(dialect)) : 1) *
+         radToDeg(e.get(ac ? "a_AY" : "b_BY"));
+}
+
+}  // namespace rotacal::ctl
