@@ -16,6 +16,7 @@
 #include "cli/output.hpp"
 #include "cli/progress.hpp"
 #include "controllers/dialect.hpp"
+#include "core/compensation.hpp"
 #include "core/errors.hpp"
 #include "core/json_io.hpp"
 #include "core/judge.hpp"
@@ -256,7 +257,21 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
     io.read_results = [&d, errors, &undone, name = dialect_name](const std::string& text, const std::string& file,
                                                                const ProbePlan& p) {
       undone = true;
-      return undoCompensation(p, d.parseResults(text, file, p), errors, NcSyntax{name});
+      // The compensated program commands each pose's compensated angles and moves each probing
+      // line with the table's error (compensatedPosition, as compensate rewrites it), and the
+      // controller logs those: the reader holds each record to the pose and line as compensated,
+      // not as planned (they differ by as much as the rotary axes' errors move the table, beyond
+      // the reader's 1 mdeg and 0.1 mm).
+      ProbePlan logged = p;
+      for (auto& q : logged.points) {
+        const Pose qc = compensatePose(errors, q.pose).pose;
+        const Eigen::Vector3d through = q.trigger_m_mm + q.approach_m;
+        q.trigger_m_mm = compensatedPosition(errors, q.pose, q.trigger_m_mm, qc);
+        q.approach_m = (compensatedPosition(errors, q.pose, through, qc) - q.trigger_m_mm).normalized();
+        q.pose = qc;
+      }
+      for (auto& q : logged.poses) q.pose = compensatePose(errors, q.pose).pose;
+      return undoCompensation(p, d.parseResults(text, file, logged), errors, NcSyntax{name});
     };
   }
   AnalyzeRequest r;

@@ -49,8 +49,21 @@ std::vector<std::string> identifiedLines(const OffsetRequest& r) {
   return out;
 }
 
+namespace {
+// The A/B table's offsets have one verified form, LinuxCNC's xyzab_tdr_kins pins; the other
+// controls' forms are written for a tilt axis carrying a C table.
+const OffsetRequest& requireTiltAndC(const OffsetRequest& r) {
+  if (r.identified.kinematics == Kinematics::TableAB)
+    throw std::invalid_argument(
+        "a table_ab machine's location errors go into its control's kinematics, and rotacal knows that form only for "
+        "LinuxCNC's xyzab_tdr_kins (--dialect linuxcnc, a .hal file); here use rotacal compensate (the program "
+        "rewritten for all eight) or enter REPORT.json's values by hand");
+  return r;
+}
+}  // namespace
+
 OffsetBasis::OffsetBasis(const OffsetRequest& r)
-    : plan((requirePlausible(r), *r.plan)),
+    : plan((requirePlausible(requireTiltAndC(r)), *r.plan)),
       machine(plan.machine),
       e(r.identified),
       ac(e.kinematics == Kinematics::TableAC),

@@ -35,6 +35,7 @@ namespace {
 // The two rotary axes a kinematics moves, as pointers into Pose.
 std::array<double Pose::*, 2> rotaryMembers(Kinematics k) {
   if (k == Kinematics::TableAC) return {&Pose::A, &Pose::C};
+  if (k == Kinematics::TableAB) return {&Pose::B, &Pose::A};
   return {&Pose::B, &Pose::C};
 }
 

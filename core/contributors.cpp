@@ -184,8 +184,9 @@ ReferenceUncertainty readReference(const JsonDoc& doc, const Json& r) {
   ref.source = stringOr(doc, r, "source", "");
   auto value = [&](const Json& parent, const std::string& param) {
     const Json& e = parent[param];
-    const int i = parameterIndex(Kinematics::TableAC, param) >= 0 ? parameterIndex(Kinematics::TableAC, param)
-                                                                   : parameterIndex(Kinematics::TableBC, param);
+    int i = -1;
+    for (const Kinematics k : {Kinematics::TableAC, Kinematics::TableBC, Kinematics::TableAB})
+      if (i < 0) i = parameterIndex(k, param);
     if (i < 0) doc.fail(parent, param, "reference: unknown location error '" + param + "'");
     if (!e.is_object() || !e.contains("u") || !e["u"].is_number() || !e.contains("unit"))
       doc.fail(parent, param, "reference: '" + param + "' needs {\"u\": number, \"unit\": \"um\" | \"mdeg\"}");

@@ -15,6 +15,7 @@ constexpr const char* kNoTableErrors =
 std::string_view kinematicsName(Kinematics kinematics) {
   if (kinematics == Kinematics::HeadAB) return "head_ab";
   if (kinematics == Kinematics::HeadTable) return "head_table";
+  if (kinematics == Kinematics::TableAB) return "table_ab";
   return kinematics == Kinematics::TableAC ? "table_ac" : "table_bc";
 }
 
@@ -23,8 +24,9 @@ Kinematics kinematicsFromName(std::string_view name) {
   if (name == "table_bc") return Kinematics::TableBC;
   if (name == "head_ab") return Kinematics::HeadAB;
   if (name == "head_table") return Kinematics::HeadTable;
+  if (name == "table_ab") return Kinematics::TableAB;
   throw std::invalid_argument("unknown kinematics '" + std::string(name) +
-                              "' (expected table_ac, table_bc, head_ab or head_table)");
+                              "' (expected table_ac, table_bc, table_ab, head_ab or head_table)");
 }
 
 const std::vector<ParameterInfo>& locationParameters(Kinematics kinematics) {
@@ -49,7 +51,20 @@ const std::vector<ParameterInfo>& locationParameters(Kinematics kinematics) {
       {"a_CB", "A0C-A0B", K::Angle, "squareness of the C axis to the B axis around X (002: alpha_CB^0)"},
       {"dx_CB", "X0C-X0B", K::Length, "offset of the C axis from the B axis in X (002: dx_CB^0)"},
   };
+  // The B axis's five keep the B/C table's names and places (both B axes sit on the bed), so a
+  // name means one thing in every table family.
+  static const std::vector<ParameterInfo> ab = {
+      {"dx_BY", "X0B", K::Length, "location of the B axis in X"},
+      {"dy_AB", "Y0A", K::Length, "location of the A table's axis in Y"},
+      {"dz_BY", "Z0B", K::Length, "location of the B axis in Z"},
+      {"a_BY", "A0B", K::Angle, "orientation of the B axis around X"},
+      {"b_BY", "B0B", K::Angle, "angular positioning error of the B axis"},
+      {"c_BY", "C0B", K::Angle, "orientation of the B axis around Z"},
+      {"c_AB", "C0A-C0B", K::Angle, "squareness of the A axis to the B axis around Z"},
+      {"dz_AB", "Z0A-Z0B", K::Length, "offset of the A axis from the B axis in Z"},
+  };
   if (!hasPapersLocationErrors(kinematics)) throw std::invalid_argument(kNoTableErrors);
+  if (kinematics == Kinematics::TableAB) return ab;
   return kinematics == Kinematics::TableAC ? ac : bc;
 }
 
@@ -103,7 +118,16 @@ const std::vector<ChainFactor>& kinematicChain(Kinematics kinematics) {
       {M::Rx, S::Parameter, 6}, {M::Tx, S::Parameter, 7},
       {M::Rz, S::NegativeAxis, 2},
   };
+  // The A/B table (error_model.hpp); parameter indices follow locationParameters(TableAB).
+  static const std::vector<ChainFactor> ab = {
+      {M::Rx, S::Parameter, 3}, {M::Ry, S::Parameter, 4}, {M::Rz, S::Parameter, 5},
+      {M::Tx, S::Parameter, 0}, {M::Ty, S::Parameter, 1}, {M::Tz, S::Parameter, 2},
+      {M::Ry, S::NegativeAxis, 1},
+      {M::Tz, S::Parameter, 7}, {M::Rz, S::Parameter, 6},
+      {M::Rx, S::NegativeAxis, 0},
+  };
   if (!hasPapersLocationErrors(kinematics)) throw std::invalid_argument(kNoTableErrors);
+  if (kinematics == Kinematics::TableAB) return ab;
   return kinematics == Kinematics::TableAC ? ac : bc;
 }
 

@@ -6,6 +6,10 @@
 //  B/C tilting table, 002 Eq. (2)-(3) with constant errors:
 //    T_m_w = Da(a_BY) Db(b_BY) Dc(c_BY) Dx(dx_BY) Dy(dy_CB) Dz(dz_BY) Db(-B)
 //            Da(a_CB) Dx(dx_CB) Dc(-C)
+//  A/B dual rotary table (LinuxCNC's xyzab_tdr_kins: a B axis on the bed about Y carrying an A
+//  table about X), rotacal's chain in 002's style, B's errors relative to the bed, A's to B:
+//    T_m_w = Da(a_BY) Db(b_BY) Dc(c_BY) Dx(dx_BY) Dy(dy_AB) Dz(dz_BY) Db(-B)
+//            Dz(dz_AB) Dc(c_AB) Da(-A)                       (B0A-B0B is B's zero, A0A the set-up's)
 // T_m_w maps a point fixed on the table (workpiece frame) to the machine frame, whose origin is
 // the nominal intersection of the rotary axes. Angles A, B, C are the commanded angles in the
 // papers' sign convention (a controller may count the other way: see MachineModel).
@@ -24,13 +28,22 @@ namespace rotacal {
 // HeadTable: a B (or A) spindle head over a C table (MachineModel::head). Its location errors are
 // the ISO 230-7 parameters of core/kinematic_model.hpp, not the papers' eight: the tables and
 // offsets of the papers' machines do not apply to it. The table turns C only.
-enum class Kinematics { TableAC, TableBC, HeadAB, HeadTable };
+// TableAB: the A/B dual rotary table above; the B axis (the tilt) sits on the bed, the A table
+// rides on it, as LinuxCNC's xyzab_tdr_kins has them (docs/conventions.md).
+enum class Kinematics { TableAC, TableBC, HeadAB, HeadTable, TableAB };
 
-std::string_view kinematicsName(Kinematics kinematics);       // "table_ac", "table_bc", "head_ab", "head_table"
+std::string_view kinematicsName(Kinematics kinematics);       // "table_ac", "table_bc", "head_ab", "head_table", "table_ab"
 /// Whether the machine's XYZ carry a spindle head (its XYZ are the pivot's, not the ball centre's).
 inline bool hasSpindleHead(Kinematics k) { return k == Kinematics::HeadAB || k == Kinematics::HeadTable; }
 /// Whether the papers' eight table location errors (000 / 002) describe the machine.
-inline bool hasPapersLocationErrors(Kinematics k) { return k == Kinematics::TableAC || k == Kinematics::TableBC; }
+/// (table_ab's eight are rotacal's, written in the papers' style: the chain above.)
+inline bool hasPapersLocationErrors(Kinematics k) {
+  return k == Kinematics::TableAC || k == Kinematics::TableBC || k == Kinematics::TableAB;
+}
+/// The tilting axis of a table machine, on the bed ('A', else 'B'), and the axis it carries
+/// ('C', or 'A' on the A/B table).
+inline char tableTiltAxis(Kinematics k) { return k == Kinematics::TableAC ? 'A' : 'B'; }
+inline char tableTurnAxis(Kinematics k) { return k == Kinematics::TableAB ? 'A' : 'C'; }
 Kinematics kinematicsFromName(std::string_view name);         // throws std::invalid_argument
 
 enum class ParamKind { Length, Angle };
@@ -46,7 +59,8 @@ struct ParameterInfo {
 constexpr int kNumLocationErrors = 8;
 using ErrorVector = Eigen::Matrix<double, kNumLocationErrors, 1>;
 
-/// The eight location errors of a kinematics, in order, 000 Table 1 / 002 Table 2.
+/// The eight location errors of a kinematics, in order, 000 Table 1 / 002 Table 2 (table_ab: the
+/// B/C table's B-axis five at the same places, then A's place and squareness relative to B).
 const std::vector<ParameterInfo>& locationParameters(Kinematics kinematics);
 int parameterIndex(Kinematics kinematics, std::string_view name);  // -1 when unknown
 

@@ -83,7 +83,7 @@ Eigen::Vector3d ballInTool(const KinematicModel& m) { return {0.0, 0.0, -m.pivot
 }  // namespace
 
 const std::vector<std::string>& kinematicConfigurations() {
-  static const std::vector<std::string> names = {"table_ac", "table_bc", "head_table", "head_ab"};
+  static const std::vector<std::string> names = {"table_ac", "table_bc", "table_ab", "head_table", "head_ab"};
   return names;
 }
 
@@ -102,6 +102,8 @@ KinematicModel kinematicModel(std::string_view configuration, const Eigen::Vecto
     m.table_axes = {'A', 'C'};
   } else if (configuration == "table_bc") {
     m.table_axes = {'B', 'C'};
+  } else if (configuration == "table_ab") {
+    m.table_axes = {'B', 'A'};
   } else if (configuration == "head_table") {
     if (head_axis != 'A' && head_axis != 'B')
       throw std::invalid_argument(std::string("head_table: the head axis must be A or B, not '") + head_axis + "'");
@@ -111,7 +113,7 @@ KinematicModel kinematicModel(std::string_view configuration, const Eigen::Vecto
     m.head_axes = {'A', 'B'};
   } else {
     throw std::invalid_argument("unknown kinematics '" + std::string(configuration) +
-                                "' (expected table_ac, table_bc, head_table or head_ab)");
+                                "' (expected table_ac, table_bc, table_ab, head_table or head_ab)");
   }
   if (!m.head_axes.empty() && !(pivot_to_ball_mm > 0))
     throw std::invalid_argument(m.name + ": the pivot-to-ball length must be > 0 mm for a spindle head");

@@ -3,6 +3,7 @@
 // model the one-sphere cycle identifies, for any of the four configurations
 //   table_ac    A tilting table carrying a C table            (000's machine)
 //   table_bc    B tilting table carrying a C table            (002's machine)
+//   table_ab    B axis on the bed carrying an A table          (LinuxCNC's xyzab_tdr_kins)
 //   head_table  a B (or A) spindle head over a C table        (the most common shop machine)
 //   head_ab     an A head carrying a B head, fixed table      (004's machine)
 // Every rotary axis k carries, in the frame of the axis it rides on (the machine for the first),
@@ -49,8 +50,8 @@ struct ModelFactor {
 };
 
 struct KinematicModel {
-  std::string name;              // table_ac, table_bc, head_table, head_ab
-  std::vector<char> table_axes;  // from the bed outwards (A then C for table_ac)
+  std::string name;              // table_ac, table_bc, table_ab, head_table, head_ab
+  std::vector<char> table_axes;  // from the bed outwards (A then C for table_ac, B then A for table_ab)
   std::vector<char> head_axes;   // from the carriage outwards (A then B for head_ab)
   std::vector<ModelParameter> parameters;
   std::vector<ModelFactor> table_chain;  // machine -> workpiece, ends with the sphere's set-up

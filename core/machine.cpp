@@ -105,7 +105,7 @@ MachineModel machineFrom(const JsonDoc& doc, const Json& j) {
                             std::string(kinematicsName(m.kinematics)) + " machine's");
   }
   const std::string rot = m.kinematics == Kinematics::TableAC  ? "AC"
-                          : m.kinematics == Kinematics::HeadAB ? "AB"
+                          : m.kinematics == Kinematics::HeadAB || m.kinematics == Kinematics::TableAB ? "AB"
                           : m.head                             ? std::string(1, m.head->axis) + "C"
                                                                : "BC";
   const Json& axes = requireObject(doc, j, "rotary_axes");

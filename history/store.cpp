@@ -125,7 +125,7 @@ Calibration calibrationFromReport(const JsonDoc& doc, const std::string& machine
         doc.fail(e, "unit", fmt::format("unit of '{}' must be um or mdeg (got '{}')", name, p.unit));
       // The trend compares values of one parameter across reports: each in the unit analyze
       // writes for its kind (um for lengths, mdeg for angles).
-      for (const Kinematics k : {Kinematics::TableAC, Kinematics::TableBC}) {  // head_ab has no location errors
+      for (const Kinematics k : {Kinematics::TableAC, Kinematics::TableBC, Kinematics::TableAB}) {  // head_ab has no location errors
         const int i = parameterIndex(k, name);
         if (i < 0) continue;
         const char* want = locationParameters(k)[i].kind == ParamKind::Length ? "um" : "mdeg";

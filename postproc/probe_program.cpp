@@ -46,6 +46,7 @@ std::string angleConvention(Kinematics k) {
   switch (k) {
     case Kinematics::TableAC: return "000 Eq. (1)";
     case Kinematics::TableBC: return "002 Eq. (2)";
+    case Kinematics::TableAB: return "rotacal's A/B table chain (docs/conventions.md)";
     case Kinematics::HeadAB:
     case Kinematics::HeadTable: return "ISO 841: the head turns by +angle";
   }

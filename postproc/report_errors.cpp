@@ -260,13 +260,15 @@ ReportErrors errorsFromReports(const std::vector<JsonDoc>& reports, Kinematics k
       if (!hasPapersLocationErrors(k))
         doc.fail(j, j.contains("machine_model") ? "machine_model" : "location_errors",
                  fmt::format("a spindle-head machine ({}) has no table location errors to compensate: compensate "
-                             "rewrites programs of table machines (table_ac, table_bc)",
+                             "rewrites programs of table machines (table_ac, table_bc, table_ab)",
                              kinematicsName(k)));
       if (!j.contains("location_errors") || !j["location_errors"].is_object())
         doc.fail(j, "location_errors", "the report has no 'location_errors'");
       const Json& errs = j["location_errors"];
       std::vector<std::string> took;
       if (namesAxisLocation(errs)) {
+        if (k == Kinematics::TableAB)
+          doc.fail(j, "location_errors", "a C axis's location (X0C Y0C A0C B0C) on a table_ab machine, which has no C axis");
         if (axis_location)
           doc.fail(j, "location_errors", fmt::format("the C axis's location is given twice (also by {}): give one report "
                                                      "per kind of error",

@@ -400,10 +400,11 @@ class LinuxCncDialect final : public Dialect {
     const ProbePlan& plan = *r.plan;
     const MachineModel& m = plan.machine;
     const bool ac = r.identified.kinematics == Kinematics::TableAC;
+    const bool ab = r.identified.kinematics == Kinematics::TableAB;
     const std::string comp = linuxcncKinsComponent(r.identified.kinematics);
     const auto changes = linuxcncKinsChanges(r.identified);
     const auto previous = parseHalSetp(r.previous_text, comp);
-    const char tilt = ac ? 'A' : 'B';
+    const char tilt = tableTiltAxis(r.identified.kinematics);
     const std::string zero_param = ac ? "a_AY" : "b_BY";
     const double zero_deg = m.hasRotary(tilt) ? m.controllerSign(tilt, kDialect) * radToDeg(r.identified.get(zero_param))
                                               : 0.0;
@@ -411,8 +412,9 @@ class LinuxCncDialect final : public Dialect {
     std::string out;
     auto line = [&](const std::string& s) { out += s + "\n"; };
     line(fmt::format("# rotacal: rotary-axis geometry of {} (LinuxCNC HAL file)", comp));
-    line("# What it changes: the rotation point of the C axis and the offset of the " + std::string(1, tilt) +
-         " pivot used by the");
+    line(ab ? std::string("# What it changes: the rotation point of the B axis and the A axis's offset from it used by the")
+            : "# What it changes: the rotation point of the C axis and the offset of the " + std::string(1, tilt) +
+                  " pivot used by the");
     line(fmt::format("#   {} kinematics in TCP mode. Replace the same setp lines of your HAL file (or load this", comp));
     line("#   file after the kinematics module) and restart LinuxCNC. Values in mm, machine coordinates.");
     // A '#' comment ends at the line end: outside names must not carry one.
@@ -420,7 +422,14 @@ class LinuxCncDialect final : public Dialect {
                                         r.report_file.empty() ? "(no report)" : r.report_file, plan.cycle, m.name)));
     line("# Identified location errors (papers' convention), value +- standard uncertainty (k = 1):");
     for (const auto& s : ctl::identifiedLines(r)) line("#   " + s);
-    if (ac) {
+    if (ab) {
+      // xyzab_tdr_kins (type 1) turns a table point p to R + Ry(-B) (D + Rx(-A) (p - R - D)), R the
+      // rot-point and D = (x-offset, 0, z-offset): the B line through R, the A line through R + D
+      // in B's frame. x-offset lies along A's own line and moves nothing.
+      line("# Mapping (mm): x-rot-point += dx_BY, y-rot-point += dy_AB, z-rot-point += dz_BY,");
+      line("#   z-offset += dz_AB: the B axis passes through rot-point, the A axis through rot-point +");
+      line("#   (x-offset, 0, z-offset) in the B axis's frame.");
+    } else if (ac) {
       line("# Mapping (mm): x-rot-point += dx_AY, y-rot-point += dy_AY + dy_CA, z-rot-point += dz_AY,");
       line("#   y-offset += -dy_CA, z-offset += 0: A pivot = rot-point + offset = (dx_AY, dy_AY, dz_AY),");
       line("#   the C axis passes through rot-point.");
@@ -462,6 +471,12 @@ class LinuxCncDialect final : public Dialect {
     line(fmt::format("#   G10 L2 P1 {}[#{} + {}] instead). Controller sign of {} for linuxcnc: {:+d}.", tilt,
                      5221 + (tilt - 'A') + 3, ctl::fixed(zero_deg, 6), tilt,
                      m.hasRotary(tilt) ? m.controllerSign(tilt, kDialect) : 1));
+    if (ab) {
+      line("# Reported only: a_BY, c_BY (orientation of the B axis) and c_AB (squareness of A to B about Z) cannot be");
+      line("#   held by xyzab_tdr_kins: it has no pins for tilted axes. Route: rotacal compensate (the program");
+      line("#   rewritten for all eight), or a mechanical adjustment.");
+      return out;
+    }
     line(ac ? "# Reported only: b_AY, c_AY (orientation of the A axis) and b_CA (squareness of C to A) cannot be"
             : "# Reported only: a_BY, c_BY (orientation of the B axis) and a_CB (squareness of C to B) cannot be");
     line("#   applied by shifting a pivot or a zero: trt-kins has no pins for tilted axes. They need a mechanical");
@@ -483,13 +498,22 @@ class LinuxCncDialect final : public Dialect {
   std::string writeWorkOffsetProgram(const OffsetRequest& r) const {
     ctl::requirePlausible(r);
     const MachineModel& m = r.plan->machine;
-    if (r.identified.kinematics != Kinematics::TableAC || !m.hasRotary('A'))
-      throw std::invalid_argument("the G10 work-offset form (.ngc) is written for A/C tables only; use a .hal file");
+    // The A/C table's route, and the A/B table's: its B axis sits on the bed as A does there, so
+    // the work offset moves B's place and B's zero alike (with machine = program + offset).
+    const bool ab = r.identified.kinematics == Kinematics::TableAB;
+    const char tilt = tableTiltAxis(r.identified.kinematics);
+    if ((r.identified.kinematics != Kinematics::TableAC && !ab) || !m.hasRotary(tilt))
+      throw std::invalid_argument(
+          "the G10 work-offset form (.ngc) is written for A/C and A/B tables only; use a .hal file");
+    const char* px = ab ? "dx_BY" : "dx_AY";
+    const char* py = ab ? "dy_AB" : "dy_AY";
+    const char* pz = ab ? "dz_BY" : "dz_AY";
+    const char* pzero = ab ? "b_BY" : "a_AY";
     const bool inch = m.units == LengthUnit::Inch;
     const double k = inch ? 1.0 / kMmPerInch : 1.0;  // mm -> program units
     const int dl = inch ? 5 : 4;
     // Previous offsets: the G10 L2 P1 line of the file this one replaces (the loop accumulates).
-    std::map<char, double> previous{{'X', 0.0}, {'Y', 0.0}, {'Z', 0.0}, {'A', 0.0}};
+    std::map<char, double> previous{{'X', 0.0}, {'Y', 0.0}, {'Z', 0.0}, {tilt, 0.0}};
     bool had_previous = false;
     for (const auto& l : ctl::splitLines(r.previous_text)) {
       std::string code = l.text;
@@ -501,18 +525,18 @@ class LinuxCncDialect final : public Dialect {
       for (size_t i = 3; i < t.size(); ++i) {
         const auto v = t[i].size() > 1 ? ctl::parseNumber(t[i].substr(1)) : std::nullopt;
         if (!v || !previous.count(t[i][0]))
-          throw std::invalid_argument(fmt::format("previous offsets file, line {}: '{}' is not one of X Y Z A <number>",
-                                                  l.number, t[i]));
+          throw std::invalid_argument(fmt::format("previous offsets file, line {}: '{}' is not one of X Y Z {} <number>",
+                                                  l.number, t[i], tilt));
         previous[t[i][0]] = *v;
       }
     }
     if (!r.previous_text.empty() && !had_previous)
       throw std::invalid_argument("previous offsets file has no 'G10 L2 P1' line: not a rotacal work-offset file");
-    const int sign_a = m.controllerSign('A', kDialect);
-    const std::map<char, double> change{{'X', r.identified.get("dx_AY") * k},
-                                        {'Y', r.identified.get("dy_AY") * k},
-                                        {'Z', r.identified.get("dz_AY") * k},
-                                        {'A', sign_a * radToDeg(r.identified.get("a_AY"))}};
+    const int sign_a = m.controllerSign(tilt, kDialect);
+    const std::map<char, double> change{{'X', r.identified.get(px) * k},
+                                        {'Y', r.identified.get(py) * k},
+                                        {'Z', r.identified.get(pz) * k},
+                                        {tilt, sign_a * radToDeg(r.identified.get(pzero))}};
     std::string out;
     auto line = [&](const std::string& s) { out += s + "\n"; };
     line("%");
@@ -521,12 +545,14 @@ class LinuxCncDialect final : public Dialect {
                              r.plan->cycle, m.name)));
     line(comment("Run it once before the cycle; it changes G54 only. Identified, papers' convention, k = 1:"));
     for (const auto& s : ctl::identifiedLines(r)) line(comment(s));
-    line(comment(fmt::format("Mapping: G54 X += dx_AY, Y += dy_AY, Z += dz_AY [{}], A += {:+d} x a_AY [deg]",
-                             unitName(inch), sign_a)));
-    line(comment("Not applied [no shift expresses them]: dy_CA, b_AY, c_AY, b_CA"));
+    line(comment(fmt::format("Mapping: G54 X += {}, Y += {}, Z += {} [{}], {} += {:+d} x {} [deg]", px, py, pz,
+                             unitName(inch), tilt, sign_a, pzero)));
+    line(comment(ab ? "Not applied [no shift expresses them]: dz_AB, a_BY, c_BY, c_AB: xyzab_tdr_kins' z-offset "
+                      "[a .hal file] holds dz_AB, rotacal compensate all four"
+                    : "Not applied [no shift expresses them]: dy_CA, b_AY, c_AY, b_CA"));
     std::string g10 = "G10 L2 P1";
-    for (char axis : {'X', 'Y', 'Z', 'A'}) {
-      const int dec = axis == 'A' ? 6 : dl + 2;
+    for (char axis : {'X', 'Y', 'Z', tilt}) {
+      const int dec = axis == tilt ? 6 : dl + 2;
       line(comment(fmt::format("{}: previous {} change {} new {}", axis, ctl::fixed(previous[axis], dec),
                                ctl::fixed(change.at(axis), dec), ctl::fixed(previous[axis] + change.at(axis), dec))));
       g10 += fmt::format(" {}{}", axis, ctl::fixed(previous[axis] + change.at(axis), dec));
@@ -670,13 +696,19 @@ class LinuxCncDialect final : public Dialect {
 
 }  // namespace
 
-std::string linuxcncKinsComponent(Kinematics k) { return k == Kinematics::TableAC ? "xyzac-trt-kins" : "xyzbc-trt-kins"; }
+std::string linuxcncKinsComponent(Kinematics k) {
+  if (k == Kinematics::TableAB) return "xyzab_tdr_kins";
+  return k == Kinematics::TableAC ? "xyzac-trt-kins" : "xyzbc-trt-kins";
+}
 
 std::vector<std::pair<std::string, double>> linuxcncKinsChanges(const LocationErrors& e) {
   if (e.kinematics == Kinematics::TableAC) {
     const double dx = e.get("dx_AY"), dy = e.get("dy_AY"), dz = e.get("dz_AY"), dyc = e.get("dy_CA");
     return {{"x-rot-point", dx}, {"y-rot-point", dy + dyc}, {"z-rot-point", dz}, {"y-offset", -dyc}, {"z-offset", 0.0}};
   }
+  if (e.kinematics == Kinematics::TableAB)
+    return {{"x-rot-point", e.get("dx_BY")}, {"y-rot-point", e.get("dy_AB")}, {"z-rot-point", e.get("dz_BY")},
+            {"z-offset", e.get("dz_AB")}};
   const double dx = e.get("dx_BY"), dyc = e.get("dy_CB"), dz = e.get("dz_BY"), dxc = e.get("dx_CB");
   return {{"x-rot-point", dx + dxc}, {"y-rot-point", dyc}, {"z-rot-point", dz}, {"x-offset", -dxc}, {"z-offset", 0.0}};
 }

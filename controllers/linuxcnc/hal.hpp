@@ -10,7 +10,7 @@
 
 namespace rotacal {
 
-/// LinuxCNC kinematics component of a table machine: "xyzac-trt-kins" or "xyzbc-trt-kins".
+/// LinuxCNC kinematics component of a table machine: "xyzac-trt-kins", "xyzbc-trt-kins" or "xyzab_tdr_kins".
 std::string linuxcncKinsComponent(Kinematics kinematics);
 
 /// Changes (mm) of the trt-kins HAL pins that apply the identified location errors (added to
@@ -21,6 +21,8 @@ std::string linuxcncKinsComponent(Kinematics kinematics);
 ///  B/C: x-rot-point += dx_BY + dx_CB, y-rot-point += dy_CB, z-rot-point += dz_BY,
 ///       x-offset += -dx_CB, z-offset += 0
 ///       (B pivot = rot-point + offset = (dx_BY, dy_CB, dz_BY); the C axis passes through rot-point)
+///  A/B (xyzab_tdr_kins): x-rot-point += dx_BY, y-rot-point += dy_AB, z-rot-point += dz_BY,
+///       z-offset += dz_AB (the B axis through rot-point, the A axis through rot-point + offset)
 std::vector<std::pair<std::string, double>> linuxcncKinsChanges(const LocationErrors& identified);
 
 /// The `setp <component>.<pin> <value>` lines of a HAL file: pin -> value. '#' starts a comment.

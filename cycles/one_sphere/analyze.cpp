@@ -276,7 +276,10 @@ Json sphereReportJson(const ProbePlan& plan, const SphereCycleResult& r, const U
     j["location_errors_note"] = fmt::format(
         "the machine's papers' parameters ({}), each the ISO 230-7 parameter of kinematic_parameters it is to first "
         "order; the two models' sphere positions differ by at most {:.6f} um over the plan's poses",
-        plan.machine.kinematics == Kinematics::TableAC ? "000 Eq. (1)" : "002 Eq. (2)", r.mapping_residual_um);
+        plan.machine.kinematics == Kinematics::TableAC   ? "000 Eq. (1)"
+        : plan.machine.kinematics == Kinematics::TableBC ? "002 Eq. (2)"
+                                                          : "the A/B table's chain in 002's style, docs/conventions.md",
+        r.mapping_residual_um);
   } else {
     j["location_errors_note"] = fmt::format(
         "a {} machine: its location errors are the ISO 230-7 parameters of kinematic_parameters, in the uncertainty "

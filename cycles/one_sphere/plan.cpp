@@ -51,7 +51,7 @@ bool parseSwitch(const std::string& key, const std::string& text) {
 Pose poseOf(char tilt_axis, char turn_axis, double tilt, double turn) {
   Pose p;
   (tilt_axis == 'A' ? p.A : p.B) = tilt;
-  (turn_axis == 'B' ? p.B : p.C) = turn;
+  (turn_axis == 'A' ? p.A : (turn_axis == 'B' ? p.B : p.C)) = turn;
   return p;
 }
 
@@ -64,12 +64,17 @@ const std::vector<std::pair<const char*, const char*>>& spherePapersNames(Kinema
   static const std::vector<std::pair<const char*, const char*>> bc = {
       {"dx_BY", "X0B"}, {"dy_CB", "Y0C"}, {"dz_BY", "Z0B"}, {"a_BY", "A0B"},
       {"b_BY", "B0B"},  {"c_BY", "C0B"},  {"a_CB", "A0C"},  {"dx_CB", "X0C"}};
+  // The A/B table's chain (core/error_model.hpp) carries the model's own factors in the same
+  // order but for the B axis's three angles, placed before its translations as in 002.
+  static const std::vector<std::pair<const char*, const char*>> ab = {
+      {"dx_BY", "X0B"}, {"dy_AB", "Y0A"}, {"dz_BY", "Z0B"}, {"a_BY", "A0B"},
+      {"b_BY", "B0B"},  {"c_BY", "C0B"},  {"c_AB", "C0A"},  {"dz_AB", "Z0A"}};
+  if (k == Kinematics::TableAB) return ab;
   return k == Kinematics::TableAC ? ac : bc;
 }
 
 char sphereTiltAxis(const MachineModel& machine) {
-  if (machine.kinematics == Kinematics::TableAC) return 'A';
-  if (machine.kinematics == Kinematics::TableBC) return 'B';
+  if (hasPapersLocationErrors(machine.kinematics)) return tableTiltAxis(machine.kinematics);
   if (machine.kinematics == Kinematics::HeadTable && machine.head) return machine.head->axis;
   if (machine.kinematics == Kinematics::HeadAB && machine.head) return 'A';
   throw std::invalid_argument(fmt::format(
@@ -78,7 +83,10 @@ char sphereTiltAxis(const MachineModel& machine) {
       kinematicsName(machine.kinematics)));
 }
 
-char sphereTurnAxis(const MachineModel& machine) { return machine.kinematics == Kinematics::HeadAB ? 'B' : 'C'; }
+char sphereTurnAxis(const MachineModel& machine) {
+  if (hasPapersLocationErrors(machine.kinematics)) return tableTurnAxis(machine.kinematics);
+  return machine.kinematics == Kinematics::HeadAB ? 'B' : 'C';
+}
 
 KinematicModel sphereModel(const MachineModel& machine, const Eigen::Vector3d& center_w_mm) {
   if (machine.head)
@@ -108,12 +116,14 @@ SphereLayout SphereLayout::fromOptions(const MachineModel& machine, const CycleO
   const bool fine = designing != options.end() && designing->second != "0";
   // The grid a design picks from is finer than the grid run whole. A head tilts its spindle, and
   // the spindle housing (not modelled, only the probe is) comes down towards the table as the
-  // tilt grows: by default a head stays within 60 deg (tilt_list goes further).
-  const double widest = machine.head ? 60.0 : 90.0;
+  // tilt grows: by default a head stays within 60 deg (tilt_list goes further). So does the A/B
+  // table's B: with A turned too, B at 90 deg lays the stem across all but three sides.
+  const double widest = machine.head || machine.kinematics == Kinematics::TableAB ? 60.0 : 90.0;
   for (double t = -widest; t <= widest; t += fine ? 15.0 : 30.0)
     if (tilt.stroke_deg.contains(t)) l.tilt_deg.push_back(t);
   if (l.turn_axis != 'C') {
-    // head_ab's second head axis tilts the spindle too: the same range as the first.
+    // head_ab's second head axis tilts the spindle too, and table_ab's A table tilts the sphere
+    // about X: the same range as the first.
     const RotaryAxis& turn = machine.rotaryAxis(l.turn_axis);
     l.c_deg.clear();
     for (double t = -widest; t <= widest; t += fine ? 15.0 : 30.0)
@@ -123,7 +133,7 @@ SphereLayout SphereLayout::fromOptions(const MachineModel& machine, const CycleO
     for (double c = 0.0; c < 360.0; c += 30.0) l.c_deg.push_back(c);
   }
   const std::string turn_key = l.turnListOption();
-  // The turning axis's list is named for the axis (c_list, or b_list on head_ab): another
+  // The turning axis's list is named for the axis (c_list, b_list on head_ab, a_list on table_ab): another
   // axis's list is unknown on this machine.
   OptionTable("one_sphere")
       .vec3("center_w_mm", &l.center_w_mm)
@@ -218,9 +228,12 @@ PoseTouches touchesAt(const MachineModel& machine, const SphereLayout& l, char t
   PoseTouches out{{name, pose, c_m.z() + R + r + machine.clearance_mm - b_m.z()}, {}};
   // The side approaches turned about Z until one faces the stylus's lean: a head tilted in two
   // axes leans it diagonally, and of four axis-parallel sides only two would face it. A lean along
-  // X or Y (a table, one head axis) turns nothing.
+  // X or Y (a table, one head axis) turns nothing. Likewise until one faces the stem's lean: an A/B
+  // table tilted in both axes leans the stem diagonally, and three axis-parallel sides would touch
+  // its half of the sphere; turned, one side does and the other three lie on or off its boundary.
   double turn = 0.0;
   if (std::hypot(d_m.x(), d_m.y()) > 1e-9) turn = std::remainder(std::atan2(d_m.y(), d_m.x()), kPi / 2);
+  else if (std::hypot(s_m.x(), s_m.y()) > 1e-9) turn = std::remainder(std::atan2(s_m.y(), s_m.x()), kPi / 2);
   if (std::abs(turn) < 1e-9) turn = 0.0;
   const Eigen::Matrix3d R_turn = Eigen::AngleAxisd(turn, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   const auto& approaches = sphereApproaches();
@@ -312,7 +325,9 @@ PoseDesign refineForContributors(const MachineModel& machine, const KinematicMod
 std::vector<int> sphereHeldFirst(const KinematicModel& m) {
   if (m.table_axes.empty()) return {};  // head_ab: the rule's own choice (plan.hpp)
   if (!m.head_axes.empty()) return {m.parameterIndex("C0C")};
-  return {m.parameterIndex("C0C"), m.parameterIndex(m.table_axes.front() == 'A' ? "A0C" : "B0C")};
+  // The inner table axis's zero, and its tilt about the outer axis's direction.
+  const std::string inner(1, m.table_axes.back());
+  return {m.parameterIndex(inner + "0" + inner), m.parameterIndex(std::string(1, m.table_axes.front()) + "0" + inner)};
 }
 
 ProbePlan makeSpherePlan(const MachineModel& machine, const CycleOptions& options) {

@@ -7,7 +7,8 @@
 // to the stem side, and the ball's vertical way down to a side touch, its approach and its
 // stylus stay on that half as long as the tilt keeps the table below the sphere (|tilt| <= 90 deg).
 //
-// It runs on the tilting-table machines (table_ac, table_bc), on a B or A head over a C table
+// It runs on the tilting-table machines (table_ac, table_bc, and table_ab, whose grid is B x A:
+// an A table on a B axis, both tilting the sphere, each within 60 deg by default), on a B or A head over a C table
 // (head_table) and on an A head carrying a B head over a fixed table (head_ab, whose grid is A x B:
 // the sphere stays, the probe turns round it). On a head machine X Y Z read the head's pivot: every
 // planned position is the reading at which the ball, L along the tilted spindle, is where the
@@ -60,18 +61,19 @@ struct SphereLayout {
   /// poses (the design's n), design (D or A), fit_squareness, backlash (0 or 1).
   static SphereLayout fromOptions(const MachineModel& machine, const CycleOptions& options);
   CycleOptions toOptions() const;
-  /// The option that lists the second axis's angles: c_list, or b_list on head_ab.
-  std::string turnListOption() const { return turn_axis == 'C' ? "c_list" : "b_list"; }
+  /// The option that lists the second axis's angles: c_list, b_list on head_ab, a_list on table_ab.
+  std::string turnListOption() const { return std::string(1, static_cast<char>(turn_axis - 'A' + 'a')) + "_list"; }
   /// The poses (tilt, C in deg): pose_list, else the grid tilt_list x c_list (a backlash plan
   /// runs them there and back).
   std::vector<std::pair<double, double>> poses() const;
 };
 
-/// The tilt axis: 'A' for table_ac and head_ab, 'B' for table_bc, the head's axis for head_table.
+/// The tilt axis: 'A' for table_ac and head_ab, 'B' for table_bc and table_ab, the head's axis for head_table.
 /// Throws std::invalid_argument naming the kinematics when the machine has no touch probe's place
 /// (head_ab without its "head").
 char sphereTiltAxis(const MachineModel& machine);
-/// The pose grid's second axis: C, or the B head that the A head carries on head_ab.
+/// The pose grid's second axis: C, the B head that the A head carries on head_ab, or the A table
+/// that the B axis carries on table_ab.
 char sphereTurnAxis(const MachineModel& machine);
 
 /// The exact model the cycle fits on this machine, the sphere at center_w_mm on the table.

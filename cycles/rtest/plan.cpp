@@ -75,8 +75,9 @@ Eigen::Vector3d nestAxis_m(Kinematics k, const Pose& pose) {
 ProbePlan makeRtestPlan(const MachineModel& m, const CycleOptions& options) {
   // 002's index poses turn a tilting table; under a head the R-test sensors would read the
   // head's chain, which this cycle's model has not.
-  if (!hasPapersLocationErrors(m.kinematics))
-    throw std::invalid_argument(fmt::format("cycle rtest calibrates a tilting table (table_bc, table_ac), not a {} machine",
+  // 002's Table 2 errors are a tilt axis's and the C table's on it: an A/B table has no C.
+  if (!hasPapersLocationErrors(m.kinematics) || m.kinematics == Kinematics::TableAB)
+    throw std::invalid_argument(fmt::format("cycle rtest calibrates a tilting table carrying a C table (table_bc, table_ac), not a {} machine",
                                             kinematicsName(m.kinematics)));
   const std::string tilt_key = m.kinematics == Kinematics::TableBC ? "b_list" : "a_list";
   // The tilt axis's list is named for the axis (a_list or b_list): the other axis's is unknown.

@@ -43,7 +43,8 @@ class Spheres3 final : public Cycle {
     // the papers' chains at tilt 0 to first order (000 Eq. (1) on an A/C table, 002 Eq. (2) on a
     // B/C table; the second order is below 1 nm for errors of tens of um and mdeg).
     const Kinematics k = r.plan->machine.kinematics;
-    if (s.injected.contains("location_errors") && !hasPapersLocationErrors(k)) s.injected.erase("location_errors");
+    // Their 001 form exists for a tilt axis carrying a C table.
+    if (k != Kinematics::TableAC && k != Kinematics::TableBC) s.injected.erase("location_errors");
     if (s.injected.contains("location_errors")) {
       const Json e = s.injected["location_errors"];
       const bool ac = k == Kinematics::TableAC;

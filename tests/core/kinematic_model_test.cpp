@@ -87,6 +87,9 @@ TEST_P(AgreesWithThePapersModel, WhereTheFactorOrdersCoincide) {
 // 002: [Da Db Dc](a_BY b_BY c_BY) Dx(dx_BY) Dy(dy_CB) Dz(dz_BY) Db(-B) Da(a_CB) Dx(dx_CB) Dc(-C).
 // With the B axis's three angles zero: Dy(dy_CB) commutes with Db(-B) and is Y0C; Da(a_CB)
 // Dx(dx_CB) = Dx Da is X0C then A0C.
+// A/B: [Da Db Dc](a_BY b_BY c_BY) Dx(dx_BY) Dy(dy_AB) Dz(dz_BY) Db(-B) Dz(dz_AB) Dc(c_AB) Da(-A).
+// With the B axis's three angles zero: Dy(dy_AB) commutes with Db(-B) and is Y0A; Dz(dz_AB)
+// Dc(c_AB) is Z0A then C0A.
 INSTANTIATE_TEST_SUITE_P(
     KinematicModel, AgreesWithThePapersModel,
     ::testing::Values(PapersModel{"table_ac", Kinematics::TableAC,
@@ -94,7 +97,10 @@ INSTANTIATE_TEST_SUITE_P(
                                    {"dy_CA", "Y0C"}, {"b_CA", "B0C"}}},
                       PapersModel{"table_bc", Kinematics::TableBC,
                                   {{"dx_BY", "X0B"}, {"dz_BY", "Z0B"}, {"dy_CB", "Y0C"}, {"dx_CB", "X0C"},
-                                   {"a_CB", "A0C"}}}),
+                                   {"a_CB", "A0C"}}},
+                      PapersModel{"table_ab", Kinematics::TableAB,
+                                  {{"dx_BY", "X0B"}, {"dz_BY", "Z0B"}, {"dy_AB", "Y0A"}, {"dz_AB", "Z0A"},
+                                   {"c_AB", "C0A"}}}),
     [](const auto& info) { return info.param.configuration; });
 
 // Rotation by angle about the line through q with direction w (Rodrigues), as a transform.
@@ -178,6 +184,7 @@ std::vector<Pose> poseSet(const KinematicModel& m) {
       Pose p;
       if (m.name == "table_ac") p = {t, 0, c};
       else if (m.name == "table_bc") p = {0, t, c};
+      else if (m.name == "table_ab") p = {c, t, 0};  // the A table turns, the B axis tilts
       else if (m.name == "head_table") p = m.head_axes[0] == 'A' ? Pose{t, 0, c} : Pose{0, t, c};
       else p = {t, c, 0};
       poses.push_back(p);
@@ -232,7 +239,7 @@ TEST_P(ClosedFormUnseen, RankAndUnseenDirectionsAreTheClosedForm) {
 // offsets. A constant translation of the whole table side and the whole head side reads nothing.
 // The zero of an inner axis commutes with its motion: the outer axis's tilt about the same
 // direction (A0C, B0C, A0B) does the same.
-const double px = kSphere.x(), py = kSphere.y();
+const double px = kSphere.x(), py = kSphere.y(), pz = kSphere.z();
 INSTANTIATE_TEST_SUITE_P(
     KinematicModel, ClosedFormUnseen,
     ::testing::Values(
@@ -240,6 +247,9 @@ INSTANTIATE_TEST_SUITE_P(
         Unseen{"table_ac", 'B', 2, {{{"C0C", 1.0}, {"dX_S", py}, {"dY_S", -px}}, {{"A0A", 1.0}, {"A0C", -1.0}}}},
         // B0B likewise: a tilt of the C axis about Y (B0C).
         Unseen{"table_bc", 'B', 2, {{{"C0C", 1.0}, {"dX_S", py}, {"dY_S", -px}}, {{"B0B", 1.0}, {"B0C", -1.0}}}},
+        // A0A turns the set-up about the A table's axis X: the sphere moves by A0A ex x p_S, undone
+        // by d_S = A0A (0, p_z, -p_y); B0A, at nominal right after B's motion, is B0B.
+        Unseen{"table_ab", 'B', 2, {{{"A0A", 1.0}, {"dY_S", pz}, {"dZ_S", -py}}, {{"B0B", 1.0}, {"B0A", -1.0}}}},
         // B0B turns the ball about B: dX_T = -L B0B undoes it (the ball at -L moves by B0B x).
         Unseen{"head_table", 'B', 5,
                {{{"C0C", 1.0}, {"dX_S", py}, {"dY_S", -px}},

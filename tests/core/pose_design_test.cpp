@@ -26,6 +26,7 @@ std::vector<Pose> grid(const KinematicModel& m, const std::vector<double>& tilts
       if (m.name == "table_ac") p = {t, 0, c};
       else if (m.name == "table_bc") p = {0, t, c};
       else if (m.name == "head_table") p = {0, t, c};
+      else if (m.name == "table_ab") p = {c, t, 0};  // B tilts, the A table it carries turns
       else p = {t, c, 0};
       out.push_back(p);
     }
@@ -62,7 +63,8 @@ class EveryConfiguration : public ::testing::TestWithParam<std::string> {};
 TEST_P(EveryConfiguration, NoSingleExchangeImprovesTheDesignAndItBeatsARegularGrid) {
   const KinematicModel m = kinematicModel(GetParam(), kSphere, 250.0);
   const std::vector<double> tilts = {-90, -75, -60, -45, -30, -15, 0, 15, 30};
-  const bool heads = m.name == "head_ab";  // two tilting axes: the second one's angles from the tilts too
+  // two tilting axes (head_ab, table_ab): the second one's angles from the tilts too
+  const bool heads = m.name == "head_ab" || m.name == "table_ab";
   const std::vector<Pose> cand =
       grid(m, tilts, heads ? tilts : std::vector<double>{0, 30, 60, 90, 120, 150, 180, 210, 240, 270, 300, 330});
   PoseDesignOptions o;
@@ -78,12 +80,12 @@ TEST_P(EveryConfiguration, NoSingleExchangeImprovesTheDesignAndItBeatsARegularGr
       EXPECT_LE(poseSetLogDet(m, cand, s, o), d.log_det + 1e-9 * std::abs(d.log_det)) << GetParam();
     }
   // The regular grid with as many poses: two tilts (0 and -90) x four C angles (on the head-head
-  // machine two A angles x four B angles).
+  // machine two A angles x four B angles, on the A/B table two B angles x four A angles).
   std::vector<int> regular;
   for (size_t k = 0; k < cand.size(); ++k) {
     const Pose& p = cand[k];
     const double t = m.name == "head_ab" ? p.A : (m.name == "table_ac" ? p.A : p.B);
-    const double c = m.name == "head_ab" ? p.B : p.C;
+    const double c = m.name == "head_ab" ? p.B : (m.name == "table_ab" ? p.A : p.C);
     const bool c_ok = heads ? (c == 0 || c == 30 || c == -90 || c == -45) : std::fmod(c, 90.0) == 0.0;
     if ((t == 0 || t == -90) && c_ok) regular.push_back(static_cast<int>(k));
   }

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "controllers/dialect.hpp"
+#include "controllers/linuxcnc/hal.hpp"
 #include "core/errors.hpp"
 #include "core/machine.hpp"
 #include "core/statistics.hpp"
@@ -391,6 +392,65 @@ TEST(SignedUncertainty, Touch154TruthLiesWithinTwiceTheReportsUAsOftenAsClaimed)
 INSTANTIATE_TEST_SUITE_P(EveryCycle, CycleBattery, ::testing::ValuesIn(cycleNames()),
                          [](const ::testing::TestParamInfo<std::string>& i) { return i.param; });
 
+
+// The sphere cycle runs on every kinematics family it accepts: each bundled machine of one family
+// through plan, every dialect's program (or a refusal with its reason), simulate, analyze, diagnose
+// and the HTML report, and the offsets in the LinuxCNC form where the family has papers' errors.
+class SphereOnEveryFamily : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(SphereOnEveryFamily, PlanProgramsSimulateAnalyzeDiagnoseAndReport) {
+  const Cycle& cycle = cycleByName("one_sphere");
+  const MachineModel m = loadMachine(test::sourcePath("examples/machines/" + GetParam() + ".json"));
+  const ProbePlan p = cycle.plan(m, {});
+  int written = 0;
+  for (const auto& name : dialectNames()) {
+    const Dialect& d = dialectByName(name);
+    if (!d.hasPrograms()) continue;
+    try {
+      const nc::Program program = cycle.program(p, name);
+      const std::string text = d.writeProgram(program);
+      const auto problems = d.check(text, p, nc::shapeOf(program));
+      EXPECT_TRUE(problems.empty()) << name << ": " << (problems.empty() ? "" : problems.front());
+      ++written;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_GT(std::string(e.what()).size(), 20u) << name << ": a refusal must say why";
+    }
+  }
+  EXPECT_GE(written, 4) << GetParam();
+  const Dialect& lc = dialectByName("linuxcnc");
+  const DialectIO io = ioOf(lc);
+  SimulateRequest s;
+  s.plan = &p;
+  s.dialect = &io;
+  s.truth = {"truth.json", R"({"format": "rotacal-truth/1"})"};
+  s.noise_um = 0.3;
+  s.seed = 7;
+  const Simulated sim = cycle.simulate(s);
+  AnalyzeRequest a;
+  a.plan = &p;
+  a.dialect = &io;
+  a.results = {{"r1.txt", sim.results_text}};
+  const CycleDocuments rep = cycle.analyze(a);
+  EXPECT_NE(report::reportHtml(rep.doc).find("<html"), std::string::npos);
+  EXPECT_EQ(rep.offsets.has_value(), hasPapersLocationErrors(m.kinematics)) << GetParam();
+  if (rep.offsets) {
+    OffsetRequest o;
+    o.plan = &p;
+    o.identified = rep.offsets->identified;
+    o.u = rep.offsets->u;
+    o.path = "offsets.hal";
+    EXPECT_NE(lc.writeOffsets(o).find(linuxcncKinsComponent(m.kinematics)), std::string::npos) << GetParam();
+  }
+  DiagnoseRequest dr;
+  dr.plan = &p;
+  dr.dialect = &io;
+  dr.results = {{"r1.txt", sim.results_text}};
+  EXPECT_NE(report::reportHtml(cycle.diagnose(dr).doc).find("<html"), std::string::npos);
+}
+
+INSTANTIATE_TEST_SUITE_P(Machines, SphereOnEveryFamily,
+                         ::testing::Values("ac_trunnion", "bc_trunnion", "ab_table", "bc_head_table", "ab_head"),
+                         [](const auto& info) { return info.param; });
 
 TEST(CycleBattery, EveryCycleHasItsOwnProgramNumber) {
   // Two cycles' programs must never overwrite each other in the control's memory.

@@ -408,7 +408,7 @@ TEST(LinuxCncOffsets, NgcFormRefusesAForeignPreviousFileAndBcMachines) {
   bc.machine = test::machineFrom(test::kBcMachineJson);
   OffsetRequest b = request(bc);
   b.path = "offsets.ngc";
-  EXPECT_NE(messageOf<std::invalid_argument>([&] { lc().writeOffsets(b); }).find("A/C tables only"),
+  EXPECT_NE(messageOf<std::invalid_argument>([&] { lc().writeOffsets(b); }).find("A/C and A/B tables only"),
             std::string::npos);
 }
 

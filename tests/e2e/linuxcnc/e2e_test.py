@@ -52,6 +52,19 @@
       axes' positioning errors (000 Eq. (22), Table 5's sizes, drawn here): every trigger 0 .. F x 1 ms
       past the contact computed with the tables, the offsets written, U covering the truth.
 
+  e2e_test.py one_sphere_ab --rotacal BIN --work DIR
+      the A/B dual rotary table (ab_table_lcsim.json, xyzab_tdr_kins): its conventions read back in
+      its TCP kinematics (type 1, selected by the read-back program: M68 E3 Q1): the joints it chooses
+      for the sphere centre at every pose are rotacal's nominal machine positions at A = +A*, B = +B*,
+      every other sign/order candidate is far off, also with a rot-point and A offset away from zero.
+      Then plan one_sphere (9 poses) -> generate -> run unchanged on LinuxCNC whose virtual probe plays
+      truth_ab.json (rotacal's A/B chain) -> analyze: every trigger 0 .. F x 1 ms past the exact
+      contact; all 8 location errors within 0.5 um / 0.05 mdeg. Then the write-back: analyze --offsets
+      writes xyzab_tdr_kins' pins (previous, change, new; what the module cannot hold named with its
+      route) and the G54 program; LinuxCNC restarted with both and the cycle run again: what the work
+      offset holds within its U of zero, the rest unchanged; beside it the program compensated for the
+      first report: all 8 within U of zero.
+
 Exit 0 pass, 1 fail, 77 skip (LinuxCNC, halcompile or root missing: CTest SKIP_RETURN_CODE).
 """
 import argparse
@@ -131,6 +144,7 @@ def session(cmd):
 
 NAMES_AC = ("dx_AY", "dy_AY", "dz_AY", "dy_CA", "a_AY", "b_AY", "c_AY", "b_CA")
 NAMES_BC = ("dx_BY", "dy_CB", "dz_BY", "dx_CB", "a_BY", "b_BY", "c_BY", "a_CB")
+NAMES_AB = ("dx_BY", "dy_AB", "dz_BY", "dz_AB", "a_BY", "b_BY", "c_BY", "c_AB")
 
 
 def injected(truth=TRUTH):
@@ -138,7 +152,9 @@ def injected(truth=TRUTH):
     with open(truth) as f:
         le = json.load(f)["location_errors"]
     out = {}
-    for name in (NAMES_BC if any(n in le for n in NAMES_BC) else NAMES_AC):
+    names = NAMES_AB if any(n in le for n in ("dy_AB", "dz_AB", "c_AB")) else (
+        NAMES_BC if any(n in le for n in NAMES_BC) else NAMES_AC)
+    for name in names:
         e = le.get(name, {"value": 0.0, "unit": "um" if name[0] == "d" else "mdeg"})
         out[name] = e["value"] * (TO_UM if name[0] == "d" else TO_MDEG)[e["unit"]]
     return out
@@ -170,6 +186,9 @@ def compare(got, want, label):
 # two directions across it. The recorded position is where the ball really was, so the analysis
 # is not affected; only this check needs the bound.
 ROUNDING_ACROSS_UM = 0.05 * 2 ** 0.5
+# The A/B table's sides turned to face a diagonal stem (one_sphere's plan) are approached along a
+# diagonal: each of the three coordinates' roundings has a part across it.
+ROUNDING_ACROSS_3D_UM = 0.05 * 3 ** 0.5
 
 
 def lateness(work, run_dir, plan, offsets=None, cycle="touch154", points=154, across_um=0.001, machine=MACHINE):
@@ -734,6 +753,264 @@ def run_one_sphere_bc(a):
     print("one_sphere B/C on LinuxCNC: %d touches, LinuxCNC session %.0f s" % (n_points, t))
 
 
+MACHINE_AB = os.path.join(HERE, "ab_table_lcsim.json")
+TRUTH_AB = os.path.join(HERE, "truth_ab.json")
+# one_sphere's poses on the A/B machine: three B tilts x three A turns = 9 poses. The plan's default
+# (B x A, -60 .. 60 in 30 deg steps, 25 poses) would take three times as long; this set keeps
+# every separable parameter (the plan refuses a set that loses one) and the identification within
+# the tolerance (docs/e2e-linuxcnc.md).
+ONE_SPHERE_AB_SET = ["tilt_list=-60,0,60", "a_list=-60,0,60"]
+
+
+def rx_deg(t, v):
+    t = math.radians(t)
+    return [v[0], math.cos(t) * v[1] - math.sin(t) * v[2], math.sin(t) * v[1] + math.cos(t) * v[2]]
+
+
+def ry_deg(t, v):
+    t = math.radians(t)
+    return [math.cos(t) * v[0] + math.sin(t) * v[2], v[1], -math.sin(t) * v[0] + math.cos(t) * v[2]]
+
+
+def kins_readback_ab(a, work, plan_path):
+    """The controller's A/B conventions, read back from the running xyzab_tdr_kins in its TCP
+    kinematics (type 1, selected by the program itself as the sample config's M428 does: M68 E3 Q1,
+    M66 E0 L0), not assumed. For every pose of the plan the program moves the ball, in table
+    coordinates, to the sphere's nominal centre at the joint angles rotacal's program commands there
+    (A = +A*, B = +B*: ab_table_lcsim.json's linuxcnc sign), and LOGs the joints LinuxCNC chose and
+    the ball as the virtual probe sees it in its table frame. Checks:
+      * the joints are the plan's nominal sphere centre in machine coordinates: rotacal's nominal
+        kinematics (p_m = Db(-B*) Da(-A*) p_w) are the controller's;
+      * every other sign/order candidate (Ry(+-B) Rx(+-A), Rx(+-A) Ry(+-B)) is far off;
+      * the probe (no errors) puts the ball at the commanded table point;
+    then the same with a rot-point and A offset away from zero, on the kinematics' pins and the
+    probe's lines alike: the pins' meaning, which the write-back relies on (the module's
+    kinematicsInverse: p_m = Ry(-B) (Rx(-A) (p_t - R - D) + D) + R, D = (x-offset, 0, z-offset))."""
+    with open(plan_path) as f:
+        plan = json.load(f)
+    centre = plan["points"][0]["sphere"]["center_w_mm"]
+    radius = plan["points"][0]["sphere"]["radius_mm"]
+    rows = [(pose["pose"]["A"], pose["pose"]["B"], centre) for pose in plan["poses"]]   # (A*, B*, table point)
+    rows += [(45.0, -30.0, [10.0, 20.0, 30.0]), (-100.0, 60.0, [40.0, -70.0, 25.0]),
+             (30.0, 100.0, [-50.0, 30.0, 60.0]), (0.0, 0.0, [0.0, 0.0, 0.0])]
+    truth0 = os.path.join(work, "truth_none.json")
+    with open(truth0, "w") as f:
+        json.dump({"format": "rotacal-truth/1", "_comment": "no error: the controller's nominal table"}, f)
+    R, D = (5.0, -3.0, 7.0), (20.0, 0.0, -15.0)
+    out = {}
+    n_poses = len(plan["poses"])
+    for tag, rd in (("zero", None), ("offsets", (R, D))):
+        rows_ = rows if rd is None else rows[:n_poses:max(1, n_poses // 4)] + rows[n_poses:]
+        ngc = os.path.join(work, "kins_readback_%s.ngc" % tag)
+        with open(ngc, "w") as f:
+            f.write("(rotacal e2e: xyzab_tdr_kins read-back, TCP kinematics; row: i A B x y z, the joints 0..4,"
+                    " the probe's ball in its table frame)\nG21 G17 G40 G49 G54 G61 G90 G94\n"
+                    "M68 E3 Q1\nM66 E0 L0\n(LOGOPEN,kins_readback.txt)\n(LOG,K #<_hal[motion.switchkins-type]>)\n")
+            for i, (a_star, b_star, p) in enumerate(rows_):
+                f.write("G0 X%.6f Y%.6f Z%.6f A%.6f B%.6f\nM66 E0 L0\n" % (p[0], p[1], p[2], a_star, b_star))
+                f.write("(LOG,R %d %.6f %.6f %.6f %.6f %.6f)\n" % (i, a_star, b_star, p[0], p[1], p[2]))
+                f.write("(LOG,J %d" % i + "".join(" #<_hal[joint.%d.pos-cmd]>" % j for j in range(5)) + ")\n")
+                f.write("(LOG,T %d #<_hal[vtouchprobe.0.ball-tx]> #<_hal[vtouchprobe.0.ball-ty]> "
+                        "#<_hal[vtouchprobe.0.ball-tz]>)\n" % i)
+            # back to identity at zero angles, where the two agree
+            f.write("G0 A0 B0\nM68 E3 Q0\nM66 E0 L0\n(LOGCLOSE)\nM2\n")
+        cmd = [RUN, "--ngc", ngc, "--truth", truth0, "--machine", MACHINE_AB, "--out",
+               os.path.join(work, "readback_" + tag), "--timeout", "300"]
+        if rd:
+            setp = os.path.join(work, "readback_offsets.hal")
+            with open(setp, "w") as f:
+                (rx_, ry_, rz_), (dx, _, dz) = rd
+                for k, v in (("x-rot-point", rx_), ("y-rot-point", ry_), ("z-rot-point", rz_), ("x-offset", dx),
+                             ("z-offset", dz)):
+                    f.write("setp xyzab_tdr_kins.%s %.12g\n" % (k, v))
+                # the probe's B line through R, its A line through R + D (x-offset moves along A: nothing)
+                for k, v in zip(("a-px", "a-py", "a-pz", "c-px", "c-py", "c-pz"), (rx_, ry_, rz_, rx_ + dx, ry_, rz_ + dz)):
+                    f.write("setp vtouchprobe.0.%s %.12g\n" % (k, v))
+            cmd += ["--setp", setp]
+        _, t = session(cmd)
+        parts, kinstype = {}, None
+        with open(os.path.join(work, "readback_" + tag, "kins_readback.txt")) as f:
+            for line in f:
+                t_ = line.split()
+                if len(t_) == 2 and t_[0] == "K":
+                    kinstype = float(t_[1])
+                if len(t_) >= 2 and t_[0] in ("R", "J", "T"):
+                    parts.setdefault(int(t_[1]), {})[t_[0]] = [float(x) for x in t_[2:]]
+        check(kinstype == 1.0, "read-back (%s): motion.switchkins-type = %s after M68 E3 Q1 (1: TCP)" % (tag, kinstype))
+        # a row: i, A, B, x, y, z (commanded), joints 0..4, the probe's ball x y z
+        got = [[float(i)] + v["R"] + v["J"] + v["T"] for i, v in sorted(parts.items())
+               if len(v.get("R", [])) == 5 and len(v.get("J", [])) == 5 and len(v.get("T", [])) == 3]
+        check(len(got) == len(rows_), "read-back (%s): %d rows of %d" % (tag, len(got), len(rows_)))
+        R_, D_ = rd if rd else ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+
+        def cand(order, sa, sb, a_, b_, p):
+            q = [p[k] - R_[k] - D_[k] for k in range(3)]
+            if order == "BA":     # A turns the table point first and is carried by B
+                v = ry_deg(sb * b_, [x + d for x, d in zip(rx_deg(sa * a_, q), D_)])
+            else:
+                v = rx_deg(sa * a_, [x + d for x, d in zip(ry_deg(sb * b_, q), D_)])
+            return [v[k] + R_[k] for k in range(3)]
+        worst = {}
+        for order in ("BA", "AB"):
+            for sa in (1, -1):
+                for sb in (1, -1):
+                    worst[(order, sa, sb)] = max(
+                        max(abs(g[6 + k] - cand(order, sa, sb, g[1], g[2], g[3:6])[k]) for k in range(3)) for g in got)
+        best = worst[("BA", -1, -1)]
+        others = min(v for k, v in worst.items() if k != ("BA", -1, -1))
+        check(best < 1e-6, "read-back (%s): joints = Ry(-B) (Rx(-A) (p - R - D) + D) + R within %.1e mm (%d rows)"
+              % (tag, best, len(got)))
+        check(others > 1.0, "read-back (%s): every other sign/order candidate is off by at least %.1f mm"
+              % (tag, others))
+        check(all(abs(g[9] - g[1]) < 1e-9 and abs(g[10] - g[2]) < 1e-9 for g in got),
+              "read-back (%s): joints 3, 4 are the commanded A, B" % tag)
+        ball = max(max(abs(g[11 + k] - g[3 + k]) for k in range(3)) for g in got)
+        check(ball < 1e-6, "read-back (%s): the probe's ball in its table frame = the commanded table point within "
+              "%.1e mm" % (tag, ball))
+        if not rd:
+            r_ball = plan["machine"]["probe"]["ball_diameter_mm"] / 2.0
+            dev, dev_chain = 0.0, 0.0
+            for pose_i, pose in enumerate(plan["poses"]):
+                pt = [q for q in plan["points"] if q["pose_name"] == pose["name"]][0]
+                cm = [pt["trigger_m_mm"][k] + (radius + r_ball) * pt["approach_m"][k] for k in range(3)]
+                dev = max(dev, max(abs(got[pose_i][6 + k] - cm[k]) for k in range(3)))
+                pc = ry_deg(-pose["pose"]["B"], rx_deg(-pose["pose"]["A"], centre))
+                dev_chain = max(dev_chain, max(abs(pc[k] - cm[k]) for k in range(3)))
+            check(dev < 1e-5, "read-back: at all %d poses LinuxCNC puts the sphere centre where rotacal's plan does "
+                  "(A = +A*, B = +B*), within %.1e mm" % (len(plan["poses"]), dev))
+            check(dev_chain < 1e-5, "the plan's centres are Db(-B*) Da(-A*) c_w (rotacal's A/B chain, nominal) within "
+                  "%.1e mm" % dev_chain)
+        out[tag] = {"rows": len(got), "session_s": t, "max_dev_mm": best, "other_candidates_min_mm": others,
+                    "candidates_mm": {"%s A%+d B%+d" % k: v for k, v in worst.items()}, "probe_ball_dev_mm": ball}
+    return out
+
+
+def plan_one_sphere_ab(a, work):
+    plan, ngc = os.path.join(work, "plan.json"), os.path.join(work, "one_sphere.ngc")
+    cmd = [a.rotacal, "plan", "--cycle", "one_sphere", "--machine", MACHINE_AB, "-o", plan]
+    for kv in ONE_SPHERE_AB_SET:
+        cmd += ["--set", kv]
+    sh(cmd)
+    sh([a.rotacal, "generate", "--plan", plan, "--dialect", "linuxcnc", "-o", ngc])
+    return plan, ngc
+
+
+def run_one_sphere_ab(a):
+    work = a.work
+    plan, ngc = plan_one_sphere_ab(a, work)
+    with open(plan) as f:
+        n_points = len(json.load(f)["points"])
+    run = os.path.join(work, "run")
+    readback, (_, t) = side_by_side(
+        lambda: kins_readback_ab(a, work, plan),
+        lambda: session([RUN, "--ngc", ngc, "--truth", TRUTH_AB, "--machine", MACHINE_AB, "--plan", plan, "--out", run,
+                         "--timeout", "300"]))
+    figures = {"readback": readback, "run_s": t}
+    figures["lateness"] = lateness(work, run, plan, cycle="one_sphere", points=n_points,
+                                   across_um=ROUNDING_ACROSS_3D_UM, machine=MACHINE_AB)
+    rep, r, want, held = analyze_one_sphere(a, work, plan, run, TRUTH_AB, "the A/B chain")
+    # what one sphere cannot separate: A's zero (with the sphere's set-up) and A's tilt about Y (with
+    # B's zero); the A/B chain carries neither, so the truth injects neither
+    check(held == ["A0A", "B0A"], "the report holds exactly A0A and B0A at nominal (unseparable): %s" % held)
+    got = identified(rep)
+    compare(got, want, "one_sphere on LinuxCNC (xyzab_tdr_kins), injected B and A location errors")
+    U = {n: e["U"] for n, e in r["location_errors"].items()}
+    figures.update({"identified": got, "injected": want, "unseparable": r.get("unseparable"), "points": n_points,
+                    "U": U, "location_errors_note": r.get("location_errors_note")})
+    figures.update(write_back_ab(a, work, plan, ngc, rep, got, want))
+    with open(os.path.join(work, "figures.json"), "w") as f:
+        json.dump(figures, f, indent=1)
+    print("one_sphere A/B on LinuxCNC: %d touches, LinuxCNC session %.0f s" % (n_points, t))
+
+
+# What each route holds on the A/B table: xyzab_tdr_kins' pins the B axis's place (rot-point) and A's
+# offset from it (z-offset); the work offset, in every kinematics, B's place and zero; the rest only
+# a rewritten program (rotacal compensate) or the mechanics.
+AB_PINS = {"x-rot-point": "dx_BY", "y-rot-point": "dy_AB", "z-rot-point": "dz_BY", "z-offset": "dz_AB"}
+AB_WORK_OFFSET = ("dx_BY", "dy_AB", "dz_BY", "b_BY")
+
+
+def write_back_ab(a, work, plan, ngc, rep1, got1, want):
+    """The write-back and the loop closed on the controller. analyze --offsets writes the kinematics'
+    own pins (offsets.hal: previous, change, new; what the module cannot hold named with its route)
+    and the work offset (offsets.ngc). LinuxCNC is then started again with the pins loaded (--setp,
+    as the HAL file would be) and the work offset run first (--pre-ngc), and the unchanged cycle
+    measures again: what the work offset holds within its U of zero, the rest as before. The cycle
+    runs in identity kinematics, where the pins act not (their meaning is the read-back's, in TCP);
+    beside it, the program rewritten for all eight (rotacal compensate): every one within U of zero."""
+    hal, g10 = os.path.join(work, "offsets.hal"), os.path.join(work, "offsets.ngc")
+    res1 = os.path.join(work, "run", "rotacal_one_sphere.txt")
+    for out in (hal, g10):
+        if os.path.exists(out):
+            os.remove(out)       # the loop starts from the nominal pins and G54 = 0 (a file present is added to)
+        sh([a.rotacal, "analyze", "--plan", plan, "--results", res1, "--dialect", "linuxcnc", "--json",
+            os.path.join(work, "report_offsets.json"), "--offsets", out])
+    with open(hal) as f:
+        hal_text = f.read()
+    print(hal_text)
+    pins = {}
+    for line in hal_text.splitlines():
+        t_ = line.split()
+        if len(t_) == 3 and t_[0] == "setp" and t_[1].startswith("xyzab_tdr_kins."):
+            pins[t_[1].split(".", 1)[1]] = float(t_[2])
+    check(sorted(pins) == sorted(AB_PINS), "offsets.hal sets xyzab_tdr_kins' %s" % ", ".join(sorted(pins)))
+    check(all(abs(pins[k] - got1[n] * 1e-3) <= 1e-6 for k, n in AB_PINS.items() if k in pins),
+          "each pin's new value = its previous (0) + the identified %s in mm"
+          % ", ".join("%s -> %s" % (n, k) for k, n in AB_PINS.items()))
+    table = [l for l in hal_text.splitlines() if l.startswith("# ") and len(l.split()) == 5]
+    check(any(l.split()[1:] == ["pin", "previous", "change", "new"] for l in table),
+          "offsets.hal gives each pin's previous value, change and new value")
+    rest = [l for l in hal_text.splitlines() if "Reported only" in l or "rotacal compensate" in l]
+    check(any("a_BY, c_BY" in l and "c_AB" in l for l in rest) and any("rotacal compensate" in l for l in rest),
+          "offsets.hal names what the module cannot hold (a_BY, c_BY, c_AB) and the route (rotacal compensate)")
+    check("G10 L2 P1 B" in hal_text, "offsets.hal gives B's zero as a work offset (G10 L2 P1 B)")
+    with open(g10) as f:
+        g10_text = f.read()
+    print(g10_text)
+    g10_line = [l for l in g10_text.splitlines() if l.startswith("G10 L2 P1")][0].split()[3:]
+    want_g54 = {w[0]: float(w[1:]) for w in g10_line}
+    check(sorted(want_g54) == ["B", "X", "Y", "Z"] and "dz_AB, a_BY, c_BY, c_AB" in g10_text,
+          "offsets.ngc shifts G54 X Y Z B and names what no shift expresses (dz_AB, a_BY, c_BY, c_AB)")
+    comp = os.path.join(work, "one_sphere_compensated.ngc")
+    sh([a.rotacal, "compensate", "--program", ngc, "--report", rep1, "--dialect", "linuxcnc", "-o", comp])
+    run2, run3 = os.path.join(work, "run2"), os.path.join(work, "run3")
+    (_, t2), (_, t3) = side_by_side(
+        lambda: session([RUN, "--setp", hal, "--pre-ngc", g10, "--ngc", ngc, "--truth", TRUTH_AB, "--machine",
+                         MACHINE_AB, "--plan", plan, "--out", run2, "--timeout", "300"]),
+        lambda: session([RUN, "--ngc", comp, "--truth", TRUTH_AB, "--machine", MACHINE_AB, "--plan", plan, "--out",
+                         run3, "--timeout", "300"]))
+    with open(os.path.join(run2, "driver_status.json")) as f:
+        g54 = json.load(f)["g5x_offset_after"][0]
+    check(all(abs(g54["XYZAB".index(k)] - v) < 1e-9 for k, v in want_g54.items()),
+          "LinuxCNC's G54 after the offsets program %s = the G10 line %s" % (g54[:5], want_g54))
+    with open(plan) as f:
+        n_points = len(json.load(f)["points"])
+    lat2 = lateness(work, run2, plan, offsets=g10, cycle="one_sphere", points=n_points,
+                    across_um=ROUNDING_ACROSS_3D_UM, machine=MACHINE_AB)
+    rep2, rep3 = os.path.join(work, "report2.json"), os.path.join(work, "report3.json")
+    sh([a.rotacal, "analyze", "--plan", plan, "--results", os.path.join(run2, "rotacal_one_sphere.txt"),
+        "--dialect", "linuxcnc", "--json", rep2])
+    sh([a.rotacal, "analyze", "--plan", plan, "--results", os.path.join(run3, "rotacal_one_sphere.txt"),
+        "--dialect", "linuxcnc", "--json", rep3, "--compensated-with", rep1])
+    out = {"run2_s": t2, "run3_s": t3, "lateness2": lat2, "pins": pins, "g54": want_g54}
+    for tag, path, held in (("after_offsets", rep2, AB_WORK_OFFSET), ("compensated", rep3, tuple(want))):
+        with open(path) as f:
+            le = json.load(f)["location_errors"]
+        rows = {}
+        for name, w in want.items():
+            expect = 0.0 if name in held else w
+            d, U = le[name]["value"] - expect, le[name]["U"]
+            # the compensated program prints its angles to 4 decimals (0.05 mdeg of rounding on each
+            # axis): there U alone is the bound
+            tol = (LENGTH_TOL_UM if name[0] == "d" else ANGLE_TOL_MDEG) if tag == "after_offsets" else U
+            what = "within its U of zero" if name in held else "unchanged (not held: reported, named above)"
+            check(abs(d) <= U and abs(d) <= tol, "%s: %-6s %9.4f %s, expected %9.4f: diff %+8.4f, U %.4f (tol %g)"
+                  % (tag, name, le[name]["value"], le[name]["unit"], expect, d, U, tol) + " " + what)
+            rows[name] = {"value": le[name]["value"], "U": U, "expected": expect}
+        out[tag] = rows
+    return out
+
+
 GUIDE = os.path.join(HERE, "..", "..", "..", "docs", "guide", "linuxcnc.md")
 GUIDE_MACHINE = "examples/machines/ac_trunnion.json"   # the guide's MACHINE.json, here the e2e controller's
 
@@ -898,7 +1175,8 @@ def run_no_trigger(a):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("case", choices=("touch154", "no_trigger", "comp_table", "one_sphere_bc", "one_sphere_ac"))
+    ap.add_argument("case", choices=("touch154", "no_trigger", "comp_table", "one_sphere_bc", "one_sphere_ac",
+                                     "one_sphere_ab"))
     ap.add_argument("--rotacal", required=True)
     ap.add_argument("--work", required=True)
     a = ap.parse_args()
@@ -908,7 +1186,7 @@ def main():
         sys.exit(77)
     os.makedirs(a.work, exist_ok=True)
     {"touch154": run_touch154, "no_trigger": run_no_trigger, "comp_table": run_comp_table,
-     "one_sphere_bc": run_one_sphere_bc, "one_sphere_ac": run_one_sphere_ac}[a.case](a)
+     "one_sphere_bc": run_one_sphere_bc, "one_sphere_ac": run_one_sphere_ac, "one_sphere_ab": run_one_sphere_ab}[a.case](a)
     finish()
 
 

@@ -1,5 +1,6 @@
-# lcsim_core.tcl -- HAL for the headless XYZAC or XYZBC trunnion simulation
-# (lcsim_xyzac.ini, lcsim_xyzbc.ini: the kinematics module is the INI's).
+# lcsim_core.tcl -- HAL for the headless XYZAC or XYZBC trunnion or XYZAB dual
+# rotary table simulation (lcsim_xyzac.ini, lcsim_xyzbc.ini, lcsim_xyzab.ini:
+# the kinematics module is the INI's).
 # Run by LinuxCNC (haltcl) with the INI sections available as ::SECTION(item)
 # and the environment as ::env().
 #
@@ -16,7 +17,7 @@
 # --- motion, kinematics ------------------------------------------------------
 # the INI value is a Tcl list (one element per occurrence): split "module sparm=..." into words
 eval loadrt [lindex $::KINS(KINEMATICS) 0]
-set kins [lindex [lindex $::KINS(KINEMATICS) 0] 0]   ;# xyzac-trt-kins or xyzbc-trt-kins
+set kins [lindex [lindex $::KINS(KINEMATICS) 0] 0]   ;# xyzac-trt-kins, xyzbc-trt-kins or xyzab_tdr_kins
 loadrt [lindex $::EMCMOT(EMCMOT) 0] servo_period_nsec=$::EMCMOT(SERVO_PERIOD) num_joints=$::KINS(JOINTS)
 addf motion-command-handler servo-thread
 addf motion-controller      servo-thread
@@ -33,7 +34,12 @@ net tool-change-loop iocontrol.0.tool-change     => iocontrol.0.tool-changed
 
 # motion.switchkins-type stays unconnected at 0: identity kinematics
 # (sparm=identityfirst in the INI). G43 still reaches the kinematics module.
-net :tool-offset     motion.tooloffset.z  => $kins.tool-offset
+# (xyzab_tdr_kins calls its pin tool-offset-z)
+if {$kins == "xyzab_tdr_kins"} {
+    net :tool-offset     motion.tooloffset.z  => $kins.tool-offset-z
+} else {
+    net :tool-offset     motion.tooloffset.z  => $kins.tool-offset
+}
 
 # --- virtual probe -----------------------------------------------------------
 loadrt vtouchprobe
@@ -58,16 +64,22 @@ if {[info exists ::env(LCSIM_XYZ_FROM_MOTOR)] && $::env(LCSIM_XYZ_FROM_MOTOR) ==
     net :jy joint.1.pos-cmd => vtouchprobe.0.joint-y
     net :jz joint.2.pos-cmd => vtouchprobe.0.joint-z
 }
-# joint 3 is the tilt axis, A (xyzac) or B (xyzbc): the probe's (pA, uA) line is that axis
-net :ja joint.3.pos-cmd => vtouchprobe.0.joint-a
-# C: the joint's command (default), or with LCSIM_C_FROM_MOTOR=1 the motor's command, which
-# carries the joint's compensation table (COMP_FILE: motor-pos-cmd = pos-cmd + correction); the
-# probe's true angle error is then a function of where the motor really is, as on a machine whose
-# encoder sits on the motor (tests/e2e/linuxcnc: the comp_table case)
-if {[info exists ::env(LCSIM_C_FROM_MOTOR)] && $::env(LCSIM_C_FROM_MOTOR) == 1} {
-    net j4-motor => vtouchprobe.0.joint-c
+# the probe's (pA, uA) line is the axis on the bed, its (pC, uC) line the one that axis carries:
+# joint 3 and 4 on the trunnions (A or B, then C); on xyzab_tdr_kins joint 4 (B) carries joint 3 (A)
+if {$kins == "xyzab_tdr_kins"} {
+    net :ja joint.4.pos-cmd => vtouchprobe.0.joint-a
+    net :jc joint.3.pos-cmd => vtouchprobe.0.joint-c
 } else {
-    net :jc joint.4.pos-cmd => vtouchprobe.0.joint-c
+    net :ja joint.3.pos-cmd => vtouchprobe.0.joint-a
+    # C: the joint's command (default), or with LCSIM_C_FROM_MOTOR=1 the motor's command, which
+    # carries the joint's compensation table (COMP_FILE: motor-pos-cmd = pos-cmd + correction); the
+    # probe's true angle error is then a function of where the motor really is, as on a machine whose
+    # encoder sits on the motor (tests/e2e/linuxcnc: the comp_table case)
+    if {[info exists ::env(LCSIM_C_FROM_MOTOR)] && $::env(LCSIM_C_FROM_MOTOR) == 1} {
+        net j4-motor => vtouchprobe.0.joint-c
+    } else {
+        net :jc joint.4.pos-cmd => vtouchprobe.0.joint-c
+    }
 }
 # after motion-controller (and the sums above, when present)
 addf vtouchprobe.0 servo-thread

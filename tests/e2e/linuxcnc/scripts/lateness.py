@@ -9,7 +9,7 @@ The recorded touch moves along the plan's approach line through the nominal trig
 single and the double touch: the second touch starts on that line, retract_mm back from where
 the first stopped). The exact contact on that line is found by bisection (lcsim_geom.first_contact,
 ~1e-10 of the move), with joints A = -A*, C = -C* (the LinuxCNC sign of rotacal's machine
-file; B = -B* on a B/C table). With --offsets (rotacal's G10 L2 P1 work-offset program),
+file; B = -B* on a B/C table; B = +B*, A = +A* on the A/B table). With --offsets (rotacal's G10 L2 P1 work-offset program),
 machine = program + offset.
 Reported per point, in um: over = (recorded - contact) . approach (> 0: late) and across =
 the part perpendicular to the approach. Exit 1 on a missing point or a result file that is not
@@ -40,8 +40,8 @@ def read_log(path):
 
 
 def read_offsets(path):
-    """X Y Z A of the 'G10 L2 P1' line of rotacal's work-offset program."""
-    o = {"X": 0.0, "Y": 0.0, "Z": 0.0, "A": 0.0}
+    """X Y Z A (or B) of the 'G10 L2 P1' line of rotacal's work-offset program."""
+    o = {"X": 0.0, "Y": 0.0, "Z": 0.0, "A": 0.0, "B": 0.0}
     if not path:
         return o
     with open(path) as f:
@@ -81,8 +81,12 @@ def main():
         u = pt["approach_m"]
         tr = G.add(pt["trigger_m_mm"], off)
         # joint 3 is the tilt axis: A on xyzac-trt-kins, B on xyzbc-trt-kins (the offsets' G10 has no B)
-        tilt = -pt["pose"]["B"] if p["machine"]["kins"] == "xyzbc" else -pt["pose"]["A"] + o["A"]
-        ja, jc = tilt, -pt["pose"]["C"]
+        if p["machine"]["kins"] == "xyzab":
+            # the harness's [outer, inner] = [B, A]; xyzab_tdr_kins counts as rotacal: B = +B*, A = +A*
+            ja, jc = pt["pose"]["B"] + o.get("B", 0.0), pt["pose"]["A"]
+        else:
+            tilt = -pt["pose"]["B"] if p["machine"]["kins"] == "xyzbc" else -pt["pose"]["A"] + o["A"]
+            ja, jc = tilt, -pt["pose"]["C"]
         j0 = G.add(tr, G.scale(u, -before)) + [ja, jc]
         j1 = G.add(tr, G.scale(u, past)) + [ja, jc]
         hit = G.first_contact(j0, j1, p, step=0.01)

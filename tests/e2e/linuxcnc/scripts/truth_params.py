@@ -31,6 +31,12 @@ The mapping (docs/e2e-linuxcnc.md, "Truth -> component"):
   is the harness's "eq2" chain term by term, same names and signs, evaluated at B* = -B, C* = -C
   (dialect_sign -1 for B and C, required). A B/C machine needs no test piece: without an
   artefact the block is off and the plan's sphere is the piece.
+* A/B table (machine "kinematics": "table_ab", LinuxCNC's xyzab_tdr_kins, type 1:
+  p_m = Ry(-B) Rx(-A) p_w at R = D = 0, docs/e2e-linuxcnc.md): rotacal's A/B chain
+  (docs/conventions.md)
+      T_m_w = Da(a_BY) Db(b_BY) Dc(c_BY) Dx(dx_BY) Dy(dy_AB) Dz(dz_BY) Db(-B*) Dz(dz_AB) Dc(c_AB) Da(-A*)
+  is the harness's "eq3" chain term by term, same names and signs, evaluated at B* = +B, A* = +A
+  (dialect_sign +1 for A and B, required: the module counts as rotacal does). No test piece.
 * form_error, probe_noise_um and drifts are not modelled by the component: refused.
 * --plan: a sphere cycle's plan (spheres3, one_sphere) puts its spheres (ids 1..3: the
   component's sphere, sphere2, sphere3) at the plan's nominal centres and radius, workpiece frame,
@@ -50,8 +56,11 @@ import lcsim_geom as G  # noqa: E402
 LENGTH = {"um": 1.0, "mm": 1000.0}                       # -> um
 ANGLE = {"mdeg": 1.0, "deg": 1000.0, "urad": 180.0 / math.pi * 1e-3}   # -> mdeg
 NAMES = {"table_ac": ("dx_AY", "dy_AY", "dz_AY", "dy_CA", "a_AY", "b_AY", "c_AY", "b_CA"),
-         "table_bc": ("dx_BY", "dy_CB", "dz_BY", "dx_CB", "a_BY", "b_BY", "c_BY", "a_CB")}
-KINS = {"table_ac": ("xyzac", "eq1", "AC"), "table_bc": ("xyzbc", "eq2", "BC")}
+         "table_bc": ("dx_BY", "dy_CB", "dz_BY", "dx_CB", "a_BY", "b_BY", "c_BY", "a_CB"),
+         "table_ab": ("dx_BY", "dy_AB", "dz_BY", "dz_AB", "a_BY", "b_BY", "c_BY", "c_AB")}
+KINS = {"table_ac": ("xyzac", "eq1", "AC"), "table_bc": ("xyzbc", "eq2", "BC"), "table_ab": ("xyzab", "eq3", "AB")}
+# how each module counts the table's angles against rotacal's papers' convention
+LINUXCNC_SIGN = {"table_ac": -1, "table_bc": -1, "table_ab": 1}
 KNOWN_TRUTH_KEYS = {"format", "location_errors", "setup_error", "probe_pretravel_um", "form_error",
                     "probe_noise_um", "start_time_s", "c_angular_positioning_error"}
 ECC_KEYS = {"ECC_cos1C": ("C_e1c", 1.0), "ECC_sin1C": ("C_e1s", -1.0), "ECC_cos2C": ("C_e2c", 1.0),
@@ -95,12 +104,16 @@ def params_from(truth, truth_path, machine, machine_path, plan=None, plan_path=N
         fail(truth_path, "probe_noise_um is not modelled (the virtual probe is deterministic)")
     kinematics = machine.get("kinematics")
     if kinematics not in KINS:
-        fail(machine_path, "the harness models an A/C table (xyzac-trt-kins) or a B/C table (xyzbc-trt-kins) only")
+        fail(machine_path, "the harness models an A/C table (xyzac-trt-kins), a B/C table (xyzbc-trt-kins) or an "
+             "A/B table (xyzab_tdr_kins) only")
     kins, chain, axes = KINS[kinematics]
     for ax in axes:
         sign = machine["rotary_axes"][ax].get("dialect_sign", {}).get(
             "linuxcnc", machine["rotary_axes"][ax].get("controller_sign", 1))
-        if sign != -1:
+        if sign != LINUXCNC_SIGN[kinematics] and kinematics == "table_ab":
+            fail(machine_path, "rotary axis %s: the linuxcnc sign must be +1 (xyzab_tdr_kins turns the table "
+                 "as Ry(-B) Rx(-A), as the papers' style chain does)" % ax)
+        if sign != LINUXCNC_SIGN[kinematics]:
             fail(machine_path, "rotary axis %s: the linuxcnc sign must be -1 (%s-trt-kins turns the table "
                  "as D_%s(+%s) D_c(+C), the opposite of the papers' chain)" % (ax, kins, ax.lower(), ax))
     if machine.get("units", "mm") != "mm":
@@ -121,7 +134,7 @@ def params_from(truth, truth_path, machine, machine_path, plan=None, plan_path=N
                 fail(truth_path, "unit of %r must be mdeg, urad or deg" % name)
             eq1[name + "_mdeg"] = v * ANGLE[unit]
     art = machine.get("artefact")
-    if art is None and kinematics == "table_bc":
+    if art is None and kinematics in ("table_bc", "table_ab"):
         # no test piece: the block is off, some harmless pose for its unused pins
         art = {"type": "square_column", "top_centre_w_mm": [0.0, 0.0, 150.0], "size_mm": [100.0, 100.0, 150.0]}
         block_on = False
