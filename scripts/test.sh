@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Builds rotacal and runs every test (the README's second command; .ci/run calls it).
-# One CTest run: the four LinuxCNC cases (label e2e) start first (their COST) and take four of its
+# One CTest run: the LinuxCNC cases (label e2e) start first (their COST) and take as many of its
 # slots, while the rest of the suite runs on the machine's cores beside them. A LinuxCNC session
 # waits on the controller's motion, not on a core, and each has its own namespaces (tests/e2e).
 #   scripts/test.sh [--build-only | --test-only]   (.ci/run builds first, then runs the tests
