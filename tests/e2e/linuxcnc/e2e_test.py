@@ -1152,6 +1152,197 @@ def run_one_sphere_ac(a):
     print("docs/guide/linuxcnc.md on LinuxCNC (A/C): %d touches, first session %.0f s" % (n_points, t))
 
 
+MACHINE_BHEAD = os.path.join(HERE, "bc_head_lcsim.json")
+TRUTH_BHEAD = os.path.join(HERE, "truth_bhead.json")
+# one_sphere's poses on the B head over the C table: three B tilts x three C turns = 9 poses, 39
+# touches. The plan's default (B -60 .. 60 in 30 deg steps x C every 90 deg, 20 poses, 84 touches)
+# would take twice as long; two tilts leave 8 directions unseen and the plan refuses them.
+ONE_SPHERE_BHEAD_SET = ["tilt_list=-60,0,60", "c_list=0,120,240"]
+# What one sphere cannot separate on a B head over a C table, as rotacal computes it from the plan's
+# Jacobian (REPORT.json unseparable): C's zero (with the sphere's set-up), the pivot's X and Z (with
+# the table's X and the sphere's Z), the ball's offsets from the spindle axis (with Y0C and B0B) and
+# the linear axes' Y/Z squareness (with Y0C and A0B). The truth injects none of them.
+BHEAD_HELD = ["C0C", "S_yz", "X0B", "Z0B", "dX_T", "dY_T"]
+BHEAD_NAMES = ("X0C", "Y0C", "A0C", "B0C", "A0B", "C0B", "B0B", "dL", "dX_S", "dY_S", "dZ_S")
+BHEAD_LENGTHS = ("X0C", "Y0C", "dL", "dX_S", "dY_S", "dZ_S")
+
+
+def injected_bhead(truth=TRUTH_BHEAD):
+    """The head truth's parameters in um / mdeg (missing = 0)."""
+    with open(truth) as f:
+        le = json.load(f)["location_errors"]
+    out = {}
+    for name in BHEAD_NAMES:
+        length = name in BHEAD_LENGTHS
+        e = le.get(name, {"value": 0.0, "unit": "um" if length else "mdeg"})
+        out[name] = e["value"] * (TO_UM if length else TO_MDEG)[e["unit"]]
+    return out
+
+
+def rz_deg(t, v):
+    t = math.radians(t)
+    return [math.cos(t) * v[0] - math.sin(t) * v[1], math.sin(t) * v[0] + math.cos(t) * v[1], v[2]]
+
+
+def kins_readback_max(a, work, plan_path):
+    """maxkins' conventions, read back from the running module (it has no identity type: run.sh
+    --kins-tcp loads it in place of the cycle's trivkins), not assumed. For every pose of the plan
+    the program moves the tip, in table coordinates, to the sphere's nominal centre at the joint
+    angles rotacal's program commands there (B = -B*, C = +C*: bc_head_lcsim.json's linuxcnc signs),
+    and to four rows off the sphere, and LOGs the joints LinuxCNC chose and the ball as the virtual
+    probe sees it in its table frame. Checks, with maxkins.pivot-length L = 250 (the machine's pivot
+    to ball) and then 173.5 mm:
+      * the joints are maxkins' inverse as its source writes it: the tip turned by -C, joint 0 -= L
+        sin B, joint 2 += L cos B - L (B against ISO 841's head, C as rotacal's table, joint 2 reading
+        the tip at B = 0, so the pivot is L above it);
+      * every other candidate (B's sign, C's sign, joint 2 reading the pivot) is far off;
+      * the probe, its pivot L above the joints' point, puts the ball at the commanded tip;
+      * at the plan's poses the joints are rotacal's machine positions for the ball on the sphere's
+        centre minus (0, 0, L): the same motion, Z counted from the tip at B = 0 instead of the pivot."""
+    with open(plan_path) as f:
+        plan = json.load(f)
+    centre = plan["points"][0]["sphere"]["center_w_mm"]
+    radius = plan["points"][0]["sphere"]["radius_mm"]
+    L0 = plan["machine"]["head"]["pivot_to_ball_mm"]
+    rows = [(-pose["pose"]["B"], pose["pose"]["C"], centre) for pose in plan["poses"]]   # (joint B, joint C, tip)
+    rows += [(-45.0, 30.0, [10.0, 20.0, 30.0]), (80.0, -100.0, [40.0, -70.0, 25.0]),
+             (-100.0, 200.0, [-50.0, 30.0, 60.0]), (0.0, 0.0, [0.0, 0.0, 0.0])]
+    truth0 = os.path.join(work, "truth_none.json")
+    with open(truth0, "w") as f:
+        json.dump({"format": "rotacal-truth/1", "_comment": "no error: the controller's nominal machine"}, f)
+    n_poses = len(plan["poses"])
+    out = {}
+    for tag, L in (("pivot_%g" % L0, L0), ("pivot_173.5", 173.5)):
+        rows_ = rows if L == L0 else rows[:n_poses:max(1, n_poses // 4)] + rows[n_poses:]
+        ngc = os.path.join(work, "kins_readback_%s.ngc" % tag)
+        with open(ngc, "w") as f:
+            f.write("(rotacal e2e: maxkins read-back, its TCP kinematics; row: i B C x y z, the joints 0..5,"
+                    " the probe's ball in its table frame)\nG21 G17 G40 G49 G54 G61 G90 G94\n"
+                    "(LOGOPEN,kins_readback.txt)\n(LOG,K #<_hal[maxkins.pivot-length]>)\n")
+            for i, (b, c, p) in enumerate(rows_):
+                f.write("G0 X%.6f Y%.6f Z%.6f B%.6f C%.6f\nM66 E0 L0\n" % (p[0], p[1], p[2], b, c))
+                f.write("(LOG,R %d %.6f %.6f %.6f %.6f %.6f)\n" % (i, b, c, p[0], p[1], p[2]))
+                f.write("(LOG,J %d" % i + "".join(" #<_hal[joint.%d.pos-cmd]>" % j for j in range(6)) + ")\n")
+                f.write("(LOG,T %d #<_hal[vtouchprobe.0.ball-tx]> #<_hal[vtouchprobe.0.ball-ty]> "
+                        "#<_hal[vtouchprobe.0.ball-tz]>)\n" % i)
+            f.write("(LOGCLOSE)\nM2\n")
+        setp = os.path.join(work, "readback_%s.hal" % tag)
+        with open(setp, "w") as f:
+            # maxkins' pin; the probe's pivot L above the joints' point, the ball on it at B = 0
+            f.write("setp maxkins.pivot-length %.12g\nsetp vtouchprobe.0.h1-pz %.12g\nsetp vtouchprobe.0.hb-z 0\n"
+                    % (L, L))
+        _, t = session([RUN, "--ngc", ngc, "--truth", truth0, "--machine", MACHINE_BHEAD, "--kins-tcp", "--setp", setp,
+                        "--out", os.path.join(work, "readback_" + tag), "--timeout", "300"])
+        parts, pin = {}, None
+        with open(os.path.join(work, "readback_" + tag, "kins_readback.txt")) as f:
+            for line in f:
+                t_ = line.split()
+                if len(t_) == 2 and t_[0] == "K":
+                    pin = float(t_[1])
+                if len(t_) >= 2 and t_[0] in ("R", "J", "T"):
+                    parts.setdefault(int(t_[1]), {})[t_[0]] = [float(x) for x in t_[2:]]
+        check(pin is not None and abs(pin - L) < 1e-9, "read-back (%s): maxkins.pivot-length = %s" % (tag, pin))
+        # a row: i, B, C, x, y, z (commanded), joints 0..5, the probe's ball x y z
+        got = [[float(i)] + v["R"] + v["J"] + v["T"] for i, v in sorted(parts.items())
+               if len(v.get("R", [])) == 5 and len(v.get("J", [])) == 6 and len(v.get("T", [])) == 3]
+        check(len(got) == len(rows_), "read-back (%s): %d rows of %d" % (tag, len(got), len(rows_)))
+
+        def cand(con, sc, tip_at_b0, b, c, p):
+            q = rz_deg(-sc * c, p)
+            zb = L * math.cos(math.radians(b)) - (L if tip_at_b0 else 0.0)
+            return [q[0] + con * L * math.sin(math.radians(b)), q[1], q[2] + zb]
+        worst = {}
+        for con in (-1, 1):
+            for sc in (1, -1):
+                for tip in (True, False):
+                    worst[(con, sc, tip)] = max(max(abs(g[6 + k] - cand(con, sc, tip, g[1], g[2], g[3:6])[k])
+                                                    for k in range(3)) for g in got)
+        best = worst[(-1, 1, True)]
+        others = min(v for k, v in worst.items() if k != (-1, 1, True))
+        check(best < 1e-6, "read-back (%s): joints = Rz(-C) p + (-L sin B, 0, L cos B - L) within %.1e mm (%d rows)"
+              % (tag, best, len(got)))
+        check(others > 1.0, "read-back (%s): every other candidate (B's sign, C's sign, joint 2 at the pivot) is off by "
+              "at least %.1f mm" % (tag, others))
+        check(all(abs(g[10] - g[1]) < 1e-9 and abs(g[11] - g[2]) < 1e-9 and abs(g[9]) < 1e-9 for g in got),
+              "read-back (%s): joints 4, 5 are the commanded B, C, joint 3 (A) stays 0" % tag)
+        ball = max(max(abs(g[12 + k] - g[3 + k]) for k in range(3)) for g in got)
+        check(ball < 1e-6, "read-back (%s): the probe's ball in its table frame = the commanded tip within %.1e mm"
+              % (tag, ball))
+        if L == L0:
+            r_ball = plan["machine"]["probe"]["ball_diameter_mm"] / 2.0
+            dev = 0.0
+            for pose_i, pose in enumerate(plan["poses"]):
+                pt = [q for q in plan["points"] if q["pose_name"] == pose["name"]][0]
+                cm = [pt["trigger_m_mm"][k] + (radius + r_ball) * pt["approach_m"][k] for k in range(3)]
+                dev = max(dev, max(abs(got[pose_i][6 + k] - (cm[k] - (L0 if k == 2 else 0.0))) for k in range(3)))
+            check(dev < 1e-5, "read-back: at all %d poses LinuxCNC's joints are rotacal's plan's carriage for the ball on "
+                  "the sphere's centre (B = -B*, C = +C*), Z less L = %g mm (maxkins' Z reads the tip at B = 0), within "
+                  "%.1e mm" % (len(plan["poses"]), L0, dev))
+        out[tag] = {"rows": len(got), "session_s": t, "pivot_length_mm": L, "max_dev_mm": best,
+                    "other_candidates_min_mm": others, "probe_ball_dev_mm": ball,
+                    "candidates_mm": {"con%+d C%+d %s" % (k[0], k[1], "tip@B0" if k[2] else "pivot"): v
+                                      for k, v in worst.items()}}
+    return out
+
+
+def plan_one_sphere_bhead(a, work):
+    plan, ngc = os.path.join(work, "plan.json"), os.path.join(work, "one_sphere.ngc")
+    cmd = [a.rotacal, "plan", "--cycle", "one_sphere", "--machine", MACHINE_BHEAD, "-o", plan]
+    for kv in ONE_SPHERE_BHEAD_SET:
+        cmd += ["--set", kv]
+    sh(cmd)
+    sh([a.rotacal, "generate", "--plan", plan, "--dialect", "linuxcnc", "-o", ngc])
+    return plan, ngc
+
+
+def kinematic_parameters(report):
+    """A head machine's report: its kinematic parameters (value, U, unit) by ISO name."""
+    with open(report) as f:
+        r = json.load(f)
+    out = {}
+    for name, e in r["kinematic_parameters"].items():
+        want = "um" if name in BHEAD_LENGTHS or name in ("X0B", "Z0B", "dX_T", "dY_T", "dR") else "mdeg"
+        if e["unit"] != want:
+            raise SystemExit("FAIL: %s: %s in %s, expected %s" % (report, name, e["unit"], want))
+        out[name] = e
+    return r, out
+
+
+def run_one_sphere_bhead(a):
+    work = a.work
+    plan, ngc = plan_one_sphere_bhead(a, work)
+    with open(plan) as f:
+        n_points = len(json.load(f)["points"])
+    run = os.path.join(work, "run")
+    readback, (_, t) = side_by_side(
+        lambda: kins_readback_max(a, work, plan),
+        lambda: session([RUN, "--ngc", ngc, "--truth", TRUTH_BHEAD, "--machine", MACHINE_BHEAD, "--plan", plan, "--out",
+                         run, "--timeout", "300"]))
+    figures = {"readback": readback, "run_s": t}
+    figures["lateness"] = lateness(work, run, plan, cycle="one_sphere", points=n_points,
+                                   across_um=ROUNDING_ACROSS_3D_UM, machine=MACHINE_BHEAD)
+    rep = os.path.join(work, "report.json")
+    sh([a.rotacal, "analyze", "--plan", plan, "--results", os.path.join(run, "rotacal_one_sphere.txt"),
+        "--dialect", "linuxcnc", "--json", rep])
+    r, kp = kinematic_parameters(rep)
+    held = sorted(u["held"] for u in r.get("unseparable", []))
+    check(held == BHEAD_HELD, "the report holds exactly %s at nominal (unseparable, from the plan's Jacobian): %s"
+          % (", ".join(BHEAD_HELD), held))
+    want = injected_bhead()
+    print("one_sphere on LinuxCNC (B head over C table, maxkins' joints), injected head_table errors "
+          "(identified - expected):")
+    for name, w in want.items():
+        tol = LENGTH_TOL_UM if name in BHEAD_LENGTHS else ANGLE_TOL_MDEG
+        d, U = kp[name]["value"] - w, kp[name]["U"]
+        check(abs(d) <= tol and abs(d) <= U, "%-5s identified %9.4f expected %9.4f diff %+8.4f %s, U %.4f (tol %g)"
+              % (name, kp[name]["value"], w, d, kp[name]["unit"], U, tol))
+    figures.update({"identified": {n: kp[n]["value"] for n in want}, "U": {n: kp[n]["U"] for n in want},
+                    "injected": want, "unseparable": r.get("unseparable"), "points": n_points})
+    with open(os.path.join(work, "figures.json"), "w") as f:
+        json.dump(figures, f, indent=1)
+    print("one_sphere B head / C table on LinuxCNC: %d touches, LinuxCNC session %.0f s" % (n_points, t))
+
+
 def run_no_trigger(a):
     work = a.work
     plan, ngc = os.path.join(work, "plan.json"), os.path.join(work, "touch154.ngc")
@@ -1176,7 +1367,7 @@ def run_no_trigger(a):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("case", choices=("touch154", "no_trigger", "comp_table", "one_sphere_bc", "one_sphere_ac",
-                                     "one_sphere_ab"))
+                                     "one_sphere_ab", "one_sphere_bhead"))
     ap.add_argument("--rotacal", required=True)
     ap.add_argument("--work", required=True)
     a = ap.parse_args()
@@ -1186,7 +1377,8 @@ def main():
         sys.exit(77)
     os.makedirs(a.work, exist_ok=True)
     {"touch154": run_touch154, "no_trigger": run_no_trigger, "comp_table": run_comp_table,
-     "one_sphere_bc": run_one_sphere_bc, "one_sphere_ac": run_one_sphere_ac, "one_sphere_ab": run_one_sphere_ab}[a.case](a)
+     "one_sphere_bc": run_one_sphere_bc, "one_sphere_ac": run_one_sphere_ac, "one_sphere_ab": run_one_sphere_ab,
+     "one_sphere_bhead": run_one_sphere_bhead}[a.case](a)
     finish()
 
 

@@ -3,7 +3,9 @@
 # controller (headless, identity kinematics) whose virtual touch probe plays a machine with
 # the location errors of a rotacal TRUTH.json. Adapted from shared/tools/linuxcnc-sim/run.sh.
 # An A/C machine ("kinematics": "table_ac") runs on xyzac-trt-kins (config/lcsim_xyzac.ini), a
-# B/C machine ("table_bc") on xyzbc-trt-kins (config/lcsim_xyzbc.ini).
+# B/C machine ("table_bc") on xyzbc-trt-kins (config/lcsim_xyzbc.ini), an A/B table ("table_ab") on
+# xyzab_tdr_kins (config/lcsim_xyzab.ini), a B head over a C table ("head_table") on trivkins, the
+# joints of maxkins (config/lcsim_max.ini; --kins-tcp: maxkins itself).
 #
 # Usage: run.sh --ngc PROGRAM --truth TRUTH.json --machine MACHINE.json --out DIR
 #               [--plan PLAN.json] [--pre-ngc OFFSETS.ngc] [--timeout S] [--comp-build DIR]
@@ -24,8 +26,10 @@
 #   --linear-comp DIR joints 0, 1, 2 (X, Y, Z) load DIR/joint0.comp, joint1.comp, joint2.comp
 #                     (COMP_FILE_TYPE = 0) and the probe reads X, Y, Z from their motor commands:
 #                     the controller itself makes the linear axes' positioning errors
-#   --kins-tcp        start in the trunnion (TCP) kinematics instead of identity (the INI
-#                     without sparm=identityfirst): for the conventions read-back only
+#   --kins-tcp        start in the TCP kinematics instead of identity (the INI without
+#                     sparm=identityfirst, or its TCP_KINEMATICS line: maxkins): for the
+#                     conventions read-back only. Without it, setp lines for a TCP-only module
+#                     (maxkins) are kept in params.hal as comments: not loaded, not applied
 #   --setp FILE       'setp PIN VALUE' lines applied after the truth's (read-back: rot-point,
 #                     offsets of the kinematics and the probe's matching axis lines)
 #   --shared          run LinuxCNC in the machine's own namespaces (one session at a time, as
@@ -56,7 +60,7 @@ while [ $# -gt 0 ]; do
         --kins-tcp) TCP=1; shift;;
         --setp) SETP="$2"; shift 2;;
         --shared) ISOLATE=0; shift;;
-        -h|--help) sed -n '2,34p' "$0" | sed 's/^# \{0,1\}//'; exit 0;;
+        -h|--help) sed -n '2,39p' "$0" | sed 's/^# \{0,1\}//'; exit 0;;
         *) echo "run.sh: unknown option $1 (see --help)" >&2; exit 3;;
     esac
 done
@@ -129,9 +133,19 @@ KINS="$("$PY" -c 'import json, sys; print(json.load(open(sys.argv[1]))["machine"
 INI="lcsim_$KINS.ini"
 [ -f "$HERE/config/$INI" ] || die "no LinuxCNC configuration config/$INI for kinematics $KINS"
 sed "s#@HARNESS@#$HERE#g" "$HERE/config/$INI" > "$OUT/config/$INI"
-if [ "$TCP" = 1 ]; then
+# a kinematics with no identity type (maxkins) has its own line: the cycle's session runs the INI's
+# identity module, --kins-tcp the TCP one
+TCPKINS="$(sed -n 's/^# TCP_KINEMATICS = \([A-Za-z0-9_-]*\)$/\1/p' "$OUT/config/$INI")"
+if [ "$TCP" = 1 ] && [ -n "$TCPKINS" ]; then
+    sed -i "s#^KINEMATICS = .*\$#KINEMATICS = $TCPKINS#" "$OUT/config/$INI"
+    grep -q "^KINEMATICS = $TCPKINS\$" "$OUT/config/$INI" || die "could not select $TCPKINS in $INI"
+elif [ "$TCP" = 1 ]; then
     sed -i 's#^\(KINEMATICS = [a-z-]*\) sparm=identityfirst$#\1#' "$OUT/config/$INI"
     grep -q '^KINEMATICS = [a-z-]*$' "$OUT/config/$INI" || die "could not drop sparm=identityfirst from $INI"
+elif [ -n "$TCPKINS" ] && grep -q "^setp $TCPKINS\." "$OUT/params.hal"; then
+    # its pins do not exist in the identity session (the module is not loaded): they cannot act, and
+    # the session says so in its params.hal instead of failing on them
+    sed -i "s#^setp $TCPKINS\.\(.*\)\$#\# not loaded in this session ($TCPKINS: identity kinematics run instead), not applied: setp $TCPKINS.\1#" "$OUT/params.hal"
 fi
 if [ -n "$COMP" ]; then
     # the C joint's compensation table (LinuxCNC ini-config: COMP_FILE, COMP_FILE_TYPE per joint)
