@@ -1338,9 +1338,155 @@ def run_one_sphere_bhead(a):
               % (name, kp[name]["value"], w, d, kp[name]["unit"], U, tol))
     figures.update({"identified": {n: kp[n]["value"] for n in want}, "U": {n: kp[n]["U"] for n in want},
                     "injected": want, "unseparable": r.get("unseparable"), "points": n_points})
+    figures.update(write_back_bhead(a, work, plan, ngc, rep, kp, want))
     with open(os.path.join(work, "figures.json"), "w") as f:
         json.dump(figures, f, indent=1)
     print("one_sphere B head / C table on LinuxCNC: %d touches, LinuxCNC session %.0f s" % (n_points, t))
+
+
+# What each route holds on maxkins' machine: its pin, pivot-length, the stylus (dL: the ball's distance
+# from the pivot); the work offset, in every kinematics, the C table's place and the head's zero; the
+# tilts no pin or shift (a mechanical adjustment); the sphere's set-up is the artefact's.
+BHEAD_WORK_OFFSET = ("X0C", "Y0C", "B0B")
+
+
+def write_back_bhead(a, work, plan, ngc, rep1, kp1, want):
+    """The write-back and the loop closed on the controller. analyze --offsets writes maxkins' pin
+    (offsets.hal: pivot-length's previous value, change and new value; the rest named with its route)
+    and the work offset (offsets.ngc). LinuxCNC is started again with both: the G54 program first
+    (--pre-ngc), the pin's line given to the session (--setp), and the unchanged cycle measures again:
+    what the work offset holds within its U of zero, the rest as before. The cycle's session runs
+    trivkins (maxkins has no identity type), where the pin is not even loaded: run.sh keeps the line
+    as a comment, and dL comes back unchanged. Beside it, a short session in maxkins itself with the
+    stylus dL longer than nominal shows the pin acting: the tip commanded at the plan's poses, the
+    ball's offset from it varies with B by dL sin B at the nominal pin and is the same at every pose
+    at the written one (the constant left, -dL in Z, is the Z reference's: the file says so)."""
+    hal, g10 = os.path.join(work, "offsets.hal"), os.path.join(work, "offsets.ngc")
+    res1 = os.path.join(work, "run", "rotacal_one_sphere.txt")
+    for out in (hal, g10):
+        if os.path.exists(out):
+            os.remove(out)       # the loop starts from the nominal pin and G54 = 0 (a file present is added to)
+        sh([a.rotacal, "analyze", "--plan", plan, "--results", res1, "--dialect", "linuxcnc", "--json",
+            os.path.join(work, "report_offsets.json"), "--offsets", out])
+    with open(plan) as f:
+        pl = json.load(f)
+    L = pl["machine"]["head"]["pivot_to_ball_mm"]
+    with open(hal) as f:
+        hal_text = f.read()
+    print(hal_text)
+    pins = {}
+    for line in hal_text.splitlines():
+        t_ = line.split()
+        if len(t_) == 3 and t_[0] == "setp" and t_[1].startswith("maxkins."):
+            pins[t_[1].split(".", 1)[1]] = float(t_[2])
+    check(sorted(pins) == ["pivot-length"], "offsets.hal sets maxkins' pivot-length only: %s" % sorted(pins))
+    new_pl = pins.get("pivot-length", float("nan"))
+    check(abs(new_pl - (L + kp1["dL"]["value"] * 1e-3)) <= 1e-6,
+          "pivot-length = previous (MACHINE.json's L = %g mm) + the identified dL (%.4f um): %.6f mm"
+          % (L, kp1["dL"]["value"], new_pl))
+    check(any(l.split()[1:] == ["pin", "previous", "change", "new"] for l in hal_text.splitlines() if l.startswith("# ")),
+          "offsets.hal gives the pin's previous value, change and new value")
+    check("A0C, B0C (orientation of the C axis) and A0B, C0B" in hal_text and "mechanical adjustment" in hal_text,
+          "offsets.hal names what maxkins cannot hold (A0C, B0C, A0B, C0B) and the route")
+    check("C0C, X0B, Z0B, dX_T, dY_T" in hal_text, "offsets.hal names the held (unseparable) parameters")
+    check("G10 L2 P1 X" in hal_text, "offsets.hal gives the C table's place and the B zero as a work offset (G10 L2 P1)")
+    with open(g10) as f:
+        g10_text = f.read()
+    print(g10_text)
+    g10_line = [l for l in g10_text.splitlines() if l.startswith("G10 L2 P1")][0].split()[3:]
+    want_g54 = {w[0]: float(w[1:]) for w in g10_line}
+    sign_b = -1   # bc_head_lcsim.json's linuxcnc sign of B, read back above
+    expect_g54 = {"X": kp1["X0C"]["value"] * 1e-3, "Y": kp1["Y0C"]["value"] * 1e-3,
+                  "B": -sign_b * kp1["B0B"]["value"] * 1e-3}
+    check(sorted(want_g54) == ["B", "X", "Y"] and all(abs(want_g54[k] - v) <= 0.5e-6 for k, v in expect_g54.items()),
+          "offsets.ngc shifts G54 X, Y by the identified X0C, Y0C and B by %+d x B0B: %s" % (-sign_b, want_g54))
+    check("dL [maxkins' pivot-length, a .hal file], A0C, B0C, A0B, C0B" in g10_text,
+          "offsets.ngc names what no shift expresses (dL, A0C, B0C, A0B, C0B)")
+    # rotacal compensate rewrites table machines' programs: it refuses the head, naming why
+    r, _ = sh([a.rotacal, "compensate", "--program", ngc, "--report", rep1, "--dialect", "linuxcnc", "-o",
+               os.path.join(work, "one_sphere_compensated.ngc")], expect=None)
+    check(r.returncode == 1 and "head_table" in r.stdout, "rotacal compensate refuses the head_table report with its "
+          "reason (exit %d)" % r.returncode)
+    run2 = os.path.join(work, "run2")
+    # the pin acting, in maxkins: the true stylus dL longer (truth: dL alone), the carriage reading the tip
+    # at B = 0 for the nominal L; the tip commanded to the sphere's centre at the plan's poses
+    dl_true = injected_bhead()["dL"] * 1e-3
+    truth_dl = os.path.join(work, "truth_dl.json")
+    with open(truth_dl, "w") as f:
+        json.dump({"format": "rotacal-truth/1", "_comment": "the stylus alone, dL longer than nominal",
+                   "location_errors": {"dL": {"value": dl_true * 1e3, "unit": "um"}}}, f)
+    centre = pl["points"][0]["sphere"]["center_w_mm"]
+
+    def pin_session(tag, pivot_length):
+        prog = os.path.join(work, "pin_%s.ngc" % tag)
+        with open(prog, "w") as f:
+            f.write("(rotacal e2e: maxkins' pivot-length acting; row: i B C, the probe's ball in its table frame)\n"
+                    "G21 G17 G40 G49 G54 G61 G90 G94\n(LOGOPEN,pin.txt)\n")
+            for i, pose in enumerate(pl["poses"]):
+                b, c = sign_b * pose["pose"]["B"], pose["pose"]["C"]
+                f.write("G0 X%.6f Y%.6f Z%.6f B%.6f C%.6f\nM66 E0 L0\n" % (centre[0], centre[1], centre[2], b, c))
+                f.write("(LOG,T %d %.6f %.6f #<_hal[vtouchprobe.0.ball-tx]> #<_hal[vtouchprobe.0.ball-ty]> "
+                        "#<_hal[vtouchprobe.0.ball-tz]>)\n" % (i, b, c))
+            f.write("(LOGCLOSE)\nM2\n")
+        setp = os.path.join(work, "pin_%s.hal" % tag)
+        with open(setp, "w") as f:
+            f.write("setp maxkins.pivot-length %.12g\nsetp vtouchprobe.0.h1-pz %.12g\nsetp vtouchprobe.0.hb-z %.12g\n"
+                    % (pivot_length, L, -dl_true))
+        out_dir = os.path.join(work, "pin_" + tag)
+        _, t_ = session([RUN, "--ngc", prog, "--truth", truth_dl, "--machine", MACHINE_BHEAD, "--kins-tcp", "--setp",
+                         setp, "--out", out_dir, "--timeout", "300"])
+        rows = []
+        with open(os.path.join(out_dir, "pin.txt")) as f:
+            for line in f:
+                t = line.split()
+                if len(t) == 7 and t[0] == "T":
+                    rows.append([float(v) for v in t[2:]])
+        check(len(rows) == len(pl["poses"]), "pin session (%s): %d rows" % (tag, len(rows)))
+        # the ball's offset from the commanded tip, its spread over the poses (um)
+        dev = [[(r_[2 + k] - centre[k]) * 1e3 for k in range(3)] for r_ in rows]
+        spread = max(max(d[k] for d in dev) - min(d[k] for d in dev) for k in range(3))
+        return t_, dev, spread
+
+    (_, t2), (t_nom, dev_nom, spread_nom), (t_new, dev_new, spread_new) = side_by_side(
+        lambda: session([RUN, "--setp", hal, "--pre-ngc", g10, "--ngc", ngc, "--truth", TRUTH_BHEAD, "--machine",
+                         MACHINE_BHEAD, "--plan", plan, "--out", run2, "--timeout", "300"]),
+        lambda: pin_session("nominal", L),
+        lambda: pin_session("written", new_pl))
+    bound = 2 * kp1["dL"]["U"]
+    check(spread_nom > 0.8 * dl_true * 1e3 * 2 * math.sin(math.radians(60)),
+          "maxkins at the nominal pivot-length: the ball's offset from the tip varies by %.3f um over the poses "
+          "(dL sin B, B -60 .. 60)" % spread_nom)
+    check(spread_new <= bound, "maxkins at the written pivot-length: the offset is the same at every pose within %.3f um "
+          "(bound 2 U of dL, %.3f um); left: %s um (the Z reference's -dL)"
+          % (spread_new, bound, ["%.3f" % v for v in dev_new[0]]))
+    with open(os.path.join(run2, "params.hal")) as f:
+        p2 = f.read()
+    check("not loaded in this session (maxkins: identity kinematics run instead), not applied: setp maxkins.pivot-length"
+          in p2, "the cycle's session (trivkins) does not load maxkins: the pin's line is kept, not applied")
+    with open(os.path.join(run2, "driver_status.json")) as f:
+        g54 = json.load(f)["g5x_offset_after"][0]
+    check(all(abs(g54["XYZABC".index(k)] - v) < 1e-9 for k, v in want_g54.items()),
+          "LinuxCNC's G54 after the offsets program %s = the G10 line %s" % (g54[:6], want_g54))
+    lat2 = lateness(work, run2, plan, offsets=g10, cycle="one_sphere", points=len(pl["points"]),
+                    across_um=ROUNDING_ACROSS_3D_UM, machine=MACHINE_BHEAD)
+    rep2 = os.path.join(work, "report2.json")
+    sh([a.rotacal, "analyze", "--plan", plan, "--results", os.path.join(run2, "rotacal_one_sphere.txt"),
+        "--dialect", "linuxcnc", "--json", rep2])
+    _, kp2 = kinematic_parameters(rep2)
+    rows = {}
+    for name, w in want.items():
+        expect = 0.0 if name in BHEAD_WORK_OFFSET else w
+        d, U = kp2[name]["value"] - expect, kp2[name]["U"]
+        tol = LENGTH_TOL_UM if name in BHEAD_LENGTHS else ANGLE_TOL_MDEG
+        what = ("within its U of zero (the work offset holds it)" if name in BHEAD_WORK_OFFSET else
+                "unchanged (the pin not loaded in identity kinematics)" if name == "dL" else
+                "unchanged (not held: reported, named above)")
+        check(abs(d) <= U and abs(d) <= tol, "after_offsets: %-5s %9.4f %s, expected %9.4f: diff %+8.4f, U %.4f (tol %g) %s"
+              % (name, kp2[name]["value"], kp2[name]["unit"], expect, d, U, tol, what))
+        rows[name] = {"value": kp2[name]["value"], "U": U, "expected": expect}
+    return {"run2_s": t2, "lateness2": lat2, "pins": pins, "g54": want_g54, "after_offsets": rows,
+            "pin_acting": {"nominal": {"session_s": t_nom, "dev_um": dev_nom, "spread_um": spread_nom},
+                           "written": {"session_s": t_new, "dev_um": dev_new, "spread_um": spread_new}}}
 
 
 def run_no_trigger(a):
