@@ -65,6 +65,22 @@
       offset holds within its U of zero, the rest unchanged; beside it the program compensated for the
       first report: all 8 within U of zero.
 
+  e2e_test.py one_sphere_bhead --rotacal BIN --work DIR
+      a B head over a C table (bc_head_lcsim.json) on maxkins' joints: maxkins' conventions read back in
+      maxkins itself (two pivot lengths), then plan one_sphere (9 poses) -> generate -> run unchanged in
+      trivkins on the same joints, the virtual probe on the head playing truth_bhead.json (rotacal's
+      head_table parameters) -> analyze: every trigger 0 .. F x 1 ms past the exact contact; the six
+      unseparable directions named; the 11 separable parameters within 0.5 um / 0.05 mdeg and U. Then
+      the write-back: analyze --offsets writes maxkins' pivot-length (previous, change, new) and the G54
+      program; LinuxCNC restarted with both and the cycle run again: the work offset's X0C, Y0C, B0B
+      within U of zero, the rest unchanged (the pin is not loaded in trivkins); beside it the pin acting
+      in maxkins (two short sessions with the stylus dL longer).
+
+  e2e_test.py readback_5axis --rotacal BIN --work DIR
+      the bridge mill (5axiskins: a C head carrying a B head, fixed table), prepared for rotacal's model
+      of it: its conventions read back in its TCP kinematics, two pivot lengths (run.sh --params: the
+      harness's nominal head, no MACHINE.json, no truth).
+
 Exit 0 pass, 1 fail, 77 skip (LinuxCNC, halcompile or root missing: CTest SKIP_RETURN_CODE).
 """
 import argparse
@@ -1489,6 +1505,93 @@ def write_back_bhead(a, work, plan, ngc, rep1, kp1, want):
                            "written": {"session_s": t_new, "dev_um": dev_new, "spread_um": spread_new}}}
 
 
+def kins_readback_5axis(a):
+    """5axiskins' conventions (the bridge mill: a C head carrying a B head over a fixed table), read
+    back from the running module in its TCP kinematics (run.sh --kins-tcp: its type 0 without
+    sparm=identityfirst), a session of its own for each of two pivot lengths, prepared for rotacal's
+    model of the machine (none here: run.sh --params, the harness's nominal head, no truth). The
+    program moves the tip to table points at B and C and LOGs the joints and the probe's ball.
+    Checks: the joints are tip - (0, 0, L) - Rz(+C) Ry(-B) (0, 0, -L) (5axiskins' source:
+    s2r(L, C, 180 - B) = L (sin B cos C, sin B sin C, -cos B); the C head carries the B head, B
+    against ISO 841's head, joint 2 reading the tip at B = 0); every other sign, order or Z
+    candidate is far off; the probe's nominal head (two lines through one pivot) puts the ball on
+    the commanded tip."""
+    work = a.work
+    rows = [(0.0, 0.0, [0.0, 0.0, 0.0]), (30.0, 45.0, [10.0, 20.0, 30.0]), (-45.0, 120.0, [40.0, -70.0, 25.0]),
+            (60.0, -30.0, [-50.0, 30.0, 60.0]), (90.0, 200.0, [5.0, 5.0, 5.0]), (-100.0, 10.0, [100.0, -50.0, 0.0]),
+            (15.0, -170.0, [0.0, 0.0, 100.0])]
+    out = {}
+    for tag, L in (("pivot_250", 250.0), ("pivot_173.5", 173.5)):
+        params = os.path.join(work, "params_%s.json" % tag)
+        with open(params, "w") as f:
+            json.dump({"_comment": "the bridge mill's nominal head (5axiskins' read-back): C head about +Z, B head "
+                       "about -Y, through one pivot L above the joints' point",
+                       "machine": {"kins": "5axis"}, "block": {"enable": False},
+                       "head": {"enable": True, "axis": "CB", "pivot_to_ball": L, "sign": -1.0, "c_sign": 1.0,
+                                "carriage_reads_ball": True}}, f)
+        ngc = os.path.join(work, "kins_readback_%s.ngc" % tag)
+        with open(ngc, "w") as f:
+            f.write("(rotacal e2e: 5axiskins read-back, its TCP kinematics; row: i B C x y z, the joints 0..5,"
+                    " the probe's ball)\nG21 G17 G40 G49 G54 G61 G90 G94\n"
+                    "(LOGOPEN,kins_readback.txt)\n(LOG,K #<_hal[5axiskins.pivot-length]> "
+                    "#<_hal[motion.switchkins-type]>)\n")
+            for i, (b, c, p) in enumerate(rows):
+                f.write("G0 X%.6f Y%.6f Z%.6f B%.6f C%.6f W0\nM66 E0 L0\n" % (p[0], p[1], p[2], b, c))
+                f.write("(LOG,R %d %.6f %.6f %.6f %.6f %.6f)\n" % (i, b, c, p[0], p[1], p[2]))
+                f.write("(LOG,J %d" % i + "".join(" #<_hal[joint.%d.pos-cmd]>" % j for j in range(6)) + ")\n")
+                f.write("(LOG,T %d #<_hal[vtouchprobe.0.ball-tx]> #<_hal[vtouchprobe.0.ball-ty]> "
+                        "#<_hal[vtouchprobe.0.ball-tz]>)\n" % i)
+            f.write("G0 B0 C0\n(LOGCLOSE)\nM2\n")
+        setp = os.path.join(work, "readback_%s.hal" % tag)
+        with open(setp, "w") as f:
+            f.write("setp 5axiskins.pivot-length %.12g\n" % L)
+        _, t = session([RUN, "--ngc", ngc, "--params", params, "--kins-tcp", "--setp", setp,
+                        "--out", os.path.join(work, "readback_" + tag), "--timeout", "300"])
+        parts, pin, kt = {}, None, None
+        with open(os.path.join(work, "readback_" + tag, "kins_readback.txt")) as f:
+            for line in f:
+                t_ = line.split()
+                if len(t_) == 3 and t_[0] == "K":
+                    pin, kt = float(t_[1]), float(t_[2])
+                if len(t_) >= 2 and t_[0] in ("R", "J", "T"):
+                    parts.setdefault(int(t_[1]), {})[t_[0]] = [float(x) for x in t_[2:]]
+        check(pin is not None and abs(pin - L) < 1e-9 and kt == 0.0,
+              "read-back (%s): 5axiskins.pivot-length = %s, motion.switchkins-type %s (0: TCP without the sparm)"
+              % (tag, pin, kt))
+        got = [[float(i)] + v["R"] + v["J"] + v["T"] for i, v in sorted(parts.items())
+               if len(v.get("R", [])) == 5 and len(v.get("J", [])) == 6 and len(v.get("T", [])) == 3]
+        check(len(got) == len(rows), "read-back (%s): %d rows of %d" % (tag, len(got), len(rows)))
+
+        def cand(order, sb, sc, tip_at_b0, b, c, p):
+            v = [0.0, 0.0, -L]
+            v = rz_deg(sc * c, ry_deg(sb * b, v)) if order == "CB" else ry_deg(sb * b, rz_deg(sc * c, v))
+            return [p[0] - v[0], p[1] - v[1], p[2] - v[2] - (L if tip_at_b0 else 0.0)]
+        worst = {}
+        for order in ("CB", "BC"):
+            for sb in (1, -1):
+                for sc in (1, -1):
+                    for tip in (True, False):
+                        worst[(order, sb, sc, tip)] = max(
+                            max(abs(g[6 + k] - cand(order, sb, sc, tip, g[1], g[2], g[3:6])[k]) for k in range(3))
+                            for g in got)
+        key = ("CB", -1, 1, True)
+        best = worst[key]
+        others = min(v for k, v in worst.items() if k != key)
+        check(best < 1e-6, "read-back (%s): joints = p - (0, 0, L) - Rz(+C) Ry(-B) (0, 0, -L) within %.1e mm (%d rows)"
+              % (tag, best, len(got)))
+        check(others > 1.0, "read-back (%s): every other order, sign or Z candidate is off by at least %.1f mm"
+              % (tag, others))
+        check(all(abs(g[9] - g[1]) < 1e-9 and abs(g[10] - g[2]) < 1e-9 and abs(g[11]) < 1e-9 for g in got),
+              "read-back (%s): joints 3, 4 are the commanded B, C, joint 5 (W) stays 0" % tag)
+        ball = max(max(abs(g[12 + k] - g[3 + k]) for k in range(3)) for g in got)
+        check(ball < 1e-6, "read-back (%s): the probe's nominal head puts the ball on the commanded tip within %.1e mm"
+              % (tag, ball))
+        out[tag] = {"rows": len(got), "session_s": t, "pivot_length_mm": L, "max_dev_mm": best,
+                    "other_candidates_min_mm": others, "probe_ball_dev_mm": ball}
+    with open(os.path.join(work, "figures.json"), "w") as f:
+        json.dump(out, f, indent=1)
+
+
 def run_no_trigger(a):
     work = a.work
     plan, ngc = os.path.join(work, "plan.json"), os.path.join(work, "touch154.ngc")
@@ -1513,7 +1616,7 @@ def run_no_trigger(a):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("case", choices=("touch154", "no_trigger", "comp_table", "one_sphere_bc", "one_sphere_ac",
-                                     "one_sphere_ab", "one_sphere_bhead"))
+                                     "one_sphere_ab", "one_sphere_bhead", "readback_5axis"))
     ap.add_argument("--rotacal", required=True)
     ap.add_argument("--work", required=True)
     a = ap.parse_args()
@@ -1524,7 +1627,7 @@ def main():
     os.makedirs(a.work, exist_ok=True)
     {"touch154": run_touch154, "no_trigger": run_no_trigger, "comp_table": run_comp_table,
      "one_sphere_bc": run_one_sphere_bc, "one_sphere_ac": run_one_sphere_ac, "one_sphere_ab": run_one_sphere_ab,
-     "one_sphere_bhead": run_one_sphere_bhead}[a.case](a)
+     "one_sphere_bhead": run_one_sphere_bhead, "readback_5axis": kins_readback_5axis}[a.case](a)
     finish()
 
 

@@ -116,6 +116,21 @@ def check_head(rnd, rotacal):
         worst = max(worst, G.norm(G.sub(G.true_table_point(j + [0.0, c, b], np_), w)))
     check(worst < 1e-9, "maxkins' inverse (con = -1) and the probe with the carriage reading the tip at B = 0: the ball "
           "at the commanded tip within %.2g mm" % worst)
+    # the bridge mill's nominal head (two lines through one pivot, "5axis") against 5axiskins' source:
+    # joints = tip - (0, 0, L) - s2r(L, C, 180 - B) = tip - (0, 0, L) - L (sin B cos C, sin B sin C, -cos B)
+    p5 = params({"machine": {"kins": "5axis"}, "block": {"enable": False},
+                 "head": {"enable": True, "axis": "CB", "pivot_to_ball": 173.5, "sign": -1.0, "c_sign": 1.0,
+                          "carriage_reads_ball": True}})
+    worst = 0.0
+    for _ in range(100):
+        b, c = rnd.uniform(-120, 120), rnd.uniform(-400, 400)
+        w = [rnd.uniform(-200, 200) for _ in range(3)]
+        sb, cb = math.sin(math.radians(b)), math.cos(math.radians(b))
+        r = [173.5 * sb * math.cos(math.radians(c)), 173.5 * sb * math.sin(math.radians(c)), -173.5 * cb]
+        j = [w[0] - r[0], w[1] - r[1], w[2] - 173.5 - r[2]]
+        worst = max(worst, G.norm(G.sub(G.true_table_point(j + [0.0, 0.0, c, b], p5), w)))
+    check(worst < 1e-9, "5axis: the probe's two head lines through one pivot (C carrying B) and 5axiskins' s2r form "
+          "agree within %.2g mm" % worst)
     if not rotacal:
         print("note: no --rotacal: the head mode against rotacal simulate not checked")
         return
