@@ -109,7 +109,8 @@ namespace {
 // The A/B table's offsets have one verified form, LinuxCNC's xyzab_tdr_kins pins; the other
 // controls' forms are written for a tilt axis carrying a C table.
 const OffsetRequest& requireTiltAndC(const OffsetRequest& r, std::string_view dialect) {
-  if (r.identified.kinematics == Kinematics::HeadTable) throw std::invalid_argument(headTableOffsetsRefusal(dialect));
+  if (r.identified.kinematics == Kinematics::HeadTable)
+    throw std::invalid_argument(headTableOffsetsRefusal(dialect));
   if (r.identified.kinematics == Kinematics::TableAB)
     throw std::invalid_argument(
         "a table_ab machine's location errors go into its control's kinematics, and rotacal knows that form only for "
