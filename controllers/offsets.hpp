@@ -26,13 +26,21 @@ std::string implausibility(Kinematics kinematics, int index, double v);
 /// when request.plan is null or a value is not finite.
 void requirePlausible(const OffsetRequest& request);
 
+/// A head machine's (request.kinematic, ISO 230-7 names): its parameter `name`, or nullptr.
+const KinematicParameterValue* kinematicParameter(const OffsetRequest& request, std::string_view name);
+
+/// Why no writer but LinuxCNC's takes a head_table machine's parameters (the dialects' refusal).
+std::string headTableOffsetsRefusal(std::string_view dialect);
+
 /// "value +- u unit" lines of the identified errors, e.g. "dx_AY (X0A)  14.600 um +- 0.900 um".
+/// A head machine's: its parameters by ISO name, the held ones marked.
 std::vector<std::string> identifiedLines(const OffsetRequest& request);
 
 /// What the offsets writers of a table A/C or B/C machine start from, the request checked by
 /// requirePlausible first.
 struct OffsetBasis {
-  explicit OffsetBasis(const OffsetRequest& request);
+  /// Refuses a head_table request, naming `dialect` (headTableOffsetsRefusal).
+  OffsetBasis(const OffsetRequest& request, std::string_view dialect);
   const ProbePlan& plan;
   const MachineModel& machine;
   const LocationErrors& e;

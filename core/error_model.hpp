@@ -85,6 +85,17 @@ struct LocationErrors {
   void setReportValue(int index, double um_or_mdeg);
 };
 
+/// One identified parameter of a kinematic model (core/kinematic_model.hpp), by its ISO 230-7 name:
+/// how a head machine's location errors reach an offsets writer, whose papers' eight do not
+/// describe it. held: the plan cannot separate it, so it stayed at nominal (0).
+struct KinematicParameterValue {
+  std::string name;
+  ParamKind kind = ParamKind::Length;
+  double value = 0.0;  // mm or rad
+  double u = 0.0;      // standard uncertainty (k = 1), mm or rad
+  bool held = false;
+};
+
 /// Factor of the kinematic chain: a motion whose value is an error parameter or a commanded angle.
 struct ChainFactor {
   Motion motion;

@@ -126,6 +126,8 @@ class CsvDialect final : public Dialect {
   }
 
   std::string writeOffsets(const OffsetRequest& r) const override {
+    if (r.identified.kinematics == Kinematics::HeadTable)
+      throw std::invalid_argument(ctl::headTableOffsetsRefusal("csv"));
     ctl::requirePlausible(r);
     const auto& params = locationParameters(r.identified.kinematics);
     std::string out = "parameter,iso,value,unit,u\n";

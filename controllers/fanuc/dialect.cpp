@@ -116,7 +116,7 @@ class FanucDialect final : public MacroBDialect {
   FanucDialect() : MacroBDialect(fanucFlavor(), fanucIdentity()) {}
 
   std::string writeOffsets(const OffsetRequest& r) const override {
-    const ctl::OffsetBasis b(r);
+    const ctl::OffsetBasis b(r, kDialect);
     const auto& [plan, m, e, ac, inch, k, tilt] = b;
     const std::string u = inch ? "INCH" : "MM";
     const Eigen::Vector3d shift = b.pivot();

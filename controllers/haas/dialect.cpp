@@ -64,7 +64,7 @@ class HaasDialect final : public MacroBDialect {
   HaasDialect() : MacroBDialect(haasFlavor(), haasIdentity()) {}
 
   std::string writeOffsets(const OffsetRequest& r) const override {
-    const ctl::OffsetBasis b(r);
+    const ctl::OffsetBasis b(r, kDialect);
     const auto& [plan, m, e, ac, inch, k, tilt] = b;
     const auto changes = haasMrzpChanges(e);
     const double zero_deg = b.zeroDeg(kDialect);

@@ -387,7 +387,7 @@ class HeidenhainDialect final : public Dialect {
   }
 
   std::string writeOffsets(const OffsetRequest& r) const override {
-    const ctl::OffsetBasis b(r);
+    const ctl::OffsetBasis b(r, kDialect);
     const auto& [plan, m, e, ac, inch, k, tilt] = b;
     const Eigen::Vector3d pivot = b.pivot();
     const Eigen::Vector3d second = b.second();

@@ -395,6 +395,8 @@ class LinuxCncDialect final : public Dialect {
   }
 
   std::string writeOffsets(const OffsetRequest& r) const override {
+    if (r.identified.kinematics == Kinematics::HeadTable)
+      return endsWithNgc(r.path) ? writeHeadWorkOffsetProgram(r) : writeMaxkinsHal(r);
     if (endsWithNgc(r.path)) return writeWorkOffsetProgram(r);
     ctl::requirePlausible(r);
     const ProbePlan& plan = *r.plan;
@@ -483,6 +485,155 @@ class LinuxCncDialect final : public Dialect {
     line("#   adjustment or a kinematics module with axis directions.");
     return out;
   }
+
+  /// A B head over a C table on maxkins (a .hal file): its one pin, pivot-length, the distance from
+  /// the B head's pivot to the point its TCP kinematics controls, += dL. Read back from the running
+  /// module (tests/e2e/linuxcnc, docs/e2e-linuxcnc.md): joint 0 = x' - L sin B, joint 2 = z' + L cos B
+  /// - L, (x', y', z') the tip turned by -C, L = pivot-length (tool length 0).
+  std::string writeMaxkinsHal(const OffsetRequest& r) const {
+    const HeadWriteBack h(r);
+    const auto previous = parseHalSetp(r.previous_text, "maxkins");
+    const auto it = previous.find("pivot-length");
+    const double old = it == previous.end() ? h.m.head->pivot_to_ball_mm : it->second;
+    const double dl = h.value("dL");
+    std::string out;
+    auto line = [&](const std::string& s) { out += s + "\n"; };
+    line("# rotacal: the B head's pivot length of maxkins (LinuxCNC HAL file)");
+    line("# What it changes: maxkins.pivot-length, the distance from the B head's pivot to the point its TCP");
+    line("#   kinematics controls (the ball centre, tool length 0), which maxkins turns about the pivot. Replace");
+    line("#   the same setp line of your HAL file (or load this file after maxkins) and restart LinuxCNC. mm.");
+    line(ctl::printableLine(fmt::format("# Provenance: {}; cycle {}, machine {}.",
+                                        r.report_file.empty() ? "(no report)" : r.report_file, h.plan.cycle,
+                                        h.m.name)));
+    line("# Identified kinematic parameters (head_table, ISO 230-7), value +- standard uncertainty (k = 1):");
+    for (const auto& s : ctl::identifiedLines(r)) line("#   " + s);
+    line("# Mapping (mm): pivot-length += dL (the ball dL farther from the pivot than nominal). maxkins' Z reads");
+    line("#   the tip at B = 0 (joint 2 = z + L cos B - L): a Z set by touching the ball off at B = 0 already holds");
+    line("#   its height there; a Z counted from the pivot, as rotacal's machine file counts it, moves by dL too");
+    line("#   (G54 Z += dL).");
+    line(fmt::format("# {:<12} {:>12} {:>12} {:>12}", "pin", "previous", "change", "new"));
+    line(fmt::format("# {:<12} {:>12} {:>12} {:>12}{}", "pivot-length", ctl::fixed(old, 6), ctl::fixed(dl, 6),
+                     ctl::fixed(old + dl, 6),
+                     it == previous.end() ? "  (no previous value: MACHINE.json's pivot_to_ball_mm assumed)" : ""));
+    line(fmt::format("setp maxkins.pivot-length {}", ctl::fixed(old + dl, 6)));
+    std::vector<std::string> kept;
+    for (const auto& l : ctl::splitLines(r.previous_text)) {
+      const std::string s = ctl::trim(l.text);
+      if (s.empty() || s[0] == '#') continue;
+      const auto t = ctl::tokens(s);
+      if (t.size() >= 2 && t[0] == "setp" && t[1] == "maxkins.pivot-length") continue;
+      kept.push_back(s);
+    }
+    if (!kept.empty()) {
+      line("# Kept unchanged from the previous file:");
+      for (const auto& s : kept) line(s);
+    }
+    line("#");
+    line("# Not HAL pins: the C axis's place (X0C, Y0C) and the B axis's zero (B0B). The work offset holds them");
+    line("#   (an offsets file named *.ngc), by MDI for a G54 that is 0 now:");
+    line(fmt::format("#   G10 L2 P1 X{} Y{} B{}", ctl::fixed(h.work('X'), 6), ctl::fixed(h.work('Y'), 6),
+                     ctl::fixed(h.work('B'), 6)));
+    line(fmt::format("#   (B = {:+d} x B0B: the controller sign of B for linuxcnc is {:+d}, the head turns by +B)",
+                     -h.sign_b, h.sign_b));
+    line("# Reported only: A0C, B0C (orientation of the C axis) and A0B, C0B (orientation of the B head) cannot be");
+    line("#   held by maxkins: it has no pins for tilted axes. Route: a mechanical adjustment, or a kinematics");
+    line("#   with axis directions (rotacal compensate rewrites table machines' programs only).");
+    line("# dX_S, dY_S, dZ_S: the sphere's set-up on the table, the artefact's place, not the machine's.");
+    line("# Held at nominal, one sphere cannot separate them (REPORT.json unseparable): " + h.heldList() +
+         "; X0C reads relative to X0B.");
+    return out;
+  }
+
+  /// A B head over a C table (an offsets file named *.ngc): the work offset, which acts in every
+  /// kinematics, holds what is a shift of the program: the C axis's place (X0C, Y0C: the table,
+  /// and the sphere on it, displaced by d is seen at d - offset, machine = program + offset) and
+  /// the B head's zero (the head turns by +(B* + B0B) and B* = sign x B: B += -sign x B0B).
+  std::string writeHeadWorkOffsetProgram(const OffsetRequest& r) const {
+    const HeadWriteBack h(r);
+    const bool inch = h.m.units == LengthUnit::Inch;
+    const double k = inch ? 1.0 / kMmPerInch : 1.0;
+    const int dl = inch ? 7 : 6;
+    std::map<char, double> previous{{'X', 0.0}, {'Y', 0.0}, {'B', 0.0}};
+    bool had_previous = false;
+    for (const auto& l : ctl::splitLines(r.previous_text)) {
+      std::string code = l.text;
+      const size_t paren = code.find('(');
+      if (paren != std::string::npos) code.resize(paren);
+      const auto t = ctl::tokens(ctl::upper(code));
+      if (t.size() < 3 || t[0] != "G10" || t[1] != "L2" || t[2] != "P1") continue;
+      had_previous = true;
+      for (size_t i = 3; i < t.size(); ++i) {
+        const auto v = t[i].size() > 1 ? ctl::parseNumber(t[i].substr(1)) : std::nullopt;
+        if (!v || !previous.count(t[i][0]))
+          throw std::invalid_argument(
+              fmt::format("previous offsets file, line {}: '{}' is not one of X Y B <number>", l.number, t[i]));
+        previous[t[i][0]] = *v;
+      }
+    }
+    if (!r.previous_text.empty() && !had_previous)
+      throw std::invalid_argument("previous offsets file has no 'G10 L2 P1' line: not a rotacal work-offset file");
+    const std::map<char, double> change{{'X', h.work('X') * k}, {'Y', h.work('Y') * k}, {'B', h.work('B')}};
+    std::string out;
+    auto line = [&](const std::string& s) { out += s + "\n"; };
+    line("%");
+    line(comment("rotacal: the work-offset route of a B head over a C table, G54 [LinuxCNC]"));
+    line(comment(fmt::format("Provenance: {}; cycle {}, machine {}",
+                             r.report_file.empty() ? "no report" : r.report_file, h.plan.cycle, h.m.name)));
+    line(comment("Run it once before the cycle; it changes G54 only. Identified, head_table ISO 230-7, k = 1:"));
+    for (const auto& s : ctl::identifiedLines(r)) line(comment(s));
+    line(comment(
+        fmt::format("Mapping: G54 X += X0C, Y += Y0C [{}], B += {:+d} x B0B [deg]", unitName(inch), -h.sign_b)));
+    line(comment("Not applied [no shift expresses them]: dL [maxkins' pivot-length, a .hal file], A0C, B0C, A0B, C0B "
+                 "[a mechanical adjustment]; the sphere's set-up dX_S dY_S dZ_S is the artefact's"));
+    line(comment("Held at nominal [one sphere cannot separate them]: " + h.heldList() + "; X0C reads relative to X0B"));
+    std::string g10 = "G10 L2 P1";
+    for (char axis : {'X', 'Y', 'B'}) {
+      const int dec = axis == 'B' ? 6 : dl;
+      line(comment(fmt::format("{}: previous {} change {} new {}", axis, ctl::fixed(previous[axis], dec),
+                               ctl::fixed(change.at(axis), dec), ctl::fixed(previous[axis] + change.at(axis), dec))));
+      g10 += fmt::format(" {}{}", axis, ctl::fixed(previous[axis] + change.at(axis), dec));
+    }
+    line(inch ? "G20" : "G21");
+    line(g10);
+    line("M2");
+    line("%");
+    return out;
+  }
+
+  /// What both head_table forms read: the request checked (plausible, a B head over a C table)
+  /// and the identified values by name.
+  struct HeadWriteBack {
+    explicit HeadWriteBack(const OffsetRequest& r)
+        : req((ctl::requirePlausible(r), r)), plan(*r.plan), m(plan.machine),
+          sign_b(m.hasRotary('B') ? m.controllerSign('B', kDialect) : 1) {
+      if (!m.head || m.head->axis != 'B' || !m.hasRotary('B') || !m.hasRotary('C'))
+        throw std::invalid_argument("LinuxCNC's maxkins is a B head over a C table: rotacal writes its offsets for "
+                                    "that head_table machine only (head.axis B, rotary axes B and C)");
+      for (const char* n : {"X0C", "Y0C", "B0B", "dL"})
+        if (!ctl::kinematicParameter(r, n))
+          throw std::invalid_argument(fmt::format("head_table offsets without {}", n));
+    }
+    double value(const char* name) const {
+      const KinematicParameterValue* p = ctl::kinematicParameter(req, name);
+      return p && !p->held ? p->value : 0.0;
+    }
+    /// The work offset's change of axis X, Y (mm) or B (deg, the controller's count).
+    double work(char axis) const {
+      if (axis == 'X') return value("X0C");
+      if (axis == 'Y') return value("Y0C");
+      return -sign_b * radToDeg(value("B0B"));
+    }
+    std::string heldList() const {
+      std::string out;
+      for (const auto& p : req.kinematic)
+        if (p.held) out += (out.empty() ? "" : ", ") + p.name;
+      return out.empty() ? std::string("none") : out;
+    }
+    const OffsetRequest& req;
+    const ProbePlan& plan;
+    const MachineModel& m;
+    int sign_b;
+  };
 
   static bool endsWithNgc(const std::string& path) {
     return path.size() >= 4 && ctl::upper(path.substr(path.size() - 4)) == ".NGC";
@@ -698,6 +849,7 @@ class LinuxCncDialect final : public Dialect {
 
 std::string linuxcncKinsComponent(Kinematics k) {
   if (k == Kinematics::TableAB) return "xyzab_tdr_kins";
+  if (k == Kinematics::HeadTable) return "maxkins";
   return k == Kinematics::TableAC ? "xyzac-trt-kins" : "xyzbc-trt-kins";
 }
 

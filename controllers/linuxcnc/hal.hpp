@@ -10,7 +10,8 @@
 
 namespace rotacal {
 
-/// LinuxCNC kinematics component of a table machine: "xyzac-trt-kins", "xyzbc-trt-kins" or "xyzab_tdr_kins".
+/// LinuxCNC kinematics component of a table machine: "xyzac-trt-kins", "xyzbc-trt-kins" or "xyzab_tdr_kins";
+/// of a B head over a C table (head_table): "maxkins".
 std::string linuxcncKinsComponent(Kinematics kinematics);
 
 /// Changes (mm) of the trt-kins HAL pins that apply the identified location errors (added to

@@ -163,7 +163,7 @@ class OkumaDialect final : public ctl::TaggedResultsDialect {
   }
 
   std::string writeOffsets(const OffsetRequest& r) const override {
-    const ctl::OffsetBasis b(r);
+    const ctl::OffsetBasis b(r, kDialect);
     const auto& [plan, m, e, ac, inch, k, tilt] = b;
     const Eigen::Vector3d shift = b.pivot();
     const double zero_deg = b.zeroDeg(kDialect);

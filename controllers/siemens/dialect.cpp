@@ -222,7 +222,7 @@ class SiemensDialect final : public ctl::TaggedResultsDialect {
   }
 
   std::string writeOffsets(const OffsetRequest& r) const override {
-    const ctl::OffsetBasis b(r);
+    const ctl::OffsetBasis b(r, kDialect);
     const auto& [plan, m, e, ac, inch, k, tilt] = b;
     const auto c = siemensToolcarrierChanges(e);
     ctl::LineWriter w(comments);

@@ -55,8 +55,9 @@ class Sphere final : public Cycle {
     out.doc["declared_noise"] = declaredNoiseJson(noise, test);
     out.doc["figures"] = sphereFiguresJson(plan, res, std::sqrt(noise.white_um2));
     if (!screen.excluded.empty() || screen.too_many) out.warnings.push_back(screen.text());
-    if (!hasPapersLocationErrors(plan.machine.kinematics)) {
-      // No writer takes a head's kinematics yet: controllers.md has no verified form of them.
+    const Eigen::VectorXd uc = b.uC();
+    if (plan.machine.kinematics == Kinematics::HeadAB) {
+      // No writer takes the A/B head's kinematics: controllers.md has no verified form of them.
       out.offsets_refused = fmt::format(
           "a {} machine's kinematic parameters go into the control's kinematics description (Heidenhain's kinematics "
           "table, Siemens' $TC_CARR, Fanuc's TCP parameters), which rotacal does not write yet: none of these forms is "
@@ -66,8 +67,20 @@ class Sphere final : public Cycle {
     }
     LocationCorrection c;
     c.identified = res.location;
-    const Eigen::VectorXd uc = b.uC();
-    for (int i = 0; i < kNumLocationErrors; ++i) {
+    if (!hasPapersLocationErrors(plan.machine.kinematics)) {
+      // A head over a table: the model's own parameters reach the dialect, which writes what its
+      // control can hold of them (LinuxCNC's maxkins) or refuses with the reason.
+      for (int i = 0; i < res.model.size(); ++i) {
+        const auto& q = res.names[static_cast<size_t>(i)];
+        KinematicParameterValue v{q.name, q.kind, res.x[i], 0.0,
+                                  static_cast<bool>(res.identifiability.held[static_cast<size_t>(i)])};
+        for (int k = 0; k < b.size(); ++k)
+          if (b.names[static_cast<size_t>(k)] == q.name)
+            v.u = q.kind == ParamKind::Length ? umToMm(uc[k]) : mdegToRad(uc[k]);
+        c.kinematic.push_back(v);
+      }
+    }
+    for (int i = 0; i < kNumLocationErrors && hasPapersLocationErrors(plan.machine.kinematics); ++i) {
       const auto& q = res.names[static_cast<size_t>(res.location_index_in_x[static_cast<size_t>(i)])];
       for (int k = 0; k < b.size(); ++k)
         if (b.names[static_cast<size_t>(k)] == q.name)

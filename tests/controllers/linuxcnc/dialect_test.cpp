@@ -1,17 +1,20 @@
 // The LinuxCNC dialect (its round trip, recovery and clean programs: battery_test): the logged
 // angles carry LinuxCNC's sign, the parser reads hand-edited line ends and names the line of
-// every fault, the probing block, the checker catches planted faults, the double touch, and the
-// HAL offsets follow the documented pin mapping.
+// every fault, the probing block, the checker catches planted faults, the double touch, the
+// HAL offsets follow the documented pin mapping, and a B head over a C table (maxkins) gets its
+// pivot length and the work offset that the exact model says cancel what they hold.
 #include <gtest/gtest.h>
 
 #include <fmt/format.h>
 
 #include <cmath>
+#include <map>
 #include <regex>
 
 #include "cycles/cycle.hpp"
 #include "controllers/linuxcnc/hal.hpp"
 #include "core/errors.hpp"
+#include "core/kinematic_model.hpp"
 #include "core/units.hpp"
 #include "ctl_test_util.hpp"
 #include "dialect_battery.hpp"
@@ -410,6 +413,140 @@ TEST(LinuxCncOffsets, NgcFormRefusesAForeignPreviousFileAndBcMachines) {
   b.path = "offsets.ngc";
   EXPECT_NE(messageOf<std::invalid_argument>([&] { lc().writeOffsets(b); }).find("A/C and A/B tables only"),
             std::string::npos);
+}
+
+// ---- a B head over a C table (maxkins) ----
+
+// bc_head_table.json's head with maxkins' linuxcnc signs (read back by tests/e2e: B -1, C +1).
+constexpr const char* kHeadMachineJson = R"({
+  "format": "rotacal-machine/1", "name": "bc_head_maxkins", "kinematics": "head_table",
+  "head": {"axis": "B", "pivot_to_ball_mm": 250.0}, "units": "mm",
+  "strokes": {"X": [-400.0, 400.0], "Y": [-300.0, 300.0], "Z": [-50.0, 600.0]},
+  "rotary_axes": {"B": {"stroke_deg": [-110.0, 110.0], "controller_sign": 1, "dialect_sign": {"linuxcnc": -1}},
+                  "C": {"continuous": true, "controller_sign": 1}},
+  "table_diameter_mm": 500.0,
+  "probe": {"ball_diameter_mm": 6.0, "stylus_length_mm": 50.0, "body_clearance_mm": 5.0, "tool_number": 0},
+  "feeds": {"rapid_mm_min": 20000.0, "positioning_mm_min": 2000.0, "probing_mm_min": 100.0, "rotary_deg_min": 3600.0},
+  "clearance_mm": 10.0, "approach_mm": 5.0, "overtravel_mm": 2.0})";
+
+// The identified parameters as one_sphere hands them over (mm, rad; u k = 1), those it holds marked.
+const std::map<std::string, double> kHeadInjected = {
+    {"X0C", 0.0124}, {"Y0C", -0.0086}, {"A0C", mdegToRad(24.0)}, {"B0C", mdegToRad(-31.0)}, {"A0B", mdegToRad(18.0)},
+    {"C0B", mdegToRad(-27.0)}, {"B0B", mdegToRad(21.0)}, {"dL", 0.0153}, {"dX_S", 0.0097}};
+
+OffsetRequest headRequest(const ProbePlan& plan) {
+  OffsetRequest r = request(plan);
+  const KinematicModel m =
+      kinematicModel("head_table", Eigen::Vector3d::Zero(), plan.machine.head->pivot_to_ball_mm, 'B');
+  for (const auto& q : m.parameters) {
+    KinematicParameterValue v{q.name, q.kind, 0.0, q.kind == ParamKind::Length ? 0.0005 : mdegToRad(0.1), false};
+    const auto it = kHeadInjected.find(q.name);
+    if (it != kHeadInjected.end()) v.value = it->second;
+    v.held = q.name == "C0C" || q.name == "X0B" || q.name == "Z0B" || q.name == "dX_T" || q.name == "dY_T";
+    r.kinematic.push_back(v);
+  }
+  return r;
+}
+
+ProbePlan headPlan() {
+  ProbePlan plan;
+  plan.cycle = "one_sphere";
+  plan.machine = test::machineFrom(kHeadMachineJson);
+  return plan;
+}
+
+TEST(LinuxCncHeadOffsets, HalSetsThePivotLengthToTheModelsPivotToBallDistance) {
+  const ProbePlan plan = headPlan();
+  OffsetRequest r = headRequest(plan);
+  r.path = "offsets.hal";
+  const std::string hal = lc().writeOffsets(r);
+  const auto pins = parseHalSetp(hal, "maxkins");
+  ASSERT_EQ(pins.size(), 1u) << hal;
+  // The exact head chain: the ball's distance from the pivot (the chain's origin here: X0B = Z0B = 0)
+  // at any head angle, with the identified parameters, is the length maxkins must turn about it.
+  const KinematicModel m = kinematicModel("head_table", Eigen::Vector3d::Zero(), 250.0, 'B');
+  Eigen::VectorXd p = Eigen::VectorXd::Zero(m.size());
+  for (const auto& v : r.kinematic) p[m.parameterIndex(v.name)] = v.held ? 0.0 : v.value;
+  for (double b : {-60.0, 0.0, 35.0}) {
+    Pose pose;
+    pose.B = b;
+    const double from_pivot = (T_c_t(m, p, pose) * Eigen::Vector3d(0.0, 0.0, -250.0)).norm();
+    EXPECT_NEAR(pins.at("pivot-length"), from_pivot, kPinRoundingMm) << "B " << b;
+  }
+  EXPECT_NE(hal.find("no previous value: MACHINE.json's pivot_to_ball_mm assumed"), std::string::npos) << hal;
+  // what the pin cannot hold: the work offset's three, the tilts with their route, the held ones
+  EXPECT_NE(hal.find("#   G10 L2 P1 X0.012400 Y-0.008600 B0.021000"), std::string::npos) << hal;
+  EXPECT_NE(hal.find("A0C, B0C (orientation of the C axis) and A0B, C0B"), std::string::npos) << hal;
+  EXPECT_NE(hal.find("C0C, X0B, Z0B, dX_T, dY_T"), std::string::npos) << hal;
+  // the loop: a previous file's pin is the start
+  r.previous_text = "setp maxkins.pivot-length 250.5\nsetp other.pin 3\n";
+  const std::string again = lc().writeOffsets(r);
+  EXPECT_NEAR(parseHalSetp(again, "maxkins").at("pivot-length"), 250.5 + 0.0153, kPinRoundingMm) << again;
+  EXPECT_NE(again.find("setp other.pin 3"), std::string::npos) << "unrelated lines kept";
+}
+
+TEST(LinuxCncHeadOffsets, NgcWorkOffsetCancelsTheTablesPlaceAndTheHeadsZeroOnTheExactModel) {
+  const ProbePlan plan = headPlan();
+  OffsetRequest r = headRequest(plan);
+  r.path = "offsets.ngc";
+  const std::string ngc = lc().writeOffsets(r);
+  const double ox = g10Word(ngc, 'X'), oy = g10Word(ngc, 'Y'), ob = g10Word(ngc, 'B');
+  // machine = program + offset. The program commands the nominal carriage at B = sign x B*; the
+  // machine with X0C, Y0C and B0B needs, at every pose, the carriage the exact model gives for the
+  // head turned to the angle the offset B makes of it. The two agree to the file's 6 decimals.
+  const KinematicModel m = kinematicModel("head_table", Eigen::Vector3d(120.0, 0.0, 80.0), 250.0, 'B');
+  Eigen::VectorXd p = Eigen::VectorXd::Zero(m.size());
+  for (const char* n : {"X0C", "Y0C", "B0B"}) p[m.parameterIndex(n)] = kHeadInjected.at(n);
+  const int sign = plan.machine.controllerSign('B', "linuxcnc");
+  ASSERT_EQ(sign, -1);
+  double worst = 0.0;
+  for (double b : {-60.0, 0.0, 60.0})
+    for (double c : {0.0, 120.0, 240.0}) {
+      Pose nominal;
+      nominal.B = b;
+      nominal.C = c;
+      Pose turned = nominal;
+      turned.B = sign * (sign * b + ob);  // the papers' angle of the machine's B joint
+      const Eigen::Vector3d needed = sphereCentreInAxes(m, p, turned);
+      const Eigen::Vector3d given =
+          sphereCentreInAxes(m, Eigen::VectorXd::Zero(m.size()), nominal) + Eigen::Vector3d(ox, oy, 0.0);
+      worst = std::max(worst, (needed - given).norm());
+    }
+  // 6 decimals: 0.5e-6 mm in X, Y and 0.5e-6 deg of B over the 250 mm stylus
+  EXPECT_LT(worst, 0.5e-6 * std::sqrt(2.0) + degToRad(0.5e-6) * 250.0 + 1e-9) << ngc;
+  EXPECT_NE(ngc.find("dL [maxkins' pivot-length, a .hal file], A0C, B0C, A0B, C0B"), std::string::npos) << ngc;
+  // the loop adds to the previous G54
+  r.previous_text = ngc;
+  EXPECT_NEAR(g10Word(lc().writeOffsets(r), 'B'), 2 * ob, 1e-9);
+}
+
+TEST(LinuxCncHeadOffsets, ImplausibleParametersAndAnotherHeadAreRefused) {
+  ProbePlan plan = headPlan();
+  OffsetRequest r = headRequest(plan);
+  for (auto& v : r.kinematic)
+    if (v.name == "dL") v.value = 0.7;
+  EXPECT_NE(messageOf<std::invalid_argument>([&] { lc().writeOffsets(r); }).find("dL = 0.7000 mm exceeds"),
+            std::string::npos);
+  r.force = true;
+  EXPECT_NO_THROW(lc().writeOffsets(r));
+  plan.machine.head->axis = 'A';
+  const OffsetRequest a = headRequest(plan);
+  EXPECT_NE(messageOf<std::invalid_argument>([&] { lc().writeOffsets(a); }).find("B head over a C table"),
+            std::string::npos);
+}
+
+TEST(LinuxCncHeadOffsets, EveryOtherDialectRefusesAHeadTableWithItsName) {
+  const ProbePlan plan = headPlan();
+  const OffsetRequest r = headRequest(plan);
+  int refused = 0;
+  for (const auto& name : dialectNames()) {
+    if (name == "linuxcnc") continue;
+    const std::string msg = messageOf<std::invalid_argument>([&] { dialectByName(name).writeOffsets(r); });
+    EXPECT_NE(msg.find("head_table"), std::string::npos) << name << ": " << msg;
+    EXPECT_NE(msg.find("confirmed for " + name), std::string::npos) << name << ": " << msg;
+    ++refused;
+  }
+  EXPECT_GE(refused, 5);
 }
 
 }  // namespace

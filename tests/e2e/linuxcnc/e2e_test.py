@@ -65,6 +65,22 @@
       offset holds within its U of zero, the rest unchanged; beside it the program compensated for the
       first report: all 8 within U of zero.
 
+  e2e_test.py one_sphere_bhead --rotacal BIN --work DIR
+      a B head over a C table (bc_head_lcsim.json) on maxkins' joints: maxkins' conventions read back in
+      maxkins itself (two pivot lengths), then plan one_sphere (9 poses) -> generate -> run unchanged in
+      trivkins on the same joints, the virtual probe on the head playing truth_bhead.json (rotacal's
+      head_table parameters) -> analyze: every trigger 0 .. F x 1 ms past the exact contact; the six
+      unseparable directions named; the 11 separable parameters within 0.5 um / 0.05 mdeg and U. Then
+      the write-back: analyze --offsets writes maxkins' pivot-length (previous, change, new) and the G54
+      program; LinuxCNC restarted with both and the cycle run again: the work offset's X0C, Y0C, B0B
+      within U of zero, the rest unchanged (the pin is not loaded in trivkins); beside it the pin acting
+      in maxkins (two short sessions with the stylus dL longer).
+
+  e2e_test.py readback_5axis --rotacal BIN --work DIR
+      the bridge mill (5axiskins: a C head carrying a B head, fixed table), prepared for rotacal's model
+      of it: its conventions read back in its TCP kinematics, two pivot lengths (run.sh --params: the
+      harness's nominal head, no MACHINE.json, no truth).
+
 Exit 0 pass, 1 fail, 77 skip (LinuxCNC, halcompile or root missing: CTest SKIP_RETURN_CODE).
 """
 import argparse
@@ -1152,6 +1168,430 @@ def run_one_sphere_ac(a):
     print("docs/guide/linuxcnc.md on LinuxCNC (A/C): %d touches, first session %.0f s" % (n_points, t))
 
 
+MACHINE_BHEAD = os.path.join(HERE, "bc_head_lcsim.json")
+TRUTH_BHEAD = os.path.join(HERE, "truth_bhead.json")
+# one_sphere's poses on the B head over the C table: three B tilts x three C turns = 9 poses, 39
+# touches. The plan's default (B -60 .. 60 in 30 deg steps x C every 90 deg, 20 poses, 84 touches)
+# would take twice as long; two tilts leave 8 directions unseen and the plan refuses them.
+ONE_SPHERE_BHEAD_SET = ["tilt_list=-60,0,60", "c_list=0,120,240"]
+# What one sphere cannot separate on a B head over a C table, as rotacal computes it from the plan's
+# Jacobian (REPORT.json unseparable): C's zero (with the sphere's set-up), the pivot's X and Z (with
+# the table's X and the sphere's Z), the ball's offsets from the spindle axis (with Y0C and B0B) and
+# the linear axes' Y/Z squareness (with Y0C and A0B). The truth injects none of them.
+BHEAD_HELD = ["C0C", "S_yz", "X0B", "Z0B", "dX_T", "dY_T"]
+BHEAD_NAMES = ("X0C", "Y0C", "A0C", "B0C", "A0B", "C0B", "B0B", "dL", "dX_S", "dY_S", "dZ_S")
+BHEAD_LENGTHS = ("X0C", "Y0C", "dL", "dX_S", "dY_S", "dZ_S")
+
+
+def injected_bhead(truth=TRUTH_BHEAD):
+    """The head truth's parameters in um / mdeg (missing = 0)."""
+    with open(truth) as f:
+        le = json.load(f)["location_errors"]
+    out = {}
+    for name in BHEAD_NAMES:
+        length = name in BHEAD_LENGTHS
+        e = le.get(name, {"value": 0.0, "unit": "um" if length else "mdeg"})
+        out[name] = e["value"] * (TO_UM if length else TO_MDEG)[e["unit"]]
+    return out
+
+
+def rz_deg(t, v):
+    t = math.radians(t)
+    return [math.cos(t) * v[0] - math.sin(t) * v[1], math.sin(t) * v[0] + math.cos(t) * v[1], v[2]]
+
+
+def kins_readback_max(a, work, plan_path):
+    """maxkins' conventions, read back from the running module (it has no identity type: run.sh
+    --kins-tcp loads it in place of the cycle's trivkins), not assumed. For every pose of the plan
+    the program moves the tip, in table coordinates, to the sphere's nominal centre at the joint
+    angles rotacal's program commands there (B = -B*, C = +C*: bc_head_lcsim.json's linuxcnc signs),
+    and to four rows off the sphere, and LOGs the joints LinuxCNC chose and the ball as the virtual
+    probe sees it in its table frame. Checks, with maxkins.pivot-length L = 250 (the machine's pivot
+    to ball) and then 173.5 mm:
+      * the joints are maxkins' inverse as its source writes it: the tip turned by -C, joint 0 -= L
+        sin B, joint 2 += L cos B - L (B against ISO 841's head, C as rotacal's table, joint 2 reading
+        the tip at B = 0, so the pivot is L above it);
+      * every other candidate (B's sign, C's sign, joint 2 reading the pivot) is far off;
+      * the probe, its pivot L above the joints' point, puts the ball at the commanded tip;
+      * at the plan's poses the joints are rotacal's machine positions for the ball on the sphere's
+        centre minus (0, 0, L): the same motion, Z counted from the tip at B = 0 instead of the pivot."""
+    with open(plan_path) as f:
+        plan = json.load(f)
+    centre = plan["points"][0]["sphere"]["center_w_mm"]
+    radius = plan["points"][0]["sphere"]["radius_mm"]
+    L0 = plan["machine"]["head"]["pivot_to_ball_mm"]
+    rows = [(-pose["pose"]["B"], pose["pose"]["C"], centre) for pose in plan["poses"]]   # (joint B, joint C, tip)
+    rows += [(-45.0, 30.0, [10.0, 20.0, 30.0]), (80.0, -100.0, [40.0, -70.0, 25.0]),
+             (-100.0, 200.0, [-50.0, 30.0, 60.0]), (0.0, 0.0, [0.0, 0.0, 0.0])]
+    truth0 = os.path.join(work, "truth_none.json")
+    with open(truth0, "w") as f:
+        json.dump({"format": "rotacal-truth/1", "_comment": "no error: the controller's nominal machine"}, f)
+    n_poses = len(plan["poses"])
+    out = {}
+    for tag, L in (("pivot_%g" % L0, L0), ("pivot_173.5", 173.5)):
+        rows_ = rows if L == L0 else rows[:n_poses:max(1, n_poses // 4)] + rows[n_poses:]
+        ngc = os.path.join(work, "kins_readback_%s.ngc" % tag)
+        with open(ngc, "w") as f:
+            f.write("(rotacal e2e: maxkins read-back, its TCP kinematics; row: i B C x y z, the joints 0..5,"
+                    " the probe's ball in its table frame)\nG21 G17 G40 G49 G54 G61 G90 G94\n"
+                    "(LOGOPEN,kins_readback.txt)\n(LOG,K #<_hal[maxkins.pivot-length]>)\n")
+            for i, (b, c, p) in enumerate(rows_):
+                f.write("G0 X%.6f Y%.6f Z%.6f B%.6f C%.6f\nM66 E0 L0\n" % (p[0], p[1], p[2], b, c))
+                f.write("(LOG,R %d %.6f %.6f %.6f %.6f %.6f)\n" % (i, b, c, p[0], p[1], p[2]))
+                f.write("(LOG,J %d" % i + "".join(" #<_hal[joint.%d.pos-cmd]>" % j for j in range(6)) + ")\n")
+                f.write("(LOG,T %d #<_hal[vtouchprobe.0.ball-tx]> #<_hal[vtouchprobe.0.ball-ty]> "
+                        "#<_hal[vtouchprobe.0.ball-tz]>)\n" % i)
+            f.write("(LOGCLOSE)\nM2\n")
+        setp = os.path.join(work, "readback_%s.hal" % tag)
+        with open(setp, "w") as f:
+            # maxkins' pin; the probe's pivot L above the joints' point, the ball on it at B = 0
+            f.write("setp maxkins.pivot-length %.12g\nsetp vtouchprobe.0.h1-pz %.12g\nsetp vtouchprobe.0.hb-z 0\n"
+                    % (L, L))
+        _, t = session([RUN, "--ngc", ngc, "--truth", truth0, "--machine", MACHINE_BHEAD, "--kins-tcp", "--setp", setp,
+                        "--out", os.path.join(work, "readback_" + tag), "--timeout", "300"])
+        parts, pin = {}, None
+        with open(os.path.join(work, "readback_" + tag, "kins_readback.txt")) as f:
+            for line in f:
+                t_ = line.split()
+                if len(t_) == 2 and t_[0] == "K":
+                    pin = float(t_[1])
+                if len(t_) >= 2 and t_[0] in ("R", "J", "T"):
+                    parts.setdefault(int(t_[1]), {})[t_[0]] = [float(x) for x in t_[2:]]
+        check(pin is not None and abs(pin - L) < 1e-9, "read-back (%s): maxkins.pivot-length = %s" % (tag, pin))
+        # a row: i, B, C, x, y, z (commanded), joints 0..5, the probe's ball x y z
+        got = [[float(i)] + v["R"] + v["J"] + v["T"] for i, v in sorted(parts.items())
+               if len(v.get("R", [])) == 5 and len(v.get("J", [])) == 6 and len(v.get("T", [])) == 3]
+        check(len(got) == len(rows_), "read-back (%s): %d rows of %d" % (tag, len(got), len(rows_)))
+
+        def cand(con, sc, tip_at_b0, b, c, p):
+            q = rz_deg(-sc * c, p)
+            zb = L * math.cos(math.radians(b)) - (L if tip_at_b0 else 0.0)
+            return [q[0] + con * L * math.sin(math.radians(b)), q[1], q[2] + zb]
+        worst = {}
+        for con in (-1, 1):
+            for sc in (1, -1):
+                for tip in (True, False):
+                    worst[(con, sc, tip)] = max(max(abs(g[6 + k] - cand(con, sc, tip, g[1], g[2], g[3:6])[k])
+                                                    for k in range(3)) for g in got)
+        best = worst[(-1, 1, True)]
+        others = min(v for k, v in worst.items() if k != (-1, 1, True))
+        check(best < 1e-6, "read-back (%s): joints = Rz(-C) p + (-L sin B, 0, L cos B - L) within %.1e mm (%d rows)"
+              % (tag, best, len(got)))
+        check(others > 1.0, "read-back (%s): every other candidate (B's sign, C's sign, joint 2 at the pivot) is off by "
+              "at least %.1f mm" % (tag, others))
+        check(all(abs(g[10] - g[1]) < 1e-9 and abs(g[11] - g[2]) < 1e-9 and abs(g[9]) < 1e-9 for g in got),
+              "read-back (%s): joints 4, 5 are the commanded B, C, joint 3 (A) stays 0" % tag)
+        ball = max(max(abs(g[12 + k] - g[3 + k]) for k in range(3)) for g in got)
+        check(ball < 1e-6, "read-back (%s): the probe's ball in its table frame = the commanded tip within %.1e mm"
+              % (tag, ball))
+        if L == L0:
+            r_ball = plan["machine"]["probe"]["ball_diameter_mm"] / 2.0
+            dev = 0.0
+            for pose_i, pose in enumerate(plan["poses"]):
+                pt = [q for q in plan["points"] if q["pose_name"] == pose["name"]][0]
+                cm = [pt["trigger_m_mm"][k] + (radius + r_ball) * pt["approach_m"][k] for k in range(3)]
+                dev = max(dev, max(abs(got[pose_i][6 + k] - (cm[k] - (L0 if k == 2 else 0.0))) for k in range(3)))
+            check(dev < 1e-5, "read-back: at all %d poses LinuxCNC's joints are rotacal's plan's carriage for the ball on "
+                  "the sphere's centre (B = -B*, C = +C*), Z less L = %g mm (maxkins' Z reads the tip at B = 0), within "
+                  "%.1e mm" % (len(plan["poses"]), L0, dev))
+        out[tag] = {"rows": len(got), "session_s": t, "pivot_length_mm": L, "max_dev_mm": best,
+                    "other_candidates_min_mm": others, "probe_ball_dev_mm": ball,
+                    "candidates_mm": {"con%+d C%+d %s" % (k[0], k[1], "tip@B0" if k[2] else "pivot"): v
+                                      for k, v in worst.items()}}
+    return out
+
+
+def plan_one_sphere_bhead(a, work):
+    plan, ngc = os.path.join(work, "plan.json"), os.path.join(work, "one_sphere.ngc")
+    cmd = [a.rotacal, "plan", "--cycle", "one_sphere", "--machine", MACHINE_BHEAD, "-o", plan]
+    for kv in ONE_SPHERE_BHEAD_SET:
+        cmd += ["--set", kv]
+    sh(cmd)
+    sh([a.rotacal, "generate", "--plan", plan, "--dialect", "linuxcnc", "-o", ngc])
+    return plan, ngc
+
+
+def kinematic_parameters(report):
+    """A head machine's report: its kinematic parameters (value, U, unit) by ISO name."""
+    with open(report) as f:
+        r = json.load(f)
+    out = {}
+    for name, e in r["kinematic_parameters"].items():
+        want = "um" if name in BHEAD_LENGTHS or name in ("X0B", "Z0B", "dX_T", "dY_T", "dR") else "mdeg"
+        if e["unit"] != want:
+            raise SystemExit("FAIL: %s: %s in %s, expected %s" % (report, name, e["unit"], want))
+        out[name] = e
+    return r, out
+
+
+def run_one_sphere_bhead(a):
+    work = a.work
+    plan, ngc = plan_one_sphere_bhead(a, work)
+    with open(plan) as f:
+        n_points = len(json.load(f)["points"])
+    run = os.path.join(work, "run")
+    readback, (_, t) = side_by_side(
+        lambda: kins_readback_max(a, work, plan),
+        lambda: session([RUN, "--ngc", ngc, "--truth", TRUTH_BHEAD, "--machine", MACHINE_BHEAD, "--plan", plan, "--out",
+                         run, "--timeout", "300"]))
+    figures = {"readback": readback, "run_s": t}
+    figures["lateness"] = lateness(work, run, plan, cycle="one_sphere", points=n_points,
+                                   across_um=ROUNDING_ACROSS_3D_UM, machine=MACHINE_BHEAD)
+    rep = os.path.join(work, "report.json")
+    sh([a.rotacal, "analyze", "--plan", plan, "--results", os.path.join(run, "rotacal_one_sphere.txt"),
+        "--dialect", "linuxcnc", "--json", rep])
+    r, kp = kinematic_parameters(rep)
+    held = sorted(u["held"] for u in r.get("unseparable", []))
+    check(held == BHEAD_HELD, "the report holds exactly %s at nominal (unseparable, from the plan's Jacobian): %s"
+          % (", ".join(BHEAD_HELD), held))
+    want = injected_bhead()
+    print("one_sphere on LinuxCNC (B head over C table, maxkins' joints), injected head_table errors "
+          "(identified - expected):")
+    for name, w in want.items():
+        tol = LENGTH_TOL_UM if name in BHEAD_LENGTHS else ANGLE_TOL_MDEG
+        d, U = kp[name]["value"] - w, kp[name]["U"]
+        check(abs(d) <= tol and abs(d) <= U, "%-5s identified %9.4f expected %9.4f diff %+8.4f %s, U %.4f (tol %g)"
+              % (name, kp[name]["value"], w, d, kp[name]["unit"], U, tol))
+    figures.update({"identified": {n: kp[n]["value"] for n in want}, "U": {n: kp[n]["U"] for n in want},
+                    "injected": want, "unseparable": r.get("unseparable"), "points": n_points})
+    figures.update(write_back_bhead(a, work, plan, ngc, rep, kp, want))
+    with open(os.path.join(work, "figures.json"), "w") as f:
+        json.dump(figures, f, indent=1)
+    print("one_sphere B head / C table on LinuxCNC: %d touches, LinuxCNC session %.0f s" % (n_points, t))
+
+
+# What each route holds on maxkins' machine: its pin, pivot-length, the stylus (dL: the ball's distance
+# from the pivot); the work offset, in every kinematics, the C table's place and the head's zero; the
+# tilts no pin or shift (a mechanical adjustment); the sphere's set-up is the artefact's.
+BHEAD_WORK_OFFSET = ("X0C", "Y0C", "B0B")
+
+
+def write_back_bhead(a, work, plan, ngc, rep1, kp1, want):
+    """The write-back and the loop closed on the controller. analyze --offsets writes maxkins' pin
+    (offsets.hal: pivot-length's previous value, change and new value; the rest named with its route)
+    and the work offset (offsets.ngc). LinuxCNC is started again with both: the G54 program first
+    (--pre-ngc), the pin's line given to the session (--setp), and the unchanged cycle measures again:
+    what the work offset holds within its U of zero, the rest as before. The cycle's session runs
+    trivkins (maxkins has no identity type), where the pin is not even loaded: run.sh keeps the line
+    as a comment, and dL comes back unchanged. Beside it, a short session in maxkins itself with the
+    stylus dL longer than nominal shows the pin acting: the tip commanded at the plan's poses, the
+    ball's offset from it varies with B by dL sin B at the nominal pin and is the same at every pose
+    at the written one (the constant left, -dL in Z, is the Z reference's: the file says so)."""
+    hal, g10 = os.path.join(work, "offsets.hal"), os.path.join(work, "offsets.ngc")
+    res1 = os.path.join(work, "run", "rotacal_one_sphere.txt")
+    for out in (hal, g10):
+        if os.path.exists(out):
+            os.remove(out)       # the loop starts from the nominal pin and G54 = 0 (a file present is added to)
+        sh([a.rotacal, "analyze", "--plan", plan, "--results", res1, "--dialect", "linuxcnc", "--json",
+            os.path.join(work, "report_offsets.json"), "--offsets", out])
+    with open(plan) as f:
+        pl = json.load(f)
+    L = pl["machine"]["head"]["pivot_to_ball_mm"]
+    with open(hal) as f:
+        hal_text = f.read()
+    print(hal_text)
+    pins = {}
+    for line in hal_text.splitlines():
+        t_ = line.split()
+        if len(t_) == 3 and t_[0] == "setp" and t_[1].startswith("maxkins."):
+            pins[t_[1].split(".", 1)[1]] = float(t_[2])
+    check(sorted(pins) == ["pivot-length"], "offsets.hal sets maxkins' pivot-length only: %s" % sorted(pins))
+    new_pl = pins.get("pivot-length", float("nan"))
+    check(abs(new_pl - (L + kp1["dL"]["value"] * 1e-3)) <= 1e-6,
+          "pivot-length = previous (MACHINE.json's L = %g mm) + the identified dL (%.4f um): %.6f mm"
+          % (L, kp1["dL"]["value"], new_pl))
+    check(any(l.split()[1:] == ["pin", "previous", "change", "new"] for l in hal_text.splitlines() if l.startswith("# ")),
+          "offsets.hal gives the pin's previous value, change and new value")
+    check("A0C, B0C (orientation of the C axis) and A0B, C0B" in hal_text and "mechanical adjustment" in hal_text,
+          "offsets.hal names what maxkins cannot hold (A0C, B0C, A0B, C0B) and the route")
+    check("C0C, X0B, Z0B, dX_T, dY_T" in hal_text, "offsets.hal names the held (unseparable) parameters")
+    check("G10 L2 P1 X" in hal_text, "offsets.hal gives the C table's place and the B zero as a work offset (G10 L2 P1)")
+    with open(g10) as f:
+        g10_text = f.read()
+    print(g10_text)
+    g10_line = [l for l in g10_text.splitlines() if l.startswith("G10 L2 P1")][0].split()[3:]
+    want_g54 = {w[0]: float(w[1:]) for w in g10_line}
+    sign_b = -1   # bc_head_lcsim.json's linuxcnc sign of B, read back above
+    expect_g54 = {"X": kp1["X0C"]["value"] * 1e-3, "Y": kp1["Y0C"]["value"] * 1e-3,
+                  "B": -sign_b * kp1["B0B"]["value"] * 1e-3}
+    check(sorted(want_g54) == ["B", "X", "Y"] and all(abs(want_g54[k] - v) <= 0.5e-6 for k, v in expect_g54.items()),
+          "offsets.ngc shifts G54 X, Y by the identified X0C, Y0C and B by %+d x B0B: %s" % (-sign_b, want_g54))
+    check("dL [maxkins' pivot-length, a .hal file], A0C, B0C, A0B, C0B" in g10_text,
+          "offsets.ngc names what no shift expresses (dL, A0C, B0C, A0B, C0B)")
+    # rotacal compensate rewrites table machines' programs: it refuses the head, naming why
+    r, _ = sh([a.rotacal, "compensate", "--program", ngc, "--report", rep1, "--dialect", "linuxcnc", "-o",
+               os.path.join(work, "one_sphere_compensated.ngc")], expect=None)
+    check(r.returncode == 1 and "head_table" in r.stdout, "rotacal compensate refuses the head_table report with its "
+          "reason (exit %d)" % r.returncode)
+    run2 = os.path.join(work, "run2")
+    # the pin acting, in maxkins: the true stylus dL longer (truth: dL alone), the carriage reading the tip
+    # at B = 0 for the nominal L; the tip commanded to the sphere's centre at the plan's poses
+    dl_true = injected_bhead()["dL"] * 1e-3
+    truth_dl = os.path.join(work, "truth_dl.json")
+    with open(truth_dl, "w") as f:
+        json.dump({"format": "rotacal-truth/1", "_comment": "the stylus alone, dL longer than nominal",
+                   "location_errors": {"dL": {"value": dl_true * 1e3, "unit": "um"}}}, f)
+    centre = pl["points"][0]["sphere"]["center_w_mm"]
+
+    def pin_session(tag, pivot_length):
+        prog = os.path.join(work, "pin_%s.ngc" % tag)
+        with open(prog, "w") as f:
+            f.write("(rotacal e2e: maxkins' pivot-length acting; row: i B C, the probe's ball in its table frame)\n"
+                    "G21 G17 G40 G49 G54 G61 G90 G94\n(LOGOPEN,pin.txt)\n")
+            for i, pose in enumerate(pl["poses"]):
+                b, c = sign_b * pose["pose"]["B"], pose["pose"]["C"]
+                f.write("G0 X%.6f Y%.6f Z%.6f B%.6f C%.6f\nM66 E0 L0\n" % (centre[0], centre[1], centre[2], b, c))
+                f.write("(LOG,T %d %.6f %.6f #<_hal[vtouchprobe.0.ball-tx]> #<_hal[vtouchprobe.0.ball-ty]> "
+                        "#<_hal[vtouchprobe.0.ball-tz]>)\n" % (i, b, c))
+            f.write("(LOGCLOSE)\nM2\n")
+        setp = os.path.join(work, "pin_%s.hal" % tag)
+        with open(setp, "w") as f:
+            f.write("setp maxkins.pivot-length %.12g\nsetp vtouchprobe.0.h1-pz %.12g\nsetp vtouchprobe.0.hb-z %.12g\n"
+                    % (pivot_length, L, -dl_true))
+        out_dir = os.path.join(work, "pin_" + tag)
+        _, t_ = session([RUN, "--ngc", prog, "--truth", truth_dl, "--machine", MACHINE_BHEAD, "--kins-tcp", "--setp",
+                         setp, "--out", out_dir, "--timeout", "300"])
+        rows = []
+        with open(os.path.join(out_dir, "pin.txt")) as f:
+            for line in f:
+                t = line.split()
+                if len(t) == 7 and t[0] == "T":
+                    rows.append([float(v) for v in t[2:]])
+        check(len(rows) == len(pl["poses"]), "pin session (%s): %d rows" % (tag, len(rows)))
+        # the ball's offset from the commanded tip, its spread over the poses (um)
+        dev = [[(r_[2 + k] - centre[k]) * 1e3 for k in range(3)] for r_ in rows]
+        spread = max(max(d[k] for d in dev) - min(d[k] for d in dev) for k in range(3))
+        return t_, dev, spread
+
+    (_, t2), (t_nom, dev_nom, spread_nom), (t_new, dev_new, spread_new) = side_by_side(
+        lambda: session([RUN, "--setp", hal, "--pre-ngc", g10, "--ngc", ngc, "--truth", TRUTH_BHEAD, "--machine",
+                         MACHINE_BHEAD, "--plan", plan, "--out", run2, "--timeout", "300"]),
+        lambda: pin_session("nominal", L),
+        lambda: pin_session("written", new_pl))
+    bound = 2 * kp1["dL"]["U"]
+    check(spread_nom > 0.8 * dl_true * 1e3 * 2 * math.sin(math.radians(60)),
+          "maxkins at the nominal pivot-length: the ball's offset from the tip varies by %.3f um over the poses "
+          "(dL sin B, B -60 .. 60)" % spread_nom)
+    check(spread_new <= bound, "maxkins at the written pivot-length: the offset is the same at every pose within %.3f um "
+          "(bound 2 U of dL, %.3f um); left: %s um (the Z reference's -dL)"
+          % (spread_new, bound, ["%.3f" % v for v in dev_new[0]]))
+    with open(os.path.join(run2, "params.hal")) as f:
+        p2 = f.read()
+    check("not loaded in this session (maxkins: identity kinematics run instead), not applied: setp maxkins.pivot-length"
+          in p2, "the cycle's session (trivkins) does not load maxkins: the pin's line is kept, not applied")
+    with open(os.path.join(run2, "driver_status.json")) as f:
+        g54 = json.load(f)["g5x_offset_after"][0]
+    check(all(abs(g54["XYZABC".index(k)] - v) < 1e-9 for k, v in want_g54.items()),
+          "LinuxCNC's G54 after the offsets program %s = the G10 line %s" % (g54[:6], want_g54))
+    lat2 = lateness(work, run2, plan, offsets=g10, cycle="one_sphere", points=len(pl["points"]),
+                    across_um=ROUNDING_ACROSS_3D_UM, machine=MACHINE_BHEAD)
+    rep2 = os.path.join(work, "report2.json")
+    sh([a.rotacal, "analyze", "--plan", plan, "--results", os.path.join(run2, "rotacal_one_sphere.txt"),
+        "--dialect", "linuxcnc", "--json", rep2])
+    _, kp2 = kinematic_parameters(rep2)
+    rows = {}
+    for name, w in want.items():
+        expect = 0.0 if name in BHEAD_WORK_OFFSET else w
+        d, U = kp2[name]["value"] - expect, kp2[name]["U"]
+        tol = LENGTH_TOL_UM if name in BHEAD_LENGTHS else ANGLE_TOL_MDEG
+        what = ("within its U of zero (the work offset holds it)" if name in BHEAD_WORK_OFFSET else
+                "unchanged (the pin not loaded in identity kinematics)" if name == "dL" else
+                "unchanged (not held: reported, named above)")
+        check(abs(d) <= U and abs(d) <= tol, "after_offsets: %-5s %9.4f %s, expected %9.4f: diff %+8.4f, U %.4f (tol %g) %s"
+              % (name, kp2[name]["value"], kp2[name]["unit"], expect, d, U, tol, what))
+        rows[name] = {"value": kp2[name]["value"], "U": U, "expected": expect}
+    return {"run2_s": t2, "lateness2": lat2, "pins": pins, "g54": want_g54, "after_offsets": rows,
+            "pin_acting": {"nominal": {"session_s": t_nom, "dev_um": dev_nom, "spread_um": spread_nom},
+                           "written": {"session_s": t_new, "dev_um": dev_new, "spread_um": spread_new}}}
+
+
+def kins_readback_5axis(a):
+    """5axiskins' conventions (the bridge mill: a C head carrying a B head over a fixed table), read
+    back from the running module in its TCP kinematics (run.sh --kins-tcp: its type 0 without
+    sparm=identityfirst), a session of its own for each of two pivot lengths, prepared for rotacal's
+    model of the machine (none here: run.sh --params, the harness's nominal head, no truth). The
+    program moves the tip to table points at B and C and LOGs the joints and the probe's ball.
+    Checks: the joints are tip - (0, 0, L) - Rz(+C) Ry(-B) (0, 0, -L) (5axiskins' source:
+    s2r(L, C, 180 - B) = L (sin B cos C, sin B sin C, -cos B); the C head carries the B head, B
+    against ISO 841's head, joint 2 reading the tip at B = 0); every other sign, order or Z
+    candidate is far off; the probe's nominal head (two lines through one pivot) puts the ball on
+    the commanded tip."""
+    work = a.work
+    rows = [(0.0, 0.0, [0.0, 0.0, 0.0]), (30.0, 45.0, [10.0, 20.0, 30.0]), (-45.0, 120.0, [40.0, -70.0, 25.0]),
+            (60.0, -30.0, [-50.0, 30.0, 60.0]), (90.0, 200.0, [5.0, 5.0, 5.0]), (-100.0, 10.0, [100.0, -50.0, 0.0]),
+            (15.0, -170.0, [0.0, 0.0, 100.0])]
+    out = {}
+    for tag, L in (("pivot_250", 250.0), ("pivot_173.5", 173.5)):
+        params = os.path.join(work, "params_%s.json" % tag)
+        with open(params, "w") as f:
+            json.dump({"_comment": "the bridge mill's nominal head (5axiskins' read-back): C head about +Z, B head "
+                       "about -Y, through one pivot L above the joints' point",
+                       "machine": {"kins": "5axis"}, "block": {"enable": False},
+                       "head": {"enable": True, "axis": "CB", "pivot_to_ball": L, "sign": -1.0, "c_sign": 1.0,
+                                "carriage_reads_ball": True}}, f)
+        ngc = os.path.join(work, "kins_readback_%s.ngc" % tag)
+        with open(ngc, "w") as f:
+            f.write("(rotacal e2e: 5axiskins read-back, its TCP kinematics; row: i B C x y z, the joints 0..5,"
+                    " the probe's ball)\nG21 G17 G40 G49 G54 G61 G90 G94\n"
+                    "(LOGOPEN,kins_readback.txt)\n(LOG,K #<_hal[5axiskins.pivot-length]> "
+                    "#<_hal[motion.switchkins-type]>)\n")
+            for i, (b, c, p) in enumerate(rows):
+                f.write("G0 X%.6f Y%.6f Z%.6f B%.6f C%.6f W0\nM66 E0 L0\n" % (p[0], p[1], p[2], b, c))
+                f.write("(LOG,R %d %.6f %.6f %.6f %.6f %.6f)\n" % (i, b, c, p[0], p[1], p[2]))
+                f.write("(LOG,J %d" % i + "".join(" #<_hal[joint.%d.pos-cmd]>" % j for j in range(6)) + ")\n")
+                f.write("(LOG,T %d #<_hal[vtouchprobe.0.ball-tx]> #<_hal[vtouchprobe.0.ball-ty]> "
+                        "#<_hal[vtouchprobe.0.ball-tz]>)\n" % i)
+            f.write("G0 B0 C0\n(LOGCLOSE)\nM2\n")
+        setp = os.path.join(work, "readback_%s.hal" % tag)
+        with open(setp, "w") as f:
+            f.write("setp 5axiskins.pivot-length %.12g\n" % L)
+        _, t = session([RUN, "--ngc", ngc, "--params", params, "--kins-tcp", "--setp", setp,
+                        "--out", os.path.join(work, "readback_" + tag), "--timeout", "300"])
+        parts, pin, kt = {}, None, None
+        with open(os.path.join(work, "readback_" + tag, "kins_readback.txt")) as f:
+            for line in f:
+                t_ = line.split()
+                if len(t_) == 3 and t_[0] == "K":
+                    pin, kt = float(t_[1]), float(t_[2])
+                if len(t_) >= 2 and t_[0] in ("R", "J", "T"):
+                    parts.setdefault(int(t_[1]), {})[t_[0]] = [float(x) for x in t_[2:]]
+        check(pin is not None and abs(pin - L) < 1e-9 and kt == 0.0,
+              "read-back (%s): 5axiskins.pivot-length = %s, motion.switchkins-type %s (0: TCP without the sparm)"
+              % (tag, pin, kt))
+        got = [[float(i)] + v["R"] + v["J"] + v["T"] for i, v in sorted(parts.items())
+               if len(v.get("R", [])) == 5 and len(v.get("J", [])) == 6 and len(v.get("T", [])) == 3]
+        check(len(got) == len(rows), "read-back (%s): %d rows of %d" % (tag, len(got), len(rows)))
+
+        def cand(order, sb, sc, tip_at_b0, b, c, p):
+            v = [0.0, 0.0, -L]
+            v = rz_deg(sc * c, ry_deg(sb * b, v)) if order == "CB" else ry_deg(sb * b, rz_deg(sc * c, v))
+            return [p[0] - v[0], p[1] - v[1], p[2] - v[2] - (L if tip_at_b0 else 0.0)]
+        worst = {}
+        for order in ("CB", "BC"):
+            for sb in (1, -1):
+                for sc in (1, -1):
+                    for tip in (True, False):
+                        worst[(order, sb, sc, tip)] = max(
+                            max(abs(g[6 + k] - cand(order, sb, sc, tip, g[1], g[2], g[3:6])[k]) for k in range(3))
+                            for g in got)
+        key = ("CB", -1, 1, True)
+        best = worst[key]
+        others = min(v for k, v in worst.items() if k != key)
+        check(best < 1e-6, "read-back (%s): joints = p - (0, 0, L) - Rz(+C) Ry(-B) (0, 0, -L) within %.1e mm (%d rows)"
+              % (tag, best, len(got)))
+        check(others > 1.0, "read-back (%s): every other order, sign or Z candidate is off by at least %.1f mm"
+              % (tag, others))
+        check(all(abs(g[9] - g[1]) < 1e-9 and abs(g[10] - g[2]) < 1e-9 and abs(g[11]) < 1e-9 for g in got),
+              "read-back (%s): joints 3, 4 are the commanded B, C, joint 5 (W) stays 0" % tag)
+        ball = max(max(abs(g[12 + k] - g[3 + k]) for k in range(3)) for g in got)
+        check(ball < 1e-6, "read-back (%s): the probe's nominal head puts the ball on the commanded tip within %.1e mm"
+              % (tag, ball))
+        out[tag] = {"rows": len(got), "session_s": t, "pivot_length_mm": L, "max_dev_mm": best,
+                    "other_candidates_min_mm": others, "probe_ball_dev_mm": ball}
+    with open(os.path.join(work, "figures.json"), "w") as f:
+        json.dump(out, f, indent=1)
+
+
 def run_no_trigger(a):
     work = a.work
     plan, ngc = os.path.join(work, "plan.json"), os.path.join(work, "touch154.ngc")
@@ -1176,7 +1616,7 @@ def run_no_trigger(a):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("case", choices=("touch154", "no_trigger", "comp_table", "one_sphere_bc", "one_sphere_ac",
-                                     "one_sphere_ab"))
+                                     "one_sphere_ab", "one_sphere_bhead", "readback_5axis"))
     ap.add_argument("--rotacal", required=True)
     ap.add_argument("--work", required=True)
     a = ap.parse_args()
@@ -1186,7 +1626,8 @@ def main():
         sys.exit(77)
     os.makedirs(a.work, exist_ok=True)
     {"touch154": run_touch154, "no_trigger": run_no_trigger, "comp_table": run_comp_table,
-     "one_sphere_bc": run_one_sphere_bc, "one_sphere_ac": run_one_sphere_ac, "one_sphere_ab": run_one_sphere_ab}[a.case](a)
+     "one_sphere_bc": run_one_sphere_bc, "one_sphere_ac": run_one_sphere_ac, "one_sphere_ab": run_one_sphere_ab,
+     "one_sphere_bhead": run_one_sphere_bhead, "readback_5axis": kins_readback_5axis}[a.case](a)
     finish()
 
 

@@ -3,13 +3,18 @@
 # controller (headless, identity kinematics) whose virtual touch probe plays a machine with
 # the location errors of a rotacal TRUTH.json. Adapted from shared/tools/linuxcnc-sim/run.sh.
 # An A/C machine ("kinematics": "table_ac") runs on xyzac-trt-kins (config/lcsim_xyzac.ini), a
-# B/C machine ("table_bc") on xyzbc-trt-kins (config/lcsim_xyzbc.ini).
+# B/C machine ("table_bc") on xyzbc-trt-kins (config/lcsim_xyzbc.ini), an A/B table ("table_ab") on
+# xyzab_tdr_kins (config/lcsim_xyzab.ini), a B head over a C table ("head_table") on trivkins, the
+# joints of maxkins (config/lcsim_max.ini; --kins-tcp: maxkins itself); the bridge mill's read-back
+# (--params, machine.kins "5axis") on 5axiskins (config/lcsim_5axis.ini).
 #
-# Usage: run.sh --ngc PROGRAM --truth TRUTH.json --machine MACHINE.json --out DIR
+# Usage: run.sh --ngc PROGRAM (--truth TRUTH.json --machine MACHINE.json | --params params.json) --out DIR
 #               [--plan PLAN.json] [--pre-ngc OFFSETS.ngc] [--timeout S] [--comp-build DIR]
 #               [--c-from-motor] [--comp-file TABLE] [--linear-comp DIR] [--kins-tcp] [--setp FILE]
 #   --ngc FILE        the program (rotacal generate --dialect linuxcnc); it runs as written
 #   --truth FILE      rotacal-truth/1: the true machine and piece (scripts/truth_params.py)
+#   --params FILE     the harness's params.json itself, in place of --truth and --machine: a
+#                     machine rotacal has no model of yet (the 5axiskins read-back)
 #   --machine FILE    rotacal-machine/1: the nominal piece and probe ball
 #   --plan FILE       rotacal-plan/1 of a sphere cycle: its spheres join the virtual piece
 #   --out DIR         run directory: LinuxCNC's INI, var file and the program's LOG land here
@@ -24,8 +29,10 @@
 #   --linear-comp DIR joints 0, 1, 2 (X, Y, Z) load DIR/joint0.comp, joint1.comp, joint2.comp
 #                     (COMP_FILE_TYPE = 0) and the probe reads X, Y, Z from their motor commands:
 #                     the controller itself makes the linear axes' positioning errors
-#   --kins-tcp        start in the trunnion (TCP) kinematics instead of identity (the INI
-#                     without sparm=identityfirst): for the conventions read-back only
+#   --kins-tcp        start in the TCP kinematics instead of identity (the INI without
+#                     sparm=identityfirst, or its TCP_KINEMATICS line: maxkins): for the
+#                     conventions read-back only. Without it, setp lines for a TCP-only module
+#                     (maxkins) are kept in params.hal as comments: not loaded, not applied
 #   --setp FILE       'setp PIN VALUE' lines applied after the truth's (read-back: rot-point,
 #                     offsets of the kinematics and the probe's matching axis lines)
 #   --shared          run LinuxCNC in the machine's own namespaces (one session at a time, as
@@ -39,12 +46,13 @@ HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 PY=/usr/bin/python3          # Debian's interpreter: it has the linuxcnc and hal modules
 export PYTHONDONTWRITEBYTECODE=1   # no __pycache__ in the source tree
 
-NGC="" PRE="" TRUTH="" MACHINE="" PLAN="" OUT="" TIMEOUT=900 BUILD=/tmp/rotacal-e2e-comp C_MOTOR=0 COMP="" LINCOMP="" TCP=0 SETP="" ISOLATE=1
+NGC="" PRE="" TRUTH="" MACHINE="" PARAMS="" PLAN="" OUT="" TIMEOUT=900 BUILD=/tmp/rotacal-e2e-comp C_MOTOR=0 COMP="" LINCOMP="" TCP=0 SETP="" ISOLATE=1
 while [ $# -gt 0 ]; do
     case "$1" in
         --ngc) NGC="$2"; shift 2;;
         --pre-ngc) PRE="$2"; shift 2;;
         --truth) TRUTH="$2"; shift 2;;
+        --params) PARAMS="$2"; shift 2;;
         --machine) MACHINE="$2"; shift 2;;
         --plan) PLAN="$2"; shift 2;;
         --out) OUT="$2"; shift 2;;
@@ -56,16 +64,23 @@ while [ $# -gt 0 ]; do
         --kins-tcp) TCP=1; shift;;
         --setp) SETP="$2"; shift 2;;
         --shared) ISOLATE=0; shift;;
-        -h|--help) sed -n '2,34p' "$0" | sed 's/^# \{0,1\}//'; exit 0;;
+        -h|--help) sed -n '2,42p' "$0" | sed 's/^# \{0,1\}//'; exit 0;;
         *) echo "run.sh: unknown option $1 (see --help)" >&2; exit 3;;
     esac
 done
 die() { echo "run.sh: $*" >&2; exit 3; }
 abspath() { echo "$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"; }
-[ -n "$NGC" ] && [ -n "$TRUTH" ] && [ -n "$MACHINE" ] && [ -n "$OUT" ] || die "--ngc, --truth, --machine and --out are required"
-for f in "$NGC" "$TRUTH" "$MACHINE" ${PRE:+"$PRE"} ${PLAN:+"$PLAN"} ${COMP:+"$COMP"} ${SETP:+"$SETP"}; do [ -f "$f" ] || die "file not found: $f"; done
+if [ -n "$PARAMS" ]; then
+    [ -n "$NGC" ] && [ -n "$OUT" ] && [ -z "$TRUTH$MACHINE$PLAN" ] || die "--params takes --ngc and --out, not --truth, --machine or --plan"
+else
+    [ -n "$NGC" ] && [ -n "$TRUTH" ] && [ -n "$MACHINE" ] && [ -n "$OUT" ] || die "--ngc, --truth, --machine and --out are required"
+fi
+for f in "$NGC" ${TRUTH:+"$TRUTH"} ${MACHINE:+"$MACHINE"} ${PARAMS:+"$PARAMS"} ${PRE:+"$PRE"} ${PLAN:+"$PLAN"} ${COMP:+"$COMP"} ${SETP:+"$SETP"}; do
+    [ -f "$f" ] || die "file not found: $f"
+done
 [[ "$TIMEOUT" =~ ^[0-9]+$ ]] || die "--timeout must be whole seconds"
-NGC="$(abspath "$NGC")" TRUTH="$(abspath "$TRUTH")" MACHINE="$(abspath "$MACHINE")"
+NGC="$(abspath "$NGC")"
+[ -n "$TRUTH" ] && TRUTH="$(abspath "$TRUTH")" MACHINE="$(abspath "$MACHINE")"
 [ -n "$PRE" ] && PRE="$(abspath "$PRE")"
 [ -n "$PLAN" ] && PLAN="$(abspath "$PLAN")"
 [ -n "$COMP" ] && COMP="$(abspath "$COMP")"
@@ -113,8 +128,12 @@ flock -u 9
 exec 9>&-
 
 # ------------------------------------------------------ truth -> HAL pins
-"$PY" "$HERE/scripts/truth_params.py" --truth "$TRUTH" --machine "$MACHINE" ${PLAN:+--plan "$PLAN"} -o "$OUT/params.json" \
-    || die "cannot turn $TRUTH into the probe's parameters"
+if [ -n "$PARAMS" ]; then
+    cp "$PARAMS" "$OUT/params.json" || die "cannot copy $PARAMS"
+else
+    "$PY" "$HERE/scripts/truth_params.py" --truth "$TRUTH" --machine "$MACHINE" ${PLAN:+--plan "$PLAN"} -o "$OUT/params.json" \
+        || die "cannot turn $TRUTH into the probe's parameters"
+fi
 "$PY" "$HERE/scripts/lcsim_params.py" "$OUT/params.json" "$OUT/params.hal" || die "bad parameters $OUT/params.json"
 if [ -n "$SETP" ]; then
     grep -Evq '^[[:space:]]*(#.*)?$|^setp [A-Za-z0-9_.-]+ [-+0-9.eE]+[[:space:]]*$' "$SETP" \
@@ -129,9 +148,20 @@ KINS="$("$PY" -c 'import json, sys; print(json.load(open(sys.argv[1]))["machine"
 INI="lcsim_$KINS.ini"
 [ -f "$HERE/config/$INI" ] || die "no LinuxCNC configuration config/$INI for kinematics $KINS"
 sed "s#@HARNESS@#$HERE#g" "$HERE/config/$INI" > "$OUT/config/$INI"
-if [ "$TCP" = 1 ]; then
-    sed -i 's#^\(KINEMATICS = [a-z-]*\) sparm=identityfirst$#\1#' "$OUT/config/$INI"
-    grep -q '^KINEMATICS = [a-z-]*$' "$OUT/config/$INI" || die "could not drop sparm=identityfirst from $INI"
+# a kinematics with no identity type (maxkins) has its own line: the cycle's session runs the INI's
+# identity module, --kins-tcp the TCP one
+TCPKINS="$(sed -n 's/^# TCP_KINEMATICS = \([A-Za-z0-9_-]*\)$/\1/p' "$OUT/config/$INI")"
+if [ "$TCP" = 1 ] && [ -n "$TCPKINS" ]; then
+    sed -i "s#^KINEMATICS = .*\$#KINEMATICS = $TCPKINS#" "$OUT/config/$INI"
+    grep -q "^KINEMATICS = $TCPKINS\$" "$OUT/config/$INI" || die "could not select $TCPKINS in $INI"
+elif [ "$TCP" = 1 ]; then
+    sed -i 's#^\(KINEMATICS = [a-z0-9-]*\( coordinates=[a-z]*\)\{0,1\}\) sparm=identityfirst$#\1#' "$OUT/config/$INI"
+    grep -q '^KINEMATICS = [a-z0-9-]*\( coordinates=[a-z]*\)\{0,1\}$' "$OUT/config/$INI" \
+        || die "could not drop sparm=identityfirst from $INI"
+elif [ -n "$TCPKINS" ] && grep -q "^setp $TCPKINS\." "$OUT/params.hal"; then
+    # its pins do not exist in the identity session (the module is not loaded): they cannot act, and
+    # the session says so in its params.hal instead of failing on them
+    sed -i "s#^setp $TCPKINS\.\(.*\)\$#\# not loaded in this session ($TCPKINS: identity kinematics run instead), not applied: setp $TCPKINS.\1#" "$OUT/params.hal"
 fi
 if [ -n "$COMP" ]; then
     # the C joint's compensation table (LinuxCNC ini-config: COMP_FILE, COMP_FILE_TYPE per joint)

@@ -1,6 +1,7 @@
-# lcsim_core.tcl -- HAL for the headless XYZAC or XYZBC trunnion or XYZAB dual
-# rotary table simulation (lcsim_xyzac.ini, lcsim_xyzbc.ini, lcsim_xyzab.ini:
-# the kinematics module is the INI's).
+# lcsim_core.tcl -- HAL for the headless XYZAC or XYZBC trunnion, XYZAB dual
+# rotary table or B head over C table simulation (lcsim_xyzac.ini,
+# lcsim_xyzbc.ini, lcsim_xyzab.ini, lcsim_max.ini: the kinematics module is
+# the INI's).
 # Run by LinuxCNC (haltcl) with the INI sections available as ::SECTION(item)
 # and the environment as ::env().
 #
@@ -34,8 +35,11 @@ net tool-change-loop iocontrol.0.tool-change     => iocontrol.0.tool-changed
 
 # motion.switchkins-type stays unconnected at 0: identity kinematics
 # (sparm=identityfirst in the INI). G43 still reaches the kinematics module.
-# (xyzab_tdr_kins calls its pin tool-offset-z)
-if {$kins == "xyzab_tdr_kins"} {
+# (xyzab_tdr_kins calls its pin tool-offset-z; trivkins and maxkins have none: the head machine's
+# programs use no tool length, the ball hangs from the pivot)
+set head [info exists ::LCSIM(HEAD_OUTER_JOINT)]
+if {$head} {
+} elseif {$kins == "xyzab_tdr_kins"} {
     net :tool-offset     motion.tooloffset.z  => $kins.tool-offset-z
 } else {
     net :tool-offset     motion.tooloffset.z  => $kins.tool-offset
@@ -65,8 +69,18 @@ if {[info exists ::env(LCSIM_XYZ_FROM_MOTOR)] && $::env(LCSIM_XYZ_FROM_MOTOR) ==
     net :jz joint.2.pos-cmd => vtouchprobe.0.joint-z
 }
 # the probe's (pA, uA) line is the axis on the bed, its (pC, uC) line the one that axis carries:
-# joint 3 and 4 on the trunnions (A or B, then C); on xyzab_tdr_kins joint 4 (B) carries joint 3 (A)
-if {$kins == "xyzab_tdr_kins"} {
+# joint 3 and 4 on the trunnions (A or B, then C); on xyzab_tdr_kins joint 4 (B) carries joint 3 (A).
+# A head machine (lcsim_max.ini's [LCSIM]): the probe rides on the head, its outer (and inner)
+# rotary joint on joint-h1 (joint-h2), the table's rotary joint, if any, on joint-c; joint-a unwired
+if {$head} {
+    net :jh1 joint.[lindex $::LCSIM(HEAD_OUTER_JOINT) 0].pos-cmd => vtouchprobe.0.joint-h1
+    if {[info exists ::LCSIM(HEAD_INNER_JOINT)]} {
+        net :jh2 joint.[lindex $::LCSIM(HEAD_INNER_JOINT) 0].pos-cmd => vtouchprobe.0.joint-h2
+    }
+    if {[info exists ::LCSIM(TABLE_ROTARY_JOINT)]} {
+        net :jc joint.[lindex $::LCSIM(TABLE_ROTARY_JOINT) 0].pos-cmd => vtouchprobe.0.joint-c
+    }
+} elseif {$kins == "xyzab_tdr_kins"} {
     net :ja joint.4.pos-cmd => vtouchprobe.0.joint-a
     net :jc joint.3.pos-cmd => vtouchprobe.0.joint-c
 } else {

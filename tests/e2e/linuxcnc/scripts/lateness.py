@@ -9,7 +9,8 @@ The recorded touch moves along the plan's approach line through the nominal trig
 single and the double touch: the second touch starts on that line, retract_mm back from where
 the first stopped). The exact contact on that line is found by bisection (lcsim_geom.first_contact,
 ~1e-10 of the move), with joints A = -A*, C = -C* (the LinuxCNC sign of rotacal's machine
-file; B = -B* on a B/C table; B = +B*, A = +A* on the A/B table). With --offsets (rotacal's G10 L2 P1 work-offset program),
+file; B = -B* on a B/C table; B = +B*, A = +A* on the A/B table; on maxkins' B head over a C
+table B = -B*, C = +C*, the ball through the true head). With --offsets (rotacal's G10 L2 P1 work-offset program),
 machine = program + offset.
 Reported per point, in um: over = (recorded - contact) . approach (> 0: late) and across =
 the part perpendicular to the approach. Exit 1 on a missing point or a result file that is not
@@ -81,14 +82,19 @@ def main():
         u = pt["approach_m"]
         tr = G.add(pt["trigger_m_mm"], off)
         # joint 3 is the tilt axis: A on xyzac-trt-kins, B on xyzbc-trt-kins (the offsets' G10 has no B)
-        if p["machine"]["kins"] == "xyzab":
+        head = []
+        if p["machine"]["kins"] == "max":
+            # the head machine's [X, Y, Z, 0, C, B]: joint B = sign x B* (+ its G54 B), C = sign x C*
+            ja, jc = 0.0, p["head"]["c_sign"] * pt["pose"]["C"]
+            head = [p["head"]["sign"] * pt["pose"]["B"] + o.get("B", 0.0)]
+        elif p["machine"]["kins"] == "xyzab":
             # the harness's [outer, inner] = [B, A]; xyzab_tdr_kins counts as rotacal: B = +B*, A = +A*
             ja, jc = pt["pose"]["B"] + o.get("B", 0.0), pt["pose"]["A"]
         else:
             tilt = -pt["pose"]["B"] if p["machine"]["kins"] == "xyzbc" else -pt["pose"]["A"] + o["A"]
             ja, jc = tilt, -pt["pose"]["C"]
-        j0 = G.add(tr, G.scale(u, -before)) + [ja, jc]
-        j1 = G.add(tr, G.scale(u, past)) + [ja, jc]
+        j0 = G.add(tr, G.scale(u, -before)) + [ja, jc] + head
+        j1 = G.add(tr, G.scale(u, past)) + [ja, jc] + head
         hit = G.first_contact(j0, j1, p, step=0.01)
         if hit is None:
             raise SystemExit("point %d: the true piece is not on the probing line" % pt["id"])

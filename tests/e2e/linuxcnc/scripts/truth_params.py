@@ -37,6 +37,14 @@ The mapping (docs/e2e-linuxcnc.md, "Truth -> component"):
       T_m_w = Da(a_BY) Db(b_BY) Dc(c_BY) Dx(dx_BY) Dy(dy_AB) Dz(dz_BY) Db(-B*) Dz(dz_AB) Dc(c_AB) Da(-A*)
   is the harness's "eq3" chain term by term, same names and signs, evaluated at B* = +B, A* = +A
   (dialect_sign +1 for A and B, required: the module counts as rotacal does). No test piece.
+* B head over a C table (machine "kinematics": "head_table" with "head": {"axis": "B",
+  "pivot_to_ball_mm": L}; LinuxCNC's maxkins, whose joints the cycle commands in identity kinematics):
+  the truth's "location_errors" are rotacal's head_table parameters by their ISO 230-7 names
+  (X0C Y0C A0C B0C C0C X0B Z0B A0B C0B B0B dX_T dY_T dL dX_S dY_S dZ_S, core/kinematic_model.hpp),
+  the harness's "head_table" section, same names and signs, evaluated exactly (lcsim_geom) at
+  B* = sign_B x B, C* = sign_C x C of the joint angles, the signs the machine file's linuxcnc ones
+  (maxkins: B -1, C +1, read back by the e2e case). The probe rides on the head, the ball L from
+  the pivot that X Y Z read. No test piece.
 * form_error, probe_noise_um and drifts are not modelled by the component: refused.
 * --plan: a sphere cycle's plan (spheres3, one_sphere) puts its spheres (ids 1..3: the
   component's sphere, sphere2, sphere3) at the plan's nominal centres and radius, workpiece frame,
@@ -58,9 +66,14 @@ ANGLE = {"mdeg": 1.0, "deg": 1000.0, "urad": 180.0 / math.pi * 1e-3}   # -> mdeg
 NAMES = {"table_ac": ("dx_AY", "dy_AY", "dz_AY", "dy_CA", "a_AY", "b_AY", "c_AY", "b_CA"),
          "table_bc": ("dx_BY", "dy_CB", "dz_BY", "dx_CB", "a_BY", "b_BY", "c_BY", "a_CB"),
          "table_ab": ("dx_BY", "dy_AB", "dz_BY", "dz_AB", "a_BY", "b_BY", "c_BY", "c_AB")}
-KINS = {"table_ac": ("xyzac", "eq1", "AC"), "table_bc": ("xyzbc", "eq2", "BC"), "table_ab": ("xyzab", "eq3", "AB")}
+KINS = {"table_ac": ("xyzac", "eq1", "AC"), "table_bc": ("xyzbc", "eq2", "BC"), "table_ab": ("xyzab", "eq3", "AB"),
+        "head_table": ("max", "head_table", "BC")}
+NAMES["head_table"] = G.HEAD_TABLE
 # how each module counts the table's angles against rotacal's papers' convention
 LINUXCNC_SIGN = {"table_ac": -1, "table_bc": -1, "table_ab": 1}
+# maxkins: B against rotacal's head (its source: "the direction of the B axis is the opposite of the
+# conventional axis direction"), C as rotacal's table; e2e_test.py reads both back
+MAXKINS_SIGN = {"B": -1, "C": 1}
 KNOWN_TRUTH_KEYS = {"format", "location_errors", "setup_error", "probe_pretravel_um", "form_error",
                     "probe_noise_um", "start_time_s", "c_angular_positioning_error"}
 ECC_KEYS = {"ECC_cos1C": ("C_e1c", 1.0), "ECC_sin1C": ("C_e1s", -1.0), "ECC_cos2C": ("C_e2c", 1.0),
@@ -104,10 +117,22 @@ def params_from(truth, truth_path, machine, machine_path, plan=None, plan_path=N
         fail(truth_path, "probe_noise_um is not modelled (the virtual probe is deterministic)")
     kinematics = machine.get("kinematics")
     if kinematics not in KINS:
-        fail(machine_path, "the harness models an A/C table (xyzac-trt-kins), a B/C table (xyzbc-trt-kins) or an "
-             "A/B table (xyzab_tdr_kins) only")
+        fail(machine_path, "the harness models an A/C table (xyzac-trt-kins), a B/C table (xyzbc-trt-kins), an "
+             "A/B table (xyzab_tdr_kins) or a B head over a C table (maxkins) only")
     kins, chain, axes = KINS[kinematics]
+    head = None
+    if kinematics == "head_table":
+        head = machine.get("head", {})
+        if head.get("axis", "B") != "B":
+            fail(machine_path, "the harness's head machine is maxkins' B head (head.axis \"B\")")
     for ax in axes:
+        if head is not None:
+            sign = machine["rotary_axes"][ax].get("dialect_sign", {}).get(
+                "linuxcnc", machine["rotary_axes"][ax].get("controller_sign", 1))
+            if sign != MAXKINS_SIGN[ax]:
+                fail(machine_path, "rotary axis %s: the linuxcnc sign must be %+d (maxkins counts B against rotacal's "
+                     "head and C as rotacal's table)" % (ax, MAXKINS_SIGN[ax]))
+            continue
         sign = machine["rotary_axes"][ax].get("dialect_sign", {}).get(
             "linuxcnc", machine["rotary_axes"][ax].get("controller_sign", 1))
         if sign != LINUXCNC_SIGN[kinematics] and kinematics == "table_ab":
@@ -125,7 +150,8 @@ def params_from(truth, truth_path, machine, machine_path, plan=None, plan_path=N
         unit, v = e.get("unit"), e.get("value")
         if not isinstance(v, (int, float)):
             fail(truth_path, "location error %r needs a numeric value" % name)
-        if name[0] == "d":
+        length = name[0] == "d" if head is None else name in ("X0C", "Y0C", "X0B", "Z0B") or name[0] == "d"
+        if length:
             if unit not in LENGTH:
                 fail(truth_path, "unit of %r must be um or mm" % name)
             eq1[name + "_um"] = v * LENGTH[unit]
@@ -134,7 +160,7 @@ def params_from(truth, truth_path, machine, machine_path, plan=None, plan_path=N
                 fail(truth_path, "unit of %r must be mdeg, urad or deg" % name)
             eq1[name + "_mdeg"] = v * ANGLE[unit]
     art = machine.get("artefact")
-    if art is None and kinematics in ("table_bc", "table_ab"):
+    if art is None and kinematics in ("table_bc", "table_ab", "head_table"):
         # no test piece: the block is off, some harmless pose for its unused pins
         art = {"type": "square_column", "top_centre_w_mm": [0.0, 0.0, 150.0], "size_mm": [100.0, 100.0, 150.0]}
         block_on = False
@@ -180,6 +206,9 @@ def params_from(truth, truth_path, machine, machine_path, plan=None, plan_path=N
         if kinematics != "table_ac":
             fail(truth_path, "c_angular_positioning_error is modelled on the A/C table only")
         out["errors"] = errors
+    if head is not None:
+        out["head"] = {"enable": True, "axis": "B", "pivot_to_ball": float(head["pivot_to_ball_mm"]),
+                       "sign": float(MAXKINS_SIGN["B"]), "c_sign": float(MAXKINS_SIGN["C"])}
     if plan is not None:
         out.update(spheres_from(plan, plan_path))
     return out
