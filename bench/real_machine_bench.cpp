@@ -635,9 +635,9 @@ int main(int argc, char** argv) {
       }
     }
     if (args.verbose || (i + 1) % 20 == 0)
-      std::fprintf(stderr, "machine %d/%d (seed %llu): offsets %s, screen %s, diagnose %s;%s  [%.0f s]\n", i + 1,
+      std::fprintf(stderr, "machine %d/%d (seed %llu): offsets %s%s, screen %s, diagnose %s;%s  [%.0f s]\n", i + 1,
                    args.machines, static_cast<unsigned long long>(seed),
-                   a.ok ? (a.written ? "written" : "refused") : "analyze refused",
+                   a.ok ? (a.written ? "written" : "refused") : "analyze refused", a.finding ? " (REPORT.json names a finding)" : "",
                    a.too_many ? fmt::format("gave up ({} beyond {:.2f})", a.beyond, a.threshold_t).c_str()
                               : fmt::format("{} removed", a.excluded.size()).c_str(),
                    verdict.c_str(), chip_line.c_str(),
