@@ -222,6 +222,11 @@ Machine drawMachine(const ContributorSet& c, const MachineModel& machine, const 
   return m;
 }
 
+LinearAxes drawLinearAxes(const ContributorSet& c, const MachineModel& machine, std::uint64_t seed) {
+  Normal n(seed);
+  return drawLinearAxes(c, machine, n);
+}
+
 Machine cleanMachine(const LocationErrors& errors) {
   Machine m;
   m.location = errors;

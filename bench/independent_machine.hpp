@@ -76,6 +76,10 @@ struct LinearAxes {
   Eigen::Vector3d error(const Eigen::Vector3d& read_m_mm) const;
 };
 
+/// Draws one machine's linear axes (000 Eq. (22)-(23), as drawMachine draws them) from its own seed:
+/// the nodes cover the machine's strokes with a margin of two spacings.
+LinearAxes drawLinearAxes(const ContributorSet& contributors, const MachineModel& machine, std::uint64_t seed);
+
 /// Per-face form of the piece (form_error), indexed by rotacal's Face order.
 struct FaceForm {
   double offset_mm = 0.0;

@@ -9,10 +9,11 @@
 //
 // Run: build/bench/rotacal_real_machine_bench [--machines N] [--mc-runs R] [--seed S]
 //        [--contributors FILE] [--machine FILE] [--dialect D] [--sd-um X] [--sd-mdeg X] [--no-chips] [--verbose]
-//        [--cycle touch154|one_sphere|spheres3|spaceframe|tooltip] [--dump DIR] [--off LIST]
+//        [--cycle touch154|one_sphere|spheres3|spaceframe|tooltip|rtest] [--dump DIR] [--off LIST]
 // --off switches contributors of the generator off (setup, form, linear_axes, pretravel,
 // repeatability, roughness; tooltip: linear_axes, alignment, laser (the per-reading terms), pivot
-// (the head's dR);
+// (the head's dR); rtest: linear_axes, sphere (its offset), sensors (gain and direction), drift,
+// noise (the sensors' own), form (the sphere's, per reading));
 // comma-separated), to see which one a failure is owed to.
 // --dump writes the first machine's PLAN.json, RESULTS, TRUTH.json, REPORT.json and DIAGNOSIS.json,
 // so that the command line can be run on the same data (`rotacal analyze --plan DIR/PLAN.json ...`).
@@ -39,10 +40,12 @@
 #include <fmt/format.h>
 
 #include "bench/independent_machine.hpp"
+#include "bench/independent_rtest.hpp"
 #include "controllers/dialect.hpp"
 #include "core/contributors.hpp"
 #include "core/machine.hpp"
 #include "cycles/cycle.hpp"
+#include "cycles/rtest/plan.hpp"
 #include "cycles/tooltip/plan.hpp"
 
 #ifndef ROTACAL_SOURCE_DIR
@@ -75,7 +78,7 @@ struct Args {
   std::fprintf(stderr,
                "rotacal_real_machine_bench: %s\nusage: rotacal_real_machine_bench [--machines N] [--mc-runs R] [--seed S] "
                "[--contributors FILE] [--machine FILE] [--dialect D] [--sd-um X] [--sd-mdeg X] [--no-chips] [--verbose]\n"
-               "       [--cycle touch154|one_sphere|spheres3|spaceframe|tooltip] [--dump DIR] [--off setup,form,linear_axes,pretravel,repeatability,roughness,alignment,laser,pivot]\n",
+               "       [--cycle touch154|one_sphere|spheres3|spaceframe|tooltip|rtest] [--dump DIR] [--off setup,form,linear_axes,pretravel,repeatability,roughness,alignment,laser,pivot,sphere,sensors,drift,noise]\n",
                why);
   std::exit(2);
 }
@@ -117,15 +120,17 @@ DialectIO dialectIO(const Dialect& d) {
 }
 
 // The results file's name: the dialect's, or the tool-tip laser's neutral CSV (its readings come
-// from the laser system, whatever the dialect).
+// from the laser system, whatever the dialect; the R-test's from its logger, likewise).
 std::string resultsName(const ProbePlan& plan, const Dialect& d) {
-  return plan.cycle == "tooltip" ? std::string("RESULTS.csv") : "RESULTS" + std::string(d.resultsExtension());
+  return plan.cycle == "tooltip" || plan.cycle == "rtest" ? std::string("RESULTS.csv") : "RESULTS" + std::string(d.resultsExtension());
 }
 
-// One drawn machine: an A/C table (the probing cycles) or a spindle head (tooltip).
+// One drawn machine: an A/C table (the probing cycles), a spindle head (tooltip) or a B/C table
+// with an R-test (rtest).
 struct Drawn {
   ind::Machine m;
   ind::Head head;
+  ind::RtestMachine rt;
 };
 
 // What one analyze gave, as the command line would see it.
@@ -134,7 +139,8 @@ struct Analyzed {
   std::string error;          // its message otherwise
   bool written = false;       // `--offsets` would write the file (no refusal, the writer accepts it)
   std::string refused;        // why not
-  std::vector<int> excluded;  // point ids the outlier screen left out
+  std::vector<int> excluded;  // point ids the outlier screen left out (rtest: 3 x pose id + axis)
+  bool finding = false;       // REPORT.json names a finding (rtest: the re-read check's sensor_step)
   bool too_many = false;
   bool held_back = false;     // REPORT.json's corrections_held_back: the data beyond the declaration
   int beyond = 0;
@@ -162,9 +168,16 @@ Analyzed analyze(const Cycle& cycle, const ProbePlan& plan, const Dialect& d, co
   a.ok = true;
   a.doc = docs.doc;
   a.held_back = a.doc.contains("corrections_held_back");
+  a.finding = a.doc.contains("findings") && a.doc["findings"].is_array() && !a.doc["findings"].empty();
   if (a.doc.contains("outliers")) {
     const Json& o = a.doc["outliers"];
-    for (const auto& e : o.value("excluded", Json::array())) a.excluded.push_back(e.value("point", 0));
+    for (const auto& e : o.value("excluded", Json::array())) {
+      // The R-test screens values: a pose's reading of one sensor (x, y, z).
+      if (e.contains("axis") && e["axis"].is_string())
+        a.excluded.push_back(3 * e.value("pose", 0) + static_cast<int>(std::string("xyz").find(e["axis"].get<std::string>())));
+      else
+        a.excluded.push_back(e.value("point", 0));
+    }
     a.too_many = o.value("too_many", false);
     a.beyond = o.value("beyond", 0);
     a.threshold_t = o.value("threshold_t", 0.0);
@@ -272,6 +285,41 @@ std::vector<Counted> countedParameters(const std::string& cycle, const ProbePlan
                    }});
     return c;
   }
+  if (cycle == "rtest") {
+    // The eight location errors the constant fit separates (REPORT.json location_errors), truth
+    // the drawn table's; then the per-tilt errors of the first cycle (cycles[0].errors, what the
+    // R-test measures at each tilt), truth the drawn table's in the reset's convention
+    // (ind::perTiltTruth: dz and c at tilt 0 are 0 by convention, U 0, not counted).
+    const auto& params = locationParameters(Kinematics::TableBC);
+    for (size_t k = 0; k < params.size(); ++k)
+      c.push_back({std::string(params[k].name), std::string(reportUnit(params[k].kind)),
+                   [k](const Drawn& d) { return d.rt.location.reportValue(static_cast<int>(k)); }, nullptr});
+    LocationErrors none;
+    none.kinematics = Kinematics::TableBC;
+    const ind::PerTiltTruth shape = ind::perTiltTruth(plan, ind::cleanRtestMachine(none));
+    for (size_t i = 0; i < shape.tilt_deg.size(); ++i)
+      for (int p = 0; p < kRtestParams; ++p) {
+        if (shape.tilt_deg[i] == 0.0 && (p == 2 || p == 5)) continue;
+        const std::string name = rtestParameterName(Kinematics::TableBC, p);
+        const double tilt = shape.tilt_deg[i];
+        c.push_back({fmt::format("{}@{:g}", name, tilt), p < 3 ? "um" : "mdeg",
+                     [&plan, i, p](const Drawn& d) { return ind::perTiltTruth(plan, d.rt).value[i][static_cast<size_t>(p)]; },
+                     [name, tilt](const Json& doc) -> std::optional<ValueU> {
+                       if (!doc.contains("cycles") || doc["cycles"].empty()) return std::nullopt;
+                       const Json& cy = doc["cycles"][0];
+                       if (!cy.contains("errors") || !cy["errors"].contains(name)) return std::nullopt;
+                       const Json& e = cy["errors"][name];
+                       const Json tilts = doc.value("tilt_deg", Json::array());
+                       for (size_t j = 0; j < tilts.size(); ++j)
+                         if (std::abs(tilts[j].get<double>() - tilt) < 1e-9 && e.contains("U") && e["U"][j].is_number() &&
+                             e["values"][j].is_number())
+                           return ValueU{e["values"][j].get<double>(), e["U"][j].get<double>(),
+                                         e.contains("u_c") ? e["u_c"][j].get<double>() : 0.0};
+                       return std::nullopt;
+                     }});
+      }
+    return c;
+  }
   if (cycle == "spheres3") {
     // spheres3 reports the C axis's location (001 Table 1); on this A/C machine at A = 0 it is
     // 000's chain to first order (cycles/spheres3/analyze.hpp, docs/e2e-linuxcnc.md's comp_table):
@@ -314,6 +362,29 @@ Json truthJson(const ind::Machine& m) {
             {"setup_rotation_urad", {1e6 * m.setup_rotation_rad.x(), 1e6 * m.setup_rotation_rad.y(), 1e6 * m.setup_rotation_rad.z()}},
             {"squareness_um_per_m", {{"S_xy", 1e6 * m.axes.S_xy}, {"S_xz", 1e6 * m.axes.S_xz}, {"S_yz", 1e6 * m.axes.S_yz}}},
             {"scale_um_per_m", {1e6 * m.axes.scale[0], 1e6 * m.axes.scale[1], 1e6 * m.axes.scale[2]}},
+            {"node_spacing_mm", {m.axes.spacing_mm[0], m.axes.spacing_mm[1], m.axes.spacing_mm[2]}}}}};
+}
+
+// A drawn R-test machine as TRUTH.json (rotacal-truth/1: the location errors) plus what the
+// generator drew beside it.
+Json rtestTruthJson(const ind::RtestMachine& m) {
+  Json le = Json::object();
+  const auto& params = locationParameters(Kinematics::TableBC);
+  for (size_t k = 0; k < params.size(); ++k)
+    le[std::string(params[k].name)] = {{"value", m.location.reportValue(static_cast<int>(k))},
+                                       {"unit", std::string(reportUnit(params[k].kind))}};
+  const Eigen::Vector3d s = 1e3 * m.sphere_offset_mm, v = 3.6e6 * m.drift_mm_per_s;
+  return {{"format", "rotacal-truth/1"},
+          {"_comment", "drawn by bench/independent_rtest (rotacal_real_machine_bench --dump)"},
+          {"location_errors", le},
+          {"independent_generator",
+           {{"sphere_offset_um", {s.x(), s.y(), s.z()}},
+            {"drift_um_per_h", {v.x(), v.y(), v.z()}},
+            {"sensor_gain_ppm", {1e6 * m.gain[0], 1e6 * m.gain[1], 1e6 * m.gain[2]}},
+            {"sensor_direction_urad_xy_xz_yx_yz_zx_zy",
+             {1e6 * m.direction[0], 1e6 * m.direction[1], 1e6 * m.direction[2], 1e6 * m.direction[3], 1e6 * m.direction[4],
+              1e6 * m.direction[5]}},
+            {"per_reading_um", {1e3 * m.sensor_noise_mm, 1e3 * m.sphere_form_mm}},
             {"node_spacing_mm", {m.axes.spacing_mm[0], m.axes.spacing_mm[1], m.axes.spacing_mm[2]}}}}};
 }
 
@@ -368,6 +439,7 @@ int main(int argc, char** argv) {
 
   ind::DrawOptions draw;
   ind::HeadDrawOptions head_draw;
+  ind::RtestDrawOptions rtest_draw;
   draw.sd_um = args.sd_um;
   draw.sd_mdeg = args.sd_mdeg;
   for (size_t b = 0, e; b <= args.off.size() && !args.off.empty(); b = e + 1) {
@@ -375,6 +447,10 @@ int main(int argc, char** argv) {
     const std::string w = args.off.substr(b, e - b);
     bool* flag = w == "setup" ? &draw.setup
                  : w == "form" ? &draw.form
+                 : w == "sphere" ? &rtest_draw.sphere
+                 : w == "sensors" ? &rtest_draw.sensors
+                 : w == "drift" ? &rtest_draw.drift
+                 : w == "noise" ? &rtest_draw.noise
                  : w == "linear_axes" ? &draw.linear_axes
                  : w == "pretravel" ? &draw.pretravel
                  : w == "repeatability" ? &draw.repeatability
@@ -383,16 +459,25 @@ int main(int argc, char** argv) {
                  : w == "laser" ? &head_draw.per_reading
                  : w == "pivot" ? &head_draw.pivot
                  : nullptr;
-    if (w == "linear_axes") head_draw.linear_axes = false;
+    if (w == "linear_axes") head_draw.linear_axes = rtest_draw.linear_axes = false;
+    if (w == "form") rtest_draw.form = false;
     if (!flag) usage(("--off: unknown contributor " + w).c_str());
     *flag = false;
   }
 
   const bool tooltip = plan.cycle == "tooltip";
+  const bool rtest = plan.cycle == "rtest";
+  rtest_draw.sd_um = args.sd_um;
+  rtest_draw.sd_mdeg = args.sd_mdeg;
   // The results text of a drawn machine, with a chip of `mm` under point `id` (0: none): the
   // probing cycles' triggers through the dialect's results writer, tooltip's laser readings
   // through its neutral CSV writer (what `simulate` writes for each).
-  const auto resultsOf = [&](const Drawn& d, int id, bool chip_z, double mm) -> std::string {
+  const auto resultsOf = [&](const Drawn& d, int id, bool chip_z, int chip_axis, double mm) -> std::string {
+    // The R-test: one sensor's value at one pose of the first cycle off by the chip's size (the
+    // reset and re-read rows are the re-read check's, not the screen's: docs/rtest.md).
+    if (rtest)
+      return rtestResultsCsv(plan, ind::measureRtest(plan, d.rt, id ? std::optional<ind::RtestChip>(ind::RtestChip{0, id, chip_axis, mm})
+                                                                    : std::nullopt));
     if (tooltip)
       return tooltipResultsText(plan, ind::measureHead(plan, d.head, id ? std::optional<ind::ReadingChip>(ind::ReadingChip{id, chip_z, mm})
                                                                          : std::nullopt));
@@ -402,6 +487,7 @@ int main(int argc, char** argv) {
   for (const auto& p : plan.points)
     if (!tooltip || std::abs(plan.options.at("axis") == "A" ? p.pose.A : p.pose.B) > 1e-9) chip_points.push_back(p.id);
 
+  int analyze_finding = 0;
   int n = 0, analyzed = 0, not_held_back = 0, written = 0, screen_removed = 0, screen_gave_up = 0, diagnosed = 0, inadequate = 0,
       named = 0, no_effect = 0;
   std::map<std::string, int> causes, refusals;
@@ -426,16 +512,18 @@ int main(int argc, char** argv) {
     const std::uint64_t seed = args.seed + static_cast<std::uint64_t>(i);
     Drawn drawn;
     if (tooltip) drawn.head = ind::drawHead(contrib, machine, head_draw, seed);
+    else if (rtest) drawn.rt = ind::drawRtestMachine(contrib, plan, rtest_draw, seed);
     else drawn.m = ind::drawMachine(contrib, machine, draw, seed);
     const ind::Machine& m = drawn.m;
     ++n;
-    const std::string clean = resultsOf(drawn, 0, false, 0.0);
+    const std::string clean = resultsOf(drawn, 0, false, 0, 0.0);
     const Analyzed a = analyze(cycle, plan, dialect, io, contrib, clean, args, seed);
     const bool dump = i == 0 && !args.dump.empty();
     if (dump) {
       writeFile(args.dump, "PLAN.json", planToJson(plan).dump(1) + "\n");
       writeFile(args.dump, resultsName(plan, dialect), clean);
-      writeFile(args.dump, "TRUTH.json", (tooltip ? headTruthJson(drawn.head) : truthJson(m)).dump(1) + "\n");
+      writeFile(args.dump, "TRUTH.json",
+                (tooltip ? headTruthJson(drawn.head) : rtest ? rtestTruthJson(drawn.rt) : truthJson(m)).dump(1) + "\n");
       writeFile(args.dump, "REPORT.json", a.doc.dump(1) + "\n");
     }
     if (!a.ok) {
@@ -443,6 +531,7 @@ int main(int argc, char** argv) {
     } else {
       ++analyzed;
       not_held_back += !a.held_back;
+      analyze_finding += a.finding;
       if (a.written) ++written;
       else ++refusals[a.refused.substr(0, std::min<size_t>(a.refused.find(':') == std::string::npos ? 60 : a.refused.find(':'), 60))];
       if (!a.excluded.empty()) {
@@ -508,11 +597,14 @@ int main(int argc, char** argv) {
       const std::vector<int>& candidates = chip_points;
       const int id = candidates[std::uniform_int_distribution<size_t>(0, candidates.size() - 1)(pick)];
       const bool chip_z = std::uniform_int_distribution<int>(0, 1)(pick) == 1;
+      // The R-test's chip: one of the three sensors (drawn after the others' draws, which stay).
+      const int chip_axis = std::uniform_int_distribution<int>(0, 2)(pick);
+      const int key = rtest ? 3 * id + chip_axis : id;  // what the screen's excluded list names
       for (auto [height_mm, tally] : {std::pair{0.020, &chip20}, std::pair{1.0, &chip1mm}}) {
-        const std::string chipped = resultsOf(drawn, id, chip_z, height_mm);
+        const std::string chipped = resultsOf(drawn, id, chip_z, chip_axis, height_mm);
         const Analyzed c = analyze(cycle, plan, dialect, io, contrib, chipped, args, seed);
         ++tally->n;
-        const bool caught = std::find(c.excluded.begin(), c.excluded.end(), id) != c.excluded.end();
+        const bool caught = std::find(c.excluded.begin(), c.excluded.end(), key) != c.excluded.end();
         tally->caught += caught;
         tally->written += c.written;
         tally->written_from_chip += c.written && !caught;
@@ -535,7 +627,7 @@ int main(int argc, char** argv) {
           ++refusals[fmt::format("{:g} um chip: ", height_mm * 1e3) +
                      (c.ok ? c.refused.substr(0, std::min<size_t>(c.refused.find(':'), 60)) : "analyze refused: " + c.error.substr(0, 80))];
         chip_line += fmt::format(" chip {:g} um at {}{}: {}{}{}", height_mm * 1e3, id,
-                                 tooltip ? (chip_z ? " (dz)" : " (dt)") : "", caught ? "caught" : "missed",
+                                 tooltip ? (chip_z ? " (dz)" : " (dt)") : rtest ? fmt::format(" (d{})", "xyz"[chip_axis]) : "", caught ? "caught" : "missed",
                                  caught && c.excluded.size() > 1 ? fmt::format(" ({} left out)", c.excluded.size()) : "",
                                  c.written ? (caught ? ", written" : ", WRITTEN")
                                  : c.ok    ? (caught ? ", analyzed" : c.held_back ? ", ANALYZED (held back)" : ", ANALYZED")
@@ -543,9 +635,9 @@ int main(int argc, char** argv) {
       }
     }
     if (args.verbose || (i + 1) % 20 == 0)
-      std::fprintf(stderr, "machine %d/%d (seed %llu): offsets %s, screen %s, diagnose %s;%s  [%.0f s]\n", i + 1,
+      std::fprintf(stderr, "machine %d/%d (seed %llu): offsets %s%s, screen %s, diagnose %s;%s  [%.0f s]\n", i + 1,
                    args.machines, static_cast<unsigned long long>(seed),
-                   a.ok ? (a.written ? "written" : "refused") : "analyze refused",
+                   a.ok ? (a.written ? "written" : "refused") : "analyze refused", a.finding ? " (REPORT.json names a finding)" : "",
                    a.too_many ? fmt::format("gave up ({} beyond {:.2f})", a.beyond, a.threshold_t).c_str()
                               : fmt::format("{} removed", a.excluded.size()).c_str(),
                    verdict.c_str(), chip_line.c_str(),
@@ -564,6 +656,8 @@ int main(int argc, char** argv) {
                             "{:g} mdeg (sd {:g} mdeg)",
                             head_draw.dR_um, head_draw.sd_dR_um, head_draw.angular_mdeg[0], head_draw.angular_mdeg[1],
                             head_draw.angular_mdeg[2], head_draw.angular_mdeg[3], head_draw.sd_mdeg)
+      : rtest ? fmt::format("B/C location errors around examples/truth/bc_location.json (sd {:g} um, {:g} mdeg)", args.sd_um,
+                            args.sd_mdeg)
               : fmt::format("location errors around 000 Table 4 (sd {:g} um, {:g} mdeg)", args.sd_um, args.sd_mdeg);
   std::printf("%d machines (seeds %llu..%llu), %s, analyze's Monte Carlo %d runs; %.0f s (%.1f s per machine)\n\n", n,
               static_cast<unsigned long long>(args.seed), static_cast<unsigned long long>(args.seed + n - 1), around.c_str(),
@@ -579,6 +673,7 @@ int main(int argc, char** argv) {
   // A cycle that writes no offsets (spheres3, spaceframe, tooltip, rtest): what it would hand on
   // is its report's values, held back when the data exceed the declaration.
   row("analyze returned, nothing held back (no `corrections_held_back`)", not_held_back, n, "");
+  row("analyze: REPORT.json names a finding (rtest: the re-read check's sensor_step)", analyze_finding, n, "");
   row("`diagnose`: model_inadequate", inadequate, n, "<= 5 %");
   row("`diagnose`: a cause named", named, n, "<= 2 %");
   row("`diagnose`: no_significant_effect", no_effect, n, "");

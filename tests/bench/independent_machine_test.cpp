@@ -5,14 +5,18 @@
 // contributors file declares.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <vector>
 
 #include "bench/independent_machine.hpp"
+#include "bench/independent_rtest.hpp"
 #include "core/contributors.hpp"
 #include "core/machine.hpp"
 #include "core/simulation.hpp"
 #include "cycles/cycle.hpp"
+#include "cycles/rtest/analyze.hpp"
+#include "cycles/rtest/plan.hpp"
 #include "cycles/spaceframe/analyze.hpp"
 #include "cycles/tooltip/plan.hpp"
 
@@ -447,6 +451,313 @@ TEST(IndependentMachine, SeededDraws) {
   const MeasurementRun d = ind::measure(plan, ind::drawMachine(c, plan.machine, {}, 6));
   EXPECT_EQ(maxDiffUm(a, b), 0.0);
   EXPECT_GT(maxDiffUm(a, d), 1.0);
+}
+
+// ---- The R-test (002) on the B/C table ----
+
+const std::string kBcMachine = std::string(ROTACAL_SOURCE_DIR) + "/examples/machines/bc_trunnion.json";
+const std::string kRtestContrib = std::string(ROTACAL_SOURCE_DIR) + "/examples/contributors/rtest_002.json";
+
+// The bundled example's plan (`plan --cycle rtest` with no options: one cycle, the reset read
+// before the first pose and again after the last).
+const ProbePlan& rtestPlan() {
+  static const ProbePlan plan = makePlan("rtest", loadMachine(kBcMachine), {});
+  return plan;
+}
+// Three cycles of the thermal schedule (the clock across cycles).
+const ProbePlan& rtestThermalPlan() {
+  static const ProbePlan plan =
+      makePlan("rtest", loadMachine(kBcMachine), {{"thermal", "1"}, {"interval_min", "15"}, {"duration_h", "0.5"}});
+  return plan;
+}
+
+// Every reading of a series in order (reset, poses, re-read per cycle).
+std::vector<RtestReading> readingsOf(const RtestSeries& s) {
+  std::vector<RtestReading> out;
+  for (const RtestCycle& c : s.cycles) {
+    if (c.reset) out.push_back(*c.reset);
+    out.insert(out.end(), c.readings.begin(), c.readings.end());
+    if (c.reread) out.push_back(*c.reread);
+  }
+  return out;
+}
+
+// The largest difference between two series' readings (um), the poses, angles and times equal.
+double maxReadingDiffUm(const RtestSeries& a, const RtestSeries& b) {
+  const auto ra = readingsOf(a), rb = readingsOf(b);
+  EXPECT_EQ(ra.size(), rb.size());
+  double worst = 0;
+  for (size_t i = 0; i < ra.size() && i < rb.size(); ++i) {
+    EXPECT_EQ(ra[i].pose_id, rb[i].pose_id);
+    EXPECT_DOUBLE_EQ(ra[i].t_s, rb[i].t_s);
+    EXPECT_DOUBLE_EQ(ra[i].tilt_deg, rb[i].tilt_deg);
+    EXPECT_DOUBLE_EQ(ra[i].c_deg, rb[i].c_deg);
+    worst = std::max(worst, 1e3 * (ra[i].dq_w_mm - rb[i].dq_w_mm).norm());
+  }
+  return worst;
+}
+
+// The bundled example's truth (examples/truth/bc_location.json), B/C order.
+LocationErrors bcLocation() {
+  LocationErrors e;
+  e.kinematics = Kinematics::TableBC;
+  const double v[8] = {12.4, -8.6, -15.3, 24.0, -31.0, 18.0, -27.0, 9.7};
+  for (int k = 0; k < kNumLocationErrors; ++k) e.setReportValue(k, v[k]);
+  return e;
+}
+
+RtestSeries rotacalRtest(const ProbePlan& plan, const Truth& truth, const RtestTruthExtras& extras) {
+  RtestSimOptions o;
+  o.noise_um = 0.0;
+  return simulateRtest(plan, truth, extras, o);
+}
+
+// A clean machine (location errors only, no noise): the generator's readings equal rotacal's
+// `simulate`, for the example's eight errors together and for each alone at a size that shows its
+// sign (100 um, 10 mdeg): both readings of 002 Eq. (1)-(4) agree.
+TEST(IndependentRtest, CleanMachineReadingsEqualRotacalSimulate) {
+  const ProbePlan& plan = rtestPlan();
+  std::vector<LocationErrors> cases = {bcLocation()};
+  for (int k = 0; k < kNumLocationErrors; ++k) {
+    LocationErrors e;
+    e.kinematics = Kinematics::TableBC;
+    const bool length = locationParameters(Kinematics::TableBC)[static_cast<size_t>(k)].kind == ParamKind::Length;
+    e.setReportValue(k, length ? 100.0 : 10.0);
+    cases.push_back(e);
+  }
+  for (const LocationErrors& e : cases) {
+    Truth truth;
+    truth.errors = e;
+    const RtestSeries theirs = rotacalRtest(plan, truth, {});
+    const RtestSeries ours = ind::measureRtest(plan, ind::cleanRtestMachine(e));
+    ASSERT_EQ(ours.cycles.size(), 1u);
+    ASSERT_TRUE(ours.cycles[0].reset && ours.cycles[0].reread);
+    EXPECT_LT(maxReadingDiffUm(ours, theirs), 1e-6);
+    // and the case moves the readings at all
+    double largest = 0;
+    for (const auto& r : readingsOf(ours)) largest = std::max(largest, 1e3 * r.dq_w_mm.norm());
+    EXPECT_GT(largest, 5.0);
+  }
+}
+
+// A whole drawn machine without its per-reading scatter (location errors, linear axes, sphere
+// offset, drift, the sensors' gain and directions) handed to rotacal's simulator as its truth
+// (linear_axis_error, sphere offset and drift, sensor_response) gives the same readings over
+// three cycles of the thermal schedule.
+TEST(IndependentRtest, DrawnMachineEqualsRotacalSimulateGivenItsParts) {
+  const ProbePlan& plan = rtestThermalPlan();
+  const ContributorSet c = loadContributors(kRtestContrib);
+  ind::RtestDrawOptions o;
+  o.noise = o.form = false;
+  const ind::RtestMachine m = ind::drawRtestMachine(c, plan, o, 11);
+  Truth truth;
+  truth.errors = m.location;
+  truth.linear_axis_error = [&m](const Eigen::Vector3d& read) { return m.axes.error(read); };
+  RtestTruthExtras extras;
+  extras.sphere_offset_m_mm = m.sphere_offset_mm;
+  extras.sphere_drift_m_mm = [&m](double t) { return Eigen::Vector3d(m.drift_mm_per_s * t); };
+  extras.sensor_response = m.response();
+  const RtestSeries ours = ind::measureRtest(plan, m);
+  ASSERT_EQ(ours.cycles.size(), 3u);
+  EXPECT_LT(maxReadingDiffUm(ours, rotacalRtest(plan, truth, extras)), 1e-6);
+  // each part moves the readings: without it rotacal's differ by more than 0.01 um
+  Truth bare = truth;
+  bare.linear_axis_error = nullptr;
+  EXPECT_GT(maxReadingDiffUm(ours, rotacalRtest(plan, bare, extras)), 0.5);
+  RtestTruthExtras no_sensors = extras;
+  no_sensors.sensor_response = Eigen::Matrix3d::Identity();
+  EXPECT_GT(maxReadingDiffUm(ours, rotacalRtest(plan, truth, no_sensors)), 0.01);
+}
+
+// Each of the sensors' errors alone against its closed form: a gain scales its sensor's reading
+// by 1 + g; a direction error tilts the plunger, which reads the displacement along its own unit
+// direction: (d_i + e_j d_j + e_k d_k) / sqrt(1 + e_j^2 + e_k^2).
+TEST(IndependentRtest, SensorGainAndDirectionHaveTheirClosedForm) {
+  const ProbePlan& plan = rtestPlan();
+  const ind::RtestMachine clean = ind::cleanRtestMachine(bcLocation());
+  const auto base = readingsOf(ind::measureRtest(plan, clean));
+  ind::RtestMachine gain = clean;
+  gain.gain = {1e-3, -2e-3, 3e-3};
+  const auto g = readingsOf(ind::measureRtest(plan, gain));
+  ind::RtestMachine dir = clean;
+  dir.direction = {2e-3, -1e-3, 3e-3, 1.5e-3, -2.5e-3, 0.5e-3};  // xy xz yx yz zx zy
+  const auto d = readingsOf(ind::measureRtest(plan, dir));
+  ASSERT_EQ(g.size(), base.size());
+  double moved_g = 0, moved_d = 0;
+  for (size_t r = 0; r < base.size(); ++r) {
+    const Eigen::Vector3d q = base[r].dq_w_mm;
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_NEAR(g[r].dq_w_mm[i], (1.0 + gain.gain[static_cast<size_t>(i)]) * q[i], 1e-12);
+      const int j = i == 0 ? 1 : 0, k = i == 2 ? 1 : 2;
+      const double ej = dir.direction[static_cast<size_t>(2 * i)], ek = dir.direction[static_cast<size_t>(2 * i + 1)];
+      EXPECT_NEAR(d[r].dq_w_mm[i], (q[i] + ej * q[j] + ek * q[k]) / std::sqrt(1 + ej * ej + ek * ek), 1e-12);
+    }
+    moved_g = std::max(moved_g, 1e3 * (g[r].dq_w_mm - q).norm());
+    moved_d = std::max(moved_d, 1e3 * (d[r].dq_w_mm - q).norm());
+  }
+  EXPECT_GT(moved_g, 0.05);
+  EXPECT_GT(moved_d, 0.05);
+}
+
+// The sphere's offset and its drift alone on a perfect table, in closed form: the sphere at
+// rq + s + v t reads (R_z(C) R_y(B)) (s + v t) - (s + v t0) against the zero at the first reset
+// (t0); the re-read minus the reset is the drift over the time between them, and the drift over
+// one measuring cycle is what the contributors file declares (rtest_cycle_drift).
+TEST(IndependentRtest, SphereOffsetAndDriftHaveTheirClosedForm) {
+  const ProbePlan& plan = rtestThermalPlan();
+  LocationErrors none;
+  none.kinematics = Kinematics::TableBC;
+  ind::RtestMachine m = ind::cleanRtestMachine(none);
+  m.sphere_offset_mm = Eigen::Vector3d(2e-3, -3e-3, 5e-3);
+  const Eigen::Vector3d per_cycle(0.05e-3, 0.1e-3, -0.05e-3);
+  m.drift_mm_per_s = per_cycle / rtestCycleTime_s(plan);
+  const RtestSeries s = ind::measureRtest(plan, m);
+  const double t0 = s.cycles.front().reset->t_s;
+  const Eigen::Vector3d zero = m.sphere_offset_mm + m.drift_mm_per_s * t0;
+  constexpr double kDeg = 3.14159265358979323846 / 180.0;
+  for (const auto& r : readingsOf(s)) {
+    const Eigen::Matrix3d R = (Eigen::AngleAxisd(r.c_deg * kDeg, Eigen::Vector3d::UnitZ()) *
+                               Eigen::AngleAxisd(r.tilt_deg * kDeg, Eigen::Vector3d::UnitY()))
+                                  .toRotationMatrix();
+    const Eigen::Vector3d expected = R * (m.sphere_offset_mm + m.drift_mm_per_s * r.t_s) - zero;
+    EXPECT_LT(1e3 * (r.dq_w_mm - expected).norm(), 1e-9);
+  }
+  for (const RtestCycle& c : s.cycles) {
+    const Eigen::Vector3d d = c.reread->dq_w_mm - c.reset->dq_w_mm;
+    EXPECT_LT(1e3 * (d - m.drift_mm_per_s * (c.reread->t_s - c.reset->t_s)).norm(), 1e-9);
+  }
+  // the drawn drift is declared over one cycle: the rate times the cycle's time is the draw
+  const ContributorSet c = loadContributors(kRtestContrib);
+  ind::RtestDrawOptions only;
+  only.linear_axes = only.sphere = only.sensors = only.noise = only.form = false;
+  const ind::RtestMachine drawn = ind::drawRtestMachine(c, plan, only, 3);
+  const Eigen::Vector3d over_cycle = drawn.drift_mm_per_s * rtestCycleTime_s(plan);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_GT(std::abs(over_cycle[i]), 0.0);
+    EXPECT_LT(std::abs(over_cycle[i]), 5 * c.find("rtest_cycle_drift")->u[i]);
+  }
+}
+
+// The per-reading scatter: each value of a clean machine's series is the sensor's and the
+// sphere form's draw, normal with variance u_sensor^2 + u_form^2 (0.2 and 0.1 um: 0.05 um^2),
+// independent between values; over 200 machines x 81 values x 3 sensors.
+TEST(IndependentRtest, PerReadingScatterHasItsDeclaredVariance) {
+  const ProbePlan& plan = rtestPlan();
+  const ContributorSet c = loadContributors(kRtestContrib);
+  ind::RtestDrawOptions o;
+  o.linear_axes = o.sphere = o.sensors = o.drift = false;
+  LocationErrors none;
+  none.kinematics = Kinematics::TableBC;
+  Moments v, lag;
+  double prev = 0;
+  for (std::uint64_t seed = 1; seed <= 200; ++seed) {
+    ind::RtestMachine m = ind::drawRtestMachine(c, plan, o, seed);
+    m.location = none;  // a perfect table: every reading is its scatter alone
+    bool first = true;
+    for (const auto& r : readingsOf(ind::measureRtest(plan, m)))
+      for (int i = 0; i < 3; ++i) {
+        const double x = 1e3 * r.dq_w_mm[i];
+        v.add(x);
+        if (!first) lag.add(x * prev);
+        prev = x, first = false;
+      }
+  }
+  const double expected = 0.2 * 0.2 + 0.1 * 0.1;
+  const double se = std::sqrt(2.0 / v.n);
+  EXPECT_NEAR(v.var() / expected, 1.0, 4 * se);
+  EXPECT_NEAR(v.mean(), 0.0, 4 * std::sqrt(expected / v.n));
+  EXPECT_NEAR(lag.mean() / expected, 0.0, 4 / std::sqrt(static_cast<double>(lag.n)));  // no correlation between values
+}
+
+// A chip (a sensor glitch) moves its one value by c and nothing else.
+TEST(IndependentRtest, ChipMovesOneValueAlone) {
+  const ProbePlan& plan = rtestThermalPlan();
+  const ContributorSet c = loadContributors(kRtestContrib);
+  const ind::RtestMachine m = ind::drawRtestMachine(c, plan, {}, 9);
+  const auto base = readingsOf(ind::measureRtest(plan, m));
+  const ind::RtestChip chip{1, 7, 2, 0.020};
+  const auto chipped = readingsOf(ind::measureRtest(plan, m, chip));
+  ASSERT_EQ(base.size(), chipped.size());
+  int moved = 0;
+  const size_t per_cycle = plan.points.size() + 2;
+  for (size_t r = 0; r < base.size(); ++r)
+    for (int i = 0; i < 3; ++i) {
+      const double d = chipped[r].dq_w_mm[i] - base[r].dq_w_mm[i];
+      const bool here = r / per_cycle == 1 && base[r].pose_id == 7 && i == 2;
+      EXPECT_NEAR(d, here ? 0.020 : 0.0, 1e-12);
+      moved += here;
+    }
+  EXPECT_EQ(moved, 1);
+}
+
+// The per-tilt truth (the table's own pose at each tilt, in the reset's convention) against
+// 002 Eq. (2) to first order in closed form (docs/rtest.md's table): X0C - X0B = 10 um and
+// A0C - A0B = 5 mdeg alone give dx 10 cos B, dz 10 sin B, a 5 cos B, c 5 sin B; C0B = 18 mdeg
+// and Z0B = 15 um alone are invisible at tilt 0 and give the reset's pattern: rotations
+// -18 (-sin B, 0, cos B) + 18 z, translations -15 (-sin B, 0, cos B) + 15 z.
+TEST(IndependentRtest, PerTiltTruthHasTheFirstOrderClosedForm) {
+  const ProbePlan& plan = rtestPlan();
+  constexpr double kDeg = 3.14159265358979323846 / 180.0;
+  LocationErrors e;
+  e.kinematics = Kinematics::TableBC;
+  e.setReportValue(parameterIndex(Kinematics::TableBC, "dx_CB"), 10.0);
+  e.setReportValue(parameterIndex(Kinematics::TableBC, "a_CB"), 5.0);
+  const ind::PerTiltTruth t = ind::perTiltTruth(plan, ind::cleanRtestMachine(e));
+  ASSERT_EQ(t.tilt_deg.size(), 5u);
+  // first order: the X-Y-Z angles of a 5 mdeg turn differ from its rotation vector by ~1e-4 mdeg
+  for (size_t i = 0; i < t.tilt_deg.size(); ++i) {
+    const double B = t.tilt_deg[i] * kDeg;
+    const std::array<double, 6> want{10 * std::cos(B), 0, 10 * std::sin(B), 5 * std::cos(B), 0, 5 * std::sin(B)};
+    for (size_t p = 0; p < 6; ++p) EXPECT_NEAR(t.value[i][p], want[p], 1e-3) << "tilt " << t.tilt_deg[i] << " p " << p;
+  }
+  LocationErrors g;
+  g.kinematics = Kinematics::TableBC;
+  g.setReportValue(parameterIndex(Kinematics::TableBC, "c_BY"), 18.0);
+  g.setReportValue(parameterIndex(Kinematics::TableBC, "dz_BY"), 15.0);
+  const ind::PerTiltTruth h = ind::perTiltTruth(plan, ind::cleanRtestMachine(g));
+  for (size_t i = 0; i < h.tilt_deg.size(); ++i) {
+    const double B = h.tilt_deg[i] * kDeg;
+    const std::array<double, 6> want{15 * std::sin(B), 0, 15 - 15 * std::cos(B), 18 * std::sin(B), 0, 18 - 18 * std::cos(B)};
+    // first order: the rotation of 18 mdeg turns the 15 um by 3e-4 of it
+    for (size_t p = 0; p < 6; ++p) EXPECT_NEAR(h.value[i][p], want[p], 1e-2) << "tilt " << h.tilt_deg[i] << " p " << p;
+  }
+}
+
+// The per-tilt truth against rotacal's own identification on the generator's clean readings
+// (the example's eight errors, no noise): the analysis and the truth read the same convention.
+// What separates them is second order: the analysis is linear about zero, the truth's reset
+// convention first order, and the errors are 10-30 um / mdeg (second order: 1e-2 um).
+TEST(IndependentRtest, PerTiltTruthIsWhatTheAnalysisReportsOnACleanMachine) {
+  const ProbePlan& plan = rtestPlan();
+  const ind::RtestMachine m = ind::cleanRtestMachine(bcLocation());
+  const RtestSeries s = ind::measureRtest(plan, m);
+  RtestFitOptions o;
+  o.screen = false;
+  const RtestAnalysis a = analyzeRtest(plan, s.cycles, o);
+  const ind::PerTiltTruth t = ind::perTiltTruth(plan, m);
+  ASSERT_EQ(a.tilt_deg.size(), t.tilt_deg.size());
+  constexpr double kMdeg = 180.0 / 3.14159265358979323846 * 1e3;
+  double largest = 0;
+  for (size_t i = 0; i < t.tilt_deg.size(); ++i) {
+    EXPECT_DOUBLE_EQ(a.tilt_deg[i], t.tilt_deg[i]);
+    for (int p = 0; p < kRtestParams; ++p) {
+      const double est = a.cycles[0].value(p, static_cast<Eigen::Index>(i)) * (p < 3 ? 1e3 : kMdeg);
+      EXPECT_NEAR(est, t.value[i][static_cast<size_t>(p)], 0.02) << "tilt " << t.tilt_deg[i] << " p " << p;
+      largest = std::max(largest, std::abs(t.value[i][static_cast<size_t>(p)]));
+    }
+  }
+  EXPECT_GT(largest, 20.0);
+}
+
+// Two machines from one seed are the same machine; another seed is another.
+TEST(IndependentRtest, SeededDraws) {
+  const ProbePlan& plan = rtestPlan();
+  const ContributorSet c = loadContributors(kRtestContrib);
+  const RtestSeries a = ind::measureRtest(plan, ind::drawRtestMachine(c, plan, {}, 5));
+  const RtestSeries b = ind::measureRtest(plan, ind::drawRtestMachine(c, plan, {}, 5));
+  const RtestSeries d = ind::measureRtest(plan, ind::drawRtestMachine(c, plan, {}, 6));
+  EXPECT_EQ(maxReadingDiffUm(a, b), 0.0);
+  EXPECT_GT(maxReadingDiffUm(a, d), 1.0);
 }
 
 }  // namespace
