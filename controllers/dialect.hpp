@@ -22,6 +22,7 @@ struct OffsetRequest {
   const ProbePlan* plan = nullptr;          // machine, units, controller signs
   LocationErrors identified;                // mm / rad, papers' convention
   ErrorVector u = ErrorVector::Zero();      // standard uncertainties, mm / rad
+  std::vector<ParameterEstimate> parameters;  // a head machine's (head_cb): its model's, identified
   std::string report_file;                  // provenance, for the file's header
   std::string previous_text;                // the existing offsets file, if any ("" = none)
   bool force = false;                       // allow corrections beyond the plausibility limit

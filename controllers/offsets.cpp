@@ -10,6 +10,15 @@
 
 namespace rotacal::ctl {
 
+void requireNotHeadCb(const OffsetRequest& r) {
+  // Its parameters are its model's, not eight location errors; one form of them is verified.
+  if (r.identified.kinematics == Kinematics::HeadCB)
+    throw std::invalid_argument(
+        "a head_cb machine's parameters go into its control's kinematics, and rotacal knows that form only for "
+        "LinuxCNC's 5axiskins (--dialect linuxcnc: a .hal file with its pivot length, a .ngc file with the B and C "
+        "zeros); here enter REPORT.json's kinematic_parameters by hand");
+}
+
 std::string implausibility(Kinematics kinematics, int index, double v) {
   const auto& p = locationParameters(kinematics).at(static_cast<size_t>(index));
   if (!std::isfinite(v)) return fmt::format("{} is not a finite number; nothing written", p.name);
@@ -26,6 +35,7 @@ std::string implausibility(Kinematics kinematics, int index, double v) {
 
 void requirePlausible(const OffsetRequest& r) {
   if (!r.plan) throw std::invalid_argument("offset request without a plan");
+  requireNotHeadCb(r);
   if (r.identified.kinematics != r.plan->machine.kinematics)
     throw std::invalid_argument("identified errors are for another kinematics than the plan's machine");
   for (int i = 0; i < kNumLocationErrors; ++i) {

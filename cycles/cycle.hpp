@@ -156,6 +156,8 @@ struct DesignedPlan {
 struct LocationCorrection {
   LocationErrors identified;            // mm / rad, papers' convention
   ErrorVector u = ErrorVector::Zero();  // standard uncertainties, mm / rad
+  /// A head machine's own parameters (head_cb), identified.kinematics naming it; empty on a table.
+  std::vector<ParameterEstimate> parameters;
 };
 
 /// What analyze or diagnose produce: the JSON document (REPORT.json / DIAGNOSIS.json, from which

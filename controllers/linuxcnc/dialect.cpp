@@ -395,6 +395,8 @@ class LinuxCncDialect final : public Dialect {
   }
 
   std::string writeOffsets(const OffsetRequest& r) const override {
+    if (r.identified.kinematics == Kinematics::HeadCB)
+      return endsWithNgc(r.path) ? linuxcncHeadCbWorkOffsets(r) : linuxcncHeadCbHal(r);
     if (endsWithNgc(r.path)) return writeWorkOffsetProgram(r);
     ctl::requirePlausible(r);
     const ProbePlan& plan = *r.plan;
@@ -698,6 +700,7 @@ class LinuxCncDialect final : public Dialect {
 
 std::string linuxcncKinsComponent(Kinematics k) {
   if (k == Kinematics::TableAB) return "xyzab_tdr_kins";
+  if (k == Kinematics::HeadCB) return "5axiskins";
   return k == Kinematics::TableAC ? "xyzac-trt-kins" : "xyzbc-trt-kins";
 }
 

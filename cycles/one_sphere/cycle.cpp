@@ -55,6 +55,13 @@ class Sphere final : public Cycle {
     out.doc["declared_noise"] = declaredNoiseJson(noise, test);
     out.doc["figures"] = sphereFiguresJson(plan, res, std::sqrt(noise.white_um2));
     if (!screen.excluded.empty() || screen.too_many) out.warnings.push_back(screen.text());
+    if (plan.machine.kinematics == Kinematics::HeadCB) {
+      // The model's own parameters: LinuxCNC's 5axiskins writer takes them (the pivot length,
+      // the B and C zeros as the work offset); the other dialects refuse them with the reason.
+      out.offsets = headCorrection(res, b);
+      finishOffsets(screen, noise, test, &out);
+      return out;
+    }
     if (!hasPapersLocationErrors(plan.machine.kinematics)) {
       // No writer takes a head's kinematics yet: controllers.md has no verified form of them.
       out.offsets_refused = fmt::format(
@@ -74,15 +81,39 @@ class Sphere final : public Cycle {
           c.u[i] = q.kind == ParamKind::Length ? umToMm(uc[k]) : mdegToRad(uc[k]);
     }
     out.offsets = c;
-    // More than a few chips: nothing was left out, and data this far from the declared noise
-    // sign no offsets.
-    if (screen.too_many) out.offsets_refused = screen.text();
-    const std::string held = offsetsHeldBack(noise, test);
-    if (!held.empty() && out.offsets_refused.empty()) {
-      out.offsets_refused = held;
-      out.warnings.push_back(held);
-    }
+    finishOffsets(screen, noise, test, &out);
     return out;
+  }
+
+  // More than a few chips: nothing was left out, and data this far from the declared noise
+  // sign no offsets.
+  static void finishOffsets(const OutlierScreen& screen, const DeclaredNoise& noise, const DeclaredNoiseTest& test,
+                            CycleDocuments* out) {
+    if (screen.too_many) out->offsets_refused = screen.text();
+    const std::string held = offsetsHeldBack(noise, test);
+    if (!held.empty() && out->offsets_refused.empty()) {
+      out->offsets_refused = held;
+      out->warnings.push_back(held);
+    }
+  }
+
+  // Every fitted parameter with its u_c (mm / rad), the held ones marked.
+  static LocationCorrection headCorrection(const SphereCycleResult& res, const UncertaintyBudget& b) {
+    LocationCorrection c;
+    c.identified.kinematics = res.location.kinematics;
+    const Eigen::VectorXd uc = b.uC();
+    for (size_t i = 0; i < res.names.size(); ++i) {
+      const auto& q = res.names[i];
+      ParameterEstimate p;
+      p.name = q.name;
+      p.kind = q.kind;
+      p.value = res.x[static_cast<Eigen::Index>(i)];
+      p.held = res.identifiability.held[i];
+      for (int k = 0; k < b.size(); ++k)
+        if (b.names[static_cast<size_t>(k)] == q.name) p.u = q.kind == ParamKind::Length ? umToMm(uc[k]) : mdegToRad(uc[k]);
+      c.parameters.push_back(p);
+    }
+    return c;
   }
 
   CycleDocuments diagnose(const DiagnoseRequest& r) const override {

@@ -142,7 +142,7 @@ class Touch154 final : public Cycle {
     const auto& params = locationParameters(plan.machine.kinematics);
     for (int i = 0; i < kNumLocationErrors; ++i)
       u_c[i] = params[i].kind == ParamKind::Length ? umToMm(uc[i]) : mdegToRad(uc[i]);
-    out.offsets = LocationCorrection{a.main.estimate, u_c};
+    out.offsets = LocationCorrection{a.main.estimate, u_c, {}};
     if (a.main.summary.termination != Termination::Converged) out.warnings.push_back(a.main.summary.message);
     return out;
   }

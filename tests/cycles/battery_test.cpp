@@ -395,7 +395,8 @@ INSTANTIATE_TEST_SUITE_P(EveryCycle, CycleBattery, ::testing::ValuesIn(cycleName
 
 // The sphere cycle runs on every kinematics family it accepts: each bundled machine of one family
 // through plan, every dialect's program (or a refusal with its reason), simulate, analyze, diagnose
-// and the HTML report, and the offsets in the LinuxCNC form where the family has papers' errors.
+// and the HTML report, and the offsets in the LinuxCNC form where the family has papers' errors
+// or a LinuxCNC kinematics module that holds its head's (head_cb: 5axiskins).
 class SphereOnEveryFamily : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(SphereOnEveryFamily, PlanProgramsSimulateAnalyzeDiagnoseAndReport) {
@@ -432,12 +433,14 @@ TEST_P(SphereOnEveryFamily, PlanProgramsSimulateAnalyzeDiagnoseAndReport) {
   a.results = {{"r1.txt", sim.results_text}};
   const CycleDocuments rep = cycle.analyze(a);
   EXPECT_NE(report::reportHtml(rep.doc).find("<html"), std::string::npos);
-  EXPECT_EQ(rep.offsets.has_value(), hasPapersLocationErrors(m.kinematics)) << GetParam();
+  EXPECT_EQ(rep.offsets.has_value(), hasPapersLocationErrors(m.kinematics) || m.kinematics == Kinematics::HeadCB)
+      << GetParam();
   if (rep.offsets) {
     OffsetRequest o;
     o.plan = &p;
     o.identified = rep.offsets->identified;
     o.u = rep.offsets->u;
+    o.parameters = rep.offsets->parameters;
     o.path = "offsets.hal";
     EXPECT_NE(lc.writeOffsets(o).find(linuxcncKinsComponent(m.kinematics)), std::string::npos) << GetParam();
   }
@@ -449,7 +452,7 @@ TEST_P(SphereOnEveryFamily, PlanProgramsSimulateAnalyzeDiagnoseAndReport) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Machines, SphereOnEveryFamily,
-                         ::testing::Values("ac_trunnion", "bc_trunnion", "ab_table", "bc_head_table", "ab_head"),
+                         ::testing::Values("ac_trunnion", "bc_trunnion", "ab_table", "bc_head_table", "ab_head", "bc_head"),
                          [](const auto& info) { return info.param; });
 
 TEST(CycleBattery, EveryCycleHasItsOwnProgramNumber) {
