@@ -1724,6 +1724,11 @@ def write_back_5axis(a, work, plan, ngc, rep1, kp1, want):
     check(sorted(want_g54) == ["B", "C"] and all(abs(want_g54[k] - v) <= 0.5e-6 for k, v in expect_g54.items()),
           "offsets.ngc shifts G54 B by +B0B and C by -C0C (5axiskins' counts): %s" % want_g54)
     check("dL: 5axiskins.pivot-length [a .hal file]" in g10_text, "offsets.ngc sends dL to the pin's .hal file")
+    # rotacal compensate rewrites table machines' programs: it refuses the head, naming why
+    r, _ = sh([a.rotacal, "compensate", "--program", ngc, "--report", rep1, "--dialect", "linuxcnc", "-o",
+               os.path.join(work, "one_sphere_compensated.ngc")], expect=None)
+    check(r.returncode == 1 and "head_cb" in r.stdout, "rotacal compensate refuses the head_cb report with its "
+          "reason (exit %d)" % r.returncode)
     run2 = os.path.join(work, "run2")
     dl_true = want["dL"] * 1e-3
     centre = pl["points"][0]["sphere"]["center_w_mm"]
