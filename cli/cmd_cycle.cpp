@@ -360,7 +360,7 @@ int cmdAnalyze(const Common& c, const std::string& plan_file, const std::vector<
     req.plan = &plan;
     req.identified = docs.offsets->identified;
     req.u = docs.offsets->u;
-    req.kinematic = docs.offsets->kinematic;
+    req.parameters = docs.offsets->parameters;
     req.report_file = json_out.empty() || json_out == "-" ? results.front() : json_out;
     req.force = force;
     req.path = offsets_out;

@@ -22,7 +22,7 @@ struct OffsetRequest {
   const ProbePlan* plan = nullptr;          // machine, units, controller signs
   LocationErrors identified;                // mm / rad, papers' convention
   ErrorVector u = ErrorVector::Zero();      // standard uncertainties, mm / rad
-  std::vector<KinematicParameterValue> kinematic;  // a head_table machine's, by ISO name (identified unused)
+  std::vector<ParameterEstimate> parameters;  // a head machine's own, by ISO name (identified unused)
   std::string report_file;                  // provenance, for the file's header
   std::string previous_text;                // the existing offsets file, if any ("" = none)
   bool force = false;                       // allow corrections beyond the plausibility limit

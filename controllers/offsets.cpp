@@ -10,6 +10,15 @@
 
 namespace rotacal::ctl {
 
+void requireNotHeadCb(const OffsetRequest& r) {
+  // Its parameters are its model's, not eight location errors; one form of them is verified.
+  if (r.identified.kinematics == Kinematics::HeadCB)
+    throw std::invalid_argument(
+        "a head_cb machine's parameters go into its control's kinematics, and rotacal knows that form only for "
+        "LinuxCNC's 5axiskins (--dialect linuxcnc: a .hal file with its pivot length, a .ngc file with the B and C "
+        "zeros); here enter REPORT.json's kinematic_parameters by hand");
+}
+
 std::string implausibility(Kinematics kinematics, int index, double v) {
   const auto& p = locationParameters(kinematics).at(static_cast<size_t>(index));
   if (!std::isfinite(v)) return fmt::format("{} is not a finite number; nothing written", p.name);
@@ -26,7 +35,7 @@ std::string implausibility(Kinematics kinematics, int index, double v) {
 
 namespace {
 // The plausibility of one of a head machine's parameters, as implausibility() judges the papers' eight.
-std::string implausibility(const KinematicParameterValue& p) {
+std::string implausibility(const ParameterEstimate& p) {
   if (!std::isfinite(p.value)) return fmt::format("{} is not a finite number; nothing written", p.name);
   if (p.kind == ParamKind::Length && std::abs(p.value) > kMaxLengthCorrectionMm)
     return fmt::format("{} = {:.4f} mm exceeds the plausibility limit of {} mm: check the setup and the results, or "
@@ -40,8 +49,8 @@ std::string implausibility(const KinematicParameterValue& p) {
 }
 }  // namespace
 
-const KinematicParameterValue* kinematicParameter(const OffsetRequest& r, std::string_view name) {
-  for (const auto& p : r.kinematic)
+const ParameterEstimate* kinematicParameter(const OffsetRequest& r, std::string_view name) {
+  for (const auto& p : r.parameters)
     if (p.name == name) return &p;
   return nullptr;
 }
@@ -57,12 +66,13 @@ std::string headTableOffsetsRefusal(std::string_view dialect) {
 
 void requirePlausible(const OffsetRequest& r) {
   if (!r.plan) throw std::invalid_argument("offset request without a plan");
+  requireNotHeadCb(r);
   if (r.identified.kinematics != r.plan->machine.kinematics)
     throw std::invalid_argument("identified errors are for another kinematics than the plan's machine");
   if (r.identified.kinematics == Kinematics::HeadTable) {
-    if (r.kinematic.empty())
+    if (r.parameters.empty())
       throw std::invalid_argument("a head_table offset request without its kinematic parameters");
-    for (const auto& p : r.kinematic) {
+    for (const auto& p : r.parameters) {
       if (p.held || (r.force && std::isfinite(p.value))) continue;
       const std::string why = implausibility(p);
       if (!why.empty()) throw std::invalid_argument(why);
@@ -80,7 +90,7 @@ void requirePlausible(const OffsetRequest& r) {
 std::vector<std::string> identifiedLines(const OffsetRequest& r) {
   std::vector<std::string> out;
   if (r.identified.kinematics == Kinematics::HeadTable) {
-    for (const auto& p : r.kinematic) {
+    for (const auto& p : r.parameters) {
       const bool len = p.kind == ParamKind::Length;
       if (p.held) {
         out.push_back(

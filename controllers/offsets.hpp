@@ -21,13 +21,17 @@ constexpr double kMaxAngleCorrectionMdeg = 100.0;  // 0.1 deg: likewise
 /// that writes a correction: the offsets writers and `rotacal compensate`.
 std::string implausibility(Kinematics kinematics, int index, double v);
 
+/// Throws std::invalid_argument with the reason when the request is a head_cb machine's: its
+/// parameters are its model's (request.parameters), which only LinuxCNC's writer takes.
+void requireNotHeadCb(const OffsetRequest& request);
+
 /// Throws std::invalid_argument naming the parameter, its value and the limit when any
 /// identified location error exceeds the plausibility limits and !request.force. Also throws
 /// when request.plan is null or a value is not finite.
 void requirePlausible(const OffsetRequest& request);
 
-/// A head machine's (request.kinematic, ISO 230-7 names): its parameter `name`, or nullptr.
-const KinematicParameterValue* kinematicParameter(const OffsetRequest& request, std::string_view name);
+/// A head machine's (request.parameters, ISO 230-7 names): its parameter `name`, or nullptr.
+const ParameterEstimate* kinematicParameter(const OffsetRequest& request, std::string_view name);
 
 /// Why no writer but LinuxCNC's takes a head_table machine's parameters (the dialects' refusal).
 std::string headTableOffsetsRefusal(std::string_view dialect);

@@ -8,14 +8,16 @@ namespace rotacal {
 
 namespace {
 constexpr const char* kNoTableErrors =
-    "a spindle-head machine (head_ab, head_table) has none of the papers' table location errors: head_ab is calibrated "
-    "at a fixed tool tip (004), head_table by its own ISO 230-7 parameters (core/kinematic_model.hpp)";
+    "a spindle-head machine (head_ab, head_table, head_cb) has none of the papers' table location errors: head_ab is "
+    "calibrated at a fixed tool tip (004), head_table and head_cb by their own ISO 230-7 parameters "
+    "(core/kinematic_model.hpp)";
 }  // namespace
 
 std::string_view kinematicsName(Kinematics kinematics) {
   if (kinematics == Kinematics::HeadAB) return "head_ab";
   if (kinematics == Kinematics::HeadTable) return "head_table";
   if (kinematics == Kinematics::TableAB) return "table_ab";
+  if (kinematics == Kinematics::HeadCB) return "head_cb";
   return kinematics == Kinematics::TableAC ? "table_ac" : "table_bc";
 }
 
@@ -25,8 +27,9 @@ Kinematics kinematicsFromName(std::string_view name) {
   if (name == "head_ab") return Kinematics::HeadAB;
   if (name == "head_table") return Kinematics::HeadTable;
   if (name == "table_ab") return Kinematics::TableAB;
+  if (name == "head_cb") return Kinematics::HeadCB;
   throw std::invalid_argument("unknown kinematics '" + std::string(name) +
-                              "' (expected table_ac, table_bc, table_ab, head_ab or head_table)");
+                              "' (expected table_ac, table_bc, table_ab, head_ab, head_table or head_cb)");
 }
 
 const std::vector<ParameterInfo>& locationParameters(Kinematics kinematics) {
@@ -152,7 +155,7 @@ Eigen::Isometry3d T_m_w_nominal(Kinematics kinematics, const Pose& pose) {
   // A head over a C table: the table turns C alone (by -C, as every table axis does).
   if (kinematics == Kinematics::HeadTable) return elementary(Motion::Rz, -degToRad(pose.C));
   // Two head axes: the table does not move.
-  if (kinematics == Kinematics::HeadAB) return Eigen::Isometry3d::Identity();
+  if (hasFixedTable(kinematics)) return Eigen::Isometry3d::Identity();
   LocationErrors zero;
   zero.kinematics = kinematics;
   return T_m_w(zero, pose);

@@ -30,11 +30,18 @@ namespace rotacal {
 // offsets of the papers' machines do not apply to it. The table turns C only.
 // TableAB: the A/B dual rotary table above; the B axis (the tilt) sits on the bed, the A table
 // rides on it, as LinuxCNC's xyzab_tdr_kins has them (docs/conventions.md).
-enum class Kinematics { TableAC, TableBC, HeadAB, HeadTable, TableAB };
+// HeadCB: a C head on the Z carriage carrying a B head that tilts the spindle, over a fixed table
+// (the bridge mill of LinuxCNC's 5axiskins). Like head_table, its location errors are the ISO
+// 230-7 parameters of core/kinematic_model.hpp; it needs MACHINE.json's "head" (the pivot length).
+enum class Kinematics { TableAC, TableBC, HeadAB, HeadTable, TableAB, HeadCB };
 
-std::string_view kinematicsName(Kinematics kinematics);       // "table_ac", "table_bc", "head_ab", "head_table", "table_ab"
+std::string_view kinematicsName(Kinematics kinematics);  // "table_ac", "table_bc", "head_ab", "head_table", "table_ab", "head_cb"
 /// Whether the machine's XYZ carry a spindle head (its XYZ are the pivot's, not the ball centre's).
-inline bool hasSpindleHead(Kinematics k) { return k == Kinematics::HeadAB || k == Kinematics::HeadTable; }
+inline bool hasSpindleHead(Kinematics k) {
+  return k == Kinematics::HeadAB || k == Kinematics::HeadTable || k == Kinematics::HeadCB;
+}
+/// Whether both rotary axes are in the head and the table stays (head_ab, head_cb).
+inline bool hasFixedTable(Kinematics k) { return k == Kinematics::HeadAB || k == Kinematics::HeadCB; }
 /// Whether the papers' eight table location errors (000 / 002) describe the machine.
 /// (table_ab's eight are rotacal's, written in the papers' style: the chain above.)
 inline bool hasPapersLocationErrors(Kinematics k) {
@@ -64,6 +71,16 @@ using ErrorVector = Eigen::Matrix<double, kNumLocationErrors, 1>;
 const std::vector<ParameterInfo>& locationParameters(Kinematics kinematics);
 int parameterIndex(Kinematics kinematics, std::string_view name);  // -1 when unknown
 
+/// One identified parameter of a kinematic model (core/kinematic_model.hpp) by its ISO 230-7
+/// name: what a head machine's offsets are written from, having none of the papers' eight.
+struct ParameterEstimate {
+  std::string name;
+  ParamKind kind = ParamKind::Length;
+  double value = 0.0;   // mm / rad
+  double u = 0.0;       // standard uncertainty, mm / rad
+  bool held = false;    // not separable by the plan: held at nominal (value 0), not identified
+};
+
 /// A commanded rotary pose in degrees, papers' convention. Unused axes stay 0.
 struct Pose {
   double A = 0.0;
@@ -83,17 +100,6 @@ struct LocationErrors {
   /// Value in report units: um for lengths, mdeg for angles.
   double reportValue(int index) const;
   void setReportValue(int index, double um_or_mdeg);
-};
-
-/// One identified parameter of a kinematic model (core/kinematic_model.hpp), by its ISO 230-7 name:
-/// how a head machine's location errors reach an offsets writer, whose papers' eight do not
-/// describe it. held: the plan cannot separate it, so it stayed at nominal (0).
-struct KinematicParameterValue {
-  std::string name;
-  ParamKind kind = ParamKind::Length;
-  double value = 0.0;  // mm or rad
-  double u = 0.0;      // standard uncertainty (k = 1), mm or rad
-  bool held = false;
 };
 
 /// Factor of the kinematic chain: a motion whose value is an error parameter or a commanded angle.

@@ -83,7 +83,7 @@ Eigen::Vector3d ballInTool(const KinematicModel& m) { return {0.0, 0.0, -m.pivot
 }  // namespace
 
 const std::vector<std::string>& kinematicConfigurations() {
-  static const std::vector<std::string> names = {"table_ac", "table_bc", "table_ab", "head_table", "head_ab"};
+  static const std::vector<std::string> names = {"table_ac", "table_bc", "table_ab", "head_table", "head_ab", "head_cb"};
   return names;
 }
 
@@ -111,9 +111,12 @@ KinematicModel kinematicModel(std::string_view configuration, const Eigen::Vecto
     m.table_axes = {'C'};
   } else if (configuration == "head_ab") {
     m.head_axes = {'A', 'B'};
+  } else if (configuration == "head_cb") {
+    // The C head turns about the carriage's Z and carries the B head, whose Y turns with it.
+    m.head_axes = {'C', 'B'};
   } else {
     throw std::invalid_argument("unknown kinematics '" + std::string(configuration) +
-                                "' (expected table_ac, table_bc, table_ab, head_table or head_ab)");
+                                "' (expected table_ac, table_bc, table_ab, head_table, head_ab or head_cb)");
   }
   if (!m.head_axes.empty() && !(pivot_to_ball_mm > 0))
     throw std::invalid_argument(m.name + ": the pivot-to-ball length must be > 0 mm for a spindle head");
@@ -133,7 +136,7 @@ KinematicModel kinematicModel(std::string_view configuration, const Eigen::Vecto
   carrier = "the carriage";
   for (char a : m.head_axes) {
     addAxis(m, m.head_chain, a, 1.0, carrier);
-    carrier = a == 'A' ? "the A axis" : "the B axis";
+    carrier = a == 'A' ? "the A axis" : (a == 'B' ? "the B axis" : "the C axis");
   }
   if (!m.head_axes.empty()) {
     m.head_chain.push_back({M::Tx, addParameter(m, "dX_T", ParamKind::Length, "the ball centre's offset from the spindle axis in X"), 0, 1.0});

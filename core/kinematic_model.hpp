@@ -1,11 +1,12 @@
 #pragma once
 // Five-axis kinematics with the ISO 230-7 location errors of both rotary axes: the
-// model the one-sphere cycle identifies, for any of the four configurations
+// model the one-sphere cycle identifies, for any of the six configurations
 //   table_ac    A tilting table carrying a C table            (000's machine)
 //   table_bc    B tilting table carrying a C table            (002's machine)
 //   table_ab    B axis on the bed carrying an A table          (LinuxCNC's xyzab_tdr_kins)
 //   head_table  a B (or A) spindle head over a C table        (the most common shop machine)
 //   head_ab     an A head carrying a B head, fixed table      (004's machine)
+//   head_cb     a C head carrying a B head, fixed table        (LinuxCNC's 5axiskins bridge mill)
 // Every rotary axis k carries, in the frame of the axis it rides on (the machine for the first),
 //   T_perp1 T_perp2 R_perp1 R_perp2 R_k(zero) R_k(-+theta_k)
 // e.g. the C axis: Dx(X0C) Dy(Y0C) Da(A0C) Db(B0C) Dc(C0C) Dc(-C). Table axes turn by -theta
@@ -50,9 +51,9 @@ struct ModelFactor {
 };
 
 struct KinematicModel {
-  std::string name;              // table_ac, table_bc, table_ab, head_table, head_ab
+  std::string name;              // table_ac, table_bc, table_ab, head_table, head_ab, head_cb
   std::vector<char> table_axes;  // from the bed outwards (A then C for table_ac, B then A for table_ab)
-  std::vector<char> head_axes;   // from the carriage outwards (A then B for head_ab)
+  std::vector<char> head_axes;   // from the carriage outwards (A then B for head_ab, C then B for head_cb)
   std::vector<ModelParameter> parameters;
   std::vector<ModelFactor> table_chain;  // machine -> workpiece, ends with the sphere's set-up
   std::vector<ModelFactor> head_chain;   // carriage -> probe-ball centre

@@ -100,14 +100,33 @@ MachineModel machineFrom(const JsonDoc& doc, const Json& j) {
     head.axis = 0;
     head.pivot_to_ball_mm = requireNumber(doc, h, "pivot_to_ball_mm", Limits::positive(kMaxCoordinateMm, "mm"));
     m.head = head;
+  } else if (m.kinematics == Kinematics::HeadCB) {
+    // Always: X Y Z read the pivot, and the probe hangs the pivot length below it (5axiskins'
+    // pivot-length); the head's two axes are fixed by the kinematics (C, and B on it).
+    if (!j.contains("head"))
+      doc.fail(j, "kinematics", "kinematics head_cb needs \"head\": {\"pivot_to_ball_mm\": L} (the pivot to the "
+                                "probe-ball centre along the spindle)");
+    const Json& h = requireObject(doc, j, "head");
+    if (h.contains("axis"))
+      doc.fail(h, "axis", "a head_cb head turns in C and, on it, B: it has no single 'axis' (only pivot_to_ball_mm)");
+    for (const auto& [key, value] : h.items()) {
+      (void)value;
+      if (key != "pivot_to_ball_mm")
+        doc.fail(h, key, "unknown field '" + key + "' of a head_cb machine's \"head\" (it holds pivot_to_ball_mm only)");
+    }
+    SpindleHead head;
+    head.axis = 0;
+    head.pivot_to_ball_mm = requireNumber(doc, h, "pivot_to_ball_mm", Limits::positive(kMaxCoordinateMm, "mm"));
+    m.head = head;
   } else if (j.contains("head")) {
-    doc.fail(j, "head", "'head' describes a head_table or head_ab machine's spindle head, not a " +
+    doc.fail(j, "head", "'head' describes a head_table, head_ab or head_cb machine's spindle head, not a " +
                             std::string(kinematicsName(m.kinematics)) + " machine's");
   }
-  const std::string rot = m.kinematics == Kinematics::TableAC  ? "AC"
+  const std::string rot = m.kinematics == Kinematics::TableAC                                       ? "AC"
                           : m.kinematics == Kinematics::HeadAB || m.kinematics == Kinematics::TableAB ? "AB"
-                          : m.head                             ? std::string(1, m.head->axis) + "C"
-                                                               : "BC";
+                          : m.kinematics == Kinematics::HeadCB                                        ? "BC"
+                          : m.head                                                                    ? std::string(1, m.head->axis) + "C"
+                                                                                                      : "BC";
   const Json& axes = requireObject(doc, j, "rotary_axes");
   for (char axis : rot) {
     const std::string key(1, axis);
@@ -209,6 +228,9 @@ Eigen::Matrix3d headRotation(const MachineModel& m, const Pose& pose) {
   // head_ab: the A head carries the B head (core/kinematic_model.hpp), both turning by +angle.
   if (m.kinematics == Kinematics::HeadAB)
     return (elementary(Motion::Rx, degToRad(pose.A)) * elementary(Motion::Ry, degToRad(pose.B))).linear();
+  // head_cb: the C head carries the B head (core/kinematic_model.hpp), both by +angle.
+  if (m.kinematics == Kinematics::HeadCB)
+    return (elementary(Motion::Rz, degToRad(pose.C)) * elementary(Motion::Ry, degToRad(pose.B))).linear();
   const char a = m.head->axis;
   return elementary(a == 'A' ? Motion::Rx : Motion::Ry, degToRad(pose.angle(a))).linear();
 }

@@ -54,12 +54,13 @@ struct Feeds {
 };
 
 /// The spindle head of a head_table machine (the axis it tilts about) or of a head_ab machine
-/// (an A head carrying a B head: axis 0), and the nominal distance from its pivot (the
+/// (an A head carrying a B head: axis 0) or of a head_cb machine (a C head carrying a B head:
+/// axis 0), and the nominal distance from its pivot (the
 /// intersection of the head axes with the spindle axis) to the probe-ball centre, along the
 /// spindle. The machine's X, Y and Z then read the pivot, with no tool length
 /// offset: the ball is L from it along the tilted spindle.
 struct SpindleHead {
-  char axis = 'B';  // head_table: 'B' or 'A'; head_ab: 0
+  char axis = 'B';  // head_table: 'B' or 'A'; head_ab, head_cb: 0
   double pivot_to_ball_mm = 0.0;
 };
 
@@ -81,7 +82,7 @@ struct MachineModel {
   double overtravel_mm = 2.0;            // end of a probing move, past the nominal trigger
   double retract_mm = 0.0;               // double touch: back-off after the first touch (0 = single touch)
   std::optional<SquareColumn> artefact;
-  std::optional<SpindleHead> head;       // head_table always, head_ab for a touch probe (MACHINE.json "head")
+  std::optional<SpindleHead> head;       // head_table and head_cb always, head_ab for a touch probe (MACHINE.json "head")
   /// The Type B contributors the owner declares: inline, or a contributors file named
   /// relative to MACHINE.json. Plans carry them inline. Absent: reports say u_B was not evaluated.
   std::optional<ContributorSet> contributors;
@@ -96,7 +97,7 @@ struct MachineModel {
 
 /// The probe-ball centre less the X Y Z reading at a pose, nominal, machine frame (mm): zero on a
 /// table machine; with a head the ball hangs L from the pivot along the spindle the head turns
-/// (by +angle, ISO 841: core/kinematic_model.hpp; head_ab: Rx(A) Ry(B)).
+/// (by +angle, ISO 841: core/kinematic_model.hpp; head_ab: Rx(A) Ry(B); head_cb: Rz(C) Ry(B)).
 Eigen::Vector3d ballFromAxes_m(const MachineModel& m, const Pose& pose);
 /// The probe's axis from the ball towards its body, machine frame (unit): +Z on a table machine.
 Eigen::Vector3d stylusAxis_m(const MachineModel& m, const Pose& pose);

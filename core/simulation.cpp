@@ -211,8 +211,10 @@ Truth truthFrom(const JsonDoc& doc, Kinematics kinematics, const MachineModel* m
     doc.fail(j, "format", "not a truth file (expected \"format\": \"rotacal-truth/1\")");
   Truth t;
   t.errors.kinematics = kinematics;
-  if (kinematics == Kinematics::HeadTable || (kinematics == Kinematics::HeadAB && machine && machine->head)) {
-    if (!machine || !machine->head) doc.fail(j, "format", "a head_table truth needs its machine's head (MACHINE.json \"head\")");
+  if (kinematics == Kinematics::HeadTable || kinematics == Kinematics::HeadCB ||
+      (kinematics == Kinematics::HeadAB && machine && machine->head)) {
+    if (!machine || !machine->head)
+      doc.fail(j, "format", fmt::format("a {} truth needs its machine's head (MACHINE.json \"head\")", kinematicsName(kinematics)));
     headLocationErrors(doc, j, *machine, &t);
     const std::string kin(kinematicsName(kinematics));
     for (const char* key : {"drift", "rotary_error_motion"})

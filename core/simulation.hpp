@@ -84,7 +84,7 @@ Truth truthOfModel(const KinematicModel& model, const Eigen::VectorXd& p);
 inline bool locationErrorsAreConstant(const Truth& t) { return !t.drift && !t.pose_dependent && !t.table_transform; }
 
 Truth truthFromJson(const JsonDoc& doc, Kinematics kinematics);
-/// The truth of a machine: for head_table (and head_ab with a "head") its "location_errors" are
+/// The truth of a machine: for head_table, head_cb (and head_ab with a "head") its "location_errors" are
 /// the ISO 230-7 parameters of core/kinematic_model.hpp (X0C .. dL, Y0A .. dL), which set
 /// table_transform and head_ball exactly.
 Truth truthFromJson(const JsonDoc& doc, const MachineModel& machine);

@@ -156,9 +156,9 @@ struct DesignedPlan {
 struct LocationCorrection {
   LocationErrors identified;            // mm / rad, papers' convention
   ErrorVector u = ErrorVector::Zero();  // standard uncertainties, mm / rad
-  /// A head machine's (identified.kinematics head_table): its model's parameters by ISO 230-7
-  /// name, identified.values unused. Empty for a table machine.
-  std::vector<KinematicParameterValue> kinematic;
+  /// A head machine's own parameters by ISO 230-7 name (head_table, head_cb), identified.kinematics
+  /// naming the machine, identified.values unused. Empty for a table machine.
+  std::vector<ParameterEstimate> parameters;
 };
 
 /// What analyze or diagnose produce: the JSON document (REPORT.json / DIAGNOSIS.json, from which

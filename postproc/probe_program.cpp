@@ -48,6 +48,7 @@ std::string angleConvention(Kinematics k) {
     case Kinematics::TableBC: return "002 Eq. (2)";
     case Kinematics::TableAB: return "rotacal's A/B table chain (docs/conventions.md)";
     case Kinematics::HeadAB:
+    case Kinematics::HeadCB:
     case Kinematics::HeadTable: return "ISO 841: the head turns by +angle";
   }
   return {};

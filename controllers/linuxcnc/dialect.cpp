@@ -397,6 +397,8 @@ class LinuxCncDialect final : public Dialect {
   std::string writeOffsets(const OffsetRequest& r) const override {
     if (r.identified.kinematics == Kinematics::HeadTable)
       return endsWithNgc(r.path) ? writeHeadWorkOffsetProgram(r) : writeMaxkinsHal(r);
+    if (r.identified.kinematics == Kinematics::HeadCB)
+      return endsWithNgc(r.path) ? linuxcncHeadCbWorkOffsets(r) : linuxcncHeadCbHal(r);
     if (endsWithNgc(r.path)) return writeWorkOffsetProgram(r);
     ctl::requirePlausible(r);
     const ProbePlan& plan = *r.plan;
@@ -614,7 +616,7 @@ class LinuxCncDialect final : public Dialect {
           throw std::invalid_argument(fmt::format("head_table offsets without {}", n));
     }
     double value(const char* name) const {
-      const KinematicParameterValue* p = ctl::kinematicParameter(req, name);
+      const ParameterEstimate* p = ctl::kinematicParameter(req, name);
       return p && !p->held ? p->value : 0.0;
     }
     /// The work offset's change of axis X, Y (mm) or B (deg, the controller's count).
@@ -625,7 +627,7 @@ class LinuxCncDialect final : public Dialect {
     }
     std::string heldList() const {
       std::string out;
-      for (const auto& p : req.kinematic)
+      for (const auto& p : req.parameters)
         if (p.held) out += (out.empty() ? "" : ", ") + p.name;
       return out.empty() ? std::string("none") : out;
     }
@@ -850,6 +852,7 @@ class LinuxCncDialect final : public Dialect {
 std::string linuxcncKinsComponent(Kinematics k) {
   if (k == Kinematics::TableAB) return "xyzab_tdr_kins";
   if (k == Kinematics::HeadTable) return "maxkins";
+  if (k == Kinematics::HeadCB) return "5axiskins";
   return k == Kinematics::TableAC ? "xyzac-trt-kins" : "xyzbc-trt-kins";
 }
 

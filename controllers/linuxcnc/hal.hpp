@@ -6,12 +6,13 @@
 #include <utility>
 #include <vector>
 
+#include "controllers/dialect.hpp"
 #include "core/error_model.hpp"
 
 namespace rotacal {
 
 /// LinuxCNC kinematics component of a table machine: "xyzac-trt-kins", "xyzbc-trt-kins" or "xyzab_tdr_kins";
-/// of a B head over a C table (head_table): "maxkins".
+/// of a B head over a C table (head_table): "maxkins"; of the C/B head machine (head_cb): "5axiskins".
 std::string linuxcncKinsComponent(Kinematics kinematics);
 
 /// Changes (mm) of the trt-kins HAL pins that apply the identified location errors (added to
@@ -29,5 +30,14 @@ std::vector<std::pair<std::string, double>> linuxcncKinsChanges(const LocationEr
 /// The `setp <component>.<pin> <value>` lines of a HAL file: pin -> value. '#' starts a comment.
 /// Throws std::invalid_argument("line N: ...") when such a line's value is not a number.
 std::map<std::string, double> parseHalSetp(const std::string& text, const std::string& component);
+
+/// A head_cb machine's offsets (request.parameters, its model's): the HAL file that moves
+/// 5axiskins.pivot-length by dL (previous + change = new, MACHINE.json's pivot_to_ball_mm when
+/// no previous file sets it), the other parameters listed with their route
+/// (controllers/linuxcnc/head_cb_offsets.cpp). Throws std::invalid_argument as requirePlausible does.
+std::string linuxcncHeadCbHal(const OffsetRequest& request);
+/// The same as a G10 L2 P1 program (an offsets file named *.ngc): G54's B and C move by the
+/// controller's sign times -B0B and -C0C (deg); X Y Z stay (the head's place reads as the sphere's).
+std::string linuxcncHeadCbWorkOffsets(const OffsetRequest& request);
 
 }  // namespace rotacal

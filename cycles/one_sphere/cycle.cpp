@@ -55,7 +55,6 @@ class Sphere final : public Cycle {
     out.doc["declared_noise"] = declaredNoiseJson(noise, test);
     out.doc["figures"] = sphereFiguresJson(plan, res, std::sqrt(noise.white_um2));
     if (!screen.excluded.empty() || screen.too_many) out.warnings.push_back(screen.text());
-    const Eigen::VectorXd uc = b.uC();
     if (plan.machine.kinematics == Kinematics::HeadAB) {
       // No writer takes the A/B head's kinematics: controllers.md has no verified form of them.
       out.offsets_refused = fmt::format(
@@ -65,37 +64,56 @@ class Sphere final : public Cycle {
           kinematicsName(plan.machine.kinematics));
       return out;
     }
+    if (!hasPapersLocationErrors(plan.machine.kinematics)) {
+      // A head machine: the model's own parameters reach the dialect, which writes what its
+      // control can hold of them (LinuxCNC's maxkins, 5axiskins) or refuses with the reason.
+      out.offsets = headCorrection(res, b);
+      finishOffsets(screen, noise, test, &out);
+      return out;
+    }
     LocationCorrection c;
     c.identified = res.location;
-    if (!hasPapersLocationErrors(plan.machine.kinematics)) {
-      // A head over a table: the model's own parameters reach the dialect, which writes what its
-      // control can hold of them (LinuxCNC's maxkins) or refuses with the reason.
-      for (int i = 0; i < res.model.size(); ++i) {
-        const auto& q = res.names[static_cast<size_t>(i)];
-        KinematicParameterValue v{q.name, q.kind, res.x[i], 0.0,
-                                  static_cast<bool>(res.identifiability.held[static_cast<size_t>(i)])};
-        for (int k = 0; k < b.size(); ++k)
-          if (b.names[static_cast<size_t>(k)] == q.name)
-            v.u = q.kind == ParamKind::Length ? umToMm(uc[k]) : mdegToRad(uc[k]);
-        c.kinematic.push_back(v);
-      }
-    }
-    for (int i = 0; i < kNumLocationErrors && hasPapersLocationErrors(plan.machine.kinematics); ++i) {
+    const Eigen::VectorXd uc = b.uC();
+    for (int i = 0; i < kNumLocationErrors; ++i) {
       const auto& q = res.names[static_cast<size_t>(res.location_index_in_x[static_cast<size_t>(i)])];
       for (int k = 0; k < b.size(); ++k)
         if (b.names[static_cast<size_t>(k)] == q.name)
           c.u[i] = q.kind == ParamKind::Length ? umToMm(uc[k]) : mdegToRad(uc[k]);
     }
     out.offsets = c;
-    // More than a few chips: nothing was left out, and data this far from the declared noise
-    // sign no offsets.
-    if (screen.too_many) out.offsets_refused = screen.text();
-    const std::string held = offsetsHeldBack(noise, test);
-    if (!held.empty() && out.offsets_refused.empty()) {
-      out.offsets_refused = held;
-      out.warnings.push_back(held);
-    }
+    finishOffsets(screen, noise, test, &out);
     return out;
+  }
+
+  // More than a few chips: nothing was left out, and data this far from the declared noise
+  // sign no offsets.
+  static void finishOffsets(const OutlierScreen& screen, const DeclaredNoise& noise, const DeclaredNoiseTest& test,
+                            CycleDocuments* out) {
+    if (screen.too_many) out->offsets_refused = screen.text();
+    const std::string held = offsetsHeldBack(noise, test);
+    if (!held.empty() && out->offsets_refused.empty()) {
+      out->offsets_refused = held;
+      out->warnings.push_back(held);
+    }
+  }
+
+  // Every fitted parameter with its u_c (mm / rad), the held ones marked.
+  static LocationCorrection headCorrection(const SphereCycleResult& res, const UncertaintyBudget& b) {
+    LocationCorrection c;
+    c.identified.kinematics = res.location.kinematics;
+    const Eigen::VectorXd uc = b.uC();
+    for (size_t i = 0; i < res.names.size(); ++i) {
+      const auto& q = res.names[i];
+      ParameterEstimate p;
+      p.name = q.name;
+      p.kind = q.kind;
+      p.value = res.x[static_cast<Eigen::Index>(i)];
+      p.held = res.identifiability.held[i];
+      for (int k = 0; k < b.size(); ++k)
+        if (b.names[static_cast<size_t>(k)] == q.name) p.u = q.kind == ParamKind::Length ? umToMm(uc[k]) : mdegToRad(uc[k]);
+      c.parameters.push_back(p);
+    }
+    return c;
   }
 
   CycleDocuments diagnose(const DiagnoseRequest& r) const override {

@@ -77,6 +77,8 @@ char sphereTiltAxis(const MachineModel& machine) {
   if (hasPapersLocationErrors(machine.kinematics)) return tableTiltAxis(machine.kinematics);
   if (machine.kinematics == Kinematics::HeadTable && machine.head) return machine.head->axis;
   if (machine.kinematics == Kinematics::HeadAB && machine.head) return 'A';
+  // head_cb: the B head tilts the spindle, the C head turns the tilt's direction about Z.
+  if (machine.kinematics == Kinematics::HeadCB && machine.head) return 'B';
   throw std::invalid_argument(fmt::format(
       "cycle one_sphere needs the touch probe's place on a {} machine: MACHINE.json \"head\": {{\"pivot_to_ball_mm\": "
       "L}} (without it the tooltip cycle (004) calibrates a tester's sphere at its radius_mm)",
@@ -97,7 +99,7 @@ KinematicModel sphereModel(const MachineModel& machine, const Eigen::Vector3d& c
 
 int sphereUnseenByAnyPlan(const KinematicModel& m, bool squareness) {
   if (m.head_axes.empty()) return 2;
-  if (m.table_axes.empty()) return 5;  // head_ab: the ball's readings span a sphere of radius L, which shows the shear
+  if (m.table_axes.empty()) return 5;  // head_ab, head_cb: the ball's readings span a sphere of radius L, which shows the shear
   return squareness ? 6 : 5;
 }
 
@@ -323,7 +325,7 @@ PoseDesign refineForContributors(const MachineModel& machine, const KinematicMod
 }  // namespace
 
 std::vector<int> sphereHeldFirst(const KinematicModel& m) {
-  if (m.table_axes.empty()) return {};  // head_ab: the rule's own choice (plan.hpp)
+  if (m.table_axes.empty()) return {};  // head_ab, head_cb: the rule's own choice (plan.hpp)
   if (!m.head_axes.empty()) return {m.parameterIndex("C0C")};
   // The inner table axis's zero, and its tilt about the outer axis's direction.
   const std::string inner(1, m.table_axes.back());

@@ -9,8 +9,10 @@
 //
 // It runs on the tilting-table machines (table_ac, table_bc, and table_ab, whose grid is B x A:
 // an A table on a B axis, both tilting the sphere, each within 60 deg by default), on a B or A head over a C table
-// (head_table) and on an A head carrying a B head over a fixed table (head_ab, whose grid is A x B:
-// the sphere stays, the probe turns round it). On a head machine X Y Z read the head's pivot: every
+// (head_table), on an A head carrying a B head over a fixed table (head_ab, whose grid is A x B:
+// the sphere stays, the probe turns round it) and on a C head carrying a B head over a fixed table
+// (head_cb, LinuxCNC's 5axiskins bridge mill: grid B x C, the B head tilting the spindle and the C
+// head turning the tilt round the sphere). On a head machine X Y Z read the head's pivot: every
 // planned position is the reading at which the ball, L along the tilted spindle, is where the
 // touch needs it; a side touch whose contact lies on the sphere's half away from the stylus
 // (n . d < 0, d the stylus's direction) is left out, as the stem's side is, so that the stylus
@@ -68,7 +70,7 @@ struct SphereLayout {
   std::vector<std::pair<double, double>> poses() const;
 };
 
-/// The tilt axis: 'A' for table_ac and head_ab, 'B' for table_bc and table_ab, the head's axis for head_table.
+/// The tilt axis: 'A' for table_ac and head_ab, 'B' for table_bc, table_ab and head_cb, the head's axis for head_table.
 /// Throws std::invalid_argument naming the kinematics when the machine has no touch probe's place
 /// (head_ab without its "head").
 char sphereTiltAxis(const MachineModel& machine);
@@ -84,7 +86,9 @@ KinematicModel sphereModel(const MachineModel& machine, const Eigen::Vector3d& c
 /// more when the squareness is fitted: the table never tilts the sphere, so its height stays and
 /// the shear across the head's axis (S_yz under a B head, S_xz under an A head) reads as the C
 /// axis's place plus the head axis's tilt times L cos(tilt). head_ab's two head axes swing the
-/// reading over a sphere of radius L round the ball, which shows all three shears: 5 either way.
+/// reading over a sphere of radius L round the ball, which shows all three shears: 5 either way;
+/// so do head_cb's (its five: the head's place X0C Y0C Z0B as the sphere's, B0B as dX_T, C0C as
+/// the B axis's tilt about Z C0B).
 int sphereUnseenByAnyPlan(const KinematicModel& m, bool squareness);
 
 /// The four horizontal approach directions the side touches take, and the top's (-Z).
@@ -96,7 +100,8 @@ const std::vector<Eigen::Vector3d>& sphereApproaches();
 /// head the others are held as core/identifiability.hpp chooses: the head pivot's X0B / Z0B (the
 /// frame's origin), the ball's dY_T (Y0C carries it) and dX_T (the head's zero carries it). On
 /// head_ab (no table axis) all five are its choice: the head's place X0B Y0A Z0A (the sphere's
-/// set-up carries it), dX_T (B0B carries it) and A0B (A0A carries the spindle's tilt about X).
+/// set-up carries it), dX_T (B0B carries it) and A0B (A0A carries the spindle's tilt about X); on
+/// head_cb likewise: X0C Y0C Z0B, dX_T, and C0B (C0C carries the spindle's turn about Z).
 std::vector<int> sphereHeldFirst(const KinematicModel& m);
 
 ProbePlan makeSpherePlan(const MachineModel& machine, const CycleOptions& options);

@@ -62,8 +62,9 @@ int transverseIndex(char axis) { return axis == 'A' ? 1 : 0; }
 
 TooltipOptions tooltipOptionsFrom(const CycleOptions& options, const MachineModel& machine) {
   if (machine.kinematics != Kinematics::HeadAB)
-    throw std::invalid_argument("tooltip: the fixed-tool-tip cycle needs a spindle-head machine (kinematics head_ab, "
-                                "e.g. examples/machines/head_ab.json)");
+    throw std::invalid_argument(fmt::format("tooltip: the fixed-tool-tip cycle needs a spindle-head machine tilting in A "
+                                            "and B (kinematics head_ab, e.g. examples/machines/head_ab.json), not a {} one",
+                                            kinematicsName(machine.kinematics)));
   TooltipOptions o;
   o.inch = machine.units == LengthUnit::Inch;
   OptionTable("tooltip")

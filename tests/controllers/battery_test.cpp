@@ -178,7 +178,7 @@ TEST(ProgramHeader, EveryKinematicsAndDialectStatesItsControlledPointZeroAndAngl
     return squeezed;
   };
   int checked = 0;
-  for (const char* name : {"ac_trunnion", "bc_trunnion", "bc_head_table", "ab_head", "head_ab"}) {
+  for (const char* name : {"ac_trunnion", "bc_trunnion", "bc_head_table", "ab_head", "head_ab", "bc_head"}) {
     const MachineModel m = loadMachine(test::sourcePath(std::string("examples/machines/") + name + ".json"));
     ProbePlan plan;
     try {
@@ -186,7 +186,7 @@ TEST(ProgramHeader, EveryKinematicsAndDialectStatesItsControlledPointZeroAndAngl
     } catch (const std::invalid_argument&) {
       continue;  // head_ab.json carries a tester's sphere, no probe: no probing program
     }
-    const bool head = m.kinematics == Kinematics::HeadTable || m.kinematics == Kinematics::HeadAB;
+    const bool head = hasSpindleHead(m.kinematics);
     for (const std::string& d : dialectNames()) {
       if (d == "csv") continue;
       std::string text;

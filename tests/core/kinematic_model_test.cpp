@@ -186,6 +186,7 @@ std::vector<Pose> poseSet(const KinematicModel& m) {
       else if (m.name == "table_bc") p = {0, t, c};
       else if (m.name == "table_ab") p = {c, t, 0};  // the A table turns, the B axis tilts
       else if (m.name == "head_table") p = m.head_axes[0] == 'A' ? Pose{t, 0, c} : Pose{0, t, c};
+      else if (m.name == "head_cb") p = {0, t, c};  // the B head tilts, the C head turns
       else p = {t, c, 0};
       poses.push_back(p);
     }
@@ -268,7 +269,16 @@ INSTANTIATE_TEST_SUITE_P(
                 {{"dY_S", 1.0}, {"Y0A", 1.0}},
                 {{"dZ_S", 1.0}, {"Z0A", 1.0}},
                 {{"B0B", 1.0}, {"dX_T", kPivotToBall}},
-                {{"A0A", 1.0}, {"A0B", -1.0}}}}),
+                {{"A0A", 1.0}, {"A0B", -1.0}}}},
+        // The C head carrying the B head: the head's place reads as the sphere's (X0C Y0C, and Z0B
+        // along the C axis); C0C commutes with the C motion and, at nominal (X0B = 0), is the B
+        // axis's tilt about Z (C0B).
+        Unseen{"head_cb", 'B', 5,
+               {{{"dX_S", 1.0}, {"X0C", 1.0}},
+                {{"dY_S", 1.0}, {"Y0C", 1.0}},
+                {{"dZ_S", 1.0}, {"Z0B", 1.0}},
+                {{"B0B", 1.0}, {"dX_T", kPivotToBall}},
+                {{"C0C", 1.0}, {"C0B", -1.0}}}}),
     [](const auto& info) { return info.param.configuration + "_" + std::string(1, info.param.head); });
 
 // Noise-free readings at the pose set, fitted from nominal by the shared engine: the fitted model
@@ -375,6 +385,7 @@ TEST(KinematicModel, UnknownConfigurationsAndHeadsAreRefusedByName) {
   EXPECT_THROW(kinematicModel("table_xy", kSphere), std::invalid_argument);
   EXPECT_THROW(kinematicModel("head_table", kSphere, kPivotToBall, 'C'), std::invalid_argument);
   EXPECT_THROW(kinematicModel("head_ab", kSphere, 0.0), std::invalid_argument);
+  EXPECT_THROW(kinematicModel("head_cb", kSphere, 0.0), std::invalid_argument);
 }
 
 }  // namespace

@@ -25,7 +25,7 @@ std::vector<Pose> grid(const KinematicModel& m, const std::vector<double>& tilts
       Pose p;
       if (m.name == "table_ac") p = {t, 0, c};
       else if (m.name == "table_bc") p = {0, t, c};
-      else if (m.name == "head_table") p = {0, t, c};
+      else if (m.name == "head_table" || m.name == "head_cb") p = {0, t, c};  // B tilts, C turns
       else if (m.name == "table_ab") p = {c, t, 0};  // B tilts, the A table it carries turns
       else p = {t, c, 0};
       out.push_back(p);

@@ -396,7 +396,7 @@ INSTANTIATE_TEST_SUITE_P(EveryCycle, CycleBattery, ::testing::ValuesIn(cycleName
 // The sphere cycle runs on every kinematics family it accepts: each bundled machine of one family
 // through plan, every dialect's program (or a refusal with its reason), simulate, analyze, diagnose
 // and the HTML report, and the offsets in the LinuxCNC form where the family has them (the papers'
-// errors of a table, the kinematic parameters of a head over a table).
+// errors of a table, the kinematic parameters of a head LinuxCNC's maxkins or 5axiskins holds).
 class SphereOnEveryFamily : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(SphereOnEveryFamily, PlanProgramsSimulateAnalyzeDiagnoseAndReport) {
@@ -433,15 +433,16 @@ TEST_P(SphereOnEveryFamily, PlanProgramsSimulateAnalyzeDiagnoseAndReport) {
   a.results = {{"r1.txt", sim.results_text}};
   const CycleDocuments rep = cycle.analyze(a);
   EXPECT_NE(report::reportHtml(rep.doc).find("<html"), std::string::npos);
-  // a head over a table: its kinematic parameters, which LinuxCNC's maxkins form takes; the A/B head: none
+  // a table's papers' errors; a head's kinematic parameters, which LinuxCNC's maxkins or 5axiskins
+  // form takes; the A/B head: none
   EXPECT_EQ(rep.offsets.has_value(), m.kinematics != Kinematics::HeadAB) << GetParam();
   if (rep.offsets) {
     OffsetRequest o;
     o.plan = &p;
     o.identified = rep.offsets->identified;
     o.u = rep.offsets->u;
-    o.kinematic = rep.offsets->kinematic;
-    EXPECT_EQ(o.kinematic.empty(), hasPapersLocationErrors(m.kinematics)) << GetParam();
+    o.parameters = rep.offsets->parameters;
+    EXPECT_EQ(o.parameters.empty(), hasPapersLocationErrors(m.kinematics)) << GetParam();
     o.path = "offsets.hal";
     EXPECT_NE(lc.writeOffsets(o).find(linuxcncKinsComponent(m.kinematics)), std::string::npos) << GetParam();
   }
@@ -453,7 +454,7 @@ TEST_P(SphereOnEveryFamily, PlanProgramsSimulateAnalyzeDiagnoseAndReport) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Machines, SphereOnEveryFamily,
-                         ::testing::Values("ac_trunnion", "bc_trunnion", "ab_table", "bc_head_table", "ab_head"),
+                         ::testing::Values("ac_trunnion", "bc_trunnion", "ab_table", "bc_head_table", "ab_head", "bc_head"),
                          [](const auto& info) { return info.param; });
 
 TEST(CycleBattery, EveryCycleHasItsOwnProgramNumber) {

@@ -439,11 +439,11 @@ OffsetRequest headRequest(const ProbePlan& plan) {
   const KinematicModel m =
       kinematicModel("head_table", Eigen::Vector3d::Zero(), plan.machine.head->pivot_to_ball_mm, 'B');
   for (const auto& q : m.parameters) {
-    KinematicParameterValue v{q.name, q.kind, 0.0, q.kind == ParamKind::Length ? 0.0005 : mdegToRad(0.1), false};
+    ParameterEstimate v{q.name, q.kind, 0.0, q.kind == ParamKind::Length ? 0.0005 : mdegToRad(0.1), false};
     const auto it = kHeadInjected.find(q.name);
     if (it != kHeadInjected.end()) v.value = it->second;
     v.held = q.name == "C0C" || q.name == "X0B" || q.name == "Z0B" || q.name == "dX_T" || q.name == "dY_T";
-    r.kinematic.push_back(v);
+    r.parameters.push_back(v);
   }
   return r;
 }
@@ -466,7 +466,7 @@ TEST(LinuxCncHeadOffsets, HalSetsThePivotLengthToTheModelsPivotToBallDistance) {
   // at any head angle, with the identified parameters, is the length maxkins must turn about it.
   const KinematicModel m = kinematicModel("head_table", Eigen::Vector3d::Zero(), 250.0, 'B');
   Eigen::VectorXd p = Eigen::VectorXd::Zero(m.size());
-  for (const auto& v : r.kinematic) p[m.parameterIndex(v.name)] = v.held ? 0.0 : v.value;
+  for (const auto& v : r.parameters) p[m.parameterIndex(v.name)] = v.held ? 0.0 : v.value;
   for (double b : {-60.0, 0.0, 35.0}) {
     Pose pose;
     pose.B = b;
@@ -523,7 +523,7 @@ TEST(LinuxCncHeadOffsets, NgcWorkOffsetCancelsTheTablesPlaceAndTheHeadsZeroOnThe
 TEST(LinuxCncHeadOffsets, ImplausibleParametersAndAnotherHeadAreRefused) {
   ProbePlan plan = headPlan();
   OffsetRequest r = headRequest(plan);
-  for (auto& v : r.kinematic)
+  for (auto& v : r.parameters)
     if (v.name == "dL") v.value = 0.7;
   EXPECT_NE(messageOf<std::invalid_argument>([&] { lc().writeOffsets(r); }).find("dL = 0.7000 mm exceeds"),
             std::string::npos);

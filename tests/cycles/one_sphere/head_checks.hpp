@@ -138,15 +138,15 @@ inline void expectTheVerifierCarriesTheBall(const ProbePlan& plan) {
   EXPECT_NE(r.violations.front().problem.find("sphere"), std::string::npos) << r.violations.front().problem;
 }
 
-/// 200 noisy repeats at the declared repeatability, half the machines without a set-up error
+/// `runs` (200) noisy repeats at the declared repeatability, half the machines without a set-up error
 /// (what the plan holds must not depend on the data); the fraction of the model's separable
 /// parameters (sphere set-up aside) within 2 u, over `cases` of them.
 inline double withinTwiceU(const ProbePlan& plan, const Injected& injected, const HandTruth& truth_of,
-                           const std::string& held, int* cases) {
+                           const std::string& held, int* cases, int runs = 200) {
   auto no_setup = injected;
   for (const char* k : {"dX_S", "dY_S", "dZ_S"}) no_setup.erase(k);
   int inside = 0, all = 0;
-  for (int seed = 1; seed <= 200; ++seed) {
+  for (int seed = 1; seed <= runs; ++seed) {
     const auto& truth_errors = seed % 2 ? injected : no_setup;
     Truth truth = truth_of(truth_errors);
     truth.noise_um = plan.machine.probe.repeatability_um;

@@ -76,10 +76,16 @@
       within U of zero, the rest unchanged (the pin is not loaded in trivkins); beside it the pin acting
       in maxkins (two short sessions with the stylus dL longer).
 
-  e2e_test.py readback_5axis --rotacal BIN --work DIR
-      the bridge mill (5axiskins: a C head carrying a B head, fixed table), prepared for rotacal's model
-      of it: its conventions read back in its TCP kinematics, two pivot lengths (run.sh --params: the
-      harness's nominal head, no MACHINE.json, no truth).
+  e2e_test.py one_sphere_5axis --rotacal BIN --work DIR
+      the bridge mill (cb_head_lcsim.json: 5axiskins, a C head carrying a B head over a fixed table): its
+      conventions read back in its TCP type (two pivot lengths, the harness's nominal head), beside plan
+      one_sphere (9 poses) -> generate -> run unchanged in its identity type, the virtual probe on the head
+      playing truth_5axis.json (rotacal's head_cb parameters) -> analyze: every trigger 0 .. F x 1 ms past
+      the exact contact; the five unseparable directions named; the 11 separable parameters within
+      0.5 um / 0.05 mdeg and U. Then the write-back: analyze --offsets writes 5axiskins' pivot-length
+      (previous, change, new) and the G54 program (B and C); LinuxCNC restarted with both and the cycle run
+      again: C0C and B0B within U of zero, the rest unchanged (the pin is set but the identity type does
+      not read it); beside it the pin acting in the TCP type (two short sessions, the stylus dL longer).
 
 Exit 0 pass, 1 fail, 77 skip (LinuxCNC, halcompile or root missing: CTest SKIP_RETURN_CODE).
 """
@@ -1505,18 +1511,17 @@ def write_back_bhead(a, work, plan, ngc, rep1, kp1, want):
                            "written": {"session_s": t_new, "dev_um": dev_new, "spread_um": spread_new}}}
 
 
-def kins_readback_5axis(a):
+def kins_readback_5axis(a, work):
     """5axiskins' conventions (the bridge mill: a C head carrying a B head over a fixed table), read
     back from the running module in its TCP kinematics (run.sh --kins-tcp: its type 0 without
-    sparm=identityfirst), a session of its own for each of two pivot lengths, prepared for rotacal's
-    model of the machine (none here: run.sh --params, the harness's nominal head, no truth). The
+    sparm=identityfirst), a session of its own for each of two pivot lengths (run.sh --params: the
+    harness's nominal head, no truth), beside the one_sphere_5axis cycle's session. The
     program moves the tip to table points at B and C and LOGs the joints and the probe's ball.
     Checks: the joints are tip - (0, 0, L) - Rz(+C) Ry(-B) (0, 0, -L) (5axiskins' source:
     s2r(L, C, 180 - B) = L (sin B cos C, sin B sin C, -cos B); the C head carries the B head, B
     against ISO 841's head, joint 2 reading the tip at B = 0); every other sign, order or Z
     candidate is far off; the probe's nominal head (two lines through one pivot) puts the ball on
     the commanded tip."""
-    work = a.work
     rows = [(0.0, 0.0, [0.0, 0.0, 0.0]), (30.0, 45.0, [10.0, 20.0, 30.0]), (-45.0, 120.0, [40.0, -70.0, 25.0]),
             (60.0, -30.0, [-50.0, 30.0, 60.0]), (90.0, 200.0, [5.0, 5.0, 5.0]), (-100.0, 10.0, [100.0, -50.0, 0.0]),
             (15.0, -170.0, [0.0, 0.0, 100.0])]
@@ -1588,8 +1593,227 @@ def kins_readback_5axis(a):
               % (tag, ball))
         out[tag] = {"rows": len(got), "session_s": t, "pivot_length_mm": L, "max_dev_mm": best,
                     "other_candidates_min_mm": others, "probe_ball_dev_mm": ball}
+    return out
+
+
+MACHINE_5AXIS = os.path.join(HERE, "cb_head_lcsim.json")
+TRUTH_5AXIS = os.path.join(HERE, "truth_5axis.json")
+# one_sphere's poses on the bridge mill: three B tilts x three C turns = 9 poses, 39 touches, as on the
+# B head over the C table (the plan refuses a set that loses a separable direction).
+ONE_SPHERE_5AXIS_SET = ["tilt_list=-60,0,60", "c_list=0,120,240"]
+# What one sphere cannot separate on the C head carrying the B head, as rotacal computes it from the
+# plan's Jacobian (REPORT.json unseparable): the head's place X0C Y0C Z0B (with the sphere's set-up),
+# C's tilt about B's direction C0B (with C's zero) and the ball's offset along X (with B's zero). The
+# truth injects none of them.
+FIVEAXIS_HELD = ["C0B", "X0C", "Y0C", "Z0B", "dX_T"]
+FIVEAXIS_NAMES = ("A0C", "B0C", "C0C", "X0B", "A0B", "B0B", "dY_T", "dL", "dX_S", "dY_S", "dZ_S")
+FIVEAXIS_LENGTHS = ("X0B", "dY_T", "dL", "dX_S", "dY_S", "dZ_S")
+# What the work offset holds on 5axiskins' machine: the C and B zeros (G54 C, B); its pin, pivot-length,
+# the stylus (dL), acting in its TCP type only; the places and tilts no pin or shift.
+FIVEAXIS_WORK_OFFSET = ("C0C", "B0B")
+SIGN_5AXIS = {"B": -1, "C": 1}   # cb_head_lcsim.json's linuxcnc signs, read back by the case
+
+
+def injected_5axis(truth=TRUTH_5AXIS):
+    """The bridge mill's truth in um / mdeg (missing = 0)."""
+    with open(truth) as f:
+        le = json.load(f)["location_errors"]
+    out = {}
+    for name in FIVEAXIS_NAMES:
+        length = name in FIVEAXIS_LENGTHS
+        e = le.get(name, {"value": 0.0, "unit": "um" if length else "mdeg"})
+        out[name] = e["value"] * (TO_UM if length else TO_MDEG)[e["unit"]]
+    return out
+
+
+def run_one_sphere_5axis(a):
+    """The bridge mill (cb_head_lcsim.json) on 5axiskins: its conventions read back in its TCP type (two
+    short sessions) beside the one_sphere cycle in its identity type, the probe on the head playing
+    truth_5axis.json (rotacal's head_cb parameters); analyze; then the write-back closed on the
+    controller (write_back_5axis)."""
+    work = a.work
+    plan, ngc = os.path.join(work, "plan.json"), os.path.join(work, "one_sphere.ngc")
+    cmd = [a.rotacal, "plan", "--cycle", "one_sphere", "--machine", MACHINE_5AXIS, "-o", plan]
+    for kv in ONE_SPHERE_5AXIS_SET:
+        cmd += ["--set", kv]
+    sh(cmd)
+    sh([a.rotacal, "generate", "--plan", plan, "--dialect", "linuxcnc", "-o", ngc])
+    with open(plan) as f:
+        n_points = len(json.load(f)["points"])
+    run = os.path.join(work, "run")
+    readback_dir = os.path.join(work, "readback")
+    os.makedirs(readback_dir, exist_ok=True)
+    readback, (_, t) = side_by_side(
+        lambda: kins_readback_5axis(a, readback_dir),
+        lambda: session([RUN, "--ngc", ngc, "--truth", TRUTH_5AXIS, "--machine", MACHINE_5AXIS, "--plan", plan,
+                         "--out", run, "--timeout", "300"]))
+    figures = {"readback": readback, "run_s": t}
+    figures["lateness"] = lateness(work, run, plan, cycle="one_sphere", points=n_points,
+                                   across_um=ROUNDING_ACROSS_3D_UM, machine=MACHINE_5AXIS)
+    rep = os.path.join(work, "report.json")
+    sh([a.rotacal, "analyze", "--plan", plan, "--results", os.path.join(run, "rotacal_one_sphere.txt"),
+        "--dialect", "linuxcnc", "--json", rep])
+    r, kp = kinematic_parameters(rep)
+    held = sorted(u["held"] for u in r.get("unseparable", []))
+    check(held == FIVEAXIS_HELD, "the report holds exactly %s at nominal (unseparable, from the plan's Jacobian): %s"
+          % (", ".join(FIVEAXIS_HELD), held))
+    want = injected_5axis()
+    print("one_sphere on LinuxCNC (C head carrying a B head, 5axiskins' identity type), injected head_cb errors "
+          "(identified - expected):")
+    for name, w in want.items():
+        tol = LENGTH_TOL_UM if name in FIVEAXIS_LENGTHS else ANGLE_TOL_MDEG
+        d, U = kp[name]["value"] - w, kp[name]["U"]
+        check(abs(d) <= tol and abs(d) <= U, "%-5s identified %9.4f expected %9.4f diff %+8.4f %s, U %.4f (tol %g)"
+              % (name, kp[name]["value"], w, d, kp[name]["unit"], U, tol))
+    figures.update({"identified": {n: kp[n]["value"] for n in want}, "U": {n: kp[n]["U"] for n in want},
+                    "injected": want, "unseparable": r.get("unseparable"), "points": n_points})
+    figures.update(write_back_5axis(a, work, plan, ngc, rep, kp, want))
     with open(os.path.join(work, "figures.json"), "w") as f:
-        json.dump(out, f, indent=1)
+        json.dump(figures, f, indent=1)
+    print("one_sphere C head / B head on LinuxCNC (5axiskins): %d touches, LinuxCNC session %.0f s" % (n_points, t))
+
+
+def write_back_5axis(a, work, plan, ngc, rep1, kp1, want):
+    """The write-back closed on the controller. analyze --offsets writes 5axiskins' pin (offsets.hal:
+    pivot-length's previous value, change and new value; the rest named with its route) and the work
+    offset (offsets.ngc: G54 B and C). LinuxCNC is started again with both: the G54 program first
+    (--pre-ngc), the pin's line in the session's HAL (--setp), and the unchanged cycle measures again:
+    the C and B zeros within their U of zero, the rest as before. The cycle runs in 5axiskins' identity
+    type: the module is loaded and its pin set, but the identity type does not read it, so dL comes
+    back unchanged. Beside it, two short sessions in 5axiskins' TCP type with the stylus dL longer than
+    nominal show the pin acting: the tip commanded at the plan's poses, the ball's offset from it
+    varies with B and C at the nominal pin and is the same at every pose at the written one."""
+    hal, g10 = os.path.join(work, "offsets.hal"), os.path.join(work, "offsets.ngc")
+    res1 = os.path.join(work, "run", "rotacal_one_sphere.txt")
+    for out in (hal, g10):
+        if os.path.exists(out):
+            os.remove(out)       # the loop starts from the nominal pin and G54 = 0 (a file present is added to)
+        sh([a.rotacal, "analyze", "--plan", plan, "--results", res1, "--dialect", "linuxcnc", "--json",
+            os.path.join(work, "report_offsets.json"), "--offsets", out])
+    with open(plan) as f:
+        pl = json.load(f)
+    L = pl["machine"]["head"]["pivot_to_ball_mm"]
+    with open(hal) as f:
+        hal_text = f.read()
+    print(hal_text)
+    pins = {}
+    for line in hal_text.splitlines():
+        t_ = line.split()
+        if len(t_) == 3 and t_[0] == "setp" and t_[1].startswith("5axiskins."):
+            pins[t_[1].split(".", 1)[1]] = float(t_[2])
+    check(sorted(pins) == ["pivot-length"], "offsets.hal sets 5axiskins' pivot-length only: %s" % sorted(pins))
+    new_pl = pins.get("pivot-length", float("nan"))
+    check(abs(new_pl - (L + kp1["dL"]["value"] * 1e-3)) <= 1e-6,
+          "pivot-length = previous (MACHINE.json's L = %g mm) + the identified dL (%.4f um): %.6f mm"
+          % (L, kp1["dL"]["value"], new_pl))
+    check(any(l.split()[1:] == ["pin", "previous", "change", "new"] for l in hal_text.splitlines() if l.startswith("# ")),
+          "offsets.hal gives the pin's previous value, change and new value")
+    check("Reported only: A0C, B0C, X0B, A0B, dY_T:" in hal_text and "mechanical adjustment" in hal_text,
+          "offsets.hal names what 5axiskins cannot hold (A0C, B0C, X0B, A0B, dY_T) and the route")
+    check("B and C zeros (B0B, C0C)" in hal_text and "work offset holds them" in hal_text,
+          "offsets.hal sends the B and C zeros to the work offset")
+    with open(g10) as f:
+        g10_text = f.read()
+    print(g10_text)
+    g10_line = [l for l in g10_text.splitlines() if l.startswith("G10 L2 P1")][0].split()[3:]
+    want_g54 = {w[0]: float(w[1:]) for w in g10_line}
+    # commanding the axis at program + offset, the head at the nominal angle: offset = -zero in the papers'
+    # count, times the controller's sign (B -1, C +1: read back above)
+    expect_g54 = {"B": -SIGN_5AXIS["B"] * kp1["B0B"]["value"] * 1e-3,
+                  "C": -SIGN_5AXIS["C"] * kp1["C0C"]["value"] * 1e-3}
+    check(sorted(want_g54) == ["B", "C"] and all(abs(want_g54[k] - v) <= 0.5e-6 for k, v in expect_g54.items()),
+          "offsets.ngc shifts G54 B by +B0B and C by -C0C (5axiskins' counts): %s" % want_g54)
+    check("dL: 5axiskins.pivot-length [a .hal file]" in g10_text, "offsets.ngc sends dL to the pin's .hal file")
+    # rotacal compensate rewrites table machines' programs: it refuses the head, naming why
+    r, _ = sh([a.rotacal, "compensate", "--program", ngc, "--report", rep1, "--dialect", "linuxcnc", "-o",
+               os.path.join(work, "one_sphere_compensated.ngc")], expect=None)
+    check(r.returncode == 1 and "head_cb" in r.stdout, "rotacal compensate refuses the head_cb report with its "
+          "reason (exit %d)" % r.returncode)
+    run2 = os.path.join(work, "run2")
+    dl_true = want["dL"] * 1e-3
+    centre = pl["points"][0]["sphere"]["center_w_mm"]
+
+    def pin_session(tag, pivot_length):
+        # 5axiskins' TCP type, the carriage reading the tip at B = 0 for the nominal L (the pivot L above the
+        # joints' point), the true stylus dL longer (head_cb: dL alone), the tip at the sphere's centre
+        params = os.path.join(work, "pin_params_%s.json" % tag)
+        with open(params, "w") as f:
+            json.dump({"_comment": "5axiskins' pin acting: the nominal bridge mill, the stylus dL longer",
+                       "machine": {"kins": "5axis"}, "block": {"enable": False},
+                       "head": {"enable": True, "axis": "CB", "pivot_to_ball": L, "sign": float(SIGN_5AXIS["B"]),
+                                "c_sign": float(SIGN_5AXIS["C"]), "carriage_reads_ball": True},
+                       "head_cb": {"dL_um": dl_true * 1e3}}, f)
+        prog = os.path.join(work, "pin_%s.ngc" % tag)
+        with open(prog, "w") as f:
+            f.write("(rotacal e2e: 5axiskins' pivot-length acting; row: i B C, the probe's ball)\n"
+                    "G21 G17 G40 G49 G54 G61 G90 G94\n(LOGOPEN,pin.txt)\n")
+            for i, pose in enumerate(pl["poses"]):
+                b, c = SIGN_5AXIS["B"] * pose["pose"]["B"], SIGN_5AXIS["C"] * pose["pose"]["C"]
+                f.write("G0 X%.6f Y%.6f Z%.6f B%.6f C%.6f W0\nM66 E0 L0\n" % (centre[0], centre[1], centre[2], b, c))
+                f.write("(LOG,T %d %.6f %.6f #<_hal[vtouchprobe.0.ball-tx]> #<_hal[vtouchprobe.0.ball-ty]> "
+                        "#<_hal[vtouchprobe.0.ball-tz]>)\n" % (i, b, c))
+            f.write("G0 B0 C0\n(LOGCLOSE)\nM2\n")
+        setp = os.path.join(work, "pin_%s.hal" % tag)
+        with open(setp, "w") as f:
+            f.write("setp 5axiskins.pivot-length %.12g\n" % pivot_length)
+        out_dir = os.path.join(work, "pin_" + tag)
+        _, t_ = session([RUN, "--ngc", prog, "--params", params, "--kins-tcp", "--setp", setp, "--out", out_dir,
+                         "--timeout", "300"])
+        rows = []
+        with open(os.path.join(out_dir, "pin.txt")) as f:
+            for line in f:
+                t = line.split()
+                if len(t) == 7 and t[0] == "T":
+                    rows.append([float(v) for v in t[2:]])
+        check(len(rows) == len(pl["poses"]), "pin session (%s): %d rows" % (tag, len(rows)))
+        dev = [[(r_[2 + k] - centre[k]) * 1e3 for k in range(3)] for r_ in rows]
+        spread = max(max(d[k] for d in dev) - min(d[k] for d in dev) for k in range(3))
+        return t_, dev, spread
+
+    (_, t2), (t_nom, dev_nom, spread_nom), (t_new, dev_new, spread_new) = side_by_side(
+        lambda: session([RUN, "--setp", hal, "--pre-ngc", g10, "--ngc", ngc, "--truth", TRUTH_5AXIS, "--machine",
+                         MACHINE_5AXIS, "--plan", plan, "--out", run2, "--timeout", "300"]),
+        lambda: pin_session("nominal", L),
+        lambda: pin_session("written", new_pl))
+    bound = 2 * kp1["dL"]["U"]
+    # at the nominal pin the ball sits dL further along the spindle: dL Rz(C) Ry(B) (0, 0, -1), whose X
+    # spreads by dL (sin 60 - sin -60) over the plan's B -60 .. 60 at C = 0
+    check(spread_nom > 0.8 * dl_true * 1e3 * 2 * math.sin(math.radians(60)),
+          "5axiskins at the nominal pivot-length: the ball's offset from the tip varies by %.3f um over the poses "
+          "(dL along the spindle, B -60 .. 60)" % spread_nom)
+    check(spread_new <= bound, "5axiskins at the written pivot-length: the offset is the same at every pose within "
+          "%.3f um (bound 2 U of dL, %.3f um); left: %s um (the Z reference's -dL)"
+          % (spread_new, bound, ["%.3f" % v for v in dev_new[0]]))
+    with open(os.path.join(run2, "params.hal")) as f:
+        p2 = f.read()
+    check(("setp 5axiskins.pivot-length %.6f" % new_pl) in p2,
+          "the cycle's session loads 5axiskins (identity type) and sets the written pivot-length %.6f mm" % new_pl)
+    with open(os.path.join(run2, "driver_status.json")) as f:
+        g54 = json.load(f)["g5x_offset_after"][0]
+    axes = "XYZBCW"   # 5axiskins' coordinates (lcsim_5axis.ini): the status' 9 slots are X Y Z A B C U V W
+    check(all(abs(g54["XYZABCUVW".index(k)] - v) < 1e-9 for k, v in want_g54.items())
+          and all(abs(g54["XYZABCUVW".index(k)]) < 1e-12 for k in axes if k not in want_g54),
+          "LinuxCNC's G54 after the offsets program %s = the G10 line %s" % (g54[:9], want_g54))
+    lat2 = lateness(work, run2, plan, offsets=g10, cycle="one_sphere", points=len(pl["points"]),
+                    across_um=ROUNDING_ACROSS_3D_UM, machine=MACHINE_5AXIS)
+    rep2 = os.path.join(work, "report2.json")
+    sh([a.rotacal, "analyze", "--plan", plan, "--results", os.path.join(run2, "rotacal_one_sphere.txt"),
+        "--dialect", "linuxcnc", "--json", rep2])
+    _, kp2 = kinematic_parameters(rep2)
+    rows = {}
+    for name, w in want.items():
+        expect = 0.0 if name in FIVEAXIS_WORK_OFFSET else w
+        d, U = kp2[name]["value"] - expect, kp2[name]["U"]
+        tol = LENGTH_TOL_UM if name in FIVEAXIS_LENGTHS else ANGLE_TOL_MDEG
+        what = ("within its U of zero (the work offset holds it)" if name in FIVEAXIS_WORK_OFFSET else
+                "unchanged (the pin set, but not read by the identity type)" if name == "dL" else
+                "unchanged (not held: reported, named above)")
+        check(abs(d) <= U and abs(d) <= tol, "after_offsets: %-5s %9.4f %s, expected %9.4f: diff %+8.4f, U %.4f (tol %g) %s"
+              % (name, kp2[name]["value"], kp2[name]["unit"], expect, d, U, tol, what))
+        rows[name] = {"value": kp2[name]["value"], "U": U, "expected": expect}
+    return {"run2_s": t2, "lateness2": lat2, "pins": pins, "g54": want_g54, "after_offsets": rows,
+            "pin_acting": {"nominal": {"session_s": t_nom, "dev_um": dev_nom, "spread_um": spread_nom},
+                           "written": {"session_s": t_new, "dev_um": dev_new, "spread_um": spread_new}}}
 
 
 def run_no_trigger(a):
@@ -1616,7 +1840,7 @@ def run_no_trigger(a):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("case", choices=("touch154", "no_trigger", "comp_table", "one_sphere_bc", "one_sphere_ac",
-                                     "one_sphere_ab", "one_sphere_bhead", "readback_5axis"))
+                                     "one_sphere_ab", "one_sphere_bhead", "one_sphere_5axis"))
     ap.add_argument("--rotacal", required=True)
     ap.add_argument("--work", required=True)
     a = ap.parse_args()
@@ -1627,7 +1851,8 @@ def main():
     os.makedirs(a.work, exist_ok=True)
     {"touch154": run_touch154, "no_trigger": run_no_trigger, "comp_table": run_comp_table,
      "one_sphere_bc": run_one_sphere_bc, "one_sphere_ac": run_one_sphere_ac, "one_sphere_ab": run_one_sphere_ab,
-     "one_sphere_bhead": run_one_sphere_bhead, "readback_5axis": kins_readback_5axis}[a.case](a)
+     "one_sphere_bhead": run_one_sphere_bhead,
+     "one_sphere_5axis": run_one_sphere_5axis}[a.case](a)
     finish()
 
 

@@ -5,16 +5,16 @@
 # An A/C machine ("kinematics": "table_ac") runs on xyzac-trt-kins (config/lcsim_xyzac.ini), a
 # B/C machine ("table_bc") on xyzbc-trt-kins (config/lcsim_xyzbc.ini), an A/B table ("table_ab") on
 # xyzab_tdr_kins (config/lcsim_xyzab.ini), a B head over a C table ("head_table") on trivkins, the
-# joints of maxkins (config/lcsim_max.ini; --kins-tcp: maxkins itself); the bridge mill's read-back
-# (--params, machine.kins "5axis") on 5axiskins (config/lcsim_5axis.ini).
+# joints of maxkins (config/lcsim_max.ini; --kins-tcp: maxkins itself), the bridge mill ("head_cb")
+# on 5axiskins, its identity type first (config/lcsim_5axis.ini; --kins-tcp: its TCP type).
 #
 # Usage: run.sh --ngc PROGRAM (--truth TRUTH.json --machine MACHINE.json | --params params.json) --out DIR
 #               [--plan PLAN.json] [--pre-ngc OFFSETS.ngc] [--timeout S] [--comp-build DIR]
 #               [--c-from-motor] [--comp-file TABLE] [--linear-comp DIR] [--kins-tcp] [--setp FILE]
 #   --ngc FILE        the program (rotacal generate --dialect linuxcnc); it runs as written
 #   --truth FILE      rotacal-truth/1: the true machine and piece (scripts/truth_params.py)
-#   --params FILE     the harness's params.json itself, in place of --truth and --machine: a
-#                     machine rotacal has no model of yet (the 5axiskins read-back)
+#   --params FILE     the harness's params.json itself, in place of --truth and --machine: the
+#                     harness's own machine (the 5axiskins read-back and pin sessions)
 #   --machine FILE    rotacal-machine/1: the nominal piece and probe ball
 #   --plan FILE       rotacal-plan/1 of a sphere cycle: its spheres join the virtual piece
 #   --out DIR         run directory: LinuxCNC's INI, var file and the program's LOG land here

@@ -1,7 +1,7 @@
 # lcsim_core.tcl -- HAL for the headless XYZAC or XYZBC trunnion, XYZAB dual
-# rotary table or B head over C table simulation (lcsim_xyzac.ini,
-# lcsim_xyzbc.ini, lcsim_xyzab.ini, lcsim_max.ini: the kinematics module is
-# the INI's).
+# rotary table, B head over C table or bridge mill simulation
+# (lcsim_xyzac.ini, lcsim_xyzbc.ini, lcsim_xyzab.ini, lcsim_max.ini,
+# lcsim_5axis.ini: the kinematics module is the INI's).
 # Run by LinuxCNC (haltcl) with the INI sections available as ::SECTION(item)
 # and the environment as ::env().
 #

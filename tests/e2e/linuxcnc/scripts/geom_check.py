@@ -14,6 +14,10 @@ e2e_harness_geometry, not label e2e):
   rotacal's head_table chains written as 4x4 matrices (300 random poses, 1000 x realistic errors),
   maxkins' nominal inverse against the probe's nominal head, and with --rotacal BIN every trigger of
   `rotacal simulate` on truth_bhead.json against the harness's true contact;
+* the head mode on the bridge mill (5axiskins' C head carrying a B head, "5axis"): the probe's two
+  head lines against rotacal's head_cb chain written as 4x4 matrices (300 random poses, 1000 x
+  realistic errors), and with --rotacal BIN every trigger of `rotacal simulate` on truth_5axis.json
+  against the harness's true contact;
 * the stem's signed distance at a few points of known answer.
 Exit 0 pass, 1 fail.
 """
@@ -80,6 +84,74 @@ def head_by_htm(e, L, B_star, C_star, pw):
                 htm(rad("C0C"), "z"), htm(-math.radians(C_star), "z"), htm(t=(mm("dX_S"), 0, 0)),
                 htm(t=(0, mm("dY_S"), 0)), htm(t=(0, 0, mm("dZ_S"))))
     return apply(head, [0.0, 0.0, -L]), apply(table, pw)
+
+
+def head_cb_by_htm(e, L, B_star, C_star, pw):
+    """rotacal's head_cb chain as 4x4 matrices written out here (docs/conventions.md's factors, not
+    lcsim_geom's rotations): the ball's offset from the carriage and the sphere point (the table
+    stays), machine frame, at the papers' angles."""
+    mm = lambda n: e[n + "_um"] * 1e-3   # noqa: E731 (um -> mm)
+    rad = lambda n: e[n + "_mdeg"] * 1e-3 * math.pi / 180.0   # noqa: E731
+    head = mul(htm(t=(mm("X0C"), 0, 0)), htm(t=(0, mm("Y0C"), 0)), htm(rad("A0C"), "x"), htm(rad("B0C"), "y"),
+               htm(rad("C0C"), "z"), htm(math.radians(C_star), "z"), htm(t=(mm("X0B"), 0, 0)),
+               htm(t=(0, 0, mm("Z0B"))), htm(rad("A0B"), "x"), htm(rad("C0B"), "z"), htm(rad("B0B"), "y"),
+               htm(math.radians(B_star), "y"), htm(t=(mm("dX_T"), 0, 0)), htm(t=(0, mm("dY_T"), 0)),
+               htm(t=(0, 0, -mm("dL"))))
+    table = mul(htm(t=(mm("dX_S"), 0, 0)), htm(t=(0, mm("dY_S"), 0)), htm(t=(0, 0, mm("dZ_S"))))
+    return apply(head, [0.0, 0.0, -L]), apply(table, pw)
+
+
+def check_head_cb(rnd, rotacal):
+    """The head mode on the bridge mill (5axiskins' C head carrying a B head, "5axis"): the probe's two
+    head lines against rotacal's head_cb chain as hand-written matrices, then against `rotacal
+    simulate`'s triggers."""
+    L = 250.0
+    hp = params({"machine": {"kins": "5axis"}, "block": {"enable": False},
+                 "head": {"enable": True, "axis": "CB", "pivot_to_ball": L, "sign": -1.0, "c_sign": 1.0},
+                 "head_cb": HEAD_ERRORS, "sphere": {"enable": True, "center": [0.0, 0.0, 0.0], "radius": 12.7}})
+    worst, worst_chain = 0.0, 0.0
+    for _ in range(300):
+        b, c = rnd.uniform(-110, 110), rnd.uniform(-400, 400)
+        pw = [rnd.uniform(-200, 200) for _ in range(3)]
+        ball_off, sphere_m = head_cb_by_htm(HEAD_ERRORS, L, b, c, pw)
+        carriage = G.sub(sphere_m, ball_off)          # where X Y Z put the ball on the point
+        hp["sphere"]["center"] = pw
+        art = G.true_artefact(hp)
+        pt = G.true_table_point(carriage + [0.0, 0.0, c, -b], hp)   # joints: C = +C*, B = -B* (5axiskins)
+        worst = max(worst, G.norm(G.sub(pt, art["sphere"]["center"])))
+        ball_g, sphere_g = G.head_cb_chain(b, c, hp, pw, [0.0, 0.0, 0.0])
+        worst_chain = max(worst_chain, G.norm(G.sub(ball_g, ball_off)), G.norm(G.sub(sphere_g, sphere_m)))
+    check(worst < 1e-9, "head_cb (5axis): the probe's two head lines put the ball on the sphere point where rotacal's "
+          "chain (4x4 matrices) does, within %.2g mm (300 poses, 1000 x the errors)" % worst)
+    check(worst_chain < 1e-9, "head_cb (5axis): lcsim_geom's chain term by term = the matrices within %.2g mm"
+          % worst_chain)
+    if not rotacal:
+        return
+    # rotacal's own simulator on the case's machine and truth: every trigger puts the harness's true ball
+    # on the true sphere
+    import subprocess
+    import lateness as LT
+    with tempfile.TemporaryDirectory() as d:
+        machine, truth = os.path.join(HERE, "cb_head_lcsim.json"), os.path.join(HERE, "truth_5axis.json")
+        plan, res = os.path.join(d, "plan.json"), os.path.join(d, "sim.txt")
+        for cmd in ([rotacal, "plan", "--cycle", "one_sphere", "--machine", machine, "--set", "tilt_list=-90,-45,0,45,90",
+                     "--set", "c_list=0,72,144,216,288", "-o", plan],
+                    [rotacal, "simulate", "--plan", plan, "--truth", truth, "--dialect", "linuxcnc", "-o", res]):
+            subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+        pj = os.path.join(d, "params.json")
+        subprocess.run(["/usr/bin/python3", os.path.join(HERE, "scripts", "truth_params.py"), "--truth", truth,
+                        "--machine", machine, "--plan", plan, "-o", pj], check=True)
+        p = G.load_params(pj)
+        with open(plan) as f:
+            pl = json.load(f)
+        got = LT.read_log(res)
+        art = G.true_artefact(p)
+        worst = 0.0
+        for pt in pl["points"]:
+            j = got[pt["id"]] + [0.0, 0.0, pt["pose"]["C"], -pt["pose"]["B"]]
+            worst = max(worst, abs(G.clearance_table(G.true_table_point(j, p), art)))
+        check(worst < 2e-6, "head_cb (5axis): at all %d triggers of rotacal simulate (truth_5axis.json) the harness's "
+              "true ball touches the true sphere within %.2g mm (the LOG's 6 decimals)" % (len(pl["points"]), worst))
 
 
 def check_head(rnd, rotacal):
@@ -210,6 +282,7 @@ def main():
     want = G.ry(math.radians(-b_), G.rx(math.radians(-a_), pw))
     check(G.norm(G.sub(G.nominal_inverse(pw, b_, a_, pa), want)) < 1e-12, "xyzab at R = D = 0: p_m = Ry(-B) Rx(-A) p_w")
     check_head(rnd, a.rotacal)
+    check_head_cb(rnd, a.rotacal)
     s = {"center": [0.0, 0.0, 0.0], "stem_u": [0.0, 0.0, -1.0], "stem_length": 60.0, "stem_radius": 4.0}
     for pt, want in (([10.0, 0.0, -30.0], 6.0), ([0.0, 0.0, -70.0], 10.0), ([3.0, 0.0, -30.0], -1.0),
                      ([0.0, 0.0, 5.0], 5.0), ([7.0, 0.0, -64.0], 5.0)):

@@ -10,7 +10,8 @@ single and the double touch: the second touch starts on that line, retract_mm ba
 the first stopped). The exact contact on that line is found by bisection (lcsim_geom.first_contact,
 ~1e-10 of the move), with joints A = -A*, C = -C* (the LinuxCNC sign of rotacal's machine
 file; B = -B* on a B/C table; B = +B*, A = +A* on the A/B table; on maxkins' B head over a C
-table B = -B*, C = +C*, the ball through the true head). With --offsets (rotacal's G10 L2 P1 work-offset program),
+table B = -B*, C = +C*, the ball through the true head; on 5axiskins' C head carrying the B head
+likewise B = -B*, C = +C*). With --offsets (rotacal's G10 L2 P1 work-offset program),
 machine = program + offset.
 Reported per point, in um: over = (recorded - contact) . approach (> 0: late) and across =
 the part perpendicular to the approach. Exit 1 on a missing point or a result file that is not
@@ -41,8 +42,8 @@ def read_log(path):
 
 
 def read_offsets(path):
-    """X Y Z A (or B) of the 'G10 L2 P1' line of rotacal's work-offset program."""
-    o = {"X": 0.0, "Y": 0.0, "Z": 0.0, "A": 0.0, "B": 0.0}
+    """X Y Z A B C (those it gives) of the 'G10 L2 P1' line of rotacal's work-offset program."""
+    o = {"X": 0.0, "Y": 0.0, "Z": 0.0, "A": 0.0, "B": 0.0, "C": 0.0}
     if not path:
         return o
     with open(path) as f:
@@ -83,7 +84,13 @@ def main():
         tr = G.add(pt["trigger_m_mm"], off)
         # joint 3 is the tilt axis: A on xyzac-trt-kins, B on xyzbc-trt-kins (the offsets' G10 has no B)
         head = []
-        if p["machine"]["kins"] == "max":
+        if p["machine"]["kins"] == "5axis":
+            # the bridge mill's [X, Y, Z, 0, 0, C, B] (its head's outer C, inner B): joint = sign x the
+            # papers' angle (+ its G54 B, C); the table's joints unwired
+            ja, jc = 0.0, 0.0
+            head = [p["head"]["c_sign"] * pt["pose"]["C"] + o.get("C", 0.0),
+                    p["head"]["sign"] * pt["pose"]["B"] + o.get("B", 0.0)]
+        elif p["machine"]["kins"] == "max":
             # the head machine's [X, Y, Z, 0, C, B]: joint B = sign x B* (+ its G54 B), C = sign x C*
             ja, jc = 0.0, p["head"]["c_sign"] * pt["pose"]["C"]
             head = [p["head"]["sign"] * pt["pose"]["B"] + o.get("B", 0.0)]

@@ -45,6 +45,13 @@ The mapping (docs/e2e-linuxcnc.md, "Truth -> component"):
   B* = sign_B x B, C* = sign_C x C of the joint angles, the signs the machine file's linuxcnc ones
   (maxkins: B -1, C +1, read back by the e2e case). The probe rides on the head, the ball L from
   the pivot that X Y Z read. No test piece.
+* C head carrying a B head over a fixed table (machine "kinematics": "head_cb" with "head":
+  {"pivot_to_ball_mm": L}; LinuxCNC's 5axiskins bridge mill, the cycle in its identity type): the
+  truth's "location_errors" are rotacal's head_cb parameters by their ISO 230-7 names (the same
+  sixteen as head_table's, docs/conventions.md's head_cb chain), the harness's "head_cb" section,
+  same names and signs, evaluated exactly (lcsim_geom) at B* = sign_B x B, C* = sign_C x C of the
+  joint angles, the machine file's linuxcnc signs (5axiskins: B -1, C +1, read back by the e2e
+  case). The table stays; no test piece.
 * form_error, probe_noise_um and drifts are not modelled by the component: refused.
 * --plan: a sphere cycle's plan (spheres3, one_sphere) puts its spheres (ids 1..3: the
   component's sphere, sphere2, sphere3) at the plan's nominal centres and radius, workpiece frame,
@@ -67,13 +74,17 @@ NAMES = {"table_ac": ("dx_AY", "dy_AY", "dz_AY", "dy_CA", "a_AY", "b_AY", "c_AY"
          "table_bc": ("dx_BY", "dy_CB", "dz_BY", "dx_CB", "a_BY", "b_BY", "c_BY", "a_CB"),
          "table_ab": ("dx_BY", "dy_AB", "dz_BY", "dz_AB", "a_BY", "b_BY", "c_BY", "c_AB")}
 KINS = {"table_ac": ("xyzac", "eq1", "AC"), "table_bc": ("xyzbc", "eq2", "BC"), "table_ab": ("xyzab", "eq3", "AB"),
-        "head_table": ("max", "head_table", "BC")}
+        "head_table": ("max", "head_table", "BC"), "head_cb": ("5axis", "head_cb", "BC")}
 NAMES["head_table"] = G.HEAD_TABLE
+NAMES["head_cb"] = G.HEAD_TABLE
 # how each module counts the table's angles against rotacal's papers' convention
 LINUXCNC_SIGN = {"table_ac": -1, "table_bc": -1, "table_ab": 1}
 # maxkins: B against rotacal's head (its source: "the direction of the B axis is the opposite of the
 # conventional axis direction"), C as rotacal's table; e2e_test.py reads both back
 MAXKINS_SIGN = {"B": -1, "C": 1}
+# 5axiskins: B against rotacal's head, C as rotacal's (e2e_test.py reads both back)
+FIVEAXIS_SIGN = {"B": -1, "C": 1}
+HEAD_SIGNS = {"head_table": ("maxkins", MAXKINS_SIGN), "head_cb": ("5axiskins", FIVEAXIS_SIGN)}
 KNOWN_TRUTH_KEYS = {"format", "location_errors", "setup_error", "probe_pretravel_um", "form_error",
                     "probe_noise_um", "start_time_s", "c_angular_positioning_error"}
 ECC_KEYS = {"ECC_cos1C": ("C_e1c", 1.0), "ECC_sin1C": ("C_e1s", -1.0), "ECC_cos2C": ("C_e2c", 1.0),
@@ -118,20 +129,24 @@ def params_from(truth, truth_path, machine, machine_path, plan=None, plan_path=N
     kinematics = machine.get("kinematics")
     if kinematics not in KINS:
         fail(machine_path, "the harness models an A/C table (xyzac-trt-kins), a B/C table (xyzbc-trt-kins), an "
-             "A/B table (xyzab_tdr_kins) or a B head over a C table (maxkins) only")
+             "A/B table (xyzab_tdr_kins), a B head over a C table (maxkins) or a C head carrying a B head "
+             "(5axiskins) only")
     kins, chain, axes = KINS[kinematics]
     head = None
     if kinematics == "head_table":
         head = machine.get("head", {})
         if head.get("axis", "B") != "B":
             fail(machine_path, "the harness's head machine is maxkins' B head (head.axis \"B\")")
+    if kinematics == "head_cb":
+        head = machine.get("head", {})
     for ax in axes:
         if head is not None:
+            module, signs = HEAD_SIGNS[kinematics]
             sign = machine["rotary_axes"][ax].get("dialect_sign", {}).get(
                 "linuxcnc", machine["rotary_axes"][ax].get("controller_sign", 1))
-            if sign != MAXKINS_SIGN[ax]:
-                fail(machine_path, "rotary axis %s: the linuxcnc sign must be %+d (maxkins counts B against rotacal's "
-                     "head and C as rotacal's table)" % (ax, MAXKINS_SIGN[ax]))
+            if sign != signs[ax]:
+                fail(machine_path, "rotary axis %s: the linuxcnc sign must be %+d (%s counts B against rotacal's "
+                     "head and C as rotacal does)" % (ax, signs[ax], module))
             continue
         sign = machine["rotary_axes"][ax].get("dialect_sign", {}).get(
             "linuxcnc", machine["rotary_axes"][ax].get("controller_sign", 1))
@@ -160,7 +175,7 @@ def params_from(truth, truth_path, machine, machine_path, plan=None, plan_path=N
                 fail(truth_path, "unit of %r must be mdeg, urad or deg" % name)
             eq1[name + "_mdeg"] = v * ANGLE[unit]
     art = machine.get("artefact")
-    if art is None and kinematics in ("table_bc", "table_ab", "head_table"):
+    if art is None and kinematics in ("table_bc", "table_ab", "head_table", "head_cb"):
         # no test piece: the block is off, some harmless pose for its unused pins
         art = {"type": "square_column", "top_centre_w_mm": [0.0, 0.0, 150.0], "size_mm": [100.0, 100.0, 150.0]}
         block_on = False
@@ -207,8 +222,10 @@ def params_from(truth, truth_path, machine, machine_path, plan=None, plan_path=N
             fail(truth_path, "c_angular_positioning_error is modelled on the A/C table only")
         out["errors"] = errors
     if head is not None:
-        out["head"] = {"enable": True, "axis": "B", "pivot_to_ball": float(head["pivot_to_ball_mm"]),
-                       "sign": float(MAXKINS_SIGN["B"]), "c_sign": float(MAXKINS_SIGN["C"])}
+        signs = HEAD_SIGNS[kinematics][1]
+        out["head"] = {"enable": True, "axis": "CB" if kinematics == "head_cb" else "B",
+                       "pivot_to_ball": float(head["pivot_to_ball_mm"]), "sign": float(signs["B"]),
+                       "c_sign": float(signs["C"])}
     if plan is not None:
         out.update(spheres_from(plan, plan_path))
     return out
