@@ -110,11 +110,11 @@ TEST(ReportErrors, AmbiguousIncompleteOrImplausibleReportsAreRefused) {
   EXPECT_NO_THROW((void)errorsFromReports({doc("big.json", big)}, Kinematics::TableAC, true));
 }
 
-// A head machine's report, even one carrying location_errors, is refused at its line: neither head
+// A head machine's report, even one carrying location_errors, is refused at its line: no head
 // kinematics has the papers' table errors that compensate rewrites programs with (before head_table
 // was refused here, its location-error lookup threw std::invalid_argument without a file).
 TEST(ReportErrors, AHeadMachinesReportIsRefusedAtItsLine) {
-  for (const Kinematics k : {Kinematics::HeadAB, Kinematics::HeadTable}) {
+  for (const Kinematics k : {Kinematics::HeadAB, Kinematics::HeadTable, Kinematics::HeadCB}) {
     const std::string text = std::string(R"({"format": "rotacal-report/1", "cycle": "x",
  "machine_model": ")") + std::string(kinematicsName(k)) + R"(",
  "location_errors": {"dx_AY": {"value": 3.0, "u": 0.2, "unit": "um"}}})";
