@@ -651,17 +651,20 @@ class LinuxCncDialect final : public Dialect {
   std::string writeWorkOffsetProgram(const OffsetRequest& r) const {
     ctl::requirePlausible(r);
     const MachineModel& m = r.plan->machine;
-    // The A/C table's route, and the A/B table's: its B axis sits on the bed as A does there, so
-    // the work offset moves B's place and B's zero alike (with machine = program + offset).
-    const bool ab = r.identified.kinematics == Kinematics::TableAB;
-    const char tilt = tableTiltAxis(r.identified.kinematics);
-    if ((r.identified.kinematics != Kinematics::TableAC && !ab) || !m.hasRotary(tilt))
+    // The A/C table's route, and the A/B and B/C tables': their B axis sits on the bed as A does
+    // there, so the work offset moves B's place (X, Z) and B's zero alike (with machine = program +
+    // offset); a shift along B's own line (Y) moves only the axis it carries: A's (dy_AB), C's (dy_CB).
+    const Kinematics kin = r.identified.kinematics;
+    const bool ab = kin == Kinematics::TableAB;
+    const bool bc = kin == Kinematics::TableBC;
+    const char tilt = tableTiltAxis(kin);
+    if ((kin != Kinematics::TableAC && !ab && !bc) || !m.hasRotary(tilt))
       throw std::invalid_argument(
-          "the G10 work-offset form (.ngc) is written for A/C and A/B tables only; use a .hal file");
-    const char* px = ab ? "dx_BY" : "dx_AY";
-    const char* py = ab ? "dy_AB" : "dy_AY";
-    const char* pz = ab ? "dz_BY" : "dz_AY";
-    const char* pzero = ab ? "b_BY" : "a_AY";
+          "the G10 work-offset form (.ngc) is written for A/C, A/B and B/C tables only; use a .hal file");
+    const char* px = ab || bc ? "dx_BY" : "dx_AY";
+    const char* py = ab ? "dy_AB" : bc ? "dy_CB" : "dy_AY";
+    const char* pz = ab || bc ? "dz_BY" : "dz_AY";
+    const char* pzero = ab || bc ? "b_BY" : "a_AY";
     const bool inch = m.units == LengthUnit::Inch;
     const double k = inch ? 1.0 / kMmPerInch : 1.0;  // mm -> program units
     const int dl = inch ? 5 : 4;
@@ -700,9 +703,11 @@ class LinuxCncDialect final : public Dialect {
     for (const auto& s : ctl::identifiedLines(r)) line(comment(s));
     line(comment(fmt::format("Mapping: G54 X += {}, Y += {}, Z += {} [{}], {} += {:+d} x {} [deg]", px, py, pz,
                              unitName(inch), tilt, sign_a, pzero)));
-    line(comment(ab ? "Not applied [no shift expresses them]: dz_AB, a_BY, c_BY, c_AB: xyzab_tdr_kins' z-offset "
-                      "[a .hal file] holds dz_AB, rotacal compensate all four"
-                    : "Not applied [no shift expresses them]: dy_CA, b_AY, c_AY, b_CA"));
+    line(comment(ab   ? "Not applied [no shift expresses them]: dz_AB, a_BY, c_BY, c_AB: xyzab_tdr_kins' z-offset "
+                        "[a .hal file] holds dz_AB, rotacal compensate all four"
+                 : bc ? "Not applied [no shift expresses them]: dx_CB, a_BY, c_BY, a_CB: rotacal compensate holds "
+                        "all four"
+                      : "Not applied [no shift expresses them]: dy_CA, b_AY, c_AY, b_CA"));
     std::string g10 = "G10 L2 P1";
     for (char axis : {'X', 'Y', 'Z', tilt}) {
       const int dec = axis == tilt ? 6 : dl + 2;

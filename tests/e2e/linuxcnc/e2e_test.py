@@ -50,7 +50,12 @@
       0 .. F x 1 ms past the exact contact; all 8 location errors within 0.5 um / 0.05 mdeg. Beside
       it, the same program on the controller whose own joint compensation tables make the linear
       axes' positioning errors (000 Eq. (22), Table 5's sizes, drawn here): every trigger 0 .. F x 1 ms
-      past the contact computed with the tables, the offsets written, U covering the truth.
+      past the contact computed with the tables, the offsets written, U covering the truth. Then the
+      write-back of the clean run: analyze --offsets writes xyzbc-trt-kins' pins (previous, change,
+      new; what the module cannot hold named) and the G54 program (X Y Z B: dx_BY, dy_CB, dz_BY,
+      b_BY); LinuxCNC restarted with both (the pins act not in identity kinematics) and the cycle run
+      again: what the work offset holds within its U of zero, the rest unchanged; beside it the
+      program compensated for the first report: all 8 within U of zero.
 
   e2e_test.py one_sphere_ab --rotacal BIN --work DIR
       the A/B dual rotary table (ab_table_lcsim.json, xyzab_tdr_kins): its conventions read back in
@@ -769,10 +774,53 @@ def run_one_sphere_bc(a):
     compare(got, want, "one_sphere on LinuxCNC (xyzbc-trt-kins), injected B and C location errors")
     figures.update({"identified": got, "injected": want, "unseparable": r.get("unseparable"),
                     "points": n_points, "location_errors_note": r.get("location_errors_note")})
+    figures["U"] = {n: e["U"] for n, e in r["location_errors"].items()}
     figures["linear_axes"] = check_linear_axes_session(a, work, linear)
+    figures.update(write_back_bc(a, work, plan, ngc, rep, got, want))
     with open(os.path.join(work, "figures.json"), "w") as f:
         json.dump(figures, f, indent=1)
     print("one_sphere B/C on LinuxCNC: %d touches, LinuxCNC session %.0f s" % (n_points, t))
+
+
+# What each route holds on the B/C table: xyzbc-trt-kins' pins (in TCP only) B's place and C's from it
+# (the C axis through rot-point, the B pivot at rot-point + offset); the work offset, in every
+# kinematics, B's place (X, Z), C's place along B's line (Y) and B's zero; the rest (dx_CB, a_BY,
+# c_BY, a_CB) only a rewritten program (rotacal compensate) or the mechanics.
+BC_PINS = {"x-rot-point": ("dx_BY", "dx_CB"), "y-rot-point": ("dy_CB",), "z-rot-point": ("dz_BY",),
+           "x-offset": ("-dx_CB",), "z-offset": ()}
+BC_WORK_OFFSET = ("dx_BY", "dy_CB", "dz_BY", "b_BY")
+
+
+def write_back_bc(a, work, plan, ngc, rep1, got1, want):
+    """The B/C table's write-back and the loop closed on the controller (write_back_table): analyze
+    --offsets writes xyzbc-trt-kins' pins (offsets.hal: previous, change, new; what the module cannot
+    hold named) and the work offset (offsets.ngc). The cycle runs in identity kinematics: the pins,
+    loaded, act not there (their meaning is the read-back's, in TCP); the work offset does."""
+    def pin_value(terms):
+        return sum(-got1[t[1:]] if t[0] == "-" else got1[t] for t in terms) * 1e-3
+
+    def files(hal_text, g10_text):
+        pins = {}
+        for line in hal_text.splitlines():
+            t_ = line.split()
+            if len(t_) == 3 and t_[0] == "setp" and t_[1].startswith("xyzbc-trt-kins."):
+                pins[t_[1].split(".", 1)[1]] = float(t_[2])
+        check(sorted(pins) == sorted(BC_PINS), "offsets.hal sets xyzbc-trt-kins' %s" % ", ".join(sorted(pins)))
+        check(all(abs(pins[k] - pin_value(v)) <= 1e-6 for k, v in BC_PINS.items() if k in pins),
+              "each pin's new value = its previous (0) + the identified %s in mm"
+              % ", ".join("%s -> %s" % (" + ".join(v) or "0", k) for k, v in BC_PINS.items()))
+        table = [l for l in hal_text.splitlines() if l.startswith("# ") and len(l.split()) == 5]
+        check(any(l.split()[1:] == ["pin", "previous", "change", "new"] for l in table),
+              "offsets.hal gives each pin's previous value, change and new value")
+        rest = [l for l in hal_text.splitlines() if "Reported only" in l]
+        check(any("a_BY, c_BY" in l and "a_CB" in l for l in rest),
+              "offsets.hal names what the module cannot hold (a_BY, c_BY, a_CB)")
+        check("G10 L2 P1 B" in hal_text, "offsets.hal gives B's zero as a work offset (G10 L2 P1 B)")
+        check("dx_CB, a_BY, c_BY, a_CB: rotacal compensate" in g10_text,
+              "offsets.ngc names what no shift expresses (dx_CB, a_BY, c_BY, a_CB) and the route (rotacal compensate)")
+        return pins
+    return write_back_table(a, work, plan, ngc, rep1, want, files, MACHINE_BC, TRUTH_BC, "B",
+                            BC_WORK_OFFSET, ROUNDING_ACROSS_UM)
 
 
 MACHINE_AB = os.path.join(HERE, "ab_table_lcsim.json")
@@ -953,13 +1001,41 @@ AB_WORK_OFFSET = ("dx_BY", "dy_AB", "dz_BY", "b_BY")
 
 
 def write_back_ab(a, work, plan, ngc, rep1, got1, want):
-    """The write-back and the loop closed on the controller. analyze --offsets writes the kinematics'
-    own pins (offsets.hal: previous, change, new; what the module cannot hold named with its route)
-    and the work offset (offsets.ngc). LinuxCNC is then started again with the pins loaded (--setp,
-    as the HAL file would be) and the work offset run first (--pre-ngc), and the unchanged cycle
-    measures again: what the work offset holds within its U of zero, the rest as before. The cycle
-    runs in identity kinematics, where the pins act not (their meaning is the read-back's, in TCP);
-    beside it, the program rewritten for all eight (rotacal compensate): every one within U of zero."""
+    """The A/B table's write-back and the loop closed on the controller (write_back_table): analyze
+    --offsets writes the kinematics' own pins (offsets.hal: previous, change, new; what the module
+    cannot hold named with its route) and the work offset (offsets.ngc)."""
+    def files(hal_text, g10_text):
+        pins = {}
+        for line in hal_text.splitlines():
+            t_ = line.split()
+            if len(t_) == 3 and t_[0] == "setp" and t_[1].startswith("xyzab_tdr_kins."):
+                pins[t_[1].split(".", 1)[1]] = float(t_[2])
+        check(sorted(pins) == sorted(AB_PINS), "offsets.hal sets xyzab_tdr_kins' %s" % ", ".join(sorted(pins)))
+        check(all(abs(pins[k] - got1[n] * 1e-3) <= 1e-6 for k, n in AB_PINS.items() if k in pins),
+              "each pin's new value = its previous (0) + the identified %s in mm"
+              % ", ".join("%s -> %s" % (n, k) for k, n in AB_PINS.items()))
+        table = [l for l in hal_text.splitlines() if l.startswith("# ") and len(l.split()) == 5]
+        check(any(l.split()[1:] == ["pin", "previous", "change", "new"] for l in table),
+              "offsets.hal gives each pin's previous value, change and new value")
+        rest = [l for l in hal_text.splitlines() if "Reported only" in l or "rotacal compensate" in l]
+        check(any("a_BY, c_BY" in l and "c_AB" in l for l in rest) and any("rotacal compensate" in l for l in rest),
+              "offsets.hal names what the module cannot hold (a_BY, c_BY, c_AB) and the route (rotacal compensate)")
+        check("G10 L2 P1 B" in hal_text, "offsets.hal gives B's zero as a work offset (G10 L2 P1 B)")
+        check("dz_AB, a_BY, c_BY, c_AB" in g10_text, "offsets.ngc names what no shift expresses (dz_AB, a_BY, c_BY, c_AB)")
+        return pins
+    return write_back_table(a, work, plan, ngc, rep1, want, files, MACHINE_AB, TRUTH_AB, "B",
+                            AB_WORK_OFFSET, ROUNDING_ACROSS_3D_UM)
+
+
+def write_back_table(a, work, plan, ngc, rep1, want, files, machine, truth, tilt, work_offset, across_um):
+    """The write-back of a table machine and the loop closed on the controller. analyze --offsets writes
+    the kinematics' pins (offsets.hal, checked by `files` with offsets.ngc's text) and the work offset
+    (offsets.ngc: G54 X Y Z and the tilt axis' zero). LinuxCNC is then started again with the pins
+    loaded (--setp, as the HAL file would be) and the work offset run first (--pre-ngc), and the
+    unchanged cycle measures again: what the work offset holds (`work_offset`) within its U of zero,
+    the rest as before. The cycle runs in identity kinematics, where the trt pins act not (their
+    meaning is the read-back's, in TCP); beside it, the program rewritten for all eight (rotacal
+    compensate): every one within U of zero."""
     hal, g10 = os.path.join(work, "offsets.hal"), os.path.join(work, "offsets.ngc")
     res1 = os.path.join(work, "run", "rotacal_one_sphere.txt")
     for out in (hal, g10):
@@ -970,52 +1046,39 @@ def write_back_ab(a, work, plan, ngc, rep1, got1, want):
     with open(hal) as f:
         hal_text = f.read()
     print(hal_text)
-    pins = {}
-    for line in hal_text.splitlines():
-        t_ = line.split()
-        if len(t_) == 3 and t_[0] == "setp" and t_[1].startswith("xyzab_tdr_kins."):
-            pins[t_[1].split(".", 1)[1]] = float(t_[2])
-    check(sorted(pins) == sorted(AB_PINS), "offsets.hal sets xyzab_tdr_kins' %s" % ", ".join(sorted(pins)))
-    check(all(abs(pins[k] - got1[n] * 1e-3) <= 1e-6 for k, n in AB_PINS.items() if k in pins),
-          "each pin's new value = its previous (0) + the identified %s in mm"
-          % ", ".join("%s -> %s" % (n, k) for k, n in AB_PINS.items()))
-    table = [l for l in hal_text.splitlines() if l.startswith("# ") and len(l.split()) == 5]
-    check(any(l.split()[1:] == ["pin", "previous", "change", "new"] for l in table),
-          "offsets.hal gives each pin's previous value, change and new value")
-    rest = [l for l in hal_text.splitlines() if "Reported only" in l or "rotacal compensate" in l]
-    check(any("a_BY, c_BY" in l and "c_AB" in l for l in rest) and any("rotacal compensate" in l for l in rest),
-          "offsets.hal names what the module cannot hold (a_BY, c_BY, c_AB) and the route (rotacal compensate)")
-    check("G10 L2 P1 B" in hal_text, "offsets.hal gives B's zero as a work offset (G10 L2 P1 B)")
     with open(g10) as f:
         g10_text = f.read()
     print(g10_text)
+    pins = files(hal_text, g10_text)
     g10_line = [l for l in g10_text.splitlines() if l.startswith("G10 L2 P1")][0].split()[3:]
     want_g54 = {w[0]: float(w[1:]) for w in g10_line}
-    check(sorted(want_g54) == ["B", "X", "Y", "Z"] and "dz_AB, a_BY, c_BY, c_AB" in g10_text,
-          "offsets.ngc shifts G54 X Y Z B and names what no shift expresses (dz_AB, a_BY, c_BY, c_AB)")
+    check(sorted(want_g54) == sorted(["X", "Y", "Z", tilt]), "offsets.ngc shifts G54 %s" % " ".join(sorted(want_g54)))
+    print("note: the cycle runs in identity kinematics: offsets.hal's trt pins, loaded, act not there (they act in "
+          "TCP, the read-back's mode); the work offset does", flush=True)
     comp = os.path.join(work, "one_sphere_compensated.ngc")
     sh([a.rotacal, "compensate", "--program", ngc, "--report", rep1, "--dialect", "linuxcnc", "-o", comp])
     run2, run3 = os.path.join(work, "run2"), os.path.join(work, "run3")
     (_, t2), (_, t3) = side_by_side(
-        lambda: session([RUN, "--setp", hal, "--pre-ngc", g10, "--ngc", ngc, "--truth", TRUTH_AB, "--machine",
-                         MACHINE_AB, "--plan", plan, "--out", run2, "--timeout", "300"]),
-        lambda: session([RUN, "--ngc", comp, "--truth", TRUTH_AB, "--machine", MACHINE_AB, "--plan", plan, "--out",
+        lambda: session([RUN, "--setp", hal, "--pre-ngc", g10, "--ngc", ngc, "--truth", truth, "--machine",
+                         machine, "--plan", plan, "--out", run2, "--timeout", "300"]),
+        lambda: session([RUN, "--ngc", comp, "--truth", truth, "--machine", machine, "--plan", plan, "--out",
                          run3, "--timeout", "300"]))
     with open(os.path.join(run2, "driver_status.json")) as f:
         g54 = json.load(f)["g5x_offset_after"][0]
-    check(all(abs(g54["XYZAB".index(k)] - v) < 1e-9 for k, v in want_g54.items()),
-          "LinuxCNC's G54 after the offsets program %s = the G10 line %s" % (g54[:5], want_g54))
+    # LinuxCNC's status carries G54 as X Y Z A B C U V W
+    check(all(abs(g54["XYZABCUVW".index(k)] - v) < 1e-9 for k, v in want_g54.items()),
+          "LinuxCNC's G54 after the offsets program %s = the G10 line %s" % (g54[:6], want_g54))
     with open(plan) as f:
         n_points = len(json.load(f)["points"])
-    lat2 = lateness(work, run2, plan, offsets=g10, cycle="one_sphere", points=n_points,
-                    across_um=ROUNDING_ACROSS_3D_UM, machine=MACHINE_AB)
+    lat2 = lateness(work, run2, plan, offsets=g10, cycle="one_sphere", points=n_points, across_um=across_um,
+                    machine=machine)
     rep2, rep3 = os.path.join(work, "report2.json"), os.path.join(work, "report3.json")
     sh([a.rotacal, "analyze", "--plan", plan, "--results", os.path.join(run2, "rotacal_one_sphere.txt"),
         "--dialect", "linuxcnc", "--json", rep2])
     sh([a.rotacal, "analyze", "--plan", plan, "--results", os.path.join(run3, "rotacal_one_sphere.txt"),
         "--dialect", "linuxcnc", "--json", rep3, "--compensated-with", rep1])
     out = {"run2_s": t2, "run3_s": t3, "lateness2": lat2, "pins": pins, "g54": want_g54}
-    for tag, path, held in (("after_offsets", rep2, AB_WORK_OFFSET), ("compensated", rep3, tuple(want))):
+    for tag, path, held in (("after_offsets", rep2, work_offset), ("compensated", rep3, tuple(want))):
         with open(path) as f:
             le = json.load(f)["location_errors"]
         rows = {}

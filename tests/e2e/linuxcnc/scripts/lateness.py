@@ -82,7 +82,7 @@ def main():
             continue
         u = pt["approach_m"]
         tr = G.add(pt["trigger_m_mm"], off)
-        # joint 3 is the tilt axis: A on xyzac-trt-kins, B on xyzbc-trt-kins (the offsets' G10 has no B)
+        # joint 3 is the tilt axis: A on xyzac-trt-kins, B on xyzbc-trt-kins (each with its G54 zero shift)
         head = []
         if p["machine"]["kins"] == "5axis":
             # the bridge mill's [X, Y, Z, 0, 0, C, B] (its head's outer C, inner B): joint = sign x the
@@ -98,7 +98,7 @@ def main():
             # the harness's [outer, inner] = [B, A]; xyzab_tdr_kins counts as rotacal: B = +B*, A = +A*
             ja, jc = pt["pose"]["B"] + o.get("B", 0.0), pt["pose"]["A"]
         else:
-            tilt = -pt["pose"]["B"] if p["machine"]["kins"] == "xyzbc" else -pt["pose"]["A"] + o["A"]
+            tilt = -pt["pose"]["B"] + o["B"] if p["machine"]["kins"] == "xyzbc" else -pt["pose"]["A"] + o["A"]
             ja, jc = tilt, -pt["pose"]["C"]
         j0 = G.add(tr, G.scale(u, -before)) + [ja, jc] + head
         j1 = G.add(tr, G.scale(u, past)) + [ja, jc] + head
