@@ -555,25 +555,7 @@ class LinuxCncDialect final : public Dialect {
     const bool inch = h.m.units == LengthUnit::Inch;
     const double k = inch ? 1.0 / kMmPerInch : 1.0;
     const int dl = inch ? 7 : 6;
-    std::map<char, double> previous{{'X', 0.0}, {'Y', 0.0}, {'B', 0.0}};
-    bool had_previous = false;
-    for (const auto& l : ctl::splitLines(r.previous_text)) {
-      std::string code = l.text;
-      const size_t paren = code.find('(');
-      if (paren != std::string::npos) code.resize(paren);
-      const auto t = ctl::tokens(ctl::upper(code));
-      if (t.size() < 3 || t[0] != "G10" || t[1] != "L2" || t[2] != "P1") continue;
-      had_previous = true;
-      for (size_t i = 3; i < t.size(); ++i) {
-        const auto v = t[i].size() > 1 ? ctl::parseNumber(t[i].substr(1)) : std::nullopt;
-        if (!v || !previous.count(t[i][0]))
-          throw std::invalid_argument(
-              fmt::format("previous offsets file, line {}: '{}' is not one of X Y B <number>", l.number, t[i]));
-        previous[t[i][0]] = *v;
-      }
-    }
-    if (!r.previous_text.empty() && !had_previous)
-      throw std::invalid_argument("previous offsets file has no 'G10 L2 P1' line: not a rotacal work-offset file");
+    std::map<char, double> previous = previousWorkOffset(r.previous_text, "XYB");
     const std::map<char, double> change{{'X', h.work('X') * k}, {'Y', h.work('Y') * k}, {'B', h.work('B')}};
     std::string out;
     auto line = [&](const std::string& s) { out += s + "\n"; };
@@ -669,25 +651,7 @@ class LinuxCncDialect final : public Dialect {
     const double k = inch ? 1.0 / kMmPerInch : 1.0;  // mm -> program units
     const int dl = inch ? 5 : 4;
     // Previous offsets: the G10 L2 P1 line of the file this one replaces (the loop accumulates).
-    std::map<char, double> previous{{'X', 0.0}, {'Y', 0.0}, {'Z', 0.0}, {tilt, 0.0}};
-    bool had_previous = false;
-    for (const auto& l : ctl::splitLines(r.previous_text)) {
-      std::string code = l.text;
-      const size_t paren = code.find('(');
-      if (paren != std::string::npos) code.resize(paren);
-      const auto t = ctl::tokens(ctl::upper(code));
-      if (t.size() < 3 || t[0] != "G10" || t[1] != "L2" || t[2] != "P1") continue;
-      had_previous = true;
-      for (size_t i = 3; i < t.size(); ++i) {
-        const auto v = t[i].size() > 1 ? ctl::parseNumber(t[i].substr(1)) : std::nullopt;
-        if (!v || !previous.count(t[i][0]))
-          throw std::invalid_argument(fmt::format("previous offsets file, line {}: '{}' is not one of X Y Z {} <number>",
-                                                  l.number, t[i], tilt));
-        previous[t[i][0]] = *v;
-      }
-    }
-    if (!r.previous_text.empty() && !had_previous)
-      throw std::invalid_argument("previous offsets file has no 'G10 L2 P1' line: not a rotacal work-offset file");
+    std::map<char, double> previous = previousWorkOffset(r.previous_text, std::string("XYZ") + tilt);
     const int sign_a = m.controllerSign(tilt, kDialect);
     const std::map<char, double> change{{'X', r.identified.get(px) * k},
                                         {'Y', r.identified.get(py) * k},
@@ -892,6 +856,34 @@ std::map<std::string, double> parseHalSetp(const std::string& text, const std::s
     pins[t[1].substr(prefix.size())] = *v;
   }
   return pins;
+}
+
+std::map<char, double> previousWorkOffset(const std::string& text, std::string_view axes) {
+  std::map<char, double> previous;
+  for (const char axis : axes) previous[axis] = 0.0;
+  std::string listed;
+  for (const char axis : axes) listed += fmt::format("{} ", axis);
+  bool had_line = false;
+  for (const auto& l : ctl::splitLines(text)) {
+    std::string code = l.text;
+    for (size_t open; (open = code.find('(')) != std::string::npos;) {
+      const size_t close = code.find(')', open);
+      code.erase(open, close == std::string::npos ? std::string::npos : close - open + 1);
+    }
+    const auto t = ctl::tokens(ctl::upper(code));
+    if (t.size() < 3 || t[0] != "G10" || t[1] != "L2" || t[2] != "P1") continue;
+    had_line = true;
+    for (size_t i = 3; i < t.size(); ++i) {
+      const auto v = t[i].size() > 1 ? ctl::parseNumber(t[i].substr(1)) : std::nullopt;
+      if (!v || !previous.count(t[i][0]))
+        throw std::invalid_argument(
+            fmt::format("previous offsets file, line {}: '{}' is not one of {}<number>", l.number, t[i], listed));
+      previous[t[i][0]] = *v;
+    }
+  }
+  if (!text.empty() && !had_line)
+    throw std::invalid_argument("previous offsets file has no 'G10 L2 P1' line: not a rotacal work-offset file");
+  return previous;
 }
 
 const Dialect& linuxcncDialect() { return singleton<LinuxCncDialect>(); }

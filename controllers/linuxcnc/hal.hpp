@@ -3,6 +3,7 @@
 // its pins, and the setp lines of a HAL file read back.
 #include <map>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -30,6 +31,13 @@ std::vector<std::pair<std::string, double>> linuxcncKinsChanges(const LocationEr
 /// The `setp <component>.<pin> <value>` lines of a HAL file: pin -> value. '#' starts a comment.
 /// Throws std::invalid_argument("line N: ...") when such a line's value is not a number.
 std::map<std::string, double> parseHalSetp(const std::string& text, const std::string& component);
+
+/// The axis values of the `G10 L2 P1` line of a previous work-offset file (an offsets file named
+/// *.ngc), so that the new file accumulates: axis -> value, every one of `axes` (e.g. "XYZB")
+/// present, 0 where the line does not set it; all zero when `text` is empty. Comments in
+/// parentheses are ignored. Throws std::invalid_argument naming the line when a word is not one of
+/// `axes` with a number, or when a non-empty file has no such line.
+std::map<char, double> previousWorkOffset(const std::string& text, std::string_view axes);
 
 /// A head_cb machine's offsets (request.parameters, its model's): the HAL file that moves
 /// 5axiskins.pivot-length by dL (previous + change = new, MACHINE.json's pivot_to_ball_mm when

@@ -140,25 +140,7 @@ std::string linuxcncHeadCbWorkOffsets(const OffsetRequest& r) {
     const ParameterEstimate& zero = find(r, std::string(1, axis) + "0" + axis);
     change[axis] = m.controllerSign(axis, kDialect) * -radToDeg(zero.value);
   }
-  std::map<char, double> previous{{'B', 0.0}, {'C', 0.0}};
-  bool had_previous = false;
-  for (const auto& l : ctl::splitLines(r.previous_text)) {
-    std::string code = l.text;
-    for (size_t open; (open = code.find('(')) != std::string::npos;)
-      code.erase(open, code.find(')', open) == std::string::npos ? std::string::npos : code.find(')', open) - open + 1);
-    const auto t = ctl::tokens(ctl::upper(code));
-    if (t.size() < 3 || t[0] != "G10" || t[1] != "L2" || t[2] != "P1") continue;
-    had_previous = true;
-    for (size_t i = 3; i < t.size(); ++i) {
-      const auto v = t[i].size() > 1 ? ctl::parseNumber(t[i].substr(1)) : std::nullopt;
-      if (!v || !previous.count(t[i][0]))
-        throw std::invalid_argument(
-            fmt::format("previous offsets file, line {}: '{}' is not one of B C <number>", l.number, t[i]));
-      previous[t[i][0]] = *v;
-    }
-  }
-  if (!r.previous_text.empty() && !had_previous)
-    throw std::invalid_argument("previous offsets file has no 'G10 L2 P1' line: not a rotacal work-offset file");
+  std::map<char, double> previous = previousWorkOffset(r.previous_text, "BC");
   std::string out;
   // rs274ngc comments: no parentheses inside, at most 200 characters each (dialect.cpp's limit),
   // never starting like an active comment (MSG, LOG, ...): each piece starts with "- ".
