@@ -156,8 +156,9 @@ void requireSingleTouch(const nc::Op& op, std::string_view dialect) {
   if (!(op.feed > 0)) throw std::invalid_argument(fmt::format("point {}: probing feed must be > 0", id));
   if (op.retract_mm > 0)
     throw std::invalid_argument(fmt::format(
-        "point {}: the {} program records a single touch; a double touch (retract_mm > 0) is not implemented", id,
-        dialect));
+        "point {}: the {} program records a single touch (rotacal has no double-touch form for this dialect); "
+        "set the machine's probe retract_mm to 0 for it",
+        id, dialect));
 }
 
 }  // namespace rotacal::ctl

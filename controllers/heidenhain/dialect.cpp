@@ -266,7 +266,9 @@ class HeidenhainDialect final : public Dialect {
           if (id <= 0 || kLabelBase + id > 65535) throw std::invalid_argument(fmt::format("point id {} out of range", id));
           if (op.retract_mm > 0)
             throw std::invalid_argument(fmt::format(
-                "point {}: cycle 0 records a single touch; a double touch (retract_mm > 0) is not implemented", id));
+                "point {}: cycle 0 records a single touch and has no double-touch form; set the machine's probe "
+                "retract_mm to 0 for this dialect",
+                id));
           if (!cur_known) throw std::invalid_argument(fmt::format("point {}: probing before any positioning move", id));
           const auto dir = axisAligned(x - cur);
           if (!dir)
