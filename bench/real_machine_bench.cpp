@@ -9,7 +9,7 @@
 //
 // Run: build/bench/rotacal_real_machine_bench [--machines N] [--mc-runs R] [--seed S]
 //        [--contributors FILE] [--machine FILE] [--dialect D] [--sd-um X] [--sd-mdeg X] [--no-chips] [--verbose]
-//        [--cycle touch154|one_sphere|spheres3|spaceframe|tooltip|rtest] [--dump DIR] [--off LIST]
+//        [--cycle touch154|one_sphere|spheres3|spaceframe|tooltip|rtest|probe_qual] [--dump DIR] [--off LIST]
 // --off switches contributors of the generator off (setup, form, linear_axes, pretravel,
 // repeatability, roughness; tooltip: linear_axes, alignment, laser (the per-reading terms), pivot
 // (the head's dR); rtest: linear_axes, sphere (its offset), sensors (gain and direction), drift,
@@ -31,6 +31,7 @@
 #include <functional>
 #include <fstream>
 #include <map>
+#include <numeric>
 #include <optional>
 #include <random>
 #include <stdexcept>
@@ -45,6 +46,7 @@
 #include "core/contributors.hpp"
 #include "core/machine.hpp"
 #include "cycles/cycle.hpp"
+#include "cycles/probe_qual/plan.hpp"
 #include "cycles/rtest/plan.hpp"
 #include "cycles/tooltip/plan.hpp"
 
@@ -78,7 +80,7 @@ struct Args {
   std::fprintf(stderr,
                "rotacal_real_machine_bench: %s\nusage: rotacal_real_machine_bench [--machines N] [--mc-runs R] [--seed S] "
                "[--contributors FILE] [--machine FILE] [--dialect D] [--sd-um X] [--sd-mdeg X] [--no-chips] [--verbose]\n"
-               "       [--cycle touch154|one_sphere|spheres3|spaceframe|tooltip|rtest] [--dump DIR] [--off setup,form,linear_axes,pretravel,repeatability,roughness,alignment,laser,pivot,sphere,sensors,drift,noise]\n",
+               "       [--cycle touch154|one_sphere|spheres3|spaceframe|tooltip|rtest|probe_qual] [--dump DIR] [--off setup,form,linear_axes,pretravel,repeatability,roughness,alignment,laser,pivot,sphere,sensors,drift,noise]\n",
                why);
   std::exit(2);
 }
@@ -318,6 +320,68 @@ std::vector<Counted> countedParameters(const std::string& cycle, const ProbePlan
                        return std::nullopt;
                      }});
       }
+    return c;
+  }
+  if (cycle == "probe_qual") {
+    // The probe's own figures against what the generator drew: its pretravel along each approach
+    // (squared direction cosines over +X -X +Y -Y +Z -Z), the horizontal ones less their first
+    // harmonic (a centre offset: the fit puts it in the sphere's centre and reports the rest), the
+    // top's as drawn, their mean; and the per-touch scatter (repeatability and roughness, both
+    // along the approach in the report's weighted rows) against the repeatability's 95 % interval.
+    const ProbeQualLayout l = probeQualLayoutOf(plan);
+    const std::vector<Eigen::Vector3d> approaches = l.approaches();
+    const int A = l.azimuths;
+    const auto truths = [approaches, A](const Drawn& d) {
+      std::vector<double> p(approaches.size(), 0.0);
+      for (size_t a = 0; a < approaches.size(); ++a)
+        for (int k = 0; k < 3; ++k)
+          p[a] += approaches[a][k] * approaches[a][k] * d.m.pretravel_mm[static_cast<size_t>(2 * k + (approaches[a][k] < 0 ? 1 : 0))];
+      Eigen::MatrixXd CS(A, 2);
+      Eigen::VectorXd h(A);
+      for (int a = 0; a < A; ++a) {
+        const double th = std::atan2(approaches[static_cast<size_t>(a)].y(), approaches[static_cast<size_t>(a)].x());
+        CS(a, 0) = std::cos(th), CS(a, 1) = std::sin(th);
+        h[a] = p[static_cast<size_t>(a)];
+      }
+      const Eigen::VectorXd rest = h - CS * CS.colPivHouseholderQr().solve(h);
+      for (int a = 0; a < A; ++a) p[static_cast<size_t>(a)] = 1e3 * rest[a];
+      p.back() *= 1e3;
+      return p;
+    };
+    c.push_back({"mean_pretravel", "um", [truths, A](const Drawn& d) {
+                   const std::vector<double> p = truths(d);
+                   return std::accumulate(p.begin(), p.begin() + A, 0.0) / A;
+                 },
+                 [](const Json& doc) -> std::optional<ValueU> {
+                   if (!doc.contains("mean_pretravel") || !doc["mean_pretravel"].contains("U")) return std::nullopt;
+                   const Json& e = doc["mean_pretravel"];
+                   return ValueU{e["value"].get<double>(), e["U"].get<double>(), e.value("u_c", 0.0)};
+                 }});
+    const std::vector<std::string> names = l.approachNames();
+    for (size_t a = 0; a < approaches.size(); ++a)
+      c.push_back({"pretravel " + names[a], "um", [truths, a](const Drawn& d) { return truths(d)[a]; },
+                   [a](const Json& doc) -> std::optional<ValueU> {
+                     const Json dirs = doc.value("pretravel_by_direction", Json::array());
+                     if (a >= dirs.size() || !dirs[a].contains("U")) return std::nullopt;
+                     return ValueU{dirs[a]["pretravel"].get<double>(), dirs[a]["U"].get<double>(), dirs[a].value("u_c", 0.0)};
+                   }});
+    // "within U": the drawn scatter inside the 95 % interval (value = its middle, U = its half-width).
+    // The report's repeatability is along the approach: the probe's scatter is drawn there, the
+    // roughness as a height along the contact normal, which a horizontal approach above the
+    // equator reads as h / |n . u|; pooled over one repeat's touches (each has the same repeats).
+    double mean_w2 = 0.0;
+    for (const auto& t : l.touches()) mean_w2 += 1.0 / std::pow(t.n.dot(approaches[static_cast<size_t>(t.approach)]), 2);
+    mean_w2 /= static_cast<double>(l.touches().size());
+    c.push_back({"repeatability (95 % interval)", "um",
+                 [mean_w2](const Drawn& d) {
+                   return 1e3 * std::sqrt(d.m.repeatability_mm * d.m.repeatability_mm + mean_w2 * d.m.roughness_mm * d.m.roughness_mm);
+                 },
+                 [](const Json& doc) -> std::optional<ValueU> {
+                   if (!doc.contains("repeatability") || !doc["repeatability"].contains("interval_95")) return std::nullopt;
+                   const double lo = doc["repeatability"]["interval_95"][0].get<double>(),
+                                hi = doc["repeatability"]["interval_95"][1].get<double>();
+                   return ValueU{(lo + hi) / 2, (hi - lo) / 2, 0.0};
+                 }});
     return c;
   }
   if (cycle == "spheres3") {

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "core/contributor_draw.hpp"
 #include "core/errors.hpp"
 #include "core/report_envelope.hpp"
 #include "core/least_squares.hpp"
@@ -267,9 +268,43 @@ ProbeQualification qualifyProbe(const ProbePlan& plan, const std::vector<Measure
   q.repeatability_lo_um = q.repeatability_um * std::sqrt(q.dof / chiSquareUpperQuantile(0.025, q.dof));
   q.repeatability_hi_um = q.repeatability_um * std::sqrt(q.dof / chiSquareUpperQuantile(0.975, q.dof));
 
-  // u: the repeatability through the fit's covariance (per unit variance of the weighted rows).
+  // u_A: the repeatability through the fit's covariance (per unit variance of the weighted rows).
   const Eigen::MatrixXd cov = std::pow(umToMm(q.repeatability_um), 2) * fit.covariance;
   const auto uOf = [&](const Eigen::VectorXd& g) { return mmToUm(std::sqrt(std::max(0.0, g.dot(cov * g)))); };
+  // u_B: the declared linear axes move each touch's reading along its approach by their error
+  // where it is read (probeAxesCovariance: scale, squareness and random nodes, to first order),
+  // the same in every repeat, so the repeats cannot see it. Over the sphere's few centimetres the
+  // random nodes (000 Eq. (22): 2 um every 20-50 mm on 000 Table 5's machine) differ between
+  // opposite contacts, which the fit reads as pretravel: without this term a machine as its
+  // contributors file declares it gets a pretravel "significant" by what its axes do. The axes'
+  // error e at a touch puts its reading on the sphere moved by -e, so its weighted row moves by
+  // -w m . e: what it reads of e is w m, the contact normal over |m . u|, not the approach (above
+  // the equator a horizontal approach reads the vertical error too, tan(latitude) of it, which
+  // the sphere's height then takes up). The parameters move by (J^T J)^-1 J^T of the rows.
+  Eigen::MatrixXd covB = Eigen::MatrixXd::Zero(nx, nx);
+  if (options.declared) {
+    ContributorSet linear;
+    linear.node_spacing_min_mm = options.declared->node_spacing_min_mm;
+    linear.node_spacing_max_mm = options.declared->node_spacing_max_mm;
+    std::vector<std::string> ids;
+    for (const Contributor& c : options.declared->items)
+      if (c.info && isLinearAxisContributor(*c.info) && c.u.cwiseAbs().maxCoeff() > 0) {
+        linear.items.push_back(c);
+        ids.push_back(std::string(c.info->id));
+      }
+    if (!linear.items.empty()) {
+      std::vector<Eigen::Vector3d> reads(static_cast<size_t>(N));
+      for (size_t j = 0; j < reads.size(); ++j)
+        reads[j] = q.normals[j] / std::max(1e-6, std::abs(q.normals[j].dot(u[j])));
+      const Eigen::MatrixXd S = probeAxesCovariance(linear, isLinearAxisContributor, t, reads);
+      const Eigen::MatrixXd K = (J.transpose() * J).ldlt().solve(J.transpose());
+      covB = K * S * K.transpose();
+      q.type_b_source = fmt::format("the declared linear axes ({}{}) at each touch, the same in every repeat, through "
+                                    "the fit to first order",
+                                    fmt::join(ids, ", "), options.declared->file.empty() ? "" : ", " + options.declared->file);
+    }
+  }
+  const auto uBOf = [&](const Eigen::VectorXd& g) { return mmToUm(std::sqrt(std::max(0.0, g.dot(covB * g)))); };
   double lo = 1e300, hi = -1e300, sum = 0.0, sum2 = 0.0;
   Eigen::VectorXd g_mean = Eigen::VectorXd::Zero(nx);
   for (int a = 0; a <= A; ++a) {
@@ -280,7 +315,9 @@ ProbeQualification qualifyProbe(const ProbePlan& plan, const std::vector<Measure
     p.name = names[static_cast<size_t>(a)];
     p.approach = approaches[static_cast<size_t>(a)];
     p.pretravel_um = mmToUm(pretravelOf(fit.x, a));
-    p.u_um = uOf(g);
+    p.u_a_um = uOf(g);
+    p.u_b_um = uBOf(g);
+    p.u_um = std::hypot(p.u_a_um, p.u_b_um);
     for (int ap : approach_of) p.touches += ap == a;
     if (a < A) {
       lo = std::min(lo, p.pretravel_um);
@@ -292,12 +329,14 @@ ProbeQualification qualifyProbe(const ProbePlan& plan, const std::vector<Measure
     q.by_direction.push_back(p);
   }
   q.mean_pretravel_um = sum / A;
-  q.u_mean_pretravel_um = uOf(g_mean);
+  q.u_a_mean_pretravel_um = uOf(g_mean);
+  q.u_b_mean_pretravel_um = uBOf(g_mean);
+  q.u_mean_pretravel_um = std::hypot(q.u_a_mean_pretravel_um, q.u_b_mean_pretravel_um);
   q.lobing_range_um = hi - lo;
   q.lobing_rms_um = std::sqrt(std::max(0.0, sum2 / A - q.mean_pretravel_um * q.mean_pretravel_um));
   // E[rms^2] of a probe without lobing: trace(H C H) / A, C the horizontal pretravels' covariance
-  // and H the centring.
-  const Eigen::MatrixXd C = B * cov.block(3, 3, nb, nb) * B.transpose();
+  // (the repeats' scatter and the declared linear axes: neither is the probe's) and H the centring.
+  const Eigen::MatrixXd C = B * (cov + covB).block(3, 3, nb, nb) * B.transpose();
   const Eigen::MatrixXd H = Eigen::MatrixXd::Identity(A, A) - Eigen::MatrixXd::Constant(A, A, 1.0 / A);
   q.lobing_rms_noise_um = mmToUm(std::sqrt(std::max(0.0, (H * C * H).trace() / A)));
   q.lobing_rms_net_um = std::sqrt(std::max(0.0, q.lobing_rms_um * q.lobing_rms_um - q.lobing_rms_noise_um * q.lobing_rms_noise_um));
@@ -328,16 +367,20 @@ Json probeQualReportJson(const ProbePlan& plan, const ProbeQualification& q, con
                     {"unit", "um"},
                     {"touches", p.touches}});
   j["pretravel_by_direction"] = dirs;
-  // u means u_c in every report; here no Type B is evaluated, so u_c is the data's u_A.
-  setTypeAOnlyFields(&j["mean_pretravel"], q.u_mean_pretravel_um);
-  for (size_t i = 0; i < q.by_direction.size(); ++i) setTypeAOnlyFields(&j["pretravel_by_direction"][i], q.by_direction[i].u_um);
+  // u means u_c in every report: u_A from the repeats, u_B from the declared linear axes.
+  setUncertaintyFields(&j["mean_pretravel"], q.u_a_mean_pretravel_um, q.u_b_mean_pretravel_um, kCoverageFactor);
+  for (size_t i = 0; i < q.by_direction.size(); ++i)
+    setUncertaintyFields(&j["pretravel_by_direction"][i], q.by_direction[i].u_a_um, q.by_direction[i].u_b_um, kCoverageFactor);
+  const bool type_b = !q.type_b_source.empty();
   j["uncertainty"] = {{"coverage_probability", round6(kCoverageProbability)},
                       {"coverage_factor", fmt::format("k = {:g}, the distribution taken as normal (no Monte Carlo distribution)",
                                                       kCoverageFactor)},
                       {"type_a", "the repeatability through the fit's covariance (the pooled scatter of the repeats)"},
-                      {"type_b", "not evaluated: the qualification measures the probe's own contributors (repeatability, "
-                                 "pretravel) that the other cycles declare, so u_c = u_A, the data's scatter only"},
-                      {"type_b_evaluated", false}};
+                      {"type_b", type_b ? q.type_b_source
+                                        : std::string("not evaluated: no linear axis declared (the qualification measures "
+                                                      "the probe's own contributors, repeatability and pretravel), so u_c = "
+                                                      "u_A, the data's scatter only")},
+                      {"type_b_evaluated", type_b}};
   j["pretravel_note"] = "along the approach, late triggers positive; the horizontal pattern's first harmonic (cos and "
                         "sin of the azimuth) is a centre offset and is in the sphere's centre";
   j["lobing"] = {{"range", round6(q.lobing_range_um)},
@@ -346,7 +389,7 @@ Json probeQualReportJson(const ProbePlan& plan, const ProbeQualification& q, con
                  {"rms_net", round6(q.lobing_rms_net_um)},
                  {"unit", "um"},
                  {"description", "the horizontal approaches' pretravel about its mean; rms_net is the rms less what "
-                                 "the repeatability alone gives it (in quadrature)"}};
+                                 "the repeatability and the declared linear axes give it (in quadrature)"}};
   j["sphere_centre_m_mm"] = {round6(q.centre_m_mm.x()), round6(q.centre_m_mm.y()), round6(q.centre_m_mm.z())};
   // What the qualification feeds: MACHINE.json's probe section and CONTRIB.json's probe entries.
   j["machine_probe"] = {{"ball_diameter_mm", round6(q.effective_ball_diameter_mm)},
@@ -355,7 +398,7 @@ Json probeQualReportJson(const ProbePlan& plan, const ProbeQualification& q, con
                                                 {"note", "probe_qual: pooled repeatability"}}},
                        {"probe_pretravel", {{"u", round6(q.lobing_rms_net_um)}, {"unit", "um"},
                                             {"note", "probe_qual: rms of the pretravel by direction about its mean, "
-                                                     "less what the repeatability alone gives it"}}}};
+                                                     "less what the repeatability and the declared linear axes give it"}}}};
   j["fit"] = {{"touches", q.touches}, {"approach_directions", q.directions}, {"dof", q.dof}};
   // The envelope's figures every report shows: the touches used and their rms residual.
   double ss = 0.0;
@@ -499,9 +542,14 @@ std::string probeQualText(const ProbeQualification& q) {
       q.touches, q.directions, q.repeatability_um, q.dof, q.repeatability_lo_um, q.repeatability_hi_um, q.mean_pretravel_um,
       q.u_mean_pretravel_um, q.effective_ball_diameter_mm);
   for (const auto& p : q.by_direction) s += fmt::format("  {:<16} {:+8.3f}  {:.3f}\n", p.name, p.pretravel_um, p.u_um);
-  s += fmt::format("lobing: range {:.3f} um, rms {:.3f} um (the repeatability alone gives {:.3f} um: net {:.3f} um)\n",
-                   q.lobing_range_um, q.lobing_rms_um, q.lobing_rms_noise_um, q.lobing_rms_net_um);
-  s += "u_c (k = 1) = u_A: Type B not evaluated (the qualification measures the probe's own contributors)\n";
+  const bool type_b = !q.type_b_source.empty();
+  s += fmt::format("lobing: range {:.3f} um, rms {:.3f} um (the repeatability{} gives {:.3f} um: net {:.3f} um)\n",
+                   q.lobing_range_um, q.lobing_rms_um, type_b ? " and the declared linear axes" : " alone",
+                   q.lobing_rms_noise_um, q.lobing_rms_net_um);
+  s += type_b ? fmt::format("u_c (k = 1): u_A the repeats' scatter, u_B {} (mean pretravel: u_A {:.3f}, u_B {:.3f} um)\n",
+                            q.type_b_source, q.u_a_mean_pretravel_um, q.u_b_mean_pretravel_um)
+              : std::string("u_c (k = 1) = u_A: no linear axis declared, no Type B (the qualification measures the probe's "
+                            "own contributors)\n");
   s += q.screen.text() + "\n";
   return s;
 }

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "core/contributors.hpp"
 #include "core/json_io.hpp"
 #include "core/measurement.hpp"
 #include "core/probe_plan.hpp"
@@ -24,7 +25,9 @@ struct DirectionPretravel {
   std::string name;
   Eigen::Vector3d approach = Eigen::Vector3d::Zero();  // unit, toward the sphere
   double pretravel_um = 0.0;  // along the approach, late positive
-  double u_um = 0.0;          // standard uncertainty (Type A)
+  double u_um = 0.0;          // combined standard uncertainty u_c
+  double u_a_um = 0.0;        // Type A: the repeats' scatter through the fit
+  double u_b_um = 0.0;        // Type B: the declared linear axes through the fit (0 when none declared)
   int touches = 0;
 };
 
@@ -64,6 +67,9 @@ struct ProbeQualScreen {
 struct ProbeQualOptions {
   double alpha = 0.01;         // family-wise rate of a clean qualification losing a touch
   double max_fraction = 0.05;  // of the touches; beyond it nothing is left out
+  /// The machine's declared contributors: its linear axes move each touch by their error where
+  /// it is read, the same in every repeat, which the repeats cannot see (Type B). Null: none.
+  const ContributorSet* declared = nullptr;
 };
 
 struct ProbeQualification {
@@ -73,7 +79,10 @@ struct ProbeQualification {
   int dof = 0;                         // touches - directions
   double repeatability_lo_um = 0.0, repeatability_hi_um = 0.0;  // 95 % interval (chi-square)
   double mean_pretravel_um = 0.0;      // over the horizontal approaches: the effective radius's deficit
-  double u_mean_pretravel_um = 0.0;
+  double u_mean_pretravel_um = 0.0;    // u_c
+  double u_a_mean_pretravel_um = 0.0, u_b_mean_pretravel_um = 0.0;
+  /// The Type B source in words, empty when the declaration holds no linear axis.
+  std::string type_b_source;
   double effective_ball_diameter_mm = 0.0;  // nominal less twice the horizontal mean pretravel
   Eigen::Vector3d centre_m_mm = Eigen::Vector3d::Zero();
   std::vector<DirectionPretravel> by_direction;

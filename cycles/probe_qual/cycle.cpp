@@ -27,7 +27,9 @@ class ProbeQual final : public Cycle {
 
   CycleDocuments analyze(const AnalyzeRequest& r) const override {
     const ProbePlan& plan = *r.plan;
-    const ProbeQualification q = qualifyProbe(plan, readProbeRuns(plan, r.results, *r.dialect));
+    ProbeQualOptions o;
+    o.declared = r.contributors;  // the machine's linear axes: Type B of the pretravels
+    const ProbeQualification q = qualifyProbe(plan, readProbeRuns(plan, r.results, *r.dialect), o);
     const std::vector<std::string> files = pathsOf(r.results);
     const Json verdict = probeQualVerdictJson(q, plan.machine.probe.repeatability_um);
     CycleDocuments out = documents(probeQualReportJson(plan, q, files), verdictText(verdict) + "\n" + probeQualText(q));
