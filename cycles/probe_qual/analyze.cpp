@@ -543,8 +543,8 @@ std::string probeQualText(const ProbeQualification& q) {
       q.u_mean_pretravel_um, q.effective_ball_diameter_mm);
   for (const auto& p : q.by_direction) s += fmt::format("  {:<16} {:+8.3f}  {:.3f}\n", p.name, p.pretravel_um, p.u_um);
   const bool type_b = !q.type_b_source.empty();
-  s += fmt::format("lobing: range {:.3f} um, rms {:.3f} um (the repeatability{} gives {:.3f} um: net {:.3f} um)\n",
-                   q.lobing_range_um, q.lobing_rms_um, type_b ? " and the declared linear axes" : " alone",
+  s += fmt::format("lobing: range {:.3f} um, rms {:.3f} um (the repeatability{} {:.3f} um: net {:.3f} um)\n",
+                   q.lobing_range_um, q.lobing_rms_um, type_b ? " and the declared linear axes give" : " alone gives",
                    q.lobing_rms_noise_um, q.lobing_rms_net_um);
   s += type_b ? fmt::format("u_c (k = 1): u_A the repeats' scatter, u_B {} (mean pretravel: u_A {:.3f}, u_B {:.3f} um)\n",
                             q.type_b_source, q.u_a_mean_pretravel_um, q.u_b_mean_pretravel_um)
