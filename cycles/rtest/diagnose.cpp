@@ -244,9 +244,23 @@ RtestDiagnosis diagnoseRtest(const ProbePlan& plan, const std::vector<RtestCycle
   const double level = d.summary.per_test_alpha;
   const JudgeCause& drift = setup.problem.causes.front();
 
+  // The nested judgements below ask who drifts, on the model the judge accepted: a sensor step it
+  // found stays in their baseline (left out, the step's residual is read by the drift families
+  // and the table drift passes beyond the linear axes' on a series they explain).
+  JudgeProblem base = setup.problem;
+  for (const auto& f : d.summary.findings) {
+    if (f.cause == kDrift) continue;
+    for (const auto& c : setup.problem.causes) {
+      if (c.name != f.cause) continue;
+      base.J0.conservativeResize(Eigen::NoChange, base.J0.cols() + c.J.cols());
+      base.J0.rightCols(c.J.cols()) = c.J;
+      for (const auto& p : c.parameters) base.baseline_parameters.push_back({c.name + "." + p.name, p.unit});
+    }
+  }
+
   // How each confound is read as table drift: the judge with the drift in the model.
-  JudgeProblem with_drift = setup.problem;
-  with_drift.J0.conservativeResize(Eigen::NoChange, setup.problem.J0.cols() + drift.J.cols());
+  JudgeProblem with_drift = base;
+  with_drift.J0.conservativeResize(Eigen::NoChange, base.J0.cols() + drift.J.cols());
   with_drift.J0.rightCols(drift.J.cols()) = drift.J;
   for (const auto& p : drift.parameters) with_drift.baseline_parameters.push_back({std::string(kDrift) + "." + p.name, p.unit});
   with_drift.causes = setup.confounds;
@@ -259,11 +273,11 @@ RtestDiagnosis diagnoseRtest(const ProbePlan& plan, const std::vector<RtestCycle
     if (rc.entry.cause.empty()) continue;  // not exactly confounded on this plan: nothing to state
     // Does it alone explain the signal? Its own test against the baseline, and the table
     // drift's test with it in the model.
-    JudgeProblem alone = setup.problem;
+    JudgeProblem alone = base;
     alone.causes = {cf};
     const JudgeSummary sa = judge(alone, o.judge);
-    JudgeProblem beyond = setup.problem;
-    beyond.J0.conservativeResize(Eigen::NoChange, setup.problem.J0.cols() + cf.J.cols());
+    JudgeProblem beyond = base;
+    beyond.J0.conservativeResize(Eigen::NoChange, base.J0.cols() + cf.J.cols());
     beyond.J0.rightCols(cf.J.cols()) = cf.J;
     for (const auto& p : cf.parameters) beyond.baseline_parameters.push_back({cf.name + "." + p.name, p.unit});
     beyond.causes = {drift};
