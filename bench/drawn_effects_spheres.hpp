@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/independent_machine.hpp"
 #include "core/contributors.hpp"
 #include "core/judge.hpp"
 #include "core/machine.hpp"
@@ -40,6 +41,9 @@ struct Spheres3World {
   ContributorSet declared;
   ProbePlan plan;
   Spheres3Noise noise;
+  /// What the generator draws (all the declared contributors; the bench switches some off to
+  /// trace what hides an effect, ROTACAL_BENCH_DRAW_OFF). The judge still reads the declaration.
+  independent::DrawOptions draw;
   static constexpr double kRepeatEvery_s = 1800.0;
   JudgeSummary judge(std::uint64_t seed, const Hide& effect, int repeats) const;
 };
@@ -56,6 +60,9 @@ struct SpaceframeWorld {
   ContributorSet declared;
   ProbePlan plan;
   SpaceframeNoise noise;
+  /// What the generator draws (all the declared contributors; the bench switches some off to
+  /// trace what hides an effect, ROTACAL_BENCH_DRAW_OFF). The judge still reads the declaration.
+  independent::DrawOptions draw;
   JudgeSummary judge(std::uint64_t seed, const Hide& effect) const;
 };
 
