@@ -86,6 +86,10 @@ struct Tally {
     if (s.verdict == JudgeVerdict::NoSignificantEffect) ++none;
     if (std::getenv("ROTACAL_BENCH_VERBOSE")) {
       std::fprintf(stderr, "  %s\n", s.message.c_str());
+      for (const auto& c : s.candidate_tests)
+        if (c.step == 0)
+          std::fprintf(stderr, "    step 0 %s: delta chi2 %.1f (k %d), p %.3g, gain %.3g +- %.3g: %s\n", c.cause.c_str(), c.delta_chi2, c.k,
+                       c.p_value, c.gain, c.gain_se, c.reason.c_str());
       for (const auto& f : s.findings) std::fprintf(stderr, "    finding %s (p %.3g, gain %.3g +- %.3g)\n", f.cause.c_str(), f.p_value, f.gain, f.gain_se);
     }
     bool any = false;
