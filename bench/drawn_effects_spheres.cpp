@@ -127,8 +127,9 @@ struct Tally {
 
 template <typename Judge>
 void row(const Judge& judge, int seeds, std::uint64_t seed0, const SphereEffect& e, double k) {
-  const char* only = std::getenv("ROTACAL_BENCH_ONLY");  // run only the rows whose name contains it
-  if (only && e.what.find(only) == std::string::npos) return;
+  // Run only the rows whose name contains ROTACAL_BENCH_ONLY, or is it when it starts with '='.
+  const char* only = std::getenv("ROTACAL_BENCH_ONLY");
+  if (only && (only[0] == '=' ? e.what != only + 1 : e.what.find(only) == std::string::npos)) return;
   Tally t;
   for (int s = 0; s < seeds; ++s) {
     try {
