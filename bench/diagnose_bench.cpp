@@ -1,9 +1,11 @@
 // rotacal_diagnose_bench: the figures of docs/diagnosis.md for the touch cycles' diagnosis
 // through the judge, printed, not asserted: false alarms on clean data (200 seeds)
 // and detection rates of hidden effects (50 seeds each), with the parameter within 3 u.
-// Run: build/bench/rotacal_diagnose_bench [touch154|touch154_drawn|one_sphere_drawn|spaceframe] [clean_seeds] [effect_seeds]
+// Run: build/bench/rotacal_diagnose_bench [touch154|touch154_drawn|one_sphere_drawn|tooltip_drawn|spaceframe] [clean_seeds] [effect_seeds]
 // touch154_drawn: the same effects on top of machines drawn from the bundled contributors by the
 // independent generator (bench/independent_machine.hpp), judged against that declaration.
+// tooltip_drawn: the tooltip cycle's causes on heads drawn from its bundled contributors
+// (bench/drawn_effects_tooltip.hpp).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -16,6 +18,7 @@
 #include <fmt/format.h>
 
 #include "bench/drawn_effect.hpp"
+#include "bench/drawn_effects_tooltip.hpp"
 #include "bench/independent_machine.hpp"
 #include "core/contributors.hpp"
 #include "core/machine.hpp"
@@ -284,6 +287,7 @@ int main(int argc, char** argv) {
   if (which == "all" || which == "touch154") touch154(clean, effect);
   if (which == "all" || which == "touch154_drawn") touch154Drawn(clean, effect);
   if (which == "all" || which == "one_sphere_drawn") oneSphereDrawn(clean, effect);
+  if (which == "all" || which == "tooltip_drawn") independent::tooltipDrawnBench(clean, effect);
   if (which == "all" || which == "spaceframe") spaceframe(clean, effect);
   return 0;
 }
