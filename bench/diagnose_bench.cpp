@@ -1,13 +1,15 @@
 // rotacal_diagnose_bench: the figures of docs/diagnosis.md for the touch cycles' diagnosis
 // through the judge, printed, not asserted: false alarms on clean data (200 seeds)
 // and detection rates of hidden effects (50 seeds each), with the parameter within 3 u.
-// Run: build/bench/rotacal_diagnose_bench [touch154|touch154_drawn|one_sphere_drawn|rtest_drawn|spaceframe|spheres3_drawn|
-//      spaceframe_drawn] [clean_seeds] [effect_seeds]
+// Run: build/bench/rotacal_diagnose_bench [touch154|touch154_drawn|one_sphere_drawn|rtest_drawn|tooltip_drawn|spaceframe|
+//      spheres3_drawn|spaceframe_drawn] [clean_seeds] [effect_seeds]
 // touch154_drawn: the same effects on top of machines drawn from the bundled contributors by the
 // independent generator (bench/independent_machine.hpp), judged against that declaration;
 // spheres3_drawn, spaceframe_drawn: theirs (bench/drawn_effects_spheres.hpp).
 // rtest_drawn: the rtest catalog on R-test machines drawn from examples/contributors/rtest_002.json
 // (bench/drawn_effects_rtest.hpp), one cycle and 002's thermal schedule.
+// tooltip_drawn: the tooltip cycle's causes on heads drawn from its bundled contributors
+// (bench/drawn_effects_tooltip.hpp).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -22,6 +24,7 @@
 #include "bench/drawn_effect.hpp"
 #include "bench/drawn_effects_rtest.hpp"
 #include "bench/drawn_effects_spheres.hpp"
+#include "bench/drawn_effects_tooltip.hpp"
 #include "bench/independent_machine.hpp"
 #include "core/contributors.hpp"
 #include "core/machine.hpp"
@@ -291,6 +294,7 @@ int main(int argc, char** argv) {
   if (which == "all" || which == "touch154_drawn") touch154Drawn(clean, effect);
   if (which == "all" || which == "one_sphere_drawn") oneSphereDrawn(clean, effect);
   if (which == "all" || which == "rtest_drawn") independent::rtestDrawnBench(clean, effect);
+  if (which == "all" || which == "tooltip_drawn") independent::tooltipDrawnBench(clean, effect);
   if (which == "all" || which == "spaceframe") spaceframe(clean, effect);
   if (which == "all" || which == "spheres3_drawn") drawn::spheres3DrawnBench(clean, effect);
   if (which == "all" || which == "spaceframe_drawn") drawn::spaceframeDrawnBench(clean, effect);

@@ -15,6 +15,10 @@
 // (the head's dR); rtest: linear_axes, sphere (its offset), sensors (gain and direction), drift,
 // noise (the sensors' own), form (the sphere's, per reading));
 // comma-separated), to see which one a failure is owed to.
+// --runs N (tooltip only, default 1): the bundled plan measured N times on the same drawn machine
+// (the same head and linear axes; a new laser zero and per-reading scatter each run), all N
+// results handed to analyze and diagnose as repeats (`analyze --results R1 R2 ...`); the chip is
+// in one reading of one run (the run drawn with the reading).
 // --dump writes the first machine's PLAN.json, RESULTS, TRUTH.json, REPORT.json and DIAGNOSIS.json,
 // so that the command line can be run on the same data (`rotacal analyze --plan DIR/PLAN.json ...`).
 // Defaults: 200 machines, 2000 Monte Carlo runs per analysis (the CLI's default), seeds 1..N,
@@ -74,12 +78,13 @@ struct Args {
   bool verbose = false;
   std::string dump;  // a folder for the first machine's RESULTS, REPORT.json and DIAGNOSIS.json
   std::string off;   // contributors switched off, comma-separated (what each failure is owed to)
+  int runs = 1;      // tooltip: repeats of the plan on the same machine
 };
 
 [[noreturn]] void usage(const char* why) {
   std::fprintf(stderr,
                "rotacal_real_machine_bench: %s\nusage: rotacal_real_machine_bench [--machines N] [--mc-runs R] [--seed S] "
-               "[--contributors FILE] [--machine FILE] [--dialect D] [--sd-um X] [--sd-mdeg X] [--no-chips] [--verbose]\n"
+               "[--contributors FILE] [--machine FILE] [--dialect D] [--sd-um X] [--sd-mdeg X] [--no-chips] [--verbose] [--runs N]\n"
                "       [--cycle touch154|one_sphere|spheres3|spaceframe|tooltip|rtest|probe_qual] [--dump DIR] [--off setup,form,linear_axes,pretravel,repeatability,roughness,alignment,laser,pivot,sphere,sensors,drift,noise]\n",
                why);
   std::exit(2);
@@ -106,9 +111,12 @@ Args parse(int argc, char** argv) {
     else if (k == "--cycle") a.cycle = value();
     else if (k == "--dump") a.dump = value();
     else if (k == "--off") a.off = value();
+    else if (k == "--runs") a.runs = std::stoi(value());
     else usage(("unknown option " + k).c_str());
   }
   if (a.machines < 1) usage("--machines must be >= 1");
+  if (a.runs < 1) usage("--runs must be >= 1");
+  if (a.runs > 1 && a.cycle != "tooltip") usage("--runs is for --cycle tooltip");
   if (a.mc_runs < 100) usage("--mc-runs must be >= 100 (analyze's own lower limit)");
   return a;
 }
@@ -123,8 +131,10 @@ DialectIO dialectIO(const Dialect& d) {
 
 // The results file's name: the dialect's, or the tool-tip laser's neutral CSV (its readings come
 // from the laser system, whatever the dialect; the R-test's from its logger, likewise).
-std::string resultsName(const ProbePlan& plan, const Dialect& d) {
-  return plan.cycle == "tooltip" || plan.cycle == "rtest" ? std::string("RESULTS.csv") : "RESULTS" + std::string(d.resultsExtension());
+// Repeats (run > 0) are RESULTS2, RESULTS3, ... as an operator would save them.
+std::string resultsName(const ProbePlan& plan, const Dialect& d, int run = 0) {
+  const std::string stem = run > 0 ? fmt::format("RESULTS{}", run + 1) : std::string("RESULTS");
+  return plan.cycle == "tooltip" || plan.cycle == "rtest" ? stem + ".csv" : stem + std::string(d.resultsExtension());
 }
 
 // One drawn machine: an A/C table (the probing cycles), a spindle head (tooltip) or a B/C table
@@ -142,6 +152,7 @@ struct Analyzed {
   bool written = false;       // `--offsets` would write the file (no refusal, the writer accepts it)
   std::string refused;        // why not
   std::vector<int> excluded;  // point ids the outlier screen left out (rtest: 3 x pose id + axis)
+  std::vector<int> excluded_run;  // the run (1-based) of each, 1 where the report names none
   bool finding = false;       // REPORT.json names a finding (rtest: the re-read check's sensor_step)
   bool too_many = false;
   bool held_back = false;     // REPORT.json's corrections_held_back: the data beyond the declaration
@@ -151,10 +162,10 @@ struct Analyzed {
 };
 
 Analyzed analyze(const Cycle& cycle, const ProbePlan& plan, const Dialect& d, const DialectIO& io,
-                 const ContributorSet& contrib, const std::string& results, const Args& args, std::uint64_t mc_seed) {
+                 const ContributorSet& contrib, const std::vector<std::string>& results, const Args& args, std::uint64_t mc_seed) {
   AnalyzeRequest r;
   r.plan = &plan;
-  r.results = {{resultsName(plan, d), results}};
+  for (size_t i = 0; i < results.size(); ++i) r.results.push_back({resultsName(plan, d, static_cast<int>(i)), results[i]});
   r.dialect = &io;
   r.contributors = &contrib;
   r.mc_runs = args.mc_runs;
@@ -179,6 +190,7 @@ Analyzed analyze(const Cycle& cycle, const ProbePlan& plan, const Dialect& d, co
         a.excluded.push_back(3 * e.value("pose", 0) + static_cast<int>(std::string("xyz").find(e["axis"].get<std::string>())));
       else
         a.excluded.push_back(e.value("point", 0));
+      a.excluded_run.push_back(e.contains("run") && e["run"].is_number_integer() ? e["run"].get<int>() : 1);
     }
     a.too_many = o.value("too_many", false);
     a.beyond = o.value("beyond", 0);
@@ -533,10 +545,18 @@ int main(int argc, char** argv) {
   const bool rtest = plan.cycle == "rtest";
   rtest_draw.sd_um = args.sd_um;
   rtest_draw.sd_mdeg = args.sd_mdeg;
-  // The results text of a drawn machine, with a chip of `mm` under point `id` (0: none): the
-  // probing cycles' triggers through the dialect's results writer, tooltip's laser readings
-  // through its neutral CSV writer (what `simulate` writes for each).
-  const auto resultsOf = [&](const Drawn& d, int id, bool chip_z, int chip_axis, double mm) -> std::string {
+  // The results texts of a drawn machine (one per run), with a chip of `mm` under point `id` (0:
+  // none) in run `chip_run`: the probing cycles' triggers through the dialect's results writer,
+  // tooltip's laser readings through its neutral CSV writer (what `simulate` writes for each).
+  // A tooltip repeat is the same head read again: its own per-reading draws (a new zero and
+  // scatter), run 0 the head's own so that one run is the single-run bench.
+  const auto resultsOfRun = [&](const Drawn& d, int id, bool chip_z, int chip_axis, double mm, int run) -> std::string {
+    if (tooltip && run > 0) {
+      Drawn again = d;
+      again.head.reading_seed = d.head.reading_seed + 1000003ULL * static_cast<std::uint64_t>(run);
+      return tooltipResultsText(plan, ind::measureHead(plan, again.head, id ? std::optional<ind::ReadingChip>(ind::ReadingChip{id, chip_z, mm})
+                                                                            : std::nullopt));
+    }
     // The R-test: one sensor's value at one pose of the first cycle off by the chip's size (the
     // reset and re-read rows are the re-read check's, not the screen's: docs/rtest.md).
     if (rtest)
@@ -546,6 +566,12 @@ int main(int argc, char** argv) {
       return tooltipResultsText(plan, ind::measureHead(plan, d.head, id ? std::optional<ind::ReadingChip>(ind::ReadingChip{id, chip_z, mm})
                                                                          : std::nullopt));
     return dialect.writeResults(plan, ind::measure(plan, d.m, id ? std::optional<ind::Chip>(ind::Chip{id, mm}) : std::nullopt));
+  };
+  const auto resultsOf = [&](const Drawn& d, int id, bool chip_z, int chip_axis, double mm, int chip_run) {
+    std::vector<std::string> texts;
+    for (int r = 0; r < args.runs; ++r)
+      texts.push_back(resultsOfRun(d, r == chip_run ? id : 0, chip_z, chip_axis, r == chip_run ? mm : 0.0, r));
+    return texts;
   };
   std::vector<int> chip_points;
   for (const auto& p : plan.points)
@@ -580,12 +606,12 @@ int main(int argc, char** argv) {
     else drawn.m = ind::drawMachine(contrib, machine, draw, seed);
     const ind::Machine& m = drawn.m;
     ++n;
-    const std::string clean = resultsOf(drawn, 0, false, 0, 0.0);
+    const std::vector<std::string> clean = resultsOf(drawn, 0, false, 0, 0.0, 0);
     const Analyzed a = analyze(cycle, plan, dialect, io, contrib, clean, args, seed);
     const bool dump = i == 0 && !args.dump.empty();
     if (dump) {
       writeFile(args.dump, "PLAN.json", planToJson(plan).dump(1) + "\n");
-      writeFile(args.dump, resultsName(plan, dialect), clean);
+      for (size_t r = 0; r < clean.size(); ++r) writeFile(args.dump, resultsName(plan, dialect, static_cast<int>(r)), clean[r]);
       writeFile(args.dump, "TRUTH.json",
                 (tooltip ? headTruthJson(drawn.head) : rtest ? rtestTruthJson(drawn.rt) : truthJson(m)).dump(1) + "\n");
       writeFile(args.dump, "REPORT.json", a.doc.dump(1) + "\n");
@@ -621,7 +647,7 @@ int main(int argc, char** argv) {
 
     DiagnoseRequest dr;
     dr.plan = &plan;
-    dr.results = {{resultsName(plan, dialect), clean}};
+    for (size_t r = 0; r < clean.size(); ++r) dr.results.push_back({resultsName(plan, dialect, static_cast<int>(r)), clean[r]});
     dr.dialect = &io;
     dr.contributors = &contrib;  // as `diagnose` reads the machine's (or --contributors)
     std::string verdict = "refused";
@@ -664,11 +690,15 @@ int main(int argc, char** argv) {
       // The R-test's chip: one of the three sensors (drawn after the others' draws, which stay).
       const int chip_axis = std::uniform_int_distribution<int>(0, 2)(pick);
       const int key = rtest ? 3 * id + chip_axis : id;  // what the screen's excluded list names
+      // With repeats, the run the chip is in (drawn after the others, which stay).
+      const int chip_run = args.runs > 1 ? std::uniform_int_distribution<int>(0, args.runs - 1)(pick) : 0;
       for (auto [height_mm, tally] : {std::pair{0.020, &chip20}, std::pair{1.0, &chip1mm}}) {
-        const std::string chipped = resultsOf(drawn, id, chip_z, chip_axis, height_mm);
+        const std::vector<std::string> chipped = resultsOf(drawn, id, chip_z, chip_axis, height_mm, chip_run);
         const Analyzed c = analyze(cycle, plan, dialect, io, contrib, chipped, args, seed);
         ++tally->n;
-        const bool caught = std::find(c.excluded.begin(), c.excluded.end(), key) != c.excluded.end();
+        bool caught = false;
+        for (size_t x = 0; x < c.excluded.size(); ++x)
+          caught = caught || (c.excluded[x] == key && (args.runs == 1 || c.excluded_run[x] == chip_run + 1));
         tally->caught += caught;
         tally->written += c.written;
         tally->written_from_chip += c.written && !caught;
@@ -690,7 +720,8 @@ int main(int argc, char** argv) {
         if (!c.written)
           ++refusals[fmt::format("{:g} um chip: ", height_mm * 1e3) +
                      (c.ok ? c.refused.substr(0, std::min<size_t>(c.refused.find(':'), 60)) : "analyze refused: " + c.error.substr(0, 80))];
-        chip_line += fmt::format(" chip {:g} um at {}{}: {}{}{}", height_mm * 1e3, id,
+        chip_line += fmt::format(" chip {:g} um at {}{}{}: {}{}{}", height_mm * 1e3, id,
+                                 args.runs > 1 ? fmt::format(" run {}", chip_run + 1) : std::string(),
                                  tooltip ? (chip_z ? " (dz)" : " (dt)") : rtest ? fmt::format(" (d{})", "xyz"[chip_axis]) : "", caught ? "caught" : "missed",
                                  caught && c.excluded.size() > 1 ? fmt::format(" ({} left out)", c.excluded.size()) : "",
                                  c.written ? (caught ? ", written" : ", WRITTEN")
@@ -715,6 +746,10 @@ int main(int argc, char** argv) {
               plan.points.size(), machine_file.c_str(), options.c_str(),
               contrib.file.empty() ? "(the machine's, inline)" : contrib.file.c_str(), args.dialect.c_str());
   if (!args.off.empty()) std::printf("switched off in the generator: %s\n", args.off.c_str());
+  if (args.runs > 1)
+    std::printf("%d runs of the plan per machine (the same head and axes, a new laser zero and scatter each), analyzed and "
+                "diagnosed as repeats; a chip is in one reading of one run\n",
+                args.runs);
   const std::string around =
       tooltip ? fmt::format("a head with dR around {:g} um (sd {:g} um) and angular-error coefficients around {:g}, {:g}, {:g}, "
                             "{:g} mdeg (sd {:g} mdeg)",

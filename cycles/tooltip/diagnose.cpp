@@ -67,8 +67,11 @@ TooltipJudgeSetup tooltipJudgeSetup(const std::vector<TooltipSet>& sets, double 
   fo.fit_pivot_length = false;
   s.baseline = fitTooltip(*sets.front().plan, sets.front().runs, fo);
   Eigen::VectorXd e_lin = Eigen::VectorXd::Zero(na);  // rad
+  // An angle the screen left out of the first set has no value there (NaN): it is linearised at
+  // zero (its own column in J0 takes what it is; the model is linear in it to (e R)^2 / R).
   for (size_t k = 0; k < s.baseline.angles_deg.size(); ++k)
-    e_lin[angleIndex(s.angles_deg, s.baseline.angles_deg[k])] = mdegToRad(s.baseline.e_mdeg[k]);
+    if (std::isfinite(s.baseline.e_mdeg[k]))
+      e_lin[angleIndex(s.angles_deg, s.baseline.angles_deg[k])] = mdegToRad(s.baseline.e_mdeg[k]);
 
   // A drift is testable where an angle is read at two different times since its sweep's zero
   // (the dynamic test of 004 Sec. VI). Static repeats re-zero and read each angle at the same

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 #include <fmt/format.h>
 
@@ -231,6 +232,25 @@ TEST(TooltipDiagnosis, TwoToolLengthsSeparatePivotFromScale) {
     ASSERT_EQ(dp.summary.verdict, JudgeVerdict::EffectFound) << tooltipDiagnosisText(dp);
     EXPECT_EQ(dp.summary.findings[0].cause, "pivot_length");
     EXPECT_LE(std::abs(dp.summary.findings[0].parameters[0].value - 5.0), 3.0 * dp.summary.findings[0].parameters[0].u);
+  }
+}
+
+// Two tool lengths where the screen of gross readings left one reading of the first tool out
+// (both components NaN, as withoutScreened does): its angle has no value in the first set's fit
+// (the linearisation point), and the judge still reads the second set's reading of that angle
+// (once a non-finite y, a throw). A 5 um pivot error is found within 3 u of the simulator's truth.
+TEST(TooltipDiagnosis, TwoToolLengthsWithAReadingLeftOutOfTheFirst) {
+  const ProbePlan a = planR(381), b = planR(200);
+  for (int seed = 1; seed <= 3; ++seed) {
+    TooltipTruth t = truthOf(seed);
+    t.dR_um = 5.0;
+    TooltipRun first = simulateTooltip(a, t, static_cast<std::uint64_t>(60 + seed));
+    for (auto& r : first)
+      if (std::abs(r.angle_deg - 45.0) < 1e-9) r.t_um = r.z_um = std::numeric_limits<double>::quiet_NaN();
+    const TooltipDiagnosis d = diagnoseTooltip({{&a, {first}}, {&b, {simulateTooltip(b, t, static_cast<std::uint64_t>(70 + seed))}}}, {});
+    ASSERT_EQ(d.summary.verdict, JudgeVerdict::EffectFound) << tooltipDiagnosisText(d);
+    EXPECT_EQ(d.summary.findings[0].cause, "pivot_length");
+    EXPECT_LE(std::abs(d.summary.findings[0].parameters[0].value - 5.0), 3.0 * d.summary.findings[0].parameters[0].u);
   }
 }
 
