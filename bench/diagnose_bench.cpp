@@ -1,8 +1,8 @@
 // rotacal_diagnose_bench: the figures of docs/diagnosis.md for the touch cycles' diagnosis
 // through the judge, printed, not asserted: false alarms on clean data (200 seeds)
 // and detection rates of hidden effects (50 seeds each), with the parameter within 3 u.
-// Run: build/bench/rotacal_diagnose_bench [touch154|touch154_drawn|one_sphere_drawn|rtest_drawn|tooltip_drawn|spaceframe|
-//      spheres3_drawn|spaceframe_drawn] [clean_seeds] [effect_seeds]
+// Run: build/bench/rotacal_diagnose_bench [touch154|touch154_drawn|one_sphere_drawn|probe_qual_drawn|rtest_drawn|
+//      tooltip_drawn|spaceframe|spheres3_drawn|spaceframe_drawn] [clean_seeds] [effect_seeds]
 // touch154_drawn: the same effects on top of machines drawn from the bundled contributors by the
 // independent generator (bench/independent_machine.hpp), judged against that declaration;
 // spheres3_drawn, spaceframe_drawn: theirs (bench/drawn_effects_spheres.hpp).
@@ -32,6 +32,7 @@
 #include "core/units.hpp"
 #include "cycles/cycle.hpp"
 #include "cycles/one_sphere/diagnose.hpp"
+#include "cycles/probe_qual/diagnose.hpp"
 #include "cycles/spaceframe/diagnose.hpp"
 #include "cycles/touch154/declared.hpp"
 #include "cycles/touch154/diagnose.hpp"
@@ -193,6 +194,33 @@ void touch154Drawn(int clean_seeds, int effect_seeds) {
 
 /// one_sphere's catalogued causes on machines drawn from the bundled contributors, one run each,
 /// judged against that declaration (as touch154Drawn).
+/// probe_qual's catalogued cause (the sphere's drift) on machines drawn from the bundled
+/// contributors, two qualifications 30 min apart (the clean-world test's schedule).
+void probeQualDrawn(int clean_seeds, int effect_seeds) {
+  const MachineModel m = loadMachine(std::string(ROTACAL_SOURCE_DIR) + "/examples/machines/ac_trunnion.json");
+  const ContributorSet cs = loadContributors(std::string(ROTACAL_SOURCE_DIR) + "/examples/contributors/table5.json");
+  const ProbePlan plan = makePlan("probe_qual", m, {});
+  auto run = [&](const Hide& hide, int seed) {
+    const independent::Machine drawn = independent::drawMachine(cs, m, {}, 13000 + static_cast<std::uint64_t>(seed));
+    return diagnoseProbeQual(plan, independent::measureWithEffect(plan, drawn, hide, 2, 1800.0), JudgeOptions{}, &cs).summary;
+  };
+  std::printf("probe_qual, two qualifications 30 min apart, on machines drawn from examples/contributors/table5.json by "
+              "the independent generator, judged against it, alpha %.2f\n",
+              JudgeOptions{}.alpha);
+  const Runner runner = run;
+  trial(runner, clean_seeds, "drawn machine, no effect", [](Truth*) {});
+  for (double rate : {5.0, 10.0, 20.0})  // um/h in X; the clean world's test: 20
+    trial(runner, effect_seeds, fmt::format("sphere drift {:g} um/h in X", rate),
+          [rate](Truth* t) {
+            t->drift = [rate](double ts) {
+              ErrorVector d = ErrorVector::Zero();
+              d[0] = umToMm(rate) * ts / 3600.0;
+              return d;
+            };
+          },
+          "thermal_drift", 0, -rate);
+}
+
 void oneSphereDrawn(int clean_seeds, int effect_seeds) {
   const MachineModel m = loadMachine(std::string(ROTACAL_SOURCE_DIR) + "/examples/machines/ac_trunnion.json");
   const ContributorSet cs = loadContributors(std::string(ROTACAL_SOURCE_DIR) + "/examples/contributors/table5.json");
@@ -293,6 +321,7 @@ int main(int argc, char** argv) {
   if (which == "all" || which == "touch154") touch154(clean, effect);
   if (which == "all" || which == "touch154_drawn") touch154Drawn(clean, effect);
   if (which == "all" || which == "one_sphere_drawn") oneSphereDrawn(clean, effect);
+  if (which == "all" || which == "probe_qual_drawn") probeQualDrawn(clean, effect);
   if (which == "all" || which == "rtest_drawn") independent::rtestDrawnBench(clean, effect);
   if (which == "all" || which == "tooltip_drawn") independent::tooltipDrawnBench(clean, effect);
   if (which == "all" || which == "spaceframe") spaceframe(clean, effect);

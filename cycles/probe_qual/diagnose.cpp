@@ -38,22 +38,35 @@ ProbeQualDiagnosis diagnoseProbeQual(const ProbePlan& plan, const std::vector<Me
   JudgeProblem p;
   p.y = Eigen::Map<const Eigen::VectorXd>(q.residuals_um.data(), n);
   p.unit = "um";
-  // The declared noise, never the data's: a row reads its trigger's displacement ds along the
-  // approach as sign(m . u) ds (rows weighted by 1 / |m . u|).
+  // The declared noise, never the data's, in the rows' unit (um along the approach, rows weighted
+  // by w = 1 / |m . u|). The probe scatters along the approach: its repeatability reads 1:1. The
+  // surface and the machine's axes move the contact itself: a roughness height h along the normal
+  // reads w h, the axes' error e reads -w m . e (above the equator a horizontal approach reads
+  // tan(latitude) of the vertical error too; analyze's u_B reads them the same way).
   DeclaredNoise noise = perTouchDeclaration(declared, plan.machine.probe.repeatability_um);
-  if (declared) {
-    std::vector<Eigen::Vector3d> t, u;
-    for (const auto& pt : plan.points) t.push_back(pt.trigger_m_mm), u.push_back(pt.approach_m);
-    addProbeAxesPart(*declared, t, u, Eigen::VectorXd(), &noise);
+  std::vector<double> w_of_point(plan.points.size(), 1.0);
+  std::vector<Eigen::Vector3d> t, reads;
+  for (const auto& pt : plan.points) {
+    const Eigen::Vector3d& m = touches[static_cast<size_t>(pt.target - 1)].n;
+    w_of_point[t.size()] = 1.0 / std::max(1e-6, std::abs(m.dot(pt.approach_m)));
+    t.push_back(pt.trigger_m_mm);
+    reads.push_back(w_of_point[t.size() - 1] * m);
   }
+  if (declared) addProbeAxesPart(*declared, t, reads, Eigen::VectorXd(), &noise);
+  const Contributor* rough = declared ? declared->find("surface_roughness") : nullptr;
+  // (perTouchDeclaration counts it only beside a declared probe_repeatability.)
+  const double rough_um2 = rough && declared->find("probe_repeatability") ? std::pow(mmToUm(rough->u[0]), 2) : 0.0;
   std::vector<std::pair<int, int>> kept;
-  Eigen::VectorXd sign(n);
   for (Eigen::Index j = 0; j < n; ++j) {
     const auto js = static_cast<size_t>(j);
     kept.emplace_back(q.repeat_of[js] / layout.repeats, q.point_index[js]);
-    sign[j] = q.normals[js].dot(plan.points[static_cast<size_t>(q.point_index[js])].approach_m) < 0 ? -1.0 : 1.0;
   }
-  p.covariance = sign.asDiagonal() * noise.covariance(kept) * sign.asDiagonal();
+  p.covariance = noise.covariance(kept);
+  // perTouchDeclaration counts the roughness once per touch; a touch above the equator reads w^2 of it.
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const double w = w_of_point[static_cast<size_t>(q.point_index[static_cast<size_t>(j)])];
+    p.covariance(j, j) += rough_um2 * (w * w - 1.0);
+  }
   p.declaration = noise.declaration;
   // The baseline at its solution: the sphere's centre and the pretravel per approach (um along
   // the approach per um).
