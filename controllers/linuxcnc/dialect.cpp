@@ -555,7 +555,7 @@ class LinuxCncDialect final : public Dialect {
     const bool inch = h.m.units == LengthUnit::Inch;
     const double k = inch ? 1.0 / kMmPerInch : 1.0;
     const int dl = inch ? 7 : 6;
-    std::map<char, double> previous = previousWorkOffset(r.previous_text, "XYB");
+    const std::map<char, double> previous = previousWorkOffset(r.previous_text, "XYB");
     const std::map<char, double> change{{'X', h.work('X') * k}, {'Y', h.work('Y') * k}, {'B', h.work('B')}};
     std::string out;
     auto line = [&](const std::string& s) { out += s + "\n"; };
@@ -570,15 +570,10 @@ class LinuxCncDialect final : public Dialect {
     line(comment("Not applied [no shift expresses them]: dL [maxkins' pivot-length, a .hal file], A0C, B0C, A0B, C0B "
                  "[a mechanical adjustment]; the sphere's set-up dX_S dY_S dZ_S is the artefact's"));
     line(comment("Held at nominal [one sphere cannot separate them]: " + h.heldList() + "; X0C reads relative to X0B"));
-    std::string g10 = "G10 L2 P1";
-    for (char axis : {'X', 'Y', 'B'}) {
-      const int dec = axis == 'B' ? 6 : dl;
-      line(comment(fmt::format("{}: previous {} change {} new {}", axis, ctl::fixed(previous[axis], dec),
-                               ctl::fixed(change.at(axis), dec), ctl::fixed(previous[axis] + change.at(axis), dec))));
-      g10 += fmt::format(" {}{}", axis, ctl::fixed(previous[axis] + change.at(axis), dec));
-    }
+    const WorkOffsetChange w = workOffsetChange("XYB", previous, change, [dl](char axis) { return axis == 'B' ? 6 : dl; });
+    for (const auto& s : w.steps) line(comment(s));
     line(inch ? "G20" : "G21");
-    line(g10);
+    line(w.g10);
     line("M2");
     line("%");
     return out;
@@ -651,7 +646,7 @@ class LinuxCncDialect final : public Dialect {
     const double k = inch ? 1.0 / kMmPerInch : 1.0;  // mm -> program units
     const int dl = inch ? 5 : 4;
     // Previous offsets: the G10 L2 P1 line of the file this one replaces (the loop accumulates).
-    std::map<char, double> previous = previousWorkOffset(r.previous_text, std::string("XYZ") + tilt);
+    const std::map<char, double> previous = previousWorkOffset(r.previous_text, std::string("XYZ") + tilt);
     const int sign_a = m.controllerSign(tilt, kDialect);
     const std::map<char, double> change{{'X', r.identified.get(px) * k},
                                         {'Y', r.identified.get(py) * k},
@@ -672,15 +667,11 @@ class LinuxCncDialect final : public Dialect {
                  : bc ? "Not applied [no shift expresses them]: dx_CB, a_BY, c_BY, a_CB: rotacal compensate holds "
                         "all four"
                       : "Not applied [no shift expresses them]: dy_CA, b_AY, c_AY, b_CA"));
-    std::string g10 = "G10 L2 P1";
-    for (char axis : {'X', 'Y', 'Z', tilt}) {
-      const int dec = axis == tilt ? 6 : dl + 2;
-      line(comment(fmt::format("{}: previous {} change {} new {}", axis, ctl::fixed(previous[axis], dec),
-                               ctl::fixed(change.at(axis), dec), ctl::fixed(previous[axis] + change.at(axis), dec))));
-      g10 += fmt::format(" {}{}", axis, ctl::fixed(previous[axis] + change.at(axis), dec));
-    }
+    const WorkOffsetChange w = workOffsetChange(std::string("XYZ") + tilt, previous, change,
+                                                [dl, tilt](char axis) { return axis == tilt ? 6 : dl + 2; });
+    for (const auto& s : w.steps) line(comment(s));
     line(inch ? "G20" : "G21");
-    line(g10);
+    line(w.g10);
     line("M2");
     line("%");
     return out;
@@ -884,6 +875,20 @@ std::map<char, double> previousWorkOffset(const std::string& text, std::string_v
   if (!text.empty() && !had_line)
     throw std::invalid_argument("previous offsets file has no 'G10 L2 P1' line: not a rotacal work-offset file");
   return previous;
+}
+
+WorkOffsetChange workOffsetChange(std::string_view axes, const std::map<char, double>& previous,
+                                  const std::map<char, double>& change, const std::function<int(char)>& decimals) {
+  WorkOffsetChange w;
+  w.g10 = "G10 L2 P1";
+  for (const char axis : axes) {
+    const int dec = decimals(axis);
+    const double was = previous.at(axis), by = change.at(axis);
+    w.steps.push_back(fmt::format("{}: previous {} change {} new {}", axis, ctl::fixed(was, dec), ctl::fixed(by, dec),
+                                  ctl::fixed(was + by, dec)));
+    w.g10 += fmt::format(" {}{}", axis, ctl::fixed(was + by, dec));
+  }
+  return w;
 }
 
 const Dialect& linuxcncDialect() { return singleton<LinuxCncDialect>(); }

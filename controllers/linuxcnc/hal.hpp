@@ -1,6 +1,7 @@
 #pragma once
 // The HAL side of LinuxCNC's offsets: the trt-kins component of a table machine, the changes of
 // its pins, and the setp lines of a HAL file read back.
+#include <functional>
 #include <map>
 #include <string>
 #include <string_view>
@@ -38,6 +39,16 @@ std::map<std::string, double> parseHalSetp(const std::string& text, const std::s
 /// parentheses are ignored. Throws std::invalid_argument naming the line when a word is not one of
 /// `axes` with a number, or when a non-empty file has no such line.
 std::map<char, double> previousWorkOffset(const std::string& text, std::string_view axes);
+
+/// What a work-offset file states for each of `axes`, in that order: a step "<axis>: previous P
+/// change C new N" (for the caller's comment form) and the `G10 L2 P1` line setting previous +
+/// change; `decimals(axis)` digits. `previous` holds every axis (previousWorkOffset's), `change` too.
+struct WorkOffsetChange {
+  std::vector<std::string> steps;
+  std::string g10;
+};
+WorkOffsetChange workOffsetChange(std::string_view axes, const std::map<char, double>& previous,
+                                  const std::map<char, double>& change, const std::function<int(char)>& decimals);
 
 /// A head_cb machine's offsets (request.parameters, its model's): the HAL file that moves
 /// 5axiskins.pivot-length by dL (previous + change = new, MACHINE.json's pivot_to_ball_mm when

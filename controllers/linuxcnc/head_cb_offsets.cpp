@@ -140,7 +140,7 @@ std::string linuxcncHeadCbWorkOffsets(const OffsetRequest& r) {
     const ParameterEstimate& zero = find(r, std::string(1, axis) + "0" + axis);
     change[axis] = m.controllerSign(axis, kDialect) * -radToDeg(zero.value);
   }
-  std::map<char, double> previous = previousWorkOffset(r.previous_text, "BC");
+  const std::map<char, double> previous = previousWorkOffset(r.previous_text, "BC");
   std::string out;
   // rs274ngc comments: no parentheses inside, at most 200 characters each (dialect.cpp's limit),
   // never starting like an active comment (MSG, LOG, ...): each piece starts with "- ".
@@ -160,13 +160,9 @@ std::string linuxcncHeadCbWorkOffsets(const OffsetRequest& r) {
   line("B0B carries the ball's offset across the spindle [dX_T / L]: check the probe's run-out first");
   line("X Y Z unchanged: the head's place X0C Y0C Z0B reads as the sphere's, which one sphere cannot tell apart");
   line("dL: 5axiskins.pivot-length [a .hal file]; the axes' places and tilts: no LinuxCNC pin or offset holds them");
-  std::string g10 = "G10 L2 P1";
-  for (const char axis : {'B', 'C'}) {
-    line(fmt::format("{}: previous {} change {} new {}", axis, ctl::fixed(previous[axis], 6), ctl::fixed(change[axis], 6),
-                     ctl::fixed(previous[axis] + change[axis], 6)));
-    g10 += fmt::format(" {}{}", axis, ctl::fixed(previous[axis] + change[axis], 6));
-  }
-  out += g10 + "\n";
+  const WorkOffsetChange w = workOffsetChange("BC", previous, change, [](char) { return 6; });
+  for (const auto& s : w.steps) line(s);
+  out += w.g10 + "\n";
   out += "M2\n%\n";
   return out;
 }
