@@ -66,6 +66,7 @@ RtestDiagnosis diagnoseAsDeclared(const ProbePlan& plan, const ContributorSet& d
   o.reading_sigma_um = std::sqrt(noise.white_um2);
   o.declaration = noise.declaration;
   o.structured_um2 = noise.structured_um2;
+  o.structured_draws_um = noise.structured_draws_um;
   return diagnoseRtest(plan, cycles, o);
 }
 

@@ -175,6 +175,51 @@ Eigen::MatrixXd probeAxesCovariance(const ContributorSet& set, const std::functi
   return C;
 }
 
+Eigen::MatrixXd probeAxesDraws(const ContributorSet& set, const std::function<bool(const ContributorInfo&)>& acts,
+                               const std::vector<Eigen::Vector3d>& t, const std::vector<Eigen::Vector3d>& u, int draws,
+                               std::uint64_t seed) {
+  if (t.size() != u.size()) throw std::invalid_argument("probeAxesDraws: as many approaches as triggers needed");
+  if (draws < 0) throw std::invalid_argument("probeAxesDraws: a negative number of draws");
+  const auto n = static_cast<Eigen::Index>(t.size());
+  Eigen::MatrixXd D = Eigen::MatrixXd::Zero(n, draws);
+  ContributorSet linear;
+  linear.node_spacing_min_mm = set.node_spacing_min_mm;
+  linear.node_spacing_max_mm = set.node_spacing_max_mm;
+  const Contributor* pretravel = nullptr;
+  double per_touch_mm2 = 0.0;
+  for (const Contributor& c : set.items) {
+    if (!acts(*c.info)) continue;
+    if (c.info->kind == ContributorKind::ProbePretravel) pretravel = &c;
+    else if (isPerTouchContributor(*c.info)) per_touch_mm2 += c.u[0] * c.u[0];
+    else if (isLinearAxisContributor(*c.info)) linear.items.push_back(c);
+    else throw std::logic_error("probeAxesDraws: contributor " + std::string(c.info->id) + " is neither probe nor axis");
+  }
+  if (n == 0) return D;
+  Eigen::Vector3d lo = t.front(), hi = t.front();
+  for (const auto& c : t) {
+    lo = lo.cwiseMin(c);
+    hi = hi.cwiseMax(c);
+  }
+  LinearAxisErrors e;
+  const double per_touch_mm = std::sqrt(per_touch_mm2);
+  for (int d = 0; d < draws; ++d) {
+    if (pretravel && pretravel->u[0] > 0) {
+      Rng rng(seed, contributorStream(*pretravel->info, d));
+      std::array<double, 6> v{};
+      for (auto& x : v) x = pretravel->u[0] * rng.normal();
+      for (Eigen::Index i = 0; i < n; ++i) D(i, d) += pretravelAlong(v, u[static_cast<size_t>(i)]);
+    }
+    if (per_touch_mm > 0) {
+      // Stream 124: beyond the catalog and drawLinearAxes' 120..123.
+      Rng rng(seed, (static_cast<std::uint64_t>(d) << 7) | 124);
+      for (Eigen::Index i = 0; i < n; ++i) D(i, d) += per_touch_mm * rng.normal();
+    }
+    if (!linear.items.empty() && drawLinearAxes(linear, -1, lo, hi, seed, d, &e))
+      for (Eigen::Index i = 0; i < n; ++i) D(i, d) += e.error(t[static_cast<size_t>(i)]).dot(u[static_cast<size_t>(i)]);
+  }
+  return D;
+}
+
 namespace {
 
 Json roundedArray(const Eigen::Vector3d& v, double factor) {

@@ -79,6 +79,16 @@ Eigen::MatrixXd probeAxesCovariance(const ContributorSet& set, const std::functi
                                     const std::vector<Eigen::Vector3d>& trigger_m_mm,
                                     const std::vector<Eigen::Vector3d>& approach_m);
 
+/// Draws of what probeAxesCovariance summarises (mm): column d is draw d of the same first-order
+/// model (touch i reads the pretravel along approach_m[i] plus the linear axes' error at
+/// trigger_m_mm[i] read along it, and the per-touch contributors where `acts` accepts them), each
+/// draw its own node spacing per axis, as drawLinearAxes draws a machine. The covariance is the
+/// second moment of a mixture over the spacing; a test whose null is the declared machine reads
+/// its tails from these draws, not from a Gaussian of that covariance.
+Eigen::MatrixXd probeAxesDraws(const ContributorSet& set, const std::function<bool(const ContributorInfo&)>& acts,
+                               const std::vector<Eigen::Vector3d>& trigger_m_mm, const std::vector<Eigen::Vector3d>& approach_m,
+                               int draws, std::uint64_t seed);
+
 /// Adds a draw to a truth (to its linear_axis_error and pretravel, if it has them).
 void applyProbeAxesDraw(const ProbeAxesDraw& draw, Truth* truth);
 

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -101,8 +102,13 @@ void addProbeAxesPart(const ContributorSet& declared, const std::vector<Eigen::V
     if (shared(*c.info) && c.u.cwiseAbs().maxCoeff() > 0) ids += fmt::format("{}{}", ids.empty() ? "" : ", ", c.info->id);
   if (ids.empty()) return;
   Eigen::MatrixXd C = 1e6 * probeAxesCovariance(declared, shared, t, u);  // mm^2 -> um^2
-  if (scale.size()) C = scale.asDiagonal() * C * scale.asDiagonal();
+  Eigen::MatrixXd D = 1e3 * probeAxesDraws(declared, shared, t, u, kDeclaredNullDraws, kDeclaredNullSeed);  // mm -> um
+  if (scale.size()) {
+    C = scale.asDiagonal() * C * scale.asDiagonal();
+    D = scale.asDiagonal() * D;
+  }
   noise->structured_um2 = C;
+  noise->structured_draws_um = std::move(D);
   noise->repeatability_only = false;
   noise->declaration += fmt::format("; shared between touches, to first order: {} ({:.2f} um rms per touch)", ids,
                                     std::sqrt(C.diagonal().mean()));
@@ -179,12 +185,11 @@ DeclaredNoiseTest testAgainstDeclared(const Eigen::VectorXd& residual, const Eig
   if (t.dof > 0 && null_draws.cols() >= kMinNullDraws) {
     const Eigen::MatrixXd Dw = w.W * null_draws;
     const Eigen::VectorXd c = (Dw - w.Q * (w.Q.transpose() * Dw)).colwise().squaredNorm().transpose();
-    const double mean = c.mean();
-    const double var = (c.array() - mean).square().sum() / static_cast<double>(c.size() - 1);
-    if (mean > 0 && var > 0) {
-      t.null_draws = static_cast<int>(c.size());
-      t.null_scale = var / (2.0 * mean);
-      t.null_dof = 2.0 * mean * mean / var;
+    const ScaledChiSquare null = scaledChiSquareFromDraws(std::vector<double>(c.data(), c.data() + c.size()));
+    if (null.draws > 0) {
+      t.null_draws = null.draws;
+      t.null_scale = null.scale;
+      t.null_dof = null.dof;
       t.p_value = chiSquareSurvival(t.chi2 / t.null_scale, t.null_dof);
     }
   }
@@ -242,17 +247,24 @@ Json declaredNoiseJson(const DeclaredNoise& noise, const DeclaredNoiseTest& test
 }
 
 Eigen::VectorXd deletionStatistics(const Eigen::VectorXd& residual, const Eigen::MatrixXd& J, const Eigen::MatrixXd& S) {
-  const Eigen::Index n = residual.size();
-  const Whitened w = whitened(residual, J, S);
+  return deletionStatisticsColumns(residual, J, S).col(0);
+}
+
+Eigen::MatrixXd deletionStatisticsColumns(const Eigen::MatrixXd& residuals, const Eigen::MatrixXd& J, const Eigen::MatrixXd& S) {
+  const Eigen::Index n = residuals.rows();
+  const Whitened w = whitened(Eigen::VectorXd::Zero(n), J, S);
   const Eigen::MatrixXd& W = w.W;
   const Eigen::MatrixXd& Q = w.Q;
   // P = W (I - Q Q^T) W: the residual projector of the whitened fit brought back to readings.
-  const Eigen::VectorXd yw = W * residual;
-  const Eigen::VectorXd Py = W * (yw - Q * (Q.transpose() * yw));
+  const Eigen::MatrixXd yw = W * residuals;
+  const Eigen::MatrixXd Py = W * (yw - Q * (Q.transpose() * yw));
   const Eigen::MatrixXd M = W - Q * (Q.transpose() * W);
   const Eigen::VectorXd Pdiag = W.cwiseProduct(M).colwise().sum().transpose();
-  Eigen::VectorXd t(n);
-  for (Eigen::Index i = 0; i < n; ++i) t[i] = Pdiag[i] > 1e-14 * W(i, i) * W(i, i) ? Py[i] / std::sqrt(Pdiag[i]) : 0.0;
+  Eigen::MatrixXd t(n, residuals.cols());
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (Pdiag[i] > 1e-14 * W(i, i) * W(i, i)) t.row(i) = Py.row(i) / std::sqrt(Pdiag[i]);
+    else t.row(i).setZero();
+  }
   return t;
 }
 

@@ -59,11 +59,17 @@ DeclaredNoise repeatabilityOnly(double repeatability_um, const std::string& sour
 /// by more than 1 % (two declarations of one quantity: neither is silently preferred).
 DeclaredNoise perTouchDeclaration(const ContributorSet* declared, double machine_repeatability_um);
 
+/// The draws of the declared machine a declaration holds (structured_draws_um) where the cycle does
+/// not set its own, and their seed: fixed, so that one data set gets one verdict.
+constexpr int kDeclaredNullDraws = 2000;
+constexpr std::uint64_t kDeclaredNullSeed = 0x6e756c6c;
+
 /// The shared part of a probe cycle's touches, read at trigger_m_mm along approach_m (plan order):
 /// the declared pretravel and linear axes to first order (contributor_draw.hpp's
 /// probeAxesCovariance), each touch's displacement along its approach times scale[i] (the touch's
 /// reading per unit of it: 1, or n . u on a sphere; empty: 1). Sets `noise`'s structured part
-/// and names the contributors in its declaration; leaves it unchanged when none is declared.
+/// and its draws (probeAxesDraws, kDeclaredNullDraws) and names the contributors in its
+/// declaration; leaves it unchanged when none is declared.
 void addProbeAxesPart(const ContributorSet& declared, const std::vector<Eigen::Vector3d>& trigger_m_mm,
                       const std::vector<Eigen::Vector3d>& approach_m, const Eigen::VectorXd& scale, DeclaredNoise* noise);
 
@@ -84,6 +90,11 @@ void squareRoots(const Eigen::MatrixXd& covariance, Eigen::MatrixXd* inverse_roo
 /// J: readings x parameters (may be rank deficient); S: the declared covariance.
 Eigen::VectorXd deletionStatistics(const Eigen::VectorXd& residual, const Eigen::MatrixXd& J,
                                    const Eigen::MatrixXd& covariance);
+
+/// deletionStatistics of several residual vectors at once (the columns of `residuals`, e.g. draws
+/// of the declared noise), from one decomposition: readings x columns.
+Eigen::MatrixXd deletionStatisticsColumns(const Eigen::MatrixXd& residuals, const Eigen::MatrixXd& J,
+                                          const Eigen::MatrixXd& covariance);
 
 /// The level below which the data's test against the declaration holds the offsets back
 /// (`analyze --offsets` writes them only with --force): offsets from a model that does not explain

@@ -229,6 +229,7 @@ struct Context {
   Eigen::VectorXd inv_sigma, yw;
   Eigen::VectorXd sigma;     // per observation: pb.sigma, or sqrt(diag) of pb.covariance
   Eigen::MatrixXd W, W_inv;  // the covariance's inverse root and root; empty: diagonal
+  Eigen::MatrixXd null_w;    // the problem's null draws whitened; empty: chi2(dof)
   Eigen::MatrixXd whiten(const Eigen::MatrixXd& X) const {
     return W.size() ? Eigen::MatrixXd(W * X) : Eigen::MatrixXd(inv_sigma.asDiagonal() * X);
   }
@@ -272,6 +273,17 @@ JudgeAdequacy adequacy(const Context& cx, const Span& sx) {
   a.dof = static_cast<int>(n) - sx.rank();
   a.threshold = cx.thr;
   a.p_value = a.dof > 0 ? chiSquareSurvival(a.chi2, a.dof) : 1.0;
+  a.null_dof = a.dof;
+  if (a.dof > 0 && cx.null_w.cols() > 0) {
+    const Eigen::VectorXd c = (cx.null_w - sx.Q * (sx.Q.transpose() * cx.null_w)).colwise().squaredNorm().transpose();
+    const ScaledChiSquare null = scaledChiSquareFromDraws(std::vector<double>(c.data(), c.data() + c.size()));
+    if (null.draws > 0) {
+      a.null_draws = null.draws;
+      a.null_scale = null.scale;
+      a.null_dof = null.dof;
+      a.p_value = chiSquareSurvival(a.chi2 / a.null_scale, a.null_dof);
+    }
+  }
   a.passes = !(a.p_value < a.threshold);
   // In y's unit: with a full covariance the whitened residual brought back by W^-1 weighs the
   // shared directions as the test does, and reads tens of micrometres along a set-up the model
@@ -652,7 +664,11 @@ void validateProblem(const JudgeProblem& pb) {
     if (!pb.covariance.allFinite()) bad("covariance has a non-finite entry");
     for (Eigen::Index i = 0; i < n; ++i)
       if (!(pb.covariance(i, i) > 0)) bad(fmt::format("covariance({0}, {0}) = {1} must be > 0", i, pb.covariance(i, i)));
+    if (pb.null_draws.size() && pb.null_draws.rows() != n)
+      bad(fmt::format("null_draws: expected {} rows, got {}", n, pb.null_draws.rows()));
+    if (!pb.null_draws.allFinite()) bad("null_draws has a non-finite entry");
   } else {
+    if (pb.null_draws.size()) bad("null_draws without a covariance: draws are read through its whitening");
     if (pb.sigma.size() != n) bad(fmt::format("sigma: expected {} entries, got {}", n, pb.sigma.size()));
     for (Eigen::Index i = 0; i < n; ++i)
       if (!(pb.sigma[i] > 0) || !std::isfinite(pb.sigma[i]))
@@ -687,7 +703,9 @@ void validateProblem(const JudgeProblem& pb) {
 }
 
 std::string adequacyClause(const JudgeAdequacy& a) {
-  return fmt::format("chi2 {:.1f} on {} dof, p {:.2g}", a.chi2, a.dof, a.p_value);
+  if (a.null_draws == 0) return fmt::format("chi2 {:.1f} on {} dof, p {:.2g}", a.chi2, a.dof, a.p_value);
+  return fmt::format("chi2 {:.1f} on {} dof, p {:.2g} against {:.3f} x chi2({:.1f}) from {} draws of the declared machine",
+                     a.chi2, a.dof, a.p_value, a.null_scale, a.null_dof, a.null_draws);
 }
 
 }  // namespace
@@ -741,10 +759,11 @@ JudgeSummary judge(const JudgeProblem& pb, const JudgeOptions& o) {
   const Eigen::Index n = pb.y.size();
   const size_t m_causes = pb.causes.size();
 
-  Context cx{pb, o, {}, {}, {}, {}, {}, {}, {}, 0, 0, 0};
+  Context cx{pb, o, {}, {}, {}, {}, {}, {}, {}, {}, 0, 0, 0};
   if (pb.covariance.size()) {
     cx.sigma = pb.covariance.diagonal().cwiseSqrt();
     squareRoots(pb.covariance, &cx.W, &cx.W_inv);
+    if (pb.null_draws.cols() >= kMinNullDraws) cx.null_w = cx.W * pb.null_draws;
   } else {
     cx.sigma = pb.sigma;
   }
@@ -1075,7 +1094,9 @@ Json adequacyJson(const JudgeAdequacy& a) {
   return {{"chi2", a.chi2},           {"dof", a.dof},
           {"p_value", a.p_value},     {"threshold", a.threshold},
           {"passes", a.passes},       {"rms_residual", a.rms_residual},
-          {"excess_rms", a.excess_rms}, {"factors", f}};
+          {"excess_rms", a.excess_rms}, {"null_draws", a.null_draws},
+          {"null_scale", a.null_scale}, {"null_dof", a.null_dof},
+          {"factors", f}};
 }
 
 Json termsJson(const std::vector<JudgeTerm>& t) {

@@ -113,6 +113,13 @@ struct JudgeProblem {
   /// empty) and everything is whitened by its symmetric inverse root; the raw-unit figures
   /// (rms, held-out rms, excess) then take sqrt(diag) as each observation's sigma.
   Eigen::MatrixXd covariance;
+  /// Draws of the declared noise (observations x draws, y's unit; DeclaredNoise::nullDraws), with
+  /// `covariance` only: from kMinNullDraws of them on, every adequacy test reads its null from
+  /// them (each draw's chi2 through the same whitened projector, read as the scaled chi-square
+  /// of their mean and variance), as analyze's test against the declaration does: the linear
+  /// axes' random nodes, one spacing per machine, give the declared machine's chi2 a heavier
+  /// upper tail than chi2(dof). Empty: chi2(dof).
+  Eigen::MatrixXd null_draws;
   /// What the noise declaration is, named in every verdict ("declared: repeatability only ...").
   std::string declaration;
   std::string unit = "um";  // of y and sigma
@@ -156,6 +163,9 @@ struct JudgeAdequacy {
   bool passes = true;
   double rms_residual = 0.0;     // rms of the raw residual, in y's unit
   double excess_rms = 0.0;       // extra white scatter that would make chi2 = dof, in y's unit
+  /// The null p_value reads: chi2(dof), or null_scale x chi2(null_dof) from null_draws draws.
+  int null_draws = 0;
+  double null_scale = 1.0, null_dof = 0.0;
   std::vector<JudgeFactorShare> factors;  // smallest p first
 };
 

@@ -48,6 +48,15 @@ std::string OutlierScreen::text() const {
                      excluded.size(), touches, threshold_t, against, list);
 }
 
+Eigen::VectorXd screenNullMaxima(const Eigen::MatrixXd& t, const std::vector<bool>& screened) {
+  if (!screened.empty() && static_cast<Eigen::Index>(screened.size()) != t.rows())
+    throw std::invalid_argument(fmt::format("screenNullMaxima: {} flags for {} statistics", screened.size(), t.rows()));
+  Eigen::VectorXd m = Eigen::VectorXd::Zero(t.cols());
+  for (Eigen::Index i = 0; i < t.rows(); ++i)
+    if (screened.empty() || screened[static_cast<size_t>(i)]) m = m.cwiseMax(t.row(i).cwiseAbs().transpose());
+  return m;
+}
+
 std::vector<std::pair<int, int>> heldOutTouches(const std::vector<PointResidual>& residuals) {
   std::vector<std::pair<int, int>> k;
   for (const auto& p : residuals)
@@ -63,7 +72,16 @@ OutlierScreen screenOutliers(const std::function<ScreenedFit(const HoldOutRule&)
   ScreenedFit r = fit(nullptr);
   for (const auto& p : r.residuals) s.touches += p.held_out ? 0 : 1;
   if (s.touches == 0) return s;
-  s.threshold_t = normalQuantile(1.0 - options.alpha / (2.0 * s.touches));
+  s.gaussian_t = normalQuantile(1.0 - options.alpha / (2.0 * s.touches));
+  s.threshold_t = s.gaussian_t;
+  const Eigen::VectorXd null_max = options.null_maxima ? options.null_maxima(r) : Eigen::VectorXd();
+  if (null_max.size() >= kMinScreenNullDraws) {
+    std::vector<double> m(null_max.data(), null_max.data() + null_max.size());
+    const auto k = static_cast<size_t>(std::ceil((1.0 - options.alpha) * static_cast<double>(m.size()))) - 1;
+    std::nth_element(m.begin(), m.begin() + static_cast<std::ptrdiff_t>(k), m.end());
+    s.null_draws = static_cast<int>(m.size());
+    s.threshold_t = std::max(s.gaussian_t, m[k]);
+  }
   const int cap = static_cast<int>(std::floor(options.max_fraction * s.touches));
   s.declaration = options.declaration;
   // Each fitted touch and its statistic, in the residuals' order.
@@ -146,6 +164,12 @@ Json screenJson(const OutlierScreen& s, const OutlierOptions& o, const std::stri
           {"sigma_um", o.sigma_um},
           {"alpha", o.alpha},
           {"threshold_t", std::round(s.threshold_t * 1e4) / 1e4},
+          {"gaussian_threshold_t", std::round(s.gaussian_t * 1e4) / 1e4},
+          {"null_draws", s.null_draws},
+          {"threshold_from", s.null_draws > 0 ? fmt::format("the larger of the normal bound at alpha / (2 N) and the (1 - alpha) "
+                                                             "quantile of the largest |t| over {} draws of the declared machine",
+                                                             s.null_draws)
+                                              : std::string("the normal bound at alpha / (2 N)")},
           {counted, s.touches},
           {"max_fraction", o.max_fraction},
           {"too_many", s.too_many},

@@ -9,7 +9,12 @@
 // predicts for it (core/declared_noise.hpp), N(0, 1) under the declaration; with a per-touch
 // scatter alone, t = r / sigma (without the leverage factor sqrt(1 - h): conservative).
 // Threshold: |t| > z with z the two-sided normal quantile at alpha / N (Bonferroni over the N
-// fitted touches: clean data lose a touch in at most alpha of the runs). The worst touch beyond z
+// fitted touches: clean data lose a touch in at most alpha of the runs), or, where the cycle
+// gives the screen draws of the declared machine, the (1 - alpha) quantile of the largest |t| of
+// the first fit in each draw when that is larger: the linear axes' random nodes, one spacing per
+// machine, make the declared noise a scale mixture whose statistics have heavier tails than the
+// normal the Bonferroni bound reads (machines drawn as declared lost a good reading in 5 % of
+// runs where the bound says 1 %). Never below the Gaussian bound: the draws are finite. The worst touch beyond z
 // is left out and the model refitted, until none is beyond z (worst first: a gross outlier, a
 // value millimetres off, drags the first fit and puts many touches beyond z; left out, they come
 // back). Still beyond after max_fraction of the touches is no longer a few chips but a model that
@@ -56,8 +61,21 @@ struct OutlierOptions {
   std::function<Eigen::VectorXd(const ScreenedFit& fit)> statistic;
   /// What the statistic tests against, for the report ("declared: repeatability only ...").
   std::string declaration;
+  /// Per draw of the declared machine, the largest |statistic| over the given fit's touches
+  /// (screenNullMaxima), asked once, of the first fit; used from kMinScreenNullDraws draws on.
+  /// Empty function or fewer draws: the Gaussian bound alone.
+  std::function<Eigen::VectorXd(const ScreenedFit& first)> null_maxima;
   bool validate(std::string* why) const;
 };
+
+/// Draws of the declared machine the screen needs before it reads its threshold from them: at
+/// alpha = 0.01 the quantile then rests on at least 10 draws beyond it.
+constexpr int kMinScreenNullDraws = 1000;
+
+/// The largest |t| of each column of `t_draws` (statistics x draws) over the rows `screened`
+/// marks (all when empty): what OutlierOptions::null_maxima returns, per screened fit; a cycle that
+/// screens several fits at once (one per cycle of a series) takes the larger per draw.
+Eigen::VectorXd screenNullMaxima(const Eigen::MatrixXd& t_draws, const std::vector<bool>& screened = {});
 
 struct ExcludedTouch {
   int run = 0;
@@ -69,6 +87,8 @@ struct ExcludedTouch {
 struct OutlierScreen {
   std::vector<ExcludedTouch> excluded;
   double threshold_t = 0.0;
+  double gaussian_t = 0.0;  // the Bonferroni bound under a normal statistic
+  int null_draws = 0;       // draws of the declared machine the threshold read (0: the bound alone)
   int touches = 0;          // fitted touches of the first fit
   bool too_many = false;    // still beyond after max_fraction left out: none excluded
   int beyond = 0;           // touches beyond the threshold in the last fit, when too_many

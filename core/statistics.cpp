@@ -95,4 +95,20 @@ double coverageHalfWidth(const std::vector<double>& samples, double sd, double p
   return 0.5 * (lo + hi);
 }
 
+ScaledChiSquare scaledChiSquareFromDraws(const std::vector<double>& c) {
+  ScaledChiSquare out;
+  if (c.size() < 2) return out;
+  double mean = 0.0;
+  for (double v : c) mean += v;
+  mean /= static_cast<double>(c.size());
+  double var = 0.0;
+  for (double v : c) var += (v - mean) * (v - mean);
+  var /= static_cast<double>(c.size() - 1);
+  if (!(mean > 0 && var > 0)) return out;
+  out.draws = static_cast<int>(c.size());
+  out.scale = var / (2.0 * mean);
+  out.dof = 2.0 * mean * mean / var;
+  return out;
+}
+
 }  // namespace rotacal

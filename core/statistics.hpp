@@ -11,6 +11,17 @@ namespace rotacal {
 double chiSquareSurvival(double x, double k);
 /// The x with P(X > x) = p for chi-square with k degrees of freedom; p in (0, 1).
 double chiSquareUpperQuantile(double p, double k);
+
+/// A statistic's null as a scaled chi-square, scale x chi2(dof), from draws of it: the draws'
+/// mean and variance matched (Satterthwaite). For a quadratic form of a scale mixture of normals
+/// (the linear axes' nodes, one spacing per machine) whose upper tail chi2(rank) would read too
+/// light. Needs >= 2 draws with positive mean and variance; otherwise draws = 0 and scale = 1.
+struct ScaledChiSquare {
+  int draws = 0;
+  double scale = 1.0;
+  double dof = 0.0;
+};
+ScaledChiSquare scaledChiSquareFromDraws(const std::vector<double>& values);
 /// P(|T| > |t|) for Student's t with nu > 0 degrees of freedom.
 double studentTwoSided(double t, double nu);
 /// P(F > f) for Fisher's F with (d1, d2) degrees of freedom. 1 for f <= 0.

@@ -198,6 +198,7 @@ SphereFittedProblem sphereFittedProblem(const DeclaredNoise& noise, const Sphere
   for (Eigen::Index j = 0; j < n; ++j)
     kept.emplace_back(r.run_index[static_cast<size_t>(j)], r.point_index[static_cast<size_t>(j)]);
   f.covariance_um2 = noise.covariance(kept);
+  f.readings = kept;
   f.J.resize(n, 0);
   for (size_t i = 0; i < r.names.size(); ++i) {
     if (r.identifiability.held[i]) continue;
@@ -244,6 +245,12 @@ SphereScreen screenSphereTouches(const ProbePlan& plan, const std::vector<Measur
     if (it == fits->end()) throw std::logic_error("sphere outlier screen: a statistic asked of a fit never made");
     const SphereFittedProblem p = sphereFittedProblem(noise, *it->second);
     return deletionStatistics(p.residual_um, p.J, p.covariance_um2);
+  };
+  s.options.null_maxima = [fits, keyOf, noise](const ScreenedFit& f) {
+    const SphereFittedProblem p = sphereFittedProblem(noise, *fits->at(keyOf(f.residuals)));
+    const Eigen::MatrixXd draws = noise.nullDraws(p.readings, kDeclaredNullSeed + 1);
+    if (draws.cols() == 0) return Eigen::VectorXd();
+    return screenNullMaxima(deletionStatisticsColumns(draws, p.J, p.covariance_um2));
   };
   s.screen = screenOutliers(fit, s.options);
   const Key last = [&] {

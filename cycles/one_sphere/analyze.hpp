@@ -10,6 +10,7 @@
 #include <array>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/contributors.hpp"
@@ -91,6 +92,7 @@ struct SphereFittedProblem {
   Eigen::VectorXd residual_um;
   Eigen::MatrixXd J;
   Eigen::MatrixXd covariance_um2;
+  std::vector<std::pair<int, int>> readings;  // (run, plan index) per row: the declaration's keys
 };
 SphereFittedProblem sphereFittedProblem(const DeclaredNoise& noise, const SphereCycleResult& r);
 

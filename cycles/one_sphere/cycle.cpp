@@ -51,7 +51,8 @@ class Sphere final : public Cycle {
     out.text = sphereText(res, b) + screen.text() + "\n";
     out.doc["outliers"] = outlierScreenJson(screen, screened.options);
     const SphereFittedProblem f = sphereFittedProblem(noise, res);
-    const DeclaredNoiseTest test = testAgainstDeclared(f.residual_um, f.J, f.covariance_um2);
+    const DeclaredNoiseTest test =
+        testAgainstDeclared(f.residual_um, f.J, f.covariance_um2, noise.nullDraws(f.readings, kDeclaredNullSeed + 2));
     out.doc["declared_noise"] = declaredNoiseJson(noise, test);
     out.doc["figures"] = sphereFiguresJson(plan, res, std::sqrt(noise.white_um2));
     if (!screen.excluded.empty() || screen.too_many) out.warnings.push_back(screen.text());

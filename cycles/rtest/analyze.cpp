@@ -6,11 +6,13 @@
 #include <map>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 #include <fmt/format.h>
 
 #include "core/contributor_draw.hpp"
 #include "core/report_envelope.hpp"
+#include "core/rng.hpp"
 #include "core/require_valid.hpp"
 #include "core/statistics.hpp"
 #include "core/units.hpp"
@@ -97,7 +99,21 @@ double rtestSensorNoiseUm(const ProbePlan& plan) {
                      plan.options.count("sensor_noise_um") ? plan.options.at("sensor_noise_um") : std::string("0.2"));
 }
 
-Eigen::MatrixXd rtestStructuredUm2(const ProbePlan& plan, const ContributorSet& set, const RtestCycle* about) {
+namespace {
+
+/// rtestStructuredUm2's model in two parts: what is Gaussian (the sphere offset, the drift, the
+/// sensors' response: linear in normal variates, so its covariance says everything) and the
+/// linear axes (their random nodes, one spacing per machine, a scale mixture: drawn, not only
+/// summarised), read as D times the axes' error at t along u.
+struct RtestStructuredParts {
+  Eigen::MatrixXd gaussian_mm2;  // 3 np x 3 np
+  ContributorSet linear;         // the declared linear-axis contributors (empty: none)
+  std::vector<Eigen::Vector3d> t, u;
+  Eigen::MatrixXd D;             // 3 np x 3 np: the axes' error at each centre, per direction, as read
+};
+
+RtestStructuredParts rtestStructuredParts(const ProbePlan& plan, const ContributorSet& set, const RtestCycle* about) {
+  RtestStructuredParts parts;
   const Kinematics k = plan.machine.kinematics;
   const auto np = static_cast<Eigen::Index>(plan.points.size());
   const Eigen::Vector3d nest = rtestNest_w(plan);
@@ -114,7 +130,7 @@ Eigen::MatrixXd rtestStructuredUm2(const ProbePlan& plan, const ContributorSet& 
   const Eigen::Matrix3d& Rt_ref = Rt[static_cast<size_t>(ref)];
   double gain = 0.0, direction = 0.0;
   Eigen::Vector3d offset = Eigen::Vector3d::Zero(), drift = Eigen::Vector3d::Zero();
-  ContributorSet linear;
+  ContributorSet& linear = parts.linear;
   linear.node_spacing_min_mm = set.node_spacing_min_mm;
   linear.node_spacing_max_mm = set.node_spacing_max_mm;
   for (const Contributor& c : set.items) {
@@ -157,13 +173,14 @@ Eigen::MatrixXd rtestStructuredUm2(const ProbePlan& plan, const ContributorSet& 
         t.push_back(q_m[static_cast<size_t>(i)]);
         u.push_back(Eigen::Vector3d::Unit(a));
       }
-    const Eigen::MatrixXd C = probeAxesCovariance(linear, isLinearAxisContributor, t, u);
     Eigen::MatrixXd D = Eigen::MatrixXd::Zero(3 * np, 3 * np);
     for (Eigen::Index i = 0; i < np; ++i) {
       D.block<3, 3>(3 * i, 3 * i) += Rt[static_cast<size_t>(i)];
       D.block<3, 3>(3 * i, 3 * ref) -= Rt_ref;
     }
-    S += D * C * D.transpose();
+    parts.t = std::move(t);
+    parts.u = std::move(u);
+    parts.D = std::move(D);
   }
   // The sensors' response (gain on the diagonal, cross-talk off it) scales what the sensors read:
   // first order in it about the displacements the readings show (none about the nominal machine,
@@ -180,7 +197,33 @@ Eigen::MatrixXd rtestStructuredUm2(const ProbePlan& plan, const ContributorSet& 
         for (Eigen::Index j = 0; j < np; ++j) S(3 * i + a, 3 * j + a) += G(i, j);
     }
   }
+  parts.gaussian_mm2 = std::move(S);
+  return parts;
+}
+
+}  // namespace
+
+Eigen::MatrixXd rtestStructuredUm2(const ProbePlan& plan, const ContributorSet& set, const RtestCycle* about) {
+  const RtestStructuredParts p = rtestStructuredParts(plan, set, about);
+  Eigen::MatrixXd S = p.gaussian_mm2;
+  if (p.D.size() > 0) S += p.D * probeAxesCovariance(p.linear, isLinearAxisContributor, p.t, p.u) * p.D.transpose();
   return kUmPerMm * kUmPerMm * S;
+}
+
+Eigen::MatrixXd rtestStructuredDrawsUm(const ProbePlan& plan, const ContributorSet& set, const RtestCycle* about, int draws,
+                                       std::uint64_t seed) {
+  const RtestStructuredParts p = rtestStructuredParts(plan, set, about);
+  // The Gaussian part by its symmetric root (positive semi-definite: the reset pose's rows are 0).
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (p.gaussian_mm2 + p.gaussian_mm2.transpose()));
+  const Eigen::MatrixXd root = es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal() *
+                               es.eigenvectors().transpose();
+  Eigen::MatrixXd Z(root.cols(), draws);
+  Rng rng(seed, 125);
+  for (Eigen::Index d = 0; d < draws; ++d)
+    for (Eigen::Index i = 0; i < Z.rows(); ++i) Z(i, d) = rng.normal();
+  Eigen::MatrixXd X = root * Z;
+  if (p.D.size() > 0) X += p.D * probeAxesDraws(p.linear, isLinearAxisContributor, p.t, p.u, draws, seed);
+  return kUmPerMm * X;
 }
 
 DeclaredNoise rtestDeclaredNoise(const ProbePlan& plan, const ContributorSet* declared, const RtestCycle* about) {
@@ -209,6 +252,7 @@ DeclaredNoise rtestDeclaredNoise(const ProbePlan& plan, const ContributorSet* de
   }
   if (shared.empty()) return d;
   d.structured_um2 = rtestStructuredUm2(plan, *declared, about);
+  d.structured_draws_um = rtestStructuredDrawsUm(plan, *declared, about, kRtestNullDraws, kRtestNullSeed);
   d.repeatability_only = false;
   d.declaration += fmt::format("; shared between readings, to first order: {} ({:.2f} um rms per reading)", shared,
                                std::sqrt(d.structured_um2.diagonal().mean()));
@@ -379,7 +423,8 @@ int rankOf(const Eigen::MatrixXd& A) {
 }  // namespace
 
 RtestScreen screenRtestReadings(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, double reading_sigma_um,
-                                const std::string& declaration, const Eigen::MatrixXd& structured_um2) {
+                                const std::string& declaration, const Eigen::MatrixXd& structured_um2,
+                                const Eigen::MatrixXd& structured_draws_um) {
   const auto np3 = 3 * static_cast<Eigen::Index>(plan.points.size());
   if (structured_um2.size() > 0 && (structured_um2.rows() != np3 || structured_um2.cols() != np3))
     throw std::invalid_argument("rtest screen: the structured part is not 3 x the plan's points square");
@@ -397,6 +442,40 @@ RtestScreen screenRtestReadings(const ProbePlan& plan, const std::vector<RtestCy
     full_rank.push_back(rankOf(designs.back().A));
   }
   const double s2 = reading_sigma_um * reading_sigma_um;
+  // The rows of cycle c's full fit (nothing held out) and their declared covariance.
+  auto keptRows = [&](const ScreenDesign& d) {
+    std::vector<int> keep;
+    for (int i = 0; i < d.A.rows(); ++i)
+      if (d.screened[static_cast<size_t>(i)] || i >= 3 * static_cast<int>(plan.points.size())) keep.push_back(i);
+    return keep;
+  };
+  // The reset and re-read rows read the reset pose: its rows of the shared part.
+  auto sharedRows = [&](const std::vector<int>& keep) {
+    std::vector<Eigen::Index> at;
+    for (int i : keep) at.push_back(i < np3 ? i : 3 * (L.ref_point) + i % 3);
+    return at;
+  };
+  // The threshold's null: the first fit's largest statistic over every cycle in each draw of the
+  // declared machine (one machine: the structured draw shared by the cycles, the white part each
+  // reading's own).
+  Eigen::VectorXd null_max;
+  if (structured_draws_um.cols() >= kMinScreenNullDraws && structured_um2.size() > 0) {
+    if (structured_draws_um.rows() != np3) throw std::invalid_argument("rtest screen: the draws are not 3 x the plan's points");
+    Rng rng(kRtestNullSeed, 126);
+    null_max = Eigen::VectorXd::Zero(structured_draws_um.cols());
+    for (const ScreenDesign& d : designs) {
+      const std::vector<int> keep = keptRows(d);
+      const std::vector<Eigen::Index> at = sharedRows(keep);
+      Eigen::MatrixXd cov = s2 * Eigen::MatrixXd::Identity(static_cast<Eigen::Index>(keep.size()), static_cast<Eigen::Index>(keep.size()));
+      cov += structured_um2(at, at);
+      Eigen::MatrixXd y = structured_draws_um(at, Eigen::all);
+      for (Eigen::Index c = 0; c < y.cols(); ++c)
+        for (Eigen::Index r = 0; r < y.rows(); ++r) y(r, c) += reading_sigma_um * rng.normal();
+      std::vector<bool> screened;
+      for (int i : keep) screened.push_back(d.screened[static_cast<size_t>(i)]);
+      null_max = null_max.cwiseMax(screenNullMaxima(deletionStatisticsColumns(y, d.A(keep, Eigen::all), cov), screened));
+    }
+  }
   // Each fit's statistics, by the values it held out (the screen asks for them after the fit).
   std::map<std::vector<std::pair<int, int>>, Eigen::VectorXd> stats;
   auto fit = [&](const std::function<bool(int, const ProbePoint&)>& hold_out) {
@@ -419,12 +498,7 @@ RtestScreen screenRtestReadings(const ProbePlan& plan, const std::vector<RtestCy
       const Eigen::VectorXd b = Ak.completeOrthogonalDecomposition().solve(d.y(keep));
       const Eigen::VectorXd r = d.y - d.A * b;
       Eigen::MatrixXd cov = s2 * Eigen::MatrixXd::Identity(Ak.rows(), Ak.rows());
-      if (structured_um2.size() > 0) {
-        // The reset and re-read rows read the reset pose: its rows of the shared part.
-        std::vector<Eigen::Index> at;
-        for (int i : keep) at.push_back(i < np3 ? i : 3 * (L.ref_point) + i % 3);
-        cov += structured_um2(at, at);
-      }
+      if (structured_um2.size() > 0) cov += structured_um2(sharedRows(keep), sharedRows(keep));
       Eigen::VectorXd t = deletionStatistics(r(keep), Ak, cov);
       for (size_t k = 0; k < keep.size(); ++k) {
         const int i = keep[k];
@@ -444,9 +518,11 @@ RtestScreen screenRtestReadings(const ProbePlan& plan, const std::vector<RtestCy
   out.options.alpha = kRtestScreenAlpha;
   out.options.max_fraction = kRtestScreenMaxFraction;
   out.options.declaration = declaration;
+  out.options.null_maxima = [&null_max](const ScreenedFit&) { return null_max; };
   out.options.statistic = [&stats](const ScreenedFit& f) { return stats.at(heldOutTouches(f.residuals)); };
   out.screen = screenOutliers(fit, out.options);
   out.options.statistic = nullptr;  // it reads this call's fits
+  out.options.null_maxima = nullptr;
   return out;
 }
 
@@ -509,7 +585,8 @@ RtestAnalysis analyzeRtest(const ProbePlan& plan, const std::vector<RtestCycle>&
   RtestAnalysis out;
   out.kinematics = k;
   out.tilt_deg = L.tilts;
-  if (opt.screen) out.screen = screenRtestReadings(plan, cycles, opt.screenSigmaUm(), opt.declaration, opt.structured_um2);
+  if (opt.screen) out.screen = screenRtestReadings(plan, cycles, opt.screenSigmaUm(), opt.declaration, opt.structured_um2,
+                                                     opt.structured_draws_um);
   const std::vector<std::pair<int, int>> excluded = out.screen.excluded();
   Eigen::Vector3d ref_dev = Eigen::Vector3d::Zero();  // J_ref omega_0: wq(0,0,t0) - wq*, first cycle
   Eigen::Matrix3d ref_cov = Eigen::Matrix3d::Zero();

@@ -17,6 +17,7 @@
 //    cycle, and a value c0 there shifts the rotations at the other tilts by -c0 about their C axis.
 #include <Eigen/Core>
 #include <Eigen/SVD>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -55,6 +56,15 @@ DeclaredNoise rtestDeclaredNoise(const ProbePlan& plan, const ContributorSet* de
 /// commanded centre (probeAxesCovariance) read the same way; the sensors' response S reads
 /// dS x (the reading), each entry independent (gain on the diagonal, cross-talk off it).
 Eigen::MatrixXd rtestStructuredUm2(const ProbePlan& plan, const ContributorSet& declared, const RtestCycle* about);
+/// Draws of the same (um): 3 x (plan points) x draws, the Gaussian parts by the root of their
+/// covariance, the linear axes by probeAxesDraws (each draw its own node spacing). What the tests
+/// whose tails matter (the screen's threshold) read instead of a normal of the covariance.
+Eigen::MatrixXd rtestStructuredDrawsUm(const ProbePlan& plan, const ContributorSet& declared, const RtestCycle* about,
+                                       int draws, std::uint64_t seed);
+/// rtestDeclaredNoise's draws of the declared machine and their seed (fixed: the same data give
+/// the same threshold on every run).
+constexpr int kRtestNullDraws = 2000;
+constexpr std::uint64_t kRtestNullSeed = 0x72746573;
 
 struct RtestFitOptions {
   double sensor_sigma_um = 0.2;  // the sensors' repeatability: a floor for the noise estimate
@@ -66,6 +76,9 @@ struct RtestFitOptions {
   /// The declared structured part of one cycle (rtestDeclaredNoise), shared by every cycle; the
   /// screen whitens by it beside reading_sigma_um. Empty: none.
   Eigen::MatrixXd structured_um2;
+  /// Draws of that part (DeclaredNoise::structured_draws_um): the screen's threshold reads its
+  /// tails from them (core/outliers.hpp). Empty: the Gaussian bound.
+  Eigen::MatrixXd structured_draws_um;
   /// false: no screen of gross readings (the budget's Monte Carlo and its derivatives propagate
   /// noise-free simulated readings through the fixed estimator; a screen there would only cost time).
   bool screen = true;
@@ -152,7 +165,8 @@ struct RtestScreen {
   std::vector<std::pair<int, int>> excluded() const;
 };
 RtestScreen screenRtestReadings(const ProbePlan& plan, const std::vector<RtestCycle>& cycles, double reading_sigma_um,
-                                const std::string& declaration, const Eigen::MatrixXd& structured_um2 = {});
+                                const std::string& declaration, const Eigen::MatrixXd& structured_um2 = {},
+                                const Eigen::MatrixXd& structured_draws_um = {});
 /// REPORT.json's `outliers` block of the R-test, and its one line.
 Json rtestScreenJson(const ProbePlan& plan, const RtestScreen& s);
 std::string rtestScreenText(const ProbePlan& plan, const RtestScreen& s);

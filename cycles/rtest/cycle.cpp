@@ -117,6 +117,7 @@ class Rtest final : public Cycle {
     o.reading_sigma_um = std::sqrt(noise.white_um2);
     o.declaration = noise.declaration;
     o.structured_um2 = noise.structured_um2;
+    o.structured_draws_um = noise.structured_draws_um;
     const RtestAnalysis a = analyzeRtest(plan, cycles, o);
     const std::vector<std::string> files = pathsOf(r.results);
     out.doc = rtestReportJson(plan, cycles, a, files);
@@ -190,6 +191,7 @@ class Rtest final : public Cycle {
     o.reading_sigma_um = std::sqrt(noise.white_um2);
     o.declaration = noise.declaration;
     o.structured_um2 = noise.structured_um2;
+    o.structured_draws_um = noise.structured_draws_um;
     requireValid(o, "rtest diagnosis");
     const RtestDiagnosis d = diagnoseRtest(plan, cycles, o);
     out.text = rtestDiagnosisText(plan, d);

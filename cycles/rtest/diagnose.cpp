@@ -8,6 +8,8 @@
 
 #include <fmt/format.h>
 
+#include "core/rng.hpp"
+
 #include "core/require_valid.hpp"
 #include "core/units.hpp"
 #include "cycles/judge_contract.hpp"
@@ -226,6 +228,7 @@ RtestDiagnosis diagnoseRtest(const ProbePlan& plan, const std::vector<RtestCycle
   fo.reading_sigma_um = o.reading_sigma_um;
   fo.declaration = o.declaration;
   fo.structured_um2 = o.structured_um2;
+  fo.structured_draws_um = o.structured_draws_um;
   d.analysis = analyzeRtest(plan, cycles, fo);
   d.cycles = static_cast<int>(cycles.size());
   RtestJudgeSetup setup = rtestJudgeSetup(plan, cycles, o.readingSigmaUm(), d.analysis.screen.excluded());
@@ -239,6 +242,15 @@ RtestDiagnosis diagnoseRtest(const ProbePlan& plan, const std::vector<RtestCycle
     std::vector<Eigen::Index> at(setup.plan_row.begin(), setup.plan_row.end());
     pb.covariance = o.structured_um2(at, at);
     pb.covariance.diagonal() += pb.sigma.cwiseAbs2();
+    if (o.structured_draws_um.cols() >= kMinNullDraws) {
+      if (o.structured_draws_um.rows() != np3)
+        throw std::invalid_argument("rtest diagnose: the structured draws are not 3 x the plan's points");
+      // One machine in every cycle (its draw shared by every row), each reading's own white part.
+      pb.null_draws = o.structured_draws_um(at, Eigen::all);
+      Rng rng(kRtestNullSeed, 127);
+      for (Eigen::Index c = 0; c < pb.null_draws.cols(); ++c)
+        for (Eigen::Index r = 0; r < pb.null_draws.rows(); ++r) pb.null_draws(r, c) += pb.sigma[r] * rng.normal();
+    }
   }
   d.summary = judge(setup.problem, o.judge);
   const double level = d.summary.per_test_alpha;

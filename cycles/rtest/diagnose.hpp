@@ -50,6 +50,7 @@ struct RtestDiagnosisOptions {
   /// The declared structured part of one cycle (rtestDeclaredNoise), the same machine in every
   /// cycle: the judge whitens by it beside reading_sigma_um (and the screen). Empty: none.
   Eigen::MatrixXd structured_um2;
+  Eigen::MatrixXd structured_draws_um;  // its draws (rtestStructuredDrawsUm): the screen's threshold
   double readingSigmaUm() const { return reading_sigma_um > 0 ? reading_sigma_um : sensor_sigma_um; }
   bool validate(std::string* why) const;  // false, and why naming the field, when out of range
 };

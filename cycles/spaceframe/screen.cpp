@@ -5,6 +5,7 @@
 #include <map>
 #include <memory>
 #include <stdexcept>
+#include <utility>
 
 #include "core/units.hpp"
 
@@ -93,6 +94,7 @@ SpaceframeTouchProblem spaceframeTouchProblem(const ProbePlan& plan, const std::
   out.J.resize(m, cols);
   for (Eigen::Index j = 0; j < m; ++j) out.J.row(j) = rows[static_cast<size_t>(j)];
   out.covariance_um2 = noise.touch.covariance(readings);
+  out.readings = std::move(readings);
   return out;
 }
 
@@ -172,7 +174,14 @@ SpaceframeScreen screenSpaceframeTouches(const ProbePlan& plan, const std::vecto
     if (it == problems->end()) throw std::logic_error("spaceframe outlier screen: a statistic asked of a fit never made");
     return deletionStatistics(it->second.residual_um, it->second.J, it->second.covariance_um2);
   };
+  s.options.null_maxima = [problems, keyOf, &noise](const ScreenedFit& f) {
+    const SpaceframeTouchProblem& p = problems->at(keyOf(f.residuals));
+    const Eigen::MatrixXd draws = noise.touch.nullDraws(p.readings, kDeclaredNullSeed + 1);
+    if (draws.cols() == 0) return Eigen::VectorXd();
+    return screenNullMaxima(deletionStatisticsColumns(draws, p.J, p.covariance_um2));
+  };
   s.screen = screenOutliers(fit, s.options);
+  s.options.null_maxima = nullptr;  // it reads this call's declaration
   std::set<int> ids = options.held_out_ids;
   for (int id : s.heldOutIds()) ids.insert(id);
   const auto it = fits.find(ids);

@@ -37,6 +37,7 @@ struct SpaceframeTouchProblem {
   Eigen::MatrixXd J;
   Eigen::MatrixXd covariance_um2;
   std::vector<std::pair<int, int>> touches;                   // (run, point id) per row
+  std::vector<std::pair<int, int>> readings;                  // (run, plan index) per row: the declaration's keys
   std::vector<std::pair<std::pair<int, int>, double>> held;   // touches not fitted: (run, id), residual
 };
 SpaceframeTouchProblem spaceframeTouchProblem(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,

@@ -759,6 +759,8 @@ Spheres3TouchProblem spheres3TouchProblem(const std::vector<MeasurementRun>& run
   Eigen::VectorXd nu(m);
   for (Eigen::Index j = 0; j < m; ++j) nu[j] = noise.nu[kept[static_cast<size_t>(j)].second];
   out.covariance_um2 = nu.asDiagonal() * noise.trigger.covariance(kept) * nu.asDiagonal();
+  out.readings = kept;
+  out.nu = nu;
 
   // The smooth model's span, at the identified location errors and spheres (central differences
   // of the exact table transform; steps 1e-4 um / 1e-7 rad, far below any parameter).
@@ -821,6 +823,16 @@ Spheres3TouchProblem spheres3TouchProblem(const std::vector<MeasurementRun>& run
   return out;
 }
 
+Eigen::MatrixXd spheres3OutlierStatisticColumns(const Spheres3TouchProblem& p, const Eigen::MatrixXd& y) {
+  Eigen::MatrixXd t = deletionStatisticsColumns(y, p.J, p.covariance_um2);
+  if ((p.full_share.array() < kSpheres3FullShareFloor).any()) {
+    const Eigen::MatrixXd ts = deletionStatisticsColumns(y, p.J_smooth, p.covariance_um2);
+    for (Eigen::Index j = 0; j < t.rows(); ++j)
+      if (p.full_share[j] < kSpheres3FullShareFloor) t.row(j) = ts.row(j);
+  }
+  return t;
+}
+
 Eigen::VectorXd spheres3OutlierStatistic(const Spheres3TouchProblem& p) {
   Eigen::VectorXd t = deletionStatistics(p.residual_um, p.J, p.covariance_um2);
   if ((p.full_share.array() < kSpheres3FullShareFloor).any()) {
@@ -879,7 +891,14 @@ Spheres3Screen screenSpheres3Touches(const ProbePlan& plan, const std::vector<Me
     if (it == problems->end()) throw std::logic_error("spheres3 outlier screen: a statistic asked of a fit never made");
     return spheres3OutlierStatistic(it->second);
   };
+  s.options.null_maxima = [problems, keyOf, &noise](const ScreenedFit& f) {
+    const Spheres3TouchProblem& p = problems->at(keyOf(f.residuals));
+    const Eigen::MatrixXd draws = noise.trigger.nullDraws(p.readings, kDeclaredNullSeed + 1);
+    if (draws.cols() == 0) return Eigen::VectorXd();
+    return screenNullMaxima(spheres3OutlierStatisticColumns(p, p.nu.asDiagonal() * draws));
+  };
   s.screen = screenOutliers(fit, s.options);
+  s.options.null_maxima = nullptr;  // it reads this call's declaration
   if (s.screen.too_many) return s;
   // The problem of the fit holding `held` out (made once), or null when that fit fails.
   const auto problemFor = [&](const Key& held) -> const Spheres3TouchProblem* {

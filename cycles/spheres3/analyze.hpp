@@ -209,6 +209,8 @@ struct Spheres3TouchProblem {
   Eigen::VectorXd full_share;
   Eigen::MatrixXd covariance_um2;
   std::vector<std::pair<int, int>> touches;  // (run, point id) per row
+  std::vector<std::pair<int, int>> readings; // (run, plan index) per row: the declaration's keys
+  Eigen::VectorXd nu;                        // n . u per row: a trigger's displacement as the touch reads it
   std::vector<std::pair<std::pair<int, int>, double>> held;  // (run, point id) and residual (um)
 };
 Spheres3TouchProblem spheres3TouchProblem(const std::vector<MeasurementRun>& runs, const Spheres3Result& r,
@@ -228,6 +230,9 @@ inline constexpr double kSpheres3FullShareFloor = 0.1;
 /// The screen's statistic for each row of a touch problem: the GLS deletion residual under the
 /// full model, or under the smooth one where the full model leaves the touch no redundancy.
 Eigen::VectorXd spheres3OutlierStatistic(const Spheres3TouchProblem& p);
+/// The same statistic of each column of `readings_um` (draws of the declared noise as the touches
+/// read it) in place of the residual: the screen's null.
+Eigen::MatrixXd spheres3OutlierStatisticColumns(const Spheres3TouchProblem& p, const Eigen::MatrixXd& readings_um);
 
 /// Touches of one sphere at one angle of which the data say one hit a chip but not which: each
 /// one's deletion alone makes the data consistent with the declaration (the screen's test at its

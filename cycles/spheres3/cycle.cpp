@@ -89,7 +89,9 @@ class Spheres3 final : public Cycle {
     }
     out.doc["outliers"]["ambiguous"] = ambiguous;
     const Spheres3TouchProblem tp = spheres3TouchProblem(runs, res, noise);
-    out.doc["declared_noise"] = declaredNoiseJson(noise.trigger, testAgainstDeclared(tp.residual_um, tp.J, tp.covariance_um2));
+    const Eigen::MatrixXd null_draws = tp.nu.asDiagonal() * noise.trigger.nullDraws(tp.readings, kDeclaredNullSeed + 2);
+    out.doc["declared_noise"] =
+        declaredNoiseJson(noise.trigger, testAgainstDeclared(tp.residual_um, tp.J, tp.covariance_um2, null_draws));
     if (!screen.excluded.empty() || screen.too_many) out.warnings.push_back(screen.text());
     // What analyze signs: u_A from the data, u_B from the declared contributors by
     // Monte Carlo through the same estimator (cycles/spheres3/budget.hpp, docs/uncertainty.md).

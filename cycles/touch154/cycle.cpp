@@ -64,7 +64,14 @@ class Touch154 final : public Cycle {
     oo.sigma_um = std::sqrt(noise.noise.white_um2);
     oo.declaration = noise.noise.declaration;
     if (noise.basis.size())
+    {
       oo.statistic = [&noise](const ScreenedFit& fit) { return touch154OutlierStatistic(noise, fit); };
+      oo.null_maxima = [&noise](const ScreenedFit& fit) {
+        const FittedReadings f = fittedProblem(noise, fit.residuals);
+        if (f.null_draws_um.cols() == 0) return Eigen::VectorXd();
+        return screenNullMaxima(deletionStatisticsColumns(f.null_draws_um, f.J, f.covariance_um2));
+      };
+    }
     const OutlierScreen screen = screenOutliers(
         [&](const std::function<bool(int, const ProbePoint&)>& hold) {
           IdentificationOptions o = opt;

@@ -50,6 +50,7 @@ JudgeProblem touch154JudgeProblem(const ProbePlan& plan, const Linearisation& li
     std::vector<std::pair<int, int>> kept;
     for (const auto& o : lin.observations) kept.emplace_back(o.run, noise->index_of_id.at(o.point->id));
     p.covariance = noise->noise.covariance(kept);
+    p.null_draws = noise->noise.nullDraws(kept, kTouch154NullSeed);
   } else {
     p.sigma = Eigen::VectorXd::Constant(n, noise ? std::sqrt(noise->noise.white_um2) : sigma_um);
   }

@@ -128,5 +128,31 @@ TEST(Contributors, ProbeAxesCovarianceIsWhatTheDrawsShow) {
   EXPECT_NEAR((diff - 1.49e-6 * Eigen::MatrixXd::Identity(n, n)).cwiseAbs().maxCoeff(), 0.0, 1e-18);
 }
 
+TEST(Contributors, ProbeAxesDrawsHaveTheCovariance) {
+  // probeAxesDraws' sample covariance over 20000 draws against probeAxesCovariance (the node
+  // correlation by quadrature, not by draws) on 000 Table 5 with 1 um pretravel and the per-touch
+  // contributors: touches 8 mm apart, 60 mm apart, oblique.
+  ContributorSet cs = loadContributors(test::sourcePath("examples/contributors/table5.json"));
+  for (auto& c : cs.items)
+    if (c.info->kind == ContributorKind::ProbePretravel) c.u[0] = 1e-3;
+  const std::vector<Eigen::Vector3d> t = {{10.0, -80.0, 40.0}, {18.0, -80.0, 40.0}, {10.0, -20.0, 100.0}, {70.0, -75.0, 35.0}};
+  const std::vector<Eigen::Vector3d> u = {{0, 0, -1}, {0, 0, -1}, {-1, 0, 0}, Eigen::Vector3d(1, 1, -1).normalized()};
+  const auto all = [](const ContributorInfo& c) { return isProbeAxesContributor(c) || isPerTouchContributor(c); };
+  const Eigen::MatrixXd C = probeAxesCovariance(cs, all, t, u);
+  const int runs = 20000;
+  const Eigen::MatrixXd D = probeAxesDraws(cs, all, t, u, runs, 11);
+  ASSERT_EQ(D.rows(), 4);
+  ASSERT_EQ(D.cols(), runs);
+  const Eigen::MatrixXd S = D * D.transpose() / runs;
+  for (Eigen::Index i = 0; i < 4; ++i)
+    for (Eigen::Index j = 0; j <= i; ++j) {
+      const double se = std::sqrt((C(i, i) * C(j, j) + C(i, j) * C(i, j)) / runs);
+      EXPECT_NEAR(S(i, j), C(i, j), 5 * se) << i << "," << j;
+    }
+  // The same seed draws the same machines; another seed others.
+  EXPECT_EQ((probeAxesDraws(cs, all, t, u, 3, 11) - D.leftCols(3)).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_GT((probeAxesDraws(cs, all, t, u, 3, 12) - D.leftCols(3)).cwiseAbs().maxCoeff(), 0.0);
+}
+
 }  // namespace
 }  // namespace rotacal

@@ -224,6 +224,66 @@ TEST(DeclaredNoise, TheJudgeWhitensByTheFullCovariance) {
   EXPECT_GT(variance(chi2_diagonal), 2.0 * variance(chi2_full));
 }
 
+// The judge's adequacy test on a scale mixture (s^2 in {0.4, 1.6} per data set, mean 1: the
+// covariance is S) with and without draws of it: chi2(dof) reads the mixture's tail as too light
+// and alarms beyond its alpha; the draws' scaled chi-square keeps it.
+TEST(DeclaredNoise, TheJudgesAdequacyKeepsItsRateOnAScaleMixture) {
+  const int n = 60, p = 4, sets = 1500;
+  const Eigen::MatrixXd S = correlatedCovariance(n);
+  const Eigen::MatrixXd L = S.llt().matrixL();
+  const Eigen::MatrixXd J = design(n, p, 19);
+  Rng rng(23, 4);
+  const auto mixture = [&] {
+    const double s2 = rng.uniform() < 0.5 ? 0.4 : 1.6;
+    Eigen::VectorXd e(n);
+    for (int i = 0; i < n; ++i) e[i] = rng.normal();
+    return Eigen::VectorXd(std::sqrt(s2) * (L * e));
+  };
+  Eigen::MatrixXd D(n, 2000);
+  for (Eigen::Index d = 0; d < D.cols(); ++d) D.col(d) = mixture();
+  JudgeOptions o;
+  o.alpha = 0.05;
+  int with_draws = 0, without = 0;
+  for (int k = 0; k < sets; ++k) {
+    JudgeProblem pb;
+    pb.y = mixture();
+    pb.J0 = J;
+    for (int q = 0; q < p; ++q) pb.baseline_parameters.push_back({"b" + std::to_string(q), "um"});
+    pb.covariance = S;
+    pb.declaration = "test mixture";
+    const JudgeSummary plain = judge(pb, o);
+    pb.null_draws = D;
+    const JudgeSummary drawn = judge(pb, o);
+    without += plain.baseline.passes ? 0 : 1;
+    with_draws += drawn.baseline.passes ? 0 : 1;
+    if (k == 0) {
+      // The same null as testAgainstDeclared's, read from the same draws.
+      const DeclaredNoiseTest t = testAgainstDeclared(pb.y, J, S, D);
+      EXPECT_NEAR(drawn.baseline.p_value, t.p_value, 1e-9 + 1e-6 * t.p_value);
+      EXPECT_EQ(drawn.baseline.null_draws, 2000);
+      EXPECT_EQ(plain.baseline.null_draws, 0);
+      EXPECT_NE(judgeToJson(drawn).dump().find("null_scale"), std::string::npos);
+    }
+  }
+  std::printf("adequacy at 5 %% on a scale mixture: %d of %d alarms with the draws' null, %d with chi2(dof)\n", with_draws,
+              sets, without);
+  // chi2(56) on a mixture whose chi2 spreads sqrt(2 x 56 x 1.36 + 56^2 x 0.36) = 35 (not 10.6):
+  // 40 % of the sets beyond its 5 % (603 of 1500 here).
+  EXPECT_GT(without, 0.25 * sets);
+  // The draws: at most the stated 5 % within 3 binomial sd (1.7 %). Two moments make a
+  // two-point mixture's null a little conservative (2.1 % here, 31 of 1500), never degenerate.
+  EXPECT_GT(with_draws, 0.01 * sets);
+  EXPECT_LT(with_draws, 0.067 * sets);
+  // Draws without a covariance are refused: they are read through its whitening.
+  JudgeProblem bad;
+  bad.y = mixture();
+  bad.J0 = J;
+  for (int q = 0; q < p; ++q) bad.baseline_parameters.push_back({"b" + std::to_string(q), "um"});
+  bad.sigma = Eigen::VectorXd::Ones(n);
+  bad.null_draws = D;
+  EXPECT_THROW(judge(bad, o), std::invalid_argument);
+}
+
 TEST(DeclaredNoise, DiagonalCovarianceEqualsSigma) {
   const int n = 25, p = 2;
   const Eigen::MatrixXd J = design(n, p, 17);
