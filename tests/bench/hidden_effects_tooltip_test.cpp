@@ -77,9 +77,9 @@ TEST(DrawnHead, EffectBySuperpositionMatchesTheGeneratorsOwnPivotError) {
 
 TEST(DrawnHead, CleanSeedsRaiseNoCauseOnHeadsAsDeclared) {
   // No effect, 10 heads on the bundled plan and on its dynamic test (one sweep). The bench
-  // measures 6 and 8 alarms in 200 (3 %, 4 %: above the judge's 1 %, docs/diagnosis.md); at 4 %
-  // three or more of 10 has probability 0.6 %. (Two tools and two sweeps alarm on 10 % and 7.5 %
-  // there: not asserted, reported.)
+  // measures 4 and 3 alarms in 200 with the laser zero declared (6 and 8 before, docs/diagnosis.md);
+  // at 4 % three or more of 10 has probability 0.6 %. (Two tools and two sweeps alarm on 3.5 % and
+  // 1.5 % there: not asserted, reported.)
   const HeadWorld& w = world();
   for (const std::vector<const ProbePlan*>& plans : {std::vector<const ProbePlan*>{&w.stat}, {&w.dyn}}) {
     int alarms = 0;
