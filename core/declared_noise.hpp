@@ -13,7 +13,7 @@
 // own budget says does not exist: the linear axes of 000 Table 5 leave several micrometres in the
 // residual of 000's 154-touch cycle where the probe declares 1.2 um. Tests therefore work on whitened residuals
 // (generalized least squares, Sigma^-1/2), so their null hypothesis is the declared machine.
-// A third part, for readings taken relative to a zero read once per run (the tooltip laser is
+// A third part, for readings taken relative to a zero read once per run (a laser that is
 // zeroed on a reading of each sweep's zero pose, which has its own scatter):
 //   per run     shared by the readings of one run only: every reading of a sweep carries minus
 //               that run's zero error, and the next run zeroes anew. Declared as shared by every
