@@ -15,6 +15,58 @@
 
 namespace rotacal {
 
+namespace {
+
+void requirePerRunIndex(const Eigen::MatrixXd& per_run, int i) {
+  if (per_run.rows() != per_run.cols())
+    throw std::invalid_argument(
+        fmt::format("declared noise: the per-run part is {} x {}, not square", per_run.rows(), per_run.cols()));
+  if (i < 0 || i >= per_run.rows())
+    throw std::invalid_argument(fmt::format("declared noise: reading {} beyond the per-run part's {}", i, per_run.rows()));
+}
+
+/// The per-run part between the readings kept[] of one run (DeclaredNoise::covariance).
+void addPerRun(const Eigen::MatrixXd& per_run_um2, const std::vector<std::pair<int, int>>& kept, Eigen::MatrixXd* C) {
+  if (per_run_um2.size() == 0) return;
+  const auto n = static_cast<Eigen::Index>(kept.size());
+  for (Eigen::Index a = 0; a < n; ++a) {
+    const auto& ka = kept[static_cast<size_t>(a)];
+    requirePerRunIndex(per_run_um2, ka.second);
+    for (Eigen::Index b = 0; b < n; ++b) {
+      const auto& kb = kept[static_cast<size_t>(b)];
+      if (kb.first == ka.first) (*C)(a, b) += per_run_um2(ka.second, kb.second);
+    }
+  }
+}
+
+/// The per-run part drawn afresh for each run of kept[] and each draw (DeclaredNoise::nullDraws).
+void addPerRunDraws(const Eigen::MatrixXd& per_run_um2, const std::vector<std::pair<int, int>>& kept, std::uint64_t seed,
+                    Eigen::MatrixXd* D) {
+  if (per_run_um2.size() == 0 || D->cols() == 0) return;
+  for (const auto& k : kept) requirePerRunIndex(per_run_um2, k.second);
+  if (!per_run_um2.allFinite()) throw std::invalid_argument("declared noise: the per-run part has a non-finite entry");
+  // Its symmetric root, negative rounding floored at 0: the part is singular (a zero reading
+  // carries none of it, and one zero serves many readings), so no Cholesky factor.
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (per_run_um2 + per_run_um2.transpose()));
+  const Eigen::MatrixXd root =
+      es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal() * es.eigenvectors().transpose();
+  std::vector<int> runs;
+  for (const auto& k : kept)
+    if (std::find(runs.begin(), runs.end(), k.first) == runs.end()) runs.push_back(k.first);
+  // A stream of its own: the white part's draws stay those of a declaration without this part.
+  Rng rng(seed, 1);
+  Eigen::VectorXd z(per_run_um2.rows());
+  for (Eigen::Index d = 0; d < D->cols(); ++d)
+    for (int run : runs) {
+      for (Eigen::Index i = 0; i < z.size(); ++i) z[i] = rng.normal();
+      const Eigen::VectorXd v = root * z;
+      for (size_t a = 0; a < kept.size(); ++a)
+        if (kept[a].first == run) (*D)(static_cast<Eigen::Index>(a), d) += v[kept[a].second];
+    }
+}
+
+}  // namespace
+
 Eigen::MatrixXd DeclaredNoise::covariance(const std::vector<std::pair<int, int>>& kept) const {
   const auto n = static_cast<Eigen::Index>(kept.size());
   Eigen::MatrixXd C = Eigen::MatrixXd::Zero(n, n);
@@ -26,6 +78,7 @@ Eigen::MatrixXd DeclaredNoise::covariance(const std::vector<std::pair<int, int>>
       for (Eigen::Index b = 0; b < n; ++b) C(a, b) = structured_um2(ia, kept[static_cast<size_t>(b)].second);
     }
   }
+  addPerRun(per_run_um2, kept, &C);
   C.diagonal().array() += white_um2;
   return C;
 }
@@ -45,13 +98,16 @@ Eigen::MatrixXd DeclaredNoise::nullDraws(const std::vector<std::pair<int, int>>&
   Rng rng(seed, 0);
   for (Eigen::Index d = 0; d < draws; ++d)
     for (Eigen::Index a = 0; a < n; ++a) D(a, d) += white * rng.normal();
+  addPerRunDraws(per_run_um2, kept, seed, &D);
   return D;
 }
 
 double DeclaredNoise::rmsSigmaUm(int readings) const {
-  if (structured_um2.size() == 0 || readings <= 0) return std::sqrt(white_um2);
-  const Eigen::Index n = std::min<Eigen::Index>(readings, structured_um2.rows());
-  return std::sqrt(white_um2 + structured_um2.diagonal().head(n).mean());
+  if (readings <= 0) return std::sqrt(white_um2);
+  double v = white_um2;
+  for (const Eigen::MatrixXd* part : {&structured_um2, &per_run_um2})
+    if (part->size() > 0) v += part->diagonal().head(std::min<Eigen::Index>(readings, part->rows())).mean();
+  return std::sqrt(v);
 }
 
 DeclaredNoise repeatabilityOnly(double repeatability_um, const std::string& source) {

@@ -13,6 +13,13 @@
 // own budget says does not exist: the linear axes of 000 Table 5 leave several micrometres in the
 // residual of 000's 154-touch cycle where the probe declares 1.2 um. Tests therefore work on whitened residuals
 // (generalized least squares, Sigma^-1/2), so their null hypothesis is the declared machine.
+// A third part, for readings taken relative to a zero read once per run (a laser that is
+// zeroed on a reading of each sweep's zero pose, which has its own scatter):
+//   per run     shared by the readings of one run only: every reading of a sweep carries minus
+//               that run's zero error, and the next run zeroes anew. Declared as shared by every
+//               run (structured), repeats would agree better than the data do; left out, a
+//               sweep's readings would move together more than declared. Cycles without a
+//               per-run zero leave it empty.
 #include <Eigen/Core>
 #include <cstdint>
 #include <string>
@@ -36,16 +43,22 @@ struct DeclaredNoise {
   /// random node spacing makes their errors a scale mixture whose chi2 has a heavier upper tail
   /// than a Gaussian of the same covariance.
   Eigen::MatrixXd structured_draws_um;
+  /// The part shared by the readings of ONE run only (readings x readings of one run, plan order,
+  /// um^2; symmetric, positive semi-definite; empty: none): covariance() adds it between readings
+  /// of the same run, nullDraws() draws it afresh for each run.
+  Eigen::MatrixXd per_run_um2;
 
   /// The covariance (um^2) of the readings kept[k] = (run, index in the run's plan order), in that
-  /// order: the structured part between any two (the same machine in every run) and the white
-  /// part on the diagonal.
+  /// order: the structured part between any two (the same machine in every run), the per-run part
+  /// between two of the same run and the white part on the diagonal. Throws std::invalid_argument
+  /// when an index is beyond a part's plan or per_run_um2 is not square.
   Eigen::MatrixXd covariance(const std::vector<std::pair<int, int>>& kept) const;
   /// Draws of the readings kept[k] (as covariance()): columns of structured_draws_um (the same
-  /// machine in every run) plus the white part drawn per reading from `seed`; readings x draws,
-  /// empty when no structured draws are held.
+  /// machine in every run) plus the white part drawn per reading and the per-run part drawn per
+  /// run and draw (its symmetric root times standard normals), both from `seed`; readings x
+  /// draws, empty when no structured draws are held.
   Eigen::MatrixXd nullDraws(const std::vector<std::pair<int, int>>& kept, std::uint64_t seed) const;
-  /// rms of sqrt(diag): the declared scatter of one reading, white and structured together.
+  /// rms of sqrt(diag): the declared scatter of one reading, white, structured and per run together.
   double rmsSigmaUm(int readings) const;
 };
 

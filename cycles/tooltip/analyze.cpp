@@ -3,6 +3,8 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <tuple>
 #include <functional>
 #include <limits>
 #include <stdexcept>
@@ -38,6 +40,7 @@ struct Problem {
     double t_um = 0, z_um = 0;
     int reading = 0;                            // index in the concatenated runs
     int run = 0, k = 0;                         // run, and plan point in it
+    int k_ref = 0;                              // the plan point of its sweep's zero reading
   };
   std::vector<Obs> obs;
   int readings = 0;
@@ -116,6 +119,7 @@ Problem makeProblem(const ProbePlan& plan, const std::vector<TooltipRun>& runs) 
       b.reading = reading;
       b.run = static_cast<int>(&run - runs.data());
       b.k = static_cast<int>(k);
+      b.k_ref = refs[k];
       p.obs.push_back(b);
     }
   }
@@ -125,7 +129,7 @@ Problem makeProblem(const ProbePlan& plan, const std::vector<TooltipRun>& runs) 
 
 struct GnResult {
   Eigen::VectorXd x;
-  Eigen::MatrixXd cov_unit;  // (J^T J)^-1 over the active parameters, in full layout (0 elsewhere)
+  Eigen::MatrixXd cov_unit;  // (J^T J)^-1 plus the laser zeros' A Z A^T over the active parameters, in full layout (0 elsewhere)
   double rss = 0;
   int iterations = 0;
   bool converged = false;
@@ -215,9 +219,25 @@ GnResult gaussNewton(const Problem& p, const Eigen::VectorXd& x0, const std::vec
       }
   g.kept_residual = res(rows);
   g.kept_J = -jac(rows, Eigen::all);  // d model / dx, as the judge and the budget read it
+  // Per um^2 of reading variance: each reading's own through the fit, (J^T J)^-1, and its
+  // sweep's laser zero's, which every value of that sweep and direction in its run is read less
+  // (A Z A^T, A = (J^T J)^-1 J^T the fit's map, Z = 1 between the values of one zero).
+  Eigen::MatrixXd cov(n, n);
+  for (int a = 0; a < n; ++a)
+    for (int b = 0; b < n; ++b) cov(a, b) = fit.covariance(a, b);
+  const Eigen::MatrixXd A = cov * jac.transpose();  // n x m: zero columns where a value is not read
+  std::map<std::tuple<int, int, int>, Eigen::VectorXd> per_zero;
+  for (size_t i = 0; i < obs.size(); ++i)
+    for (int c = 0; c < 2; ++c) {
+      if (!std::isfinite(c == 0 ? obs[i]->t_um : obs[i]->z_um)) continue;
+      auto [it, fresh] = per_zero.try_emplace({obs[i]->run, obs[i]->k_ref, c}, Eigen::VectorXd::Zero(n));
+      it->second -= A.col(2 * static_cast<Eigen::Index>(i) + c);  // d x / d(reading) = -(J_r^T J_r)^-1 J_r^T
+    }
+  Eigen::MatrixXd with_zero = cov;
+  for (const auto& [key, a_z] : per_zero) with_zero += a_z * a_z.transpose();
   g.cov_unit = Eigen::MatrixXd::Zero(x0.size(), x0.size());
   for (int a = 0; a < n; ++a)
-    for (int b = 0; b < n; ++b) g.cov_unit(cols[static_cast<size_t>(a)], cols[static_cast<size_t>(b)]) = fit.covariance(a, b);
+    for (int b = 0; b < n; ++b) g.cov_unit(cols[static_cast<size_t>(a)], cols[static_cast<size_t>(b)]) = with_zero(a, b);
   return g;
 }
 

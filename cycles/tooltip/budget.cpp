@@ -151,6 +151,16 @@ TooltipRun simulateTooltipHead(const ProbePlan& plan, const TooltipHead& head, c
   const Eigen::Vector3d& nt = m.beam_t;
   const Eigen::Vector3d& nz = m.beam_z;
   const std::vector<int> refs = tooltipReferences(plan);
+  // The laser is zeroed on a reading of each sweep's zero pose, as noisy as any: drawn first, in
+  // plan order, then every later reading of the sweep is its own less that one.
+  const bool noisy = rng && noise_um > 0;
+  std::vector<Eigen::Vector2d> zero_noise(plan.points.size(), Eigen::Vector2d::Zero());
+  if (noisy)
+    for (size_t k = 0; k < plan.points.size(); ++k)
+      if (refs[k] == static_cast<int>(k)) {
+        zero_noise[k].x() = noise_um * rng->normal();
+        if (read_z) zero_noise[k].y() = noise_um * rng->normal();
+      }
   TooltipRun run;
   run.reserve(plan.points.size());
   for (size_t k = 0; k < plan.points.size(); ++k) {
@@ -159,9 +169,10 @@ TooltipRun simulateTooltipHead(const ProbePlan& plan, const TooltipHead& head, c
     r.angle_deg = o.axis == 'A' ? plan.points[k].pose.A : plan.points[k].pose.B;
     r.t_um = nt.dot(rel);
     r.z_um = read_z ? nz.dot(rel) : std::numeric_limits<double>::quiet_NaN();
-    if (rng && noise_um > 0 && refs[k] != static_cast<int>(k)) {  // the zero reading is 0 by construction
-      r.t_um += noise_um * rng->normal();
-      if (read_z) r.z_um += noise_um * rng->normal();
+    if (noisy && refs[k] != static_cast<int>(k)) {  // the zero reading is 0 by construction
+      const Eigen::Vector2d& zero = zero_noise[static_cast<size_t>(refs[k])];
+      r.t_um += noise_um * rng->normal() - zero.x();
+      if (read_z) r.z_um += noise_um * rng->normal() - zero.y();
     }
     run.push_back(r);
   }
@@ -213,12 +224,21 @@ UncertaintyBudget tooltipBudget(const ProbePlan& plan, const std::vector<Tooltip
   const TooltipModelEval ev = evaluateTooltipModel(plan, runs, x);
   const std::vector<int> refs = tooltipReferences(plan);
   std::vector<int> rows;
+  std::vector<size_t> zero_of_row;  // which laser zero each row reads against: (run, zero reading, direction)
   int obs = 0;
-  for (const auto& run : runs)
-    for (size_t k = 0; k < run.size(); ++k) {
+  for (size_t ri = 0; ri < runs.size(); ++ri)
+    for (size_t k = 0; k < runs[ri].size(); ++k) {
+      const TooltipRun& run = runs[ri];
       if (refs[k] == static_cast<int>(k)) continue;
-      if (std::isfinite(run[k].t_um)) rows.push_back(2 * obs);  // NaN: left out by the screen
-      if (std::isfinite(run[k].z_um)) rows.push_back(2 * obs + 1);
+      const size_t zero = (ri * plan.points.size() + static_cast<size_t>(refs[k])) * 2;
+      if (std::isfinite(run[k].t_um)) {  // NaN: left out by the screen
+        rows.push_back(2 * obs);
+        zero_of_row.push_back(zero);
+      }
+      if (std::isfinite(run[k].z_um)) {
+        rows.push_back(2 * obs + 1);
+        zero_of_row.push_back(zero + 1);
+      }
       ++obs;
     }
   std::vector<int> cols(l.e.begin(), l.e.end());
@@ -232,6 +252,30 @@ UncertaintyBudget tooltipBudget(const ProbePlan& plan, const std::vector<Tooltip
   const Eigen::MatrixXd cov_unit = scale.cwiseInverse().asDiagonal() *
                                    (js.transpose() * js).ldlt().solve(Eigen::MatrixXd::Identity(n, n)) *
                                    scale.cwiseInverse().asDiagonal();  // per um^2 of reading variance
+  // The laser's zero (cycles/tooltip/noise.hpp): it is read with the per-reading scatter, and
+  // every value of its sweep and direction in that run is read less it, so those values share
+  // one error. Through the fit's map A = (J^T J)^-1 J^T it adds A Z A^T per um^2 (Z = 1 between
+  // the values of one zero), and it leaves tr(M Z) in the residual (M = I - J A) beside the
+  // dof of the independent part: the residual's variance per dof is the reading's times kappa.
+  const Eigen::MatrixXd A =
+      scale.cwiseInverse().asDiagonal() * (js.transpose() * js).ldlt().solve(js.transpose());  // params x rows
+  Eigen::MatrixXd cov_zero_unit = Eigen::MatrixXd::Zero(n, n);
+  double trace_MZ = 0.0;
+  {
+    std::vector<size_t> zeros = zero_of_row;
+    std::sort(zeros.begin(), zeros.end());
+    zeros.erase(std::unique(zeros.begin(), zeros.end()), zeros.end());
+    for (size_t z : zeros) {
+      Eigen::VectorXd ones = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(rows.size()));
+      for (size_t r = 0; r < rows.size(); ++r)
+        if (zero_of_row[r] == z) ones[static_cast<Eigen::Index>(r)] = 1.0;
+      const Eigen::VectorXd a_z = A * ones;
+      cov_zero_unit += a_z * a_z.transpose();
+      trace_MZ += ones.sum() - ones.dot(jr * a_z);
+    }
+  }
+  const double independent_dof = static_cast<double>(rows.size()) - n;
+  const double kappa = independent_dof > 0 ? 1.0 + trace_MZ / independent_dof : 1.0;
 
   // The per-reading scatter declared: the laser's own error (laser_resolution, else the plan's
   // laser_noise_um: the same 004 figure), the sphere's form, lateral coupling.
@@ -270,11 +314,14 @@ UncertaintyBudget tooltipBudget(const ProbePlan& plan, const std::vector<Tooltip
     });
   }
   const double s_obs = fit.dof > 0 ? fit.sigma_um : 0.0;
-  const ReadingScatter scatter = readingScatter(declared_um2, s_obs * s_obs, fit.dof, sys_um2);
+  // The residual and the contributors' share of it on the per-reading scale (kappa above).
+  for (double& v : sys_um2) v /= kappa;
+  const ReadingScatter scatter = readingScatter(declared_um2, s_obs * s_obs / kappa, fit.dof, sys_um2);
   const double sigma2 = scatter.variance_um2;
-  Eigen::MatrixXd cov_a = f.asDiagonal() * (sigma2 * cov_unit) * f.asDiagonal();
+  Eigen::MatrixXd cov_a = f.asDiagonal() * (sigma2 * (cov_unit + cov_zero_unit)) * f.asDiagonal();
   b.type_a_source = fmt::format(
-      "the per-reading scatter {:.3f} um ({}; declared: laser, sphere form, lateral coupling) through the fit",
+      "the per-reading scatter {:.3f} um ({}; declared: laser, sphere form, lateral coupling) through the fit, "
+      "each reading's own and its sweep's laser zero's",
       std::sqrt(sigma2), scatter.why);
   // Repeats: a parameter whose repeats scatter more than that (drift between runs, a set-up that
   // moved) takes the standard error of the repeats' mean instead; correlations kept by scaling.

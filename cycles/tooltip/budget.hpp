@@ -2,9 +2,12 @@
 // The uncertainty the tooltip cycle signs for its angular errors e_k (mdeg) and the pivot-length
 // error dR (um), on core/uncertainty_budget:
 //   Type A  the per-reading scatter (the laser's own error, the sphere's form, lateral coupling:
-//           004 Sec. VII) through the fit's own map, sigma^2 (J^T J)^-1, with sigma from the
-//           residual less what the Type B contributors leave in it, floored at the declared
-//           scatter; repeats raise a parameter to the scatter of the repeats' mean;
+//           004 Sec. VII) through the fit's own map, sigma^2 (J^T J)^-1, plus the same scatter
+//           of each sweep's zero reading, which every value of the sweep and direction in its
+//           run is read less (sigma^2 A Z A^T, A = (J^T J)^-1 J^T, Z = 1 between the values of
+//           one zero); sigma from the residual less what the Type B contributors leave in it,
+//           on the per-reading scale (the zero's share of the residual taken out), floored at
+//           the declared scatter; repeats raise a parameter to the scatter of the repeats' mean;
 //   Type B  the declared contributors the data cannot show (004 Sec. VII's machine positioning,
 //           on the linear-axis model; the laser's alignment), by Monte Carlo: each run draws them,
 //           simulates the readings on the exact head geometry around the identified errors, and
@@ -61,7 +64,9 @@ struct TooltipHead {
 
 /// The exact readings of `plan` for `head` with the draw acting (the pivot off its command, the
 /// beams tilted), zeroed at each sweep's zero pose as the laser is; `read_z` false: the transverse
-/// direction alone (z NaN, 004). With `rng`, every reading component gets noise_um x N(0, 1).
+/// direction alone (z NaN, 004). With `rng`, every reading component gets noise_um x N(0, 1),
+/// and so does each sweep's zero reading (drawn first, in plan order), which every later reading
+/// of its sweep is read less: the laser is zeroed on a reading.
 TooltipRun simulateTooltipHead(const ProbePlan& plan, const TooltipHead& head, const TooltipDraw& draw, bool read_z,
                                double noise_um, Rng* rng);
 

@@ -99,6 +99,7 @@ TooltipJudgeSetup tooltipJudgeSetup(const std::vector<TooltipSet>& sets, double 
   std::vector<Eigen::VectorXd> j0, piv, sc;
   std::vector<int> group, comp;
   std::vector<std::pair<int, int>> kept;  // (set, 2 k + c) of each value: the declaration's index
+  std::vector<int> kept_run;              // each value's run over all sets: whose laser zero it reads against
   JudgeFactor f_angle{"angle", {}, {}, ""}, f_comp{"component", {}, {}, ""}, f_rep{"repeat", {}, {}, ""},
       f_time{"time", {}, {}, "h"}, f_tool{"tool", {}, {}, ""};
   const char tname = o0.axis == 'A' ? 'Y' : 'X';
@@ -127,6 +128,7 @@ TooltipJudgeSetup tooltipJudgeSetup(const std::vector<TooltipSet>& sets, double 
           const Eigen::Index row = 2 * obs + c;
           if (!std::isfinite(c == 0 ? run[k].t_um : run[k].z_um)) continue;  // left out by the screen
           kept.emplace_back(static_cast<int>(si), static_cast<int>(2 * k) + c);
+          kept_run.push_back(run_global);
           comp.push_back(c);
           y.push_back((c == 0 ? run[k].t_um : run[k].z_um) - ev.model_um[row]);
           Eigen::VectorXd jr = Eigen::VectorXd::Zero(na);
@@ -156,15 +158,18 @@ TooltipJudgeSetup tooltipJudgeSetup(const std::vector<TooltipSet>& sets, double 
   JudgeProblem& pb = s.problem;
   pb.unit = "um";
   pb.y = Eigen::Map<const Eigen::VectorXd>(y.data(), n);
+  // Each set's per-reading variance, for the laser's zero below.
+  std::vector<double> white;
   if (!contributors) {
     pb.sigma = Eigen::VectorXd::Constant(n, noise_um);
     pb.declaration = fmt::format("declared: laser noise {:.3f} um only (laser_noise_um)", noise_um);
+    white.assign(sets.size(), noise_um * noise_um);
+    pb.covariance = pb.sigma.array().square().matrix().asDiagonal();
   } else {
     // The machine's declaration: white per value of each set's plan, the structured part shared
     // between every value of every set and repeat (one machine), about the first run's readings.
     std::vector<const ProbePlan*> plans;
     std::vector<const TooltipRun*> about;
-    std::vector<double> white;
     std::vector<Eigen::Index> first;
     Eigen::Index m = 0;
     for (const auto& set : sets) {
@@ -186,6 +191,17 @@ TooltipJudgeSetup tooltipJudgeSetup(const std::vector<TooltipSet>& sets, double 
       }
     for (Eigen::Index a = 0; a < n; ++a) pb.covariance(a, a) += white[static_cast<size_t>(kept[static_cast<size_t>(a)].first)];
   }
+  // The laser's zero, read once per run with the per-reading scatter: shared by the values of
+  // one run (cycles/tooltip/noise.hpp), not between runs or tools (each zeroes anew).
+  std::vector<Eigen::MatrixXd> per_run;
+  for (size_t si = 0; si < sets.size(); ++si) per_run.push_back(tooltipPerRunUm2(*sets[si].plan, white[si]));
+  for (Eigen::Index a = 0; a < n; ++a)
+    for (Eigen::Index b = 0; b < n; ++b) {
+      const auto& ka = kept[static_cast<size_t>(a)];
+      const auto& kb = kept[static_cast<size_t>(b)];
+      if (kept_run[static_cast<size_t>(a)] == kept_run[static_cast<size_t>(b)])
+        pb.covariance(a, b) += per_run[static_cast<size_t>(ka.first)](ka.second, kb.second);
+    }
   pb.J0.resize(n, na);
   for (Eigen::Index i = 0; i < n; ++i) pb.J0.row(i) = j0[static_cast<size_t>(i)].transpose();
   for (double a : s.angles_deg) pb.baseline_parameters.push_back({fmt::format("e({}={:g})", o0.axis, a), "mdeg"});

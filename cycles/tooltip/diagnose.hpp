@@ -12,8 +12,10 @@
 //    their declaration (cycles/tooltip/noise.hpp: the per-reading laser contributors, and what the
 //    linear axes and the beams' alignment move the readings by, shared between readings, as the
 //    judge's full covariance); without, the plan's `laser_noise_um` alone (default 0.254 um: 004
-//    Sec. VII's laser system error, 0.000010 in). A value the screen of gross readings left out
-//    (NaN) is not in the problem.
+//    Sec. VII's laser system error, 0.000010 in). Either way each sweep's laser zero, read with
+//    the same per-reading scatter, is shared by the values of its sweep and direction in one run
+//    (a new zero in every run and tool). A value the screen of gross readings left out (NaN) is
+//    not in the problem.
 //  - groups: the repeats (results files) when there are at least 3, else the commanded angles
 //    (leave one angle out: its own error is refitted on it by the judge); factors: angle,
 //    component, repeat, time, tool.

@@ -32,6 +32,20 @@ std::vector<std::pair<int, int>> tooltipReadValues(const ProbePlan& plan, const 
   return kept;
 }
 
+Eigen::MatrixXd tooltipPerRunUm2(const ProbePlan& plan, double white_um2) {
+  if (!(white_um2 >= 0) || !std::isfinite(white_um2))
+    throw std::invalid_argument(fmt::format("tooltip declared noise: per-reading variance {} um^2 (expected >= 0)", white_um2));
+  const std::vector<int> refs = tooltipReferences(plan);
+  const auto n = 2 * static_cast<Eigen::Index>(refs.size());
+  Eigen::MatrixXd P = Eigen::MatrixXd::Zero(n, n);
+  for (size_t a = 0; a < refs.size(); ++a)
+    for (size_t b = 0; b < refs.size(); ++b) {
+      if (refs[a] == static_cast<int>(a) || refs[b] == static_cast<int>(b) || refs[a] != refs[b]) continue;
+      for (Eigen::Index c = 0; c < 2; ++c) P(2 * static_cast<Eigen::Index>(a) + c, 2 * static_cast<Eigen::Index>(b) + c) = white_um2;
+    }
+  return P;
+}
+
 Eigen::MatrixXd tooltipStructuredUm2(const std::vector<const ProbePlan*>& plans, const ContributorSet& set,
                                      const std::vector<const TooltipRun*>& about) {
   if (about.size() != plans.size()) throw std::invalid_argument("tooltip declared noise: one deviation run per plan");
@@ -107,6 +121,7 @@ DeclaredNoise tooltipDeclaredNoise(const ProbePlan& plan, const ContributorSet* 
     d.white_um2 = o.noise_um * o.noise_um;
     d.declaration = fmt::format("declared: {} only", plan_noise);
     d.repeatability_only = true;
+    d.per_run_um2 = tooltipPerRunUm2(plan, d.white_um2);
     return d;
   }
   // The budget's split: the per-reading part it measures by the residual, the Type B part it
@@ -150,6 +165,9 @@ DeclaredNoise tooltipDeclaredNoise(const ProbePlan& plan, const ContributorSet* 
   if (parts == plan_noise && shared.empty())
     d.declaration = fmt::format("declared: {} only ({} declares no laser or axis contributor{})", plan_noise,
                                 fromOf(*declared), left_out.empty() ? "" : "; " + left_out + " do not act here");
+  else
+    d.declaration += "; each sweep's laser zero read with the same per-reading scatter, shared by the sweep's readings of one run";
+  d.per_run_um2 = tooltipPerRunUm2(plan, d.white_um2);
   return d;
 }
 

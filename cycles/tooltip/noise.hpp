@@ -12,6 +12,11 @@
 //               tilt reads the other in-plane component of the deviation: tilt x deviation, so
 //               linear in the tilt about the deviations the readings show, zero about the
 //               nominal head).
+//   per run     the laser's zero: it is set on a reading of the sweep's zero pose, which has the
+//               same per-reading scatter as any other (white above), so every later value of the
+//               sweep, in the same read direction, carries minus that run's zero error. It is
+//               shared by one run's values and drawn anew by the next (a new zero): white_um2
+//               between two values of one sweep and direction, 0 elsewhere.
 // A reading value is indexed 2 k + c: k the plan point, c = 0 the transverse component (Y for an
 // A sweep, X for B), c = 1 Z. The zero readings' rows are zero (the laser is zeroed there).
 #include <Eigen/Core>
@@ -37,6 +42,12 @@ DeclaredNoise tooltipDeclaredNoise(const ProbePlan& plan, const ContributorSet* 
 /// the beams are aligned anew for each plan (no alignment term between plans). `about[p]` may be null.
 Eigen::MatrixXd tooltipStructuredUm2(const std::vector<const ProbePlan*>& plans, const ContributorSet& contributors,
                                      const std::vector<const TooltipRun*>& about);
+
+/// The per-run part (um^2) of `plan`'s 2 x points values for a per-reading variance `white_um2`:
+/// white_um2 between two values that read the same direction relative to the same zero reading,
+/// 0 elsewhere and in the zero readings' own rows. Throws std::invalid_argument when white_um2
+/// is negative or not finite.
+Eigen::MatrixXd tooltipPerRunUm2(const ProbePlan& plan, double white_um2);
 
 /// The values (run, 2 k + c) of `runs` that are read (finite) and not a zero reading, in the fit's
 /// order (run by run, plan order, transverse before Z): what the declaration's covariance is taken over.

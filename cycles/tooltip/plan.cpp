@@ -279,6 +279,16 @@ TooltipRun simulateTooltip(const ProbePlan& plan, const TooltipTruth& truth, std
   Eigen::Vector3d beam_t = machine.beam_t;
   if (beam_t.isZero()) beam_t = Eigen::Vector3d::Unit(ti);
   const std::vector<int> refs = tooltipReferences(plan);
+  // The laser is zeroed on a reading of each sweep's zero pose, as noisy as any other: every
+  // later reading of the sweep is its own reading less that one. Drawn from a stream of its own,
+  // so that the other readings' draws are those of a zero taken as exact.
+  Rng zero_rng(seed, 5);
+  std::vector<Eigen::Vector2d> zero_noise(plan.points.size(), Eigen::Vector2d::Zero());
+  for (size_t k = 0; k < plan.points.size(); ++k)
+    if (truth.noise_um > 0 && refs[k] == static_cast<int>(k)) {
+      zero_noise[k].x() = truth.noise_um * zero_rng.normal();
+      zero_noise[k].y() = truth.noise_um * zero_rng.normal();
+    }
   for (size_t k = 0; k < plan.points.size(); ++k) {
     const ProbePoint& pt = plan.points[k];
     const Eigen::Vector3d rel = mmToUm(1.0) * (devs[k] - devs[refs[k]]);
@@ -287,8 +297,8 @@ TooltipRun simulateTooltip(const ProbePlan& plan, const TooltipTruth& truth, std
     r.t_um = beam_t.dot(rel);
     r.z_um = machine.beam_z.dot(rel);
     if (truth.noise_um > 0 && refs[k] != static_cast<int>(k)) {
-      r.t_um += truth.noise_um * rng.normal();
-      r.z_um += truth.noise_um * rng.normal();
+      r.t_um += truth.noise_um * rng.normal() - zero_noise[static_cast<size_t>(refs[k])].x();
+      r.z_um += truth.noise_um * rng.normal() - zero_noise[static_cast<size_t>(refs[k])].y();
     }
     run.push_back(r);
   }

@@ -344,5 +344,100 @@ TEST(DeclaredNoise, RepeatabilityOnlyAndContradictions) {
   }
 }
 
+// The part shared by one run only (a zero read once per run): against the closed form, entry by
+// entry, for readings of the same run and of different runs; nothing between runs.
+TEST(DeclaredNoise, PerRunPartIsSharedWithinARunOnly) {
+  DeclaredNoise d;
+  d.white_um2 = 0.25;
+  d.structured_um2 = correlatedCovariance(4);
+  // A zero shared by readings 1 and 2 (1.5 um^2), reading 0 the zero itself (none of it), and
+  // reading 3 against another zero (0.7 um^2).
+  d.per_run_um2 = Eigen::MatrixXd::Zero(4, 4);
+  d.per_run_um2.block(1, 1, 2, 2).setConstant(1.5);
+  d.per_run_um2(3, 3) = 0.7;
+  const std::vector<std::pair<int, int>> kept = {{0, 1}, {0, 2}, {1, 1}, {1, 3}, {0, 3}, {1, 0}};
+  const Eigen::MatrixXd C = d.covariance(kept);
+  const Eigen::MatrixXd& S = d.structured_um2;
+  // Same run, one zero: structured + 1.5; the white part on the diagonal alone.
+  EXPECT_DOUBLE_EQ(C(0, 1), S(1, 2) + 1.5);
+  EXPECT_DOUBLE_EQ(C(0, 0), S(1, 1) + 1.5 + 0.25);
+  EXPECT_DOUBLE_EQ(C(3, 3), S(3, 3) + 0.7 + 0.25);
+  EXPECT_DOUBLE_EQ(C(4, 4), S(3, 3) + 0.7 + 0.25);
+  // Different runs, the same readings of the plan: the structured part alone (a new zero).
+  EXPECT_DOUBLE_EQ(C(0, 2), S(1, 1));
+  EXPECT_DOUBLE_EQ(C(1, 2), S(2, 1));
+  EXPECT_DOUBLE_EQ(C(3, 4), S(3, 3));
+  // Same run, different zeros; and the zero reading itself.
+  EXPECT_DOUBLE_EQ(C(0, 4), S(1, 3));
+  EXPECT_DOUBLE_EQ(C(5, 5), S(0, 0) + 0.25);
+  EXPECT_DOUBLE_EQ(C(5, 2), S(0, 1));
+  // rmsSigmaUm takes it in: the mean of the three parts' diagonals over the plan.
+  EXPECT_NEAR(d.rmsSigmaUm(4), std::sqrt(0.25 + S.diagonal().mean() + (1.5 + 1.5 + 0.7) / 4.0), 1e-12);
+  // Without it, the same declaration's covariance is the old one.
+  DeclaredNoise without = d;
+  without.per_run_um2.resize(0, 0);
+  const Eigen::MatrixXd C0 = without.covariance(kept);
+  EXPECT_DOUBLE_EQ(C(0, 1) - C0(0, 1), 1.5);
+  EXPECT_DOUBLE_EQ(C(0, 2) - C0(0, 2), 0.0);
+  // A reading beyond the per-run part's plan is refused, naming it.
+  DeclaredNoise per_run_only;
+  per_run_only.white_um2 = 0.25;
+  per_run_only.per_run_um2 = d.per_run_um2;
+  try {
+    per_run_only.covariance({{0, 4}});
+    ADD_FAILURE() << "reading 4 of a 4-reading per-run part was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("per-run"), std::string::npos) << e.what();
+  }
+}
+
+// nullDraws draws the per-run part afresh for each run: the sample covariance of 20000 draws
+// against covariance(), entry by entry within 5 sampling sd ((C_aa C_bb + C_ab^2) / N for a
+// Gaussian), the structured draws' own second moment standing for the structured part. The
+// declared per-run part is written as a sum of outer products (not the code's symmetric root).
+TEST(DeclaredNoise, PerRunNullDrawsMonteCarloConvergesToTheCovariance) {
+  const int m = 5, draws = 20000;
+  DeclaredNoise d;
+  d.white_um2 = 0.3;
+  Rng rng(77, 2);
+  const Eigen::MatrixXd S = correlatedCovariance(m);
+  const Eigen::MatrixXd L = S.llt().matrixL();
+  d.structured_draws_um.resize(m, draws);
+  for (int k = 0; k < draws; ++k) {
+    Eigen::VectorXd z(m);
+    for (int i = 0; i < m; ++i) z[i] = rng.normal();
+    d.structured_draws_um.col(k) = L * z;
+  }
+  d.structured_um2 = d.structured_draws_um * d.structured_draws_um.transpose() / draws;
+  Eigen::VectorXd u(m), v(m);
+  u << 0.0, 1.2, 1.2, 1.2, 0.0;  // a zero shared by readings 1-3
+  v << 0.0, 0.0, 0.5, -0.8, 1.1;
+  d.per_run_um2 = u * u.transpose() + v * v.transpose();
+  const std::vector<std::pair<int, int>> kept = {{0, 1}, {0, 2}, {0, 3}, {1, 1}, {1, 3}, {1, 4}, {2, 2}};
+  const Eigen::MatrixXd D = d.nullDraws(kept, 5);
+  ASSERT_EQ(D.rows(), static_cast<Eigen::Index>(kept.size()));
+  ASSERT_EQ(D.cols(), draws);
+  const Eigen::MatrixXd sample = D * D.transpose() / draws;
+  const Eigen::MatrixXd C = d.covariance(kept);
+  double worst = 0.0;
+  for (Eigen::Index a = 0; a < C.rows(); ++a)
+    for (Eigen::Index b = 0; b < C.cols(); ++b) {
+      const double sd = std::sqrt((C(a, a) * C(b, b) + C(a, b) * C(a, b)) / draws);
+      worst = std::max(worst, std::abs(sample(a, b) - C(a, b)) / sd);
+    }
+  std::printf("per-run null draws: worst entry %.2f sampling sd off covariance()\n", worst);
+  EXPECT_LT(worst, 5.0);
+  // Between runs only the structured draws are shared: reading 1 of run 0 and of run 1.
+  const double structured_only = d.structured_um2(1, 1);
+  EXPECT_NEAR(sample(0, 3), structured_only, 5.0 * std::sqrt((C(0, 0) * C(3, 3) + C(0, 3) * C(0, 3)) / draws));
+  EXPECT_GT(C(0, 0) - C(0, 3), 1.4);  // the test can tell: 1.44 um^2 of the zero between them in one run
+  // Without the per-run part the draws are those of the white and structured parts alone, as before.
+  DeclaredNoise without = d;
+  without.per_run_um2.resize(0, 0);
+  const Eigen::MatrixXd D0 = without.nullDraws(kept, 5);
+  EXPECT_GT((D - D0).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_LT(((D - D0) * (D - D0).transpose() / draws - (C - without.covariance(kept))).cwiseAbs().maxCoeff(), 0.1);
+}
+
 }  // namespace
 }  // namespace rotacal::test

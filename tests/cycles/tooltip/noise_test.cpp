@@ -56,6 +56,9 @@ TEST(TooltipDeclaredNoise, NothingDeclaredIsThePlansLaserNoiseOnly) {
   const DeclaredNoise d = tooltipDeclaredNoise(plan, nullptr);
   EXPECT_DOUBLE_EQ(d.white_um2, 0.16);
   EXPECT_EQ(d.structured_um2.size(), 0);
+  // The zero's own scatter is the same laser's: 0.16 um^2 per run, not between runs.
+  EXPECT_EQ(d.per_run_um2.rows(), 2 * static_cast<Eigen::Index>(plan.points.size()));
+  EXPECT_DOUBLE_EQ(d.per_run_um2.maxCoeff(), 0.16);
   EXPECT_NE(d.declaration.find("only"), std::string::npos) << d.declaration;
   EXPECT_NE(d.declaration.find("laser_noise_um 0.400"), std::string::npos) << d.declaration;
 }
@@ -139,10 +142,70 @@ TEST(TooltipDeclaredNoise, TheJudgeWhitensByTheDeclaration) {
   ASSERT_EQ(s.problem.covariance.rows(), want.rows());
   EXPECT_LT((s.problem.covariance - want).cwiseAbs().maxCoeff(), 1e-9 * want.cwiseAbs().maxCoeff());
   EXPECT_EQ(s.problem.declaration, d.declaration);
-  // Without contributors: the laser noise alone, independent.
+  // Without contributors: the laser noise alone, each reading's own and its zero's, written out
+  // here by sweep and direction: 0.254^2 on the diagonal, and again between two values of one
+  // run that read one direction against one zero.
   const TooltipJudgeSetup w = tooltipJudgeSetup({{&plan, runs}}, 0.254);
-  EXPECT_EQ(w.problem.covariance.size(), 0);
+  const std::vector<std::pair<int, int>> kept = tooltipReadValues(plan, runs);
+  const std::vector<int> refs = tooltipReferences(plan);
+  ASSERT_EQ(w.problem.covariance.rows(), static_cast<Eigen::Index>(kept.size()));
+  const double v = 0.254 * 0.254;
+  for (size_t a = 0; a < kept.size(); ++a)
+    for (size_t b = 0; b < kept.size(); ++b) {
+      const bool one_zero = kept[a].first == kept[b].first && kept[a].second % 2 == kept[b].second % 2 &&
+                            refs[static_cast<size_t>(kept[a].second / 2)] == refs[static_cast<size_t>(kept[b].second / 2)];
+      const double want_ab = (a == b ? v : 0.0) + (one_zero ? v : 0.0);
+      EXPECT_NEAR(w.problem.covariance(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)), want_ab, 1e-12) << a << " " << b;
+    }
   EXPECT_NE(w.problem.declaration.find("only"), std::string::npos);
+}
+
+// The laser is zeroed on a noisy reading: 4000 runs of the simulator (noise 0.5 um, two sweeps at
+// B = 0 and 30 deg, so two zeros) against the declaration's white and per-run parts, entry by
+// entry within 5 sampling sd: between two values of one sweep and direction the zero's variance,
+// elsewhere nothing; each value's variance twice the reading's.
+TEST(TooltipDeclaredNoise, ZeroReadingMonteCarloMatchesThePerRunPart) {
+  const ProbePlan plan = makePlan("tooltip", headMachine(),
+                                  {{"units", "mm"}, {"radius_mm", "381"}, {"step_deg", "30"}, {"end_deg", "90"},
+                                   {"other_deg", "0,30"}, {"laser_noise_um", "0.5"}});
+  const DeclaredNoise d = tooltipDeclaredNoise(plan, nullptr);
+  TooltipTruth t;
+  t.dR_um = 15.0;
+  t.noise_um = 0.5;
+  TooltipTruth noiseless = t;
+  noiseless.noise_um = 0.0;
+  const Eigen::VectorXd clean = values(simulateTooltip(plan, noiseless, 1));
+  const int runs = 4000;
+  const std::vector<int> refs = tooltipReferences(plan);
+  const std::vector<std::pair<int, int>> kept = tooltipReadValues(plan, {simulateTooltip(plan, t, 1)});
+  const auto n = static_cast<Eigen::Index>(kept.size());
+  ASSERT_GT(n, 8);
+  Eigen::MatrixXd sample = Eigen::MatrixXd::Zero(n, n);
+  for (int r = 0; r < runs; ++r) {
+    const Eigen::VectorXd all = values(simulateTooltip(plan, t, static_cast<std::uint64_t>(100 + r))) - clean;
+    Eigen::VectorXd x(n);
+    for (Eigen::Index a = 0; a < n; ++a) x[a] = all[kept[static_cast<size_t>(a)].second];
+    sample += x * x.transpose() / runs;
+  }
+  const Eigen::MatrixXd C = d.covariance(kept);
+  double worst = 0.0;
+  int shared = 0;
+  for (Eigen::Index a = 0; a < n; ++a)
+    for (Eigen::Index b = 0; b < n; ++b) {
+      worst = std::max(worst, std::abs(sample(a, b) - C(a, b)) / std::sqrt((C(a, a) * C(b, b) + C(a, b) * C(a, b)) / runs));
+      shared += a != b && C(a, b) > 0 ? 1 : 0;
+    }
+  std::printf("tooltip zero reading: worst entry %.2f sampling sd off the declaration (%d shared pairs)\n", worst, shared);
+  EXPECT_LT(worst, 5.0);
+  EXPECT_GT(shared, 0);
+  for (Eigen::Index a = 0; a < n; ++a) EXPECT_NEAR(C(a, a), 2.0 * 0.25, 1e-12);
+  // Two sweeps, two zeros: a value of B0 shares nothing with one of B30.
+  for (size_t a = 0; a < kept.size(); ++a)
+    for (size_t b = 0; b < kept.size(); ++b) {
+      if (refs[static_cast<size_t>(kept[a].second / 2)] != refs[static_cast<size_t>(kept[b].second / 2)]) {
+        EXPECT_EQ(C(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)), 0.0);
+      }
+    }
 }
 
 CycleDocuments analyzeThrough(const ProbePlan& plan, const TooltipRun& run, const ContributorSet* cs) {
