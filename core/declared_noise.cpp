@@ -170,6 +170,21 @@ void addProbeAxesPart(const ContributorSet& declared, const std::vector<Eigen::V
                                     std::sqrt(C.diagonal().mean()));
 }
 
+namespace {
+
+/// The last covariance whose roots were asked for, with its eigen-decomposition and the roots made
+/// from it. The screen, the judge and the budget of one analysis, and every data set of a series
+/// read against one declaration, ask again for the roots of the same matrix, and its
+/// eigen-decomposition (order n^3) was the largest cost of a judgement. Per thread, keyed by the
+/// matrix itself (compared entry by entry): the answer is the one a fresh decomposition gives.
+struct RootsMemo {
+  Eigen::MatrixXd S, V, inverse_root, root;
+  Eigen::VectorXd r;
+  bool has_inverse_root = false, has_root = false;
+};
+
+}  // namespace
+
 void squareRoots(const Eigen::MatrixXd& S, Eigen::MatrixXd* inverse_root, Eigen::MatrixXd* root) {
   if (S.rows() != S.cols()) throw std::invalid_argument("declared noise: the covariance is not square");
   if (!S.allFinite()) throw std::invalid_argument("declared noise: the covariance has a non-finite entry");
@@ -179,12 +194,25 @@ void squareRoots(const Eigen::MatrixXd& S, Eigen::MatrixXd* inverse_root, Eigen:
     return;
   }
   if (!(S.diagonal().minCoeff() > 0)) throw std::invalid_argument("declared noise: a reading with no declared variance");
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (S + S.transpose()));
-  const double top = es.eigenvalues().maxCoeff();
-  const Eigen::VectorXd r = es.eigenvalues().cwiseMax(1e-12 * top).cwiseSqrt();
-  const Eigen::MatrixXd& V = es.eigenvectors();
-  if (inverse_root) *inverse_root = V * r.cwiseInverse().asDiagonal() * V.transpose();
-  if (root) *root = V * r.asDiagonal() * V.transpose();
+  thread_local RootsMemo memo;
+  if (memo.S.rows() != S.rows() || memo.S != S) {
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (S + S.transpose()));
+    const double top = es.eigenvalues().maxCoeff();
+    memo.r = es.eigenvalues().cwiseMax(1e-12 * top).cwiseSqrt();
+    memo.V = es.eigenvectors();
+    memo.S = S;
+    memo.has_inverse_root = memo.has_root = false;
+  }
+  if (inverse_root) {
+    if (!memo.has_inverse_root) memo.inverse_root = memo.V * memo.r.cwiseInverse().asDiagonal() * memo.V.transpose();
+    memo.has_inverse_root = true;
+    *inverse_root = memo.inverse_root;
+  }
+  if (root) {
+    if (!memo.has_root) memo.root = memo.V * memo.r.asDiagonal() * memo.V.transpose();
+    memo.has_root = true;
+    *root = memo.root;
+  }
 }
 
 Eigen::MatrixXd inverseSquareRoot(const Eigen::MatrixXd& S) {

@@ -9,10 +9,13 @@ set -euo pipefail
 STEP=${1:-all}
 case "$STEP" in all|--build-only|--test-only) ;; *) echo "test.sh: unknown option $STEP" >&2; exit 2;; esac
 cd "$(dirname "$0")/.."
+# CI: warnings are errors, and the build is the One Definition Rule check too (ROTACAL_ODR_CHECK:
+# `rotacal` linked under LTO with -Werror=odr from the libraries' fat objects; scripts/odr-check.sh).
 WERROR=OFF
-if [ "${CI:-}" = "true" ]; then WERROR=ON; fi
+ODR=OFF
+if [ "${CI:-}" = "true" ]; then WERROR=ON; ODR=ON; fi
 if [ "$STEP" != --test-only ]; then
-  cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DROTACAL_WERROR=$WERROR
+  cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DROTACAL_WERROR=$WERROR -DROTACAL_ODR_CHECK=$ODR
   cmake --build build -j"$(nproc)"
 fi
 [ "$STEP" = --build-only ] && exit 0
