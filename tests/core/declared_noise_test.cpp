@@ -284,6 +284,36 @@ TEST(DeclaredNoise, TheJudgesAdequacyKeepsItsRateOnAScaleMixture) {
   EXPECT_THROW(judge(bad, o), std::invalid_argument);
 }
 
+// The roots of the last covariance are kept for the next call: every answer must still be the
+// roots of the matrix asked about, checked by their defining products (W S W = I, R R = S), for a
+// second matrix of the same size differing in one entry pair, and for the first one asked again.
+TEST(DeclaredNoise, KeptRootsAreTheRootsOfTheMatrixAskedAbout) {
+  const int n = 40;
+  const Eigen::MatrixXd S1 = correlatedCovariance(n);
+  Eigen::MatrixXd S2 = S1;
+  S2(3, 7) += 0.5;
+  S2(7, 3) += 0.5;
+  const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n);
+  const auto check = [&](const Eigen::MatrixXd& S, const char* what) {
+    Eigen::MatrixXd W, R;
+    squareRoots(S, &W, &R);
+    EXPECT_LT((W * S * W - I).cwiseAbs().maxCoeff(), 1e-9) << what;
+    EXPECT_LT((R * R - S).cwiseAbs().maxCoeff(), 1e-9) << what;
+    EXPECT_LT((inverseSquareRoot(S) - W).cwiseAbs().maxCoeff(), 1e-12) << what;
+    return W;
+  };
+  const Eigen::MatrixXd W1 = check(S1, "first");
+  const Eigen::MatrixXd W2 = check(S2, "same size, one entry pair changed");
+  EXPECT_GT((W1 - W2).cwiseAbs().maxCoeff(), 1e-4);
+  EXPECT_EQ(check(S1, "first again"), W1);
+  Eigen::MatrixXd W_only;
+  squareRoots(S2, &W_only, nullptr);  // the inverse root alone, then the root alone
+  Eigen::MatrixXd R_only;
+  squareRoots(S2, nullptr, &R_only);
+  EXPECT_LT((R_only * R_only - S2).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_LT((W_only * S2 * W_only - I).cwiseAbs().maxCoeff(), 1e-9);
+}
+
 TEST(DeclaredNoise, DiagonalCovarianceEqualsSigma) {
   const int n = 25, p = 2;
   const Eigen::MatrixXd J = design(n, p, 17);
