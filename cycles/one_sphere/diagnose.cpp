@@ -4,6 +4,7 @@
 
 #include <stdexcept>
 
+#include "core/declared_noise.hpp"
 #include "core/units.hpp"
 #include "cycles/judge_contract.hpp"
 #include "cycles/one_sphere/analyze.hpp"
@@ -38,7 +39,12 @@ SphereDiagnosis diagnoseSphere(const ProbePlan& plan, const std::vector<Measurem
   // The declared covariance of the touches, never the fit's own scatter: the linear axes' shared
   // errors are part of the declared machine, not a misfit.
   const DeclaredNoise noise = sphereDeclaredNoise(plan, declared);
-  p.covariance = sphereFittedProblem(noise, fit).covariance_um2;
+  const SphereFittedProblem declared_fit = sphereFittedProblem(noise, fit);
+  p.covariance = declared_fit.covariance_um2;
+  // The null from draws of the declared machine (its node spacing one per machine: a scale
+  // mixture, heavier-tailed than a normal of the same covariance), the draws analyze's adequacy
+  // test reads: one data set, one null.
+  p.null_draws = noise.nullDraws(declared_fit.readings, kDeclaredNullSeed + 2);
   p.declaration = noise.declaration;
   p.unit = "um";
   // The baseline at its solution: the columns of the parameters the fit frees, in um per report

@@ -131,7 +131,7 @@ class Spaceframe final : public Cycle {
     // The centres against what the machine's contributors declare (the budget's own model):
     // beyond it, the model does not explain this machine.
     const SpaceframeCentreProblem cp = spaceframeCentreProblem(plan, a, noise);
-    const DeclaredNoiseTest test = testAgainstDeclared(cp.residual_um, cp.J, cp.covariance_um2);
+    const DeclaredNoiseTest test = testAgainstDeclared(cp.residual_um, cp.J, cp.covariance_um2, cp.null_draws_um);
     out.doc["declared_noise"] = spaceframeDeclaredNoiseJson(noise, test);
     out.text += "declared noise: " + out.doc["declared_noise"]["summary"].get<std::string>() + " (" +
                 noise.touch.declaration + ")\n";

@@ -201,6 +201,9 @@ SpaceframeDiagnosis diagnoseSpaceframe(const ProbePlan& plan, const std::vector<
                               "sphere fit)", options.sigma_um);
   if (options.noise) {
     d.problem.covariance = spaceframeCentreCovariance(plan, pb.points, *options.noise, static_cast<int>(runs.size()));
+    // The adequacy test's null from draws of the declared machine, analyze's own draws.
+    d.problem.null_draws = spaceframeCentreNullDraws(plan, pb.points, *options.noise, static_cast<int>(runs.size()),
+                                                     kDeclaredNullSeed + 2);
     pb.W_full = inverseSquareRoot(d.problem.covariance);
     d.sigma_um = std::sqrt(options.noise->touch.white_um2);
     d.declaration = options.noise->touch.declaration;

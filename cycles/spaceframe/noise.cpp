@@ -39,30 +39,64 @@ Eigen::MatrixXd spaceframeCentreMap(const ProbePlan& plan, const FramePoint& p) 
   return linearSphereFit(t, u, at).centre;
 }
 
+namespace {
+
+/// The centres' maps side by side (3 x centres rows, one column per touch, point by point) and
+/// each touch's plan index.
+struct CentreMaps {
+  Eigen::MatrixXd M;
+  std::vector<int> index;
+};
+
+CentreMaps centreMaps(const ProbePlan& plan, const std::vector<FramePoint>& points, const SpaceframeNoise& noise) {
+  CentreMaps c;
+  std::vector<Eigen::Index> first;
+  for (const auto& f : points) {
+    first.push_back(static_cast<Eigen::Index>(c.index.size()));
+    for (int id : f.point_ids) c.index.push_back(noise.index_of_id.at(id));
+  }
+  const auto n = static_cast<Eigen::Index>(points.size());
+  c.M = Eigen::MatrixXd::Zero(3 * n, static_cast<Eigen::Index>(c.index.size()));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Eigen::MatrixXd m = spaceframeCentreMap(plan, points[static_cast<size_t>(i)]);
+    c.M.block(3 * i, first[static_cast<size_t>(i)], 3, m.cols()) = m;
+  }
+  return c;
+}
+
+}  // namespace
+
 Eigen::MatrixXd spaceframeCentreCovariance(const ProbePlan& plan, const std::vector<FramePoint>& points,
                                            const SpaceframeNoise& noise, int runs) {
   if (runs < 1) throw std::invalid_argument("spaceframe declared noise: no repeats");
-  std::vector<int> idx;  // plan index of every touch, point by point
-  std::vector<Eigen::Index> first;
-  for (const auto& f : points) {
-    first.push_back(static_cast<Eigen::Index>(idx.size()));
-    for (int id : f.point_ids) idx.push_back(noise.index_of_id.at(id));
-  }
-  const auto T = static_cast<Eigen::Index>(idx.size());
-  const auto n = static_cast<Eigen::Index>(points.size());
+  const CentreMaps maps = centreMaps(plan, points, noise);
+  const auto T = static_cast<Eigen::Index>(maps.index.size());
   Eigen::MatrixXd C = Eigen::MatrixXd::Zero(T, T);
   if (noise.touch.structured_um2.size() > 0)
     for (Eigen::Index a = 0; a < T; ++a)
-      for (Eigen::Index b = 0; b < T; ++b) C(a, b) = noise.touch.structured_um2(idx[static_cast<size_t>(a)], idx[static_cast<size_t>(b)]);
+      for (Eigen::Index b = 0; b < T; ++b)
+        C(a, b) = noise.touch.structured_um2(maps.index[static_cast<size_t>(a)], maps.index[static_cast<size_t>(b)]);
   // The mean of the repeats: the same machine in each (the structured part once), the white part
   // independent in each.
   C.diagonal().array() += noise.touch.white_um2 / runs;
-  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(3 * n, T);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const Eigen::MatrixXd m = spaceframeCentreMap(plan, points[static_cast<size_t>(i)]);
-    M.block(3 * i, first[static_cast<size_t>(i)], 3, m.cols()) = m;
-  }
-  return M * C * M.transpose();
+  return maps.M * C * maps.M.transpose();
+}
+
+Eigen::MatrixXd spaceframeCentreNullDraws(const ProbePlan& plan, const std::vector<FramePoint>& points,
+                                          const SpaceframeNoise& noise, int runs, std::uint64_t seed) {
+  if (runs < 1) throw std::invalid_argument("spaceframe declared noise: no repeats");
+  const CentreMaps maps = centreMaps(plan, points, noise);
+  const auto T = static_cast<Eigen::Index>(maps.index.size());
+  std::vector<std::pair<int, int>> kept;
+  for (int r = 0; r < runs; ++r)
+    for (int i : maps.index) kept.emplace_back(r, i);
+  const Eigen::MatrixXd D = noise.touch.nullDraws(kept, seed);
+  if (D.cols() == 0) return Eigen::MatrixXd(maps.M.rows(), 0);
+  // Each centre is fitted to the repeats' mean touch: the draws' mean over the runs.
+  Eigen::MatrixXd mean = Eigen::MatrixXd::Zero(T, D.cols());
+  for (int r = 0; r < runs; ++r) mean += D.middleRows(static_cast<Eigen::Index>(r) * T, T);
+  mean /= runs;
+  return maps.M * mean;
 }
 
 SpaceframeCentreProblem spaceframeCentreProblem(const ProbePlan& plan, const SpaceframeAnalysis& a,
@@ -78,6 +112,7 @@ SpaceframeCentreProblem spaceframeCentreProblem(const ProbePlan& plan, const Spa
   p.J = mmToUm(1.0) * frameJacobian(plan, a.points, layout.origin_w_mm, a.model,
                                     activeParameters(layout.nominal_from == "initial"), 1e-3);
   p.covariance_um2 = spaceframeCentreCovariance(plan, a.points, noise, std::max(1, a.runs));
+  p.null_draws_um = spaceframeCentreNullDraws(plan, a.points, noise, std::max(1, a.runs), kDeclaredNullSeed + 2);
   return p;
 }
 

@@ -19,6 +19,7 @@
 // themselves (cycles/spaceframe/screen.hpp): a chip is one touch, and a centre fitted from 4
 // touches has no residual of its own to show it.
 #include <Eigen/Core>
+#include <cstdint>
 #include <map>
 #include <vector>
 
@@ -47,13 +48,22 @@ Eigen::MatrixXd spaceframeCentreMap(const ProbePlan& plan, const FramePoint& p);
 Eigen::MatrixXd spaceframeCentreCovariance(const ProbePlan& plan, const std::vector<FramePoint>& points,
                                            const SpaceframeNoise& noise, int runs);
 
+/// Draws of the same centres under the declared machine (3 x centres rows, um, one column per
+/// draw; DeclaredNoise::nullDraws of the touches, their mean over the `runs` repeats, through the
+/// same maps), from `seed`; no columns when the declaration holds no draws. The tests' null: the
+/// linear axes' node spacing, one per machine, makes the centres a scale mixture whose chi2 has a
+/// heavier tail than a normal of their covariance.
+Eigen::MatrixXd spaceframeCentreNullDraws(const ProbePlan& plan, const std::vector<FramePoint>& points,
+                                          const SpaceframeNoise& noise, int runs, std::uint64_t seed);
+
 /// The identification as the declaration's test reads it: the centres' residual after the fit
 /// (um), the fit's Jacobian there (um per report unit, the analysis' active parameters) and the
-/// centres' declared covariance (um^2).
+/// centres' declared covariance (um^2) with its null draws (spaceframeCentreNullDraws).
 struct SpaceframeCentreProblem {
   Eigen::VectorXd residual_um;
   Eigen::MatrixXd J;
   Eigen::MatrixXd covariance_um2;
+  Eigen::MatrixXd null_draws_um;
 };
 SpaceframeCentreProblem spaceframeCentreProblem(const ProbePlan& plan, const SpaceframeAnalysis& analysis,
                                                 const SpaceframeNoise& noise);

@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "core/declared_noise.hpp"
 #include "core/sphere_centre_fit.hpp"
 #include "core/units.hpp"
 #include "cycles/judge_contract.hpp"
@@ -198,6 +199,10 @@ JudgeProblem spheres3JudgeProblem(const Spheres3Result& b, const std::vector<Mea
     for (size_t k = 0; k < obs.size(); ++k)
       M.block(3 * static_cast<Eigen::Index>(k), block[k].first, 3, block[k].second) = maps[k];
     p.covariance = M * C * M.transpose();
+    // The null from draws of the declared machine carried the same way (the node spacing one per
+    // machine makes it a scale mixture, heavier-tailed than a normal of the same covariance); the
+    // draws analyze's adequacy test reads.
+    p.null_draws = M * nz.trigger.nullDraws(readings, kDeclaredNullSeed + 2);
     p.declaration = nz.trigger.declaration;
     p.sigma = Eigen::VectorXd();
   }

@@ -85,6 +85,8 @@ TEST(OneSphereRealMachine, TheScreenAndTheJudgeKeepTheirRatesAndCatchAChip) {
     const SphereScreen old = screenSphereTouches(b.plan, {run}, repeatability);
     old_screened += (old.screen.too_many || !old.screen.excluded.empty()) ? 1 : 0;
     const SphereDiagnosis d = diagnoseSphere(b.plan, {run}, JudgeOptions{}, &b.contributors);
+    // Its adequacy test reads its null from draws of the declared machine, as analyze's does.
+    EXPECT_EQ(d.summary.baseline.null_draws, kDeclaredNullDraws);
     if (d.summary.verdict == JudgeVerdict::ModelInadequate) {
       ++inadequate;
       std::printf("machine %d: %s\n", m, d.summary.message.c_str());

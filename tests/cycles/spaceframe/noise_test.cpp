@@ -120,6 +120,41 @@ TEST(SpaceframeDeclaredNoise, StructuredPartMatchesAMonteCarloOfTheProductsDraw)
   EXPECT_LT(worst_cov, 7.0 / std::sqrt(static_cast<double>(N)));
 }
 
+// The tests' null draws of the centres (spaceframeCentreNullDraws) against their declared
+// covariance (spaceframeCentreCovariance, M C M^T written out): the whole declaration with one
+// repeat and with two (the draws' sample covariance; 2000 draws of a scale mixture), and the white
+// part alone, where the repeats' mean halves the variance: a draw not averaged over the repeats
+// reads twice the covariance.
+TEST(SpaceframeDeclaredNoise, CentreNullDrawsHaveTheCentresDeclaredCovariance) {
+  const ProbePlan plan = reducedPlan();
+  const ContributorSet cs = table5();
+  const SpaceframeNoise whole = spaceframeDeclaredNoise(plan, &cs);
+  SpaceframeNoise white = whole;
+  white.touch.structured_um2.setZero();
+  white.touch.structured_draws_um.setZero();
+  const std::vector<FramePoint> pts = framePoints(plan);
+  for (const SpaceframeNoise* noise : std::vector<const SpaceframeNoise*>{&whole, &white})
+    for (int runs : {1, 2}) {
+      const Eigen::MatrixXd C = spaceframeCentreCovariance(plan, pts, *noise, runs);
+      const Eigen::MatrixXd D = spaceframeCentreNullDraws(plan, pts, *noise, runs, 17);
+      ASSERT_EQ(D.rows(), C.rows());
+      ASSERT_EQ(D.cols(), kDeclaredNullDraws);
+      const auto N = static_cast<double>(D.cols());
+      const Eigen::MatrixXd S = D * D.transpose() / N;  // the draws have mean zero by construction
+      double worst_diag = 0.0, worst_cov = 0.0;
+      for (Eigen::Index i = 0; i < C.rows(); ++i) {
+        worst_diag = std::max(worst_diag, std::abs(S(i, i) / C(i, i) - 1.0));
+        for (Eigen::Index j = 0; j < i; ++j)
+          worst_cov = std::max(worst_cov, std::abs(S(i, j) - C(i, j)) / std::sqrt(C(i, i) * C(j, j)));
+      }
+      const char* which = noise == &whole ? "whole" : "white only";
+      std::printf("spaceframe centre null draws (%s, %d repeats): worst variance %.3f relative, worst covariance %.3f\n",
+                  which, runs, worst_diag, worst_cov);
+      EXPECT_LT(worst_diag, 5.0 * std::sqrt(2.0 / N)) << which << ", " << runs << " repeats";
+      EXPECT_LT(worst_cov, 7.0 / std::sqrt(N)) << which << ", " << runs << " repeats";
+    }
+}
+
 // The judge is handed the declaration: the covariance of the centres it judges, in their order,
 // and the declaration's words.
 TEST(SpaceframeDeclaredNoise, TheJudgeReadsTheCentresDeclaredCovariance) {
@@ -138,6 +173,9 @@ TEST(SpaceframeDeclaredNoise, TheJudgeReadsTheCentresDeclaredCovariance) {
   EXPECT_EQ(d.problem.sigma.size(), 0);
   EXPECT_EQ(d.problem.declaration, noise.touch.declaration);
   EXPECT_EQ(d.judged.declaration, noise.touch.declaration);
+  // Its adequacy test reads its null from draws of the declared machine, not chi2(dof).
+  EXPECT_EQ(d.problem.null_draws.rows(), want.rows());
+  EXPECT_EQ(d.judged.baseline.null_draws, kDeclaredNullDraws);
 }
 
 // Centres that scatter 4 x what the declared repeatability gives: the data exceed the

@@ -83,6 +83,8 @@ TEST(Spheres3RealMachine, TheScreenAndTheJudgeKeepTheirRatesAndCatchAChip) {
     }
     too_many += s.screen.too_many ? 1 : 0;
     const Spheres3Diagnosis dg = diagnoseSpheres3(b.plan, {run}, d);
+    // Its adequacy test reads its null from draws of the declared machine, as analyze's does.
+    EXPECT_EQ(dg.judged.baseline.null_draws, kDeclaredNullDraws);
     if (dg.judged.verdict == JudgeVerdict::ModelInadequate) {
       ++inadequate;
       std::printf("machine %d: %s\n", m, dg.judged.message.c_str());
