@@ -34,6 +34,7 @@
 #include <filesystem>
 #include <functional>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <optional>
@@ -146,6 +147,22 @@ struct Drawn {
 };
 
 // What one analyze gave, as the command line would see it.
+/// The screen's stated reach (REPORT.json outliers.reach.points[].detectable_um, um) at the value
+/// of run `run1` (1-based), point `point` whose name ends in `suffix` (empty: any); +inf where the
+/// report says the screen cannot see it (null), nothing when the report gives no reach there.
+std::optional<double> statedReach(const Json& doc, int run1, int point, const std::string& suffix) {
+  if (!doc.contains("outliers") || !doc["outliers"].contains("reach") || doc["outliers"]["reach"].is_null()) return {};
+  for (const auto& e : doc["outliers"]["reach"]["points"]) {
+    if (e.value("run", 0) != run1 || e.value("point", -1) != point) continue;
+    const std::string name = e.value("name", std::string());
+    if (!suffix.empty() && (name.size() < suffix.size() || name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0))
+      continue;
+    if (e["detectable_um"].is_null()) return std::numeric_limits<double>::infinity();
+    return e["detectable_um"].get<double>();
+  }
+  return {};
+}
+
 struct Analyzed {
   bool ok = false;            // analyze returned (no refusal of the data as a whole)
   std::string error;          // its message otherwise
@@ -590,6 +607,10 @@ int main(int argc, char** argv) {
     int refused = 0;        // analyze refused the data
     // Coverage of U on the analyses with the chip left out (what a report of such data claims).
     std::vector<int> in_U, counted;
+    // By the screen's stated reach at the chip's value (the chip-free REPORT.json's
+    // outliers.reach): at most the chip's size (caught 8 times in 10 or more, it claims), beyond
+    // it, and unseen at any size.
+    int within = 0, caught_within = 0, beyond = 0, caught_beyond = 0, unseen = 0, caught_unseen = 0;
   };
   ChipTally chip20, chip1mm;
   const std::vector<Counted> cover = countedParameters(args.cycle, plan);
@@ -692,6 +713,10 @@ int main(int argc, char** argv) {
       const int key = rtest ? 3 * id + chip_axis : id;  // what the screen's excluded list names
       // With repeats, the run the chip is in (drawn after the others, which stay).
       const int chip_run = args.runs > 1 ? std::uniform_int_distribution<int>(0, args.runs - 1)(pick) : 0;
+      // How the report names the chip's value beside its point: tooltip's beam, the R-test's sensor.
+      const std::string reachSuffix = tooltip ? fmt::format(" d{}", chip_z ? 'z' : (plan.options.at("axis") == "A" ? 'y' : 'x'))
+                                      : rtest ? fmt::format(" d{}", "xyz"[chip_axis])
+                                              : std::string();
       for (auto [height_mm, tally] : {std::pair{0.020, &chip20}, std::pair{1.0, &chip1mm}}) {
         const std::vector<std::string> chipped = resultsOf(drawn, id, chip_z, chip_axis, height_mm, chip_run);
         const Analyzed c = analyze(cycle, plan, dialect, io, contrib, chipped, args, seed);
@@ -700,6 +725,12 @@ int main(int argc, char** argv) {
         for (size_t x = 0; x < c.excluded.size(); ++x)
           caught = caught || (c.excluded[x] == key && (args.runs == 1 || c.excluded_run[x] == chip_run + 1));
         tally->caught += caught;
+        if (const std::optional<double> r = statedReach(a.doc, chip_run + 1, id, reachSuffix)) {
+          const bool unseen = !std::isfinite(*r), within = !unseen && *r <= height_mm * 1e3;
+          tally->unseen += unseen, tally->caught_unseen += unseen && caught;
+          tally->within += within, tally->caught_within += within && caught;
+          tally->beyond += !unseen && !within, tally->caught_beyond += !unseen && !within && caught;
+        }
         tally->written += c.written;
         tally->written_from_chip += c.written && !caught;
         tally->gave_up += c.too_many;
@@ -794,6 +825,13 @@ int main(int argc, char** argv) {
     row("1 mm chip: analyzed (a report) with the chip in the fit", chip1mm.returned_with, chip1mm.n, "0");
     row("1 mm chip: analyzed with the chip in the fit, nothing held back", chip1mm.handed_on, chip1mm.n, "0");
     row("1 mm chip: analyze refused the data", chip1mm.refused, chip1mm.n, "");
+    for (auto [what, tally] : {std::pair{"20 um", &chip20}, std::pair{"1 mm", &chip1mm}}) {
+      row(fmt::format("{} chip: caught, where the clean report's reach there is <= its size", what).c_str(), tally->caught_within,
+          tally->within, ">= 80 % (the reach's claim)");
+      row(fmt::format("{} chip: caught, where the reach is beyond its size", what).c_str(), tally->caught_beyond, tally->beyond, "");
+      row(fmt::format("{} chip: caught, where the report says the screen cannot see it", what).c_str(), tally->caught_unseen,
+          tally->unseen, "");
+    }
   }
   std::printf("\nCoverage of analyze's U (chip-free machines; truth = the drawn location errors):\n\n");
   std::printf("| parameter | within U | within u_c | rms error | rms U | unit |\n|---|---|---|---|---|---|\n");

@@ -334,22 +334,47 @@ Eigen::VectorXd deletionStatistics(const Eigen::VectorXd& residual, const Eigen:
   return deletionStatisticsColumns(residual, J, S).col(0);
 }
 
+namespace {
+
+/// The diagonal of P = W (I - Q Q^T) W and the pieces that made it.
+struct DeletionProjector {
+  Whitened w;
+  Eigen::VectorXd Pdiag;
+  /// P_ii below this share of the reading's own weight: the model takes the whole reading up.
+  bool unseen(Eigen::Index i) const { return !(Pdiag[i] > 1e-14 * w.W(i, i) * w.W(i, i)); }
+};
+
+DeletionProjector deletionProjector(Eigen::Index n, const Eigen::MatrixXd& J, const Eigen::MatrixXd& S) {
+  DeletionProjector d;
+  d.w = whitened(Eigen::VectorXd::Zero(n), J, S);
+  const Eigen::MatrixXd M = d.w.W - d.w.Q * (d.w.Q.transpose() * d.w.W);
+  d.Pdiag = d.w.W.cwiseProduct(M).colwise().sum().transpose();
+  return d;
+}
+
+}  // namespace
+
 Eigen::MatrixXd deletionStatisticsColumns(const Eigen::MatrixXd& residuals, const Eigen::MatrixXd& J, const Eigen::MatrixXd& S) {
   const Eigen::Index n = residuals.rows();
-  const Whitened w = whitened(Eigen::VectorXd::Zero(n), J, S);
-  const Eigen::MatrixXd& W = w.W;
-  const Eigen::MatrixXd& Q = w.Q;
+  const DeletionProjector d = deletionProjector(n, J, S);
+  const Eigen::MatrixXd& W = d.w.W;
+  const Eigen::MatrixXd& Q = d.w.Q;
   // P = W (I - Q Q^T) W: the residual projector of the whitened fit brought back to readings.
   const Eigen::MatrixXd yw = W * residuals;
   const Eigen::MatrixXd Py = W * (yw - Q * (Q.transpose() * yw));
-  const Eigen::MatrixXd M = W - Q * (Q.transpose() * W);
-  const Eigen::VectorXd Pdiag = W.cwiseProduct(M).colwise().sum().transpose();
   Eigen::MatrixXd t(n, residuals.cols());
   for (Eigen::Index i = 0; i < n; ++i) {
-    if (Pdiag[i] > 1e-14 * W(i, i) * W(i, i)) t.row(i) = Py.row(i) / std::sqrt(Pdiag[i]);
+    if (!d.unseen(i)) t.row(i) = Py.row(i) / std::sqrt(d.Pdiag[i]);
     else t.row(i).setZero();
   }
   return t;
+}
+
+Eigen::VectorXd deletionSensitivity(const Eigen::MatrixXd& J, const Eigen::MatrixXd& S) {
+  const DeletionProjector d = deletionProjector(S.rows(), J, S);
+  Eigen::VectorXd s(S.rows());
+  for (Eigen::Index i = 0; i < s.size(); ++i) s[i] = d.unseen(i) ? 0.0 : std::sqrt(d.Pdiag[i]);
+  return s;
 }
 
 }  // namespace rotacal

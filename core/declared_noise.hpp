@@ -109,6 +109,13 @@ Eigen::VectorXd deletionStatistics(const Eigen::VectorXd& residual, const Eigen:
 Eigen::MatrixXd deletionStatisticsColumns(const Eigen::MatrixXd& residuals, const Eigen::MatrixXd& J,
                                           const Eigen::MatrixXd& covariance);
 
+/// What a gross error at each reading moves its own deletion statistic by, per um: sqrt(P_ii)
+/// (P as above), so that an error c at reading i shifts t_i by c sqrt(P_ii). 0 where the model
+/// takes up the whole reading (P_ii below 1e-14 of the reading's own weight, as
+/// deletionStatistics treats it): a gross error there moves the fit, never the screen. For
+/// S = sigma^2 I it is sqrt(1 - h_ii) / sigma.
+Eigen::VectorXd deletionSensitivity(const Eigen::MatrixXd& J, const Eigen::MatrixXd& covariance);
+
 /// The level below which the data's test against the declaration holds the offsets back
 /// (`analyze --offsets` writes them only with --force): offsets from a model that does not explain
 /// the machine would move it by what the model misreads. One machine in a thousand that is as

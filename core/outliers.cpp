@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <utility>
 #include <set>
 #include <stdexcept>
@@ -135,7 +136,67 @@ OutlierScreen screenOutliers(const std::function<ScreenedFit(const HoldOutRule&)
   for (auto& e : s.excluded)
     for (const auto& p : r.residuals)
       if (p.run == e.run && p.point_id == e.point_id) e.residual_um = p.residual_um;
+  if (options.sensitivity) {
+    std::vector<const PointResidual*> fitted;
+    for (const auto& p : r.residuals)
+      if (!p.held_out) fitted.push_back(&p);
+    const Eigen::VectorXd k = options.sensitivity(r);
+    if (k.size() != static_cast<Eigen::Index>(fitted.size()))
+      throw std::logic_error(fmt::format("outlier screen: {} sensitivities for {} touches", k.size(), fitted.size()));
+    const double shift = s.threshold_t + normalQuantile(kScreenReachPower);
+    for (size_t i = 0; i < fitted.size(); ++i) {
+      const double ki = k[static_cast<Eigen::Index>(i)];
+      s.reach.push_back({fitted[i]->run, fitted[i]->point_id,
+                         ki > 0 ? shift / ki : std::numeric_limits<double>::infinity(), std::string()});
+    }
+  }
   return s;
+}
+
+namespace {
+
+/// A reach in um, or in mm from 1 mm on (a gross error the size of the part is no chip).
+std::string reachSize(double um) { return um < 1000.0 ? fmt::format("{:.1f} um", um) : fmt::format("{:.1f} mm", um / 1000.0); }
+
+std::string nameOf(const TouchReach& t) {
+  if (!t.name.empty()) return t.name;
+  return fmt::format("point {}{}", t.point_id, t.run > 0 ? fmt::format(" of run {}", t.run + 1) : std::string());
+}
+
+}  // namespace
+
+std::string OutlierScreen::reachLine(const std::string& counted) const {
+  return reach.empty() ? std::string() : reachText(counted) + "\n";
+}
+
+std::string OutlierScreen::lines() const { return text() + "\n" + reachLine(); }
+
+std::string OutlierScreen::reachText(const std::string& counted) const {
+  if (reach.empty()) return {};
+  std::vector<double> seen;
+  std::string unseen;
+  int n_unseen = 0;
+  const TouchReach* worst = nullptr;
+  for (const auto& t : reach) {
+    if (std::isfinite(t.detectable_um)) {
+      seen.push_back(t.detectable_um);
+      if (!worst || t.detectable_um > worst->detectable_um) worst = &t;
+      continue;
+    }
+    if (++n_unseen <= 5) unseen += (unseen.empty() ? "" : ", ") + nameOf(t);
+  }
+  if (seen.empty())
+    return fmt::format("the screen cannot see a gross error at any of its {} {}: the fit takes every error up",
+                       reach.size(), counted);
+  std::nth_element(seen.begin(), seen.begin() + static_cast<std::ptrdiff_t>(seen.size() / 2), seen.end());
+  std::string out = fmt::format(
+      "the screen catches a gross error at one of its {} {} {:.0f} times in 10 from {} (median; {} at {})", reach.size(),
+      counted, 10 * kScreenReachPower, reachSize(seen[seen.size() / 2]), reachSize(worst->detectable_um), nameOf(*worst));
+  if (n_unseen > 0)
+    out += fmt::format("; {} of them it cannot see at any size, the fit taking their whole error up ({}{}): an error there "
+                       "moves the estimate, and only another reading of the same quantity (a repeat) exposes it",
+                       n_unseen, unseen, n_unseen > 5 ? ", ..." : "");
+  return out;
 }
 
 Json outlierScreenJson(const OutlierScreen& s, const OutlierOptions& o) {
@@ -157,6 +218,33 @@ Json outlierScreenJson(const OutlierScreen& s, const OutlierOptions& o) {
                     "touches", std::move(ex), s.text());
 }
 
+namespace {
+
+Json reachJson(const OutlierScreen& s, const std::string& counted) {
+  if (s.reach.empty()) return nullptr;
+  Json per = Json::array();
+  int unseen = 0;
+  for (const auto& t : s.reach) {
+    const bool seen = std::isfinite(t.detectable_um);
+    unseen += seen ? 0 : 1;
+    Json e = {{"run", t.run + 1},
+              {"point", t.point_id},
+              {"detectable_um", seen ? Json(std::round(t.detectable_um * 1e3) / 1e3) : Json(nullptr)}};
+    if (!t.name.empty()) e["name"] = t.name;
+    per.push_back(std::move(e));
+  }
+  return {{"what", fmt::format("per {}, the smallest gross error there that the screen catches with probability {:g} under "
+                               "the declared noise, (threshold + z({:g})) / sqrt(P_ii), P the declared residual projector "
+                               "(the minimal detectable bias); null where the fit takes the whole error up",
+                               counted, kScreenReachPower, kScreenReachPower)},
+          {"power", kScreenReachPower},
+          {"unseen", unseen},
+          {"points", std::move(per)},
+          {"summary", s.reachText(counted)}};
+}
+
+}  // namespace
+
 Json screenJson(const OutlierScreen& s, const OutlierOptions& o, const std::string& test, const std::string& counted,
                 Json excluded, const std::string& summary) {
   return {{"test", test},
@@ -175,7 +263,8 @@ Json screenJson(const OutlierScreen& s, const OutlierOptions& o, const std::stri
           {"too_many", s.too_many},
           {"beyond", s.beyond},
           {"excluded", std::move(excluded)},
-          {"summary", summary}};
+          {"summary", summary},
+          {"reach", reachJson(s, counted)}};
 }
 
 }  // namespace rotacal

@@ -65,7 +65,31 @@ struct OutlierOptions {
   /// (screenNullMaxima), asked once, of the first fit; used from kMinScreenNullDraws draws on.
   /// Empty function or fewer draws: the Gaussian bound alone.
   std::function<Eigen::VectorXd(const ScreenedFit& first)> null_maxima;
+  /// Per fitted touch of the given fit (its residuals not held out, in their order), what a gross
+  /// error of 1 um there moves its statistic by (deletionSensitivity on the declared covariance,
+  /// 1 / um; 0 where the fit takes the whole touch up), asked once, of the last fit: the screen's
+  /// reach (OutlierScreen::reach). Empty: no reach is reported (r / sigma_um's depends on the
+  /// touch's leverage, which the screen does not know).
+  std::function<Eigen::VectorXd(const ScreenedFit& fit)> sensitivity;
   bool validate(std::string* why) const;
+};
+
+/// The probability with which OutlierScreen::reach's size is caught (Baarda's power, 80 %): a
+/// gross error shifts its touch's statistic by c x sensitivity, so one of (threshold +
+/// z(power)) / sensitivity lies beyond the threshold with this probability under the declared
+/// noise (the minimal detectable bias of geodesy's reliability theory).
+constexpr double kScreenReachPower = 0.8;
+
+/// The smallest gross error at one touch that the screen catches with kScreenReachPower, in um
+/// along the touch's reading: +inf where the model takes the whole reading up (no screen of this
+/// plan can see an error there; it moves the estimate instead).
+struct TouchReach {
+  int run = 0;
+  int point_id = 0;
+  double detectable_um = 0.0;
+  /// How the report names it; empty: "point <id>" (and " of run <n>" beyond the first). A cycle
+  /// whose screened values are not plan points names them after the screen.
+  std::string name;
 };
 
 /// Draws of the declared machine the screen needs before it reads its threshold from them: at
@@ -93,9 +117,19 @@ struct OutlierScreen {
   bool too_many = false;    // still beyond after max_fraction left out: none excluded
   int beyond = 0;           // touches beyond the threshold in the last fit, when too_many
   std::string declaration;  // OutlierOptions::declaration
+  /// Per fitted touch of the last fit, with OutlierOptions::sensitivity (empty without it, or when
+  /// the screen gave up).
+  std::vector<TouchReach> reach;
   /// The hold-out rule of a fit for the excluded touches (null when none).
   HoldOutRule holdOut() const;
   std::string text() const;  // one line for the report
+  /// One line on the reach: the median and the largest detectable error, the touches the screen
+  /// cannot see (empty without a reach). `counted` names them ("touches", "values").
+  std::string reachText(const std::string& counted = "touches") const;
+  /// reachText() as a line ending in a newline; empty without a reach.
+  std::string reachLine(const std::string& counted = "touches") const;
+  /// text() and reachLine(), each a line ending in a newline: the report's lines.
+  std::string lines() const;
 };
 
 /// The touches a fit held out, as (run, point id) sorted: the key by which a screen's caller

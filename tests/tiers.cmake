@@ -30,7 +30,9 @@ set(ROTACAL_STATISTICAL_TESTS
   "WithNoiseWithinUncertainty" "NoisyLocationErrorsWithinTheirUncertainty"
   # a Monte Carlo, or drawn values, against the closed form
   "MonteCarlo" "RefitsOfDrawnContributors" "HasTheRequestedSpread" "HaveTheStatedSpread"
-  "SensorResponseMatchesTheSimulatorsOwn"
+  "SensorResponseMatchesTheSimulatorsOwn" "CentreNullDrawsHaveThe"
+  # a rate of the screen over seeds: a gross error of its stated reach caught as often as claimed
+  "CaughtEightTimesInTen"
   # machines drawn from their declared contributors: the screen's and the judge's rates on them
   "RealMachine\\." "KeepsItsRateOn" "KeepTheirRates" "StandardNormalUnderTheDeclaration"
   "TheJudgeWhitensByTheFullCovariance"

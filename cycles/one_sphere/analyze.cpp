@@ -252,6 +252,10 @@ SphereScreen screenSphereTouches(const ProbePlan& plan, const std::vector<Measur
     if (draws.cols() == 0) return Eigen::VectorXd();
     return screenNullMaxima(deletionStatisticsColumns(draws, p.J, p.covariance_um2));
   };
+  s.options.sensitivity = [fits, keyOf, noise](const ScreenedFit& f) {
+    const SphereFittedProblem p = sphereFittedProblem(noise, *fits->at(keyOf(f.residuals)));
+    return deletionSensitivity(p.J, p.covariance_um2);
+  };
   s.screen = screenOutliers(fit, s.options);
   const Key last = [&] {
     Key k;

@@ -48,7 +48,7 @@ class Sphere final : public Cycle {
     const std::vector<std::string> files = pathsOf(r.results);
     CycleDocuments out;
     out.doc = sphereReportJson(plan, res, b, files);
-    out.text = sphereText(res, b) + screen.text() + "\n";
+    out.text = sphereText(res, b) + screen.lines();
     out.doc["outliers"] = outlierScreenJson(screen, screened.options);
     const SphereFittedProblem f = sphereFittedProblem(noise, res);
     const DeclaredNoiseTest test =

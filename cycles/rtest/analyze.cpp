@@ -477,11 +477,11 @@ RtestScreen screenRtestReadings(const ProbePlan& plan, const std::vector<RtestCy
     }
   }
   // Each fit's statistics, by the values it held out (the screen asks for them after the fit).
-  std::map<std::vector<std::pair<int, int>>, Eigen::VectorXd> stats;
+  std::map<std::vector<std::pair<int, int>>, Eigen::VectorXd> stats, sensitivities;
   auto fit = [&](const std::function<bool(int, const ProbePoint&)>& hold_out) {
     ScreenedFit res;
     res.summary.termination = Termination::Converged;
-    std::vector<double> t_all;
+    std::vector<double> t_all, k_all;
     for (size_t c = 0; c < designs.size(); ++c) {
       const ScreenDesign& d = designs[c];
       std::vector<int> keep;
@@ -500,17 +500,21 @@ RtestScreen screenRtestReadings(const ProbePlan& plan, const std::vector<RtestCy
       Eigen::MatrixXd cov = s2 * Eigen::MatrixXd::Identity(Ak.rows(), Ak.rows());
       if (structured_um2.size() > 0) cov += structured_um2(sharedRows(keep), sharedRows(keep));
       Eigen::VectorXd t = deletionStatistics(r(keep), Ak, cov);
+      const Eigen::VectorXd sens = deletionSensitivity(Ak, cov);
       for (size_t k = 0; k < keep.size(); ++k) {
         const int i = keep[k];
         if (!d.screened[static_cast<size_t>(i)]) continue;
         // A value the others cannot predict (its leverage 1) cannot be tested: 0.
         t_all.push_back(std::isfinite(t[static_cast<Eigen::Index>(k)]) ? t[static_cast<Eigen::Index>(k)] : 0.0);
+        k_all.push_back(sens[static_cast<Eigen::Index>(k)]);
       }
       for (int i = 0; i < d.A.rows(); ++i)
         if (d.screened[static_cast<size_t>(i)])
           res.residuals.push_back({static_cast<int>(c), i, r[i], 0.0, held[static_cast<size_t>(i)]});
     }
     stats[heldOutTouches(res.residuals)] = Eigen::Map<const Eigen::VectorXd>(t_all.data(), static_cast<Eigen::Index>(t_all.size()));
+    sensitivities[heldOutTouches(res.residuals)] =
+        Eigen::Map<const Eigen::VectorXd>(k_all.data(), static_cast<Eigen::Index>(k_all.size()));
     return res;
   };
   RtestScreen out;
@@ -520,9 +524,16 @@ RtestScreen screenRtestReadings(const ProbePlan& plan, const std::vector<RtestCy
   out.options.declaration = declaration;
   out.options.null_maxima = [&null_max](const ScreenedFit&) { return null_max; };
   out.options.statistic = [&stats](const ScreenedFit& f) { return stats.at(heldOutTouches(f.residuals)); };
+  out.options.sensitivity = [&sensitivities](const ScreenedFit& f) { return sensitivities.at(heldOutTouches(f.residuals)); };
   out.screen = screenOutliers(fit, out.options);
-  out.options.statistic = nullptr;  // it reads this call's fits
+  out.options.statistic = nullptr;  // they read this call's fits
   out.options.null_maxima = nullptr;
+  out.options.sensitivity = nullptr;
+  for (auto& v : out.screen.reach) {
+    const auto& p = plan.points[static_cast<size_t>(v.point_id / 3)];
+    v.name = fmt::format("cycle {} pose {} d{}", v.run + 1, p.id, "xyz"[v.point_id % 3]);
+    v.point_id = p.id;  // the pose, as the excluded list names it; the name says which sensor
+  }
   return out;
 }
 

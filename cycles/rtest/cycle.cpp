@@ -172,7 +172,7 @@ class Rtest final : public Cycle {
                                  100.0 * kCoverageProbability, U.topRows(3).maxCoeff(), U.bottomRows(3).maxCoeff(), tb.tilts,
                                  tb.budget.type_b_evaluated ? "from the declared contributors" : "not evaluated (none declared)");
     }
-    out.text = rtestReportText(plan, a, signed_u) + rtestScreenText(plan, a.screen) + "\n" + budget_text;
+    out.text = rtestReportText(plan, a, signed_u) + rtestScreenText(plan, a.screen) + "\n" + a.screen.screen.reachLine("values") + budget_text;
     return out;
   }
 

@@ -125,7 +125,7 @@ class Spaceframe final : public Cycle {
     if (!a.summary.usable())
       out.warnings.push_back("spaceframe identification " + std::string(terminationName(a.summary.termination)));
     out.doc["outliers"] = screened.json();
-    out.text += screened.text() + "\n";
+    out.text += screened.text() + "\n" + screened.screen.reachLine();
     if (!screened.screen.excluded.empty()) out.warnings.push_back(screened.text());
     if (screened.screen.too_many) holdBack(&out, screened.text());
     // The centres against what the machine's contributors declare (the budget's own model):

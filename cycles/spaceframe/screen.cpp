@@ -180,8 +180,13 @@ SpaceframeScreen screenSpaceframeTouches(const ProbePlan& plan, const std::vecto
     if (draws.cols() == 0) return Eigen::VectorXd();
     return screenNullMaxima(deletionStatisticsColumns(draws, p.J, p.covariance_um2));
   };
+  s.options.sensitivity = [problems, keyOf](const ScreenedFit& f) {
+    const SpaceframeTouchProblem& p = problems->at(keyOf(f.residuals));
+    return deletionSensitivity(p.J, p.covariance_um2);
+  };
   s.screen = screenOutliers(fit, s.options);
   s.options.null_maxima = nullptr;  // it reads this call's declaration
+  s.options.sensitivity = nullptr;
   std::set<int> ids = options.held_out_ids;
   for (int id : s.heldOutIds()) ids.insert(id);
   const auto it = fits.find(ids);

@@ -843,6 +843,16 @@ Eigen::VectorXd spheres3OutlierStatistic(const Spheres3TouchProblem& p) {
   return t;
 }
 
+Eigen::VectorXd spheres3OutlierSensitivity(const Spheres3TouchProblem& p) {
+  Eigen::VectorXd k = deletionSensitivity(p.J, p.covariance_um2);
+  if ((p.full_share.array() < kSpheres3FullShareFloor).any()) {
+    const Eigen::VectorXd ks = deletionSensitivity(p.J_smooth, p.covariance_um2);
+    for (Eigen::Index j = 0; j < k.size(); ++j)
+      if (p.full_share[j] < kSpheres3FullShareFloor) k[j] = ks[j];
+  }
+  return k;
+}
+
 Spheres3Screen screenSpheres3Touches(const ProbePlan& plan, const std::vector<MeasurementRun>& runs,
                                      const Spheres3Noise& noise, const Spheres3Options& options) {
   // Each fit the screen asks for, by the touches it holds out: the statistic reads its problem.
@@ -897,8 +907,12 @@ Spheres3Screen screenSpheres3Touches(const ProbePlan& plan, const std::vector<Me
     if (draws.cols() == 0) return Eigen::VectorXd();
     return screenNullMaxima(spheres3OutlierStatisticColumns(p, p.nu.asDiagonal() * draws));
   };
+  s.options.sensitivity = [problems, keyOf](const ScreenedFit& f) {
+    return spheres3OutlierSensitivity(problems->at(keyOf(f.residuals)));
+  };
   s.screen = screenOutliers(fit, s.options);
   s.options.null_maxima = nullptr;  // it reads this call's declaration
+  s.options.sensitivity = nullptr;
   if (s.screen.too_many) return s;
   // The problem of the fit holding `held` out (made once), or null when that fit fails.
   const auto problemFor = [&](const Key& held) -> const Spheres3TouchProblem* {

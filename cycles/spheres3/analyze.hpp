@@ -230,6 +230,9 @@ inline constexpr double kSpheres3FullShareFloor = 0.1;
 /// The screen's statistic for each row of a touch problem: the GLS deletion residual under the
 /// full model, or under the smooth one where the full model leaves the touch no redundancy.
 Eigen::VectorXd spheres3OutlierStatistic(const Spheres3TouchProblem& p);
+/// What a gross error of 1 um at each row moves that row's statistic by (deletionSensitivity under
+/// the same model the statistic reads): the screen's reach.
+Eigen::VectorXd spheres3OutlierSensitivity(const Spheres3TouchProblem& p);
 /// The same statistic of each column of `readings_um` (draws of the declared noise as the touches
 /// read it) in place of the residual: the screen's null.
 Eigen::MatrixXd spheres3OutlierStatisticColumns(const Spheres3TouchProblem& p, const Eigen::MatrixXd& readings_um);

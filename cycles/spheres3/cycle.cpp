@@ -108,7 +108,7 @@ class Spheres3 final : public Cycle {
     bo.seed = r.mc_seed;
     const Spheres3Budget b = spheres3Budget(plan, res, per_run, r.contributors, bo);
     addSpheres3Budget(&out.doc, b);
-    out.text = spheres3Text(res, &b.location) + screen.text() + "\n";
+    out.text = spheres3Text(res, &b.location) + screen.lines();
     Eigen::VectorXd values(4);
     for (int i = 0; i < 4; ++i) values[i] = i < 2 ? mmToUm(res.location[i]) : radToMdeg(res.location[i]);
     out.text += "\n" + budgetText(b.location, values);

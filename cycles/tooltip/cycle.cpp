@@ -123,7 +123,7 @@ class Tooltip final : public Cycle {
     out.doc["uncertainty"] = budgetJson(b, values);
     out.text = tooltipReportText(plan, a, &b) + "\n" + budgetText(b, values);
     out.doc["outliers"] = tooltipScreenJson(plan, screen);
-    out.text += tooltipScreenText(plan, screen) + "\n";
+    out.text += tooltipScreenText(plan, screen) + "\n" + screen.screen.reachLine("values");
     if (!screen.screen.excluded.empty()) out.warnings.push_back(tooltipScreenText(plan, screen));
     if (screen.screen.too_many) holdBack(&out, tooltipScreenText(plan, screen));
     // The data against what the machine's contributors declare (the budget's own model): beyond

@@ -51,7 +51,7 @@ TooltipScreen screenTooltipReadings(const ProbePlan& plan, const std::vector<Too
   fo.fit_pivot_length = !transverseOnlyRuns(runs);
   const std::vector<int> refs = tooltipReferences(plan);
   // Each fit's statistics, by the values it held out (the screen asks for them after the fit).
-  std::map<std::vector<std::pair<int, int>>, Eigen::VectorXd> stats;
+  std::map<std::vector<std::pair<int, int>>, Eigen::VectorXd> stats, sensitivities;
   auto fit = [&](const std::function<bool(int, const ProbePoint&)>& hold_out) {
     std::set<std::pair<int, int>> held;  // (run, plan point)
     if (hold_out)
@@ -86,11 +86,13 @@ TooltipScreen screenTooltipReadings(const ProbePlan& plan, const std::vector<Too
         if (std::isfinite(x.z_um))
           res.residuals.push_back({static_cast<int>(r), static_cast<int>(2 * k + 1), x.z_um - f.model_z_um[static_cast<size_t>(reading)], 0.0, true});
       }
-    Eigen::VectorXd t = deletionStatistics(f.kept_residual_um, f.kept_J, noise.covariance(f.kept_values));
+    const Eigen::MatrixXd C = noise.covariance(f.kept_values);
+    Eigen::VectorXd t = deletionStatistics(f.kept_residual_um, f.kept_J, C);
     // A value the others cannot predict (its angle seen by it alone) cannot be tested: 0.
     for (Eigen::Index i = 0; i < t.size(); ++i)
       if (!std::isfinite(t[i])) t[i] = 0.0;
     stats[heldOutTouches(res.residuals)] = t;
+    sensitivities[heldOutTouches(res.residuals)] = deletionSensitivity(f.kept_J, C);
     return res;
   };
   TooltipScreen out;
@@ -99,8 +101,18 @@ TooltipScreen screenTooltipReadings(const ProbePlan& plan, const std::vector<Too
   out.options.max_fraction = kTooltipScreenMaxFraction;
   out.options.declaration = noise.declaration;
   out.options.statistic = [&stats](const ScreenedFit& f) { return stats.at(heldOutTouches(f.residuals)); };
+  out.options.sensitivity = [&sensitivities](const ScreenedFit& f) { return sensitivities.at(heldOutTouches(f.residuals)); };
   out.screen = screenOutliers(fit, out.options);
-  out.options.statistic = nullptr;  // it reads this call's fits
+  out.options.statistic = nullptr;  // they read this call's fits
+  out.options.sensitivity = nullptr;
+  const TooltipOptions opt = tooltipOptionsFrom(plan.options, plan.machine);
+  const char tn = transverseName(plan);
+  for (auto& v : out.screen.reach) {
+    const auto& p = plan.points[static_cast<size_t>(v.point_id / 2)];
+    v.name = fmt::format("run {} {} = {:g} deg ({}) d{}", v.run + 1, opt.axis, opt.axis == 'A' ? p.pose.A : p.pose.B,
+                         p.pose_name, v.point_id % 2 == 0 ? tn : 'z');
+    v.point_id = p.id;  // the plan's point, as the excluded list names it; the name says which value
+  }
   return out;
 }
 

@@ -71,6 +71,10 @@ class Touch154 final : public Cycle {
         if (f.null_draws_um.cols() == 0) return Eigen::VectorXd();
         return screenNullMaxima(deletionStatisticsColumns(f.null_draws_um, f.J, f.covariance_um2));
       };
+      oo.sensitivity = [&noise](const ScreenedFit& fit) {
+        const FittedReadings f = fittedProblem(noise, fit.residuals);
+        return deletionSensitivity(f.J, f.covariance_um2);
+      };
     }
     const OutlierScreen screen = screenOutliers(
         [&](const std::function<bool(int, const ProbePoint&)>& hold) {
@@ -111,7 +115,7 @@ class Touch154 final : public Cycle {
     bo.seed = r.mc_seed;
     a.budget = touch154Budget(plan, a.main, a.per_run, r.contributors, bo);
     CycleDocuments out;
-    out.text = analysisText(a) + screen.text() + "\n";
+    out.text = analysisText(a) + screen.lines();
     out.doc = analysisToJson(a);
     out.doc["outliers"] = outlierScreenJson(screen, oo);
     // What the screen and the adequacy test read, and how the data compare with it.
