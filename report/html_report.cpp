@@ -420,6 +420,15 @@ std::string analyzeBody(const Json& doc) {
   if (sum.contains("termination"))
     s += row({"termination", escape(str(sum, "termination")) +
                                  (sum.contains("message") ? ": " + escape(str(sum, "message")) : std::string())});
+  // What the data were screened and tested against: a reader signs values from screened data, so
+  // the page says what the screen left out, how large a gross error it sees, and where it sees none.
+  if (doc.contains("outliers") && doc["outliers"].is_object()) {
+    const Json& o = doc["outliers"];
+    if (o.contains("summary")) s += row({"gross errors", escape(str(o, "summary"))});
+    if (o.contains("reach") && o["reach"].is_object()) s += row({"what the screen can see", escape(str(o["reach"], "summary"))});
+  }
+  if (doc.contains("declared_noise") && doc["declared_noise"].is_object() && doc["declared_noise"].contains("summary"))
+    s += row({"against the declared noise", escape(str(doc["declared_noise"], "summary"))});
   s += "</table>\n";
 
   // A cycle whose table holds other than location errors in ISO 230-7's sense (position-dependent

@@ -96,6 +96,28 @@ TEST(HtmlReport, TextIsEscaped) {
   EXPECT_NE(html.find("&lt;script&gt;alert(1)"), std::string::npos);
 }
 
+// What the data were screened against reaches the page: the screen's line, its reach (where it
+// sees no gross error) and the data against the declaration, escaped, in the machine table.
+TEST(HtmlReport, ShowsWhatTheScreenLeftOutAndWhereItSeesNothing) {
+  Json doc = {{"format", "rotacal-report/1"},
+              {"cycle", "tooltip"},
+              {"outliers", {{"summary", "reading screen: no value beyond 3.64 sigma"},
+                            {"reach", {{"summary", "the screen catches ... from 35.2 um (median; 150.2 mm at run 1 A = 90 deg (B0) dz) <x>"},
+                                       {"unseen", 0}}}}},
+              {"declared_noise", {{"summary", "chi2 20.1 on 17 dof, p 0.27"}}}};
+  const std::string html = reportHtml(doc);
+  const size_t screen = html.find("reading screen: no value beyond 3.64 sigma"),
+               reach = html.find("150.2 mm at run 1 A = 90 deg (B0) dz) &lt;x&gt;"), declared = html.find("chi2 20.1 on 17 dof");
+  ASSERT_NE(screen, std::string::npos);
+  ASSERT_NE(reach, std::string::npos);
+  ASSERT_NE(declared, std::string::npos);
+  EXPECT_LT(screen, reach);
+  EXPECT_EQ(count(html, "what the screen can see"), 1);
+  // Without a reach (a screen that reads no declared covariance) no empty row.
+  doc["outliers"].erase("reach");
+  EXPECT_EQ(count(reportHtml(doc), "what the screen can see"), 0);
+}
+
 TEST(HtmlReport, ShowsTheUncertaintyBudgetAndTheCorrelations) {
   // A REPORT.json with the block core/uncertainty_budget writes: the table repeats its figures,
   // and the correlation matrix has one row per parameter.
