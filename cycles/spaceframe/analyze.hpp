@@ -101,8 +101,9 @@ struct FrameModel {
 };
 
 /// d(fitted centre)/d(parameter) at `model` for the `active` entries of FrameModel::toVector(),
-/// in mm per report unit (3 rows per point): central differences of fittedCentre_m with steps of
-/// `step` report units. The least squares' Jacobian, and its map for the uncertainty budget.
+/// in mm per report unit (3 rows per point): central differences of the readings with steps of
+/// `step` report units, carried to the centre by the sphere fit's linear map at the model's
+/// triggers. The least squares' Jacobian, and its map for the uncertainty budget.
 Eigen::MatrixXd frameJacobian(const ProbePlan& plan, const std::vector<FramePoint>& points, const Eigen::Vector3d& origin_w,
                               const FrameModel& model, const std::vector<int>& active, double step);
 
