@@ -10,6 +10,7 @@
 
 #include "controllers/dialect.hpp"
 #include "controllers/end_point_check.hpp"
+#include "controllers/sinumerik_names.hpp"
 #include "controllers/text.hpp"
 #include "gcode/reader.hpp"
 
@@ -70,6 +71,12 @@ std::vector<nc::Motion> readWordAddress(const Dialect& dialect, const std::strin
       continue;
     }
     if (whole.control) continue;  // macro statements, o-words, #assignments, DPRNT
+    if (siemens) {
+      if (const auto frame = sinumerikFrameChange(whole.code)) {
+        out.push_back(unreadable(whole.line, *frame + " is not followed by the verifier"));
+        continue;
+      }
+    }
     nc::Block b = whole;
     bool probe_prefix = false;
     std::smatch mm;
@@ -84,6 +91,20 @@ std::vector<nc::Motion> readWordAddress(const Dialect& dialect, const std::strin
       probe_prefix = true;
     } else if (isStatement(whole.code, false)) {
       continue;
+    }
+    if (siemens) {
+      // The language's own names (SOFT, X=-10, a subprogram's name) before the words.
+      const SinumerikBlock sb = readSinumerikBlock(b.code);
+      if (!sb.problem.empty()) {
+        out.push_back(unreadable(whole.line, sb.problem));
+        continue;
+      }
+      if (sb.code != upper(b.code)) {
+        const std::vector<nc::Block> rest = nc::readProgram(sb.code);
+        if (rest.empty()) continue;
+        b = rest.front();
+        b.line = whole.line;
+      }
     }
     if (!b.issues.empty()) {
       out.push_back(unreadable(b.line, b.issues.front()));

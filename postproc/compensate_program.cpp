@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 
 #include "controllers/dialect.hpp"
+#include "controllers/sinumerik_names.hpp"
 #include "controllers/end_point_check.hpp"
 #include "controllers/motion_reader.hpp"
 #include "controllers/program_checking.hpp"
@@ -288,6 +289,7 @@ class ProgramRewrite {
   // the move behind it is the motion part.
   bool motionPart(const nc::Block& block, nc::Block* b, std::string* prefix) {
     static const std::regex measuring(R"(^\s*(N\d+\s+)?(MEAS|MEAW)\s*=\s*-?\d+\s+)", std::regex::icase);
+    refuseFrameChanges(block);
     *b = block;
     std::smatch mm;
     if (std::regex_search(block.raw, mm, measuring)) {
@@ -305,17 +307,38 @@ class ProgramRewrite {
       emit(block.raw);
       return false;
     }
+    return sinumerikMotion(block, b);
+  }
+
+  // A Sinumerik block's own names (SOFT, X=-10, a cycle's name) before its words: settings pass
+  // on the rewritten line, a block of settings alone as written.
+  bool sinumerikMotion(const nc::Block& block, nc::Block* b) {
+    block_settings_.clear();
+    if (dialect_.language() != ProgramLanguage::Sinumerik) return true;
+    const ctl::SinumerikBlock sb = ctl::readSinumerikBlock(b->code);
+    if (!sb.problem.empty()) fail(block.line, sb.problem);
+    if (sb.code == upper(b->code)) return true;
+    const std::vector<nc::Block> read = nc::readProgram(sb.code);
+    if (read.empty()) {
+      emit(block.raw);
+      return false;
+    }
+    const std::vector<std::string> comments = b->comments;
+    *b = read.front();
+    b->line = block.line;
+    b->raw = block.raw;
+    b->comments = comments;
+    block_settings_ = sb.settings;
     return true;
   }
 
   // Frame changes first: the tokenizer reads TRAORI as words T, R, A, ... and would name those.
   void refuseFrameChanges(const nc::Block& b) const {
-    const std::string code_upper = upper(b.code);
-    for (const char* kw : {"TRAORI", "TRANSMIT", "TRACYL", "CYCLE800", "ROT ", "AROT", "TRANS ", "ATRANS"})
-      if (code_upper.find(kw) != std::string::npos)
-        fail(b.line, fmt::format("{} changes the coordinate frame inside the program: compensate a program in plain "
-                                 "machine coordinates, or through the kinematics (analyze --offsets)",
-                                 std::string(kw)));
+    if (dialect_.language() != ProgramLanguage::Sinumerik) return;
+    if (const auto frame = ctl::sinumerikFrameChange(b.code))
+      fail(b.line, fmt::format("{} changes the coordinate frame inside the program: compensate a program in plain "
+                               "machine coordinates, or through the kinematics (analyze --offsets)",
+                               *frame));
   }
 
   struct BlockModes {
@@ -653,6 +676,12 @@ class ProgramRewrite {
     std::string line = prefix + (b.block_delete ? "/" : "");
     bool axes_written = false;
     for (const auto& w : b.words) {
+      // A setting before the words: the block's number stays first, and the motion words keep the
+      // form the dialect's checker reads.
+      if (!block_settings_.empty() && w.letter != 'N') {
+        appendWord(line, block_settings_);
+        block_settings_.clear();
+      }
       const bool axis_word = linearIndex(w.letter) >= 0 || isRotary(w.letter);
       if (split_move && w.letter == 'F' && modal_.inverse_time) {
         appendWord(line, "F" + feedText(w, split.feed_factor));
@@ -733,6 +762,7 @@ class ProgramRewrite {
   const NcSyntax& syntax_;
   const ProgramCompensationOptions& options_;
   const Dialect& dialect_;
+  std::string block_settings_;  // a Sinumerik block's settings, written after its N word
   const std::optional<ctl::EndPointCheck> end_check_;
   const std::vector<nc::Block> blocks_;
   std::vector<char> rotary_letters_;

@@ -261,6 +261,47 @@ TEST(CompensateProgram, MalformedInputIsRefusedNamingTheLineNeverACrash) {
       << messageOf(head + "G1 X1e2 F100.0\n", "linuxcnc");
 }
 
+// A Sinumerik part program in the language's own words is compensated as its plain twin is: the
+// same rewritten coordinates, its settings kept where they stood; a frame change is refused by
+// name, the tool carrier's assignment included.
+TEST(CompensateProgram, ASinumerikProgramInItsOwnWordsIsCompensatedAsItsPlainTwin) {
+  const Fixture f;
+  const NcSyntax syntax{"siemens", 4, 5, 4, NcSyntax::Comment::Semicolon};
+  const std::string own = "G71 G90\nTRAFOOF\nSOFT FFWON\nG0 X10.0 Y-200.0 Z200.0 A0.0 C0.0\n"
+                          "G1 X=20.0 Y=-190.0 A=-15.0 C=30.0 F800.0 SOFT ; cut\nCYCLE832(0.01,1,1)\nG0 Z210.0\nM30\n";
+  const std::string plain = "G71 G90\nG0 X10.0 Y-200.0 Z200.0 A0.0 C0.0\nG1 X20.0 Y-190.0 A-15.0 C30.0 F800.0\n"
+                            "G0 Z210.0\nM30\n";
+  const auto motion = [](const std::string& text) {  // the moves, without the setting and the comment
+    std::vector<std::string> out;
+    std::istringstream in(text);
+    for (std::string l; std::getline(in, l);) {
+      if (l.rfind("SOFT ", 0) == 0) l = l.substr(5);
+      l = l.substr(0, l.find(" ;"));
+      if (l.rfind("G0 ", 0) == 0 || l.rfind("G1 ", 0) == 0) out.push_back(l);
+    }
+    return out;
+  };
+  const std::string a = compensateProgram(own, "own.mpf", f.plan.machine, f.errors, syntax, {}).text;
+  const std::string b = compensateProgram(plain, "plain.mpf", f.plan.machine, f.errors, syntax, {}).text;
+  EXPECT_EQ(motion(a), motion(b));
+  ASSERT_EQ(motion(a).size(), 3u);
+  EXPECT_NE(motion(a)[1], "G1 X20.0 Y-190.0 A-15.0 C30.0 F800.0");  // rewritten, not passed through
+  EXPECT_NE(a.find("\nTRAFOOF\nSOFT FFWON\n"), std::string::npos) << a;
+  EXPECT_NE(a.find("\nSOFT G1 X"), std::string::npos) << a;  // the setting kept, before the words
+  EXPECT_NE(a.find(" F800.0 ; cut\n"), std::string::npos) << a;
+  EXPECT_NE(a.find("\nCYCLE832(0.01,1,1)\n"), std::string::npos) << a;
+  for (const std::string frame : {"TRAORI", "TCARR=1", "CYCLE800(1,\"TC1\",200000,57,0,0,0,30,0,0,0,0,0,-1,100,1)"}) {
+    try {
+      compensateProgram("G71 G90\n" + frame + "\nG0 X10.0 Y-200.0 Z200.0 A0.0 C0.0\nM30\n", "p.mpf", f.plan.machine,
+                        f.errors, syntax, {});
+      ADD_FAILURE() << frame << " accepted";
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind("p.mpf:2: " + frame.substr(0, frame.find_first_of("=(")) + " (", 0), 0u)
+          << e.what();
+    }
+  }
+}
+
 TEST(CompensateProgram, FanucHeaderGoesAfterTheProgramNumber) {
   const Fixture f;
   const std::string prog = "%\nO7154 (TEST)\nG21 G90\nG0 X10.0 Y-200.0 Z200.0 A0.0 C0.0\nM30\n%\n";

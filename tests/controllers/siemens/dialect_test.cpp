@@ -8,6 +8,7 @@
 
 #include "test_util.hpp"
 #include "dialect_battery.hpp"
+#include "controllers/motion_reader.hpp"
 
 namespace rotacal {
 namespace {
@@ -71,6 +72,48 @@ TEST(SiemensOffsets, ToolcarrierFineOffsetsAndAxisVectors) {
   EXPECT_NE(text.find("\n$TC_CARR24[1]=$TC_CARR24[1]-0.0005\n"), std::string::npos);
   for (const auto& l : test::lines(text)) EXPECT_LE(l.size(), 80u) << l;
   test::expectPlausibilityLimit(sm(), plan, "$TC_CARR44[1]=$TC_CARR44[1]+0.7000");
+}
+
+// A program a user brings, in the language's own words: the verifier reads its settings as
+// absent and X=-10 as X-10, so it follows the same motions as the program written plainly; a
+// frame change, a cycle's call and a name it does not know are refused at their line, by name.
+TEST(SinumerikNames, AUsersProgramReadsAsItsPlainTwin) {
+  const std::string own =
+      "N10 G17 G90 G54 G71\nN15 TRAFOOF\nN16 SOFT FFWON\nN20 G0 X0 Y0 Z100 A0 C0\nN40 G1 Z50 F2000\n"
+      "N50 X=25.5 Y=-10 A=-15 C=.5 SOFT ; cut\nN55 CYCLE832(0.01,1,1)\nMSG(\"ROT TRAORI\")\nN60 G0 Z100\nN80 M30\n";
+  const std::string plain = "N10 G17 G90 G54 G71\n\n\nN20 G0 X0 Y0 Z100 A0 C0\nN40 G1 Z50 F2000\n"
+                            "N50 X25.5 Y-10 A-15 C.5\n\n\nN60 G0 Z100\nN80 M30\n";
+  const auto a = ctl::readMotions("siemens", own), b = ctl::readMotions("siemens", plain);
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].kind, b[i].kind) << i;
+    EXPECT_EQ(a[i].line, b[i].line) << i;
+    EXPECT_EQ(a[i].words, b[i].words) << i;
+    EXPECT_NE(a[i].kind, nc::Motion::Kind::Unreadable) << a[i].problem;
+  }
+  const auto problem = [](const std::string& block) {
+    for (const auto& m : ctl::readMotions("siemens", "N10 G90 G0 X0 Y0 Z100\n" + block + "\nM30\n"))
+      if (m.kind == nc::Motion::Kind::Unreadable) return fmt::format("{}: {}", m.line, m.problem);
+    return std::string("followed");
+  };
+  EXPECT_EQ(problem("N20 TRAORI"), "2: TRAORI (five-axis transformation: tool-centre-point control) is not followed by the verifier");
+  EXPECT_EQ(problem("TRAORI(1)").rfind("2: TRAORI (", 0), 0u);
+  EXPECT_EQ(problem("TCARR=1").rfind("2: TCARR (orientable tool carrier)", 0), 0u);  // an assignment, not a statement
+  EXPECT_EQ(problem("CYCLE800(1,\"TC1\",200000,57,0,0,0,30,0,0,0,0,0,-1,100,1)").rfind("2: CYCLE800 (swivel", 0), 0u);
+  EXPECT_EQ(problem("N30 ROT Z45").rfind("2: ROT (programmable frame rotation)", 0), 0u);
+  EXPECT_EQ(problem("SUPA G0 Z0").rfind("2: SUPA (", 0), 0u);
+  EXPECT_EQ(problem("CYCLE81(100,0,2,-10)").rfind("2: CYCLE81: a name rotacal does not know", 0), 0u);
+  EXPECT_EQ(problem("N30 PART_SUB").rfind("2: PART_SUB: a name rotacal does not know", 0), 0u);
+  EXPECT_EQ(problem("G0 A=DC(90)").rfind("2: A=DC is an expression or a parameter", 0), 0u);
+  EXPECT_EQ(problem("G1 X=R1+5 F100").rfind("2: X=R1+5 is an expression or a parameter", 0), 0u);
+  // Names that only contain a keyword, and keywords inside strings, are not frame changes.
+  EXPECT_EQ(problem("DEF REAL ROT_ANGLE"), "followed");
+  EXPECT_EQ(problem("TXT=\"NO TRAORI, NO CYCLE800\""), "followed");
+  EXPECT_EQ(problem("R1=5"), "followed");
+  // A block of any length is read without recursion (std::regex overflowed the stack on 100 kB):
+  // the verifier names the block's length itself.
+  EXPECT_EQ(problem("G1 X=" + std::string(100000, 'A')).rfind("2: X=AAAA", 0), 0u);
+  EXPECT_EQ(problem("G1 X1.0 F100.0 " + std::string(100000, 'Q')).rfind("2: QQQQ", 0), 0u);
 }
 
 }  // namespace

@@ -339,7 +339,7 @@ check_cases = [
     ('fanuc', 'a_out_of_stroke', 'G00 A-200.', 'stroke'),
     ('linuxcnc', 'g93_without_f', 'G93 G1 X10 Y0 Z200', 'G93'),
     ('linuxcnc', 'line_1mb', 'G0 X10 Y0 Z300 (' + 'A' * 1048576 + ')', 'long'),
-    ('siemens', 'unknown_word', 'G0 X10 QQ=5', 'word Q'),
+    ('siemens', 'unknown_word', 'G0 X10 QQ=5', 'QQ: a name rotacal does not know'),
 ]
 for d, name, line, frag in check_cases:
     body = insert_after_first_motion(PROG[d], line)
