@@ -63,6 +63,12 @@ struct DialectIdentity {
   /// The no-trigger check's variables; nullopt where the probing move raises the error itself
   /// (G38.2), where the check is written otherwise (Klartext's cycle 0) or there is no program.
   std::optional<EndPointCheck> end_point_check;
+  /// Whether G28 / G30 of Z alone through the current position (G91 Z0) and G53 of Z alone reach
+  /// the Z reference at the top of the Z stroke, machine coordinates counted from it (Fanuc's
+  /// reference position with parameter 1240 = 0, Haas' machine zero): a retract the verifier can
+  /// follow. False where the reference is a stored position (LinuxCNC's G28 reads parameters
+  /// 5161-5169) or the language has no such word.
+  bool z_reference_at_stroke_top = false;
   /// Why a program moving under inverse-time feed (G93) is refused; empty where it is written.
   std::string_view inverse_time_refusal;
   /// Why `compensate` does not rewrite its programs, when they are not word-address G-code.

@@ -61,6 +61,7 @@ inline DialectIdentity identity() {
   d.language = ProgramLanguage::IsoGcode;
   d.numbers_programs = true;
   d.end_point_check = EndPointCheck{{"#1", "#2", "#3"}, {"#5061", "#5062", "#5063"}};
+  d.z_reference_at_stroke_top = true;
   return d;
 }
 /// Upper-case comment lines "(...)" of at most 80 characters in Fanuc's safe character set.

@@ -34,6 +34,21 @@ nc::Motion motionAt(nc::Motion::Kind kind, int line, std::string why = "") {
 
 nc::Motion unreadable(int line, std::string why) { return motionAt(nc::Motion::Kind::Unreadable, line, std::move(why)); }
 
+/// Where G28 / G30 (through the current position: incremental zero) or G53 of `b` takes Z, from
+/// its reference (program units, <= 0); nullopt when the block is anything else, or the
+/// dialect's reference is not the top of the Z stroke.
+std::optional<double> zFromReference(const Dialect& dialect, double g, bool incremental, const nc::Block& b) {
+  if (!dialect.identity().z_reference_at_stroke_top) return std::nullopt;
+  std::optional<double> z;
+  for (const auto& w : b.words) {
+    if (w.letter == 'Z' && w.value && !z) z = *w.value;
+    else if (isAxisLetter(w.letter) || w.letter == 'Z') return std::nullopt;
+  }
+  if (!z) return std::nullopt;
+  if (std::abs(g - 53) < 1e-9) return *z <= 0 ? z : std::nullopt;
+  return incremental && *z == 0 ? std::optional<double>(0.0) : std::nullopt;
+}
+
 std::vector<nc::Motion> readWordAddress(const Dialect& dialect, const std::string& text) {
   const bool siemens = dialect.language() == ProgramLanguage::Sinumerik;
   const bool numbered = dialect.numbersPrograms();
@@ -112,6 +127,7 @@ std::vector<nc::Motion> readWordAddress(const Dialect& dialect, const std::strin
     }
     std::optional<nc::Motion::Kind> motion;
     bool probe = probe_prefix, alarms = false, dwell = false, end = false, modes = false;
+    std::optional<double> reference_g;  // G28, G30 or G53 on this block
     std::string trouble;
     for (const auto& w : b.words) {
       if (w.letter != 'G') continue;
@@ -139,11 +155,32 @@ std::vector<nc::Motion> readWordAddress(const Dialect& dialect, const std::strin
       else if (is(94)) inverse_time = false;
       else if (is(95)) trouble = "G95 (feed per revolution) is not a probing program's feed";
       else if (is(53) || is(28) || is(30))
-        trouble = fmt::format("G{} moves in machine coordinates: the verifier follows program coordinates only", w.text);
+        reference_g = g;
       else if (is(10) || is(92) || is(52))
         trouble = fmt::format("G{} changes an offset inside the program: the verifier cannot know the new zero", w.text);
       else if (is(43.4) || is(43.5) || is(68) || is(68.2) || is(234))
         trouble = fmt::format("G{} (tool-centre-point control or a tilted plane) is not followed by the verifier", w.text);
+    }
+    if (reference_g && trouble.empty()) {
+      // The retract every Fanuc and Haas part program ends with (G91 G28 Z0, G53 Z0): Z alone up
+      // to the reference, the top of the stroke, which the verifier follows; anything else in
+      // machine coordinates it cannot.
+      const std::optional<double> z = zFromReference(dialect, *reference_g, incremental, b);
+      if (!z) {
+        out.push_back(unreadable(
+            b.line, fmt::format("G{:g} moves in machine coordinates: the verifier follows program coordinates only{}",
+                                *reference_g,
+                                dialect.identity().z_reference_at_stroke_top
+                                    ? ", and of machine coordinates the retract of Z alone to its reference (G91 G28 "
+                                      "Z0, G53 Z0.)"
+                                    : "")));
+        continue;
+      }
+      nc::Motion m = motionAt(nc::Motion::Kind::Rapid, b.line);
+      m.z_from_reference = *z;
+      m.inch = inch;
+      out.push_back(m);
+      continue;
     }
     if (!trouble.empty()) {
       out.push_back(unreadable(b.line, trouble));

@@ -33,6 +33,10 @@ struct Motion {
   bool inch = false;           // G20 / G70 in force (program units are inches)
   bool inverse_time = false;   // G93 in force
   std::optional<double> feed;  // F on this block (per minute, or 1/min under G93)
+  /// Rapid: Z alone to this far (program units, <= 0) from the machine's Z reference, the top of
+  /// its stroke (G28 / G30 with G91 Z0: 0; G53 Z-10.: -10), the words empty. Where the program's
+  /// zero is does not matter: the reference is a place on the machine.
+  std::optional<double> z_from_reference;
 
   // Probe
   bool alarms = false;          // the control stops the program by itself when nothing triggers (G38.2, G38.4)

@@ -372,6 +372,9 @@ ProgramCheckResult checkProgram(const std::vector<nc::Motion>& motions, const Pr
   // The configuration after a move's words.
   auto apply = [&](const nc::Motion& mo, Config c) {
     const double unit = mo.inch ? kMmPerInch : 1.0;
+    // Z to its reference, the top of the stroke, counted in the machine: in the program's
+    // coordinates that is the stroke's top less the program's zero.
+    if (mo.z_from_reference) c.xyz[2] = m.z.max + *mo.z_from_reference * unit - origin.z();
     for (const auto& [letter, value] : mo.words) {
       if (letter == 'X' || letter == 'Y' || letter == 'Z') {
         auto& v = c.xyz[static_cast<size_t>(letter - 'X')];

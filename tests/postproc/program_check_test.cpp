@@ -371,5 +371,49 @@ TEST(ProgramCheckFault, FeedMoveBeforeAnyFeed) {
   EXPECT_TRUE(verify(with_f, "fanuc", m, nullptr).violations.empty()) << describe(verify(with_f, "fanuc", m, nullptr));
 }
 
+// The retract a Fanuc or Haas part program ends with, G91 G28 Z0 (or G53 Z0.), takes Z alone to
+// its reference at the top of the Z stroke: followed, not refused. Shown by where Z stands after
+// it: a feed move down from there by the distance MACHINE.json puts between the stroke's top and
+// the table's top, plus 1 mm, crosses the table; 1 mm less does not. G53 Z-10. stands 10 mm lower.
+// LinuxCNC's G28 goes to a stored position and stays refused, as does a G28 of other axes.
+TEST(ProgramCheck, APartProgramsRetractToTheZReferenceIsFollowed) {
+  const MachineModel m = loadMachine(test::sourcePath("examples/machines/ac_trunnion.json"));
+  ASSERT_TRUE(m.artefact.has_value());
+  // The table's top as MACHINE.json declares it (table_top_z_mm, else the column's foot).
+  const double top = m.table_top_z_mm ? *m.table_top_z_mm : m.artefact->top_centre_w.z() - m.artefact->size_mm.z();
+  const auto run = [&](const std::string& dialect, const std::string& retract, double down_mm) {
+    const std::string text = fmt::format(
+        "%\nO1000\nG90 G21 G17\nG0 A0. C0.\nG0 X0. Y0. Z100.\n{}\nG90 G0 X0. Y0.\nG91 G1 Z{:.4f} F500.\nG90\nM30\n%\n",
+        retract, -down_mm);
+    // As `check --part-program` sets it up: no plan, no rotacal program number.
+    ProgramCheckSetup s = programCheckSetup(m, dialect, ctl::numbersPrograms(dialect), nullptr, false);
+    s.part_program = true;
+    return checkProgram(ctl::readMotions(dialect, text), s);
+  };
+  for (const std::string dialect : {"fanuc", "haas"}) {
+    for (const auto& [retract, below] : {std::pair<std::string, double>{"G91 G28 Z0", 0.0}, {"G28 G91 Z0.", 0.0},
+                                         {"G91 G30 Z0", 0.0}, {"G53 G0 Z0.", 0.0}, {"G53 Z-10.", 10.0}}) {
+      const double gap = m.z.max - below - top;
+      const ProgramCheckResult clear = run(dialect, retract, gap - 1.0);
+      EXPECT_TRUE(clear.violations.empty()) << dialect << " " << retract << "\n" << describe(clear);
+      const ProgramCheckResult hit = run(dialect, retract, gap + 1.0);
+      const ProgramViolation* v = find(hit, "table");
+      ASSERT_NE(v, nullptr) << dialect << " " << retract << "\n" << describe(hit);
+      EXPECT_EQ(v->line, 8) << describe(hit);
+    }
+    const ProgramCheckResult xz = run(dialect, "G91 G28 X0 Z0", 10.0);
+    ASSERT_NE(find(xz, "G28 moves in machine coordinates"), nullptr) << describe(xz);
+    EXPECT_EQ(find(xz, "G28 moves in machine coordinates")->line, 6);
+    EXPECT_FALSE(run(dialect, "G91 G28 Z5.", 10.0).violations.empty());  // an intermediate point: not followed
+    EXPECT_FALSE(run(dialect, "G53 Z10.", 10.0).violations.empty());      // above the reference
+  }
+  const std::string ngc = "G21 G90\nG0 Z100.\nG91 G28 Z0\nG90\nM2\n";
+  ProgramCheckSetup s = programCheckSetup(m, "linuxcnc", false, nullptr, false);
+  s.part_program = true;
+  const ProgramCheckResult lcnc = checkProgram(ctl::readMotions("linuxcnc", ngc), s);
+  ASSERT_EQ(lcnc.violations.size(), 1u) << describe(lcnc);
+  EXPECT_EQ(lcnc.violations.front().problem, "G28 moves in machine coordinates: the verifier follows program coordinates only");
+}
+
 }  // namespace
 }  // namespace rotacal
