@@ -221,7 +221,7 @@ TEST(ProgramCheckFault, RapidThroughTheArtefact) {
 // the column's place. Turning C from 120 to 240 deg there sweeps the column through the stylus,
 // while both end poses are clear (the column then stands 173 mm to either side): only the sweep
 // shows it.
-const char* kStylusProgram = R"(%
+constexpr char kStylusProgram[] = R"(%
 O7154(ROTACAL TEST)
 G21
 G17 G40 G49 G80 G90 G94
