@@ -459,7 +459,6 @@ class ProgramRewrite {
   // ---- One block ----
 
   void rewriteBlock(const nc::Block& b, const std::string& prefix) {
-    refuseFrameChanges(b);
     if (!b.issues.empty()) fail(b.line, b.issues.front());
     if (b.control || b.percent || b.words.empty()) {
       emit(b.raw);

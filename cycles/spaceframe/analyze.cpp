@@ -306,13 +306,22 @@ std::vector<double> FrameModel::readingsAlong(const ProbePlan& plan, const Frame
   return s;
 }
 
-Eigen::Vector3d FrameModel::fittedCentre_m(const ProbePlan& plan, const FramePoint& p, const Eigen::Vector3d& origin_w) const {
-  const std::vector<double> s = readingsAlong(plan, p, origin_w);
+namespace {
+
+/// The triggers the readings `s` along point p's approaches put the ball centre at.
+std::vector<Eigen::Vector3d> triggersAt(const ProbePlan& plan, const FramePoint& p, const std::vector<double>& s) {
   std::vector<Eigen::Vector3d> t;
   for (size_t k = 0; k < s.size(); ++k) {
     const ProbePoint& q = *plan.findPoint(p.point_ids[k]);
     t.push_back(q.trigger_m_mm + s[k] * q.approach_m);
   }
+  return t;
+}
+
+}  // namespace
+
+Eigen::Vector3d FrameModel::fittedCentre_m(const ProbePlan& plan, const FramePoint& p, const Eigen::Vector3d& origin_w) const {
+  const std::vector<Eigen::Vector3d> t = triggersAt(plan, p, readingsAlong(plan, p, origin_w));
   return fitSphereCentre(t, p.nominal_m_mm, fitOptions(plan, *plan.findPoint(p.point_ids.front()))).centre_mm;
 }
 
@@ -339,12 +348,9 @@ Eigen::MatrixXd frameJacobian(const ProbePlan& plan, const std::vector<FramePoin
   for (int i = 0; i < n; ++i) {
     const FramePoint& p = points[static_cast<size_t>(i)];
     const std::vector<double> s = model.readingsAlong(plan, p, origin_w);
-    std::vector<Eigen::Vector3d> t, u;
-    for (size_t k = 0; k < s.size(); ++k) {
-      const ProbePoint& q = *plan.findPoint(p.point_ids[k]);
-      t.push_back(q.trigger_m_mm + s[k] * q.approach_m);
-      u.push_back(q.approach_m);
-    }
+    const std::vector<Eigen::Vector3d> t = triggersAt(plan, p, s);
+    std::vector<Eigen::Vector3d> u;
+    for (int id : p.point_ids) u.push_back(plan.findPoint(id)->approach_m);
     const SphereFit fit = fitSphereCentre(t, p.nominal_m_mm, fitOptions(plan, *plan.findPoint(p.point_ids.front())));
     const Eigen::MatrixXd M = linearSphereFit(t, u, fit).centre;
     Eigen::VectorXd ds(static_cast<Eigen::Index>(s.size()));
