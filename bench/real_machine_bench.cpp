@@ -15,10 +15,10 @@
 // (the head's dR); rtest: linear_axes, sphere (its offset), sensors (gain and direction), drift,
 // noise (the sensors' own), form (the sphere's, per reading));
 // comma-separated), to see which one a failure is owed to.
-// --runs N (tooltip only, default 1): the bundled plan measured N times on the same drawn machine
-// (the same head and linear axes; a new laser zero and per-reading scatter each run), all N
-// results handed to analyze and diagnose as repeats (`analyze --results R1 R2 ...`); the chip is
-// in one reading of one run (the run drawn with the reading).
+// --runs N (tooltip only; default: the bundled plan's own `repeats`, 3): the plan made with
+// repeats = N and measured N times on the same drawn machine (the same head and linear axes; a
+// new laser zero and per-reading scatter each run), the N runs in one results file as its program
+// has the laser write them; the chip is in one reading of one run (the run drawn with the reading).
 // --dump writes the first machine's PLAN.json, RESULTS, TRUTH.json, REPORT.json and DIAGNOSIS.json,
 // so that the command line can be run on the same data (`rotacal analyze --plan DIR/PLAN.json ...`).
 // Defaults: 200 machines, 2000 Monte Carlo runs per analysis (the CLI's default), seeds 1..N,
@@ -79,7 +79,7 @@ struct Args {
   bool verbose = false;
   std::string dump;  // a folder for the first machine's RESULTS, REPORT.json and DIAGNOSIS.json
   std::string off;   // contributors switched off, comma-separated (what each failure is owed to)
-  int runs = 1;      // tooltip: repeats of the plan on the same machine
+  int runs = 0;      // tooltip: runs of the plan on the same machine (0: the plan's own repeats)
 };
 
 [[noreturn]] void usage(const char* why) {
@@ -116,8 +116,8 @@ Args parse(int argc, char** argv) {
     else usage(("unknown option " + k).c_str());
   }
   if (a.machines < 1) usage("--machines must be >= 1");
-  if (a.runs < 1) usage("--runs must be >= 1");
-  if (a.runs > 1 && a.cycle != "tooltip") usage("--runs is for --cycle tooltip");
+  if (a.runs < 0) usage("--runs must be >= 1");
+  if (a.runs > 0 && a.cycle != "tooltip") usage("--runs is for --cycle tooltip");
   if (a.mc_runs < 100) usage("--mc-runs must be >= 100 (analyze's own lower limit)");
   return a;
 }
@@ -525,7 +525,11 @@ int main(int argc, char** argv) {
       !args.contributors.empty() ? loadContributors(args.contributors)
       : machine.contributors     ? *machine.contributors
                                  : loadContributors(std::string(ROTACAL_SOURCE_DIR) + "/examples/contributors/table5.json");
-  const ProbePlan plan = makePlan(args.cycle, machine, args.machine.empty() ? example.options : CycleOptions{});
+  CycleOptions plan_options = args.machine.empty() ? example.options : CycleOptions{};
+  if (args.runs > 0) plan_options["repeats"] = std::to_string(args.runs);
+  const ProbePlan plan = makePlan(args.cycle, machine, plan_options);
+  // tooltip's program repeats the plan (its `repeats`); every other cycle's is one run here.
+  const int runs = plan.options.count("repeats") && plan.cycle == "tooltip" ? std::stoi(plan.options.at("repeats")) : 1;
   const Cycle& cycle = cycleOfPlan(plan);
   const Dialect& dialect = dialectByName(args.dialect);
   const DialectIO io = dialectIO(dialect);
@@ -562,33 +566,32 @@ int main(int argc, char** argv) {
   const bool rtest = plan.cycle == "rtest";
   rtest_draw.sd_um = args.sd_um;
   rtest_draw.sd_mdeg = args.sd_mdeg;
-  // The results texts of a drawn machine (one per run), with a chip of `mm` under point `id` (0:
-  // none) in run `chip_run`: the probing cycles' triggers through the dialect's results writer,
-  // tooltip's laser readings through its neutral CSV writer (what `simulate` writes for each).
-  // A tooltip repeat is the same head read again: its own per-reading draws (a new zero and
-  // scatter), run 0 the head's own so that one run is the single-run bench.
-  const auto resultsOfRun = [&](const Drawn& d, int id, bool chip_z, int chip_axis, double mm, int run) -> std::string {
-    if (tooltip && run > 0) {
-      Drawn again = d;
-      again.head.reading_seed = d.head.reading_seed + 1000003ULL * static_cast<std::uint64_t>(run);
-      return tooltipResultsText(plan, ind::measureHead(plan, again.head, id ? std::optional<ind::ReadingChip>(ind::ReadingChip{id, chip_z, mm})
-                                                                            : std::nullopt));
-    }
+  // The results text of a drawn machine, with a chip of `mm` under point `id` (0: none) in run
+  // `chip_run`: the probing cycles' triggers through the dialect's results writer, tooltip's laser
+  // readings of every run through its neutral CSV writer, one file (what `simulate` writes). A
+  // tooltip run is the same head read again: its own per-reading draws (a new zero and scatter),
+  // run 0 the head's own so that a plan of one run is the single-run bench.
+  const auto resultsText = [&](const Drawn& d, int id, bool chip_z, int chip_axis, double mm, int chip_run) -> std::string {
     // The R-test: one sensor's value at one pose of the first cycle off by the chip's size (the
     // reset and re-read rows are the re-read check's, not the screen's: docs/rtest.md).
     if (rtest)
       return rtestResultsCsv(plan, ind::measureRtest(plan, d.rt, id ? std::optional<ind::RtestChip>(ind::RtestChip{0, id, chip_axis, mm})
                                                                     : std::nullopt));
-    if (tooltip)
-      return tooltipResultsText(plan, ind::measureHead(plan, d.head, id ? std::optional<ind::ReadingChip>(ind::ReadingChip{id, chip_z, mm})
-                                                                         : std::nullopt));
+    if (tooltip) {
+      std::vector<TooltipRun> read;
+      for (int r = 0; r < runs; ++r) {
+        auto head = d.head;
+        head.reading_seed = d.head.reading_seed + 1000003ULL * static_cast<std::uint64_t>(r);
+        const bool chipped = id && r == chip_run;
+        read.push_back(ind::measureHead(plan, head, chipped ? std::optional<ind::ReadingChip>(ind::ReadingChip{id, chip_z, mm})
+                                                            : std::nullopt));
+      }
+      return tooltipResultsText(plan, read);
+    }
     return dialect.writeResults(plan, ind::measure(plan, d.m, id ? std::optional<ind::Chip>(ind::Chip{id, mm}) : std::nullopt));
   };
   const auto resultsOf = [&](const Drawn& d, int id, bool chip_z, int chip_axis, double mm, int chip_run) {
-    std::vector<std::string> texts;
-    for (int r = 0; r < args.runs; ++r)
-      texts.push_back(resultsOfRun(d, r == chip_run ? id : 0, chip_z, chip_axis, r == chip_run ? mm : 0.0, r));
-    return texts;
+    return std::vector<std::string>{resultsText(d, id, chip_z, chip_axis, mm, chip_run)};
   };
   std::vector<int> chip_points;
   for (const auto& p : plan.points)
@@ -712,7 +715,7 @@ int main(int argc, char** argv) {
       const int chip_axis = std::uniform_int_distribution<int>(0, 2)(pick);
       const int key = rtest ? 3 * id + chip_axis : id;  // what the screen's excluded list names
       // With repeats, the run the chip is in (drawn after the others, which stay).
-      const int chip_run = args.runs > 1 ? std::uniform_int_distribution<int>(0, args.runs - 1)(pick) : 0;
+      const int chip_run = runs > 1 ? std::uniform_int_distribution<int>(0, runs - 1)(pick) : 0;
       // How the report names the chip's value beside its point: tooltip's beam, the R-test's sensor.
       const std::string reachSuffix = tooltip ? fmt::format(" d{}", chip_z ? 'z' : (plan.options.at("axis") == "A" ? 'y' : 'x'))
                                       : rtest ? fmt::format(" d{}", "xyz"[chip_axis])
@@ -723,7 +726,7 @@ int main(int argc, char** argv) {
         ++tally->n;
         bool caught = false;
         for (size_t x = 0; x < c.excluded.size(); ++x)
-          caught = caught || (c.excluded[x] == key && (args.runs == 1 || c.excluded_run[x] == chip_run + 1));
+          caught = caught || (c.excluded[x] == key && (runs == 1 || c.excluded_run[x] == chip_run + 1));
         tally->caught += caught;
         if (const std::optional<double> r = statedReach(a.doc, chip_run + 1, id, reachSuffix)) {
           const bool unseen = !std::isfinite(*r), within = !unseen && *r <= height_mm * 1e3;
@@ -752,7 +755,7 @@ int main(int argc, char** argv) {
           ++refusals[fmt::format("{:g} um chip: ", height_mm * 1e3) +
                      (c.ok ? c.refused.substr(0, std::min<size_t>(c.refused.find(':'), 60)) : "analyze refused: " + c.error.substr(0, 80))];
         chip_line += fmt::format(" chip {:g} um at {}{}{}: {}{}{}", height_mm * 1e3, id,
-                                 args.runs > 1 ? fmt::format(" run {}", chip_run + 1) : std::string(),
+                                 runs > 1 ? fmt::format(" run {}", chip_run + 1) : std::string(),
                                  tooltip ? (chip_z ? " (dz)" : " (dt)") : rtest ? fmt::format(" (d{})", "xyz"[chip_axis]) : "", caught ? "caught" : "missed",
                                  caught && c.excluded.size() > 1 ? fmt::format(" ({} left out)", c.excluded.size()) : "",
                                  c.written ? (caught ? ", written" : ", WRITTEN")
@@ -772,15 +775,15 @@ int main(int argc, char** argv) {
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   std::string options;
-  for (const auto& [k, v] : (args.machine.empty() ? example.options : CycleOptions{})) options += " --set " + k + "=" + v;
+  for (const auto& [k, v] : plan_options) options += " --set " + k + "=" + v;
   std::printf("rotacal_real_machine_bench: %s (%zu touches) on %s%s, contributors %s, dialect %s\n", args.cycle.c_str(),
               plan.points.size(), machine_file.c_str(), options.c_str(),
               contrib.file.empty() ? "(the machine's, inline)" : contrib.file.c_str(), args.dialect.c_str());
   if (!args.off.empty()) std::printf("switched off in the generator: %s\n", args.off.c_str());
-  if (args.runs > 1)
+  if (runs > 1)
     std::printf("%d runs of the plan per machine (the same head and axes, a new laser zero and scatter each), analyzed and "
-                "diagnosed as repeats; a chip is in one reading of one run\n",
-                args.runs);
+                "diagnosed as repeats (one results file); a chip is in one reading of one run\n",
+                runs);
   const std::string around =
       tooltip ? fmt::format("a head with dR around {:g} um (sd {:g} um) and angular-error coefficients around {:g}, {:g}, {:g}, "
                             "{:g} mdeg (sd {:g} mdeg)",

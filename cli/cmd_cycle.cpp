@@ -147,7 +147,7 @@ int cmdPlan(const Common& c, const std::string& cycle_name, const std::string& m
   outputs.commit();
   if (out != "-")
     say(c, fmt::format("plan {}: {} points in {} poses, about {:.0f} s of machine time -> {}\n", plan.cycle,
-                       plan.points.size(), plan.poses.size(), plan.points.empty() ? 0.0 : plan.points.back().t_s, out));
+                       plan.points.size(), plan.poses.size(), cycleOfPlan(plan).machineSeconds(plan), out));
   return 0;
 }
 

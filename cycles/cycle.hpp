@@ -234,6 +234,9 @@ class Cycle {
   /// std::invalid_argument when it cannot be expressed.
   nc::Program program(const ProbePlan& plan, const std::string& dialect) const;
   int programNumber() const { return identity_.program_number; }
+  /// The machine time of the plan's program, s: its last point's clock, unless the program runs
+  /// the plan more than once.
+  virtual double machineSeconds(const ProbePlan& plan) const { return plan.points.empty() ? 0.0 : plan.points.back().t_s; }
   std::string_view pointNoun() const { return identity_.point_noun; }
 
   /// What the controller records on a machine with known errors (exact simulation). The default

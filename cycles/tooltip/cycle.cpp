@@ -22,10 +22,22 @@
 namespace rotacal {
 namespace {
 
+/// Every run of every results file, in order (a file holds the runs of one program).
 std::vector<TooltipRun> readRuns(const ProbePlan& plan, const std::vector<InputFile>& results) {
   std::vector<TooltipRun> runs;
-  for (const auto& f : results) runs.push_back(parseTooltipResults(f.text, f.path, plan));
+  for (const auto& f : results)
+    for (TooltipRun& run : parseTooltipResults(f.text, f.path, plan)) runs.push_back(std::move(run));
   return runs;
+}
+
+/// A plan's runs not all read: the text says what the missing ones would have seen.
+std::string fewerRunsThanPlanned(const ProbePlan& plan, size_t read) {
+  const int planned = tooltipOptionsFrom(plan.options, plan.machine).repeats;
+  if (read >= static_cast<size_t>(planned)) return {};
+  return fmt::format("{} run{} read where the plan repeats {}: {}", read, read == 1 ? "" : "s", planned,
+                     read < static_cast<size_t>(kTooltipRepeats)
+                         ? fmt::format("a gross reading along the tool tip's circle is seen from {} runs on", kTooltipRepeats)
+                         : std::string("the values are those of the runs read"));
 }
 
 /// The cycle writes no offsets; its values go into the machine's kinematics tables by hand. When
@@ -48,6 +60,12 @@ class Tooltip final : public Cycle {
                       "the tooltip cycle writes no offsets (a head's pivot length and angular errors go into the "
                       "machine's kinematics tables by hand)",
                       "tool-tip poses"}) {}
+
+  // Every run but the last ends with the move back to the next run's start.
+  double machineSeconds(const ProbePlan& plan) const override {
+    const int runs = tooltipOptionsFrom(plan.options, plan.machine).repeats;
+    return runs * tooltipRunSeconds(plan) - (plan.points.empty() ? 0.0 : 60.0);
+  }
 
   Simulated simulate(const SimulateRequest& r) const override {
     const ProbePlan& plan = *r.plan;
@@ -82,10 +100,13 @@ class Tooltip final : public Cycle {
     // Both are >= 0: the truth file's reader and --noise-um's check refuse a negative noise.
     if (r.noise_um) truth.noise_um = *r.noise_um;
     if (!truth_json.is_null()) truth_json["noise_um"] = truth.noise_um;
-    const TooltipRun run = onTruthFile(r.truth, [&] { return simulateTooltip(plan, truth, r.seed, machine); });
-    Simulated s{tooltipResultsText(plan, run),
-                fmt::format("simulated {} tool-tip readings (dR {:.3f} um, noise {:.3f} um, seed {}{})", run.size(),
-                            truth.dR_um, truth.noise_um, r.seed, drawn),
+    const std::vector<TooltipRun> runs =
+        onTruthFile(r.truth, [&] { return simulateTooltipRepeats(plan, truth, r.seed, machine, r.start_s.value_or(0.0)); });
+    Simulated s{tooltipResultsText(plan, runs),
+                fmt::format("simulated {} tool-tip readings{} (dR {:.3f} um, noise {:.3f} um, seed {}{})",
+                            runs.size() * plan.points.size(),
+                            runs.size() > 1 ? fmt::format(" in {} runs", runs.size()) : std::string(), truth.dR_um,
+                            truth.noise_um, r.seed, drawn),
                 truth_json};
     s.injected["location_errors"] = {{"dR", truth.dR_um}};
     return s;
@@ -104,6 +125,13 @@ class Tooltip final : public Cycle {
     a.result_files = pathsOf(r.results);
     CycleDocuments out;
     out.doc = tooltipReportJson(plan, runs, a);
+    const std::string fewer = fewerRunsThanPlanned(plan, read.size());
+    if (!fewer.empty()) {
+      out.warnings.push_back(fewer);
+      out.doc["runs_read"] = {{"read", read.size()},
+                              {"planned", tooltipOptionsFrom(plan.options, plan.machine).repeats},
+                              {"note", fewer}};
+    }
     out.doc["errors_heading"] = "Identified errors";  // a pivot length and angular errors, not location errors in ISO 230-7's sense
     // What analyze signs: u_A from the data, u_B from the declared contributors by
     // Monte Carlo through the same fit (cycles/tooltip/budget.hpp, docs/uncertainty.md).
@@ -122,6 +150,7 @@ class Tooltip final : public Cycle {
     const Eigen::VectorXd values = tooltipBudgetValues(a, b);
     out.doc["uncertainty"] = budgetJson(b, values);
     out.text = tooltipReportText(plan, a, &b) + "\n" + budgetText(b, values);
+    if (!fewer.empty()) out.text += fewer + "\n";
     out.doc["outliers"] = tooltipScreenJson(plan, screen);
     out.text += tooltipScreenText(plan, screen) + "\n" + screen.screen.reachLine("values");
     if (!screen.screen.excluded.empty()) out.warnings.push_back(tooltipScreenText(plan, screen));
@@ -138,13 +167,14 @@ class Tooltip final : public Cycle {
 
   CycleDocuments diagnose(const DiagnoseRequest& r) const override {
     const ProbePlan& plan = *r.plan;
+    for (const auto& f : r.results)
+      for (const TooltipRun& run : parseTooltipResults(f.text, f.path, plan))
+        for (const auto& reading : run)
+          if (!std::isfinite(reading.z_um))
+            throw InputError(f.path, 1,
+                             "diagnose needs both directions of the reading (dz too): its causes (pivot length, scale, "
+                             "drift) differ only in how they split between the two; analyze reads one direction");
     const std::vector<TooltipRun> runs = readRuns(plan, r.results);
-    for (size_t k = 0; k < runs.size(); ++k)
-      for (const auto& reading : runs[k])
-        if (!std::isfinite(reading.z_um))
-          throw InputError(r.results[k].path, 1,
-                           "diagnose needs both directions of the reading (dz too): its causes (pivot length, scale, "
-                           "drift) differ only in how they split between the two; analyze reads one direction");
     TooltipDiagnosisOptions o;
     o.judge.alpha = r.alpha;
     o.contributors = r.contributors;  // the declared noise; none: the plan's laser_noise_um alone

@@ -86,6 +86,7 @@ TooltipOptions tooltipOptionsFrom(const CycleOptions& options, const MachineMode
       .number("move_s", &o.move_s)
       .number("dwell_s", &o.dwell_s)
       .count("sweeps", &o.sweeps, 0, kMaxRepeats)
+      .count("repeats", &o.repeats, 1, kMaxRepeats)
       .number("laser_noise_um", &o.noise_um)
       .number("max_sag_um", &o.max_sag_um)
       .read(options);
@@ -146,6 +147,9 @@ ProbePlan makeTooltipPlan(const MachineModel& machine, const CycleOptions& optio
   plan.options["step_deg"] = fmt::format("{}", o.step_deg);
   plan.options["end_deg"] = fmt::format("{}", o.end_deg);
   plan.options["units"] = o.inch ? "inch" : "mm";
+  // A new static plan runs kTooltipRepeats times unless told; the dynamic test reads every angle
+  // several times in one run already. Written out, so the plan says what its program does.
+  plan.options["repeats"] = fmt::format("{}", options.count("repeats") ? o.repeats : o.sweeps == 0 ? kTooltipRepeats : 1);
   plan.index_z_mm = 0.0;
   const std::vector<double> angles = sweepAngles(o);
   std::vector<std::string> problems;
@@ -253,7 +257,8 @@ TooltipRun simulateTooltip(const ProbePlan& plan, const TooltipTruth& truth, std
   return simulateTooltip(plan, truth, seed, TooltipMachine{});
 }
 
-TooltipRun simulateTooltip(const ProbePlan& plan, const TooltipTruth& truth, std::uint64_t seed, const TooltipMachine& machine) {
+TooltipRun simulateTooltip(const ProbePlan& plan, const TooltipTruth& truth, std::uint64_t seed, const TooltipMachine& machine,
+                           double start_s) {
   const TooltipOptions o = tooltipOptionsFrom(plan.options, plan.machine);
   const double r_true = o.radius_mm + umToMm(truth.dR_um);
   const int ti = transverseIndex(o.axis);
@@ -272,8 +277,8 @@ TooltipRun simulateTooltip(const ProbePlan& plan, const TooltipTruth& truth, std
     pivot.z() *= 1.0 + 1e-6 * truth.scale_z_um_m;
     if (machine.pivot_error_mm) pivot += machine.pivot_error_mm(pt.trigger_m_mm);
     Eigen::Vector3d tip = pivot + tipOffset_m(degToRad(actual.A), degToRad(actual.B), r_true);
-    tip[ti] += umToMm(truth.drift_t_um_h * pt.t_s / 3600.0);
-    tip.z() += umToMm(truth.drift_z_um_h * pt.t_s / 3600.0);
+    tip[ti] += umToMm(truth.drift_t_um_h * (start_s + pt.t_s) / 3600.0);
+    tip.z() += umToMm(truth.drift_z_um_h * (start_s + pt.t_s) / 3600.0);
     devs.push_back(tip - pt.contact_w_mm);
   }
   Eigen::Vector3d beam_t = machine.beam_t;
@@ -305,20 +310,47 @@ TooltipRun simulateTooltip(const ProbePlan& plan, const TooltipTruth& truth, std
   return run;
 }
 
-std::string tooltipResultsText(const ProbePlan& plan, const TooltipRun& run) {
+double tooltipRunSeconds(const ProbePlan& plan) {
+  // makeTooltipPlan's re-positioning between sweeps: the next run starts as a next sweep would.
+  return plan.points.empty() ? 0.0 : plan.points.back().t_s + 60.0;
+}
+
+std::vector<TooltipRun> simulateTooltipRepeats(const ProbePlan& plan, const TooltipTruth& truth, std::uint64_t seed,
+                                               const TooltipMachine& machine, double start_s) {
+  const TooltipOptions o = tooltipOptionsFrom(plan.options, plan.machine);
+  std::vector<TooltipRun> runs;
+  std::uint64_t next = seed;
+  for (int r = 0; r < o.repeats; ++r) {
+    // Run 0 reads with `seed` itself, so a plan of one run simulates as before repeats existed.
+    const std::uint64_t s = r == 0 ? seed : splitmix64(next);
+    runs.push_back(simulateTooltip(plan, truth, s, machine, start_s + r * tooltipRunSeconds(plan)));
+  }
+  return runs;
+}
+
+std::string tooltipResultsText(const ProbePlan& plan, const std::vector<TooltipRun>& runs) {
   const TooltipOptions o = tooltipOptionsFrom(plan.options, plan.machine);
   std::string out = o.axis == 'A' ? "angle_deg,dy_um,dz_um\n" : "angle_deg,dx_um,dz_um\n";
-  for (const auto& r : run) out += fmt::format("{:.4f},{:.4f},{:.4f}\n", r.angle_deg, r.t_um, r.z_um);
+  for (size_t k = 0; k < runs.size(); ++k) {
+    if (k > 0) out += fmt::format("# run {}\n", k + 1);
+    for (const auto& r : runs[k]) out += fmt::format("{:.4f},{:.4f},{:.4f}\n", r.angle_deg, r.t_um, r.z_um);
+  }
   return out;
 }
 
-TooltipRun parseTooltipResults(const std::string& text, const std::string& file, const ProbePlan& plan) {
+std::string tooltipResultsText(const ProbePlan& plan, const TooltipRun& run) {
+  return tooltipResultsText(plan, std::vector<TooltipRun>{run});
+}
+
+std::vector<TooltipRun> parseTooltipResults(const std::string& text, const std::string& file, const ProbePlan& plan) {
   const TooltipOptions o = tooltipOptionsFrom(plan.options, plan.machine);
+  const size_t points = plan.points.size();
   const std::string header = o.axis == 'A' ? "angle_deg,dy_um,dz_um" : "angle_deg,dx_um,dz_um";
   // 004's laser reads one direction: the transverse column alone is a results file too.
   const std::string header_t = o.axis == 'A' ? "angle_deg,dy_um" : "angle_deg,dx_um";
   int columns = 3;
-  TooltipRun run;
+  std::vector<TooltipRun> runs;
+  size_t read = 0;
   int line_no = 0;
   size_t pos = 0;
   bool seen_header = false;
@@ -354,20 +386,28 @@ TooltipRun parseTooltipResults(const std::string& text, const std::string& file,
       }
       p = comma + 1;
     }
-    const size_t k = run.size();
-    if (k >= plan.points.size())
-      throw InputError(file, line_no, fmt::format("more readings than the plan's {} poses", plan.points.size()));
+    if (read >= points * static_cast<size_t>(o.repeats))
+      throw InputError(file, line_no,
+                       fmt::format("more readings than the plan's {} run{} of {} poses", o.repeats, o.repeats == 1 ? "" : "s",
+                                   points));
+    const size_t k = read % points;
+    if (k == 0) runs.emplace_back();
     const Pose& pose = plan.points[k].pose;
     const double want = o.axis == 'A' ? pose.A : pose.B;
     if (std::abs(v[0] - want) > 1e-3)
-      throw InputError(file, line_no, fmt::format("reading {} is at {} = {} deg, the plan says {} deg", k + 1, o.axis,
-                                                  v[0], want));
-    run.push_back({v[0], v[1], v[2]});
+      throw InputError(file, line_no,
+                       fmt::format("reading {}{} is at {} = {} deg, the plan says {} deg", k + 1,
+                                   runs.size() > 1 ? fmt::format(" of run {}", runs.size()) : std::string(), o.axis, v[0], want));
+    runs.back().push_back({v[0], v[1], v[2]});
+    ++read;
   }
   if (!seen_header) throw InputError(file, std::max(line_no, 1), "empty results file (expected the header '" + header + "')");
-  if (run.size() != plan.points.size())
-    throw InputError(file, line_no, fmt::format("{} readings, the plan has {} poses", run.size(), plan.points.size()));
-  return run;
+  if (runs.empty() || runs.back().size() != points)
+    throw InputError(file, line_no,
+                     runs.size() > 1 ? fmt::format("run {} has {} readings, the plan has {} poses", runs.size(),
+                                                   runs.back().size(), points)
+                                     : fmt::format("{} readings, the plan has {} poses", read, points));
+  return runs;
 }
 
 PlanRules tooltipPlanRules() {

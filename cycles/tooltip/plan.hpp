@@ -32,6 +32,11 @@ struct TooltipOptions {
   double dwell_s = 2.0;             // static test: dwell after each step for the reading (0: none)
   int sweeps = 0;                   // 0: static 0..end; n > 0: dynamic test of 004 Sec. VI,
                                     // 0 -> +end -> -end -> 0, n times, no dwell
+  /// Runs of the whole plan in one program, each zeroing the laser anew: one run cannot see a
+  /// gross reading along the tip's circle (its angle's own error takes it up), three can. A plan
+  /// without the option reads 1 (004's one run); makeTooltipPlan writes kTooltipRepeats for the
+  /// static test.
+  int repeats = 1;
   double noise_um = 0.254;          // laser_noise_um: the DECLARED noise of a reading component;
                                     // default 004 Sec. VII's laser system error, 0.000010 in
   /// Dynamic test: the largest distance the tool tip may leave its fixed point between the
@@ -45,6 +50,11 @@ struct TooltipOptions {
 };
 
 TooltipOptions tooltipOptionsFrom(const CycleOptions& options, const MachineModel& machine);
+
+/// The runs a new static plan repeats when `repeats` is not given: the fewest that tell a gross
+/// reading from its angle's own error (two readings of a value predict each other alike; a third
+/// breaks the tie: docs/real_machines.md).
+constexpr int kTooltipRepeats = 3;
 
 /// Moves per step of the program (1 for the static test) and the tool tip's largest departure
 /// from its fixed point between them, um (the chord's sagitta).
@@ -90,6 +100,7 @@ struct TooltipReading {
 using TooltipRun = std::vector<TooltipReading>;
 
 /// Exact forward model: deviation of every plan point, zeroed at the first point of its sweep.
+/// `start_s`: the clock at the run's start (a repeat's drift), added to the plan's reading times.
 TooltipRun simulateTooltip(const ProbePlan& plan, const TooltipTruth& truth, std::uint64_t seed);
 
 /// What a machine drawn from its contributors adds (simulate --contributors, budget.hpp's
@@ -99,15 +110,26 @@ struct TooltipMachine {
   std::function<Eigen::Vector3d(const Eigen::Vector3d&)> pivot_error_mm;  // empty: none
   Eigen::Vector3d beam_t = Eigen::Vector3d::Zero(), beam_z = Eigen::Vector3d::UnitZ();  // beam_t zero: the transverse axis
 };
-TooltipRun simulateTooltip(const ProbePlan& plan, const TooltipTruth& truth, std::uint64_t seed, const TooltipMachine& machine);
+TooltipRun simulateTooltip(const ProbePlan& plan, const TooltipTruth& truth, std::uint64_t seed, const TooltipMachine& machine,
+                           double start_s = 0.0);
+/// The plan's `repeats` runs on one machine, as its program measures them: run r from its own
+/// reading seed (run 0: `seed` itself) and starting when the one before ends (tooltipRunSeconds).
+std::vector<TooltipRun> simulateTooltipRepeats(const ProbePlan& plan, const TooltipTruth& truth, std::uint64_t seed,
+                                               const TooltipMachine& machine, double start_s = 0.0);
+/// The time one run of the plan takes, s: its last reading plus the move back to the next start.
+double tooltipRunSeconds(const ProbePlan& plan);
 
 /// Index of the zero reading (the first pose at 0 deg of the same sweep) of every plan point.
 std::vector<int> tooltipReferences(const ProbePlan& plan);
 
-/// The neutral results file `angle_deg,dy_um,dz_um` (axis B: `angle_deg,dx_um,dz_um`).
+/// The neutral results file `angle_deg,dy_um,dz_um` (axis B: `angle_deg,dx_um,dz_um`): one row
+/// per plan point, run after run (the program's repeats), a `# run r` line before each from the
+/// second on.
 std::string tooltipResultsText(const ProbePlan& plan, const TooltipRun& run);
-/// Reads it; throws InputError(file, line, ...) on a wrong header, count or angle.
-TooltipRun parseTooltipResults(const std::string& text, const std::string& file, const ProbePlan& plan);
+std::string tooltipResultsText(const ProbePlan& plan, const std::vector<TooltipRun>& runs);
+/// Reads it: the runs it holds, a whole number of the plan's points each, at most the plan's
+/// `repeats`; throws InputError(file, line, ...) on a wrong header, count or angle.
+std::vector<TooltipRun> parseTooltipResults(const std::string& text, const std::string& file, const ProbePlan& plan);
 
 /// What a PLAN.json of this cycle must satisfy beyond the format (the cycle's identity).
 PlanRules tooltipPlanRules();

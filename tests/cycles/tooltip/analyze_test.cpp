@@ -191,9 +191,10 @@ TEST(TooltipResults, RoundTripAndErrors) {
   const ProbePlan plan = plan004();
   const TooltipRun run = simulateTooltip(plan, truthOf(10, 1, 0, 0, 0, 0.5), 3);
   const std::string text = tooltipResultsText(plan, run);
-  const TooltipRun back = parseTooltipResults(text, "r.csv", plan);
-  ASSERT_EQ(back.size(), run.size());
-  for (size_t k = 0; k < run.size(); ++k) EXPECT_NEAR(back[k].t_um, run[k].t_um, 0.5e-4);
+  const std::vector<TooltipRun> back = parseTooltipResults(text, "r.csv", plan);
+  ASSERT_EQ(back.size(), 1u);
+  ASSERT_EQ(back[0].size(), run.size());
+  for (size_t k = 0; k < run.size(); ++k) EXPECT_NEAR(back[0][k].t_um, run[k].t_um, 0.5e-4);
   try {
     parseTooltipResults("angle_deg,dy_um,dz_um\n0,0,0\n5,x,0\n", "bad.csv", plan);
     FAIL();
@@ -204,6 +205,56 @@ TEST(TooltipResults, RoundTripAndErrors) {
   EXPECT_THROW(parseTooltipResults("a,b\n", "hdr.csv", plan), InputError);
 }
 
+// The program repeats the plan (option repeats, 3 on a new static plan) and the laser's file holds
+// the runs one after the other: read back run by run, each with its own draws and the same head;
+// a part-run, a run too many and an angle out of place are refused at their line.
+TEST(TooltipResults, ThePlansRunsAreReadFromOneFile) {
+  const ProbePlan plan = makePlan("tooltip", loadMachine(test::sourcePath("examples/machines/head_ab.json")),
+                                  {{"units", "mm"}, {"radius_mm", "381"}, {"step_deg", "5"}, {"end_deg", "90"}});
+  ASSERT_EQ(plan.options.at("repeats"), "3");
+  const TooltipTruth truth = truthOf(10, 1, 0, 0, 0, 0.5);
+  const std::vector<TooltipRun> runs = simulateTooltipRepeats(plan, truth, 3, TooltipMachine{});
+  ASSERT_EQ(runs.size(), 3u);
+  // Run 0 is the single run of the same seed; the others differ by their draws alone.
+  const TooltipRun one = simulateTooltip(plan, truth, 3);
+  const TooltipRun clean = simulateTooltip(plan, truthOf(10, 1, 0, 0, 0, 0.0), 3);
+  for (size_t k = 0; k < one.size(); ++k) EXPECT_EQ(runs[0][k].t_um, one[k].t_um);
+  double diff = 0.0;
+  for (size_t r = 1; r < 3; ++r)
+    for (size_t k = 1; k < one.size(); ++k) diff = std::max(diff, std::abs(runs[r][k].t_um - runs[0][k].t_um));
+  EXPECT_GT(diff, 0.1);
+  // Without scatter every run reads the same head.
+  const std::vector<TooltipRun> still = simulateTooltipRepeats(plan, truthOf(10, 1, 0, 0, 0, 0.0), 3, TooltipMachine{});
+  for (size_t r = 0; r < 3; ++r)
+    for (size_t k = 0; k < one.size(); ++k) EXPECT_EQ(still[r][k].z_um, clean[k].z_um);
+  const std::string text = tooltipResultsText(plan, runs);
+  const std::vector<TooltipRun> back = parseTooltipResults(text, "r.csv", plan);
+  ASSERT_EQ(back.size(), 3u);
+  for (size_t r = 0; r < 3; ++r)
+    for (size_t k = 0; k < one.size(); ++k) EXPECT_NEAR(back[r][k].z_um, runs[r][k].z_um, 0.5e-4);
+  // Fewer runs than planned are read as they are; a part of a run or a fourth one is refused.
+  const std::vector<TooltipRun> two = parseTooltipResults(tooltipResultsText(plan, {runs[0], runs[1]}), "r.csv", plan);
+  EXPECT_EQ(two.size(), 2u);
+  const size_t n = one.size();
+  auto lineOfError = [&](const std::string& t) {
+    try {
+      (void)parseTooltipResults(t, "r.csv", plan);
+    } catch (const InputError& e) {
+      return e.line();
+    }
+    return -1;
+  };
+  std::string part = tooltipResultsText(plan, {runs[0], runs[1]});
+  part = part.substr(0, part.rfind("90.0000,"));  // run 2 without its last reading
+  EXPECT_GT(lineOfError(part), 0);
+  const std::string four = tooltipResultsText(plan, {runs[0], runs[1], runs[2], runs[0]});
+  // Header, n rows, then "# run k" and n rows per run: the fourth run's first row.
+  EXPECT_EQ(lineOfError(four), static_cast<int>(1 + n + 2 * (n + 1) + 2));
+  std::string shifted = tooltipResultsText(plan, {runs[0], runs[1]});
+  const size_t second = shifted.find("# run 2\n") + 8;
+  shifted.erase(second, shifted.find('\n', second) + 1 - second);  // run 2 starts at 5 deg
+  EXPECT_EQ(lineOfError(shifted), static_cast<int>(1 + n + 2));
+}
 
 // 004's laser reads one direction (issue 17): a results file of the transverse column alone is
 // analyzed, and what it cannot identify is said, not guessed.
@@ -215,7 +266,7 @@ TEST(TooltipResults, TheTransverseReadingAloneGivesTheAngularErrorsAndSaysDRIsNo
   const TooltipRun full = simulateTooltip(plan, t, 1);
   std::string text = "angle_deg,dy_um\n";
   for (const auto& r : full) text += fmt::format("{:.4f},{:.4f}\n", r.angle_deg, r.t_um);
-  const TooltipRun dy = parseTooltipResults(text, "dy.csv", plan);
+  const TooltipRun dy = parseTooltipResults(text, "dy.csv", plan).front();
   ASSERT_EQ(dy.size(), full.size());
   EXPECT_FALSE(std::isfinite(dy[3].z_um));
   const TooltipAnalysis a = analyzeTooltip(plan, {dy});
@@ -244,7 +295,7 @@ TEST(TooltipResults, TheTransverseReadingAloneCannotSeeTheAngleAt90Degrees) {
   const TooltipRun full = simulateTooltip(plan, t, 1);
   std::string text = "angle_deg,dy_um\n";
   for (const auto& r : full) text += fmt::format("{:.6f},{:.6f}\n", r.angle_deg, r.t_um);
-  const TooltipAnalysis a = analyzeTooltip(plan, {parseTooltipResults(text, "dy.csv", plan)});
+  const TooltipAnalysis a = analyzeTooltip(plan, parseTooltipResults(text, "dy.csv", plan));
   int at90 = 0;
   for (size_t k = 0; k < a.joint.angles_deg.size(); ++k) {
     const double A = a.joint.angles_deg[k];
@@ -258,7 +309,7 @@ TEST(TooltipResults, TheTransverseReadingAloneCannotSeeTheAngleAt90Degrees) {
     }
   }
   EXPECT_GE(at90, 1);
-  const Json j = tooltipReportJson(plan, {parseTooltipResults(text, "dy.csv", plan)}, a);
+  const Json j = tooltipReportJson(plan, parseTooltipResults(text, "dy.csv", plan), a);
   EXPECT_NO_THROW((void)j.dump());
 }
 

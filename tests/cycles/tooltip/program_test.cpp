@@ -38,8 +38,9 @@ const char* kTable1[18] = {
     "Y-0.1708Z-1.2974A5.", "Y-0.0571Z-1.3073A5.",
 };
 
+/// 004 Table 1's plan: one run (a new static plan repeats it kTooltipRepeats times).
 ProbePlan table1Plan(CycleOptions extra = {}) {
-  CycleOptions o{{"units", "inch"}, {"radius_mm", "381"}, {"step_deg", "5"}, {"end_deg", "90"}};
+  CycleOptions o{{"units", "inch"}, {"radius_mm", "381"}, {"step_deg", "5"}, {"end_deg", "90"}, {"repeats", "1"}};
   for (const auto& [k, v] : extra) o[k] = v;
   return makePlan("tooltip", loadMachine(test::sourcePath("examples/machines/head_ab.json")), o);
 }
@@ -152,6 +153,20 @@ TEST(TooltipRs274, Table1ProgramRunsAndKeepsTheTipFixed) {
   if (!fs::exists(kRs274)) GTEST_SKIP() << kRs274 << " not found";
   // 18 steps + the zero-length feed of "G91 G01 G93 F2." (004's mode line)
   expectRs274KeepsTipFixed(table1Plan(), 18 + 1);
+}
+
+// A new static plan runs three times in its program, each run from the zero pose with the stop
+// that zeroes the laser: three times Table 1's feeds and stops, the tip fixed throughout.
+TEST(TooltipRs274, ANewPlansThreeRunsRunAndKeepTheTipFixed) {
+  if (!fs::exists(kRs274)) GTEST_SKIP() << kRs274 << " not found";
+  CycleOptions o{{"units", "inch"}, {"radius_mm", "381"}, {"step_deg", "5"}, {"end_deg", "90"}};
+  const ProbePlan plan = makePlan("tooltip", loadMachine(test::sourcePath("examples/machines/head_ab.json")), o);
+  ASSERT_EQ(tooltipOptionsFrom(plan.options, plan.machine).repeats, kTooltipRepeats);
+  expectRs274KeepsTipFixed(plan, 3 * (18 + 1));
+  const Rs274Run r = runRs274(dialectByName("linuxcnc").writeProgram(test::cycleProgram(plan, "linuxcnc")));
+  size_t stops = 0;
+  for (size_t p = r.out.find("PROGRAM_STOP"); p != std::string::npos; p = r.out.find("PROGRAM_STOP", p + 1)) ++stops;
+  EXPECT_EQ(stops, 3u) << r.out;
 }
 
 TEST(TooltipRs274, DynamicTestRunsAtEveryAngleOfTheOtherAxis) {

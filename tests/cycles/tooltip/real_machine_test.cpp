@@ -24,7 +24,7 @@ namespace {
 
 ProbePlan plan004() {
   return makePlan("tooltip", loadMachine(test::sourcePath("examples/machines/head_ab.json")),
-                  {{"units", "mm"}, {"radius_mm", "381"}, {"step_deg", "5"}, {"end_deg", "90"}});
+                  {{"units", "mm"}, {"radius_mm", "381"}, {"step_deg", "5"}, {"end_deg", "90"}, {"repeats", "1"}});
 }
 
 const char* kTruth = R"({"format": "rotacal-truth/1", "tooltip": {"dR_um": 0.0,
@@ -54,7 +54,11 @@ Simulated simulateDrawn(const ProbePlan& plan, const ContributorSet& cs, std::ui
   return cycleByName("tooltip").simulate(r);
 }
 
-TooltipRun readBack(const ProbePlan& plan, const Simulated& s) { return parseTooltipResults(s.results_text, "r.csv", plan); }
+TooltipRun readBack(const ProbePlan& plan, const Simulated& s) {
+  const std::vector<TooltipRun> runs = parseTooltipResults(s.results_text, "r.csv", plan);
+  EXPECT_EQ(runs.size(), 1u);
+  return runs.front();
+}
 
 Eigen::VectorXd values(const TooltipRun& run) {
   Eigen::VectorXd v(2 * static_cast<Eigen::Index>(run.size()));

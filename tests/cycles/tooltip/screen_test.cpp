@@ -79,6 +79,44 @@ TEST(TooltipScreen, GlitchOf1mmLeftOutAndKeptFromTheValues) {
   }
 }
 
+// A glitch exactly along its reading's tangent (dz at 90 deg) is that angle's own error to one run:
+// the plan of one run keeps it; a new plan runs three times (repeats) and its one results file
+// is read run by run, so the two clean readings of that angle outvote it. Through analyze, on a
+// simulated head the screen never sees; a file of fewer runs than planned is said to be one.
+TEST(TooltipScreen, ANewPlansThreeRunsCatchAGlitchAlongTheTangent) {
+  const ProbePlan three = plan004();
+  ASSERT_EQ(three.options.at("repeats"), "3");
+  CycleOptions o = three.options;
+  o["repeats"] = "1";
+  const ProbePlan one = makePlan("tooltip", three.machine, o);
+  const size_t at90 = three.points.size() - 1;
+  ASSERT_NEAR(three.points[at90].pose.A, 90.0, 1e-9);
+  auto analyzeText = [](const ProbePlan& plan, const std::string& text) {
+    AnalyzeRequest r;
+    r.plan = &plan;
+    r.results = {{"r.csv", text}};
+    r.mc_runs = 100;
+    return cycleByName("tooltip").analyze(r);
+  };
+  std::vector<TooltipRun> runs = simulateTooltipRepeats(three, truth004(0.254), 5, TooltipMachine{});
+  runs[1][at90].z_um += 50.0;
+  const CycleDocuments d3 = analyzeText(three, tooltipResultsText(three, runs));
+  ASSERT_EQ(d3.doc["outliers"]["excluded"].size(), 1u) << d3.doc["outliers"].dump(1);
+  EXPECT_EQ(d3.doc["outliers"]["excluded"][0]["run"], 2);
+  EXPECT_EQ(d3.doc["outliers"]["excluded"][0]["point"], three.points[at90].id);
+  EXPECT_FALSE(d3.doc.contains("runs_read"));
+  // The same glitch in a run of its own: the 90 deg angle's error takes it up, nothing is left out.
+  const CycleDocuments d1 = analyzeText(one, tooltipResultsText(one, runs[1]));
+  EXPECT_TRUE(d1.doc["outliers"]["excluded"].empty()) << d1.doc["outliers"].dump(1);
+  // One run of the three-run plan: analysed, and said.
+  const CycleDocuments part = analyzeText(three, tooltipResultsText(three, runs[0]));
+  ASSERT_TRUE(part.doc.contains("runs_read"));
+  EXPECT_EQ(part.doc["runs_read"]["read"], 1);
+  EXPECT_EQ(part.doc["runs_read"]["planned"], 3);
+  EXPECT_NE(part.text.find("1 run read where the plan repeats 3"), std::string::npos) << part.text;
+  EXPECT_TRUE(part.offsets_refused.empty()) << part.offsets_refused;
+}
+
 // Through analyze: REPORT.json names the reading, the text and the warnings say it, the reading
 // is in no value analyze signs.
 TEST(TooltipScreen, AnalyzeReportsWhatItLeftOut) {
