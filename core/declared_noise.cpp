@@ -344,24 +344,54 @@ struct DeletionProjector {
   bool unseen(Eigen::Index i) const { return !(Pdiag[i] > 1e-14 * w.W(i, i) * w.W(i, i)); }
 };
 
-DeletionProjector deletionProjector(Eigen::Index n, const Eigen::MatrixXd& J, const Eigen::MatrixXd& S) {
+/// The last (J, S) whose projector was asked for, with it. A screen asks for the statistics, their
+/// null draws' and the sensitivities of one fit in turn, and every step of a series read against
+/// one declaration asks again: the whitening's SVD was the largest cost of a screen. Per thread,
+/// keyed by both matrices (compared entry by entry): the answer is the one a fresh one gives.
+struct ProjectorMemo {
+  Eigen::MatrixXd J, S;
   DeletionProjector d;
+  Eigen::MatrixXd P;  // W (I - Q Q^T) W, formed on the first call with many columns
+  bool valid = false, has_P = false;
+};
+
+ProjectorMemo& deletionProjector(Eigen::Index n, const Eigen::MatrixXd& J, const Eigen::MatrixXd& S) {
+  thread_local ProjectorMemo memo;
+  const bool same = memo.valid && memo.J.rows() == J.rows() && memo.J.cols() == J.cols() && memo.S.rows() == S.rows() &&
+                    memo.S.cols() == S.cols() && memo.J == J && memo.S == S && memo.d.Pdiag.size() == n;
+  if (same) return memo;
+  memo.valid = false;
+  DeletionProjector& d = memo.d;
   d.w = whitened(Eigen::VectorXd::Zero(n), J, S);
   const Eigen::MatrixXd M = d.w.W - d.w.Q * (d.w.Q.transpose() * d.w.W);
   d.Pdiag = d.w.W.cwiseProduct(M).colwise().sum().transpose();
-  return d;
+  memo.J = J;
+  memo.S = S;
+  memo.has_P = false;
+  memo.valid = true;
+  return memo;
 }
 
 }  // namespace
 
 Eigen::MatrixXd deletionStatisticsColumns(const Eigen::MatrixXd& residuals, const Eigen::MatrixXd& J, const Eigen::MatrixXd& S) {
   const Eigen::Index n = residuals.rows();
-  const DeletionProjector d = deletionProjector(n, J, S);
+  ProjectorMemo& memo = deletionProjector(n, J, S);
+  const DeletionProjector& d = memo.d;
   const Eigen::MatrixXd& W = d.w.W;
   const Eigen::MatrixXd& Q = d.w.Q;
   // P = W (I - Q Q^T) W: the residual projector of the whitened fit brought back to readings.
-  const Eigen::MatrixXd yw = W * residuals;
-  const Eigen::MatrixXd Py = W * (yw - Q * (Q.transpose() * yw));
+  // Many columns (a screen's null draws): P formed once (n^3) and applied once (n^2 x columns),
+  // where applying its factors costs two such products.
+  Eigen::MatrixXd Py;
+  if (residuals.cols() > n) {
+    if (!memo.has_P) memo.P = W * (W - Q * (Q.transpose() * W));
+    memo.has_P = true;
+    Py.noalias() = memo.P * residuals;
+  } else {
+    const Eigen::MatrixXd yw = W * residuals;
+    Py = W * (yw - Q * (Q.transpose() * yw));
+  }
   Eigen::MatrixXd t(n, residuals.cols());
   for (Eigen::Index i = 0; i < n; ++i) {
     if (!d.unseen(i)) t.row(i) = Py.row(i) / std::sqrt(d.Pdiag[i]);
@@ -371,7 +401,7 @@ Eigen::MatrixXd deletionStatisticsColumns(const Eigen::MatrixXd& residuals, cons
 }
 
 Eigen::VectorXd deletionSensitivity(const Eigen::MatrixXd& J, const Eigen::MatrixXd& S) {
-  const DeletionProjector d = deletionProjector(S.rows(), J, S);
+  const DeletionProjector& d = deletionProjector(S.rows(), J, S).d;
   Eigen::VectorXd s(S.rows());
   for (Eigen::Index i = 0; i < s.size(); ++i) s[i] = d.unseen(i) ? 0.0 : std::sqrt(d.Pdiag[i]);
   return s;

@@ -242,7 +242,8 @@ TEST(MacroB, EveryDprntFieldKeepsEightDigitsAndTheParserAgrees) {
 TEST(MacroB, DwellIsSecondsInEachControlsOwnWord) {
   const MachineModel head = loadMachine(test::sourcePath("examples/machines/head_ab.json"));
   const ProbePlan plan = makePlan(
-      "tooltip", head, {{"units", "inch"}, {"radius_mm", "381"}, {"step_deg", "5"}, {"end_deg", "90"}, {"dwell_s", "2.5"}});
+      "tooltip", head,
+      {{"units", "inch"}, {"radius_mm", "381"}, {"step_deg", "5"}, {"end_deg", "90"}, {"dwell_s", "2.5"}, {"repeats", "1"}});
   // Haas: G04 P2.5 ([HaasMan]: P with a point = seconds); Fanuc: G04 X2.5 (P would be integer ms).
   for (const auto& [d, word] : {std::pair<const char*, const char*>{"haas", "P"}, {"fanuc", "X"}}) {
     const std::string text = dialectByName(d).writeProgram(test::cycleProgram(plan, d));

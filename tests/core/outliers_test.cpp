@@ -95,9 +95,14 @@ TEST(OutlierScreen, KeepsItsRateOnAScaleMixture) {
   Eigen::MatrixXd D(kN, 4000);
   for (Eigen::Index d = 0; d < D.cols(); ++d) D.col(d) = mixtureDraw(L, null_rng);
   const Eigen::VectorXd null_max = screenNullMaxima(deletionStatisticsColumns(D, J, S));
-  // The statistic of one column against the vector form.
+  // The statistic of one column against the vector form; the many columns' (the projector formed
+  // once) against each column's own (its factors applied).
   EXPECT_NEAR((deletionStatisticsColumns(D.leftCols(1), J, S).col(0) - deletionStatistics(D.col(0), J, S)).cwiseAbs().maxCoeff(),
               0.0, 1e-12);
+  const Eigen::MatrixXd all = deletionStatisticsColumns(D, J, S);
+  ASSERT_GT(D.cols(), D.rows());
+  for (Eigen::Index d : {0, 1, 1999, 3999})
+    EXPECT_NEAR((all.col(d) - deletionStatistics(D.col(d), J, S)).cwiseAbs().maxCoeff(), 0.0, 1e-10) << d;
 
   Rng rng(5, 2);
   const int sets = 2000;
