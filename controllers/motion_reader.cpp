@@ -1,5 +1,6 @@
 #include "controllers/motion_reader.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <optional>
@@ -16,6 +17,11 @@
 
 namespace rotacal::ctl {
 namespace {
+
+/// M2 or M30: the program ends with this block.
+bool endsProgram(const nc::Word& w) {
+  return w.letter == 'M' && w.value && (std::abs(*w.value - 2) < 1e-9 || std::abs(*w.value - 30) < 1e-9);
+}
 
 // Heidenhain's no-trigger test compares cycle 0's result with the end point moved this far
 // back toward the start (controllers/heidenhain/dialect.cpp writes it so): the end point it guards is
@@ -180,6 +186,11 @@ std::vector<nc::Motion> readWordAddress(const Dialect& dialect, const std::strin
       m.z_from_reference = *z;
       m.inch = inch;
       out.push_back(m);
+      // The retract and the end in one block (G91 G28 Z0 M30): the program ends after it.
+      if (std::any_of(b.words.begin(), b.words.end(), endsProgram)) {
+        out.push_back(motionAt(nc::Motion::Kind::End, b.line));
+        return out;
+      }
       continue;
     }
     if (!trouble.empty()) {
@@ -201,7 +212,7 @@ std::vector<nc::Motion> readWordAddress(const Dialect& dialect, const std::strin
         n.line = b.line;
         n.number = static_cast<int>(std::lround(*w.value));
         out.push_back(n);
-      } else if (w.letter == 'M' && w.value && (std::abs(*w.value - 2) < 1e-9 || std::abs(*w.value - 30) < 1e-9)) {
+      } else if (endsProgram(w)) {
         end = true;
       } else if (w.letter == 'F') {
         if (!w.value) {

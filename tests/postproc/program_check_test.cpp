@@ -406,6 +406,13 @@ TEST(ProgramCheck, APartProgramsRetractToTheZReferenceIsFollowed) {
     EXPECT_EQ(find(xz, "G28 moves in machine coordinates")->line, 6);
     EXPECT_FALSE(run(dialect, "G91 G28 Z5.", 10.0).violations.empty());  // an intermediate point: not followed
     EXPECT_FALSE(run(dialect, "G53 Z10.", 10.0).violations.empty());      // above the reference
+    // The retract and the end in one block: the program ends there, as with M30 on its own.
+    const std::vector<nc::Motion> ending = ctl::readMotions(dialect, "%\nO1000\nG90 G21\nG0 Z100.\nG91 G28 Z0 M30\n%\n");
+    ASSERT_FALSE(ending.empty());
+    EXPECT_EQ(ending.back().kind, nc::Motion::Kind::End) << dialect;
+    EXPECT_EQ(ending.back().line, 5) << dialect;
+    ASSERT_GE(ending.size(), 2u);
+    EXPECT_TRUE(ending[ending.size() - 2].z_from_reference.has_value()) << dialect;
   }
   const std::string ngc = "G21 G90\nG0 Z100.\nG91 G28 Z0\nG90\nM2\n";
   ProgramCheckSetup s = programCheckSetup(m, "linuxcnc", false, nullptr, false);
