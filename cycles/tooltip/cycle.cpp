@@ -22,17 +22,21 @@
 namespace rotacal {
 namespace {
 
-/// Every run of every results file, in order (a file holds the runs of one program).
-std::vector<TooltipRun> readRuns(const ProbePlan& plan, const std::vector<InputFile>& results) {
+/// Every run of every results file, in order (a file holds the runs of one program); `file_of`
+/// (optional): the index in `results` of each run's file.
+std::vector<TooltipRun> readRuns(const ProbePlan& plan, const std::vector<InputFile>& results,
+                                 std::vector<size_t>* file_of = nullptr) {
   std::vector<TooltipRun> runs;
-  for (const auto& f : results)
-    for (TooltipRun& run : parseTooltipResults(f.text, f.path, plan)) runs.push_back(std::move(run));
+  for (size_t f = 0; f < results.size(); ++f)
+    for (TooltipRun& run : parseTooltipResults(results[f].text, results[f].path, plan)) {
+      runs.push_back(std::move(run));
+      if (file_of) file_of->push_back(f);
+    }
   return runs;
 }
 
-/// A plan's runs not all read: the text says what the missing ones would have seen.
-std::string fewerRunsThanPlanned(const ProbePlan& plan, size_t read) {
-  const int planned = tooltipOptionsFrom(plan.options, plan.machine).repeats;
+/// A plan's `planned` runs not all read: the text says what the missing ones would have seen.
+std::string fewerRunsThanPlanned(int planned, size_t read) {
   if (read >= static_cast<size_t>(planned)) return {};
   return fmt::format("{} run{} read where the plan repeats {}: {}", read, read == 1 ? "" : "s", planned,
                      read < static_cast<size_t>(kTooltipRepeats)
@@ -125,12 +129,11 @@ class Tooltip final : public Cycle {
     a.result_files = pathsOf(r.results);
     CycleDocuments out;
     out.doc = tooltipReportJson(plan, runs, a);
-    const std::string fewer = fewerRunsThanPlanned(plan, read.size());
+    const TooltipOptions to = tooltipOptionsFrom(plan.options, plan.machine);
+    const std::string fewer = fewerRunsThanPlanned(to.repeats, read.size());
     if (!fewer.empty()) {
       out.warnings.push_back(fewer);
-      out.doc["runs_read"] = {{"read", read.size()},
-                              {"planned", tooltipOptionsFrom(plan.options, plan.machine).repeats},
-                              {"note", fewer}};
+      out.doc["runs_read"] = {{"read", read.size()}, {"planned", to.repeats}, {"note", fewer}};
     }
     out.doc["errors_heading"] = "Identified errors";  // a pivot length and angular errors, not location errors in ISO 230-7's sense
     // What analyze signs: u_A from the data, u_B from the declared contributors by
@@ -138,7 +141,6 @@ class Tooltip final : public Cycle {
     TooltipBudgetOptions bo;
     bo.runs = r.mc_runs;
     bo.seed = r.mc_seed;
-    const TooltipOptions to = tooltipOptionsFrom(plan.options, plan.machine);
     const UncertaintyBudget b = tooltipBudget(plan, runs, a, to.noise_um, r.contributors, bo);
     addBudgetFields(&out.doc["location_errors"], b);
     // The angular errors are an array by angle: each entry gets the same fields, u = u_c.
@@ -167,14 +169,14 @@ class Tooltip final : public Cycle {
 
   CycleDocuments diagnose(const DiagnoseRequest& r) const override {
     const ProbePlan& plan = *r.plan;
-    for (const auto& f : r.results)
-      for (const TooltipRun& run : parseTooltipResults(f.text, f.path, plan))
-        for (const auto& reading : run)
-          if (!std::isfinite(reading.z_um))
-            throw InputError(f.path, 1,
-                             "diagnose needs both directions of the reading (dz too): its causes (pivot length, scale, "
-                             "drift) differ only in how they split between the two; analyze reads one direction");
-    const std::vector<TooltipRun> runs = readRuns(plan, r.results);
+    std::vector<size_t> file_of;
+    const std::vector<TooltipRun> runs = readRuns(plan, r.results, &file_of);
+    for (size_t k = 0; k < runs.size(); ++k)
+      for (const auto& reading : runs[k])
+        if (!std::isfinite(reading.z_um))
+          throw InputError(r.results[file_of[k]].path, 1,
+                           "diagnose needs both directions of the reading (dz too): its causes (pivot length, scale, "
+                           "drift) differ only in how they split between the two; analyze reads one direction");
     TooltipDiagnosisOptions o;
     o.judge.alpha = r.alpha;
     o.contributors = r.contributors;  // the declared noise; none: the plan's laser_noise_um alone
