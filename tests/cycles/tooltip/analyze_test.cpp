@@ -285,6 +285,25 @@ TEST(TooltipResults, TheTransverseReadingAloneGivesTheAngularErrorsAndSaysDRIsNo
   EXPECT_THROW(parseTooltipResults("angle_deg,dy_um\n0,0,0\n", "bad.csv", plan), InputError);
 }
 
+// diagnose's causes differ only in how they split between the two directions: a file of one
+// direction among several is refused naming that file (the runs of every file read in turn).
+TEST(TooltipResults, DiagnoseRefusesAFileOfOneDirectionNamingIt) {
+  const ProbePlan plan = plan004();
+  const TooltipRun full = simulateTooltip(plan, truthOf(10, 1, 0, 0, 0, 0.5), 1);
+  std::string dy = "angle_deg,dy_um\n";
+  for (const auto& r : full) dy += fmt::format("{:.4f},{:.4f}\n", r.angle_deg, r.t_um);
+  DiagnoseRequest r;
+  r.plan = &plan;
+  r.results = {{"both.csv", tooltipResultsText(plan, {full, full})}, {"dy.csv", dy}};
+  try {
+    (void)cycleByName("tooltip").diagnose(r);
+    FAIL() << "a file of one direction was diagnosed";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), "dy.csv");
+    EXPECT_NE(std::string(e.what()).find("both directions"), std::string::npos) << e.what();
+  }
+}
+
 // At A = +-90 deg the tip moves along the beam: the transverse reading does not see the angle to
 // first order (d(dy)/de = R cos A). The fit said -1.4e17 mdeg there; it must say "not
 // identifiable" (NaN, null in REPORT.json) and keep the other angles right.
